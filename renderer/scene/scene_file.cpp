@@ -1,0 +1,503 @@
+// JSON scene files (format: docs/scene-format.md). Every error names the file and the JSON field
+// path, on one line, so a typo in a sweep's scene is caught before anything is rendered.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <set>
+#include <span>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+
+#include "scene/scene.h"
+
+namespace penumbra::scene {
+namespace {
+
+using nlohmann::json;
+
+// Control characters (from a key, a token or an Assimp message) would break the one-line rule.
+std::string one_line(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out;
+}
+
+// How a wrong value is shown after "got": short, one line.
+std::string describe(const json& v) {
+  switch (v.type()) {
+    case json::value_t::object: return "an object";
+    case json::value_t::array: return "an array of " + std::to_string(v.size()) + " element" + (v.size() == 1 ? "" : "s");
+    case json::value_t::null: return "null";
+    default: break;
+  }
+  std::string s = v.dump(-1, ' ', false, json::error_handler_t::replace);
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
+std::string fmt(float f) {
+  std::ostringstream s;
+  s << f;
+  return s.str();
+}
+
+std::string child(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+std::string element(const std::string& path, std::size_t i) { return path + "[" + std::to_string(i) + "]"; }
+
+// 1-based line and column of the 1-based byte position `byte` in `text`.
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t byte) {
+  const std::size_t pos = std::min(byte == 0 ? 0 : byte - 1, text.size());
+  const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n'));
+  const std::size_t last_newline = text.rfind('\n', pos == 0 ? std::string_view::npos : pos - 1);
+  const std::size_t column = last_newline == std::string_view::npos || pos == 0 ? pos + 1 : pos - last_newline;
+  return {line, column};
+}
+
+// nlohmann keeps the last of two equal keys without a word; a duplicated key is as silent a
+// mistake as a misspelt one, so the parse callback tracks the field path and rejects it.
+struct DuplicateKey {
+  std::string path;
+};
+
+class DuplicateKeyCheck {
+ public:
+  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start: frames_.push_back({false, 0, {}, {}}); break;
+      case json::parse_event_t::array_start: frames_.push_back({true, 0, {}, {}}); break;
+      case json::parse_event_t::key: {
+        Frame& f = frames_.back();
+        f.key = parsed.get<std::string>();
+        if (!f.keys.insert(f.key).second) throw DuplicateKey{path()};
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        frames_.pop_back();
+        element_done();
+        break;
+      case json::parse_event_t::value: element_done(); break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool array;
+    std::size_t index;
+    std::string key;
+    std::set<std::string> keys;
+  };
+  void element_done() {
+    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+  }
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : frames_) p = f.array ? element(p, f.index) : child(p, f.key);
+    return p;
+  }
+  std::vector<Frame> frames_;
+};
+
+// Reads one parsed scene document; every accessor checks type, range and finiteness.
+class SceneReader {
+ public:
+  explicit SceneReader(std::filesystem::path file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw SceneError(one_line(file_.string() + ": " + (path.empty() ? "(top level)" : path) + ": " + what));
+  }
+
+  void require_object(const json& v, const std::string& path) const {
+    if (!v.is_object()) fail(path, "expected an object, got " + describe(v));
+  }
+
+  void check_keys(const json& obj, const std::string& path, std::initializer_list<std::string_view> allowed,
+                  std::string_view where = {}) const {
+    for (const auto& [key, value] : obj.items()) {
+      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+      std::string list;
+      for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      fail(child(path, key), "unknown key" + std::string(where) + " (allowed: " + list + ")");
+    }
+  }
+
+  static const json* find(const json& obj, std::string_view key) {
+    const auto it = obj.find(key);
+    return it == obj.end() ? nullptr : &*it;
+  }
+
+  const json& required(const json& obj, const std::string& path, std::string_view key, const std::string& why) const {
+    const json* v = find(obj, key);
+    if (!v) fail(child(path, key), "missing (" + why + ")");
+    return *v;
+  }
+
+  float number(const json& v, const std::string& path) const {
+    if (!v.is_number()) fail(path, "expected a number, got " + describe(v));
+    const auto f = v.get<float>();
+    if (!std::isfinite(f)) fail(path, "expected a finite number, got " + describe(v));
+    return f;
+  }
+
+  float positive(const json& v, const std::string& path) const {
+    const float f = number(v, path);
+    if (!(f > 0)) fail(path, "expected a positive number, got " + describe(v));
+    return f;
+  }
+
+  float non_zero(const json& v, const std::string& path) const {
+    const float f = number(v, path);
+    if (f == 0) fail(path, "expected a non-zero number, got " + describe(v));
+    return f;
+  }
+
+  // Open interval (lo, hi).
+  float open_range(const json& v, const std::string& path, float lo, float hi) const {
+    const float f = number(v, path);
+    if (!(f > lo && f < hi)) fail(path, "expected a number in (" + fmt(lo) + ", " + fmt(hi) + "), got " + describe(v));
+    return f;
+  }
+
+  float unit_interval(const json& v, const std::string& path) const {
+    const float f = number(v, path);
+    if (!(f >= 0 && f <= 1)) fail(path, "expected a number in [0, 1], got " + describe(v));
+    return f;
+  }
+
+  int integer(const json& v, const std::string& path, int lo, int hi) const {
+    const std::string expected = "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got ";
+    if (!v.is_number_integer()) fail(path, expected + describe(v));
+    if (v.is_number_unsigned() ? v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)
+                               : v.get<std::int64_t>() < lo || v.get<std::int64_t>() > hi)
+      fail(path, expected + describe(v));
+    return static_cast<int>(v.get<std::int64_t>());
+  }
+
+  std::string string(const json& v, const std::string& path) const {
+    if (!v.is_string()) fail(path, "expected a string, got " + describe(v));
+    return v.get<std::string>();
+  }
+
+  // One of `names`; returns its index.
+  std::size_t choice(const json& v, const std::string& path, std::span<const std::string_view> names) const {
+    std::string list;
+    for (auto n : names) list += (list.empty() ? "\"" : ", \"") + std::string(n) + "\"";
+    if (v.is_string()) {
+      const auto it = std::find(names.begin(), names.end(), v.get<std::string>());
+      if (it != names.end()) return static_cast<std::size_t>(it - names.begin());
+    }
+    fail(path, "expected one of " + list + ", got " + describe(v));
+  }
+
+  const json& array(const json& v, const std::string& path, std::size_t n) const {
+    if (!v.is_array() || v.size() != n)
+      fail(path, "expected an array of " + std::to_string(n) + " numbers, got " + describe(v));
+    return v;
+  }
+
+  glm::vec2 vec2_positive(const json& v, const std::string& path) const {
+    array(v, path, 2);
+    return {positive(v[0], element(path, 0)), positive(v[1], element(path, 1))};
+  }
+
+  glm::vec3 vec3(const json& v, const std::string& path) const {
+    array(v, path, 3);
+    return {number(v[0], element(path, 0)), number(v[1], element(path, 1)), number(v[2], element(path, 2))};
+  }
+
+  template <class Check>
+  glm::vec3 vec3(const json& v, const std::string& path, Check check) const {
+    array(v, path, 3);
+    glm::vec3 out;
+    for (int i = 0; i < 3; ++i) out[i] = (this->*check)(v[static_cast<std::size_t>(i)], element(path, static_cast<std::size_t>(i)));
+    return out;
+  }
+
+  glm::vec3 non_zero_vec3(const json& v, const std::string& path) const {
+    const glm::vec3 out = vec3(v, path);
+    if (out == glm::vec3(0)) fail(path, "must not be the zero vector");
+    return out;
+  }
+
+  float colour_component(const json& v, const std::string& path) const {
+    const float f = number(v, path);
+    if (!(f >= 0)) fail(path, "expected a non-negative number, got " + describe(v));
+    return f;
+  }
+
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+};
+
+constexpr std::array<std::string_view, 2> kProjections = {"perspective", "orthographic"};
+constexpr std::array<std::string_view, 2> kLightTypes = {"directional", "spot"};
+constexpr std::array<std::string_view, 5> kShapes = {"plane", "box", "sphere", "lattice", "model"};
+
+Camera read_camera(const SceneReader& r, const json& j, const std::string& path) {
+  r.require_object(j, path);
+  r.check_keys(j, path, {"projection", "position", "target", "up", "fov_y_deg", "ortho_height_ws", "near_ws", "far_ws"});
+  Camera c;
+  if (const json* v = r.find(j, "projection"))
+    c.projection = r.choice(*v, child(path, "projection"), kProjections) == 0
+                       ? Camera::Projection::perspective
+                       : Camera::Projection::orthographic;
+  if (const json* v = r.find(j, "position")) c.position = r.vec3(*v, child(path, "position"));
+  if (const json* v = r.find(j, "target")) c.target = r.vec3(*v, child(path, "target"));
+  if (const json* v = r.find(j, "up")) c.up = r.non_zero_vec3(*v, child(path, "up"));
+  if (const json* v = r.find(j, "fov_y_deg")) c.fov_y_deg = r.open_range(*v, child(path, "fov_y_deg"), 0, 180);
+  if (const json* v = r.find(j, "ortho_height_ws")) c.ortho_height_ws = r.positive(*v, child(path, "ortho_height_ws"));
+  if (const json* v = r.find(j, "near_ws")) c.near_ws = r.positive(*v, child(path, "near_ws"));
+  if (const json* v = r.find(j, "far_ws")) c.far_ws = r.positive(*v, child(path, "far_ws"));
+  if (c.position == c.target) r.fail(child(path, "target"), "must differ from the camera position");
+  if (!(c.far_ws > c.near_ws))
+    r.fail(child(path, "far_ws"), "must be greater than near_ws (" + fmt(c.near_ws) + "), got " + fmt(c.far_ws));
+  return c;
+}
+
+Light read_light(const SceneReader& r, const json& j, const std::string& path) {
+  r.require_object(j, path);
+  r.check_keys(j, path, {"type", "direction", "position", "spot_fov_deg", "size", "color", "ambient"});
+  Light l;
+  if (const json* v = r.find(j, "type"))
+    l.type = r.choice(*v, child(path, "type"), kLightTypes) == 0 ? Light::Type::directional : Light::Type::spot;
+  if (const json* v = r.find(j, "direction")) l.direction = glm::normalize(r.non_zero_vec3(*v, child(path, "direction")));
+  if (!std::isfinite(l.direction.x + l.direction.y + l.direction.z))  // e.g. [1e-30, 0, 0] underflows
+    r.fail(child(path, "direction"), "too short to normalize");
+  if (const json* v = r.find(j, "position")) l.position = r.vec3(*v, child(path, "position"));
+  if (const json* v = r.find(j, "spot_fov_deg")) l.spot_fov_deg = r.open_range(*v, child(path, "spot_fov_deg"), 0, 180);
+  if (const json* v = r.find(j, "size")) l.size = r.positive(*v, child(path, "size"));
+  if (const json* v = r.find(j, "color")) l.color = r.vec3(*v, child(path, "color"), &SceneReader::colour_component);
+  if (const json* v = r.find(j, "ambient")) l.ambient = r.unit_interval(*v, child(path, "ambient"));
+  return l;
+}
+
+// Normals Assimp could not make (a vertex used only by degenerate triangles, a file's own bad
+// normals) are rebuilt from the area-weighted normals of the triangles around the vertex.
+void repair_normals(MeshData& m) {
+  const auto bad = [](const glm::vec3& n) {
+    const float len = glm::length(n);
+    return !std::isfinite(len) || len < 1e-6f;
+  };
+  if (std::none_of(m.vertices.begin(), m.vertices.end(), [&](const Vertex& v) { return bad(v.normal); })) return;
+  std::vector<glm::vec3> sum(m.vertices.size(), glm::vec3(0));
+  for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+    const std::uint32_t a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
+    const glm::vec3 n = glm::cross(m.vertices[b].position - m.vertices[a].position, m.vertices[c].position - m.vertices[a].position);
+    for (auto i : {a, b, c}) sum[i] += n;
+  }
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    if (!bad(m.vertices[i].normal)) {
+      m.vertices[i].normal = glm::normalize(m.vertices[i].normal);
+      continue;
+    }
+    m.vertices[i].normal = bad(sum[i]) ? glm::vec3(0, 1, 0) : glm::normalize(sum[i]);
+  }
+}
+
+// All triangles of every mesh in a model file, node transforms applied, as one mesh.
+MeshData load_model(const SceneReader& r, const std::filesystem::path& file, const std::string& path, const std::string& as_written) {
+  const std::string prefix = "cannot read model '" + as_written + "': ";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) r.fail(path, prefix + "no such file (looked for " + file.string() + ")");
+
+  Assimp::Importer importer;
+  const aiScene* s = importer.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_GenSmoothNormals |
+                                                          aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+  if (!s) r.fail(path, prefix + importer.GetErrorString());
+
+  MeshData out;
+  for (unsigned mi = 0; mi < s->mNumMeshes; ++mi) {
+    const aiMesh& mesh = *s->mMeshes[mi];
+    const auto base = static_cast<std::uint32_t>(out.vertices.size());
+    for (unsigned vi = 0; vi < mesh.mNumVertices; ++vi) {
+      const aiVector3D& p = mesh.mVertices[vi];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        r.fail(path, "model '" + as_written + "' has a non-finite vertex position");
+      const glm::vec3 n = mesh.mNormals ? glm::vec3(mesh.mNormals[vi].x, mesh.mNormals[vi].y, mesh.mNormals[vi].z) : glm::vec3(0);
+      out.vertices.push_back({{p.x, p.y, p.z}, n});
+    }
+    // Points and lines (kept by Triangulate) have no surface; zero-area triangles add nothing.
+    for (unsigned fi = 0; fi < mesh.mNumFaces; ++fi) {
+      const aiFace& f = mesh.mFaces[fi];
+      if (f.mNumIndices != 3) continue;
+      const std::uint32_t a = base + f.mIndices[0], b = base + f.mIndices[1], c = base + f.mIndices[2];
+      const glm::vec3 pa = out.vertices[a].position;
+      if (glm::cross(out.vertices[b].position - pa, out.vertices[c].position - pa) == glm::vec3(0)) continue;
+      out.indices.insert(out.indices.end(), {a, b, c});
+    }
+  }
+  if (out.indices.empty()) r.fail(path, "model '" + as_written + "' contains no triangles");
+  repair_normals(out);
+  return out;
+}
+
+// Scale first, then rotation about the world X, Y and Z axes in that order, then translation.
+glm::mat4 object_transform(const glm::vec3& translate, const glm::vec3& rotate_deg, const glm::vec3& scale) {
+  glm::mat4 m = glm::translate(glm::mat4(1), translate);
+  m = glm::rotate(m, glm::radians(rotate_deg.z), glm::vec3(0, 0, 1));
+  m = glm::rotate(m, glm::radians(rotate_deg.y), glm::vec3(0, 1, 0));
+  m = glm::rotate(m, glm::radians(rotate_deg.x), glm::vec3(1, 0, 0));
+  return glm::scale(m, scale);
+}
+
+class ObjectReader {
+ public:
+  explicit ObjectReader(const SceneReader& r) : r_(r) {}
+
+  Object read(const json& j, const std::string& path) {
+    r_.require_object(j, path);
+    const std::size_t shape = r_.choice(r_.required(j, path, "shape", "every object needs a shape"), child(path, "shape"), kShapes);
+    const std::string shape_name(kShapes[shape]);
+    const std::string where = " for shape '" + shape_name + "'";
+    const std::string why = "required" + where;
+
+    Object o;
+    o.name = shape_name;
+    switch (shape) {
+      case 0:
+        r_.check_keys(j, path, {"name", "shape", "size", "translate", "rotate_deg", "scale", "albedo"}, where);
+        {
+          const glm::vec2 size = r_.vec2_positive(r_.required(j, path, "size", why), child(path, "size"));
+          o.mesh = share(make_plane(size.x, size.y));
+        }
+        break;
+      case 1:
+        r_.check_keys(j, path, {"name", "shape", "size", "translate", "rotate_deg", "scale", "albedo"}, where);
+        o.mesh = share(make_box(r_.vec3(r_.required(j, path, "size", why), child(path, "size"), &SceneReader::positive)));
+        break;
+      case 2:
+        r_.check_keys(j, path, {"name", "shape", "radius", "translate", "rotate_deg", "scale", "albedo"}, where);
+        o.mesh = share(make_sphere(r_.positive(r_.required(j, path, "radius", why), child(path, "radius"))));
+        break;
+      case 3: {
+        r_.check_keys(j, path,
+                      {"name", "shape", "width", "height", "bars_x", "bars_y", "bar_width", "translate", "rotate_deg", "scale", "albedo"},
+                      where);
+        const float width = r_.positive(r_.required(j, path, "width", why), child(path, "width"));
+        const float height = r_.positive(r_.required(j, path, "height", why), child(path, "height"));
+        const int bars_x = r_.integer(r_.required(j, path, "bars_x", why), child(path, "bars_x"), 0, kMaxBars);
+        const int bars_y = r_.integer(r_.required(j, path, "bars_y", why), child(path, "bars_y"), 0, kMaxBars);
+        const float bar_width = r_.positive(r_.required(j, path, "bar_width", why), child(path, "bar_width"));
+        if (bars_x + bars_y == 0) r_.fail(child(path, "bars_y"), "a lattice needs at least one bar (bars_x and bars_y are both 0)");
+        o.mesh = share(make_lattice(width, height, bars_x, bars_y, bar_width));
+        break;
+      }
+      default: {
+        r_.check_keys(j, path, {"name", "shape", "path", "translate", "rotate_deg", "scale", "albedo"}, where);
+        const std::string field = child(path, "path");
+        const std::string as_written = r_.string(r_.required(j, path, "path", why), field);
+        if (as_written.empty()) r_.fail(field, "expected a file path, got an empty string");
+        const std::filesystem::path file = (r_.file().parent_path() / as_written).lexically_normal();
+        auto& cached = models_[file];
+        if (!cached) cached = share(load_model(r_, file, field, as_written));
+        o.mesh = cached;
+        o.name = std::filesystem::path(as_written).stem().string();
+        break;
+      }
+    }
+
+    if (const json* v = r_.find(j, "name")) o.name = r_.string(*v, child(path, "name"));
+    glm::vec3 translate(0), rotate_deg(0), scale(1);
+    if (const json* v = r_.find(j, "translate")) translate = r_.vec3(*v, child(path, "translate"));
+    if (const json* v = r_.find(j, "rotate_deg")) rotate_deg = r_.vec3(*v, child(path, "rotate_deg"));
+    if (const json* v = r_.find(j, "scale")) {
+      // Zero would flatten the object and make its normal matrix singular.
+      scale = v->is_number() ? glm::vec3(r_.non_zero(*v, child(path, "scale")))
+                             : r_.vec3(*v, child(path, "scale"), &SceneReader::non_zero);
+    }
+    o.model = object_transform(translate, rotate_deg, scale);
+    if (const json* v = r_.find(j, "albedo")) o.albedo = r_.vec3(*v, child(path, "albedo"), &SceneReader::unit_interval);
+    return o;
+  }
+
+ private:
+  static constexpr int kMaxBars = 10000;  // beyond this a lattice is a typo, not a stimulus
+  static std::shared_ptr<const MeshData> share(MeshData m) { return std::make_shared<const MeshData>(std::move(m)); }
+
+  const SceneReader& r_;
+  std::map<std::filesystem::path, std::shared_ptr<const MeshData>> models_;  // one mesh per file
+};
+
+std::string read_text(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw SceneError(one_line(path.string() + ": cannot read scene file: " +
+                              (std::filesystem::exists(path, ec) ? "not a regular file" : "no such file")));
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) throw SceneError(one_line(path.string() + ": cannot read scene file"));
+  return text.str();
+}
+
+json parse(const std::filesystem::path& path, const std::string& text) {
+  const auto where = [&](std::size_t byte) {
+    const auto [line, column] = line_column(text, byte);
+    return path.string() + ":" + std::to_string(line) + ":" + std::to_string(column) + ": ";
+  };
+  // nlohmann's messages start with "[json.exception.x.n] " and repeat the position we print.
+  const auto strip = [](std::string msg) {
+    if (const auto p = msg.find("] "); msg.starts_with("[json.exception") && p != std::string::npos) msg.erase(0, p + 2);
+    if (msg.starts_with("parse error at line"))
+      if (const auto p = msg.find(": "); p != std::string::npos) msg.erase(0, p + 2);
+    return msg;
+  };
+  try {
+    return json::parse(text, DuplicateKeyCheck{});
+  } catch (const json::parse_error& e) {
+    throw SceneError(one_line(where(e.byte) + "malformed JSON: " + strip(e.what())));
+  } catch (const DuplicateKey& d) {
+    throw SceneError(one_line(path.string() + ": " + d.path + ": duplicate key"));
+  } catch (const json::exception& e) {
+    // Number overflow ("number overflow parsing '1e400'") carries no position: find the token.
+    std::string msg = strip(e.what());
+    std::string prefix = path.string() + ": ";
+    if (const auto a = msg.find('\''), b = msg.rfind('\''); a != std::string::npos && b > a + 1)
+      if (const auto at = text.find(msg.substr(a + 1, b - a - 1)); at != std::string::npos) prefix = where(at + 1);
+    throw SceneError(one_line(prefix + "malformed JSON: " + msg));
+  }
+}
+
+}  // namespace
+
+Scene load_scene_file(const std::filesystem::path& path) {
+  const json doc = parse(path, read_text(path));
+  const SceneReader r(path);
+  r.require_object(doc, "");
+  r.check_keys(doc, "", {"name", "camera", "light", "objects"});
+
+  Scene scene;
+  scene.name = path.stem().string();
+  if (const json* v = r.find(doc, "name")) scene.name = r.string(*v, "name");
+  if (const json* v = r.find(doc, "camera")) scene.camera = read_camera(r, *v, "camera");
+  if (const json* v = r.find(doc, "light")) scene.light = read_light(r, *v, "light");
+  if (const json* v = r.find(doc, "objects")) {
+    if (!v->is_array()) r.fail("objects", "expected an array of objects, got " + describe(*v));
+    ObjectReader objects(r);
+    for (std::size_t i = 0; i < v->size(); ++i) scene.objects.push_back(objects.read((*v)[i], element("objects", i)));
+  }
+  return scene;
+}
+
+}  // namespace penumbra::scene

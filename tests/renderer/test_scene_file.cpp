@@ -1,0 +1,283 @@
+// Scene files: the shipped examples load as documented, models merge into one mesh, and every bad
+// file is rejected with one line naming the file and the JSON field.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "scene/scene.h"
+
+namespace fs = std::filesystem;
+using namespace penumbra::scene;
+
+namespace {
+
+const fs::path kScenes = fs::path(PENUMBRA_SOURCE_DIR) / "data" / "scenes";
+
+std::size_t triangles(const Object& o) { return o.mesh->indices.size() / 3; }
+
+const Object& find(const Scene& s, const std::string& name) {
+  for (const auto& o : s.objects)
+    if (o.name == name) return o;
+  throw std::runtime_error("no object " + name);
+}
+
+void expect_near(const glm::vec3& got, const glm::vec3& want, float tol = 1e-4f) {
+  EXPECT_NEAR(got.x, want.x, tol);
+  EXPECT_NEAR(got.y, want.y, tol);
+  EXPECT_NEAR(got.z, want.z, tol);
+}
+
+void expect_unit_normals(const MeshData& m) {
+  for (const auto& v : m.vertices) {
+    ASSERT_TRUE(std::isfinite(v.normal.x) && std::isfinite(v.normal.y) && std::isfinite(v.normal.z));
+    ASSERT_NEAR(glm::length(v.normal), 1.0f, 1e-4f);
+  }
+}
+
+// A fresh folder per test for hand-made scene and model files.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "_" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    dir_ = fs::path(::testing::TempDir()) / ("penumbra_scene_file_" + name);
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  ~TempDir() { fs::remove_all(dir_); }
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  const fs::path& path() const { return dir_; }
+
+ private:
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST(SceneFile, ShapesExampleLoads) {
+  const Scene s = load_scene_file(kScenes / "shapes.json");
+  EXPECT_EQ(s.name, "shapes");
+  ASSERT_EQ(s.objects.size(), 5u);
+  EXPECT_EQ(s.objects[2].name, "ball");
+  EXPECT_EQ(s.light.type, Light::Type::spot);
+  EXPECT_NEAR(glm::length(s.light.direction), 1.0f, 1e-6f);
+  expect_near(s.light.direction, glm::normalize(glm::vec3(-6, -10, -6)));
+  EXPECT_FLOAT_EQ(s.light.spot_fov_deg, 70);
+  EXPECT_FLOAT_EQ(s.light.ambient, 0.15f);
+  EXPECT_FLOAT_EQ(s.camera.far_ws, 60);
+  EXPECT_FLOAT_EQ(s.camera.up.y, 1);  // default kept
+  expect_near(s.objects[0].albedo, {0.85f, 0.85f, 0.85f});
+  expect_near(s.objects[4].albedo, Object{}.albedo);  // default kept
+
+  // Ground is 20 × 20 at y = 0; the panel tilted by 60° about x reaches 2 + 2 sin 60° = 3.732.
+  const Aabb b = s.bounds();
+  expect_near(b.lo, {-10, 0, -10});
+  expect_near(b.hi, {10, 2 + 2 * std::sin(glm::radians(60.0f)), 10});
+  // Fence: 4 wide around x = 4, plus half a bar on each side.
+  const Aabb fence = find(s, "fence").mesh->bounds().transformed(find(s, "fence").model);
+  EXPECT_NEAR(fence.lo.x, 1.96f, 1e-4f);
+  EXPECT_NEAR(fence.hi.x, 6.04f, 1e-4f);
+  EXPECT_EQ(triangles(find(s, "fence")), (9u + 5u) * 12u);
+}
+
+TEST(SceneFile, ModelsExampleLoads) {
+  const Scene s = load_scene_file(kScenes / "models.json");
+  ASSERT_EQ(s.objects.size(), 4u);
+  EXPECT_EQ(s.light.type, Light::Type::directional);
+  EXPECT_NEAR(glm::length(s.light.direction), 1.0f, 1e-6f);
+  EXPECT_FLOAT_EQ(s.light.size, 1.5f);
+
+  const Object& tetra = find(s, "tetra");
+  EXPECT_EQ(triangles(tetra), 4u);
+  EXPECT_EQ(tetra.mesh, find(s, "small-tetra").mesh);  // one mesh per model file
+  expect_unit_normals(*tetra.mesh);
+  expect_near(tetra.mesh->bounds().lo, {0, 0, 0});
+  expect_near(tetra.mesh->bounds().hi, {1, 1, 1});
+
+  // The glTF's node graph (lift by 0.5, scale x and z by 2) is baked into the mesh.
+  const Object& pyramid = find(s, "pyramid");
+  EXPECT_EQ(triangles(pyramid), 6u);
+  expect_unit_normals(*pyramid.mesh);
+  expect_near(pyramid.mesh->bounds().lo, {-1, 0.5f, -1});
+  expect_near(pyramid.mesh->bounds().hi, {1, 1.5f, 1});
+
+  const Aabb b = s.bounds();
+  expect_near(b.lo, {-5, 0, -5});
+  expect_near(b.hi, {5, 1.5f, 5});
+}
+
+TEST(SceneFile, RotationIsXThenYThenZAfterScale) {
+  TempDir dir;
+  const Scene s = load_scene_file(dir.write("r.json", R"({"objects": [
+    {"shape": "box", "size": [1, 1, 1], "rotate_deg": [90, 90, 0], "translate": [10, 0, 0]},
+    {"shape": "box", "size": [1, 1, 1], "rotate_deg": [0, 0, 90], "scale": [2, 1, 1]}]})"));
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.name, "r");
+  EXPECT_EQ(s.objects[0].name, "box");
+  // +z turned 90° about x becomes -y, which 90° about y leaves alone (y first would give +x).
+  expect_near(glm::vec3(s.objects[0].model * glm::vec4(0, 0, 1, 1)), {10, -1, 0});
+  // Scaled to (2, 0, 0) first, then turned 90° about z.
+  expect_near(glm::vec3(s.objects[1].model * glm::vec4(1, 0, 0, 1)), {0, 2, 0});
+}
+
+TEST(SceneFile, EmptyObjectListAndDefaults) {
+  TempDir dir;
+  const Scene s = load_scene_file(dir.write("e.json", "{}"));
+  EXPECT_TRUE(s.objects.empty());
+  EXPECT_TRUE(s.bounds().empty());
+  expect_near(s.camera.position, Camera{}.position);
+  expect_near(s.light.direction, Light{}.direction);
+}
+
+TEST(SceneFile, ModelQuadsAreTriangulatedAndDegenerateTrianglesDropped) {
+  TempDir dir;
+  // A unit square as one quad, a triangle repeating a vertex, and a zero-area sliver through a
+  // vertex (5) that no other face uses.
+  dir.write("m.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nv 2 0 0\n"
+            "f 1 2 3 4\nf 1 1 2\nf 1 2 5\n");
+  const Scene s = load_scene_file(dir.write("s.json", R"({"objects": [{"shape": "model", "path": "m.obj"}]})"));
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.objects[0].name, "m");
+  EXPECT_EQ(triangles(s.objects[0]), 2u);
+  expect_unit_normals(*s.objects[0].mesh);
+  for (auto i : s.objects[0].mesh->indices) EXPECT_NEAR(s.objects[0].mesh->vertices[i].normal.y, 1.0f, 1e-5f);
+}
+
+TEST(SceneFile, ModelPathIsRelativeToTheSceneFile) {
+  TempDir dir;
+  fs::create_directories(dir.path() / "sub" / "meshes");
+  dir.write("sub/meshes/t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const Scene s = load_scene_file(dir.write("sub/s.json", R"({"objects": [{"shape": "model", "path": "meshes/t.obj"}]})"));
+  EXPECT_EQ(triangles(s.objects.at(0)), 1u);
+}
+
+struct BadCase {
+  const char* name;
+  const char* json;
+  const char* expected;  // must follow "<file>: " in what(), or "<file>" when it starts with ':' (line:col)
+};
+
+// Keeps the parameter's name (not its bytes) in the test names CTest lists.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
+class BadSceneFile : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadSceneFile, NamesFileAndField) {
+  TempDir dir;
+  dir.write("junk.glb", "this is not a binary glTF file at all");
+  dir.write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
+  dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  const fs::path file = dir.write("bad.json", GetParam().json);
+  try {
+    load_scene_file(file);
+    FAIL() << "accepted a bad scene file";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    const std::string expected = file.string() + (GetParam().expected[0] == ':' ? "" : ": ") + GetParam().expected;
+    EXPECT_NE(what.find(expected), std::string::npos) << what << "\n does not contain\n" << expected;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\r'), std::string::npos) << what;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, BadSceneFile,
+    ::testing::Values(
+        BadCase{"MalformedJson", "{\n  \"objects\": [\n    {\"shape\": \"box\" \"size\": [1, 1, 1]}\n  ]\n}\n",
+                ":3:26: malformed JSON"},
+        BadCase{"NumberOverflow", "{\"light\": {\n\"size\": 1e400}}", ":2:9: malformed JSON: number overflow"},
+        BadCase{"TopLevelNotObject", "[1, 2]", "(top level): expected an object, got an array of 2 elements"},
+        BadCase{"UnknownTopLevelKey", R"({"objcts": []})", "objcts: unknown key"},
+        BadCase{"DuplicateKey", R"({"objects": [{"shape": "sphere", "radius": 1, "radius": 2}]})",
+                "objects[0].radius: duplicate key"},
+        BadCase{"NegativeRadius",
+                R"({"objects": [{"shape": "plane", "size": [1, 1]}, {"shape": "box", "size": [1, 1, 1]},
+                                {"shape": "sphere", "radius": -1}]})",
+                "objects[2].radius: expected a positive number, got -1"},
+        BadCase{"MisspeltShapeParameter", R"({"objects": [{"shape": "sphere", "radus": 1}]})",
+                "objects[0].radus: unknown key for shape 'sphere'"},
+        BadCase{"ParameterOfAnotherShape", R"({"objects": [{"shape": "box", "size": [1, 1, 1], "radius": 1}]})",
+                "objects[0].radius: unknown key for shape 'box'"},
+        BadCase{"MissingRadius", R"({"objects": [{"shape": "sphere"}]})", "objects[0].radius: missing"},
+        BadCase{"MissingShape", R"({"objects": [{"radius": 1}]})", "objects[0].shape: missing"},
+        BadCase{"UnknownShape", R"({"objects": [{"shape": "cube"}]})", "objects[0].shape: expected one of"},
+        BadCase{"ObjectNotAnObject", R"({"objects": [{"shape": "sphere", "radius": 1}, 7]})",
+                "objects[1]: expected an object, got 7"},
+        BadCase{"ObjectsNotAnArray", R"({"objects": {"shape": "sphere"}})", "objects: expected an array"},
+        BadCase{"ZeroLightDirection", R"({"light": {"direction": [0, 0, 0]}})", "light.direction: must not be the zero vector"},
+        BadCase{"SpotFovOutOfRange", R"({"light": {"type": "spot", "spot_fov_deg": 180}})",
+                "light.spot_fov_deg: expected a number in (0, 180), got 180"},
+        BadCase{"AmbientOutOfRange", R"({"light": {"ambient": 1.5}})", "light.ambient: expected a number in [0, 1]"},
+        BadCase{"UnknownLightType", R"({"light": {"type": "point"}})", "light.type: expected one of \"directional\", \"spot\""},
+        BadCase{"UnknownProjection", R"({"camera": {"projection": "ortho"}})", "camera.projection: expected one of"},
+        BadCase{"FarBeforeNear", R"({"camera": {"near_ws": 5, "far_ws": 2}})", "camera.far_ws: must be greater than near_ws"},
+        BadCase{"UnknownCameraKey", R"({"camera": {"fov": 40}})", "camera.fov: unknown key"},
+        BadCase{"ShortTranslate", R"({"objects": [{"shape": "sphere", "radius": 1, "translate": [1, 2]}]})",
+                "objects[0].translate: expected an array of 3 numbers, got an array of 2 elements"},
+        BadCase{"FloatOverflowInVector", R"({"objects": [{"shape": "sphere", "radius": 1, "translate": [0, 1e39, 0]}]})",
+                "objects[0].translate[1]: expected a finite number"},
+        BadCase{"StringForNumber", R"({"camera": {"fov_y_deg": "50"}})", "camera.fov_y_deg: expected a number, got \"50\""},
+        BadCase{"BoolForNumber", R"({"objects": [{"shape": "sphere", "radius": true}]})",
+                "objects[0].radius: expected a number, got true"},
+        BadCase{"AlbedoOutOfRange", R"({"objects": [{"shape": "sphere", "radius": 1, "albedo": [0.5, 1.5, 0]}]})",
+                "objects[0].albedo[1]: expected a number in [0, 1], got 1.5"},
+        BadCase{"ZeroScale", R"({"objects": [{"shape": "sphere", "radius": 1, "scale": 0}]})",
+                "objects[0].scale: expected a non-zero number, got 0"},
+        BadCase{"ZeroScaleComponent", R"({"objects": [{"shape": "sphere", "radius": 1, "scale": [1, 0, 1]}]})",
+                "objects[0].scale[1]: expected a non-zero number, got 0"},
+        BadCase{"FractionalBarCount",
+                R"({"objects": [{"shape": "lattice", "width": 1, "height": 1, "bars_x": 2.5, "bars_y": 2, "bar_width": 0.1}]})",
+                "objects[0].bars_x: expected an integer"},
+        BadCase{"PlaneSizeHasThreeNumbers", R"({"objects": [{"shape": "plane", "size": [1, 1, 1]}]})",
+                "objects[0].size: expected an array of 2 numbers"},
+        BadCase{"MissingModel", R"({"objects": [{"shape": "model", "path": "missing.glb"}]})",
+                "objects[0].path: cannot read model 'missing.glb': no such file"},
+        BadCase{"UnreadableModel", R"({"objects": [{"shape": "model", "path": "junk.glb"}]})",
+                "objects[0].path: cannot read model 'junk.glb': "},
+        BadCase{"ModelWithOnlyLines", R"({"objects": [{"shape": "model", "path": "lines.obj"}]})",
+                "objects[0].path: model 'lines.obj' contains no triangles"},
+        BadCase{"ModelWithOnlyDegenerateTriangles", R"({"objects": [{"shape": "model", "path": "flat.obj"}]})",
+                "objects[0].path: model 'flat.obj' contains no triangles"},
+        BadCase{"EmptyFile", "", ":1:1: malformed JSON"}),
+    [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
+
+// The complete example in docs/scene-format.md stays a valid scene.
+TEST(SceneFile, DocumentedExampleLoads) {
+  std::ifstream in(fs::path(PENUMBRA_SOURCE_DIR) / "docs" / "scene-format.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto start = doc.find("```json\n");
+  ASSERT_NE(start, std::string::npos);
+  const auto end = doc.find("```", start + 8);
+  ASSERT_NE(end, std::string::npos);
+  TempDir dir;
+  fs::create_directories(dir.path() / "models");
+  fs::copy_file(kScenes / "models" / "pyramid.gltf", dir.path() / "models" / "pyramid.gltf");
+  const Scene s = load_scene_file(dir.write("example.json", doc.substr(start + 8, end - start - 8)));
+  EXPECT_EQ(s.name, "example");
+  EXPECT_EQ(s.objects.size(), 5u);
+}
+
+TEST(SceneFile, MissingSceneFile) {
+  try {
+    load_scene_file(kScenes / "no-such-scene.json");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-scene.json: cannot read scene file"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneFile, LoadSceneDispatchesOnJsonExtension) {
+  EXPECT_EQ(load_scene((kScenes / "shapes.json").string()).objects.size(), 5u);
+}
