@@ -1,0 +1,252 @@
+// penumbra-render: scene + technique + parameters + shadow-map resolution → lit image (PNG),
+// visibility buffer (EXR) and report.json with per-pass times. Runs headless (EGL).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "gl/context.h"
+#include "gl/timer.h"
+#include "io/image_io.h"
+#include "io/report.h"
+#include "scene/scene.h"
+#include "shadows/renderer.h"
+#include "shadows/settings.h"
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+namespace {
+
+// Adds --<section>.<key> for every row of a parameters table.
+template <class P>
+void add_table_options(CLI::App& app, const std::string& section, P& params) {
+  for (const auto& row : shadows::settings_table(&params)) {
+    const std::string name = "--" + section + "." + std::string(row.key);
+    std::string help(row.help);
+    if (!row.unit.empty()) help += " [" + std::string(row.unit == "radius_unit" ? "see radius_unit" : row.unit) + "]";
+    help += " (default " + shadows::value_to_string(row, params) + ")";
+    app.add_option_function<std::string>(
+           name, [&params, row, name](const std::string& v) {
+             try {
+               shadows::set_from_string(row, params, v);
+             } catch (const std::invalid_argument& e) {
+               throw CLI::ValidationError(name, e.what());
+             }
+           },
+           help)
+        ->group(section + " parameters");
+  }
+}
+
+// Removes a staging directory unless the run succeeded, so a failure leaves nothing behind.
+struct StagingGuard {
+  fs::path path;
+  bool committed = false;
+  ~StagingGuard() {
+    std::error_code ec;
+    if (!committed && !path.empty()) fs::remove_all(path, ec);
+  }
+};
+
+struct Variant {
+  std::string name;
+  shadows::ShadowSettings settings;
+};
+
+std::vector<int> parse_resolutions(const std::string& text) {
+  std::vector<int> out;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    std::size_t used = 0;
+    long v = 0;
+    try {
+      v = std::stol(item, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used != item.size() || item.empty() || v < 1 || v > 65536)
+      throw CLI::ValidationError("--resolution", "expected texel counts in [1, 65536] separated by commas, got '" + text + "'");
+    out.push_back(static_cast<int>(v));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
+std::string fmt_ms(double ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%9.2f", ms);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Render a scene with a shadow technique; writes lit.png, visibility.exr and report.json."};
+  app.option_defaults()->always_capture_default();
+  std::string scene_arg = "demo";
+  std::string technique_arg = "pcf";
+  std::string resolution_arg = "2048";
+  std::string output;
+  int width = 1280, height = 720, frames = 5, warmup = 1;
+  float light_size = -1;
+  shadows::ShadowSettings base;
+
+  app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
+  app.add_option("--technique", technique_arg, "hard, pcf, pcss, vsm, or all (every technique and PCF kernel)")
+      ->check(CLI::IsMember({"hard", "pcf", "pcss", "vsm", "all"}));
+  app.add_option("--resolution", resolution_arg, "shadow-map texels per side; a comma list renders each");
+  app.add_option("--width", width, "image width in pixels")->check(CLI::Range(1, 16384));
+  app.add_option("--height", height, "image height in pixels")->check(CLI::Range(1, 16384));
+  app.add_option("--frames", frames, "timed frames per render (median reported)")->check(CLI::Range(1, 1000));
+  app.add_option("--warmup", warmup, "untimed frames before timing")->check(CLI::Range(0, 100));
+  app.add_option("--light-size", light_size,
+                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
+  add_table_options(app, "map", base.map);
+  add_table_options(app, "pcf", base.pcf);
+  add_table_options(app, "pcss", base.pcss);
+  add_table_options(app, "vsm", base.vsm);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "penumbra-render: " << e.what() << "\n";
+    return 2;
+  }
+
+  try {
+    const std::vector<int> resolutions = parse_resolutions(resolution_arg);
+    scene::Scene scene = scene::load_scene(scene_arg);
+    if (light_size >= 0) scene.light.size = light_size;
+
+    std::vector<Variant> variants;
+    auto add_variant = [&](shadows::Technique t, const std::string& name, shadows::Kernel kernel) {
+      Variant v{name, base};
+      v.settings.technique = t;
+      if (t == shadows::Technique::pcf) v.settings.pcf.kernel = kernel;
+      variants.push_back(v);
+    };
+    if (technique_arg == "all") {
+      add_variant(shadows::Technique::hard, "hard", {});
+      add_variant(shadows::Technique::pcf, "pcf-grid", shadows::Kernel::grid);
+      add_variant(shadows::Technique::pcf, "pcf-poisson", shadows::Kernel::poisson);
+      add_variant(shadows::Technique::pcss, "pcss", {});
+      add_variant(shadows::Technique::vsm, "vsm", {});
+    } else {
+      const auto t = shadows::technique_from_string(technique_arg);
+      std::string name = technique_arg;
+      if (t == shadows::Technique::pcf) name += base.pcf.kernel == shadows::Kernel::grid ? "-grid" : "-poisson";
+      add_variant(t, name, base.pcf.kernel);
+    }
+
+    // Refuse to replace a directory that is not ours.
+    const fs::path out_dir(output);
+    if (fs::exists(out_dir) && (!fs::is_directory(out_dir) ||
+                                (!fs::is_empty(out_dir) && !fs::exists(out_dir / "report.json")))) {
+      throw std::runtime_error(output + ": exists and is not a penumbra-render output; choose another --output");
+    }
+
+    gl::HeadlessContext context;
+    const auto& ctx = context.info();
+    for (int r : resolutions)
+      if (r > ctx.max_texture_size)
+        throw std::runtime_error("--resolution " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
+                                 std::to_string(ctx.max_texture_size));
+
+    const fs::path staging = out_dir.string() + ".partial-" + std::to_string(::getpid());
+    fs::remove_all(staging);
+    StagingGuard guard{staging};
+    fs::create_directories(staging);
+
+    shadows::Renderer renderer;
+    renderer.set_scene(scene);
+    nlohmann::json summary;
+    summary["device"] = io::to_json(ctx);
+    summary["scene"] = scene.name;
+    summary["image_px"] = {width, height};
+    summary["frames"] = frames;
+    summary["renders"] = nlohmann::json::array();
+    std::vector<io::Image8> montage_images;
+    std::vector<std::string> labels;
+
+    std::cout << "scene " << scene.name << ", " << width << "x" << height << ", " << ctx.renderer << " ("
+              << ctx.platform << "); times: median of " << frames << " frames, ms, "
+              << (ctx.software ? "wall clock around glFinish (wall_finish)" : "GPU timer queries (gpu_timer); wall_finish in report.json")
+              << "\n";
+    std::printf("%-12s %6s %10s %10s %10s %10s\n", "technique", "res", "shadow_map", "vsm_blur", "shading", "total");
+    const bool progress = ::isatty(STDERR_FILENO) != 0;  // a progress line only where it can be redrawn
+    const int total_runs = static_cast<int>(variants.size() * resolutions.size());
+    int run = 0;
+    for (int res : resolutions) {
+      for (auto& v : variants) {
+        ++run;
+        if (progress) {
+          std::fprintf(stderr, "[%d/%d] %s at %d^2...\r", run, total_runs, v.name.c_str(), res);
+          std::fflush(stderr);
+        }
+        v.settings.map.resolution_texels = res;
+        gl::PassTimer timer(!ctx.software);
+        for (int i = 0; i < warmup; ++i) renderer.render(v.settings, width, height);
+        shadows::FrameInfo info;
+        for (int i = 0; i < frames; ++i) info = renderer.render(v.settings, width, height, &timer);
+        timer.poll(true);
+        const auto stats = timer.stats();
+
+        const std::string dir_name = resolutions.size() > 1 ? v.name + "-" + std::to_string(res) : v.name;
+        const fs::path dir = staging / dir_name;
+        fs::create_directories(dir);
+        io::Image8 color = renderer.read_color();
+        io::write_png(dir / "lit.png", color);
+        io::write_exr(dir / "visibility.exr", renderer.read_visibility());
+        nlohmann::json report = io::frame_report(info, v.settings, stats);
+        report["scene"] = scene.name;
+        report["device"] = io::to_json(ctx);
+        io::write_text(dir / "report.json", report.dump(2) + "\n");
+
+        const gl::TimingMethod shown = ctx.software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
+        double by_pass[3] = {0, 0, 0};
+        const char* pass_names[3] = {"shadow_map", "vsm_blur", "shading"};
+        for (const auto& st : stats)
+          for (int k = 0; k < 3; ++k)
+            if (st.method == shown && st.pass == pass_names[k]) by_pass[k] = st.median_ms;
+        const double total = by_pass[0] + by_pass[1] + by_pass[2];
+        std::printf("%-12s %6d %s %s %s %s\n", v.name.c_str(), res, fmt_ms(by_pass[0]).c_str(),
+                    v.settings.technique == shadows::Technique::vsm ? fmt_ms(by_pass[1]).c_str() : "        -",
+                    fmt_ms(by_pass[2]).c_str(), fmt_ms(total).c_str());
+        std::fflush(stdout);
+        summary["renders"].push_back({{"name", dir_name}, {"technique", v.name}, {"resolution_texels", res},
+                                      {"timing_method", gl::to_string(shown)}, {"total_ms", total},
+                                      {"timings", report["timings"]}});
+        if (resolutions.size() == 1 || res == resolutions.back()) {
+          montage_images.push_back(std::move(color));
+          labels.push_back(v.name);
+        }
+      }
+    }
+    if (progress) std::fprintf(stderr, "%*s\r", 60, "");
+    if (montage_images.size() > 1) {
+      io::write_png(staging / "montage.png", io::montage(montage_images, labels, 3, 640));
+    }
+    io::write_text(staging / "report.json", summary.dump(2) + "\n");
+    if (fs::exists(out_dir)) fs::remove_all(out_dir);
+    if (out_dir.has_parent_path()) fs::create_directories(out_dir.parent_path());
+    fs::rename(staging, out_dir);
+    guard.committed = true;
+    std::cout << "wrote " << out_dir.string() << "/\n";
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra-render: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,153 @@
+#pragma once
+// One GL name per object, owned with RAII and created from a small descriptor (GL 4.5 DSA).
+#include <epoxy/gl.h>
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <utility>
+
+namespace penumbra::gl {
+
+// Move-only owner of one GL name; `Deleter` frees it.
+template <void (*Deleter)(GLuint)>
+class Handle {
+ public:
+  Handle() = default;
+  explicit Handle(GLuint id) : id_(id) {}
+  ~Handle() { reset(); }
+  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      reset();
+      id_ = std::exchange(o.id_, 0);
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+
+  GLuint id() const { return id_; }
+  explicit operator bool() const { return id_ != 0; }
+  void reset() {
+    if (id_) Deleter(id_);
+    id_ = 0;
+  }
+
+ private:
+  GLuint id_ = 0;
+};
+
+namespace detail {
+inline void delete_texture(GLuint id) { glDeleteTextures(1, &id); }
+inline void delete_sampler(GLuint id) { glDeleteSamplers(1, &id); }
+inline void delete_framebuffer(GLuint id) { glDeleteFramebuffers(1, &id); }
+inline void delete_buffer(GLuint id) { glDeleteBuffers(1, &id); }
+inline void delete_vertex_array(GLuint id) { glDeleteVertexArrays(1, &id); }
+inline void delete_query(GLuint id) { glDeleteQueries(1, &id); }
+inline void delete_program(GLuint id) { glDeleteProgram(id); }
+}  // namespace detail
+
+struct TextureDesc {
+  GLenum format = GL_RGBA8;  // sized internal format
+  int width = 1;
+  int height = 1;
+  int levels = 1;
+};
+
+// Immutable-storage 2D texture. Sampling state lives in `Sampler` objects.
+class Texture {
+ public:
+  Texture() = default;
+  // Throws if the driver cannot allocate it (e.g. out of memory), naming `label`.
+  Texture(const TextureDesc& desc, const char* label);
+  GLuint id() const { return handle_.id(); }
+  const TextureDesc& desc() const { return desc_; }
+  void bind(GLuint unit) const { glBindTextureUnit(unit, id()); }
+
+ private:
+  Handle<detail::delete_texture> handle_;
+  TextureDesc desc_;
+};
+
+struct SamplerDesc {
+  GLenum min_filter = GL_LINEAR;
+  GLenum mag_filter = GL_LINEAR;
+  GLenum wrap = GL_CLAMP_TO_BORDER;
+  float border[4] = {1, 1, 1, 1};
+  bool depth_compare = false;  // GL_COMPARE_REF_TO_TEXTURE with GL_LEQUAL
+};
+
+class Sampler {
+ public:
+  Sampler() = default;
+  explicit Sampler(const SamplerDesc& desc);
+  GLuint id() const { return handle_.id(); }
+  void bind(GLuint unit) const { glBindSampler(unit, id()); }
+
+ private:
+  Handle<detail::delete_sampler> handle_;
+};
+
+class Framebuffer {
+ public:
+  struct Attachment {
+    const Texture* texture;
+    GLenum point;  // GL_COLOR_ATTACHMENT0.., GL_DEPTH_ATTACHMENT
+  };
+  Framebuffer() = default;
+  // Throws naming `label` if the result is incomplete.
+  Framebuffer(std::span<const Attachment> attachments, const char* label);
+  GLuint id() const { return handle_.id(); }
+  void bind() const { glBindFramebuffer(GL_FRAMEBUFFER, id()); }
+
+ private:
+  Handle<detail::delete_framebuffer> handle_;
+};
+
+class Buffer {
+ public:
+  Buffer() = default;
+  // Immutable storage of `bytes` bytes; `data` may be null. `flags` as for glNamedBufferStorage.
+  Buffer(std::size_t bytes, const void* data, GLbitfield flags = 0);
+  GLuint id() const { return handle_.id(); }
+  std::size_t size() const { return bytes_; }
+
+ private:
+  Handle<detail::delete_buffer> handle_;
+  std::size_t bytes_ = 0;
+};
+
+class VertexArray {
+ public:
+  VertexArray();
+  GLuint id() const { return handle_.id(); }
+  void bind() const { glBindVertexArray(id()); }
+
+ private:
+  Handle<detail::delete_vertex_array> handle_;
+};
+
+class Query {
+ public:
+  explicit Query(GLenum target);
+  GLuint id() const { return handle_.id(); }
+
+ private:
+  Handle<detail::delete_query> handle_;
+};
+
+// A linked GLSL program. Build it with `ShaderLibrary::program`.
+class Program {
+ public:
+  Program() = default;
+  explicit Program(GLuint id) : handle_(id) {}
+  GLuint id() const { return handle_.id(); }
+  void use() const { glUseProgram(id()); }
+  GLint location(const char* name) const { return glGetUniformLocation(id(), name); }
+
+ private:
+  Handle<detail::delete_program> handle_;
+};
+
+}  // namespace penumbra::gl

@@ -1,0 +1,58 @@
+#pragma once
+// Per-pass timing. Wall clock around glFinish is always taken (the only meaningful method on
+// software GL); GL_TIME_ELAPSED queries are added on real GPUs and read a few frames late so that
+// they never stall the pipeline. Every number is reported with the method that produced it.
+#include <chrono>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gl/objects.h"
+
+namespace penumbra::gl {
+
+enum class TimingMethod { wall_finish, gpu_timer };
+const char* to_string(TimingMethod m);
+
+struct PassStats {
+  std::string pass;
+  TimingMethod method;
+  double median_ms = 0;
+  double min_ms = 0;
+  double max_ms = 0;
+  int samples = 0;
+};
+
+class PassTimer {
+ public:
+  explicit PassTimer(bool use_gpu_queries);
+  ~PassTimer();
+
+  // Brackets one pass of the current frame. Passes may not nest.
+  void begin(const std::string& pass);
+  void end();
+  // Collects GPU query results that are ready (all of them when `wait` is set).
+  void poll(bool wait);
+  void clear();
+
+  bool gpu_queries() const { return use_gpu_; }
+  // Median/min/max per pass and method, in first-seen pass order.
+  std::vector<PassStats> stats() const;
+  std::vector<std::string> pass_order() const { return order_; }
+
+ private:
+  struct Pending;
+  bool use_gpu_;
+  std::string current_;
+  std::chrono::steady_clock::time_point t0_;
+  std::vector<std::string> order_;
+  std::map<std::string, std::vector<double>> wall_ms_;
+  std::map<std::string, std::vector<double>> gpu_ms_;
+  std::vector<std::unique_ptr<Pending>> pending_;  // issued queries not yet read
+  std::vector<std::unique_ptr<Query>> free_queries_;
+};
+
+double median(std::vector<double> v);
+
+}  // namespace penumbra::gl

@@ -1,0 +1,119 @@
+#include "scene/mesh.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace penumbra::scene {
+
+Aabb Aabb::transformed(const glm::mat4& m) const {
+  Aabb out;
+  if (empty()) return out;
+  for (int i = 0; i < 8; ++i) out.extend(glm::vec3(m * glm::vec4(corner(i), 1.0f)));
+  return out;
+}
+
+Aabb MeshData::bounds() const {
+  Aabb b;
+  for (const auto& v : vertices) b.extend(v.position);
+  return b;
+}
+
+void MeshData::append(const MeshData& other, const glm::mat4& transform) {
+  const auto base = static_cast<std::uint32_t>(vertices.size());
+  const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(transform)));
+  for (const auto& v : other.vertices) {
+    glm::vec3 n = normal_matrix * v.normal;
+    const float len = glm::length(n);
+    vertices.push_back({glm::vec3(transform * glm::vec4(v.position, 1.0f)), len > 0 ? n / len : glm::vec3(0, 1, 0)});
+  }
+  for (auto i : other.indices) indices.push_back(base + i);
+}
+
+namespace {
+// Adds a quad with corners a, b, c, d (counter-clockwise seen from the side `normal` points to).
+void add_quad(MeshData& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 normal) {
+  const auto base = static_cast<std::uint32_t>(m.vertices.size());
+  for (const auto& p : {a, b, c, d}) m.vertices.push_back({p, normal});
+  for (std::uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
+}
+}  // namespace
+
+MeshData make_plane(float size_x, float size_z) {
+  MeshData m;
+  const float x = size_x / 2, z = size_z / 2;
+  add_quad(m, {-x, 0, z}, {x, 0, z}, {x, 0, -z}, {-x, 0, -z}, {0, 1, 0});
+  return m;
+}
+
+MeshData make_box(const glm::vec3& size) {
+  MeshData m;
+  const glm::vec3 h = size / 2.0f;
+  // +x, -x, +y, -y, +z, -z faces.
+  add_quad(m, {h.x, -h.y, h.z}, {h.x, -h.y, -h.z}, {h.x, h.y, -h.z}, {h.x, h.y, h.z}, {1, 0, 0});
+  add_quad(m, {-h.x, -h.y, -h.z}, {-h.x, -h.y, h.z}, {-h.x, h.y, h.z}, {-h.x, h.y, -h.z}, {-1, 0, 0});
+  add_quad(m, {-h.x, h.y, h.z}, {h.x, h.y, h.z}, {h.x, h.y, -h.z}, {-h.x, h.y, -h.z}, {0, 1, 0});
+  add_quad(m, {-h.x, -h.y, -h.z}, {h.x, -h.y, -h.z}, {h.x, -h.y, h.z}, {-h.x, -h.y, h.z}, {0, -1, 0});
+  add_quad(m, {-h.x, -h.y, h.z}, {h.x, -h.y, h.z}, {h.x, h.y, h.z}, {-h.x, h.y, h.z}, {0, 0, 1});
+  add_quad(m, {h.x, -h.y, -h.z}, {-h.x, -h.y, -h.z}, {-h.x, h.y, -h.z}, {h.x, h.y, -h.z}, {0, 0, -1});
+  return m;
+}
+
+MeshData make_sphere(float radius, int segments, int rings) {
+  MeshData m;
+  for (int r = 0; r <= rings; ++r) {
+    const float theta = std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(rings);
+    for (int s = 0; s <= segments; ++s) {
+      const float phi = 2 * std::numbers::pi_v<float> * static_cast<float>(s) / static_cast<float>(segments);
+      const glm::vec3 n(std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi));
+      m.vertices.push_back({radius * n, n});
+    }
+  }
+  const auto row = static_cast<std::uint32_t>(segments + 1);
+  for (std::uint32_t r = 0; r < static_cast<std::uint32_t>(rings); ++r) {
+    for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(segments); ++s) {
+      const std::uint32_t a = r * row + s, b = a + row;
+      m.indices.insert(m.indices.end(), {a, b, a + 1, a + 1, b, b + 1});
+    }
+  }
+  return m;
+}
+
+MeshData make_lattice(float width, float height, int bars_x, int bars_y, float bar_width) {
+  MeshData m;
+  const MeshData vertical = make_box({bar_width, height, bar_width});
+  const MeshData horizontal = make_box({width, bar_width, bar_width});
+  for (int i = 0; i < bars_x; ++i) {
+    const float x = bars_x == 1 ? 0.0f : -width / 2 + width * static_cast<float>(i) / static_cast<float>(bars_x - 1);
+    m.append(vertical, glm::translate(glm::mat4(1), glm::vec3(x, 0, 0)));
+  }
+  for (int j = 0; j < bars_y; ++j) {
+    const float y = bars_y == 1 ? 0.0f : -height / 2 + height * static_cast<float>(j) / static_cast<float>(bars_y - 1);
+    m.append(horizontal, glm::translate(glm::mat4(1), glm::vec3(0, y, 0)));
+  }
+  return m;
+}
+
+GpuMesh::GpuMesh(const MeshData& mesh)
+    : vertices_(mesh.vertices.size() * sizeof(Vertex), mesh.vertices.data()),
+      indices_(mesh.indices.size() * sizeof(std::uint32_t), mesh.indices.data()),
+      index_count_(mesh.indices.size()) {
+  const GLuint vao = vao_.id();
+  glVertexArrayVertexBuffer(vao, 0, vertices_.id(), 0, sizeof(Vertex));
+  glVertexArrayElementBuffer(vao, indices_.id());
+  glEnableVertexArrayAttrib(vao, 0);
+  glVertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, position));
+  glVertexArrayAttribBinding(vao, 0, 0);
+  glEnableVertexArrayAttrib(vao, 1);
+  glVertexArrayAttribFormat(vao, 1, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, normal));
+  glVertexArrayAttribBinding(vao, 1, 0);
+}
+
+void GpuMesh::draw() const {
+  if (index_count_ == 0) return;
+  vao_.bind();
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(index_count_), GL_UNSIGNED_INT, nullptr);
+}
+
+}  // namespace penumbra::scene

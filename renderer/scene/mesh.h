@@ -1,0 +1,68 @@
+#pragma once
+// Triangle meshes on the CPU (procedural shapes, loaded models) and their GPU counterpart.
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gl/objects.h"
+
+namespace penumbra::scene {
+
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+};
+
+struct Aabb {
+  glm::vec3 lo{std::numeric_limits<float>::max()};
+  glm::vec3 hi{std::numeric_limits<float>::lowest()};
+
+  bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+  void extend(const glm::vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void extend(const Aabb& b) {
+    if (!b.empty()) {
+      extend(b.lo);
+      extend(b.hi);
+    }
+  }
+  // Corner i (bit 0: x, bit 1: y, bit 2: z picks hi).
+  glm::vec3 corner(int i) const { return {i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z}; }
+  Aabb transformed(const glm::mat4& m) const;
+};
+
+struct MeshData {
+  std::vector<Vertex> vertices;
+  std::vector<std::uint32_t> indices;  // triangle list
+
+  Aabb bounds() const;
+  void append(const MeshData& other, const glm::mat4& transform);
+};
+
+// Procedural shapes, centred on the origin.
+MeshData make_plane(float size_x, float size_z);                      // in y = 0, normal +y
+MeshData make_box(const glm::vec3& size);
+MeshData make_sphere(float radius, int segments = 48, int rings = 24);
+// A lattice of thin square bars in the xy plane: `bars_x` vertical and `bars_y` horizontal bars of
+// width `bar_width` over a `width` × `height` frame of depth `bar_width`.
+MeshData make_lattice(float width, float height, int bars_x, int bars_y, float bar_width);
+
+// GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.
+class GpuMesh {
+ public:
+  explicit GpuMesh(const MeshData& mesh);
+  void draw() const;
+  std::size_t index_count() const { return index_count_; }
+
+ private:
+  gl::Buffer vertices_;
+  gl::Buffer indices_;
+  gl::VertexArray vao_;
+  std::size_t index_count_ = 0;
+};
+
+}  // namespace penumbra::scene

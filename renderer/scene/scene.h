@@ -1,0 +1,87 @@
+#pragma once
+// What is drawn: objects (mesh + transform + albedo), one camera, one shadow-casting light.
+// Plain data: a sweep or a test may build or edit a Scene directly.
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene/mesh.h"
+
+namespace penumbra::scene {
+
+struct Camera {
+  enum class Projection { perspective, orthographic };
+  Projection projection = Projection::perspective;
+  glm::vec3 position{0, 6, 12};
+  glm::vec3 target{0, 0, 0};
+  glm::vec3 up{0, 1, 0};
+  float fov_y_deg = 50;        // perspective
+  float ortho_height_ws = 10;  // orthographic: world-space height of the view
+  float near_ws = 0.1f;
+  float far_ws = 100;
+
+  glm::mat4 view() const;
+  glm::mat4 projection_matrix(float aspect) const;
+};
+
+struct Light {
+  enum class Type { directional, spot };
+  Type type = Type::directional;
+  glm::vec3 direction{0, -1, 0};  // the direction light travels, normalized
+  glm::vec3 position{0, 10, 0};   // spot only
+  float spot_fov_deg = 60;        // spot only: full cone angle
+  // Area-light size for soft shadows (PCSS): the light's angular diameter in degrees for a
+  // directional light, the emitter's width in world units for a spot light.
+  float size = 1;
+  glm::vec3 color{1, 1, 1};
+  float ambient = 0.2f;  // fraction of light that reaches shadowed surfaces
+};
+
+struct Object {
+  std::string name;
+  std::shared_ptr<const MeshData> mesh;
+  glm::mat4 model{1};
+  glm::vec3 albedo{0.8f, 0.8f, 0.8f};
+};
+
+struct Scene {
+  std::string name;
+  std::vector<Object> objects;
+  Camera camera;
+  Light light;
+
+  // World-space bounds of all objects (empty for an empty scene).
+  Aabb bounds() const;
+};
+
+// Thrown for a bad scene name or file; what() is one line naming the file and field.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Built-in procedural scenes: "demo" (the default: box, sphere, fence, tilted panel on a ground
+// plane), "box", "sphere", "fence", "tilted" (grazing receiver for acne/bias), "square" (analytic
+// square occluder, light and orthographic camera straight down), "two-planes" (half-plane blocker
+// over a receiver under a spot light), "empty".
+std::span<const std::string_view> builtin_scene_names();
+Scene make_builtin_scene(std::string_view name);
+
+// Square occluder of side `side_ws` at height `height_ws` over a plane (the analytic test scene).
+Scene make_square_scene(float side_ws, float height_ws);
+// Half-plane blocker (x < 0) at `blocker_height_ws` over a receiver at y = 0, lit by a spot light
+// of width `light_width_ws` at `light_height_ws`, seen by an orthographic camera from above.
+Scene make_two_planes_scene(float blocker_height_ws, float light_height_ws, float light_width_ws);
+
+// Loads a JSON scene file (format in docs/scene-format.md); models through Assimp.
+Scene load_scene_file(const std::filesystem::path& path);
+// A built-in name or a path to a scene file.
+Scene load_scene(std::string_view name_or_path);
+
+}  // namespace penumbra::scene

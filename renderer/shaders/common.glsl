@@ -1,0 +1,65 @@
+// Shared shadow-map state: samplers, light description, bias helpers.
+// Spaces: `sc` = shadow-map coordinates (uv in [0,1]^2, depth in [0,1] window depth);
+// `*_ws` = world units; light-view depth = distance along the light's viewing axis.
+
+const float PI = 3.14159265358979;
+
+layout(binding = 0) uniform sampler2DShadow u_shadow_cmp;          // linear: hardware 2x2 comparison
+layout(binding = 1) uniform sampler2DShadow u_shadow_cmp_nearest;  // nearest comparison / gather
+layout(binding = 2) uniform sampler2D u_shadow_depth;              // raw depth (blocker search)
+layout(binding = 3) uniform sampler2D u_moments;                   // VSM moments (linear depth)
+
+uniform bool u_light_perspective;
+uniform float u_light_near_ws;
+uniform float u_light_far_ws;
+uniform float u_light_extent_ws;    // directional: side of the map; spot: unfitted near-plane width
+uniform float u_light_s_xy;         // fitting scale
+uniform float u_light_tan_half_fov; // spot
+uniform float u_shadow_res;         // texels per side
+uniform float u_rpdb_max;           // largest |d depth / d uv| trusted by the receiver-plane bias
+uniform bool u_receiver_plane_bias;
+uniform vec2 u_poisson[64];         // unit-disk taps, the outermost at radius 1
+
+// Shadow-map uv per world unit at light-view depth `depth_ws`.
+float uv_per_ws(float depth_ws) {
+  if (!u_light_perspective) return 1.0 / u_light_extent_ws;
+  return u_light_s_xy / (2.0 * max(depth_ws, 1e-6) * u_light_tan_half_fov);
+}
+
+// Light-view depth (world units) of a stored window depth `d`.
+float linear_depth_ws(float d) {
+  if (!u_light_perspective) return mix(u_light_near_ws, u_light_far_ws, d);
+  float n = u_light_near_ws, f = u_light_far_ws;
+  float z_ndc = 2.0 * d - 1.0;
+  return 2.0 * n * f / (f + n - z_ndc * (f - n));
+}
+
+// d(depth)/d(uv) of the receiver plane, from screen-space derivatives; zero where undefined.
+vec2 receiver_plane_gradient(vec3 sc) {
+  if (!u_receiver_plane_bias) return vec2(0.0);
+  vec3 dx = dFdx(sc);
+  vec3 dy = dFdy(sc);
+  float det = dx.x * dy.y - dx.y * dy.x;
+  if (abs(det) < 1e-20) return vec2(0.0);
+  vec2 g = vec2(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+  float len = length(g);
+  return len > u_rpdb_max ? g * (u_rpdb_max / len) : g;
+}
+
+// Receiver depth to compare against at `sc.xy + offset_uv`, clamped into the map's depth range.
+float reference_depth(vec3 sc, vec2 offset_uv, vec2 gradient) {
+  return clamp(sc.z + dot(offset_uv, gradient), 0.0, 1.0);
+}
+
+// Interleaved gradient noise (Jimenez 2014): a per-pixel value in [0, 1).
+float interleaved_gradient_noise(vec2 pixel) {
+  return fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715))));
+}
+
+// Rotation of the Poisson disk for this pixel (identity when rotation is off).
+mat2 poisson_rotation(bool rotate) {
+  if (!rotate) return mat2(1.0);
+  float a = 2.0 * PI * interleaved_gradient_noise(gl_FragCoord.xy);
+  float c = cos(a), s = sin(a);
+  return mat2(c, s, -s, c);
+}

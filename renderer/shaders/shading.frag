@@ -1,0 +1,82 @@
+// Camera pass: Lambert shading with the technique's visibility (TECHNIQUE_* and KERNEL_GRID
+// are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer) and
+// the light visibility in [0, 1] (shadow test * spot cone).
+#include "common.glsl"
+#include "shadow_hard.glsl"
+#include "shadow_pcf.glsl"
+#include "shadow_pcss.glsl"
+#include "shadow_vsm.glsl"
+
+in vec3 v_world;
+in vec3 v_normal;
+
+uniform mat4 u_light_view_projection;
+uniform mat4 u_light_view;
+uniform vec3 u_light_direction;   // direction light travels
+uniform vec3 u_light_position;    // spot
+uniform float u_spot_cos_outer;   // spot cone
+uniform float u_spot_cos_inner;
+uniform vec3 u_light_color;
+uniform float u_ambient;
+uniform vec3 u_albedo;
+uniform float u_normal_offset_texels;
+
+uniform float u_pcf_radius_texels;  // used when u_pcf_radius_ws < 0
+uniform float u_pcf_radius_ws;
+uniform int u_taps;
+uniform bool u_rotate;
+uniform int u_max_grid_taps;
+uniform int u_blocker_taps;
+
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out float o_visibility;
+
+void main() {
+  vec3 n = normalize(v_normal);
+  if (!gl_FrontFacing) n = -n;
+  vec3 to_light = u_light_perspective ? normalize(u_light_position - v_world) : -u_light_direction;
+  float n_dot_l = dot(n, to_light);
+
+  float depth_ws = -(u_light_view * vec4(v_world, 1.0)).z;
+  float texel_ws = 1.0 / (uv_per_ws(depth_ws) * u_shadow_res);
+  float sin_angle = sqrt(clamp(1.0 - n_dot_l * n_dot_l, 0.0, 1.0));
+  vec3 lookup = v_world + n * (u_normal_offset_texels * texel_ws * sin_angle);
+  vec4 clip = u_light_view_projection * vec4(lookup, 1.0);
+  vec3 sc = clip.xyz / clip.w * 0.5 + 0.5;
+  vec2 gradient = receiver_plane_gradient(sc);  // uniform control flow: derivatives are valid here
+
+  float visibility;
+#if defined(TECHNIQUE_HARD)
+  visibility = shadow_hard(sc);
+#elif defined(TECHNIQUE_PCF)
+  float radius_uv = u_pcf_radius_ws >= 0.0 ? u_pcf_radius_ws * uv_per_ws(depth_ws) : u_pcf_radius_texels / u_shadow_res;
+#  if defined(KERNEL_GRID)
+  visibility = pcf_grid(sc, gradient, radius_uv * u_shadow_res, u_max_grid_taps);
+#  else
+  visibility = pcf_poisson(sc, gradient, radius_uv, u_taps, poisson_rotation(u_rotate));
+#  endif
+#elif defined(TECHNIQUE_PCSS)
+  float filter_uv;
+#  if defined(KERNEL_GRID)
+  const bool grid = true;
+#  else
+  const bool grid = false;
+#  endif
+  visibility = shadow_pcss(sc, gradient, depth_ws, u_blocker_taps, u_taps, grid, u_max_grid_taps,
+                           poisson_rotation(true), filter_uv);
+#elif defined(TECHNIQUE_VSM)
+  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
+  visibility = shadow_vsm(sc.xy, t);
+#else
+#  error "no TECHNIQUE_* defined"
+#endif
+
+  if (u_light_perspective) {
+    float cos_axis = dot(-to_light, u_light_direction);
+    visibility *= smoothstep(u_spot_cos_outer, u_spot_cos_inner, cos_axis);
+  }
+  float direct = max(n_dot_l, 0.0) * visibility;
+  vec3 radiance = u_albedo * u_light_color * (u_ambient + (1.0 - u_ambient) * direct);
+  o_color = vec4(radiance, 1.0);
+  o_visibility = visibility;
+}

@@ -1,0 +1,40 @@
+// Percentage-closer soft shadows (Fernando 2005; Kreuzer 2017 eq. 5.8-5.11).
+// Spot light: emitter of radius u_pcss_light_radius_uv (near-plane uv); directional light: angular
+// radius with tangent u_pcss_tan_half_angle.
+uniform float u_pcss_light_radius_uv;
+uniform float u_pcss_tan_half_angle;
+uniform float u_pcss_min_penumbra_ws;
+
+// Search radius (uv) of the blocker search for a receiver at light-view depth z_r.
+float pcss_search_uv(float z_r) {
+  if (u_light_perspective) return u_pcss_light_radius_uv * (z_r - u_light_near_ws) / z_r;
+  return u_pcss_tan_half_angle * (z_r - u_light_near_ws) / u_light_extent_ws;
+}
+
+// Filter radius (uv) for receiver depth z_r and mean blocker depth z_b, before the clamp.
+float pcss_filter_uv(float z_r, float z_b) {
+  if (u_light_perspective) return u_pcss_light_radius_uv * (z_r - z_b) / z_b * u_light_near_ws / z_r;
+  return u_pcss_tan_half_angle * (z_r - z_b) / u_light_extent_ws;
+}
+
+// Returns visibility; `filter_uv` receives the filter radius used (0 when no blocker was found).
+float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
+                  int max_grid_taps, mat2 rotation, out float filter_uv) {
+  filter_uv = 0.0;
+  float search = pcss_search_uv(z_r);
+  float blocker_sum = 0.0;
+  int blockers = 0;
+  for (int i = 0; i < blocker_taps; ++i) {
+    vec2 o = rotation * u_poisson[i] * search;
+    float d = textureLod(u_shadow_depth, sc.xy + o, 0.0).r;
+    if (d < reference_depth(sc, o, gradient)) {
+      blocker_sum += linear_depth_ws(d);
+      ++blockers;
+    }
+  }
+  if (blockers == 0) return 1.0;  // no blocker: fully lit
+  float z_b = blocker_sum / float(blockers);
+  filter_uv = max(pcss_filter_uv(z_r, z_b), u_pcss_min_penumbra_ws * uv_per_ws(z_r));
+  if (grid) return pcf_grid(sc, gradient, filter_uv * u_shadow_res, max_grid_taps);
+  return pcf_poisson(sc, gradient, filter_uv, filter_taps, rotation);
+}

@@ -1,0 +1,203 @@
+#include "shadows/settings.h"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace penumbra::shadows {
+namespace {
+
+constexpr std::array<std::string_view, 4> kTechniques = {"hard", "pcf", "pcss", "vsm"};
+constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
+constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
+
+// Row builders. Each expands to a Setting whose get/set lambdas touch exactly one field.
+#define PENUMBRA_REAL(P, field, unit, lo, hi, help)                                                      \
+  Setting<P> {                                                                                           \
+    #field, unit, SettingType::real, lo, hi, help, [](const P& p) { return static_cast<double>(p.field); }, \
+        [](P& p, double v) { p.field = static_cast<float>(v); }                                          \
+  }
+#define PENUMBRA_INT(P, field, unit, lo, hi, help)                                                          \
+  Setting<P> {                                                                                              \
+    #field, unit, SettingType::integer, lo, hi, help, [](const P& p) { return static_cast<double>(p.field); }, \
+        [](P& p, double v) { p.field = static_cast<int>(std::lround(v)); }                                  \
+  }
+#define PENUMBRA_BOOL(P, field, help)                                                                    \
+  Setting<P> {                                                                                           \
+    #field, "", SettingType::boolean, 0, 1, help, [](const P& p) { return p.field ? 1.0 : 0.0; },        \
+        [](P& p, double v) { p.field = v != 0.0; }                                                       \
+  }
+#define PENUMBRA_CHOICE(P, field, Enum, names, help)                                                       \
+  Setting<P> {                                                                                             \
+    #field, "", SettingType::choice, 0, static_cast<double>(names.size() - 1), help,                       \
+        [](const P& p) { return static_cast<double>(p.field); },                                           \
+        [](P& p, double v) { p.field = static_cast<Enum>(static_cast<int>(v)); }, names                    \
+  }
+
+const Setting<ShadowMapParams> kMapTable[] = {
+    PENUMBRA_INT(ShadowMapParams, resolution_texels, "texels", 1, 65536, "shadow-map width = height"),
+    PENUMBRA_BOOL(ShadowMapParams, fit, "fit the light frustum to the potential shadow receivers"),
+    PENUMBRA_REAL(ShadowMapParams, slope_bias, "", 0, 16, "slope-scaled raster depth offset (glPolygonOffset factor)"),
+    PENUMBRA_REAL(ShadowMapParams, offset_bias, "depth steps", 0, 1e4, "constant raster depth offset (glPolygonOffset units)"),
+    PENUMBRA_REAL(ShadowMapParams, normal_offset_texels, "texels", 0, 16, "lookup offset along the surface normal"),
+    PENUMBRA_BOOL(ShadowMapParams, receiver_plane_bias, "per-tap reference depth from the receiver's depth gradient"),
+};
+
+const Setting<PcfParams> kPcfTable[] = {
+    PENUMBRA_REAL(PcfParams, radius, "radius_unit", 0, 1e6, "filter radius"),
+    PENUMBRA_CHOICE(PcfParams, radius_unit, RadiusUnit, kUnits, "unit of the radius: shadow-map texels or world units"),
+    PENUMBRA_CHOICE(PcfParams, kernel, Kernel, kKernels, "grid: box over whole texels, coverage-weighted; poisson: rotated disk"),
+    PENUMBRA_INT(PcfParams, poisson_taps, "taps", 1, 64, "Poisson-disk taps (each a hardware 2x2 comparison)"),
+    PENUMBRA_BOOL(PcfParams, rotate, "rotate the Poisson disk per pixel"),
+    PENUMBRA_INT(PcfParams, max_grid_taps, "taps", 2, 256, "grid taps per axis before the grid is strided"),
+};
+
+const Setting<PcssParams> kPcssTable[] = {
+    PENUMBRA_CHOICE(PcssParams, kernel, Kernel, kKernels, "kernel of the filtering step"),
+    PENUMBRA_INT(PcssParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search"),
+    PENUMBRA_INT(PcssParams, filter_taps, "taps", 1, 64, "Poisson taps of the filtering step"),
+    PENUMBRA_REAL(PcssParams, min_penumbra_ws, "world", 0, 1e6, "minimum filter radius at the receiver"),
+    PENUMBRA_INT(PcssParams, max_grid_taps, "taps", 2, 256, "grid taps per axis before the grid is strided"),
+};
+
+const Setting<VsmParams> kVsmTable[] = {
+    PENUMBRA_REAL(VsmParams, radius, "radius_unit", 0, 1e6, "box-blur radius of the moments"),
+    PENUMBRA_CHOICE(VsmParams, radius_unit, RadiusUnit, kUnits, "unit of the radius: shadow-map texels or world units"),
+    PENUMBRA_REAL(VsmParams, min_variance, "depth^2", 0, 1, "variance floor"),
+    PENUMBRA_REAL(VsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
+};
+
+#undef PENUMBRA_REAL
+#undef PENUMBRA_INT
+#undef PENUMBRA_BOOL
+#undef PENUMBRA_CHOICE
+
+template <class P>
+nlohmann::json table_json(const P& p) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& s : settings_table(static_cast<const P*>(nullptr))) {
+    const double v = s.get(p);
+    switch (s.type) {
+      case SettingType::real: j[std::string(s.key)] = v; break;
+      case SettingType::integer: j[std::string(s.key)] = static_cast<long long>(v); break;
+      case SettingType::boolean: j[std::string(s.key)] = v != 0.0; break;
+      case SettingType::choice: j[std::string(s.key)] = std::string(s.choices[static_cast<std::size_t>(v)]); break;
+    }
+  }
+  return j;
+}
+
+}  // namespace
+
+std::span<const std::string_view> technique_names() { return kTechniques; }
+std::string_view to_string(Technique t) { return kTechniques[static_cast<std::size_t>(t)]; }
+Technique technique_from_string(std::string_view name) {
+  for (std::size_t i = 0; i < kTechniques.size(); ++i)
+    if (kTechniques[i] == name) return static_cast<Technique>(i);
+  throw std::invalid_argument("unknown technique '" + std::string(name) + "' (expected hard, pcf, pcss or vsm)");
+}
+
+std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*) { return kMapTable; }
+std::span<const Setting<PcfParams>> settings_table(const PcfParams*) { return kPcfTable; }
+std::span<const Setting<PcssParams>> settings_table(const PcssParams*) { return kPcssTable; }
+std::span<const Setting<VsmParams>> settings_table(const VsmParams*) { return kVsmTable; }
+
+template <class P>
+void set_from_string(const Setting<P>& s, P& params, std::string_view value) {
+  const std::string key(s.key);
+  const std::string text(value);
+  auto fail = [&](const std::string& expected) {
+    throw std::invalid_argument(key + ": expected " + expected + ", got '" + text + "'");
+  };
+  auto range = [&] {
+    return "a number in [" + nlohmann::json(s.min).dump() + ", " + nlohmann::json(s.max).dump() + "]";
+  };
+  switch (s.type) {
+    case SettingType::boolean:
+      if (value == "true" || value == "1" || value == "on") s.set(params, 1);
+      else if (value == "false" || value == "0" || value == "off") s.set(params, 0);
+      else fail("true or false");
+      return;
+    case SettingType::choice: {
+      for (std::size_t i = 0; i < s.choices.size(); ++i) {
+        if (s.choices[i] == value) {
+          s.set(params, static_cast<double>(i));
+          return;
+        }
+      }
+      std::string names;
+      for (auto c : s.choices) names += (names.empty() ? "" : " or ") + std::string(c);
+      fail(names);
+      return;
+    }
+    case SettingType::real:
+    case SettingType::integer: {
+      double v = 0;
+      const auto* end = text.data() + text.size();
+      auto [ptr, ec] = std::from_chars(text.data(), end, v);
+      if (ec != std::errc() || ptr != end || !std::isfinite(v)) fail(range());
+      if (s.type == SettingType::integer && v != std::floor(v)) fail("an integer in [" + nlohmann::json(s.min).dump() + ", " + nlohmann::json(s.max).dump() + "]");
+      if (v < s.min || v > s.max) fail(range());
+      s.set(params, v);
+      return;
+    }
+  }
+}
+
+template <class P>
+std::string value_to_string(const Setting<P>& s, const P& params) {
+  const double v = s.get(params);
+  switch (s.type) {
+    case SettingType::boolean: return v != 0.0 ? "true" : "false";
+    case SettingType::choice: return std::string(s.choices[static_cast<std::size_t>(v)]);
+    case SettingType::integer: return std::to_string(static_cast<long long>(v));
+    case SettingType::real: return nlohmann::json(static_cast<float>(v)).dump();
+  }
+  return {};
+}
+
+#define PENUMBRA_INSTANTIATE(P)                                                      \
+  template void set_from_string<P>(const Setting<P>&, P&, std::string_view);       \
+  template std::string value_to_string<P>(const Setting<P>&, const P&);
+PENUMBRA_INSTANTIATE(ShadowMapParams)
+PENUMBRA_INSTANTIATE(PcfParams)
+PENUMBRA_INSTANTIATE(PcssParams)
+PENUMBRA_INSTANTIATE(VsmParams)
+#undef PENUMBRA_INSTANTIATE
+
+nlohmann::json to_json(const ShadowMapParams& p) { return table_json(p); }
+nlohmann::json to_json(const PcfParams& p) { return table_json(p); }
+nlohmann::json to_json(const PcssParams& p) { return table_json(p); }
+nlohmann::json to_json(const VsmParams& p) { return table_json(p); }
+
+nlohmann::json to_json(const ShadowSettings& s) {
+  nlohmann::json j;
+  j["technique"] = std::string(to_string(s.technique));
+  j["map"] = to_json(s.map);
+  switch (s.technique) {
+    case Technique::hard: break;
+    case Technique::pcf: j["pcf"] = to_json(s.pcf); break;
+    case Technique::pcss: j["pcss"] = to_json(s.pcss); break;
+    case Technique::vsm: j["vsm"] = to_json(s.vsm); break;
+  }
+  return j;
+}
+
+std::string describe(const ShadowSettings& s) {
+  std::string out(to_string(s.technique));
+  auto add = [&](const auto& params) {
+    for (const auto& row : settings_table(&params)) out += " " + std::string(row.key) + "=" + value_to_string(row, params);
+  };
+  switch (s.technique) {
+    case Technique::hard: break;
+    case Technique::pcf: add(s.pcf); break;
+    case Technique::pcss: add(s.pcss); break;
+    case Technique::vsm: add(s.vsm); break;
+  }
+  return out;
+}
+
+}  // namespace penumbra::shadows

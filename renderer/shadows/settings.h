@@ -1,0 +1,103 @@
+#pragma once
+// Technique parameters, declared once. Each parameters struct is plain data; its table below
+// (name, unit, range, help) feeds the CLI, the ImGui panels, the JSON reports and shader defines,
+// so there is no second list to keep in sync.
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace penumbra::shadows {
+
+enum class Technique { hard, pcf, pcss, vsm };
+enum class Kernel { grid, poisson };
+enum class RadiusUnit { texels, world };
+
+std::span<const std::string_view> technique_names();  // "hard", "pcf", "pcss", "vsm"
+std::string_view to_string(Technique t);
+Technique technique_from_string(std::string_view name);  // throws std::invalid_argument
+
+// Shadow-map pass and biases, shared by every technique.
+struct ShadowMapParams {
+  int resolution_texels = 2048;
+  bool fit = true;                    // fit the light frustum to the potential receivers L ∩ V ∩ S
+  float slope_bias = 1.5f;            // glPolygonOffset factor (depth slopes)
+  float offset_bias = 4.0f;           // glPolygonOffset units (smallest depth steps)
+  float normal_offset_texels = 0.75f; // lookup moved along the normal, in texels at the receiver
+  bool receiver_plane_bias = true;    // per-tap depth from the receiver's depth gradient
+};
+
+struct PcfParams {
+  float radius = 2;                   // filter radius, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  Kernel kernel = Kernel::poisson;
+  int poisson_taps = 25;
+  bool rotate = true;                 // per-pixel random rotation of the Poisson disk
+  int max_grid_taps = 32;             // per axis; larger kernels are sampled with a stride
+};
+
+struct PcssParams {
+  Kernel kernel = Kernel::poisson;
+  int blocker_taps = 25;
+  int filter_taps = 25;
+  float min_penumbra_ws = 0.01f;      // smallest filter radius, world units at the receiver
+  int max_grid_taps = 32;
+};
+
+struct VsmParams {
+  float radius = 2;                   // box-blur radius of the moments, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  float min_variance = 1e-6f;         // in normalized depth²
+  float bleed_reduction = 0.2f;       // p below this maps to 0, rest rescaled to [0, 1]
+};
+
+// Everything a frame needs to know about its shadows.
+struct ShadowSettings {
+  Technique technique = Technique::pcf;
+  ShadowMapParams map;
+  PcfParams pcf;
+  PcssParams pcss;
+  VsmParams vsm;
+};
+
+enum class SettingType { real, integer, boolean, choice };
+
+// One row of a parameters table. get/set go through double so every front end handles a row the
+// same way; choices are stored as their index.
+template <class P>
+struct Setting {
+  std::string_view key;
+  std::string_view unit;
+  SettingType type;
+  double min;
+  double max;
+  std::string_view help;
+  double (*get)(const P&);
+  void (*set)(P&, double);
+  std::span<const std::string_view> choices = {};
+};
+
+std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*);
+std::span<const Setting<PcfParams>> settings_table(const PcfParams*);
+std::span<const Setting<PcssParams>> settings_table(const PcssParams*);
+std::span<const Setting<VsmParams>> settings_table(const VsmParams*);
+
+// Sets one row from its textual value ("2.5", "true", "poisson"); throws std::invalid_argument
+// naming the key, the value and the accepted range or choices.
+template <class P>
+void set_from_string(const Setting<P>& s, P& params, std::string_view value);
+template <class P>
+std::string value_to_string(const Setting<P>& s, const P& params);
+
+// {"key": value, ...} using the table; choices as strings.
+nlohmann::json to_json(const ShadowSettings& s);
+nlohmann::json to_json(const ShadowMapParams& p);
+nlohmann::json to_json(const PcfParams& p);
+nlohmann::json to_json(const PcssParams& p);
+nlohmann::json to_json(const VsmParams& p);
+
+// The parameters relevant to `s.technique`, as "section.key=value" pairs (for names and reports).
+std::string describe(const ShadowSettings& s);
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs Penumbra's build and run dependencies from Debian packages, only those missing.
+# Idempotent: a second run installs nothing and prints one line.
+set -euo pipefail
+
+packages=(
+  cmake g++ make pkg-config
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libepoxy-dev libegl-dev libegl1-mesa-dev libgl1-mesa-dri libglm-dev
+  libglfw3-dev libimgui-dev libstb-dev
+  libopencv-dev libopencv-contrib-dev
+  libceres-dev
+  libopenimageio-dev openimageio-tools
+  libassimp-dev libcli11-dev nlohmann-json3-dev
+  python3-matplotlib
+  xvfb xauth fonts-dejavu-core
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+  [[ "$status" == "install ok installed" ]] || missing+=("$p")
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+if [[ $(id -u) -ne 0 ]]; then
+  echo "setup: missing packages (${missing[*]}); run this script as root (sudo $0) to install them" >&2
+  exit 1
+fi
+
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done"
