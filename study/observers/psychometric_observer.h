@@ -1,0 +1,53 @@
+#pragma once
+// A simulated observer that answers from a planted psychometric model. Its threshold is planted
+// in filter-radius terms, the way the study reports it: at artifact size a the observer is correct
+// with probability p_threshold when filter_radius_px = c_true * a, i.e. at intensity
+// log10(a / (c_true a)) = -log10(c_true) whatever a is.
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "observers/observer.h"
+#include "observers/random.h"
+#include "quest/psychometric.h"
+
+namespace penumbra::observers {
+
+struct PlantedModel {
+  double c_true = 3.47;  // threshold filter radius in artifact sizes (texels)
+  psychometric::Model model = psychometric::Model::log_weibull;
+  double slope = 3.5;          // beta in the model's units (per log10 unit for the log models)
+  double guess = 0.5;          // gamma
+  double lapse = 0.0;          // lambda
+  double p_threshold = 0.82;   // the percent correct at which c_true is the threshold
+};
+
+class PsychometricObserver : public Observer {
+ public:
+  // One planted model per condition. Throws std::invalid_argument for a model whose psi never
+  // reaches p_threshold or with c_true <= 0.
+  PsychometricObserver(std::map<std::string, PlantedModel> conditions, std::uint64_t seed);
+
+  Response respond(const Stimulus& stimulus) override;
+  // The planted probability of a correct answer.
+  double p_correct(const Stimulus& stimulus) const;
+  // The planted threshold in QUEST intensity units, -log10(c_true).
+  double threshold_intensity(const std::string& condition) const;
+
+ private:
+  struct Planted {
+    PlantedModel model;
+    psychometric::Params<double> params;
+  };
+  const Planted& planted(const std::string& condition) const;
+
+  std::map<std::string, Planted> conditions_;
+  Random random_;
+};
+
+// The model's x for a stimulus: the intensity for the log-unit models, the ratio
+// artifact_px / filter_radius_px for the linear Weibull.
+double model_x(psychometric::Model model, const Stimulus& stimulus);
+
+}  // namespace penumbra::observers
