@@ -65,9 +65,10 @@ std::vector<double> parse_intensities(const std::string& text) {
   for (const std::string& item : split_commas(text, "--intensities")) {
     double value = 0.0;
     const auto [end, error] = std::from_chars(item.data(), item.data() + item.size(), value);
-    if (error != std::errc() || end != item.data() + item.size() || !std::isfinite(value))
+    // +-inf is accepted (used at the table's edge, as Psychtoolbox does); NaN is not.
+    if (error != std::errc() || end != item.data() + item.size() || std::isnan(value))
       throw UsageError("--intensities: item " + std::to_string(values.size() + 1) + " is '" + item +
-                       "', expected a finite number");
+                       "', expected a number");
     values.push_back(value);
   }
   return values;

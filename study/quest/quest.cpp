@@ -216,26 +216,42 @@ double Quest::quantile() const { return quantile(quantile_order_); }
 
 double Quest::quantile(double order) const {
   require(order >= 0.0 && order <= 1.0, format("quantileOrder %f is outside range 0 to 1.", order));
-  std::vector<double> cumulative(pdf_.size());
-  double running = 0.0;
-  for (std::size_t j = 0; j < pdf_.size(); ++j) cumulative[j] = running += pdf_[j];
-  const double total = cumulative.back();
+  // The running sum reproduces cumsum(pdf) bit for bit; its last value is p(end).
+  double total = 0.0;
+  for (double value : pdf_) total += value;
   require(std::isfinite(total), "pdf is not finite");
   require(total != 0.0, "pdf is all zero");
-  if (order < cumulative.front()) return params_.t_guess + x_.front();
+  if (order < pdf_.front()) return params_.t_guess + x_.front();
   if (order > total) return params_.t_guess + x_.back();
-  // Points where the cumulative sum strictly rises (the first point always counts).
-  std::vector<double> p_rising, x_rising;
-  double previous = -1.0;
-  for (std::size_t j = 0; j < cumulative.size(); ++j) {
-    if (cumulative[j] - previous > 0.0) {
-      p_rising.push_back(cumulative[j]);
-      x_rising.push_back(x_[j]);
+  // interp1(p(index), x(index), order * p(end)) over the points where the cumulative sum strictly
+  // rises (the first point always counts), without building those vectors: find the first rising
+  // point above the target and interpolate from the rising point before it.
+  const double target = order * total;
+  double running = 0.0, previous = -1.0;
+  double below_p = NAN, below_x = NAN;  // last rising point <= target
+  double before_p = NAN, before_x = NAN;  // the rising point before that one
+  std::size_t rising = 0;
+  for (std::size_t j = 0; j < pdf_.size(); ++j) {
+    running += pdf_[j];
+    if (running - previous > 0.0) {
+      ++rising;
+      if (running > target) {
+        if (std::isnan(below_p)) return NAN;  // below the first point: interp1 gives NaN
+        const double slope = (x_[j] - below_x) / (running - below_p);
+        return params_.t_guess + (slope * (target - below_p) + below_x);
+      }
+      before_p = below_p;
+      before_x = below_x;
+      below_p = running;
+      below_x = x_[j];
     }
-    previous = cumulative[j];
+    previous = running;
   }
-  require(p_rising.size() >= 2, format("pdf has only %g nonzero point(s)", static_cast<double>(p_rising.size())));
-  return params_.t_guess + interp1(p_rising, x_rising, order * total);
+  require(rising >= 2, format("pdf has only %g nonzero point(s)", static_cast<double>(rising)));
+  // target equals the last rising point: interp1 uses the last interval.
+  if (target != below_p) return NAN;
+  const double slope = (below_x - before_x) / (below_p - before_p);
+  return params_.t_guess + (slope * (target - before_p) + before_x);
 }
 
 double Quest::p(double x) const {
