@@ -46,9 +46,20 @@ vec2 receiver_plane_gradient(vec3 sc) {
   return len > u_rpdb_max ? g * (u_rpdb_max / len) : g;
 }
 
+// Window-depth change per world unit of light-view depth at `depth_ws`.
+float depth_per_ws(float depth_ws) {
+  float n = u_light_near_ws, f = u_light_far_ws;
+  if (!u_light_perspective) return 1.0 / (f - n);
+  return f * n / ((f - n) * depth_ws * depth_ws);
+}
+
+// Constant receiver offset in window depth, set once per fragment by the shading pass: covers
+// the rounding between the map's rasterized depth and the receiver's recomputed depth.
+float g_constant_bias = 0.0;
+
 // Receiver depth to compare against at `sc.xy + offset_uv`, clamped into the map's depth range.
 float reference_depth(vec3 sc, vec2 offset_uv, vec2 gradient) {
-  return clamp(sc.z + dot(offset_uv, gradient), 0.0, 1.0);
+  return clamp(sc.z + dot(offset_uv, gradient) - g_constant_bias, 0.0, 1.0);
 }
 
 // Interleaved gradient noise (Jimenez 2014): a per-pixel value in [0, 1).

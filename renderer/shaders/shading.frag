@@ -20,6 +20,7 @@ uniform vec3 u_light_color;
 uniform float u_ambient;
 uniform vec3 u_albedo;
 uniform float u_normal_offset_texels;
+uniform float u_depth_bias_texels;
 
 uniform float u_pcf_radius_texels;  // used when u_pcf_radius_ws < 0
 uniform float u_pcf_radius_ws;
@@ -44,6 +45,7 @@ void main() {
   vec4 clip = u_light_view_projection * vec4(lookup, 1.0);
   vec3 sc = clip.xyz / clip.w * 0.5 + 0.5;
   vec2 gradient = receiver_plane_gradient(sc);  // uniform control flow: derivatives are valid here
+  g_constant_bias = u_depth_bias_texels * texel_ws * depth_per_ws(depth_ws);
 
   float visibility;
 #if defined(TECHNIQUE_HARD)
@@ -71,6 +73,7 @@ void main() {
 #  error "no TECHNIQUE_* defined"
 #endif
 
+  visibility = clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
   if (u_light_perspective) {
     float cos_axis = dot(-to_light, u_light_direction);
     visibility *= smoothstep(u_spot_cos_outer, u_spot_cos_inner, cos_axis);

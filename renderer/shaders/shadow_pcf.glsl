@@ -46,7 +46,7 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
 
 // Poisson-disk PCF over a disk of radius `radius_uv`; each tap is a hardware 2x2 comparison.
 float pcf_poisson(vec3 sc, vec2 gradient, float radius_uv, int taps, mat2 rotation) {
-  if (radius_uv <= 0.0) return texture(u_shadow_cmp, vec3(sc.xy, clamp(sc.z, 0.0, 1.0)));
+  if (radius_uv <= 0.0) return texture(u_shadow_cmp, vec3(sc.xy, reference_depth(sc, vec2(0.0), gradient)));
   float sum = 0.0;
   for (int i = 0; i < taps; ++i) {
     vec2 o = rotation * u_poisson[i] * radius_uv;

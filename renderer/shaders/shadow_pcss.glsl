@@ -4,6 +4,7 @@
 uniform float u_pcss_light_radius_uv;
 uniform float u_pcss_tan_half_angle;
 uniform float u_pcss_min_penumbra_ws;
+uniform float u_pcss_search_scale;
 
 // Search radius (uv) of the blocker search for a receiver at light-view depth z_r.
 float pcss_search_uv(float z_r) {
@@ -21,7 +22,7 @@ float pcss_filter_uv(float z_r, float z_b) {
 float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
                   int max_grid_taps, mat2 rotation, out float filter_uv) {
   filter_uv = 0.0;
-  float search = pcss_search_uv(z_r);
+  float search = pcss_search_uv(z_r) * u_pcss_search_scale;
   float blocker_sum = 0.0;
   int blockers = 0;
   for (int i = 0; i < blocker_taps; ++i) {

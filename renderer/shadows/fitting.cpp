@@ -146,6 +146,11 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
     zmin = std::min(zmin, z);
     zmax = std::max(zmax, z);
   }
+  // A margin keeps surfaces lying exactly on the near or far plane off the depth range's ends,
+  // where quantization would make a receiver shadow itself.
+  const float margin = 0.01f * std::max(zmax - zmin, 1e-3f);
+  zmin -= margin;
+  zmax += margin;
   const std::vector<glm::dvec3> psr = potential_receivers(scene, request.camera_aspect);
   f.receivers_visible = !psr.empty();
   const bool fit = request.fit && f.receivers_visible;
@@ -168,15 +173,15 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
       }
     }
     const double cx = (lo_x + hi_x) / 2, cy = (lo_y + hi_y) / 2;
-    const double half = padded_half(std::max({hi_x - lo_x, hi_y - lo_y, 1e-6}) / 2, request.resolution_texels,
-                                    request.pad_texels, request.pad_ws);
+    // Only a fitted frustum is padded: the unfitted one already spans every caster and receiver.
+    const double tight_half = std::max({hi_x - lo_x, hi_y - lo_y, 1e-6}) / 2;
+    const double half = fit ? padded_half(tight_half, request.resolution_texels, request.pad_texels, request.pad_ws) : tight_half;
     f.near_ws = zmin;
-    f.far_ws = static_cast<float>(std::max(far_z, static_cast<double>(zmin) + 1e-4));
+    f.far_ws = static_cast<float>(std::max(fit ? far_z + margin : far_z, static_cast<double>(zmin) + 1e-4));
     f.projection = glm::ortho(static_cast<float>(cx - half), static_cast<float>(cx + half),
                               static_cast<float>(cy - half), static_cast<float>(cy + half), f.near_ws, f.far_ws);
     f.extent_ws = static_cast<float>(2 * half);
     f.s_xy = fit ? static_cast<float>(unfitted_side / (2 * half)) : 1.0f;
-    if (!fit) f.s_xy = 1;
     return f;
   }
 

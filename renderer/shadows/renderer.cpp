@@ -161,7 +161,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   } else if (s.technique == Technique::pcss) {
     const scene::Aabb b = scene_.bounds();
     const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
-    fit.pad_ws = light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range;
+    fit.pad_ws = s.pcss.search_scale * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
     fit.pad_texels = 1;
   }
   info.light = compute_light_frame(scene_, fit);
@@ -303,6 +303,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     set_vec3(prog, "u_light_color", light.color);
     set_float(prog, "u_ambient", light.ambient);
     set_float(prog, "u_normal_offset_texels", s.map.normal_offset_texels);
+    set_float(prog, "u_depth_bias_texels", s.map.depth_bias_texels);
 
     int taps = 1;
     if (s.technique == Technique::pcf) {
@@ -318,6 +319,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       set_float(prog, "u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
       set_float(prog, "u_pcss_tan_half_angle", tan_half_angle);
       set_float(prog, "u_pcss_min_penumbra_ws", s.pcss.min_penumbra_ws);
+      set_float(prog, "u_pcss_search_scale", s.pcss.search_scale);
     } else if (vsm) {
       set_float(prog, "u_vsm_min_variance", s.vsm.min_variance);
       set_float(prog, "u_vsm_bleed_reduction", s.vsm.bleed_reduction);

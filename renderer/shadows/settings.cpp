@@ -43,6 +43,7 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_REAL(ShadowMapParams, slope_bias, "", 0, 16, "slope-scaled raster depth offset (glPolygonOffset factor)"),
     PENUMBRA_REAL(ShadowMapParams, offset_bias, "depth steps", 0, 1e4, "constant raster depth offset (glPolygonOffset units)"),
     PENUMBRA_REAL(ShadowMapParams, normal_offset_texels, "texels", 0, 16, "lookup offset along the surface normal"),
+    PENUMBRA_REAL(ShadowMapParams, depth_bias_texels, "texels", 0, 64, "constant receiver depth offset, in texel widths at the receiver"),
     PENUMBRA_BOOL(ShadowMapParams, receiver_plane_bias, "per-tap reference depth from the receiver's depth gradient"),
 };
 
@@ -60,6 +61,8 @@ const Setting<PcssParams> kPcssTable[] = {
     PENUMBRA_INT(PcssParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search"),
     PENUMBRA_INT(PcssParams, filter_taps, "taps", 1, 64, "Poisson taps of the filtering step"),
     PENUMBRA_REAL(PcssParams, min_penumbra_ws, "world", 0, 1e6, "minimum filter radius at the receiver"),
+    PENUMBRA_REAL(PcssParams, search_scale, "", 1, 8,
+                  "blocker-search radius over its geometric bound; > 1 lets sparse taps find blockers near the penumbra's outer rim"),
     PENUMBRA_INT(PcssParams, max_grid_taps, "taps", 2, 256, "grid taps per axis before the grid is strided"),
 };
 

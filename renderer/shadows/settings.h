@@ -25,6 +25,7 @@ struct ShadowMapParams {
   float slope_bias = 1.5f;            // glPolygonOffset factor (depth slopes)
   float offset_bias = 4.0f;           // glPolygonOffset units (smallest depth steps)
   float normal_offset_texels = 0.75f; // lookup moved along the normal, in texels at the receiver
+  float depth_bias_texels = 0.5f;     // receiver moved toward the light by this many texel widths
   bool receiver_plane_bias = true;    // per-tap depth from the receiver's depth gradient
 };
 
@@ -42,6 +43,7 @@ struct PcssParams {
   int blocker_taps = 25;
   int filter_taps = 25;
   float min_penumbra_ws = 0.01f;      // smallest filter radius, world units at the receiver
+  float search_scale = 1.0f;          // blocker-search radius relative to its geometric bound
   int max_grid_taps = 32;
 };
 
