@@ -1,0 +1,337 @@
+// penumbra-render as a user runs it: a good run writes images and a report; every bad input is
+// refused with exit status ≠ 0 and exactly one line on stderr naming what was wrong, and leaves no
+// output (not even a staging directory) behind; an existing directory is replaced only when it is
+// a previous penumbra-render output.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "io/image_io.h"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;  // -1: did not exit normally (signal)
+  std::string out;
+  std::string err;
+};
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Runs penumbra-render with `args`, stdout and stderr captured through files in `scratch`.
+Result run_render(const std::vector<std::string>& args, const fs::path& scratch) {
+  const fs::path out_file = scratch / "stdout.txt", err_file = scratch / "stderr.txt";
+  std::vector<std::string> argv_s = {PENUMBRA_RENDER_EXE};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  Result r;
+  if (rc != 0) {
+    r.err = "posix_spawn failed: " + std::to_string(rc);
+    return r;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+  }
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  r.out = read_file(out_file);
+  r.err = read_file(err_file);
+  fs::remove(out_file);
+  fs::remove(err_file);
+  return r;
+}
+
+const std::vector<std::string> kSmall = {"--width", "64", "--height", "48", "--resolution", "64",
+                                         "--frames", "1", "--warmup", "0"};
+
+std::vector<std::string> small_args(std::vector<std::string> extra) {
+  std::vector<std::string> args = kSmall;
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+// Names under `dir` (one level), sorted.
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+// Number of lines in `text`, a trailing newline not opening another one.
+int line_count(const std::string& text) {
+  if (text.empty()) return 0;
+  const auto n = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  return text.back() == '\n' ? n : n + 1;
+}
+
+nlohmann::json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+class RenderCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "-" + info->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    tmp_ = fs::temp_directory_path() / ("penumbra-cli-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(tmp_);
+    fs::create_directories(tmp_);
+    scratch_ = tmp_ / "scratch";
+    fs::create_directories(scratch_);
+    work_ = tmp_ / "work";  // the only things here are what the test or penumbra-render put here
+    fs::create_directories(work_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!HasFailure()) fs::remove_all(tmp_, ec);
+  }
+
+  // Checks what every refused run must do: status ≠ 0, one line on stderr that contains each of
+  // `needles`, nothing new in the work folder (no output, no `*.partial-*` staging directory).
+  void expect_refused(const std::vector<std::string>& args, const std::vector<std::string>& needles) {
+    const auto before = listing(work_);
+    const Result r = run_render(args, scratch_);
+    EXPECT_NE(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.exit_code, -1) << "killed by a signal";
+    EXPECT_EQ(line_count(r.err), 1) << "stderr:\n" << r.err;
+    for (const auto& n : needles) EXPECT_THAT(r.err, HasSubstr(n));
+    EXPECT_EQ(listing(work_), before) << "a refused run changed " << work_;
+    EXPECT_FALSE(fs::exists(work_ / "out"));
+  }
+
+  fs::path tmp_, scratch_, work_;
+};
+
+// The one render of a single-technique, single-resolution run, as listed by the summary report.
+fs::path only_render_dir(const fs::path& out) {
+  const auto summary = read_json(out / "report.json");
+  const auto& renders = summary.at("renders");
+  EXPECT_EQ(renders.size(), 1u) << summary.dump(2);
+  return out / renders.at(0).at("name").get<std::string>();
+}
+
+void expect_render_files(const fs::path& dir, const std::vector<std::string>& passes) {
+  SCOPED_TRACE(dir.string());
+  ASSERT_TRUE(fs::is_regular_file(dir / "lit.png"));
+  ASSERT_TRUE(fs::is_regular_file(dir / "visibility.exr"));
+  ASSERT_TRUE(fs::is_regular_file(dir / "report.json"));
+
+  const auto lit = penumbra::io::read_image8(dir / "lit.png");
+  EXPECT_EQ(lit.width, 64);
+  EXPECT_EQ(lit.height, 48);
+  const auto vis = penumbra::io::read_imagef(dir / "visibility.exr");
+  ASSERT_EQ(vis.width, 64);
+  ASSERT_EQ(vis.height, 48);
+  ASSERT_EQ(vis.channels, 1);
+  const auto [lo, hi] = std::minmax_element(vis.pixels.begin(), vis.pixels.end());
+  for (float v : vis.pixels) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
+  EXPECT_LT(*lo, 0.5f) << "the demo scene has shadows";
+  EXPECT_GT(*hi, 0.5f) << "the demo scene has lit receivers";
+
+  const auto report = read_json(dir / "report.json");
+  EXPECT_EQ(report.at("resolution_texels"), 64);
+  EXPECT_EQ(report.at("image_px"), nlohmann::json({64, 48}));
+  EXPECT_EQ(report.at("passes_run").get<std::vector<std::string>>(), passes);
+  const double s_xy = report.at("light").at("s_xy").get<double>();
+  EXPECT_TRUE(std::isfinite(s_xy) && s_xy > 0) << s_xy;
+  // Wall clock around glFinish is recorded on every device (and is all there is on llvmpipe),
+  // once per pass run.
+  std::vector<std::string> wall_passes;
+  for (const auto& t : report.at("timings")) {
+    if (t.at("method") != "wall_finish") continue;
+    wall_passes.push_back(t.at("pass").get<std::string>());
+    EXPECT_GE(t.at("median_ms").get<double>(), 0.0);
+    EXPECT_LE(t.at("min_ms").get<double>(), t.at("max_ms").get<double>());
+  }
+  EXPECT_EQ(wall_passes, passes) << report.at("timings").dump(2);
+}
+
+}  // namespace
+
+TEST_F(RenderCli, GoodRunWritesImagesAndReport) {
+  const fs::path out = work_ / "out";
+  const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "") << "a good run prints nothing on stderr when it is not a terminal";
+  EXPECT_THAT(r.out, HasSubstr("pcf-poisson"));
+  expect_render_files(only_render_dir(out), {"shadow_map", "shading"});
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
+}
+
+TEST_F(RenderCli, AllTechniquesWriteFiveRendersMontageAndSummary) {
+  const fs::path out = work_ / "out";
+  const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm"};
+  std::set<std::string> expected = renders;
+  expected.insert({"montage.png", "report.json"});
+  EXPECT_EQ(listing(out), expected);
+  for (const auto& name : renders)
+    expect_render_files(out / name, name == "vsm" ? std::vector<std::string>{"shadow_map", "vsm_blur", "shading"}
+                                                  : std::vector<std::string>{"shadow_map", "shading"});
+  const auto montage = penumbra::io::read_image8(out / "montage.png");
+  EXPECT_GT(montage.width, 0);
+  EXPECT_GT(montage.height, 0);
+  const auto summary = read_json(out / "report.json");
+  std::set<std::string> listed;
+  for (const auto& render : summary.at("renders")) {
+    listed.insert(render.at("name").get<std::string>());
+    EXPECT_EQ(render.at("resolution_texels"), 64);
+    EXPECT_FALSE(render.at("timings").empty());
+  }
+  EXPECT_EQ(listed, renders);
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
+}
+
+TEST_F(RenderCli, PreviousOutputIsReplacedOnSuccess) {
+  const fs::path out = work_ / "out";
+  ASSERT_EQ(run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_).exit_code, 0);
+  std::ofstream(out / "stale.txt") << "from an older run\n";
+  const Result r = run_render(small_args({"--technique", "hard", "-o", out.string()}), scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(listing(out), (std::set<std::string>{"hard", "report.json"}));
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
+}
+
+TEST_F(RenderCli, PreviousOutputIsKeptWhenARunFails) {
+  const fs::path out = work_ / "out";
+  ASSERT_EQ(run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_).exit_code, 0);
+  const auto before = listing(out);
+  const std::string report_before = read_file(out / "report.json");
+  const Result r = run_render(small_args({"--technique", "hard", "--resolution", "65536", "-o", out.string()}), scratch_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_EQ(listing(out), before);
+  EXPECT_EQ(read_file(out / "report.json"), report_before);
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
+}
+
+// Disabled until penumbra_render.cpp strips a trailing '/' from --output: with "-o out/" the
+// staging directory becomes out/.partial-PID, inside the output; the final remove_all(out) deletes
+// it (and a previous output) and the rename fails, so the run exits 1 having destroyed the old run.
+TEST_F(RenderCli, DISABLED_OutputWithTrailingSlashIsReplacedOnSuccess) {
+  const fs::path out = work_ / "out";
+  ASSERT_EQ(run_render(small_args({"--technique", "hard", "-o", out.string()}), scratch_).exit_code, 0);
+  const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string() + "/"}), scratch_);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(listing(out), (std::set<std::string>{"pcf-poisson", "report.json"}));
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
+}
+
+TEST_F(RenderCli, ForeignDirectoryIsRefusedAndLeftUntouched) {
+  const fs::path out = work_ / "out";
+  fs::create_directories(out);
+  std::ofstream(out / "thesis.tex") << "precious\n";
+  const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(out.string()));
+  EXPECT_EQ(listing(out), std::set<std::string>{"thesis.tex"});
+  EXPECT_EQ(read_file(out / "thesis.tex"), "precious\n");
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
+}
+
+TEST_F(RenderCli, RegularFileAsOutputIsRefusedAndLeftUntouched) {
+  const fs::path out = work_ / "out";
+  std::ofstream(out) << "a file\n";
+  const Result r = run_render(small_args({"-o", out.string()}), scratch_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(out.string()));
+  EXPECT_EQ(read_file(out), "a file\n");
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
+}
+
+// --- refused inputs: one case per bad value ---
+
+struct BadCase {
+  std::string name;
+  std::vector<std::string> args;       // replaces the value given in kSmall when it sets the same option
+  std::vector<std::string> needles;    // what the one stderr line must contain; {bad_scene} is substituted
+  bool with_output = true;
+};
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
+class RenderCliRefuses : public RenderCli, public ::testing::WithParamInterface<BadCase> {};
+
+TEST_P(RenderCliRefuses, WithOneLineAndNoOutput) {
+  const fs::path bad_scene = scratch_ / "bad_scene.json";
+  std::ofstream(bad_scene) << R"({"name": "bad", "camera": {"fov_deg": 50}, "objects": []})" << "\n";
+  auto subst = [&](std::string s) {
+    if (s == "{bad_scene}") return bad_scene.string();
+    return s;
+  };
+  // Base arguments, minus any option the case sets itself (a repeated option is its own error).
+  std::vector<std::string> args;
+  for (std::size_t i = 0; i < kSmall.size(); i += 2)
+    if (std::find(GetParam().args.begin(), GetParam().args.end(), kSmall[i]) == GetParam().args.end()) {
+      args.push_back(kSmall[i]);
+      args.push_back(kSmall[i + 1]);
+    }
+  for (const auto& a : GetParam().args) args.push_back(subst(a));
+  if (GetParam().with_output) {
+    args.push_back("-o");
+    args.push_back((work_ / "out").string());
+  }
+  std::vector<std::string> needles;
+  for (const auto& n : GetParam().needles) needles.push_back(subst(n));
+  expect_refused(args, needles);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BadInputs, RenderCliRefuses,
+    ::testing::Values(
+        BadCase{"resolution_zero", {"--resolution", "0"}, {"--resolution", "'0'"}},
+        BadCase{"resolution_not_a_number", {"--resolution", "abc"}, {"--resolution", "'abc'"}},
+        BadCase{"resolution_too_large", {"--resolution", "99999999"}, {"--resolution", "99999999"}},
+        BadCase{"resolution_list_gap", {"--resolution", "64,,128"}, {"--resolution"}},
+        BadCase{"resolution_above_device_limit", {"--resolution", "65536"}, {"--resolution", "65536"}},
+        BadCase{"pcf_radius_negative", {"--pcf.radius", "-1"}, {"--pcf.radius", "'-1'"}},
+        BadCase{"pcf_radius_nan", {"--pcf.radius", "nan"}, {"--pcf.radius", "'nan'"}},
+        BadCase{"pcf_taps_not_integer", {"--pcf.poisson_taps", "2.5"}, {"--pcf.poisson_taps", "'2.5'"}},
+        BadCase{"pcf_kernel_unknown", {"--pcf.kernel", "box"}, {"--pcf.kernel", "'box'", "poisson"}},
+        BadCase{"technique_unknown", {"--technique", "foo"}, {"--technique", "foo"}},
+        BadCase{"width_zero", {"--width", "0"}, {"--width"}},
+        BadCase{"map_fit_not_bool", {"--map.fit", "maybe"}, {"--map.fit", "'maybe'"}},
+        BadCase{"vsm_bleed_reduction_above_max", {"--vsm.bleed_reduction", "1.5"}, {"--vsm.bleed_reduction", "'1.5'"}},
+        BadCase{"scene_unknown_name", {"--scene", "nosuchscene"}, {"scene", "'nosuchscene'"}},
+        BadCase{"scene_missing_file", {"--scene", "/nonexistent/x.json"}, {"/nonexistent/x.json"}},
+        BadCase{"scene_bad_field", {"--scene", "{bad_scene}"}, {"{bad_scene}", "camera.fov_deg"}},
+        BadCase{"unknown_option", {"--bogus"}, {"--bogus"}},
+        BadCase{"missing_output", {"--technique", "hard"}, {"--output"}, false}),
+    [](const ::testing::TestParamInfo<BadCase>& param_info) { return param_info.param.name; });
