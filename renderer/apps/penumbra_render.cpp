@@ -151,7 +151,10 @@ int main(int argc, char** argv) {
     }
 
     // Refuse to replace a directory that is not ours.
-    const fs::path out_dir(output);
+    // "out/" and "out" name the same directory; without the trailing separator the staging
+    // directory lands beside it, not inside it.
+    fs::path out_dir = fs::path(output).lexically_normal();
+    if (!out_dir.has_filename() && out_dir.has_parent_path()) out_dir = out_dir.parent_path();
     if (fs::exists(out_dir) && (!fs::is_directory(out_dir) ||
                                 (!fs::is_empty(out_dir) && !fs::exists(out_dir / "report.json")))) {
       throw std::runtime_error(output + ": exists and is not a penumbra-render output; choose another --output");

@@ -36,7 +36,8 @@ DebugState& debug_state() {
 
 void GLAPIENTRY on_debug_message(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei,
                                  const GLchar* message, const void*) {
-  (void)source;
+  // Compile and link failures are reported, with file and line, by the shader library.
+  if (source == GL_DEBUG_SOURCE_SHADER_COMPILER) return;
   if (type != GL_DEBUG_TYPE_ERROR && severity != GL_DEBUG_SEVERITY_HIGH) return;
   auto& state = debug_state();
   std::lock_guard lock(state.mutex);

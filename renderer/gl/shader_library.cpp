@@ -25,6 +25,14 @@ const std::string& ShaderLibrary::text_of(const std::string& file) const {
 
 namespace {
 
+// Each file's lines are numbered from id * kLinesPerFile, so an error's line number alone tells its
+// file: some drivers (Mesa 22) report errors in included files under the wrong source id.
+constexpr long kLinesPerFile = 100000;
+
+std::string line_marker(int line, int id) {
+  return "#line " + std::to_string(id * kLinesPerFile + line) + " " + std::to_string(id) + "\n";
+}
+
 void expand_into(const ShaderLibrary& lib, const std::string& file, const std::string& text,
                  std::vector<std::string>& names, std::vector<std::string>& stack, std::string& out,
                  const std::function<const std::string&(const std::string&)>& lookup) {
@@ -34,7 +42,7 @@ void expand_into(const ShaderLibrary& lib, const std::string& file, const std::s
   stack.push_back(file);
   const int id = static_cast<int>(names.size());
   names.push_back(file);
-  out += "#line 1 " + std::to_string(id) + "\n";
+  out += line_marker(1, id);
   static const std::regex include_re(R"(^\s*#\s*include\s+"([^"]+)\"\s*$)");
   std::istringstream in(text);
   std::string line;
@@ -45,7 +53,7 @@ void expand_into(const ShaderLibrary& lib, const std::string& file, const std::s
     if (std::regex_match(line, m, include_re)) {
       const std::string inc = m[1];
       expand_into(lib, inc, lookup(inc), names, stack, out, lookup);
-      out += "#line " + std::to_string(line_no + 1) + " " + std::to_string(id) + "\n";
+      out += line_marker(line_no + 1, id);
     } else {
       out += line;
       out += '\n';
@@ -82,6 +90,12 @@ std::string ShaderLibrary::map_log(std::string_view log, const std::vector<std::
     const auto i = static_cast<std::size_t>(std::stoul(id));
     return i < source_names.size() ? source_names[i] : "source" + id;
   };
+  // File and line from an encoded line number (see kLinesPerFile); the reported id otherwise.
+  auto locate = [&](const std::string& id, const std::string& line) {
+    const long n = std::stol(line);
+    if (n < kLinesPerFile) return name_of(id) + ":" + line;
+    return name_of(std::to_string(n / kLinesPerFile)) + ":" + std::to_string(n % kLinesPerFile);
+  };
   std::string text(log);
   std::string out;
   std::smatch m;
@@ -90,7 +104,7 @@ std::string ShaderLibrary::map_log(std::string_view log, const std::vector<std::
     auto begin = text.cbegin();
     while (std::regex_search(begin, text.cend(), m, re)) {
       out.append(begin, m[0].first);
-      out += m[1].str() + name_of(m[2].str()) + ":" + m[3].str() + ":";
+      out += m[1].str() + locate(m[2].str(), m[3].str()) + ":";
       if (mesa) out += m[4].str() + ":";
       begin = m[0].second;
     }

@@ -177,6 +177,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     m->resolution = res;
     m->moments = vsm;
     m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, res, res, 1}, "shadow depth map");
+    const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
+    glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
     const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
     m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
     if (vsm) {
@@ -363,6 +365,15 @@ io::Image<T> read_texture(const gl::Texture& tex, GLenum format, GLenum type, in
   return img;
 }
 }  // namespace
+
+void Renderer::present(GLuint target, int width_px, int height_px) const {
+  if (!targets_) return;
+  glNamedFramebufferReadBuffer(targets_->fbo.id(), GL_COLOR_ATTACHMENT0);
+  glBlitNamedFramebuffer(targets_->fbo.id(), target, 0, 0, targets_->width, targets_->height, 0, 0, width_px, height_px,
+                         GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
+GLuint Renderer::shadow_map_texture() const { return maps_ ? maps_->depth.id() : 0; }
 
 io::Image8 Renderer::read_color() const {
   if (!targets_) throw std::logic_error("read_color before render");

@@ -48,6 +48,11 @@ class Renderer {
   // large for the device), naming the pass.
   FrameInfo render(const ShadowSettings& settings, int width_px, int height_px, gl::PassTimer* timer = nullptr);
 
+  // Copies the last frame's lit colour into framebuffer `target` (0: the window) at its size.
+  void present(GLuint target, int width_px, int height_px) const;
+  // The last frame's depth map (for debug views); 0 before the first frame.
+  GLuint shadow_map_texture() const;
+
   io::Image8 read_color() const;       // RGBA, sRGB-encoded
   io::ImageF read_visibility() const;  // one channel
   io::ImageF read_shadow_depth() const;  // the depth map of the last frame, one channel

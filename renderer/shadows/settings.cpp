@@ -14,10 +14,20 @@ constexpr std::array<std::string_view, 4> kTechniques = {"hard", "pcf", "pcss", 
 constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
 constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
 
+// The double nearest to a float's shortest decimal form (0.2f → 0.2, not 0.20000000298...), so that
+// printed, reported and range-checked values are the ones a user typed.
+double decimal(float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  double d = v;
+  std::from_chars(buf, r.ptr, d);
+  return d;
+}
+
 // Row builders. Each expands to a Setting whose get/set lambdas touch exactly one field.
 #define PENUMBRA_REAL(P, field, unit, lo, hi, help)                                                      \
   Setting<P> {                                                                                           \
-    #field, unit, SettingType::real, lo, hi, help, [](const P& p) { return static_cast<double>(p.field); }, \
+    #field, unit, SettingType::real, lo, hi, help, [](const P& p) { return decimal(p.field); },            \
         [](P& p, double v) { p.field = static_cast<float>(v); }                                          \
   }
 #define PENUMBRA_INT(P, field, unit, lo, hi, help)                                                          \
@@ -157,7 +167,7 @@ std::string value_to_string(const Setting<P>& s, const P& params) {
     case SettingType::boolean: return v != 0.0 ? "true" : "false";
     case SettingType::choice: return std::string(s.choices[static_cast<std::size_t>(v)]);
     case SettingType::integer: return std::to_string(static_cast<long long>(v));
-    case SettingType::real: return nlohmann::json(static_cast<float>(v)).dump();
+    case SettingType::real: return nlohmann::json(v).dump();
   }
   return {};
 }

@@ -1,0 +1,136 @@
+// penumbra-view: the renderer in a window. Orbit with the left mouse button, zoom with the wheel;
+// the panel edits the technique's parameters (from the same tables as the CLI) and shows the
+// fitted light frame, per-pass times and the shadow map.
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <CLI/CLI.hpp>
+#include <imgui.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include <glm/gtc/constants.hpp>
+
+#include "gl/timer.h"
+#include "gl/window.h"
+#include "gui/settings_panel.h"
+#include "io/image_io.h"
+#include "scene/scene.h"
+#include "shadows/renderer.h"
+
+using namespace penumbra;
+
+namespace {
+
+// Orbit camera around the scene camera's target.
+struct Orbit {
+  float yaw = 0, pitch = 0.4f, distance = 10;
+  void from_camera(const scene::Camera& c) {
+    const glm::vec3 d = c.position - c.target;
+    distance = glm::length(d);
+    pitch = std::asin(std::clamp(d.y / distance, -1.0f, 1.0f));
+    yaw = std::atan2(d.x, d.z);
+  }
+  void apply(scene::Camera& c) const {
+    c.position = c.target + distance * glm::vec3(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Interactive shadow viewer (GLFW + Dear ImGui)."};
+  std::string scene_arg = "demo", screenshot;
+  int width = 1280, height = 720, frames = 0;
+  app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
+  app.add_option("--width", width, "window width")->check(CLI::Range(64, 8192));
+  app.add_option("--height", height, "window height")->check(CLI::Range(64, 8192));
+  app.add_option("--screenshot", screenshot, "write the window (with the panel) to this PNG after --frames frames, then exit");
+  app.add_option("--frames", frames, "frames to run before --screenshot (0: run until closed)")->check(CLI::Range(0, 1000000));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "penumbra-view: " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    scene::Scene scene = scene::load_scene(scene_arg);
+    gl::WindowContext window(width, height, "Penumbra — " + scene.name);
+    shadows::Renderer renderer;
+    renderer.set_scene(scene);
+    shadows::ShadowSettings settings;
+    Orbit orbit;
+    orbit.from_camera(scene.camera);
+    gl::PassTimer timer(!window.info().software);
+    bool show_map = true;
+    int frame = 0;
+    double last_x = 0, last_y = 0;
+    while (!window.should_close()) {
+      window.begin_frame();
+      ImGuiIO& io = ImGui::GetIO();
+      if (!io.WantCaptureMouse) {
+        double x, y;
+        glfwGetCursorPos(window.window(), &x, &y);
+        if (glfwGetMouseButton(window.window(), GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
+          orbit.yaw -= static_cast<float>(x - last_x) * 0.005f;
+          orbit.pitch = std::clamp(orbit.pitch + static_cast<float>(y - last_y) * 0.005f, 0.05f, 1.5f);
+        }
+        orbit.distance = std::clamp(orbit.distance * std::pow(0.9f, io.MouseWheel), 0.5f, 200.0f);
+        last_x = x, last_y = y;
+      }
+      orbit.apply(renderer.scene().camera);
+
+      int fb_w = 0, fb_h = 0;
+      window.framebuffer_size(fb_w, fb_h);
+      if (frame % 30 == 0) timer.clear();
+      const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+      renderer.present(0, fb_w, fb_h);
+
+      ImGui::SetNextWindowPos({10, 10}, ImGuiCond_FirstUseEver);
+      ImGui::SetNextWindowSize({430, 0}, ImGuiCond_FirstUseEver);
+      ImGui::Begin("Penumbra");
+      ImGui::PushItemWidth(200);
+      ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
+      gui::shadow_settings_panel(settings);
+      float light_size = renderer.scene().light.size;
+      if (ImGui::DragFloat(renderer.scene().light.type == scene::Light::Type::spot ? "light width [world]" : "light angle [deg]",
+                           &light_size, 0.02f, 0.0f, 45.0f))
+        renderer.scene().light.size = light_size;
+      ImGui::Separator();
+      ImGui::Text("map %d^2, %s, s_xy %.2f, extent %.2f ws", info.resolution_texels, info.light.fitted ? "fitted" : "unfitted",
+                  info.light.s_xy, info.light.extent_ws);
+      for (const auto& st : timer.stats())
+        ImGui::Text("%-10s %7.2f ms (%s)", st.pass.c_str(), st.median_ms, gl::to_string(st.method));
+      ImGui::Checkbox("show shadow map", &show_map);
+      if (show_map && renderer.shadow_map_texture())
+        ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200}, {0, 1}, {1, 0});
+      ImGui::PopItemWidth();
+      ImGui::End();
+      window.render_ui();
+      ++frame;
+      if (!screenshot.empty() && frame >= std::max(frames, 2)) {
+        io::Image8 shot{fb_w, fb_h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(fb_w) * fb_h * 4)};
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+        glReadBuffer(GL_BACK);
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadPixels(0, 0, fb_w, fb_h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
+        for (int y = 0; y < fb_h / 2; ++y)
+          std::swap_ranges(shot.pixels.begin() + y * fb_w * 4, shot.pixels.begin() + (y + 1) * fb_w * 4,
+                           shot.pixels.begin() + (fb_h - 1 - y) * fb_w * 4);
+        io::write_png(screenshot, shot);
+        break;
+      }
+      window.swap();
+      if (frames > 0 && screenshot.empty() && frame >= frames) break;
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra-view: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,85 @@
+#include "gui/settings_panel.h"
+
+#include <string>
+
+#include <imgui.h>
+
+namespace penumbra::gui {
+
+template <class P>
+bool settings_panel(const char* id, P& params) {
+  bool changed = false;
+  ImGui::PushID(id);
+  for (const auto& row : shadows::settings_table(&params)) {
+    const std::string label(row.key);
+    const double value = row.get(params);
+    switch (row.type) {
+      case shadows::SettingType::boolean: {
+        bool v = value != 0.0;
+        if (ImGui::Checkbox(label.c_str(), &v)) row.set(params, v ? 1 : 0), changed = true;
+        break;
+      }
+      case shadows::SettingType::choice: {
+        int v = static_cast<int>(value);
+        const std::string current(row.choices[static_cast<std::size_t>(v)]);
+        if (ImGui::BeginCombo(label.c_str(), current.c_str())) {
+          for (std::size_t i = 0; i < row.choices.size(); ++i) {
+            const std::string name(row.choices[i]);
+            if (ImGui::Selectable(name.c_str(), static_cast<int>(i) == v)) row.set(params, static_cast<double>(i)), changed = true;
+          }
+          ImGui::EndCombo();
+        }
+        break;
+      }
+      case shadows::SettingType::integer: {
+        int v = static_cast<int>(value);
+        if (ImGui::DragInt(label.c_str(), &v, 1.0f, static_cast<int>(row.min), static_cast<int>(row.max), "%d", ImGuiSliderFlags_AlwaysClamp))
+          row.set(params, v), changed = true;
+        break;
+      }
+      case shadows::SettingType::real: {
+        float v = static_cast<float>(value);
+        const float speed = std::max(0.001f, std::abs(v) * 0.01f);
+        if (ImGui::DragFloat(label.c_str(), &v, speed, static_cast<float>(row.min), static_cast<float>(row.max), "%.4g",
+                             ImGuiSliderFlags_AlwaysClamp))
+          row.set(params, v), changed = true;
+        break;
+      }
+    }
+    if (ImGui::IsItemHovered()) {
+      const std::string tip = std::string(row.help) + (row.unit.empty() ? "" : " [" + std::string(row.unit) + "]");
+      ImGui::SetTooltip("%s", tip.c_str());
+    }
+  }
+  ImGui::PopID();
+  return changed;
+}
+
+template bool settings_panel<shadows::ShadowMapParams>(const char*, shadows::ShadowMapParams&);
+template bool settings_panel<shadows::PcfParams>(const char*, shadows::PcfParams&);
+template bool settings_panel<shadows::PcssParams>(const char*, shadows::PcssParams&);
+template bool settings_panel<shadows::VsmParams>(const char*, shadows::VsmParams&);
+
+bool shadow_settings_panel(shadows::ShadowSettings& s) {
+  bool changed = false;
+  int t = static_cast<int>(s.technique);
+  const auto names = shadows::technique_names();
+  const std::string current(names[static_cast<std::size_t>(t)]);
+  if (ImGui::BeginCombo("technique", current.c_str())) {
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const std::string name(names[i]);
+      if (ImGui::Selectable(name.c_str(), static_cast<int>(i) == t)) s.technique = static_cast<shadows::Technique>(i), changed = true;
+    }
+    ImGui::EndCombo();
+  }
+  switch (s.technique) {
+    case shadows::Technique::hard: break;
+    case shadows::Technique::pcf: changed |= settings_panel("pcf", s.pcf); break;
+    case shadows::Technique::pcss: changed |= settings_panel("pcss", s.pcss); break;
+    case shadows::Technique::vsm: changed |= settings_panel("vsm", s.vsm); break;
+  }
+  if (ImGui::CollapsingHeader("shadow map and bias", ImGuiTreeNodeFlags_DefaultOpen)) changed |= settings_panel("map", s.map);
+  return changed;
+}
+
+}  // namespace penumbra::gui
