@@ -39,7 +39,7 @@ Object ground(float size) { return {"ground", share(make_plane(size, size)), glm
 Scene base(std::string name) {
   Scene s;
   s.name = std::move(name);
-  s.camera.position = {0, 4.5f, 9};
+  s.camera.position = {1, 5.5f, 11.5f};
   s.camera.target = {0, 0.8f, 0};
   s.camera.fov_y_deg = 45;
   s.light.type = Light::Type::directional;
@@ -110,7 +110,7 @@ Scene make_builtin_scene(std::string_view name) {
     s.objects.push_back(box_object({-4.5f, 1, 1}));
     s.objects.push_back(sphere_object({-0.5f, 1.8f, 2.5f}));
     s.objects.push_back(fence_object({3.5f, 1.6f, 0}));
-    s.objects.push_back(tilted_object({-1, 1.5f, -4}, -60));
+    s.objects.push_back(tilted_object({-1, 1.5f, -4}, 60));
     return s;
   }
   if (name == "box") {
@@ -134,7 +134,7 @@ Scene make_builtin_scene(std::string_view name) {
   if (name == "tilted") {
     Scene s = base("tilted");
     s.light.direction = {0, -1, 0};
-    s.objects.push_back(tilted_object({0, 2.5f, 0}, -80));  // receiver at 80° from the light
+    s.objects.push_back(tilted_object({0, 2.5f, 0}, 80));  // receiver at 80° from the light, facing the camera
     s.objects.push_back({"caster", share(make_box({1, 0.2f, 1})), translate({0, 6, 0}), {0.7f, 0.3f, 0.3f}});
     s.camera.position = {6, 6, 8};
     s.camera.target = {0, 2.5f, 0};
