@@ -1,0 +1,74 @@
+#pragma once
+// The filter-to-resolution rule r = c·a (Kreuzer 2017, eq. 5.1–5.6): a filter of radius r hides the
+// staircase of texels of size a when a <= r / c, so the smallest shadow map that a filter can hide
+// has res = c / r_uv texels per side, or res = c · L_ws / r_ws for a world-space radius over a
+// light view plane of extent L_ws (with fitting, L_ws is the fitted extent: r_uv = r_ws / L_ws · s_xy
+// with L_ws unfitted is the same thing).
+//
+// This header and its .cpp need neither GL, the study nor Ceres: another engine can link
+// `penumbra_adaptive` alone.
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace penumbra::adaptive {
+
+// c as the fitter writes it (calibration.json, see DESIGN.md).
+struct Calibration {
+  double c = 3.47;
+  double ci95_lo = 3.47;
+  double ci95_hi = 3.47;
+  std::string condition;
+  std::string source;  // the file it came from, or "built-in"
+};
+
+// Reads calibration.json; throws CalibrationError naming the file and field on bad input.
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+Calibration load_calibration(const std::filesystem::path& path);
+
+struct ResolutionLimits {
+  int min_texels = 16;
+  int max_texels = 8192;
+  int quantum_texels = 32;  // results are rounded *up* to a multiple of this (never below the rule)
+};
+
+// The rule before clamping and quantization, in texels per side: c / r_uv. Infinite for r_uv <= 0,
+// NaN never (NaN inputs give +inf, i.e. the maximum after clamping).
+double required_texels_uv(double c, double radius_uv);
+// c · L_ws / r_ws for a world-space radius over a light view plane of extent L_ws.
+double required_texels_ws(double c, double light_extent_ws, double radius_ws);
+
+// Clamped to [min, max] and rounded up to the quantum (then clamped again), always finite:
+// r → 0 or NaN gives max, r huge or L → 0 gives min.
+int clamp_resolution(double required_texels, const ResolutionLimits& limits);
+
+// Rate limits resolution changes so edges do not wobble: grows at once to the (quantized)
+// requirement, shrinks only after the requirement has stayed below `shrink_fraction` of the
+// current resolution for `shrink_delay_frames` consecutive frames, and then to the largest
+// requirement seen during that wait.
+class ResolutionController {
+ public:
+  struct Params {
+    ResolutionLimits limits;
+    int shrink_delay_frames = 30;
+    double shrink_fraction = 0.8;
+  };
+  explicit ResolutionController(Params params);
+  // Feeds one frame's requirement (texels, unclamped) and returns the resolution to use.
+  int update(double required_texels);
+  int current() const { return current_; }
+  int changes() const { return changes_; }  // how often the resolution changed
+
+ private:
+  Params params_;
+  int current_ = 0;
+  int frames_below_ = 0;
+  int pending_max_ = 0;
+  int changes_ = 0;
+};
+
+}  // namespace penumbra::adaptive
