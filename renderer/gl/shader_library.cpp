@@ -62,6 +62,17 @@ void expand_into(const ShaderLibrary& lib, const std::string& file, const std::s
   stack.pop_back();
 }
 
+// The info log of a shader or program, through its pair of query functions.
+template <class GetIv, class GetLog>
+std::string info_log(GLuint object, GetIv get_iv, GetLog get_log) {
+  GLint len = 0;
+  get_iv(object, GL_INFO_LOG_LENGTH, &len);
+  std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
+  get_log(object, len, nullptr, log.data());
+  log.resize(std::strlen(log.c_str()));
+  return log;
+}
+
 std::string stage_name(GLenum type) {
   switch (type) {
     case GL_VERTEX_SHADER: return "vertex";
@@ -134,13 +145,8 @@ Program ShaderLibrary::program(const std::vector<ShaderStage>& stages, const std
       GLint ok = 0;
       glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
       if (!ok) {
-        GLint len = 0;
-        glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
-        glGetShaderInfoLog(s, len, nullptr, log.data());
-        log.resize(std::strlen(log.c_str()));
         throw std::runtime_error("GLSL compile error in " + stage.file + " (" + stage_name(stage.type) +
-                                 " stage):\n" + map_log(log, e.source_names));
+                                 " stage):\n" + map_log(info_log(s, glGetShaderiv, glGetShaderInfoLog), e.source_names));
       }
       glAttachShader(prog, s);
       names += (names.empty() ? "" : " + ") + stage.file;
@@ -148,14 +154,7 @@ Program ShaderLibrary::program(const std::vector<ShaderStage>& stages, const std
     glLinkProgram(prog);
     GLint ok = 0;
     glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) {
-      GLint len = 0;
-      glGetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
-      std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
-      glGetProgramInfoLog(prog, len, nullptr, log.data());
-      log.resize(std::strlen(log.c_str()));
-      throw std::runtime_error("GLSL link error in " + names + ":\n" + log);
-    }
+    if (!ok) throw std::runtime_error("GLSL link error in " + names + ":\n" + info_log(prog, glGetProgramiv, glGetProgramInfoLog));
   } catch (...) {
     cleanup();
     glDeleteProgram(prog);
