@@ -69,7 +69,9 @@ void expect_contains_visible_receivers(const scene::Scene& s) {
   // Light-space area: the fit magnifies uv by s_xy on each axis.
   EXPECT_GT(fitted.s_xy, 1.2f) << s.name;
   EXPECT_FLOAT_EQ(unfitted.s_xy, 1.0f);
-  if (!fitted.perspective) EXPECT_LT(fitted.extent_ws * fitted.extent_ws, unfitted.extent_ws * unfitted.extent_ws);
+  if (!fitted.perspective) {
+    EXPECT_LT(fitted.extent_ws * fitted.extent_ws, unfitted.extent_ws * unfitted.extent_ws);
+  }
 }
 
 TEST(Fitting, DirectionalFitContainsEveryVisibleReceiverAndCoversLess) {

@@ -98,7 +98,9 @@ TEST_P(HardShadow, FootprintMatchesTheAnalyticSquareWithinOneTexel) {
   }
   EXPECT_GT(checked, n * n / 2);
   EXPECT_EQ(wrong, 0) << "texel " << texel << " ws, fitted " << info.light.fitted;
-  if (fit) EXPECT_GT(info.light.s_xy, 1.5f);  // the view covers far less than the 10×10 ground
+  if (fit) {
+    EXPECT_GT(info.light.s_xy, 1.5f);  // the view covers far less than the 10×10 ground
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Fitting, HardShadow, ::testing::Values(false, true),
