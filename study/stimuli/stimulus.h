@@ -1,0 +1,100 @@
+#pragma once
+// 2AFC stimuli drawn the renderer's way: an occluder whose straight edge is the original line is
+// rasterized into a shadow map whose texels are `artifact_px` stimulus pixels wide, and the
+// receiver (a white plane seen orthographically, 1 world unit = 1 screen pixel, light straight
+// down) is shaded with PCF of radius `filter_radius_px`. The artifact-free partner filters the
+// original edge itself (analytically) with the same kernel and radius.
+//
+// Light levels: `lit_linear` is the lit receiver's level in *linear light* as a fraction of the
+// display's white luminance (1.0 = full contrast, 0.5 = half the luminance). The GL pass computes
+// visibility in linear light; `encode` applies the display's transfer function once, on the CPU,
+// and the resulting 8-bit values are what is shown and what the PNGs hold.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "io/image_io.h"
+
+namespace penumbra::stimuli {
+
+enum class Pattern { stair, step };
+enum class Kernel { disk, grid, poisson };
+enum class Transfer { srgb, gamma22, linear };
+
+// Parse/print; parse throws std::invalid_argument naming the accepted values.
+Pattern parse_pattern(const std::string& s);
+Kernel parse_kernel(const std::string& s);
+Transfer parse_transfer(const std::string& s);
+std::string to_string(Pattern p);
+std::string to_string(Kernel k);
+std::string to_string(Transfer t);
+
+struct StimulusSpec {
+  Pattern pattern = Pattern::stair;
+  double artifact_px = 10;       // one shadow-map texel on screen
+  double filter_radius_px = 20;  // PCF radius (as shown: clamp first, see clamp_filter_radius)
+  double lit_linear = 1.0;       // lit level in linear light, (0, 1]
+  Kernel kernel = Kernel::disk;
+  int poisson_taps = 32;         // Poisson kernel only
+  int size_px = 320;             // square stimulus side
+  std::uint64_t seed = 1;        // edge phase, orientation, Poisson rotation
+  Transfer transfer = Transfer::srgb;
+};
+// Throws std::invalid_argument naming the field for a spec that cannot be drawn.
+void validate(const StimulusSpec& spec);
+
+// Everything random about one stimulus, derived from spec.seed. Canonical frame: stimulus px,
+// origin at the stimulus centre, y up; the edge is y = line_m x + line_b with the occluder below.
+struct Geometry {
+  int orientation = 0;          // 0..7: rotation by 90° * (orientation % 4), mirrored when >= 4
+  glm::dmat2 to_canonical{1.0}; // screen offset from the centre (y up) -> canonical
+  double line_m = 0, line_b = 0;
+  glm::dvec2 map_origin_px{0};  // canonical position of shadow-map texel (0, 0)'s lower-left corner
+  int map_texels = 0;           // per side
+  double poisson_rotation = 0;  // radians
+};
+Geometry make_geometry(const StimulusSpec& spec);
+
+// The filter radius that can actually be shown: at least 1 px, at most half the stimulus.
+struct ShownRadius {
+  double filter_radius_px;
+  bool clamped;
+};
+ShownRadius clamp_filter_radius(double requested_px, int size_px);
+
+// Linear light in [0, 1] -> 8-bit display value through the transfer function.
+std::uint8_t encode(double linear, Transfer transfer);
+double decode(std::uint8_t value, Transfer transfer);
+
+struct StimulusPair {
+  Geometry geometry;
+  io::ImageF artifact_visibility;  // linear visibility in [0, 1], top row first
+  io::ImageF line_visibility;
+  io::Image8 artifact;  // one channel, encoded: exactly the displayed values
+  io::Image8 line;
+};
+
+nlohmann::json to_json(const StimulusSpec& spec, const Geometry& geometry);
+
+// Needs a current OpenGL 4.5 context (headless or windowed).
+class StimulusRenderer {
+ public:
+  StimulusRenderer();
+  ~StimulusRenderer();
+  StimulusRenderer(const StimulusRenderer&) = delete;
+  StimulusRenderer& operator=(const StimulusRenderer&) = delete;
+
+  StimulusPair render(const StimulusSpec& spec);
+  // The shadow map of the last render: 1 = lit texel, 0 = occluded, row 0 = canonical bottom.
+  const std::vector<std::uint8_t>& last_shadow_map() const { return last_map_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::vector<std::uint8_t> last_map_;
+};
+
+}  // namespace penumbra::stimuli

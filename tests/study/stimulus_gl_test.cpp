@@ -1,0 +1,214 @@
+// Stimulus pixels against an independent CPU computation: the shadow map from the texel-centre
+// rule in double precision, and the disk/box integrals by Gauss–Legendre quadrature over the
+// kernel's height (split at every texel row, where the integrand jumps), not by the closed forms
+// the shader uses.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+#include "gl_test_env.h"
+#include "shadows/renderer.h"
+#include "stimuli/stimulus.h"
+
+namespace {
+
+using namespace penumbra;
+using stimuli::Geometry;
+using stimuli::StimulusSpec;
+
+constexpr double kGaussX[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
+                               0.1834346424956498,  0.5255324099163290,  0.7966664774136267,  0.9602898564975363};
+constexpr double kGaussW[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
+                               0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+
+// Integral of f over [lo, hi], split at the sorted breaks, each piece subdivided 8 times.
+double integrate(const std::function<double(double)>& f, double lo, double hi, std::vector<double> breaks) {
+  breaks.push_back(lo);
+  breaks.push_back(hi);
+  std::sort(breaks.begin(), breaks.end());
+  double sum = 0;
+  for (std::size_t k = 0; k + 1 < breaks.size(); ++k) {
+    const double a = std::max(lo, breaks[k]), b = std::min(hi, breaks[k + 1]);
+    if (!(b > a)) continue;
+    constexpr int sub = 8;
+    for (int s = 0; s < sub; ++s) {
+      const double s0 = a + (b - a) * s / sub, s1 = a + (b - a) * (s + 1) / sub;
+      for (int g = 0; g < 8; ++g) sum += 0.5 * (s1 - s0) * kGaussW[g] * f(0.5 * (s0 + s1) + 0.5 * (s1 - s0) * kGaussX[g]);
+    }
+  }
+  return sum;
+}
+
+struct Reference {
+  const StimulusSpec& spec;
+  const Geometry& g;
+  std::vector<glm::vec2> taps = shadows::poisson_disk(spec.poisson_taps);
+  double a() const { return spec.artifact_px; }
+  // Texel-centre rule: a texel is occluded when its centre lies below the edge.
+  bool texel_lit(long i, long j) const {
+    if (i < 0 || j < 0 || i >= g.map_texels || j >= g.map_texels) return true;
+    const double cx = g.map_origin_px.x + (i + 0.5) * a(), cy = g.map_origin_px.y + (j + 0.5) * a();
+    return cy >= g.line_m * cx + g.line_b;
+  }
+  // Lit length of the segment [x0, x1] (canonical) at height y, from the shadow map or the edge.
+  double lit_length(double x0, double x1, double y, bool from_map) const {
+    if (!(x1 > x0)) return 0;
+    if (!from_map) {
+      const double x_edge = (y - g.line_b) / g.line_m;  // lit for x <= x_edge (m > 0)
+      return std::clamp(x_edge - x0, 0.0, x1 - x0);
+    }
+    const long j = static_cast<long>(std::floor((y - g.map_origin_px.y) / a()));
+    const long i0 = static_cast<long>(std::floor((x0 - g.map_origin_px.x) / a()));
+    const long i1 = static_cast<long>(std::floor((x1 - g.map_origin_px.x) / a()));
+    double len = 0;
+    for (long i = i0; i <= i1; ++i) {
+      if (!texel_lit(i, j)) continue;
+      const double t0 = g.map_origin_px.x + i * a(), t1 = t0 + a();
+      len += std::max(0.0, std::min(x1, t1) - std::max(x0, t0));
+    }
+    return len;
+  }
+  double visibility(glm::dvec2 q, bool from_map) const {
+    const double r = spec.filter_radius_px;
+    if (spec.kernel == stimuli::Kernel::poisson) {
+      double sum = 0;
+      for (auto t : taps) {
+        const double c = std::cos(g.poisson_rotation), s = std::sin(g.poisson_rotation);
+        const glm::dvec2 p = q + r * glm::dvec2(c * t.x - s * t.y, s * t.x + c * t.y);
+        sum += lit_length(p.x - 1e-9, p.x + 1e-9, p.y, from_map) > 0 ? 1 : 0;
+      }
+      return sum / static_cast<double>(taps.size());
+    }
+    std::vector<double> breaks;  // texel rows (the integrand jumps there)
+    const double first = std::floor((q.y - r - g.map_origin_px.y) / a());
+    for (double k = first; g.map_origin_px.y + k * a() <= q.y + r; k += 1) breaks.push_back(g.map_origin_px.y + k * a());
+    if (spec.kernel == stimuli::Kernel::grid) {
+      const double area = integrate([&](double y) { return lit_length(q.x - r, q.x + r, y, from_map); }, q.y - r,
+                                    q.y + r, breaks);
+      return area / (4 * r * r);
+    }
+    // Disk: y = q.y + r sin(theta), chord half-width r cos(theta).
+    std::vector<double> theta_breaks;
+    for (double y : breaks) {
+      const double s = (y - q.y) / r;
+      if (s > -1 && s < 1) theta_breaks.push_back(std::asin(s));
+    }
+    const double area = integrate(
+        [&](double t) {
+          const double half = r * std::cos(t);
+          return lit_length(q.x - half, q.x + half, q.y + r * std::sin(t), from_map) * r * std::cos(t);
+        },
+        -std::numbers::pi / 2, std::numbers::pi / 2, theta_breaks);
+    return area / (std::numbers::pi * r * r);
+  }
+};
+
+struct Case {
+  stimuli::Pattern pattern;
+  double artifact_px, radius_px, lit;
+  stimuli::Kernel kernel;
+  std::uint64_t seed;
+};
+
+class StimulusPixels : public ::testing::TestWithParam<Case> {};
+
+TEST_P(StimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
+  const Case c = GetParam();
+  StimulusSpec spec;
+  spec.pattern = c.pattern;
+  spec.artifact_px = c.artifact_px;
+  spec.filter_radius_px = c.radius_px;
+  spec.lit_linear = c.lit;
+  spec.kernel = c.kernel;
+  spec.size_px = 96;
+  spec.seed = c.seed;
+  stimuli::StimulusRenderer renderer;
+  const auto pair = renderer.render(spec);
+  const Geometry& g = pair.geometry;
+  Reference ref{spec, g, {}};
+  ref.taps = shadows::poisson_disk(spec.poisson_taps);
+
+  // The rasterized shadow map is the texel-centre rule exactly.
+  const auto& map = renderer.last_shadow_map();
+  int map_mismatch = 0;
+  for (int j = 0; j < g.map_texels; ++j)
+    for (int i = 0; i < g.map_texels; ++i) map_mismatch += map[j * g.map_texels + i] != (ref.texel_lit(i, j) ? 1 : 0);
+  EXPECT_EQ(map_mismatch, 0);
+
+  const int n = spec.size_px;
+  int worst = 0, artifact_differs = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
+      for (int from_map = 0; from_map < 2; ++from_map) {
+        const double v = ref.visibility(q, from_map == 1);
+        const int expected = stimuli::encode(c.lit * v, spec.transfer);
+        const int got = from_map ? pair.artifact.at(x, y) : pair.line.at(x, y);
+        const int diff = std::abs(expected - got);
+        worst = std::max(worst, diff);
+        if (diff > 1) ADD_FAILURE() << (from_map ? "artifact" : "line") << " pixel (" << x << ", " << y << "): got "
+                                    << got << ", expected " << expected << " (visibility " << v << ")";
+      }
+      artifact_differs += pair.artifact.at(x, y) != pair.line.at(x, y);
+    }
+  }
+  EXPECT_LE(worst, 1);
+  // The pair really differs (the staircase is there) and both have a dark and a lit side.
+  EXPECT_GT(artifact_differs, 20);
+  const auto [lo, hi] = std::minmax_element(pair.line.pixels.begin(), pair.line.pixels.end());
+  EXPECT_EQ(*lo, 0);
+  EXPECT_EQ(*hi, stimuli::encode(c.lit, spec.transfer));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Stimuli, StimulusPixels,
+    ::testing::Values(Case{stimuli::Pattern::stair, 10, 4, 1.0, stimuli::Kernel::disk, 1},
+                      Case{stimuli::Pattern::stair, 10, 17, 1.0, stimuli::Kernel::disk, 2},
+                      Case{stimuli::Pattern::step, 10, 4, 1.0, stimuli::Kernel::disk, 3},
+                      Case{stimuli::Pattern::step, 20, 17, 0.5, stimuli::Kernel::disk, 4},
+                      Case{stimuli::Pattern::stair, 5, 6, 0.5, stimuli::Kernel::grid, 5},
+                      Case{stimuli::Pattern::step, 10, 5, 1.0, stimuli::Kernel::poisson, 6}));
+
+TEST(StimulusGeometry, StepCrossesExactlyOneTexelRowAndOrientationsVary) {
+  std::set<int> orientations;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    StimulusSpec spec;
+    spec.pattern = stimuli::Pattern::step;
+    spec.seed = seed;
+    const Geometry g = stimuli::make_geometry(spec);
+    orientations.insert(g.orientation);
+    // Texel-centre rows crossed by the edge inside the stimulus: exactly one.
+    const double half = 0.5 * spec.size_px;
+    const double y_left = g.line_m * -half + g.line_b, y_right = g.line_m * half + g.line_b;
+    int crossed = 0;
+    for (int j = 0; j < g.map_texels; ++j) {
+      const double cy = g.map_origin_px.y + (j + 0.5) * spec.artifact_px;
+      crossed += (cy - y_left) * (cy - y_right) < 0;
+    }
+    EXPECT_EQ(crossed, 1) << "seed " << seed;
+  }
+  EXPECT_EQ(orientations.size(), 8u);
+}
+
+TEST(StimulusDisplay, TransferFunctionsAndRadiusClamp) {
+  EXPECT_EQ(stimuli::encode(0.5, stimuli::Transfer::srgb), 188);  // 50 % linear light is sRGB 188
+  EXPECT_EQ(stimuli::encode(0.5, stimuli::Transfer::gamma22), 186);
+  EXPECT_EQ(stimuli::encode(0.5, stimuli::Transfer::linear), 128);
+  for (int v = 0; v < 256; ++v)
+    for (auto t : {stimuli::Transfer::srgb, stimuli::Transfer::gamma22, stimuli::Transfer::linear})
+      EXPECT_EQ(stimuli::encode(stimuli::decode(static_cast<std::uint8_t>(v), t), t), v);
+  EXPECT_EQ(stimuli::clamp_filter_radius(0.3, 320).filter_radius_px, 1.0);
+  EXPECT_TRUE(stimuli::clamp_filter_radius(0.3, 320).clamped);
+  EXPECT_EQ(stimuli::clamp_filter_radius(500, 320).filter_radius_px, 160.0);
+  EXPECT_FALSE(stimuli::clamp_filter_radius(20, 320).clamped);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
+  return RUN_ALL_TESTS();
+}
