@@ -2,11 +2,16 @@
 //   penumbra-study stimulus --pattern stair --artifact-px 10 --filter-radius-px 20 -o DIR
 #include <CLI/CLI.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <thread>
 
 #include "gl/context.h"
 #include "io/image_io.h"
+#include "observers/psychometric_observer.h"
+#include "procedure/session.h"
 #include "stimuli/stimulus.h"
 
 namespace fs = std::filesystem;
@@ -40,6 +45,80 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   return 0;
 }
 
+// "psychometric:c=3.0,beta=3.5,lapse=0.02" -> the planted model (same for every condition).
+observers::PlantedModel parse_psychometric(const std::string& spec) {
+  observers::PlantedModel m;
+  m.slope = 3.5;
+  const std::string body = spec.substr(spec.find(':') == std::string::npos ? spec.size() : spec.find(':') + 1);
+  std::size_t pos = 0;
+  while (pos < body.size()) {
+    const std::size_t comma = body.find(',', pos);
+    const std::string kv = body.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    const std::size_t eq = kv.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("--observer: '" + kv + "': expected key=value");
+    const std::string k = kv.substr(0, eq);
+    double v = 0;
+    try {
+      v = std::stod(kv.substr(eq + 1));
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--observer: '" + kv + "': expected a number");
+    }
+    if (k == "c") m.c_true = v;
+    else if (k == "beta") m.slope = v;
+    else if (k == "lapse") m.lapse = v;
+    else if (k == "p_threshold") m.p_threshold = v;
+    else throw std::invalid_argument("--observer: unknown parameter '" + k + "' (c, beta, lapse, p_threshold)");
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return m;
+}
+
+struct RunOptions {
+  fs::path config, output, resume;
+  std::string observer = "psychometric:c=3.0,beta=3.5,lapse=0.02";
+  std::string participant = "sim";
+  bool headless = false;
+  int pace_ms = 0;
+  std::uint64_t observer_seed = 7;
+};
+
+int run_study(const RunOptions& o) {
+  if (!o.headless) throw std::runtime_error("run: only --headless is built into this binary; use penumbra-study-gui for participants");
+  if (o.observer.rfind("psychometric", 0) != 0)
+    throw std::invalid_argument("--observer '" + o.observer + "': expected psychometric:c=..,beta=..,lapse=..");
+  procedure::Session session = [&] {
+    if (!o.resume.empty()) return procedure::Session::resume(o.resume);
+    if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
+    return procedure::Session::create(procedure::load_config(o.config), o.output, o.participant,
+                                      {{"observer", o.observer}, {"config_file", o.config.string()}});
+  }();
+  const observers::PlantedModel model = parse_psychometric(o.observer);
+  std::map<std::string, observers::PlantedModel> conditions;
+  for (std::size_t r = 0; r < session.config().rounds.size(); ++r) conditions[session.condition(static_cast<int>(r))] = model;
+  while (const auto plan = session.next()) {
+    observers::PsychometricObserver observer(conditions, observers::derive_seed(o.observer_seed, plan->trial));
+    const bool correct = observer.respond({session.condition(plan->round), plan->stimulus.artifact_px,
+                                           plan->stimulus.filter_radius_px}).correct;
+    std::string response;
+    if (session.config().task == "2afc") response = correct == (plan->target == "left") ? "left" : "right";
+    else response = correct == (plan->target == "straight") ? "yes" : "no";
+    session.record(*plan, response, 0.0);
+    if (o.pace_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(o.pace_ms));
+  }
+  std::cout << "session " << session.session_id() << ": " << session.trials_done() << " trials in "
+            << session.dir().string() << "\n";
+  for (std::size_t r = 0; r < session.rounds().size(); ++r) {
+    for (const auto& sc : session.rounds()[r]) {
+      const double t = sc.quest.mean();
+      std::printf("  round %zu %-10s %-4s trials %3zu  threshold log10(a/r) %+.3f sd %.3f  -> r/a = %.2f\n", r,
+                  session.condition(static_cast<int>(r)).c_str(), sc.name.c_str(), sc.quest.trial_count(), t,
+                  sc.quest.sd(), std::pow(10.0, -t));
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -61,9 +140,21 @@ int main(int argc, char** argv) {
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str();
   stim->add_option("-o,--output", stim_out, "output directory")->required();
 
+  auto* run = app.add_subcommand("run", "run a study session (headless with a simulated observer)");
+  RunOptions ro;
+  run->add_option("--config", ro.config, "study config JSON (data/studies/)");
+  run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)");
+  run->add_option("--resume", ro.resume, "continue the session in this directory");
+  run->add_option("--observer", ro.observer, "psychometric:c=..,beta=..,lapse=..")->capture_default_str();
+  run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")->capture_default_str();
+  run->add_option("--participant", ro.participant, "participant id")->capture_default_str();
+  run->add_flag("--headless", ro.headless, "no window: the observer answers");
+  run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
+    if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
     std::cerr << "penumbra-study: " << e.what() << "\n";
     return 1;

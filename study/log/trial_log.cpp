@@ -1,0 +1,206 @@
+#include "log/trial_log.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace penumbra::trial_log {
+
+const std::vector<std::string>& columns() {
+  static const std::vector<std::string> c = {
+      "session_id", "participant", "utc_time", "round", "trial", "staircase", "pattern", "contrast",
+      "artifact_px", "task", "intensity", "filter_radius_px", "kernel", "target", "response", "correct",
+      "rt_ms", "quest_mean", "quest_sd", "practice", "requested_filter_radius_px", "clamped",
+      "artifact_arcmin", "filter_radius_arcmin", "stimulus_seed"};
+  return c;
+}
+
+std::string header_line() {
+  std::string s;
+  for (std::size_t i = 0; i < columns().size(); ++i) s += (i ? "," : "") + columns()[i];
+  return s + "\n";
+}
+
+namespace {
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// Free-text fields may not hold separators; the writer refuses them instead of quoting.
+const std::string& text(const std::string& v, const char* name) {
+  if (v.find_first_of(",\"\n\r") != std::string::npos)
+    throw std::invalid_argument(std::string("trial log: ") + name + " '" + v + "' contains , \" or a newline");
+  return v;
+}
+
+}  // namespace
+
+std::string format_row(const TrialRow& r) {
+  std::ostringstream o;
+  o << text(r.session_id, "session_id") << ',' << text(r.participant, "participant") << ',' << r.utc_time << ','
+    << r.round << ',' << r.trial << ',' << text(r.staircase, "staircase") << ',' << r.pattern << ',' << num(r.contrast)
+    << ',' << num(r.artifact_px) << ',' << r.task << ',' << num(r.intensity) << ',' << num(r.filter_radius_px) << ','
+    << r.kernel << ',' << r.target << ',' << r.response << ',' << r.correct << ',' << num(r.rt_ms) << ','
+    << num(r.quest_mean) << ',' << num(r.quest_sd) << ',' << r.practice << ',' << num(r.requested_filter_radius_px)
+    << ',' << r.clamped << ',' << num(r.artifact_arcmin) << ',' << num(r.filter_radius_arcmin) << ','
+    << r.stimulus_seed << '\n';
+  return o.str();
+}
+
+TrialRow parse_row(const std::string& line, const std::string& file, int line_number) {
+  std::vector<std::string> f;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    f.push_back(line.substr(start, comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  const std::string where = file + ":" + std::to_string(line_number) + ": ";
+  if (f.size() != columns().size())
+    throw std::runtime_error(where + "expected " + std::to_string(columns().size()) + " columns, found " +
+                             std::to_string(f.size()));
+  auto fail = [&](std::size_t i, const std::string& what) -> void {
+    throw std::runtime_error(where + "column '" + columns()[i] + "': " + what + " (found '" + f[i] + "')");
+  };
+  auto real = [&](std::size_t i) {
+    double v = 0;
+    const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
+    if (ec != std::errc() || p != f[i].data() + f[i].size() || !std::isfinite(v)) fail(i, "expected a finite number");
+    return v;
+  };
+  auto integer = [&](std::size_t i, long lo, long hi) {
+    long v = 0;
+    const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
+    if (ec != std::errc() || p != f[i].data() + f[i].size() || v < lo || v > hi)
+      fail(i, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return static_cast<int>(v);
+  };
+  auto one_of = [&](std::size_t i, std::initializer_list<const char*> allowed) {
+    for (const char* a : allowed)
+      if (f[i] == a) return f[i];
+    std::string list;
+    for (const char* a : allowed) list += (list.empty() ? "" : "|") + std::string(a);
+    fail(i, "expected " + list);
+    return std::string();
+  };
+  auto nonempty = [&](std::size_t i) {
+    if (f[i].empty()) fail(i, "expected a value");
+    return f[i];
+  };
+  TrialRow r;
+  r.session_id = nonempty(0);
+  r.participant = nonempty(1);
+  r.utc_time = nonempty(2);
+  r.round = integer(3, 0, 1000);
+  r.trial = integer(4, 0, 1000000);
+  r.staircase = nonempty(5);
+  r.pattern = one_of(6, {"stair", "step"});
+  r.contrast = real(7);
+  if (!(r.contrast > 0 && r.contrast <= 1)) fail(7, "expected a lit level in (0, 1]");
+  r.artifact_px = real(8);
+  if (!(r.artifact_px > 0)) fail(8, "expected > 0");
+  r.task = one_of(9, {"2afc", "yesno"});
+  r.intensity = real(10);
+  r.filter_radius_px = real(11);
+  if (!(r.filter_radius_px > 0)) fail(11, "expected > 0");
+  if (std::abs(r.intensity - std::log10(r.artifact_px / r.filter_radius_px)) > 1e-9)
+    fail(10, "expected log10(artifact_px / filter_radius_px)");
+  r.kernel = one_of(12, {"disk", "grid", "poisson"});
+  if (r.task == "2afc") {
+    r.target = one_of(13, {"left", "right"});
+    r.response = one_of(14, {"left", "right"});
+  } else {
+    r.target = one_of(13, {"jagged", "straight"});
+    r.response = one_of(14, {"yes", "no"});
+  }
+  r.correct = integer(15, 0, 1);
+  const bool right = r.task == "2afc" ? r.response == r.target : (r.response == "yes") == (r.target == "straight");
+  if (r.correct != (right ? 1 : 0)) fail(15, "does not agree with target and response");
+  r.rt_ms = real(16);
+  if (r.rt_ms < 0) fail(16, "expected >= 0");
+  r.quest_mean = real(17);
+  r.quest_sd = real(18);
+  if (r.quest_sd < 0) fail(18, "expected >= 0");
+  r.practice = integer(19, 0, 1);
+  r.requested_filter_radius_px = real(20);
+  r.clamped = integer(21, 0, 1);
+  r.artifact_arcmin = real(22);
+  r.filter_radius_arcmin = real(23);
+  {
+    std::uint64_t v = 0;
+    const auto [p, ec] = std::from_chars(f[24].data(), f[24].data() + f[24].size(), v);
+    if (ec != std::errc() || p != f[24].data() + f[24].size()) fail(24, "expected an unsigned integer");
+    r.stimulus_seed = v;
+  }
+  return r;
+}
+
+Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
+  const int flags = O_WRONLY | O_APPEND | O_CLOEXEC | (create ? (O_CREAT | O_EXCL) : 0);
+  fd_ = ::open(path.c_str(), flags, 0644);
+  if (fd_ < 0)
+    throw std::runtime_error(path.string() + ": cannot " + (create ? "create" : "open") + " the trial log: " +
+                             std::strerror(errno));
+  if (create) {
+    const std::string h = header_line();
+    if (::write(fd_, h.data(), h.size()) != static_cast<ssize_t>(h.size()) || ::fsync(fd_) != 0)
+      throw std::runtime_error(path.string() + ": cannot write the header: " + std::strerror(errno));
+  }
+}
+
+Writer::~Writer() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void Writer::append(const TrialRow& row) {
+  const std::string line = format_row(row);
+  if (::write(fd_, line.data(), line.size()) != static_cast<ssize_t>(line.size()))
+    throw std::runtime_error(path_.string() + ": cannot append trial " + std::to_string(row.trial) + ": " +
+                             std::strerror(errno));
+  if (::fsync(fd_) != 0) throw std::runtime_error(path_.string() + ": fsync failed: " + std::strerror(errno));
+}
+
+ReadResult read(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open the trial log");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const std::string all = ss.str();
+  ReadResult result;
+  const std::string file = path.string();
+  std::size_t pos = 0;
+  int line_number = 0;
+  while (pos < all.size()) {
+    const std::size_t nl = all.find('\n', pos);
+    ++line_number;
+    if (nl == std::string::npos) {
+      result.torn_tail = true;
+      break;
+    }
+    const std::string line = all.substr(pos, nl - pos);
+    if (line_number == 1) {
+      if (line + "\n" != header_line())
+        throw std::runtime_error(file + ":1: the header does not match the trial-log columns (" +
+                                 header_line().substr(0, header_line().size() - 1) + ")");
+    } else {
+      result.rows.push_back(parse_row(line, file, line_number));
+    }
+    pos = nl + 1;
+    result.complete_bytes = pos;
+  }
+  if (line_number == 0 || result.complete_bytes == 0) throw std::runtime_error(file + ":1: no header");
+  return result;
+}
+
+}  // namespace penumbra::trial_log

@@ -1,0 +1,207 @@
+#include "procedure/config.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+
+namespace penumbra::procedure {
+
+double Display::arcmin(double px) const {
+  const double mm = px * width_mm / width_px;
+  return 2.0 * std::atan(0.5 * mm / viewing_distance_mm) * 180.0 / M_PI * 60.0;
+}
+
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
+    throw std::runtime_error(file_ + ": " + field + ": " + what);
+  }
+  const nlohmann::json* find(const nlohmann::json& obj, const std::string& key) const {
+    auto it = obj.find(key);
+    return it == obj.end() ? nullptr : &*it;
+  }
+  double number(const nlohmann::json& obj, const std::string& path, const std::string& key, double fallback,
+                double lo, double hi) const {
+    const auto* v = find(obj, key);
+    if (!v) return fallback;
+    if (!v->is_number()) fail(path + key, "expected a number");
+    const double d = v->get<double>();
+    if (!(d >= lo && d <= hi)) fail(path + key, "expected a number in [" + fmt(lo) + ", " + fmt(hi) + "], found " + fmt(d));
+    return d;
+  }
+  long integer(const nlohmann::json& obj, const std::string& path, const std::string& key, long fallback, long lo,
+               long hi) const {
+    const auto* v = find(obj, key);
+    if (!v) return fallback;
+    if (!v->is_number_integer()) fail(path + key, "expected an integer");
+    const long d = v->get<long>();
+    if (d < lo || d > hi) fail(path + key, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return d;
+  }
+  std::string text(const nlohmann::json& obj, const std::string& path, const std::string& key,
+                   const std::string& fallback) const {
+    const auto* v = find(obj, key);
+    if (!v) return fallback;
+    if (!v->is_string()) fail(path + key, "expected a string");
+    return v->get<std::string>();
+  }
+  void only(const nlohmann::json& obj, const std::string& path, const std::set<std::string>& keys) const {
+    if (!obj.is_object()) fail(path.empty() ? "(top level)" : path.substr(0, path.size() - 1), "expected an object");
+    for (auto it = obj.begin(); it != obj.end(); ++it)
+      if (!keys.count(it.key())) fail(path + it.key(), "unknown field");
+  }
+  template <class F>
+  auto parse_enum(const std::string& field, const std::string& value, F parse) const {
+    try {
+      return parse(value);
+    } catch (const std::invalid_argument& e) {
+      fail(field, e.what());
+    }
+  }
+  static std::string fmt(double d) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", d);
+    return b;
+  }
+
+ private:
+  std::string file_;
+};
+
+}  // namespace
+
+StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
+  const Reader r(file);
+  r.only(j, "", {"name", "task", "artifact_px", "rounds", "quest", "intensity_bounds", "stopping", "practice_trials",
+                 "practice_intensity", "break_every_trials", "seed", "stimulus", "display", "description"});
+  StudyConfig c;
+  c.name = r.text(j, "", "name", "study");
+  c.task = r.text(j, "", "task", "2afc");
+  if (c.task != "2afc" && c.task != "yesno") r.fail("task", "expected 2afc or yesno");
+
+  if (const auto* a = r.find(j, "artifact_px")) {
+    if (!a->is_array() || a->empty()) r.fail("artifact_px", "expected a non-empty array of sizes in px");
+    c.artifact_px.clear();
+    std::set<double> seen;
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const auto& v = (*a)[i];
+      const std::string f = "artifact_px[" + std::to_string(i) + "]";
+      if (!v.is_number() || !(v.get<double>() >= 1 && v.get<double>() <= 200)) r.fail(f, "expected a size in [1, 200] px");
+      if (!seen.insert(v.get<double>()).second) r.fail(f, "duplicate artifact size");
+      c.artifact_px.push_back(v.get<double>());
+    }
+  }
+  const auto* rounds = r.find(j, "rounds");
+  if (!rounds || !rounds->is_array() || rounds->empty()) r.fail("rounds", "expected a non-empty array of {pattern, contrast}");
+  for (std::size_t i = 0; i < rounds->size(); ++i) {
+    const std::string p = "rounds[" + std::to_string(i) + "].";
+    r.only((*rounds)[i], p, {"pattern", "contrast"});
+    RoundConfig rc;
+    rc.pattern = r.parse_enum(p + "pattern", r.text((*rounds)[i], p, "pattern", "stair"), stimuli::parse_pattern);
+    rc.contrast = r.number((*rounds)[i], p, "contrast", 1.0, 0.01, 1.0);
+    c.rounds.push_back(rc);
+  }
+  if (const auto* q = r.find(j, "quest")) {
+    r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range"});
+    c.quest.t_guess = r.number(*q, "quest.", "t_guess", -0.5, -5, 5);
+    c.quest.t_guess_sd = r.number(*q, "quest.", "t_guess_sd", 1.0, 0.01, 100);
+    c.quest.p_threshold = r.number(*q, "quest.", "p_threshold", 0.82, 0.5, 0.999);
+    c.quest.beta = r.number(*q, "quest.", "beta", 3.5, 0.1, 100);
+    c.quest.delta = r.number(*q, "quest.", "delta", 0.01, 0, 0.5);
+    c.quest.gamma = r.number(*q, "quest.", "gamma", 0.5, 0, 0.99);
+    c.quest.grain = r.number(*q, "quest.", "grain", 0.01, 1e-4, 1);
+    if (r.find(*q, "range")) c.quest.range = r.number(*q, "quest.", "range", 5, 0.1, 100);
+  } else {
+    c.quest.t_guess = -0.5;
+    c.quest.t_guess_sd = 1.0;
+  }
+  if (const auto* b = r.find(j, "intensity_bounds")) {
+    if (!b->is_array() || b->size() != 2 || !(*b)[0].is_number() || !(*b)[1].is_number() ||
+        !((*b)[0].get<double>() < (*b)[1].get<double>()))
+      r.fail("intensity_bounds", "expected [min, max] with min < max (log10(a / r))");
+    c.intensity_min = (*b)[0].get<double>();
+    c.intensity_max = (*b)[1].get<double>();
+  }
+  if (const auto* s = r.find(j, "stopping")) {
+    r.only(*s, "stopping.", {"min_trials", "max_trials", "sd_below"});
+    c.min_trials = static_cast<int>(r.integer(*s, "stopping.", "min_trials", 10, 1, 10000));
+    c.max_trials = static_cast<int>(r.integer(*s, "stopping.", "max_trials", 40, 1, 10000));
+    if (c.max_trials < c.min_trials) r.fail("stopping.max_trials", "expected >= stopping.min_trials");
+    c.sd_below = r.number(*s, "stopping.", "sd_below", 0.1, 0, 10);
+  }
+  c.practice_trials = static_cast<int>(r.integer(j, "", "practice_trials", 4, 0, 1000));
+  c.practice_intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
+  c.break_every_trials = static_cast<int>(r.integer(j, "", "break_every_trials", 40, 0, 100000));
+  if (const auto* s = r.find(j, "seed")) {
+    if (!s->is_number_unsigned()) r.fail("seed", "expected a non-negative integer");
+    c.seed = s->get<std::uint64_t>();
+  }
+  if (const auto* s = r.find(j, "stimulus")) {
+    r.only(*s, "stimulus.", {"size_px", "kernel", "poisson_taps"});
+    c.stimulus_size_px = static_cast<int>(r.integer(*s, "stimulus.", "size_px", 320, 16, 4096));
+    c.kernel = r.parse_enum("stimulus.kernel", r.text(*s, "stimulus.", "kernel", "disk"), stimuli::parse_kernel);
+    c.poisson_taps = static_cast<int>(r.integer(*s, "stimulus.", "poisson_taps", 32, 1, 64));
+  }
+  if (const auto* d = r.find(j, "display")) {
+    r.only(*d, "display.", {"width_px", "height_px", "width_mm", "height_mm", "viewing_distance_mm", "transfer", "monitor"});
+    c.display.width_px = static_cast<int>(r.integer(*d, "display.", "width_px", 1920, 1, 100000));
+    c.display.height_px = static_cast<int>(r.integer(*d, "display.", "height_px", 1080, 1, 100000));
+    c.display.width_mm = r.number(*d, "display.", "width_mm", 527, 1, 100000);
+    c.display.height_mm = r.number(*d, "display.", "height_mm", 296, 1, 100000);
+    c.display.viewing_distance_mm = r.number(*d, "display.", "viewing_distance_mm", 600, 1, 100000);
+    c.display.transfer = r.parse_enum("display.transfer", r.text(*d, "display.", "transfer", "srgb"), stimuli::parse_transfer);
+    c.display.monitor = static_cast<int>(r.integer(*d, "display.", "monitor", 0, 0, 16));
+  }
+  for (double a : c.artifact_px)
+    if (2 * a > c.stimulus_size_px) r.fail("artifact_px", "an artifact larger than half the stimulus cannot be shown");
+  try {
+    quest::Quest probe(c.quest);
+  } catch (const std::exception& e) {
+    r.fail("quest", e.what());
+  }
+  return c;
+}
+
+StudyConfig load_config(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open the study config");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::runtime_error(path.string() + ": not valid JSON: " + e.what());
+  }
+  return parse_config(j, path.string());
+}
+
+nlohmann::json to_json(const StudyConfig& c) {
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const auto& r : c.rounds) rounds.push_back({{"pattern", stimuli::to_string(r.pattern)}, {"contrast", r.contrast}});
+  nlohmann::json quest = {{"t_guess", c.quest.t_guess}, {"t_guess_sd", c.quest.t_guess_sd},
+                          {"p_threshold", c.quest.p_threshold}, {"beta", c.quest.beta}, {"delta", c.quest.delta},
+                          {"gamma", c.quest.gamma}, {"grain", c.quest.grain}};
+  if (c.quest.range) quest["range"] = *c.quest.range;
+  return {{"name", c.name},
+          {"task", c.task},
+          {"artifact_px", c.artifact_px},
+          {"rounds", rounds},
+          {"quest", quest},
+          {"intensity_bounds", {c.intensity_min, c.intensity_max}},
+          {"stopping", {{"min_trials", c.min_trials}, {"max_trials", c.max_trials}, {"sd_below", c.sd_below}}},
+          {"practice_trials", c.practice_trials},
+          {"practice_intensity", c.practice_intensity},
+          {"break_every_trials", c.break_every_trials},
+          {"seed", c.seed},
+          {"stimulus", {{"size_px", c.stimulus_size_px}, {"kernel", stimuli::to_string(c.kernel)},
+                        {"poisson_taps", c.poisson_taps}}},
+          {"display", {{"width_px", c.display.width_px}, {"height_px", c.display.height_px},
+                       {"width_mm", c.display.width_mm}, {"height_mm", c.display.height_mm},
+                       {"viewing_distance_mm", c.display.viewing_distance_mm},
+                       {"transfer", stimuli::to_string(c.display.transfer)}, {"monitor", c.display.monitor}}}};
+}
+
+}  // namespace penumbra::procedure

@@ -1,0 +1,55 @@
+#pragma once
+// A study configuration (data/studies/*.json). Every field is checked on load; errors name the
+// file and the field path, e.g. "default.json: stopping.min_trials: expected an integer >= 1".
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "quest/quest.h"
+#include "stimuli/stimulus.h"
+
+namespace penumbra::procedure {
+
+struct RoundConfig {
+  stimuli::Pattern pattern = stimuli::Pattern::stair;
+  double contrast = 1.0;  // lit level in linear light
+};
+
+struct Display {
+  int width_px = 1920, height_px = 1080;
+  double width_mm = 527, height_mm = 296;
+  double viewing_distance_mm = 600;
+  stimuli::Transfer transfer = stimuli::Transfer::srgb;
+  int monitor = 0;  // participant view's monitor (GLFW index)
+  // Visual angle of `px` pixels at the screen centre, in arcminutes.
+  double arcmin(double px) const;
+};
+
+struct StudyConfig {
+  std::string name;
+  std::string task = "2afc";                 // 2afc | yesno
+  std::vector<double> artifact_px = {5, 10, 20};
+  std::vector<RoundConfig> rounds;
+  quest::QuestParams quest;                  // t_guess, t_guess_sd in intensity units
+  double intensity_min = -2.0, intensity_max = 1.0;  // QUEST's suggestion is clamped to these
+  int min_trials = 10, max_trials = 40;
+  double sd_below = 0.1;                     // converged when the posterior sd drops below this
+  int practice_trials = 4;
+  double practice_intensity = 0.3;           // an easy trial: r = a / 2
+  int break_every_trials = 40;               // 0: no breaks
+  std::uint64_t seed = 1;
+  stimuli::Kernel kernel = stimuli::Kernel::disk;
+  int poisson_taps = 32;
+  int stimulus_size_px = 320;
+  Display display;
+};
+
+// Throws std::runtime_error "<file>: <field>: <what>".
+StudyConfig parse_config(const nlohmann::json& j, const std::string& file);
+StudyConfig load_config(const std::filesystem::path& path);
+nlohmann::json to_json(const StudyConfig& c);
+
+}  // namespace penumbra::procedure

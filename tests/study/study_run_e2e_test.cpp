@@ -1,0 +1,171 @@
+// penumbra-study run --headless end to end: valid logs, convergence to the planted threshold,
+// SIGKILL + --resume equal to an uninterrupted run, refusals with one clear line.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "log/trial_log.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+const std::string kExe = PENUMBRA_STUDY_EXE;
+const std::string kConfig = PENUMBRA_DATA_DIR "/studies/default.json";
+const std::string kObserver = "psychometric:c=3.0,beta=3.5,lapse=0.02";
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-e2e-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+pid_t spawn(const std::vector<std::string>& args, const fs::path& capture) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int fd = ::open(capture.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, 1);
+    dup2(fd, 2);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(kExe.c_str()));
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(kExe.c_str(), argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+int run(const std::vector<std::string>& args, std::string* output = nullptr) {
+  const fs::path cap = fresh("capture");
+  int status = 0;
+  waitpid(spawn(args, cap), &status, 0);
+  if (output) {
+    std::ifstream in(cap);
+    *output = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  fs::remove(cap);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Rows without the two columns that differ between sessions (session_id, utc_time).
+std::vector<std::string> comparable(const std::vector<trial_log::TrialRow>& rows) {
+  std::vector<std::string> out;
+  for (auto r : rows) {
+    r.session_id = "-";
+    r.utc_time = "-";
+    out.push_back(trial_log::format_row(r));
+  }
+  return out;
+}
+
+TEST(StudyRun, HeadlessSimulationLogsValidRowsAndConvergesToThePlantedThreshold) {
+  const fs::path dir = fresh("run");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string()}), 0);
+  const auto log = trial_log::read(dir / "trials.csv");  // validates every row against the schema
+  ASSERT_GT(log.rows.size(), 100u);
+  EXPECT_FALSE(log.torn_tail);
+  std::map<std::string, std::vector<const trial_log::TrialRow*>> staircases;
+  int practice = 0;
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    const auto& r = log.rows[i];
+    EXPECT_EQ(r.trial, static_cast<int>(i));
+    EXPECT_GE(r.filter_radius_px, 1.0);
+    EXPECT_LE(r.filter_radius_px, 160.0);
+    if (r.practice) {
+      ++practice;
+      continue;
+    }
+    staircases[std::to_string(r.round) + "/" + r.staircase].push_back(&r);
+  }
+  EXPECT_EQ(practice, 4);
+  ASSERT_EQ(staircases.size(), 12u);  // 4 rounds x 3 artifact sizes
+  const double planted = -std::log10(3.0);
+  double sum_error = 0;
+  for (const auto& [name, rows] : staircases) {
+    const auto& last = *rows.back();
+    EXPECT_GE(rows.size(), 10u) << name;
+    EXPECT_LE(rows.size(), 40u) << name;
+    if (rows.size() < 40) {
+      EXPECT_LT(last.quest_sd, 0.1) << name;  // stopped by convergence
+    }
+    EXPECT_NEAR(last.quest_mean, planted, 0.3) << name;
+    sum_error += last.quest_mean - planted;
+  }
+  EXPECT_NEAR(sum_error / 12, 0.0, 0.08);  // no bias across the 12 staircases
+  const std::string json = [&] {
+    std::ifstream in(dir / "session.json");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_NE(json.find("\"transfer\": \"srgb\""), std::string::npos);
+  EXPECT_NE(json.find("\"p_threshold\": 0.82"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(StudyRun, SigkillAtARandomTrialThenResumeEqualsAnUninterruptedRun) {
+  const fs::path whole = fresh("whole"), killed = fresh("killed");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", whole.string()}), 0);
+  const auto reference = trial_log::read(whole / "trials.csv").rows;
+
+  std::mt19937 rng(static_cast<unsigned>(std::random_device{}()));
+  const std::size_t kill_after = 5 + rng() % (reference.size() - 10);
+  const fs::path cap = fresh("kill-capture");
+  const pid_t pid = spawn({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", killed.string(),
+                           "--pace-ms", "3"},
+                          cap);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  std::size_t lines = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream in(killed / "trials.csv");
+    lines = static_cast<std::size_t>(std::count(std::istreambuf_iterator<char>(in), {}, '\n'));
+    if (lines >= kill_after + 1) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(kill(pid, SIGKILL), 0);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the run finished before it could be killed";
+  const auto before = trial_log::read(killed / "trials.csv");
+  EXPECT_GE(before.rows.size(), kill_after) << "completed trials were lost";
+  ASSERT_LT(before.rows.size(), reference.size());
+
+  std::string out;
+  ASSERT_EQ(run({"run", "--resume", killed.string(), "--observer", kObserver, "--headless"}, &out), 0) << out;
+  const auto resumed = trial_log::read(killed / "trials.csv");
+  EXPECT_EQ(comparable(resumed.rows), comparable(reference)) << "killed after " << before.rows.size() << " trials";
+  fs::remove_all(whole);
+  fs::remove_all(killed);
+  fs::remove(cap);
+}
+
+TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
+  const fs::path dir = fresh("refuse");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string()}), 0);
+  const auto size = fs::file_size(dir / "trials.csv");
+  std::string out;
+  EXPECT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string()}, &out), 1);
+  EXPECT_EQ(out, "penumbra-study: " + dir.string() + ": already holds a session; refusing to overwrite it (use --resume)\n");
+  EXPECT_EQ(fs::file_size(dir / "trials.csv"), size);
+
+  const fs::path bad = fresh("bad.json");
+  std::ofstream(bad) << R"({"rounds": [{"pattern": "stair"}], "stopping": {"sd_below": "small"}})";
+  EXPECT_EQ(run({"run", "--config", bad.string(), "--headless", "-o", fresh("never").string()}, &out), 1);
+  EXPECT_EQ(out, "penumbra-study: " + bad.string() + ": stopping.sd_below: expected a number\n");
+  EXPECT_FALSE(fs::exists(fresh("never")));
+  fs::remove_all(dir);
+  fs::remove(bad);
+}
+
+}  // namespace

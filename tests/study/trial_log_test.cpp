@@ -1,0 +1,142 @@
+// Trial log (schema, append-only writer, validating reader) and study configs (errors naming the
+// file and the field).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "log/trial_log.h"
+#include "procedure/config.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-test-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+trial_log::TrialRow sample_row(int trial) {
+  trial_log::TrialRow r;
+  r.session_id = "p1-20250101T000000";
+  r.participant = "p1";
+  r.utc_time = "2025-01-01T00:00:00.000Z";
+  r.trial = trial;
+  r.staircase = "a10";
+  r.pattern = "stair";
+  r.artifact_px = 10;
+  r.task = "2afc";
+  r.filter_radius_px = 31.622776601683793 + trial;
+  r.intensity = std::log10(r.artifact_px / r.filter_radius_px);
+  r.requested_filter_radius_px = r.filter_radius_px;
+  r.kernel = "disk";
+  r.target = "left";
+  r.response = trial % 2 ? "left" : "right";
+  r.correct = trial % 2;
+  r.quest_mean = -0.1234567890123456789;
+  r.quest_sd = 0.3;
+  r.stimulus_seed = 4010436946754998ull;
+  return r;
+}
+
+TEST(TrialLog, RoundTripsEveryValueExactly) {
+  const fs::path dir = fresh_dir("log-roundtrip");
+  {
+    trial_log::Writer w(dir / "trials.csv", true);
+    for (int t = 0; t < 3; ++t) w.append(sample_row(t));
+  }
+  {
+    trial_log::Writer w(dir / "trials.csv", false);  // reopened: appends after the existing rows
+    w.append(sample_row(3));
+  }
+  const auto log = trial_log::read(dir / "trials.csv");
+  ASSERT_EQ(log.rows.size(), 4u);
+  EXPECT_FALSE(log.torn_tail);
+  for (int t = 0; t < 4; ++t) {
+    EXPECT_EQ(log.rows[t].intensity, sample_row(t).intensity);  // bit for bit
+    EXPECT_EQ(log.rows[t].quest_mean, sample_row(t).quest_mean);
+    EXPECT_EQ(log.rows[t].stimulus_seed, sample_row(t).stimulus_seed);
+    EXPECT_EQ(trial_log::format_row(log.rows[t]), trial_log::format_row(sample_row(t)));
+  }
+  EXPECT_THROW(trial_log::Writer(dir / "trials.csv", true), std::runtime_error);  // never recreated
+}
+
+TEST(TrialLog, ReaderNamesFileLineAndColumn) {
+  const fs::path dir = fresh_dir("log-errors");
+  auto write = [&](const std::string& body) {
+    std::ofstream(dir / "t.csv") << trial_log::header_line() << body;
+    return dir / "t.csv";
+  };
+  auto message = [&](const fs::path& p) {
+    try {
+      trial_log::read(p);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string good = trial_log::format_row(sample_row(0));
+  std::string bad = good;
+  bad.replace(bad.find(",stair,"), 7, ",stairs,");
+  EXPECT_EQ(message(write(good + bad)), (dir / "t.csv").string() +
+                                           ":3: column 'pattern': expected stair|step (found 'stairs')");
+  std::string wrong_correct = trial_log::format_row(sample_row(1));
+  wrong_correct.replace(wrong_correct.find(",left,left,1,"), 13, ",left,left,0,");
+  EXPECT_NE(message(write(wrong_correct)).find(":2: column 'correct': does not agree"), std::string::npos);
+  std::string wrong_intensity = good;
+  wrong_intensity.replace(wrong_intensity.find(",2afc,") + 6, 4, "0.25");
+  EXPECT_NE(message(write(wrong_intensity)).find("column 'intensity'"), std::string::npos);
+  EXPECT_NE(message(write("a,b\n")).find(":2: expected 25 columns, found 2"), std::string::npos);
+  std::ofstream(dir / "h.csv") << "trial,response\n";
+  EXPECT_NE(message(dir / "h.csv").find("h.csv:1: the header"), std::string::npos);
+
+  // A torn last line is reported, not parsed.
+  const auto torn = trial_log::read(write(good + good.substr(0, 20)));
+  EXPECT_TRUE(torn.torn_tail);
+  EXPECT_EQ(torn.rows.size(), 1u);
+  EXPECT_EQ(torn.complete_bytes, trial_log::header_line().size() + good.size());
+}
+
+std::string config_error(const nlohmann::json& j) {
+  try {
+    procedure::parse_config(j, "study.json");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
+  const auto c = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default.json");
+  EXPECT_EQ(c.rounds.size(), 4u);
+  EXPECT_EQ(c.artifact_px, (std::vector<double>{5, 10, 20}));
+  EXPECT_DOUBLE_EQ(c.quest.p_threshold, 0.82);
+  EXPECT_DOUBLE_EQ(c.quest.beta, 3.5);
+  EXPECT_NEAR(c.display.arcmin(10), 15.73, 0.01);  // 10 px = 2.745 mm at 600 mm
+
+  const nlohmann::json base = {{"rounds", {{{"pattern", "stair"}, {"contrast", 1.0}}}}};
+  EXPECT_EQ(config_error(base), "no error");
+  auto with = [&](const std::string& key, const nlohmann::json& v) {
+    nlohmann::json j = base;
+    j[key] = v;
+    return config_error(j);
+  };
+  EXPECT_EQ(with("stopping", {{"min_trials", 0}}), "study.json: stopping.min_trials: expected an integer in [1, 10000]");
+  EXPECT_EQ(with("stopping", {{"min_trials", 20}, {"max_trials", 10}}),
+            "study.json: stopping.max_trials: expected >= stopping.min_trials");
+  EXPECT_EQ(with("rounds", {{{"pattern", "zigzag"}}}),
+            "study.json: rounds[0].pattern: pattern 'zigzag': expected stair or step");
+  EXPECT_EQ(with("quest", {{"beta", "steep"}}), "study.json: quest.beta: expected a number");
+  EXPECT_EQ(with("artifact_px", {5, 5}), "study.json: artifact_px[1]: duplicate artifact size");
+  EXPECT_EQ(with("colour", 1), "study.json: colour: unknown field");
+  EXPECT_EQ(with("display", {{"transfer", "pq"}}),
+            "study.json: display.transfer: transfer function 'pq': expected srgb, gamma2.2 or linear");
+  EXPECT_EQ(config_error(nlohmann::json::object()),
+            "study.json: rounds: expected a non-empty array of {pattern, contrast}");
+}
+
+}  // namespace
