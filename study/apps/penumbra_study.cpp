@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <thread>
 
 #include "gl/context.h"
 #include "io/image_io.h"
+#include "observers/image_observer.h"
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
 #include "stimuli/stimulus.h"
@@ -45,10 +47,9 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   return 0;
 }
 
-// "psychometric:c=3.0,beta=3.5,lapse=0.02" -> the planted model (same for every condition).
-observers::PlantedModel parse_psychometric(const std::string& spec) {
-  observers::PlantedModel m;
-  m.slope = 3.5;
+// "name:k=v,k=v" -> {k, v}.
+std::vector<std::pair<std::string, double>> parse_key_values(const std::string& spec) {
+  std::vector<std::pair<std::string, double>> out;
   const std::string body = spec.substr(spec.find(':') == std::string::npos ? spec.size() : spec.find(':') + 1);
   std::size_t pos = 0;
   while (pos < body.size()) {
@@ -56,20 +57,27 @@ observers::PlantedModel parse_psychometric(const std::string& spec) {
     const std::string kv = body.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     const std::size_t eq = kv.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("--observer: '" + kv + "': expected key=value");
-    const std::string k = kv.substr(0, eq);
-    double v = 0;
     try {
-      v = std::stod(kv.substr(eq + 1));
+      out.emplace_back(kv.substr(0, eq), std::stod(kv.substr(eq + 1)));
     } catch (const std::exception&) {
       throw std::invalid_argument("--observer: '" + kv + "': expected a number");
     }
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
+// "psychometric:c=3.0,beta=3.5,lapse=0.02" -> the planted model (same for every condition).
+observers::PlantedModel parse_psychometric(const std::string& spec) {
+  observers::PlantedModel m;
+  m.slope = 3.5;
+  for (const auto& [k, v] : parse_key_values(spec)) {
     if (k == "c") m.c_true = v;
     else if (k == "beta") m.slope = v;
     else if (k == "lapse") m.lapse = v;
     else if (k == "p_threshold") m.p_threshold = v;
     else throw std::invalid_argument("--observer: unknown parameter '" + k + "' (c, beta, lapse, p_threshold)");
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
   }
   return m;
 }
@@ -85,21 +93,49 @@ struct RunOptions {
 
 int run_study(const RunOptions& o) {
   if (!o.headless) throw std::runtime_error("run: only --headless is built into this binary; use penumbra-study-gui for participants");
-  if (o.observer.rfind("psychometric", 0) != 0)
-    throw std::invalid_argument("--observer '" + o.observer + "': expected psychometric:c=..,beta=..,lapse=..");
+  const bool image_observer = o.observer.rfind("image", 0) == 0;
+  if (!image_observer && o.observer.rfind("psychometric", 0) != 0)
+    throw std::invalid_argument("--observer '" + o.observer + "': expected psychometric:c=..,beta=..,lapse=.. or image:noise=..,blur_arcmin=..");
   procedure::Session session = [&] {
     if (!o.resume.empty()) return procedure::Session::resume(o.resume);
     if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
     return procedure::Session::create(procedure::load_config(o.config), o.output, o.participant,
                                       {{"observer", o.observer}, {"config_file", o.config.string()}});
   }();
-  const observers::PlantedModel model = parse_psychometric(o.observer);
+  const observers::PlantedModel model = image_observer ? observers::PlantedModel{} : parse_psychometric(o.observer);
+  observers::ImageObserverParams image_params;
+  image_params.pixels_per_degree = 60.0 / session.config().display.arcmin(1.0);
+  if (image_observer) {
+    for (const auto& [k, v] : parse_key_values(o.observer)) {
+      if (k == "noise") image_params.noise_sd = v;
+      else if (k == "blur_arcmin") image_params.blur_sigma_arcmin = v;
+      else if (k == "ppd") image_params.pixels_per_degree = v;
+      else throw std::invalid_argument("--observer: unknown image parameter '" + k + "' (noise, blur_arcmin, ppd)");
+    }
+  }
+  std::unique_ptr<gl::HeadlessContext> context;
+  std::unique_ptr<stimuli::StimulusRenderer> renderer;
+  if (image_observer) {
+    context = std::make_unique<gl::HeadlessContext>();
+    renderer = std::make_unique<stimuli::StimulusRenderer>();
+  }
   std::map<std::string, observers::PlantedModel> conditions;
   for (std::size_t r = 0; r < session.config().rounds.size(); ++r) conditions[session.condition(static_cast<int>(r))] = model;
   while (const auto plan = session.next()) {
-    observers::PsychometricObserver observer(conditions, observers::derive_seed(o.observer_seed, plan->trial));
-    const bool correct = observer.respond({session.condition(plan->round), plan->stimulus.artifact_px,
-                                           plan->stimulus.filter_radius_px}).correct;
+    bool correct = false;
+    if (image_observer) {
+      const stimuli::StimulusPair pair = renderer->render(plan->stimulus);
+      observers::ImageObserver eye(image_params, observers::derive_seed(o.observer_seed, plan->trial));
+      if (session.config().task != "2afc") throw std::invalid_argument("the image observer answers 2afc trials only");
+      const bool left_jagged = plan->target == "left";
+      const io::Image8& left = left_jagged ? pair.artifact : pair.line;
+      const io::Image8& right = left_jagged ? pair.line : pair.artifact;
+      correct = eye.first_is_jagged(left, right, plan->stimulus, pair.geometry) == left_jagged;
+    } else {
+      observers::PsychometricObserver observer(conditions, observers::derive_seed(o.observer_seed, plan->trial));
+      correct = observer.respond({session.condition(plan->round), plan->stimulus.artifact_px,
+                                  plan->stimulus.filter_radius_px}).correct;
+    }
     std::string response;
     if (session.config().task == "2afc") response = correct == (plan->target == "left") ? "left" : "right";
     else response = correct == (plan->target == "straight") ? "yes" : "no";

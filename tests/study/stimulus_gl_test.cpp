@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "gl_test_env.h"
+#include "observers/image_observer.h"
 #include "shadows/renderer.h"
 #include "stimuli/stimulus.h"
 
@@ -203,6 +204,33 @@ TEST(StimulusDisplay, TransferFunctionsAndRadiusClamp) {
   EXPECT_TRUE(stimuli::clamp_filter_radius(0.3, 320).clamped);
   EXPECT_EQ(stimuli::clamp_filter_radius(500, 320).filter_radius_px, 160.0);
   EXPECT_FALSE(stimuli::clamp_filter_radius(20, 320).clamped);
+}
+
+TEST(ImageObserver, SeesTheStaircaseAtSmallRadiiAndNotAtLargeOnes) {
+  stimuli::StimulusRenderer renderer;
+  observers::ImageObserver eye({0.02, 0.0, 60.0}, 11);
+  auto residual_gap = [&](double ratio) {
+    StimulusSpec spec;
+    spec.artifact_px = 10;
+    spec.filter_radius_px = ratio * spec.artifact_px;
+    spec.size_px = 160;
+    spec.seed = 9;
+    const auto pair = renderer.render(spec);
+    return eye.straightness_residual(pair.artifact, spec, pair.geometry, false) -
+           eye.straightness_residual(pair.line, spec, pair.geometry, false);
+  };
+  const double sharp = residual_gap(0.5), soft = residual_gap(6.0);
+  EXPECT_GT(sharp, 10.0);        // luminance^2 summed over the edge band
+  EXPECT_LT(soft, 0.01 * sharp);  // 6 texels of disk PCF hide almost all of it
+  EXPECT_GE(soft, -1e-3);
+  // With noise, at r = a/2 it picks the jagged one nearly always.
+  StimulusSpec spec;
+  spec.filter_radius_px = 5;
+  spec.size_px = 160;
+  const auto pair = renderer.render(spec);
+  int right = 0;
+  for (int i = 0; i < 20; ++i) right += eye.first_is_jagged(pair.artifact, pair.line, spec, pair.geometry);
+  EXPECT_GE(right, 19);
 }
 
 }  // namespace
