@@ -33,10 +33,9 @@ std::string line_marker(int line, int id) {
   return "#line " + std::to_string(id * kLinesPerFile + line) + " " + std::to_string(id) + "\n";
 }
 
-void expand_into(const ShaderLibrary& lib, const std::string& file, const std::string& text,
+void expand_into(const std::string& file, const std::string& text,
                  std::vector<std::string>& names, std::vector<std::string>& stack, std::string& out,
                  const std::function<const std::string&(const std::string&)>& lookup) {
-  (void)lib;
   if (std::find(stack.begin(), stack.end(), file) != stack.end())
     throw std::runtime_error("shader include cycle through '" + file + "'");
   stack.push_back(file);
@@ -52,7 +51,7 @@ void expand_into(const ShaderLibrary& lib, const std::string& file, const std::s
     std::smatch m;
     if (std::regex_match(line, m, include_re)) {
       const std::string inc = m[1];
-      expand_into(lib, inc, lookup(inc), names, stack, out, lookup);
+      expand_into(inc, lookup(inc), names, stack, out, lookup);
       out += line_marker(line_no + 1, id);
     } else {
       out += line;
@@ -89,7 +88,7 @@ ShaderLibrary::Expanded ShaderLibrary::expand(const std::string& file, const std
   e.text = "#version 450 core\n";
   for (const auto& d : defines) e.text += "#define " + d.name + " " + d.value + "\n";
   std::vector<std::string> stack;
-  expand_into(*this, file, text_of(file), e.source_names, stack, e.text,
+  expand_into(file, text_of(file), e.source_names, stack, e.text,
               [this](const std::string& f) -> const std::string& { return text_of(f); });
   return e;
 }

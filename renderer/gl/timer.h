@@ -39,7 +39,6 @@ class PassTimer {
   bool gpu_queries() const { return use_gpu_; }
   // Median/min/max per pass and method, in first-seen pass order.
   std::vector<PassStats> stats() const;
-  std::vector<std::string> pass_order() const { return order_; }
 
  private:
   struct Pending;
