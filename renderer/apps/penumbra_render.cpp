@@ -15,6 +15,7 @@
 #include "io/report.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
+#include "shadows/screen_space.h"
 #include "shadows/settings.h"
 
 namespace fs = std::filesystem;
@@ -100,8 +101,12 @@ int main(int argc, char** argv) {
   shadows::ShadowSettings base;
 
   app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
-  app.add_option("--technique", technique_arg, "hard, pcf, pcss, vsm, or all (every technique and PCF kernel)")
-      ->check(CLI::IsMember({"hard", "pcf", "pcss", "vsm", "all"}));
+  std::vector<std::string> technique_choices(shadows::technique_names().begin(), shadows::technique_names().end());
+  technique_choices.push_back("all");
+  std::string technique_help;
+  for (const auto& t : technique_choices) technique_help += (technique_help.empty() ? "" : ", ") + t;
+  app.add_option("--technique", technique_arg, technique_help + " (all: every technique and PCF kernel)")
+      ->check(CLI::IsMember(technique_choices));
   app.add_option("--resolution", resolution_arg, "shadow-map texels per side; a comma list renders each");
   app.add_option("--width", width, "image width in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--height", height, "image height in pixels")->check(CLI::Range(1, 16384));
@@ -115,6 +120,9 @@ int main(int argc, char** argv) {
   add_table_options(app, "pcf", base.pcf);
   add_table_options(app, "pcss", base.pcss);
   add_table_options(app, "vsm", base.vsm);
+  add_table_options(app, "edtsm", base.edtsm);
+  add_table_options(app, "edtssm", base.edtssm);
+  add_table_options(app, "erosion", base.erosion);
 
   try {
     app.parse(argc, argv);
@@ -143,6 +151,9 @@ int main(int argc, char** argv) {
       add_variant(shadows::Technique::pcf, "pcf-poisson", shadows::Kernel::poisson);
       add_variant(shadows::Technique::pcss, "pcss", {});
       add_variant(shadows::Technique::vsm, "vsm", {});
+      add_variant(shadows::Technique::edtsm, "edtsm", {});
+      add_variant(shadows::Technique::edtssm, "edtssm", {});
+      add_variant(shadows::Technique::erosion, "erosion", {});
     } else {
       const auto t = shadows::technique_from_string(technique_arg);
       std::string name = technique_arg;
@@ -187,7 +198,8 @@ int main(int argc, char** argv) {
               << ctx.platform << "); times: median of " << frames << " frames, ms, "
               << (ctx.software ? "wall clock around glFinish (wall_finish)" : "GPU timer queries (gpu_timer); wall_finish in report.json")
               << "\n";
-    std::printf("%-12s %6s %10s %10s %10s %10s\n", "technique", "res", "shadow_map", "vsm_blur", "shading", "total");
+    // screen: the G-buffer and post passes of the screen-space techniques.
+    std::printf("%-12s %6s %10s %10s %10s %10s %10s\n", "technique", "res", "shadow_map", "vsm_blur", "screen", "shading", "total");
     const bool progress = ::isatty(STDERR_FILENO) != 0;  // a progress line only where it can be redrawn
     const int total_runs = static_cast<int>(variants.size() * resolutions.size());
     int run = 0;
@@ -218,15 +230,19 @@ int main(int argc, char** argv) {
         io::write_text(dir / "report.json", report.dump(2) + "\n");
 
         const gl::TimingMethod shown = ctx.software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
-        double by_pass[3] = {0, 0, 0};
-        const char* pass_names[3] = {"shadow_map", "vsm_blur", "shading"};
-        for (const auto& st : stats)
-          for (int k = 0; k < 3; ++k)
-            if (st.method == shown && st.pass == pass_names[k]) by_pass[k] = st.median_ms;
-        const double total = by_pass[0] + by_pass[1] + by_pass[2];
-        std::printf("%-12s %6d %s %s %s %s\n", v.name.c_str(), res, fmt_ms(by_pass[0]).c_str(),
-                    v.settings.technique == shadows::Technique::vsm ? fmt_ms(by_pass[1]).c_str() : "        -",
-                    fmt_ms(by_pass[2]).c_str(), fmt_ms(total).c_str());
+        double shadow_map = 0, vsm_blur = 0, screen = 0, shading = 0, total = 0;
+        for (const auto& st : stats) {
+          if (st.method != shown) continue;
+          total += st.median_ms;
+          if (st.pass == "shadow_map") shadow_map = st.median_ms;
+          else if (st.pass == "vsm_blur") vsm_blur = st.median_ms;
+          else if (st.pass == "shading") shading = st.median_ms;
+          else screen += st.median_ms;
+        }
+        const bool screen_space = shadows::is_screen_space(v.settings.technique);
+        std::printf("%-12s %6d %s %s %s %s %s\n", v.name.c_str(), res, fmt_ms(shadow_map).c_str(),
+                    v.settings.technique == shadows::Technique::vsm ? fmt_ms(vsm_blur).c_str() : "        -",
+                    screen_space ? fmt_ms(screen).c_str() : "        -", fmt_ms(shading).c_str(), fmt_ms(total).c_str());
         std::fflush(stdout);
         summary["renders"].push_back({{"name", dir_name}, {"technique", v.name}, {"resolution_texels", res},
                                       {"timing_method", gl::to_string(shown)}, {"total_ms", total},

@@ -59,6 +59,9 @@ template bool settings_panel<shadows::ShadowMapParams>(const char*, shadows::Sha
 template bool settings_panel<shadows::PcfParams>(const char*, shadows::PcfParams&);
 template bool settings_panel<shadows::PcssParams>(const char*, shadows::PcssParams&);
 template bool settings_panel<shadows::VsmParams>(const char*, shadows::VsmParams&);
+template bool settings_panel<shadows::EdtsmParams>(const char*, shadows::EdtsmParams&);
+template bool settings_panel<shadows::EdtssmParams>(const char*, shadows::EdtssmParams&);
+template bool settings_panel<shadows::ErosionParams>(const char*, shadows::ErosionParams&);
 
 bool shadow_settings_panel(shadows::ShadowSettings& s) {
   bool changed = false;
@@ -77,6 +80,9 @@ bool shadow_settings_panel(shadows::ShadowSettings& s) {
     case shadows::Technique::pcf: changed |= settings_panel("pcf", s.pcf); break;
     case shadows::Technique::pcss: changed |= settings_panel("pcss", s.pcss); break;
     case shadows::Technique::vsm: changed |= settings_panel("vsm", s.vsm); break;
+    case shadows::Technique::edtsm: changed |= settings_panel("edtsm", s.edtsm); break;
+    case shadows::Technique::edtssm: changed |= settings_panel("edtssm", s.edtssm); break;
+    case shadows::Technique::erosion: changed |= settings_panel("erosion", s.erosion); break;
   }
   if (ImGui::CollapsingHeader("shadow map and bias", ImGuiTreeNodeFlags_DefaultOpen)) changed |= settings_panel("map", s.map);
   return changed;

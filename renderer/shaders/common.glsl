@@ -34,6 +34,7 @@ float linear_depth_ws(float d) {
   return 2.0 * n * f / (f + n - z_ndc * (f - n));
 }
 
+#if !defined(PENUMBRA_COMPUTE)  // screen-space derivatives exist only in fragment shaders
 // d(depth)/d(uv) of the receiver plane, from screen-space derivatives; zero where undefined.
 vec2 receiver_plane_gradient(vec3 sc) {
   if (!u_receiver_plane_bias) return vec2(0.0);
@@ -45,6 +46,7 @@ vec2 receiver_plane_gradient(vec3 sc) {
   float len = length(g);
   return len > u_rpdb_max ? g * (u_rpdb_max / len) : g;
 }
+#endif
 
 // Window-depth change per world unit of light-view depth at `depth_ws`.
 float depth_per_ws(float depth_ws) {
@@ -67,6 +69,7 @@ float interleaved_gradient_noise(vec2 pixel) {
   return fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715))));
 }
 
+#if !defined(PENUMBRA_COMPUTE)
 // Rotation of the Poisson disk for this pixel (identity when rotation is off).
 mat2 poisson_rotation(bool rotate) {
   if (!rotate) return mat2(1.0);
@@ -74,3 +77,4 @@ mat2 poisson_rotation(bool rotate) {
   float c = cos(a), s = sin(a);
   return mat2(c, s, -s, c);
 }
+#endif

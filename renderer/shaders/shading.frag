@@ -1,6 +1,10 @@
 // Camera pass: Lambert shading with the technique's visibility (TECHNIQUE_* and KERNEL_GRID
 // are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer) and
 // the light visibility in [0, 1] (shadow test * spot cone).
+// Screen-space techniques run it twice: with SCREEN_SPACE_GBUFFER it writes the G-buffer (world
+// position, the input visibility before the spot cone, shadow-map coordinates); the second time
+// it takes the visibility the post passes left in u_screen_visibility (SCREEN_SPACE_VISIBILITY),
+// or, for erosion, PCF scaled by the eroded penumbra width found there (TECHNIQUE_EROSION).
 #include "common.glsl"
 #include "shadow_hard.glsl"
 #include "shadow_pcf.glsl"
@@ -29,8 +33,16 @@ uniform bool u_rotate;
 uniform int u_max_grid_taps;
 uniform int u_blocker_taps;
 
+layout(binding = 4) uniform sampler2D u_screen_visibility;  // screen-space techniques, by pixel
+
+#if defined(SCREEN_SPACE_GBUFFER)
+layout(location = 0) out vec4 o_position;  // world xyz, 1
+layout(location = 1) out float o_visibility;
+layout(location = 2) out vec4 o_light;     // shadow-map uv, biased reference depth, light-view depth (world)
+#else
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_visibility;
+#endif
 
 void main() {
   vec3 n = normalize(v_normal);
@@ -48,7 +60,13 @@ void main() {
   g_constant_bias = u_depth_bias_texels * texel_ws * depth_per_ws(depth_ws);
 
   float visibility;
-#if defined(TECHNIQUE_HARD)
+#if defined(SCREEN_SPACE_VISIBILITY)
+  visibility = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;
+#elif defined(TECHNIQUE_EROSION)
+  float eroded_ws = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;
+  visibility = eroded_ws > 0.0 ? pcf_poisson(sc, gradient, 0.5 * eroded_ws * uv_per_ws(depth_ws), u_taps, poisson_rotation(u_rotate))
+                               : shadow_hard(sc);
+#elif defined(TECHNIQUE_HARD)
   visibility = shadow_hard(sc);
 #elif defined(TECHNIQUE_PCF)
   float radius_uv = u_pcf_radius_ws >= 0.0 ? u_pcf_radius_ws * uv_per_ws(depth_ws) : u_pcf_radius_texels / u_shadow_res;
@@ -74,12 +92,20 @@ void main() {
 #endif
 
   visibility = clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
+#if defined(SCREEN_SPACE_GBUFFER)
+  o_position = vec4(v_world, 1.0);
+  o_visibility = visibility;
+  o_light = vec4(sc.xy, sc.z - g_constant_bias, depth_ws);
+  return;
+#endif
   if (u_light_perspective) {
     float cos_axis = dot(-to_light, u_light_direction);
     visibility *= smoothstep(u_spot_cos_outer, u_spot_cos_inner, cos_axis);
   }
   float direct = max(n_dot_l, 0.0) * visibility;
   vec3 radiance = u_albedo * u_light_color * (u_ambient + (1.0 - u_ambient) * direct);
+#if !defined(SCREEN_SPACE_GBUFFER)
   o_color = vec4(radiance, 1.0);
   o_visibility = visibility;
+#endif
 }

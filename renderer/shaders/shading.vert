@@ -7,6 +7,8 @@ uniform mat3 u_normal_matrix;
 uniform mat4 u_view_projection;
 
 out vec3 v_world;
+// The screen-space techniques draw the scene twice and test depth for equality the second time.
+invariant gl_Position;
 out vec3 v_normal;
 
 void main() {

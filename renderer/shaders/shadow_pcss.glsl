@@ -18,10 +18,8 @@ float pcss_filter_uv(float z_r, float z_b) {
   return u_pcss_tan_half_angle * (z_r - z_b) / u_light_extent_ws;
 }
 
-// Returns visibility; `filter_uv` receives the filter radius used (0 when no blocker was found).
-float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
-                  int max_grid_taps, mat2 rotation, out float filter_uv) {
-  filter_uv = 0.0;
+// Blocker search: true when a blocker was found, with `z_b` their mean light-view depth (world units).
+bool pcss_blocker_depth(vec3 sc, vec2 gradient, float z_r, int blocker_taps, mat2 rotation, out float z_b) {
   float search = pcss_search_uv(z_r) * u_pcss_search_scale;
   float blocker_sum = 0.0;
   int blockers = 0;
@@ -33,8 +31,16 @@ float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filte
       ++blockers;
     }
   }
-  if (blockers == 0) return 1.0;  // no blocker: fully lit
-  float z_b = blocker_sum / float(blockers);
+  z_b = blockers > 0 ? blocker_sum / float(blockers) : 0.0;
+  return blockers > 0;
+}
+
+// Returns visibility; `filter_uv` receives the filter radius used (0 when no blocker was found).
+float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
+                  int max_grid_taps, mat2 rotation, out float filter_uv) {
+  filter_uv = 0.0;
+  float z_b;
+  if (!pcss_blocker_depth(sc, gradient, z_r, blocker_taps, rotation, z_b)) return 1.0;  // no blocker: fully lit
   filter_uv = max(pcss_filter_uv(z_r, z_b), u_pcss_min_penumbra_ws * uv_per_ws(z_r));
   if (grid) return pcf_grid(sc, gradient, filter_uv * u_shadow_res, max_grid_taps);
   return pcf_poisson(sc, gradient, filter_uv, filter_taps, rotation);

@@ -7,6 +7,9 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include "shadows/scoped_pass.h"
+#include "shadows/screen_space.h"
+
 namespace penumbra::shadows {
 
 std::vector<glm::vec2> poisson_disk(int taps) {
@@ -80,12 +83,19 @@ void Renderer::set_scene(const scene::Scene& s) {
   gl::check_errors("scene upload");
 }
 
-const gl::Program& Renderer::shading_program(const ShadowSettings& s) {
+const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuffer) {
   std::vector<gl::ShaderDefine> defines;
-  const char* names[] = {"TECHNIQUE_HARD", "TECHNIQUE_PCF", "TECHNIQUE_PCSS", "TECHNIQUE_VSM"};
-  defines.push_back({names[static_cast<int>(s.technique)], "1"});
-  const Kernel kernel = s.technique == Technique::pcss ? s.pcss.kernel : s.pcf.kernel;
-  if (kernel == Kernel::grid) defines.push_back({"KERNEL_GRID", "1"});
+  if (is_screen_space(s.technique)) {
+    // First pass: the input shadows (plain hard shadows; the revectorized ones once RBSM exists).
+    if (gbuffer) defines.push_back({"TECHNIQUE_HARD", "1"}), defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
+    else if (s.technique == Technique::erosion) defines.push_back({"TECHNIQUE_EROSION", "1"});
+    else defines.push_back({"SCREEN_SPACE_VISIBILITY", "1"});
+  } else {
+    const char* names[] = {"TECHNIQUE_HARD", "TECHNIQUE_PCF", "TECHNIQUE_PCSS", "TECHNIQUE_VSM"};
+    defines.push_back({names[static_cast<int>(s.technique)], "1"});
+    const Kernel kernel = s.technique == Technique::pcss ? s.pcss.kernel : s.pcf.kernel;
+    if (kernel == Kernel::grid) defines.push_back({"KERNEL_GRID", "1"});
+  }
   std::string key;
   for (const auto& d : defines) key += d.name + ";";
   auto it = shading_programs_.find(key);
@@ -121,21 +131,6 @@ void set_mat4(const gl::Program& p, const char* name, const glm::mat4& m) {
   glProgramUniformMatrix4fv(p.id(), p.location(name), 1, GL_FALSE, glm::value_ptr(m));
 }
 
-class ScopedPass {
- public:
-  ScopedPass(gl::PassTimer* timer, const char* name, FrameInfo& info) : timer_(timer) {
-    info.passes.emplace_back(name);
-    if (timer_) timer_->begin(name);
-  }
-  ~ScopedPass() {
-    if (timer_) timer_->end();
-  }
-  ScopedPass(const ScopedPass&) = delete;
-  ScopedPass& operator=(const ScopedPass&) = delete;
-
- private:
-  gl::PassTimer* timer_;
-};
 
 }  // namespace
 
@@ -158,10 +153,15 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     (s.pcf.radius_unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = s.pcf.radius;
   } else if (vsm) {
     (s.vsm.radius_unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = s.vsm.radius;
-  } else if (s.technique == Technique::pcss) {
+  } else if (s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion) {
     const scene::Aabb b = scene_.bounds();
     const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
-    fit.pad_ws = s.pcss.search_scale * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
+    const float search_scale = s.technique == Technique::pcss     ? s.pcss.search_scale
+                               : s.technique == Technique::edtssm ? s.edtssm.search_scale
+                                                                  : s.erosion.search_scale;
+    fit.pad_ws = search_scale * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
+    fit.pad_texels = 1;
+  } else if (s.technique == Technique::edtsm) {
     fit.pad_texels = 1;
   }
   info.light = compute_light_frame(scene_, fit);
@@ -209,7 +209,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
 
   // --- shadow map ----------------------------------------------------------------------------
   {
-    ScopedPass pass(timer, "shadow_map", info);
+    ScopedPass pass(timer, "shadow_map", info.passes);
     const gl::Program& prog = vsm ? moments_program_ : depth_program_;
     (vsm ? maps_->moments_fbo : maps_->depth_fbo).bind();
     glViewport(0, 0, res, res);
@@ -240,7 +240,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   if (vsm) {
     const float radius_texels = s.vsm.radius_unit == RadiusUnit::texels ? s.vsm.radius : s.vsm.radius / texel_mid_ws;
     info.filter_radius_texels = radius_texels;
-    ScopedPass pass(timer, "vsm_blur", info);
+    ScopedPass pass(timer, "vsm_blur", info.passes);
     blur_program_.use();
     set_float(blur_program_, "u_radius_texels", radius_texels);
     const GLuint groups = static_cast<GLuint>((res + 63) / 64);
@@ -260,30 +260,12 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     info.filter_radius_texels = s.pcf.radius_unit == RadiusUnit::texels ? s.pcf.radius : s.pcf.radius / texel_mid_ws;
   }
 
-  // --- shading -------------------------------------------------------------------------------
-  {
-    ScopedPass pass(timer, "shading", info);
-    const gl::Program& prog = shading_program(s);
-    targets_->fbo.bind();
-    glViewport(0, 0, width_px, height_px);
-    glEnable(GL_FRAMEBUFFER_SRGB);
-    const float sky[4] = {0.45f, 0.55f, 0.7f, 1};
-    const float lit = 1, far_depth = 1;
-    glClearBufferfv(GL_COLOR, 0, sky);
-    glClearBufferfv(GL_COLOR, 1, &lit);
-    glClearBufferfv(GL_DEPTH, 0, &far_depth);
-    prog.use();
-    maps_->depth.bind(0);
-    maps_->depth.bind(1);
-    maps_->depth.bind(2);
-    cmp_linear_.bind(0);
-    cmp_nearest_.bind(1);
-    raw_nearest_.bind(2);
-    if (vsm) {
-      maps_->moments_tex.bind(3);
-      moments_linear_.bind(3);
-    }
-    const scene::Camera& cam = scene_.camera;
+  // --- shading (and, for screen-space techniques, the G-buffer and post passes) --------------
+  const scene::Camera& cam = scene_.camera;
+  const bool light_size_used = s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion;
+  // Light frame, biases and the technique's uniforms: shared by both camera passes and the
+  // screen-space compute passes (uniforms a program lacks are ignored).
+  auto set_shading_uniforms = [&](const gl::Program& prog) {
     set_mat4(prog, "u_view_projection", cam.projection_matrix(aspect) * cam.view());
     set_mat4(prog, "u_light_view_projection", light_vp);
     set_mat4(prog, "u_light_view", lf.view);
@@ -307,36 +289,115 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     set_float(prog, "u_normal_offset_texels", s.map.normal_offset_texels);
     set_float(prog, "u_depth_bias_texels", s.map.depth_bias_texels);
 
-    int taps = 1;
+    int taps = 0;
     if (s.technique == Technique::pcf) {
       taps = s.pcf.poisson_taps;
       set_float(prog, "u_pcf_radius_texels", s.pcf.radius_unit == RadiusUnit::texels ? s.pcf.radius : 0.0f);
       set_float(prog, "u_pcf_radius_ws", s.pcf.radius_unit == RadiusUnit::world ? s.pcf.radius : -1.0f);
       set_int(prog, "u_rotate", s.pcf.rotate ? 1 : 0);
       set_int(prog, "u_max_grid_taps", s.pcf.max_grid_taps);
+      set_int(prog, "u_taps", taps);
     } else if (s.technique == Technique::pcss) {
       taps = std::max(s.pcss.filter_taps, s.pcss.blocker_taps);
       set_int(prog, "u_blocker_taps", s.pcss.blocker_taps);
       set_int(prog, "u_max_grid_taps", s.pcss.max_grid_taps);
-      set_float(prog, "u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
-      set_float(prog, "u_pcss_tan_half_angle", tan_half_angle);
-      set_float(prog, "u_pcss_min_penumbra_ws", s.pcss.min_penumbra_ws);
       set_float(prog, "u_pcss_search_scale", s.pcss.search_scale);
+      // One disk for both steps, sized for the larger tap count; the filter step takes its own
+      // count from the front (the best-candidate order spreads any prefix).
+      set_int(prog, "u_taps", s.pcss.filter_taps);
     } else if (vsm) {
       set_float(prog, "u_vsm_min_variance", s.vsm.min_variance);
       set_float(prog, "u_vsm_bleed_reduction", s.vsm.bleed_reduction);
+    } else if (s.technique == Technique::edtssm) {
+      taps = s.edtssm.blocker_taps;
+    } else if (s.technique == Technique::erosion) {
+      taps = std::max(s.erosion.taps, s.erosion.blocker_taps);
+      set_int(prog, "u_taps", s.erosion.taps);
+      set_int(prog, "u_rotate", s.erosion.rotate ? 1 : 0);
     }
-    if (s.technique == Technique::pcf || s.technique == Technique::pcss) {
-      // PCSS uses one disk for both steps, sized for the larger tap count; the filter step then
-      // takes its own count from the front (the best-candidate order spreads any prefix).
+    if (light_size_used) {
+      set_float(prog, "u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
+      set_float(prog, "u_pcss_tan_half_angle", tan_half_angle);
+      set_float(prog, "u_pcss_min_penumbra_ws", s.pcss.min_penumbra_ws);
+    }
+    if (taps > 0) {
       auto it = poisson_.find(taps);
       if (it == poisson_.end()) it = poisson_.emplace(taps, poisson_disk(taps)).first;
       glProgramUniform2fv(prog.id(), prog.location("u_poisson"), static_cast<GLsizei>(it->second.size()),
                           glm::value_ptr(it->second[0]));
-      set_int(prog, "u_taps", s.technique == Technique::pcss ? s.pcss.filter_taps : taps);
     }
+  };
+  auto bind_shadow_maps = [&] {
+    maps_->depth.bind(0);
+    maps_->depth.bind(1);
+    maps_->depth.bind(2);
+    cmp_linear_.bind(0);
+    cmp_nearest_.bind(1);
+    raw_nearest_.bind(2);
+    if (vsm) {
+      maps_->moments_tex.bind(3);
+      moments_linear_.bind(3);
+    }
+  };
+
+  const gl::Texture* screen_result = nullptr;
+  if (is_screen_space(s.technique)) {
+    if (!screen_space_) screen_space_ = std::make_unique<ScreenSpace>(shaders_);
+    screen_space_->resize(targets_->depth);
+    {
+      ScopedPass pass(timer, "gbuffer", info.passes);
+      const gl::Program& prog = shading_program(s, true);
+      screen_space_->gbuffer_framebuffer().bind();
+      glViewport(0, 0, width_px, height_px);
+      const float nothing[4] = {0, 0, 0, 0}, lit = 1, far_depth = 1;
+      glClearBufferfv(GL_COLOR, 0, nothing);
+      glClearBufferfv(GL_COLOR, 1, &lit);
+      glClearBufferfv(GL_COLOR, 2, nothing);
+      glClearBufferfv(GL_DEPTH, 0, &far_depth);
+      prog.use();
+      bind_shadow_maps();
+      set_shading_uniforms(prog);
+      draw_scene(prog, true);
+      gl::check_errors("gbuffer pass");
+    }
+    PostPassContext ctx;
+    ctx.view.position = cam.position;
+    ctx.view.forward = glm::normalize(cam.target - cam.position);
+    ctx.view.perspective = cam.projection == scene::Camera::Projection::perspective;
+    ctx.view.px_scale = ctx.view.perspective ? static_cast<float>(height_px) / (2 * std::tan(glm::radians(cam.fov_y_deg) / 2))
+                                             : static_cast<float>(height_px) / cam.ortho_height_ws;
+    ctx.set_light_uniforms = set_shading_uniforms;
+    ctx.timer = timer;
+    ctx.passes = &info.passes;
+    bind_shadow_maps();
+    screen_result = &screen_space_->run(s, ctx);
+  }
+  {
+    ScopedPass pass(timer, "shading", info.passes);
+    const gl::Program& prog = shading_program(s);
+    targets_->fbo.bind();
+    glViewport(0, 0, width_px, height_px);
+    glEnable(GL_FRAMEBUFFER_SRGB);
+    const float sky[4] = {0.45f, 0.55f, 0.7f, 1};
+    const float lit = 1, far_depth = 1;
+    glClearBufferfv(GL_COLOR, 0, sky);
+    glClearBufferfv(GL_COLOR, 1, &lit);
+    if (screen_result) {
+      // The G-buffer pass left the depth: shade exactly the fragments it kept.
+      glDepthFunc(GL_LEQUAL);
+      glDepthMask(GL_FALSE);
+      glBindSampler(4, 0);
+      screen_result->bind(4);
+    } else {
+      glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    }
+    prog.use();
+    bind_shadow_maps();
+    set_shading_uniforms(prog);
     draw_scene(prog, true);
     glDisable(GL_FRAMEBUFFER_SRGB);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
     gl::check_errors("shading pass");
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -383,6 +444,11 @@ io::Image8 Renderer::read_color() const {
 io::ImageF Renderer::read_visibility() const {
   if (!targets_) throw std::logic_error("read_visibility before render");
   return read_texture<float>(targets_->visibility, GL_RED, GL_FLOAT, 1);
+}
+
+io::ImageF Renderer::read_screen_space_input() const {
+  if (!screen_space_ || !screen_space_->width()) throw std::logic_error("read_screen_space_input before a screen-space frame");
+  return read_texture<float>(screen_space_->input_visibility(), GL_RED, GL_FLOAT, 1);
 }
 
 io::ImageF Renderer::read_shadow_depth() const {

@@ -1,7 +1,9 @@
 #pragma once
-// The frame: shadow-map pass(es) → (VSM blur) → shading pass, each with a contract:
+// The frame: shadow-map pass(es) → (VSM blur) → (G-buffer and screen-space passes) → shading
+// pass, each with a contract:
 //   shadow_map  reads the scene, writes the depth map (and, for VSM, the moments)
 //   vsm_blur    reads/writes the moments (VSM only)
+//   gbuffer + post passes   screen-space techniques only (screen_space.h)
 //   shading     reads the maps, writes lit colour (sRGB 8-bit) and visibility (float)
 // A frame runs only the passes its technique needs; FrameInfo lists those that ran.
 #include <map>
@@ -32,6 +34,8 @@ struct FrameInfo {
 // Poisson-disk taps in the unit disk (deterministic best-candidate set, outermost tap at radius 1).
 std::vector<glm::vec2> poisson_disk(int taps);
 
+class ScreenSpace;
+
 class Renderer {
  public:
   Renderer();
@@ -56,11 +60,14 @@ class Renderer {
   io::Image8 read_color() const;       // RGBA, sRGB-encoded
   io::ImageF read_visibility() const;  // one channel
   io::ImageF read_shadow_depth() const;  // the depth map of the last frame, one channel
+  // The input (hard) visibility of the last screen-space frame, before its post passes.
+  io::ImageF read_screen_space_input() const;
 
  private:
   struct Maps;
   struct Targets;
-  const gl::Program& shading_program(const ShadowSettings& s);
+  // `gbuffer`: the first camera pass of a screen-space technique.
+  const gl::Program& shading_program(const ShadowSettings& s, bool gbuffer = false);
   void draw_scene(const gl::Program& program, bool shading);
 
   gl::ShaderLibrary shaders_;
@@ -74,6 +81,7 @@ class Renderer {
   std::unique_ptr<Maps> maps_;
   std::unique_ptr<Targets> targets_;
   std::map<int, std::vector<glm::vec2>> poisson_;
+  std::unique_ptr<ScreenSpace> screen_space_;  // made on the first screen-space frame
 };
 
 }  // namespace penumbra::shadows

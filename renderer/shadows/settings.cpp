@@ -10,7 +10,7 @@
 namespace penumbra::shadows {
 namespace {
 
-constexpr std::array<std::string_view, 4> kTechniques = {"hard", "pcf", "pcss", "vsm"};
+constexpr std::array<std::string_view, 7> kTechniques = {"hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"};
 constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
 constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
 
@@ -83,6 +83,34 @@ const Setting<VsmParams> kVsmTable[] = {
     PENUMBRA_REAL(VsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
 };
 
+constexpr std::string_view kDepthThresholdHelp =
+    "largest relative eye-depth difference |dz|/z between pixels treated as one surface (edge-aware sites, EDT and filter)";
+
+const Setting<EdtsmParams> kEdtsmTable[] = {
+    PENUMBRA_REAL(EdtsmParams, penumbra_ws, "world", 0, 1e6, "P: fake-penumbra width; I = 1/2 -+ D/P for D <= P/2"),
+    PENUMBRA_REAL(EdtsmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
+    PENUMBRA_REAL(EdtsmParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
+    PENUMBRA_INT(EdtsmParams, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),
+};
+
+const Setting<EdtssmParams> kEdtssmTable[] = {
+    PENUMBRA_REAL(EdtssmParams, beta, "", 0, 1e6, "beta: penumbra scale; alpha = 1/2 -+ d / (beta w_p) for d <= beta w_p / 2"),
+    PENUMBRA_INT(EdtssmParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search at silhouette pixels"),
+    PENUMBRA_REAL(EdtssmParams, search_scale, "", 1, 8, "blocker-search radius over its geometric bound"),
+    PENUMBRA_REAL(EdtssmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
+    PENUMBRA_REAL(EdtssmParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
+    PENUMBRA_INT(EdtssmParams, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),
+};
+
+const Setting<ErosionParams> kErosionTable[] = {
+    PENUMBRA_INT(ErosionParams, taps, "taps", 1, 64, "Poisson taps of the PCF scaled by the eroded penumbra width"),
+    PENUMBRA_INT(ErosionParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search at edge pixels"),
+    PENUMBRA_REAL(ErosionParams, search_scale, "", 1, 8, "blocker-search radius over its geometric bound"),
+    PENUMBRA_INT(ErosionParams, max_search_px, "px", 1, 4096, "largest erosion search radius on screen"),
+    PENUMBRA_BOOL(ErosionParams, rotate, "rotate the PCF disk per pixel"),
+    PENUMBRA_REAL(ErosionParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
+};
+
 #undef PENUMBRA_REAL
 #undef PENUMBRA_INT
 #undef PENUMBRA_BOOL
@@ -110,13 +138,19 @@ std::string_view to_string(Technique t) { return kTechniques[static_cast<std::si
 Technique technique_from_string(std::string_view name) {
   for (std::size_t i = 0; i < kTechniques.size(); ++i)
     if (kTechniques[i] == name) return static_cast<Technique>(i);
-  throw std::invalid_argument("unknown technique '" + std::string(name) + "' (expected hard, pcf, pcss or vsm)");
+  std::string names;
+  for (std::size_t i = 0; i < kTechniques.size(); ++i)
+    names += (i == 0 ? "" : i + 1 == kTechniques.size() ? " or " : ", ") + std::string(kTechniques[i]);
+  throw std::invalid_argument("unknown technique '" + std::string(name) + "' (expected " + names + ")");
 }
 
 std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*) { return kMapTable; }
 std::span<const Setting<PcfParams>> settings_table(const PcfParams*) { return kPcfTable; }
 std::span<const Setting<PcssParams>> settings_table(const PcssParams*) { return kPcssTable; }
 std::span<const Setting<VsmParams>> settings_table(const VsmParams*) { return kVsmTable; }
+std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*) { return kEdtsmTable; }
+std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*) { return kEdtssmTable; }
+std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*) { return kErosionTable; }
 
 template <class P>
 void set_from_string(const Setting<P>& s, P& params, std::string_view value) {
@@ -179,12 +213,18 @@ PENUMBRA_INSTANTIATE(ShadowMapParams)
 PENUMBRA_INSTANTIATE(PcfParams)
 PENUMBRA_INSTANTIATE(PcssParams)
 PENUMBRA_INSTANTIATE(VsmParams)
+PENUMBRA_INSTANTIATE(EdtsmParams)
+PENUMBRA_INSTANTIATE(EdtssmParams)
+PENUMBRA_INSTANTIATE(ErosionParams)
 #undef PENUMBRA_INSTANTIATE
 
 nlohmann::json to_json(const ShadowMapParams& p) { return table_json(p); }
 nlohmann::json to_json(const PcfParams& p) { return table_json(p); }
 nlohmann::json to_json(const PcssParams& p) { return table_json(p); }
 nlohmann::json to_json(const VsmParams& p) { return table_json(p); }
+nlohmann::json to_json(const EdtsmParams& p) { return table_json(p); }
+nlohmann::json to_json(const EdtssmParams& p) { return table_json(p); }
+nlohmann::json to_json(const ErosionParams& p) { return table_json(p); }
 
 nlohmann::json to_json(const ShadowSettings& s) {
   nlohmann::json j;
@@ -195,6 +235,9 @@ nlohmann::json to_json(const ShadowSettings& s) {
     case Technique::pcf: j["pcf"] = to_json(s.pcf); break;
     case Technique::pcss: j["pcss"] = to_json(s.pcss); break;
     case Technique::vsm: j["vsm"] = to_json(s.vsm); break;
+    case Technique::edtsm: j["edtsm"] = to_json(s.edtsm); break;
+    case Technique::edtssm: j["edtssm"] = to_json(s.edtssm); break;
+    case Technique::erosion: j["erosion"] = to_json(s.erosion); break;
   }
   return j;
 }
@@ -209,6 +252,9 @@ std::string describe(const ShadowSettings& s) {
     case Technique::pcf: add(s.pcf); break;
     case Technique::pcss: add(s.pcss); break;
     case Technique::vsm: add(s.vsm); break;
+    case Technique::edtsm: add(s.edtsm); break;
+    case Technique::edtssm: add(s.edtssm); break;
+    case Technique::erosion: add(s.erosion); break;
   }
   return out;
 }

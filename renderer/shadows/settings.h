@@ -10,11 +10,11 @@
 
 namespace penumbra::shadows {
 
-enum class Technique { hard, pcf, pcss, vsm };
+enum class Technique { hard, pcf, pcss, vsm, edtsm, edtssm, erosion };
 enum class Kernel { grid, poisson };
 enum class RadiusUnit { texels, world };
 
-std::span<const std::string_view> technique_names();  // "hard", "pcf", "pcss", "vsm"
+std::span<const std::string_view> technique_names();  // "hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"
 std::string_view to_string(Technique t);
 Technique technique_from_string(std::string_view name);  // throws std::invalid_argument
 
@@ -54,6 +54,42 @@ struct VsmParams {
   float bleed_reduction = 0.2f;       // p below this maps to 0, rest rescaled to [0, 1]
 };
 
+// Screen-space techniques (renderer/shadows/screen_space.h; choices in docs/alternatives.md).
+// Eye-depth differences are relative (|z_a - z_b| / min(z_a, z_b)) so one threshold serves every
+// scene scale.
+
+// EDT shadow mapping (Macedo & Apolinario 2016): hard shadows -> 3x3 sites -> exact EDT ->
+// I = 1/2 -+ D/P for D <= P/2 (D in world units between G-buffer positions) -> edge-aware mean filter.
+struct EdtsmParams {
+  float penumbra_ws = 0.2f;           // P: full fake-penumbra width, world units
+  float filter_ws = 0.1f;             // w_filter: mean-filter width, world units (screen size w z_screen / z_eye)
+  float depth_threshold = 0.05f;      // largest relative eye-depth difference treated as one surface
+  int max_filter_px = 64;             // clamp of the mean filter's width in pixels
+};
+
+// EDT soft shadows (Macedo & Apolinario 2017): PCSS blocker search at silhouette pixels only ->
+// w_p = w_light (z_R - z_avg) / z_avg -> EDT propagates w_p -> alpha = 1/2 -+ d / (beta w_p) -> mean filter.
+struct EdtssmParams {
+  float beta = 1.0f;                  // penumbra scale (w_p is in world units here; the paper's 750 was for light-space units)
+  int blocker_taps = 25;              // Poisson taps of the blocker search at silhouette pixels
+  float search_scale = 1.0f;          // blocker-search radius over its geometric bound
+  float filter_ws = 0.05f;            // w_filter, world units
+  float depth_threshold = 0.05f;
+  int max_filter_px = 64;
+};
+
+// Contact-hardening soft shadows by erosion (Klein, Nischwitz & Obermeier 2012): hard shadows ->
+// 4-neighbour Laplacian edges with their penumbra width -> min-max mip-map erosion -> PCF scaled
+// by the eroded width.
+struct ErosionParams {
+  int taps = 32;                      // Poisson taps of the final PCF (published: 32)
+  int blocker_taps = 25;              // Poisson taps of the blocker search at edge pixels
+  float search_scale = 1.0f;
+  int max_search_px = 128;            // clamp of the erosion's search radius, pixels
+  bool rotate = true;                 // rotate the PCF disk per pixel
+  float depth_threshold = 0.05f;      // edges only between pixels of one surface
+};
+
 // Everything a frame needs to know about its shadows.
 struct ShadowSettings {
   Technique technique = Technique::pcf;
@@ -61,6 +97,9 @@ struct ShadowSettings {
   PcfParams pcf;
   PcssParams pcss;
   VsmParams vsm;
+  EdtsmParams edtsm;
+  EdtssmParams edtssm;
+  ErosionParams erosion;
 };
 
 enum class SettingType { real, integer, boolean, choice };
@@ -84,6 +123,9 @@ std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*)
 std::span<const Setting<PcfParams>> settings_table(const PcfParams*);
 std::span<const Setting<PcssParams>> settings_table(const PcssParams*);
 std::span<const Setting<VsmParams>> settings_table(const VsmParams*);
+std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*);
+std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*);
+std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*);
 
 // Sets one row from its textual value ("2.5", "true", "poisson"); throws std::invalid_argument
 // naming the key, the value and the accepted range or choices.
@@ -98,6 +140,9 @@ nlohmann::json to_json(const ShadowMapParams& p);
 nlohmann::json to_json(const PcfParams& p);
 nlohmann::json to_json(const PcssParams& p);
 nlohmann::json to_json(const VsmParams& p);
+nlohmann::json to_json(const EdtsmParams& p);
+nlohmann::json to_json(const EdtssmParams& p);
+nlohmann::json to_json(const ErosionParams& p);
 
 // The parameters relevant to `s.technique`, as "section.key=value" pairs (for names and reports).
 std::string describe(const ShadowSettings& s);

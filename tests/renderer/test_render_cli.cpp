@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -192,17 +193,21 @@ TEST_F(RenderCli, GoodRunWritesImagesAndReport) {
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
 }
 
-TEST_F(RenderCli, AllTechniquesWriteFiveRendersMontageAndSummary) {
+TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const fs::path out = work_ / "out";
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm"};
+  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm", "edtsm", "edtssm", "erosion"};
   std::set<std::string> expected = renders;
   expected.insert({"montage.png", "report.json"});
   EXPECT_EQ(listing(out), expected);
+  const std::map<std::string, std::vector<std::string>> special = {
+      {"vsm", {"shadow_map", "vsm_blur", "shading"}},
+      {"edtsm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
+      {"edtssm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
+      {"erosion", {"shadow_map", "gbuffer", "edges", "erosion_minmax", "erosion", "shading"}}};
   for (const auto& name : renders)
-    expect_render_files(out / name, name == "vsm" ? std::vector<std::string>{"shadow_map", "vsm_blur", "shading"}
-                                                  : std::vector<std::string>{"shadow_map", "shading"});
+    expect_render_files(out / name, special.contains(name) ? special.at(name) : std::vector<std::string>{"shadow_map", "shading"});
   const auto montage = penumbra::io::read_image8(out / "montage.png");
   EXPECT_GT(montage.width, 0);
   EXPECT_GT(montage.height, 0);

@@ -28,6 +28,12 @@ template <>
 std::string section_of<PcssParams>() { return "pcss"; }
 template <>
 std::string section_of<VsmParams>() { return "vsm"; }
+template <>
+std::string section_of<EdtsmParams>() { return "edtsm"; }
+template <>
+std::string section_of<EdtssmParams>() { return "edtssm"; }
+template <>
+std::string section_of<ErosionParams>() { return "erosion"; }
 
 template <class P>
 std::span<const Setting<P>> table() {
@@ -180,6 +186,9 @@ TEST(Settings, DefaultsLieWithinTheirRanges) {
   check_defaults_in_range<PcfParams>();
   check_defaults_in_range<PcssParams>();
   check_defaults_in_range<VsmParams>();
+  check_defaults_in_range<EdtsmParams>();
+  check_defaults_in_range<EdtssmParams>();
+  check_defaults_in_range<ErosionParams>();
 }
 
 TEST(Settings, SetFromStringAcceptsValuesInRange) {
@@ -187,6 +196,9 @@ TEST(Settings, SetFromStringAcceptsValuesInRange) {
   check_accepts_valid<PcfParams>();
   check_accepts_valid<PcssParams>();
   check_accepts_valid<VsmParams>();
+  check_accepts_valid<EdtsmParams>();
+  check_accepts_valid<EdtssmParams>();
+  check_accepts_valid<ErosionParams>();
 }
 
 TEST(Settings, SetFromStringRejectsBadValuesNamingTheKey) {
@@ -194,6 +206,9 @@ TEST(Settings, SetFromStringRejectsBadValuesNamingTheKey) {
   check_rejects_invalid<PcfParams>();
   check_rejects_invalid<PcssParams>();
   check_rejects_invalid<VsmParams>();
+  check_rejects_invalid<EdtsmParams>();
+  check_rejects_invalid<EdtssmParams>();
+  check_rejects_invalid<ErosionParams>();
 }
 
 TEST(Settings, SetFromStringKnownRows) {
@@ -239,6 +254,9 @@ TEST(Settings, ValueToStringRoundTripsEveryNonRealRow) {
   check_round_trip<PcfParams>(false);
   check_round_trip<PcssParams>(false);
   check_round_trip<VsmParams>(false);
+  check_round_trip<EdtsmParams>(false);
+  check_round_trip<EdtssmParams>(false);
+  check_round_trip<ErosionParams>(false);
 }
 
 // Disabled until renderer/shadows/settings.cpp:160 prints reals as the shortest *float* text:
@@ -249,6 +267,9 @@ TEST(Settings, ValueToStringRoundTripsEveryRealRow) {
   check_round_trip<PcfParams>(true);
   check_round_trip<PcssParams>(true);
   check_round_trip<VsmParams>(true);
+  check_round_trip<EdtsmParams>(true);
+  check_round_trip<EdtssmParams>(true);
+  check_round_trip<ErosionParams>(true);
   VsmParams defaults;
   for (const auto& s : table<VsmParams>()) {
     if (s.key == "bleed_reduction") {
@@ -263,6 +284,9 @@ TEST(Settings, ToJsonHasEveryKeyOfTheActiveTechnique) {
   set_non_defaults(s.pcf);
   set_non_defaults(s.pcss);
   set_non_defaults(s.vsm);
+  set_non_defaults(s.edtsm);
+  set_non_defaults(s.edtssm);
+  set_non_defaults(s.erosion);
   for (auto name : technique_names()) {
     SCOPED_TRACE(std::string(name));
     s.technique = technique_from_string(name);
@@ -277,6 +301,12 @@ TEST(Settings, ToJsonHasEveryKeyOfTheActiveTechnique) {
     if (s.technique == Technique::pcf) check_json_section(j["pcf"], s.pcf);
     if (s.technique == Technique::pcss) check_json_section(j["pcss"], s.pcss);
     if (s.technique == Technique::vsm) check_json_section(j["vsm"], s.vsm);
+    EXPECT_EQ(j.contains("edtsm"), s.technique == Technique::edtsm) << j.dump();
+    EXPECT_EQ(j.contains("edtssm"), s.technique == Technique::edtssm) << j.dump();
+    EXPECT_EQ(j.contains("erosion"), s.technique == Technique::erosion) << j.dump();
+    if (s.technique == Technique::edtsm) check_json_section(j["edtsm"], s.edtsm);
+    if (s.technique == Technique::edtssm) check_json_section(j["edtssm"], s.edtssm);
+    if (s.technique == Technique::erosion) check_json_section(j["erosion"], s.erosion);
   }
 }
 
@@ -292,8 +322,9 @@ TEST(Settings, DescribeListsTheActiveTechniquesParameters) {
 
 TEST(Settings, TechniqueFromString) {
   const auto names = technique_names();
-  ASSERT_EQ(names.size(), 4u);
-  const Technique expected[] = {Technique::hard, Technique::pcf, Technique::pcss, Technique::vsm};
+  ASSERT_EQ(names.size(), 7u);
+  const Technique expected[] = {Technique::hard, Technique::pcf,    Technique::pcss,   Technique::vsm,
+                                Technique::edtsm, Technique::edtssm, Technique::erosion};
   for (std::size_t i = 0; i < names.size(); ++i) {
     EXPECT_EQ(technique_from_string(names[i]), expected[i]);
     EXPECT_EQ(to_string(expected[i]), names[i]);

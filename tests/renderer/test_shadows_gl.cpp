@@ -266,9 +266,10 @@ void expect_finite_render(const scene::Scene& s, const ShadowSettings& st, const
 
 std::vector<ShadowSettings> every_technique(int resolution) {
   std::vector<ShadowSettings> out;
-  for (Technique t : {Technique::hard, Technique::pcf, Technique::pcss, Technique::vsm}) {
+  for (Technique t : {Technique::hard, Technique::pcf, Technique::pcss, Technique::vsm, Technique::edtsm,
+                      Technique::edtssm, Technique::erosion}) {
     for (Kernel k : {Kernel::grid, Kernel::poisson}) {
-      if (k == Kernel::grid && (t == Technique::hard || t == Technique::vsm)) continue;
+      if (k == Kernel::grid && t != Technique::pcf && t != Technique::pcss) continue;
       ShadowSettings st = settings(t, resolution, true);
       st.pcf.kernel = k;
       st.pcss.kernel = k;

@@ -1,0 +1,32 @@
+// Shared state of the screen-space post passes (EDTSM, EDTSSM, erosion): the G-buffer written by
+// the first camera pass and the camera's metric. Pixel coordinates are GL's (row 0 at the bottom).
+
+layout(binding = 4) uniform sampler2D u_gbuffer_position;  // world xyz; w = 1 on geometry, 0 on sky
+layout(binding = 5) uniform sampler2D u_gbuffer_light;     // shadow-map uv, biased reference depth, light-view depth (world)
+layout(binding = 6) uniform sampler2D u_gbuffer_hard;      // input (hard) visibility, 0 or 1
+
+uniform vec3 u_camera_position;
+uniform vec3 u_camera_forward;     // unit viewing direction
+uniform bool u_camera_perspective;
+uniform float u_px_scale;          // perspective: z_screen * height_px; orthographic: height_px / view height
+uniform float u_depth_threshold;   // largest relative eye-depth difference within one surface
+
+// World position of pixel p (w = 0: nothing drawn there).
+vec4 gbuffer_position(ivec2 p) {
+  return texelFetch(u_gbuffer_position, p, 0);
+}
+
+// Distance along the viewing direction (world units) of world point `w`.
+float eye_depth(vec3 w) {
+  return dot(w - u_camera_position, u_camera_forward);
+}
+
+// Screen pixels per world unit at eye depth z (Macedo & Apolinario eq. 2-3: w z_screen / z_eye).
+float px_per_ws(float z_eye) {
+  return u_camera_perspective ? u_px_scale / max(z_eye, 1e-6) : u_px_scale;
+}
+
+// Whether two eye depths belong to one surface (the edge-aware test of every pass).
+bool same_surface(float z_a, float z_b) {
+  return abs(z_a - z_b) <= u_depth_threshold * max(min(z_a, z_b), 1e-6);
+}

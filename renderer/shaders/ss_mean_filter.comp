@@ -1,0 +1,45 @@
+// One axis of the edge-aware, viewpoint-invariant mean filter of EDTSM/EDTSSM: the box of width
+// w_filter (world units) projected at the pixel's depth, w z_screen / z_eye pixels (Macedo &
+// Apolinario eq. 2-3), clamped to u_max_width_px; the end pixels are weighted by the part of them
+// the box covers, and neighbours on another surface (eye-depth test) are left out.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "screen_space.glsl"
+
+layout(binding = 7) uniform sampler2D u_source;
+layout(binding = 0, r32f) uniform writeonly image2D u_target;
+
+uniform float u_filter_ws;
+uniform float u_max_width_px;
+uniform int u_axis;  // 0: x, 1: y
+
+void main() {
+  ivec2 size = textureSize(u_source, 0);
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(p, size))) return;
+
+  vec4 here = gbuffer_position(p);
+  float centre = texelFetch(u_source, p, 0).r;
+  if (here.w <= 0.0) {
+    imageStore(u_target, p, vec4(centre));
+    return;
+  }
+  float z = eye_depth(here.xyz);
+  float half_px = 0.5 * min(u_filter_ws * px_per_ws(z), u_max_width_px);
+  int reach = int(ceil(half_px - 0.5));
+  ivec2 step = u_axis == 0 ? ivec2(1, 0) : ivec2(0, 1);
+  float sum = 0.0, weight = 0.0;
+  for (int k = -reach; k <= reach; ++k) {
+    ivec2 q = p + k * step;
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+    // Coverage of pixel k ([k - 1/2, k + 1/2]) by the box [-half_px, half_px].
+    float w = max(0.0, min(float(k) + 0.5, half_px) - max(float(k) - 0.5, -half_px));
+    if (k != 0) {
+      vec4 there = gbuffer_position(q);
+      if (there.w <= 0.0 || !same_surface(z, eye_depth(there.xyz))) continue;
+    }
+    sum += w * texelFetch(u_source, q, 0).r;
+    weight += w;
+  }
+  imageStore(u_target, p, vec4(weight > 0.0 ? sum / weight : centre));
+}

@@ -1,0 +1,29 @@
+#include "shadows/edtsm.h"
+
+#include "gl/context.h"
+#include "shadows/scoped_pass.h"
+
+namespace penumbra::shadows {
+
+const gl::Texture& run_edtsm(ScreenSpace& ss, const EdtsmParams& p, const PostPassContext& ctx) {
+  ss.detect_sites({}, p.depth_threshold, ctx);
+  {
+    ScopedPass pass(ctx.timer, "edt", *ctx.passes);
+    ss.edt().compute(ss.sites());
+  }
+  {
+    ScopedPass pass(ctx.timer, "edt_penumbra", *ctx.passes);
+    const gl::Program& prog = ss.program("edt_penumbra.comp");
+    prog.use();
+    ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
+    ss.edt().nearest().bind(7);
+    glProgramUniform1f(prog.id(), prog.location("u_penumbra_ws"), p.penumbra_ws);
+    glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    dispatch_pixels(ss.width(), ss.height());
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    gl::check_errors("edt_penumbra pass");
+  }
+  return ss.mean_filter(ss.scratch(0), p.filter_ws, p.max_filter_px, p.depth_threshold, ctx);
+}
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,133 @@
+#include "shadows/screen_space.h"
+
+#include <algorithm>
+#include <bit>
+#include <stdexcept>
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include "gl/context.h"
+#include "shadows/scoped_pass.h"
+
+namespace penumbra::shadows {
+
+bool is_screen_space(Technique t) {
+  return t == Technique::edtsm || t == Technique::edtssm || t == Technique::erosion;
+}
+
+void dispatch_pixels(int width, int height) {
+  glDispatchCompute(static_cast<GLuint>((width + 7) / 8), static_cast<GLuint>((height + 7) / 8), 1);
+}
+
+ScreenSpace::ScreenSpace(const gl::ShaderLibrary& shaders) : shaders_(shaders), edt_(shaders) {
+  gl::SamplerDesc d;
+  d.min_filter = d.mag_filter = GL_NEAREST;
+  d.wrap = GL_CLAMP_TO_EDGE;
+  nearest_ = gl::Sampler(d);
+}
+ScreenSpace::~ScreenSpace() = default;
+
+void ScreenSpace::resize(const gl::Texture& camera_depth) {
+  const int w = camera_depth.desc().width, h = camera_depth.desc().height;
+  if (w == width_ && h == height_ && depth_id_ == camera_depth.id()) return;
+  position_ = gl::Texture({GL_RGBA32F, w, h, 1}, "G-buffer position");
+  light_ = gl::Texture({GL_RGBA32F, w, h, 1}, "G-buffer shadow-map coordinates");
+  hard_ = gl::Texture({GL_R8, w, h, 1}, "G-buffer input visibility");
+  const gl::Framebuffer::Attachment att[] = {{&position_, GL_COLOR_ATTACHMENT0},
+                                             {&hard_, GL_COLOR_ATTACHMENT1},
+                                             {&light_, GL_COLOR_ATTACHMENT2},
+                                             {&camera_depth, GL_DEPTH_ATTACHMENT}};
+  gbuffer_fbo_ = gl::Framebuffer(att, "G-buffer framebuffer");
+  sites_ = gl::Texture({GL_R8UI, w, h, 1}, "screen-space sites");
+  site_width_ = gl::Texture({GL_R32F, w, h, 1}, "screen-space site penumbra width");
+  scratch_[0] = gl::Texture({GL_R32F, w, h, 1}, "screen-space scratch 0");
+  scratch_[1] = gl::Texture({GL_R32F, w, h, 1}, "screen-space scratch 1");
+  filtered_ = gl::Texture({GL_R32F, w, h, 1}, "screen-space filtered visibility");
+  edges_ = gl::Texture();
+  width_ = w;
+  height_ = h;
+  depth_id_ = camera_depth.id();
+}
+
+gl::Texture& ScreenSpace::edges_mip() {
+  if (!edges_.id()) {
+    const int levels = std::bit_width(static_cast<unsigned>(std::max(width_, height_)));
+    edges_ = gl::Texture({GL_RG32F, width_, height_, levels}, "erosion min-max mip-map");
+  }
+  return edges_;
+}
+
+const gl::Program& ScreenSpace::program(const std::string& file, const std::vector<gl::ShaderDefine>& defines) {
+  std::string key = file;
+  for (const auto& d : defines) key += ";" + d.name + "=" + d.value;
+  auto it = programs_.find(key);
+  if (it == programs_.end()) it = programs_.emplace(key, shaders_.program({{GL_COMPUTE_SHADER, file}}, defines)).first;
+  return it->second;
+}
+
+void ScreenSpace::bind_gbuffer(const gl::Program& p, const ScreenView& view, float depth_threshold) const {
+  // Integer textures with the default (linear, mip-mapped) filter are incomplete even for
+  // texelFetch: every post-pass input is read through a nearest sampler.
+  for (GLuint unit = 4; unit <= 8; ++unit) nearest_.bind(unit);
+  position_.bind(4);
+  light_.bind(5);
+  hard_.bind(6);
+  glProgramUniform3fv(p.id(), p.location("u_camera_position"), 1, glm::value_ptr(view.position));
+  glProgramUniform3fv(p.id(), p.location("u_camera_forward"), 1, glm::value_ptr(view.forward));
+  glProgramUniform1i(p.id(), p.location("u_camera_perspective"), view.perspective ? 1 : 0);
+  glProgramUniform1f(p.id(), p.location("u_px_scale"), view.px_scale);
+  glProgramUniform1f(p.id(), p.location("u_depth_threshold"), depth_threshold);
+}
+
+void ScreenSpace::detect_sites(const SiteSearch& search, float depth_threshold, const PostPassContext& ctx) {
+  ScopedPass pass(ctx.timer, search.laplacian ? "edges" : "sites", *ctx.passes);
+  std::vector<gl::ShaderDefine> defines;
+  if (search.laplacian) defines.push_back({"LAPLACIAN", "1"});
+  if (search.blocker_search) defines.push_back({"BLOCKER_SEARCH", "1"});
+  const gl::Program& p = program("ss_sites.comp", defines);
+  p.use();
+  ctx.set_light_uniforms(p);
+  bind_gbuffer(p, ctx.view, depth_threshold);
+  glProgramUniform1i(p.id(), p.location("u_blocker_taps"), search.blocker_taps);
+  glProgramUniform1f(p.id(), p.location("u_pcss_search_scale"), search.search_scale);
+  glBindImageTexture(0, sites_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R8UI);
+  glBindImageTexture(1, site_width_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  dispatch_pixels(width_, height_);
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  gl::check_errors("screen-space sites");
+}
+
+const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float filter_ws, int max_width_px,
+                                            float depth_threshold, const PostPassContext& ctx) {
+  ScopedPass pass(ctx.timer, "mean_filter", *ctx.passes);
+  const gl::Program& p = program("ss_mean_filter.comp");
+  p.use();
+  bind_gbuffer(p, ctx.view, depth_threshold);
+  glProgramUniform1f(p.id(), p.location("u_filter_ws"), filter_ws);
+  glProgramUniform1f(p.id(), p.location("u_max_width_px"), static_cast<float>(max_width_px));
+  // Ping-pong through a scratch image that is not `source`.
+  gl::Texture& tmp = &source == &scratch_[0] ? scratch_[1] : scratch_[0];
+  const gl::Texture* in[2] = {&source, &tmp};
+  const gl::Texture* out[2] = {&tmp, &filtered_};
+  for (int axis = 0; axis < 2; ++axis) {
+    glProgramUniform1i(p.id(), p.location("u_axis"), axis);
+    in[axis]->bind(7);
+    glBindImageTexture(0, out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    dispatch_pixels(width_, height_);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  }
+  gl::check_errors("screen-space mean filter");
+  return filtered_;
+}
+
+const gl::Texture& ScreenSpace::run(const ShadowSettings& s, const PostPassContext& ctx) {
+  if (!width_) throw std::logic_error("ScreenSpace::run before resize");
+  switch (s.technique) {
+    case Technique::edtsm: return run_edtsm(*this, s.edtsm, ctx);
+    case Technique::edtssm: return run_edtssm(*this, s.edtssm, ctx);
+    case Technique::erosion: return run_erosion(*this, s.erosion, ctx);
+    default: throw std::logic_error("ScreenSpace::run: not a screen-space technique");
+  }
+}
+
+}  // namespace penumbra::shadows
