@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,8 @@ struct PlanesCase {
   Technique technique;
   double tolerance;  // relative, on the measured full width
 };
+
+void PrintTo(const PlanesCase& c, std::ostream* os) { *os << shadows::to_string(c.technique); }
 
 class ParallelPlanes : public ::testing::TestWithParam<PlanesCase> {};
 
