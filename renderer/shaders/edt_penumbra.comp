@@ -9,7 +9,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 7) uniform isampler2D u_nearest;  // EDT: nearest site, (-1, -1) when none
 layout(binding = 8) uniform sampler2D u_site_width;
-layout(binding = 0, r32f) uniform writeonly image2D u_penumbra;
+layout(binding = 0, rg32f) uniform writeonly image2D u_penumbra;  // intensity, the G-buffer's signed depth
 
 uniform float u_penumbra_ws;  // EDTSM: P
 uniform float u_beta;         // EDTSSM: P = beta * w_p(site)
@@ -19,20 +19,20 @@ void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, size))) return;
 
-  vec4 here = gbuffer_position(p);
-  float hard = texelFetch(u_gbuffer_hard, p, 0).r;
-  float intensity = here.w > 0.0 ? hard : 1.0;
+  vec4 here = gbuffer(p);
+  float hard = input_visibility(here);
+  float intensity = covered(here) ? hard : 1.0;
   ivec2 site = texelFetch(u_nearest, p, 0).xy;
-  if (here.w > 0.0 && site.x >= 0) {
-    vec4 there = gbuffer_position(site);
+  if (covered(here) && site.x >= 0) {
+    vec4 there = gbuffer(site);
 #if defined(PROPAGATED_WIDTH)
     float width = u_beta * texelFetch(u_site_width, site, 0).r;
 #else
     float width = u_penumbra_ws;
 #endif
     float d = distance(here.xyz, there.xyz);
-    if (width > 0.0 && d < 0.5 * width && same_surface(eye_depth(here.xyz), eye_depth(there.xyz)))
+    if (width > 0.0 && d < 0.5 * width && same_surface(eye_depth(here), eye_depth(there)))
       intensity = hard > 0.5 ? 0.5 + d / width : 0.5 - d / width;
   }
-  imageStore(u_penumbra, p, vec4(intensity));
+  imageStore(u_penumbra, p, vec4(intensity, here.w, 0.0, 0.0));
 }

@@ -21,7 +21,7 @@ void main() {
   if (u_level == 0) {
     bool edge = texelFetch(u_sites, p, 0).r != 0u;
     float width_px = 0.0;
-    if (edge) width_px = texelFetch(u_site_width, p, 0).r * px_per_ws(eye_depth(gbuffer_position(p).xyz));
+    if (edge) width_px = texelFetch(u_site_width, p, 0).r * px_per_ws(eye_depth(gbuffer(p)));
     imageStore(u_coarser, p, vec4(edge ? 0.0 : 1.0, width_px, 0.0, 0.0));
     return;
   }

@@ -13,7 +13,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "screen_space.glsl"
 
 layout(binding = 7) uniform sampler2D u_edges;  // min-max mip-map (erosion_minmax.comp)
-layout(binding = 0, r32f) uniform writeonly image2D u_eroded;
+layout(binding = 0, rg32f) uniform writeonly image2D u_eroded;
 
 uniform float u_max_search_px;
 
@@ -40,9 +40,9 @@ void main() {
   if (any(greaterThanEqual(p, size))) return;
 
   float width_ws = 0.0;
-  vec4 here = gbuffer_position(p);
-  if (here.w > 0.0) {
-    float scale = px_per_ws(eye_depth(here.xyz));
+  vec4 here = gbuffer(p);
+  if (covered(here)) {
+    float scale = px_per_ws(eye_depth(here));
     float z_r = texelFetch(u_gbuffer_light, p, 0).w;
     // Half the widest penumbra at this receiver (a blocker at the light's near plane).
     float reach_ws = pcss_search_uv(z_r) * u_pcss_search_scale / uv_per_ws(z_r);

@@ -1,24 +1,33 @@
 // Shared state of the screen-space post passes (EDTSM, EDTSSM, erosion): the G-buffer written by
 // the first camera pass and the camera's metric. Pixel coordinates are GL's (row 0 at the bottom).
+//
+// G-buffer texel g = (world xyz, signed eye depth): |g.w| is the distance along the viewing
+// direction, positive where the input shadow test says lit, negative where shadowed, and 0 where
+// nothing was drawn. One fetch gives every post pass the position, the depth and the input.
 
-layout(binding = 4) uniform sampler2D u_gbuffer_position;  // world xyz; w = 1 on geometry, 0 on sky
+layout(binding = 4) uniform sampler2D u_gbuffer_position;  // world xyz, signed eye depth
 layout(binding = 5) uniform sampler2D u_gbuffer_light;     // shadow-map uv, biased reference depth, light-view depth (world)
-layout(binding = 6) uniform sampler2D u_gbuffer_hard;      // input (hard) visibility, 0 or 1
 
-uniform vec3 u_camera_position;
-uniform vec3 u_camera_forward;     // unit viewing direction
 uniform bool u_camera_perspective;
 uniform float u_px_scale;          // perspective: z_screen * height_px; orthographic: height_px / view height
 uniform float u_depth_threshold;   // largest relative eye-depth difference within one surface
 
-// World position of pixel p (w = 0: nothing drawn there).
-vec4 gbuffer_position(ivec2 p) {
+vec4 gbuffer(ivec2 p) {
   return texelFetch(u_gbuffer_position, p, 0);
 }
 
-// Distance along the viewing direction (world units) of world point `w`.
-float eye_depth(vec3 w) {
-  return dot(w - u_camera_position, u_camera_forward);
+bool covered(vec4 g) {
+  return g.w != 0.0;
+}
+
+// Distance along the viewing direction (world units).
+float eye_depth(vec4 g) {
+  return abs(g.w);
+}
+
+// The input (hard) visibility, 0 or 1.
+float input_visibility(vec4 g) {
+  return g.w > 0.0 ? 1.0 : 0.0;
 }
 
 // Screen pixels per world unit at eye depth z (Macedo & Apolinario eq. 2-3: w z_screen / z_eye).

@@ -2,7 +2,8 @@
 // are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer) and
 // the light visibility in [0, 1] (shadow test * spot cone).
 // Screen-space techniques run it twice: with SCREEN_SPACE_GBUFFER it writes the G-buffer (world
-// position, the input visibility before the spot cone, shadow-map coordinates); the second time
+// position and eye depth signed by the input test before the spot cone, shadow-map
+// coordinates); the second time
 // it takes the visibility the post passes left in u_screen_visibility (SCREEN_SPACE_VISIBILITY),
 // or, for erosion, PCF scaled by the eroded penumbra width found there (TECHNIQUE_EROSION).
 #include "common.glsl"
@@ -36,9 +37,10 @@ uniform int u_blocker_taps;
 layout(binding = 4) uniform sampler2D u_screen_visibility;  // screen-space techniques, by pixel
 
 #if defined(SCREEN_SPACE_GBUFFER)
-layout(location = 0) out vec4 o_position;  // world xyz, 1
-layout(location = 1) out float o_visibility;
-layout(location = 2) out vec4 o_light;     // shadow-map uv, biased reference depth, light-view depth (world)
+uniform vec3 u_camera_position;
+uniform vec3 u_camera_forward;
+layout(location = 0) out vec4 o_position;  // world xyz, eye depth signed by the input test (+ lit, - shadowed)
+layout(location = 1) out vec4 o_light;     // shadow-map uv, biased reference depth, light-view depth (world)
 #else
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_visibility;
@@ -93,8 +95,8 @@ void main() {
 
   visibility = clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
 #if defined(SCREEN_SPACE_GBUFFER)
-  o_position = vec4(v_world, 1.0);
-  o_visibility = visibility;
+  float eye_z = max(dot(v_world - u_camera_position, u_camera_forward), 1e-6);
+  o_position = vec4(v_world, visibility > 0.5 ? eye_z : -eye_z);
   o_light = vec4(sc.xy, sc.z - g_constant_bias, depth_ws);
   return;
 #endif

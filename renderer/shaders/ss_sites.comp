@@ -24,10 +24,9 @@ void main() {
   if (any(greaterThanEqual(p, size))) return;
 
   bool site = false;
-  vec4 here = gbuffer_position(p);
-  if (here.w > 0.0) {
-    float z = eye_depth(here.xyz);
-    float hard = texelFetch(u_gbuffer_hard, p, 0).r;
+  vec4 here = gbuffer(p);
+  if (covered(here)) {
+    float z = eye_depth(here);
     for (int dy = -1; dy <= 1 && !site; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
 #if defined(LAPLACIAN)
@@ -35,8 +34,8 @@ void main() {
 #endif
         ivec2 q = p + ivec2(dx, dy);
         if ((dx == 0 && dy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
-        vec4 there = gbuffer_position(q);
-        if (there.w > 0.0 && same_surface(z, eye_depth(there.xyz)) && texelFetch(u_gbuffer_hard, q, 0).r != hard) {
+        vec4 there = gbuffer(q);
+        if (covered(there) && (there.w > 0.0) != (here.w > 0.0) && same_surface(z, eye_depth(there))) {
           site = true;
           break;
         }

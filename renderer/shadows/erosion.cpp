@@ -44,7 +44,7 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     edges.bind(7);
     glProgramUniform1f(prog.id(), prog.location("u_pcss_search_scale"), p.search_scale);
     glProgramUniform1f(prog.id(), prog.location("u_max_search_px"), static_cast<float>(p.max_search_px));
-    glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch_pixels(ss.width(), ss.height());
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     gl::check_errors("erosion pass");

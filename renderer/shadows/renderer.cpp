@@ -288,6 +288,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     set_float(prog, "u_ambient", light.ambient);
     set_float(prog, "u_normal_offset_texels", s.map.normal_offset_texels);
     set_float(prog, "u_depth_bias_texels", s.map.depth_bias_texels);
+    set_vec3(prog, "u_camera_position", cam.position);
+    set_vec3(prog, "u_camera_forward", glm::normalize(cam.target - cam.position));
 
     int taps = 0;
     if (s.technique == Technique::pcf) {
@@ -349,10 +351,9 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       const gl::Program& prog = shading_program(s, true);
       screen_space_->gbuffer_framebuffer().bind();
       glViewport(0, 0, width_px, height_px);
-      const float nothing[4] = {0, 0, 0, 0}, lit = 1, far_depth = 1;
+      const float nothing[4] = {0, 0, 0, 0}, far_depth = 1;
       glClearBufferfv(GL_COLOR, 0, nothing);
-      glClearBufferfv(GL_COLOR, 1, &lit);
-      glClearBufferfv(GL_COLOR, 2, nothing);
+      glClearBufferfv(GL_COLOR, 1, nothing);
       glClearBufferfv(GL_DEPTH, 0, &far_depth);
       prog.use();
       bind_shadow_maps();
@@ -361,8 +362,6 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       gl::check_errors("gbuffer pass");
     }
     PostPassContext ctx;
-    ctx.view.position = cam.position;
-    ctx.view.forward = glm::normalize(cam.target - cam.position);
     ctx.view.perspective = cam.projection == scene::Camera::Projection::perspective;
     ctx.view.px_scale = ctx.view.perspective ? static_cast<float>(height_px) / (2 * std::tan(glm::radians(cam.fov_y_deg) / 2))
                                              : static_cast<float>(height_px) / cam.ortho_height_ws;
@@ -448,7 +447,11 @@ io::ImageF Renderer::read_visibility() const {
 
 io::ImageF Renderer::read_screen_space_input() const {
   if (!screen_space_ || !screen_space_->width()) throw std::logic_error("read_screen_space_input before a screen-space frame");
-  return read_texture<float>(screen_space_->input_visibility(), GL_RED, GL_FLOAT, 1);
+  const io::ImageF g = read_texture<float>(screen_space_->gbuffer_position(), GL_RGBA, GL_FLOAT, 4);
+  io::ImageF vis{g.width, g.height, 1, std::vector<float>(static_cast<std::size_t>(g.width) * g.height)};
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) vis.at(x, y) = g.at(x, y, 3) < 0 ? 0.0f : 1.0f;  // nothing drawn: lit
+  return vis;
 }
 
 io::ImageF Renderer::read_shadow_depth() const {

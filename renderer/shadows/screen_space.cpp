@@ -4,8 +4,6 @@
 #include <bit>
 #include <stdexcept>
 
-#include <glm/gtc/type_ptr.hpp>
-
 #include "gl/context.h"
 #include "shadows/scoped_pass.h"
 
@@ -30,19 +28,17 @@ ScreenSpace::~ScreenSpace() = default;
 void ScreenSpace::resize(const gl::Texture& camera_depth) {
   const int w = camera_depth.desc().width, h = camera_depth.desc().height;
   if (w == width_ && h == height_ && depth_id_ == camera_depth.id()) return;
-  position_ = gl::Texture({GL_RGBA32F, w, h, 1}, "G-buffer position");
+  position_ = gl::Texture({GL_RGBA32F, w, h, 1}, "G-buffer position and signed eye depth");
   light_ = gl::Texture({GL_RGBA32F, w, h, 1}, "G-buffer shadow-map coordinates");
-  hard_ = gl::Texture({GL_R8, w, h, 1}, "G-buffer input visibility");
   const gl::Framebuffer::Attachment att[] = {{&position_, GL_COLOR_ATTACHMENT0},
-                                             {&hard_, GL_COLOR_ATTACHMENT1},
-                                             {&light_, GL_COLOR_ATTACHMENT2},
+                                             {&light_, GL_COLOR_ATTACHMENT1},
                                              {&camera_depth, GL_DEPTH_ATTACHMENT}};
   gbuffer_fbo_ = gl::Framebuffer(att, "G-buffer framebuffer");
   sites_ = gl::Texture({GL_R8UI, w, h, 1}, "screen-space sites");
   site_width_ = gl::Texture({GL_R32F, w, h, 1}, "screen-space site penumbra width");
-  scratch_[0] = gl::Texture({GL_R32F, w, h, 1}, "screen-space scratch 0");
-  scratch_[1] = gl::Texture({GL_R32F, w, h, 1}, "screen-space scratch 1");
-  filtered_ = gl::Texture({GL_R32F, w, h, 1}, "screen-space filtered visibility");
+  scratch_[0] = gl::Texture({GL_RG32F, w, h, 1}, "screen-space scratch 0");
+  scratch_[1] = gl::Texture({GL_RG32F, w, h, 1}, "screen-space scratch 1");
+  filtered_ = gl::Texture({GL_RG32F, w, h, 1}, "screen-space filtered visibility");
   edges_ = gl::Texture();
   width_ = w;
   height_ = h;
@@ -71,9 +67,6 @@ void ScreenSpace::bind_gbuffer(const gl::Program& p, const ScreenView& view, flo
   for (GLuint unit = 4; unit <= 8; ++unit) nearest_.bind(unit);
   position_.bind(4);
   light_.bind(5);
-  hard_.bind(6);
-  glProgramUniform3fv(p.id(), p.location("u_camera_position"), 1, glm::value_ptr(view.position));
-  glProgramUniform3fv(p.id(), p.location("u_camera_forward"), 1, glm::value_ptr(view.forward));
   glProgramUniform1i(p.id(), p.location("u_camera_perspective"), view.perspective ? 1 : 0);
   glProgramUniform1f(p.id(), p.location("u_px_scale"), view.px_scale);
   glProgramUniform1f(p.id(), p.location("u_depth_threshold"), depth_threshold);
@@ -112,7 +105,7 @@ const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float fil
   for (int axis = 0; axis < 2; ++axis) {
     glProgramUniform1i(p.id(), p.location("u_axis"), axis);
     in[axis]->bind(7);
-    glBindImageTexture(0, out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glBindImageTexture(0, out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch_pixels(width_, height_);
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }

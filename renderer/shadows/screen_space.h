@@ -14,8 +14,6 @@
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-
 #include "gl/objects.h"
 #include "gl/shader_library.h"
 #include "gl/timer.h"
@@ -28,8 +26,6 @@ bool is_screen_space(Technique t);
 
 // The camera's metric as the post passes need it.
 struct ScreenView {
-  glm::vec3 position{0};
-  glm::vec3 forward{0, 0, -1};  // unit viewing direction
   bool perspective = true;
   // Pixels per world unit: perspective z_screen * height_px (divided by the eye depth in the
   // shaders, z_screen = 1 / (2 tan(fov_y / 2))); orthographic height_px / view height.
@@ -51,7 +47,8 @@ class ScreenSpace {
 
   // (Re)allocates the G-buffer at the size of `camera_depth`, whose framebuffer shares it.
   void resize(const gl::Texture& camera_depth);
-  // Colour attachments 0: position, 1: input visibility, 2: shadow-map coordinates.
+  // Colour attachments 0: world position and eye depth signed by the input shadow test (+ lit,
+  // - shadowed, 0 nothing drawn), 1: shadow-map coordinates.
   const gl::Framebuffer& gbuffer_framebuffer() const { return gbuffer_fbo_; }
 
   // Runs the post passes of `s.technique`; returns what the shading pass reads per pixel.
@@ -75,18 +72,19 @@ class ScreenSpace {
   };
   void detect_sites(const SiteSearch& search, float depth_threshold, const PostPassContext& ctx);
   Edt& edt() { return edt_; }
-  // Edge-aware separable mean filter of `source` (R32F) into the returned image.
+  // Edge-aware separable mean filter of `source` (RG32F: value, the G-buffer's signed depth) into
+  // the returned image (the same layout).
   const gl::Texture& mean_filter(const gl::Texture& source, float filter_ws, int max_width_px, float depth_threshold,
                                  const PostPassContext& ctx);
 
   const gl::Texture& sites() const { return sites_; }
   const gl::Texture& site_width() const { return site_width_; }
-  // Two R32F images for intermediate results.
+  // Two RG32F images for intermediate results (value, signed depth).
   gl::Texture& scratch(int i) { return scratch_[i]; }
   // RG32F with a full mip chain at the image size (erosion's min-max mip-map), made on first use.
   gl::Texture& edges_mip();
-  // The last frame's input visibility (R8), for tests and debug views.
-  const gl::Texture& input_visibility() const { return hard_; }
+  // The last frame's G-buffer position (RGBA32F; the sign of w is the input visibility).
+  const gl::Texture& gbuffer_position() const { return position_; }
 
  private:
   const gl::ShaderLibrary& shaders_;
@@ -95,7 +93,7 @@ class ScreenSpace {
   Edt edt_;
   int width_ = 0, height_ = 0;
   GLuint depth_id_ = 0;
-  gl::Texture position_, light_, hard_;
+  gl::Texture position_, light_;
   gl::Framebuffer gbuffer_fbo_;
   gl::Texture sites_, site_width_;
   gl::Texture scratch_[2];
