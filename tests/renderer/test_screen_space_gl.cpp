@@ -1,6 +1,8 @@
 // The screen-space techniques against their defining formulas (label `gl`):
 //  - EDTSM: I = 1/2 at the silhouette sites, 1/2 -+ D/P inside the penumbra, exactly 0 or 1 from
 //    D = P/2 on (mean filter off), and a filter that keeps the edge where it was;
+//  - EDTSM's penumbra is world-sized: the same from two camera distances;
+//  - the pipeline stays finite on 1x1, line-shaped and odd-sized images;
 //  - EDTSSM and erosion: on two parallel planes under a spot light of width W the penumbra is
 //    W (z_R - z_B) / z_B wide, so it grows with the blocker's height and vanishes at contact.
 #include <gtest/gtest.h>
@@ -120,6 +122,65 @@ TEST_F(Edtsm, MeanFilterKeepsTheEdgeAndTheRampMonotone) {
   // The box widens the ramp by its own width at most: fully dark/lit beyond P/2 + 6 px.
   EXPECT_EQ(profile.front(), 0.0);
   EXPECT_EQ(profile.back(), 1.0);
+}
+
+TEST_F(Edtsm, PenumbraIsViewpointInvariantInWorldUnits) {
+  // A perspective camera straight above the edge at two heights: the fake penumbra and the mean
+  // filter are world-sized, so the ramp measured in world units is the same from both.
+  const int n = 400;
+  const float fov_deg = 40;
+  double widths[2];
+  int i = 0;
+  for (float height : {3.0f, 6.0f}) {
+    scene::Scene s = scene::make_square_scene(2, 1);
+    s.camera.projection = scene::Camera::Projection::perspective;
+    s.camera.position = {1, height, 0};
+    s.camera.target = {1, 0, 0};
+    s.camera.up = {0, 0, -1};
+    s.camera.fov_y_deg = fov_deg;
+    s.camera.near_ws = height - 0.5f;  // the receiver only
+    s.camera.far_ws = height + 1;
+    ShadowSettings st;
+    st.technique = Technique::edtsm;
+    st.map.resolution_texels = 2048;
+    st.edtsm.penumbra_ws = 0.2f;
+    st.edtsm.filter_ws = 0.1f;
+    shadows::Renderer r;
+    r.set_scene(s);
+    r.render(st, n, n);
+    const io::ImageF vis = r.read_visibility();
+    ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
+    const auto profile = column_means(vis, n / 2 - 20, n / 2 + 20);
+    const double ws_per_px = 2 * height * std::tan(glm::radians(fov_deg) / 2) / n;  // on the receiver
+    // Only the edge x = 1 (the view's centre column); the square's far edge x = -1 is in view too.
+    const int reach = static_cast<int>(0.5 / ws_per_px);
+    int first = -1, last = -1;
+    for (int x = n / 2 - reach; x < n / 2 + reach; ++x) {
+      if (first < 0 && profile[static_cast<std::size_t>(x)] > 0.01) first = x;
+      if (profile[static_cast<std::size_t>(x)] < 0.99) last = x;
+    }
+    widths[i++] = (last - first + 1) * ws_per_px;
+    RecordProperty("width_ws_from_" + std::to_string(static_cast<int>(height)), std::to_string(widths[i - 1]));
+  }
+  // P = 0.2 plus at most the box's 0.1: about 0.25 world units from either height.
+  EXPECT_NEAR(widths[0], widths[1], 2 * 2 * 6.0 * std::tan(glm::radians(fov_deg) / 2) / n);
+  EXPECT_GT(widths[0], 0.2);
+  EXPECT_LT(widths[0], 0.32);
+}
+
+TEST(ScreenSpaceImages, OddTinyAndLineShapedImagesStayFinite) {
+  const scene::Scene s = scene::make_builtin_scene("demo");
+  for (Technique t : {Technique::edtsm, Technique::edtssm, Technique::erosion}) {
+    shadows::Renderer r;
+    r.set_scene(s);
+    ShadowSettings st;
+    st.technique = t;
+    st.map.resolution_texels = 512;
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 64}, {64, 1}, {37, 91}, {91, 37}, {3, 2}}) {
+      r.render(st, w, h);
+      EXPECT_TRUE(test::all_finite_in(r.read_visibility(), 0, 1)) << shadows::to_string(t) << " " << w << "x" << h;
+    }
+  }
 }
 
 // ---- EDTSSM and erosion: the parallel-planes penumbra --------------------------------------------
