@@ -13,73 +13,23 @@
 #include "gl/timer.h"
 #include "io/image_io.h"
 #include "io/report.h"
+#include "io/staged_dir.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/screen_space.h"
 #include "shadows/settings.h"
+#include "cli_options.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
+using apps::add_table_options;
 
 namespace {
-
-// Adds --<section>.<key> for every row of a parameters table.
-template <class P>
-void add_table_options(CLI::App& app, const std::string& section, P& params) {
-  for (const auto& row : shadows::settings_table(&params)) {
-    const std::string name = "--" + section + "." + std::string(row.key);
-    std::string help(row.help);
-    if (!row.unit.empty()) help += " [" + std::string(row.unit == "radius_unit" ? "see radius_unit" : row.unit) + "]";
-    help += " (default " + shadows::value_to_string(row, params) + ")";
-    app.add_option_function<std::string>(
-           name, [&params, row, name](const std::string& v) {
-             try {
-               shadows::set_from_string(row, params, v);
-             } catch (const std::invalid_argument& e) {
-               throw CLI::ValidationError(name, e.what());
-             }
-           },
-           help)
-        ->group(section + " parameters");
-  }
-}
-
-// Removes a staging directory unless the run succeeded, so a failure leaves nothing behind.
-struct StagingGuard {
-  fs::path path;
-  bool committed = false;
-  ~StagingGuard() {
-    std::error_code ec;
-    if (!committed && !path.empty()) fs::remove_all(path, ec);
-  }
-};
 
 struct Variant {
   std::string name;
   shadows::ShadowSettings settings;
 };
-
-std::vector<int> parse_resolutions(const std::string& text) {
-  std::vector<int> out;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t comma = text.find(',', pos);
-    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    std::size_t used = 0;
-    long v = 0;
-    try {
-      v = std::stol(item, &used);
-    } catch (...) {
-      used = 0;
-    }
-    if (used != item.size() || item.empty() || v < 1 || v > 65536)
-      throw CLI::ValidationError("--resolution", "expected texel counts in [1, 65536] separated by commas, got '" + text + "'");
-    out.push_back(static_cast<int>(v));
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
-  }
-  return out;
-}
 
 std::string fmt_ms(double ms) {
   char buf[32];
@@ -134,7 +84,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const std::vector<int> resolutions = parse_resolutions(resolution_arg);
+    const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);
     scene::Scene scene = scene::load_scene(scene_arg);
     if (light_size >= 0) scene.light.size = light_size;
 
@@ -161,16 +111,6 @@ int main(int argc, char** argv) {
       add_variant(t, name, base.pcf.kernel);
     }
 
-    // Refuse to replace a directory that is not ours.
-    // "out/" and "out" name the same directory; without the trailing separator the staging
-    // directory lands beside it, not inside it.
-    fs::path out_dir = fs::path(output).lexically_normal();
-    if (!out_dir.has_filename() && out_dir.has_parent_path()) out_dir = out_dir.parent_path();
-    if (fs::exists(out_dir) && (!fs::is_directory(out_dir) ||
-                                (!fs::is_empty(out_dir) && !fs::exists(out_dir / "report.json")))) {
-      throw std::runtime_error(output + ": exists and is not a penumbra-render output; choose another --output");
-    }
-
     gl::HeadlessContext context;
     const auto& ctx = context.info();
     for (int r : resolutions)
@@ -178,10 +118,8 @@ int main(int argc, char** argv) {
         throw std::runtime_error("--resolution " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
                                  std::to_string(ctx.max_texture_size));
 
-    const fs::path staging = out_dir.string() + ".partial-" + std::to_string(::getpid());
-    fs::remove_all(staging);
-    StagingGuard guard{staging};
-    fs::create_directories(staging);
+    io::StagedDirectory out(output, "report.json");  // refuses a directory that is not ours
+    const fs::path& staging = out.path();
 
     shadows::Renderer renderer;
     renderer.set_scene(scene);
@@ -258,11 +196,8 @@ int main(int argc, char** argv) {
       io::write_png(staging / "montage.png", io::montage(montage_images, labels, 3, 640));
     }
     io::write_text(staging / "report.json", summary.dump(2) + "\n");
-    if (fs::exists(out_dir)) fs::remove_all(out_dir);
-    if (out_dir.has_parent_path()) fs::create_directories(out_dir.parent_path());
-    fs::rename(staging, out_dir);
-    guard.committed = true;
-    std::cout << "wrote " << out_dir.string() << "/\n";
+    out.commit();
+    std::cout << "wrote " << out.target().string() << "/\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "penumbra-render: " << e.what() << "\n";

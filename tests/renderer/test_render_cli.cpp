@@ -2,8 +2,6 @@
 // refused with exit status ≠ 0 and exactly one line on stderr naming what was wrong, and leaves no
 // output (not even a staging directory) behind; an existing directory is replaced only when it is
 // a previous penumbra-render output.
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,56 +20,18 @@
 #include <nlohmann/json.hpp>
 
 #include "io/image_io.h"
-
-extern char** environ;
+#include "subprocess.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;  // -1: did not exit normally (signal)
-  std::string out;
-  std::string err;
-};
+using penumbra::test::read_file;
+using penumbra::test::Result;
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-// Runs penumbra-render with `args`, stdout and stderr captured through files in `scratch`.
 Result run_render(const std::vector<std::string>& args, const fs::path& scratch) {
-  const fs::path out_file = scratch / "stdout.txt", err_file = scratch / "stderr.txt";
-  std::vector<std::string> argv_s = {PENUMBRA_RENDER_EXE};
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : argv_s) argv.push_back(a.data());
-  argv.push_back(nullptr);
-
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  Result r;
-  if (rc != 0) {
-    r.err = "posix_spawn failed: " + std::to_string(rc);
-    return r;
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-  }
-  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  r.out = read_file(out_file);
-  r.err = read_file(err_file);
-  fs::remove(out_file);
-  fs::remove(err_file);
-  return r;
+  return penumbra::test::run_exe(PENUMBRA_RENDER_EXE, args, scratch);
 }
 
 const std::vector<std::string> kSmall = {"--width", "64", "--height", "48", "--resolution", "64",

@@ -1,0 +1,67 @@
+#pragma once
+// Command-line helpers shared by the apps: options generated from a settings table, and
+// comma-separated number lists. Errors are CLI::ValidationError naming the option.
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "shadows/settings.h"
+
+namespace penumbra::apps {
+
+// --<section>.<key> for every row of a parameters table, with the unit and default in the help
+// and the table's own range check.
+template <class P>
+void add_table_options(CLI::App& app, const std::string& section, P& params) {
+  for (const auto& row : shadows::settings_table(&params)) {
+    const std::string name = "--" + section + "." + std::string(row.key);
+    std::string help(row.help);
+    if (!row.unit.empty()) help += " [" + std::string(row.unit == "radius_unit" ? "see radius_unit" : row.unit) + "]";
+    help += " (default " + shadows::value_to_string(row, params) + ")";
+    app.add_option_function<std::string>(
+           name, [&params, row, name](const std::string& v) {
+             try {
+               shadows::set_from_string(row, params, v);
+             } catch (const std::invalid_argument& e) {
+               throw CLI::ValidationError(name, e.what());
+             }
+           },
+           help)
+        ->group(section + " parameters");
+  }
+}
+
+// "a,b,c" → numbers in [lo, hi]; integers only when T is integral. Throws CLI::ValidationError
+// naming `option` and the accepted form.
+template <class T>
+std::vector<T> parse_list(const std::string& option, const std::string& text, T lo, T hi) {
+  std::ostringstream expected;
+  expected << (std::is_integral_v<T> ? "integers" : "numbers") << " in [" << lo << ", " << hi << "] separated by commas, got '" << text
+           << "'";
+  std::vector<T> out;
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    std::size_t used = 0;
+    double v = NAN;
+    try {
+      v = std::stod(item, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || !std::isfinite(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi) ||
+        (std::is_integral_v<T> && v != std::floor(v)))
+      throw CLI::ValidationError(option, "expected " + expected.str());
+    out.push_back(static_cast<T>(v));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace penumbra::apps

@@ -1,0 +1,462 @@
+// penumbra-bench: shadow error against frame time. For every scene, technique of the settings
+// table, filter radius and shadow-map resolution it renders K timed frames and compares the
+// visibility with a ground truth (renderer/metrics/ground_truth.h): the area-light average for
+// techniques that stand for an area light (PCSS), the same filter on an 8192² map otherwise.
+// Writes DIR/bench.csv (one row per configuration, `pareto` marks the error/time front among
+// the rows measured against the same reference), DIR/report.json, and one plot per scene
+// (DIR/pareto-<scene>.png/.svg, drawn by scripts/plot_bench.py). Progress goes to stderr.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include "cli_options.h"
+#include "gl/context.h"
+#include "gl/objects.h"
+#include "gl/timer.h"
+#include "io/image_io.h"
+#include "io/report.h"
+#include "io/staged_dir.h"
+#include "metrics/ground_truth.h"
+#include "metrics/image_error.h"
+#include "scene/scene.h"
+#include "shadows/renderer.h"
+#include "shadows/settings.h"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+namespace {
+
+struct Options {
+  std::vector<std::string> scenes = {"demo", "fence", "tilted", "two-planes"};
+  std::vector<std::string> techniques;  // empty: every technique of the settings table
+  std::vector<int> resolutions = {128, 256, 512, 1024, 2048, 4096};
+  std::vector<double> radii_ws = {0.02, 0.05, 0.1};
+  int width = 640, height = 360, frames = 5, warmup = 1;
+  metrics::ReferenceOptions reference;
+  shadows::ShadowSettings base;
+  bool plot = true;
+  std::string python = "/usr/bin/python3";
+  std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_bench.py";
+  std::string output;
+};
+
+// One configuration family: a technique, and for fixed-radius filters one world-space radius.
+// Every resolution of a variant is measured against the variant's one reference.
+struct Variant {
+  std::string technique;
+  std::string label;        // "pcf r=0.05", "pcss"
+  double radius_ws = NAN;   // NaN: the technique has no radius the bench sweeps
+  shadows::ShadowSettings settings;
+};
+
+struct FrameTimes {
+  std::vector<double> ms;
+  gl::TimingMethod method = gl::TimingMethod::wall_finish;
+  double median() const { return gl::median(ms); }
+  double min() const { return *std::min_element(ms.begin(), ms.end()); }
+  double max() const { return *std::max_element(ms.begin(), ms.end()); }
+};
+
+struct Row {
+  std::string scene, technique, variant;
+  double radius_ws = NAN;
+  int resolution_texels = 0;
+  bool adaptive = false;
+  FrameTimes times;
+  double floor_ms = 0;
+  const metrics::Reference* reference = nullptr;
+  metrics::ImageError error;
+  bool pareto = false;
+  float s_xy = 1;
+  float filter_radius_texels = 0;
+  std::string settings;
+};
+
+// Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
+// at every resolution and at the reference's. False for techniques without such a radius.
+bool set_radius_ws(shadows::ShadowSettings& s, double radius_ws) {
+  if (s.technique == shadows::Technique::pcf) {
+    s.pcf.radius_unit = shadows::RadiusUnit::world;
+    s.pcf.radius = static_cast<float>(radius_ws);
+    return true;
+  }
+  if (s.technique == shadows::Technique::vsm) {
+    s.vsm.radius_unit = shadows::RadiusUnit::world;
+    s.vsm.radius = static_cast<float>(radius_ws);
+    return true;
+  }
+  return false;
+}
+
+std::string format_radius(double r) {
+  std::ostringstream o;
+  o << r;
+  return o.str();
+}
+
+std::vector<Variant> make_variants(const Options& opt) {
+  std::vector<Variant> out;
+  const auto names = opt.techniques.empty() ? std::vector<std::string>(shadows::technique_names().begin(), shadows::technique_names().end())
+                                            : opt.techniques;
+  for (const auto& name : names) {
+    shadows::ShadowSettings s = opt.base;
+    s.technique = shadows::technique_from_string(name);
+    shadows::ShadowSettings probe = s;
+    if (set_radius_ws(probe, 1)) {
+      for (double r : opt.radii_ws) {
+        Variant v{name, name + " r=" + format_radius(r), r, s};
+        set_radius_ws(v.settings, r);
+        out.push_back(v);
+      }
+    } else {
+      out.push_back({name, name, NAN, s});
+    }
+  }
+  return out;
+}
+
+// K frames after `warmup` untimed ones (which absorb allocation and shader compilation). Each
+// frame is bracketed by glFinish and timed with the wall clock; on a GPU a GL_TIME_ELAPSED query
+// around the frame is read back at once (a stall between frames costs the bench nothing).
+FrameTimes time_frames(shadows::Renderer& r, const shadows::ShadowSettings& s, int width, int height, int warmup, int frames,
+                       bool gpu, shadows::FrameInfo& info) {
+  for (int i = 0; i < warmup; ++i) r.render(s, width, height);
+  FrameTimes t;
+  t.method = gpu ? gl::TimingMethod::gpu_timer : gl::TimingMethod::wall_finish;
+  std::optional<gl::Query> query;
+  if (gpu) query.emplace(GL_TIME_ELAPSED);
+  for (int i = 0; i < frames; ++i) {
+    glFinish();
+    const auto t0 = std::chrono::steady_clock::now();
+    if (gpu) glBeginQuery(GL_TIME_ELAPSED, query->id());
+    info = r.render(s, width, height);
+    if (gpu) glEndQuery(GL_TIME_ELAPSED);
+    glFinish();
+    const auto t1 = std::chrono::steady_clock::now();
+    if (gpu) {
+      GLuint64 ns = 0;
+      glGetQueryObjectui64v(query->id(), GL_QUERY_RESULT, &ns);
+      t.ms.push_back(static_cast<double>(ns) * 1e-6);
+    } else {
+      t.ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+  }
+  return t;
+}
+
+// The floor: the frame without a meaningful shadow — hard shadows from a 1×1 unfitted map, so
+// the shading pass does one lookup and the depth pass rasterizes into one texel. Everything a
+// shadowed frame adds to the lit image lies above it.
+shadows::ShadowSettings unshadowed(const shadows::ShadowSettings& base) {
+  shadows::ShadowSettings s = base;
+  s.technique = shadows::Technique::hard;
+  s.map.resolution_texels = 1;
+  s.map.fit = false;
+  return s;
+}
+
+// Marks, within each (scene, variant) group, the rows no other row beats in both frame time and
+// error (mean absolute visibility error): lower or equal in both and lower in one.
+void mark_pareto(std::vector<Row>& rows) {
+  for (auto& a : rows) {
+    a.pareto = true;
+    for (const auto& b : rows) {
+      if (&a == &b || a.scene != b.scene || a.variant != b.variant) continue;
+      const double am = a.times.median(), bm = b.times.median();
+      if (bm <= am && b.error.mean_abs <= a.error.mean_abs && (bm < am || b.error.mean_abs < a.error.mean_abs)) {
+        a.pareto = false;
+        break;
+      }
+    }
+  }
+}
+
+std::string csv_number(double v) {
+  if (std::isnan(v)) return "";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+const char* kCsvHeader =
+    "scene,technique,variant,filter_radius_ws,resolution_texels,adaptive,width_px,height_px,frames,timing_method,"
+    "frame_ms_median,frame_ms_min,frame_ms_max,floor_ms,reference_kind,reference_resolution_texels,reference_samples,"
+    "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,s_xy,filter_radius_texels,settings";
+
+std::string csv_row(const Row& r, const Options& opt) {
+  std::ostringstream o;
+  o << r.scene << ',' << r.technique << ',' << r.variant << ',' << csv_number(r.radius_ws) << ',' << r.resolution_texels << ','
+    << (r.adaptive ? 1 : 0) << ',' << opt.width << ',' << opt.height << ',' << r.times.ms.size() << ','
+    << gl::to_string(r.times.method) << ',' << csv_number(r.times.median()) << ',' << csv_number(r.times.min()) << ','
+    << csv_number(r.times.max()) << ',' << csv_number(r.floor_ms) << ',' << metrics::to_string(r.reference->kind) << ','
+    << r.reference->resolution_texels << ',' << r.reference->samples << ',' << csv_number(r.error.mean_abs) << ','
+    << csv_number(r.error.rmse) << ',' << csv_number(r.error.max_abs) << ',' << csv_number(r.error.ssim) << ','
+    << csv_number(r.error.psnr_db) << ',' << csv_number(r.error.share_above_threshold) << ',' << (r.pareto ? 1 : 0) << ','
+    << csv_number(r.s_xy) << ',' << csv_number(r.filter_radius_texels) << ",\"" << r.settings << "\"";
+  return o.str();
+}
+
+nlohmann::json row_json(const Row& r) {
+  nlohmann::json j = {{"scene", r.scene},
+                      {"technique", r.technique},
+                      {"variant", r.variant},
+                      {"filter_radius_ws", std::isnan(r.radius_ws) ? nlohmann::json(nullptr) : nlohmann::json(r.radius_ws)},
+                      {"resolution_texels", r.resolution_texels},
+                      {"adaptive", r.adaptive},
+                      {"timing_method", gl::to_string(r.times.method)},
+                      {"frame_ms", r.times.ms},
+                      {"frame_ms_median", r.times.median()},
+                      {"floor_ms", r.floor_ms},
+                      {"reference_kind", metrics::to_string(r.reference->kind)},
+                      {"error", metrics::to_json(r.error)},
+                      {"pareto", r.pareto},
+                      {"s_xy", r.s_xy},
+                      {"settings", r.settings}};
+  return j;
+}
+
+// Runs `python script csv outdir`; throws naming the script when it fails.
+void run_plot(const Options& opt, const fs::path& csv, const fs::path& dir) {
+  std::vector<std::string> args = {opt.python, opt.plot_script, csv.string(), dir.string()};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, opt.python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
+    throw std::runtime_error("--python " + opt.python + ": cannot be started (use --no-plot to skip the plots)");
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(opt.plot_script + " failed (status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                             "); use --no-plot to skip the plots");
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+std::vector<std::string> split(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', pos);
+    out.push_back(text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
+    if (comma == std::string::npos) return out;
+    pos = comma + 1;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Shadow error against frame time: every technique x resolution (x filter radius) against a ground truth; "
+               "writes bench.csv, report.json and a Pareto plot per scene."};
+  app.option_defaults()->always_capture_default();
+  Options opt;
+  std::string scenes_arg = join(opt.scenes), techniques_arg = "all", resolutions_arg = "128,256,512,1024,2048,4096",
+              radii_arg = "0.02,0.05,0.1";
+  bool quick = false, no_plot = false;
+  app.add_option("--scenes", scenes_arg, "built-in scene names or scene files (.json), comma-separated");
+  app.add_option("--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all");
+  app.add_option("--resolutions", resolutions_arg, "shadow-map texels per side, comma-separated");
+  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (pcf, vsm), world units, comma-separated");
+  app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(1, 16384));
+  app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(1, 16384));
+  app.add_option("--frames", opt.frames, "timed frames per configuration (median and min/max reported)")->check(CLI::Range(1, 1000));
+  app.add_option("--warmup", opt.warmup, "untimed frames before timing")->check(CLI::Range(0, 100));
+  app.add_option("--area-samples", opt.reference.area_samples, "point-light samples of the area-light reference (rounded up to a square)")
+      ->check(CLI::Range(1, 4096));
+  app.add_option("--area-resolution", opt.reference.area_resolution_texels, "texels per side of each area-light sample's hard map")
+      ->check(CLI::Range(16, 65536));
+  app.add_option("--reference-resolution", opt.reference.filter_resolution_texels,
+                 "texels per side of the same-filter reference (clamped to GL_MAX_TEXTURE_SIZE, with a note)")
+      ->check(CLI::Range(16, 65536));
+  app.add_flag("--quick", quick,
+               "a few-minute run: scenes demo,two-planes, resolutions 256,1024,4096, radius 0.05, 320x180, 3 frames, "
+               "16 area samples (options given explicitly still win)");
+  app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
+  app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
+  app.add_option("--plot-script", opt.plot_script, "the plotting script");
+  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")->required();
+  apps::add_table_options(app, "map", opt.base.map);
+  apps::add_table_options(app, "pcf", opt.base.pcf);
+  apps::add_table_options(app, "pcss", opt.base.pcss);
+  apps::add_table_options(app, "vsm", opt.base.vsm);
+
+  try {
+    app.parse(argc, argv);
+    if (quick) {
+      auto preset = [&](const char* option, auto& target, auto value) {
+        if (app.count(option) == 0) target = value;
+      };
+      preset("--scenes", scenes_arg, std::string("demo,two-planes"));
+      preset("--resolutions", resolutions_arg, std::string("256,1024,4096"));
+      preset("--radii", radii_arg, std::string("0.05"));
+      preset("--width", opt.width, 320);
+      preset("--height", opt.height, 180);
+      preset("--frames", opt.frames, 3);
+      preset("--area-samples", opt.reference.area_samples, 16);
+    }
+    opt.plot = !no_plot;
+    opt.scenes = split(scenes_arg);
+    for (const auto& s : opt.scenes)
+      if (s.empty()) throw CLI::ValidationError("--scenes", "expected scene names or files separated by commas, got '" + scenes_arg + "'");
+    if (techniques_arg != "all") {
+      opt.techniques = split(techniques_arg);
+      for (const auto& t : opt.techniques) {
+        try {
+          shadows::technique_from_string(t);
+        } catch (const std::invalid_argument& e) {
+          throw CLI::ValidationError("--techniques", e.what());
+        }
+      }
+    }
+    opt.resolutions = apps::parse_list<int>("--resolutions", resolutions_arg, 1, 65536);
+    opt.radii_ws = apps::parse_list<double>("--radii", radii_arg, 1e-6, 1e6);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "penumbra-bench: " << e.what() << "\n";
+    return 2;
+  }
+
+  try {
+    const auto started = std::chrono::steady_clock::now();
+    auto elapsed_s = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); };
+    // Scenes first: a bad name or file is refused before any GL work.
+    std::vector<scene::Scene> scenes;
+    for (const auto& name : opt.scenes) scenes.push_back(scene::load_scene(name));
+    if (opt.plot && !fs::exists(opt.plot_script))
+      throw std::runtime_error("--plot-script " + opt.plot_script + ": no such file (use --no-plot to skip the plots)");
+
+    gl::HeadlessContext context;
+    const gl::ContextInfo& ctx = context.info();
+    for (int r : opt.resolutions)
+      if (r > ctx.max_texture_size)
+        throw std::runtime_error("--resolutions " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
+                                 std::to_string(ctx.max_texture_size));
+    io::StagedDirectory out(opt.output, "report.json");
+    const bool gpu = !ctx.software;
+
+    const std::vector<Variant> variants = make_variants(opt);
+    const int total_rows = static_cast<int>(scenes.size() * variants.size() * opt.resolutions.size());
+    std::fprintf(stderr, "penumbra-bench: %zu scenes x %zu variants x %zu resolutions = %d rows at %dx%d, %d frames each, on %s (%s)\n",
+                 scenes.size(), variants.size(), opt.resolutions.size(), total_rows, opt.width, opt.height, opt.frames,
+                 ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
+
+    std::vector<Row> rows;
+    std::vector<std::unique_ptr<metrics::Reference>> references;  // rows point into these
+    nlohmann::json scene_reports = nlohmann::json::array();
+    shadows::Renderer renderer;
+    int done = 0;
+    for (const auto& scene : scenes) {
+      renderer.set_scene(scene);
+      shadows::FrameInfo info;
+      const FrameTimes floor = time_frames(renderer, unshadowed(opt.base), opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
+      std::fprintf(stderr, "[%6.1f s] %s: unshadowed floor %.2f ms\n", elapsed_s(), scene.name.c_str(), floor.median());
+      nlohmann::json scene_report = {{"scene", scene.name},
+                                     {"floor_ms", {{"median", floor.median()}, {"min", floor.min()}, {"max", floor.max()}}},
+                                     {"floor_method", "hard shadows from a 1x1 unfitted map (one lookup per pixel)"},
+                                     {"references", nlohmann::json::array()}};
+      std::map<std::string, const metrics::Reference*> area_reference;  // one per scene: it does not depend on the technique
+      for (const auto& v : variants) {
+        const metrics::Reference* ref = nullptr;
+        const bool area = metrics::reference_kind(v.technique) == metrics::ReferenceKind::area_light;
+        if (area && area_reference.count(scene.name)) {
+          ref = area_reference[scene.name];
+        } else {
+          std::fprintf(stderr, "[%6.1f s] %s: reference for %s (%s)...\n", elapsed_s(), scene.name.c_str(), v.label.c_str(),
+                       area ? "area-light average" : "same filter, high resolution");
+          references.push_back(std::make_unique<metrics::Reference>(
+              metrics::make_reference(renderer, v.settings, opt.width, opt.height, opt.reference)));
+          ref = references.back().get();
+          if (area) area_reference[scene.name] = ref;
+          if (!ref->note.empty()) std::fprintf(stderr, "  note: %s\n", ref->note.c_str());
+          scene_report["references"].push_back({{"for", area ? v.technique : v.label},
+                                                {"kind", metrics::to_string(ref->kind)},
+                                                {"resolution_texels", ref->resolution_texels},
+                                                {"samples", ref->samples},
+                                                {"description", ref->description},
+                                                {"note", ref->note},
+                                                {"render_ms", ref->render_ms}});
+        }
+        for (int res : opt.resolutions) {
+          Row row{scene.name, v.technique, v.label, v.radius_ws, res};
+          shadows::ShadowSettings s = v.settings;
+          s.map.resolution_texels = res;
+          row.times = time_frames(renderer, s, opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
+          row.floor_ms = floor.median();
+          row.reference = ref;
+          row.error = metrics::compare(ref->visibility, renderer.read_visibility());
+          row.s_xy = info.light.s_xy;
+          row.filter_radius_texels = info.filter_radius_texels;
+          row.settings = shadows::describe(s);
+          rows.push_back(row);
+          ++done;
+          std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %d^2: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
+                       total_rows, scene.name.c_str(), v.label.c_str(), res, row.times.median(), row.error.mean_abs,
+                       row.error.max_abs, row.error.ssim);
+        }
+      }
+      scene_reports.push_back(scene_report);
+    }
+    mark_pareto(rows);
+
+    const fs::path& dir = out.path();
+    std::string csv = std::string(kCsvHeader) + "\n";
+    for (const auto& r : rows) csv += csv_row(r, opt) + "\n";
+    io::write_text(dir / "bench.csv", csv);
+
+    std::ostringstream command;
+    for (int i = 0; i < argc; ++i) command << (i ? " " : "") << argv[i];
+    nlohmann::json report = {
+        {"tool", "penumbra-bench"},
+        {"command", command.str()},
+        {"device", io::to_json(ctx)},
+        {"timing_method", gpu ? "gpu_timer" : "wall_finish"},
+        {"image_px", {opt.width, opt.height}},
+        {"frames", opt.frames},
+        {"warmup", opt.warmup},
+        {"resolutions", opt.resolutions},
+        {"radii_ws", opt.radii_ws},
+        {"reference", {{"area_samples", opt.reference.area_samples},
+                       {"area_resolution_texels", opt.reference.area_resolution_texels},
+                       {"filter_resolution_texels", opt.reference.filter_resolution_texels}}},
+        {"error_metric_for_pareto", "mean_abs (visibility, whole image)"},
+        {"scenes", scene_reports},
+        {"rows", nlohmann::json::array()}};
+    for (const auto& r : rows) report["rows"].push_back(row_json(r));
+    if (opt.plot) {
+      std::fprintf(stderr, "[%6.1f s] plotting...\n", elapsed_s());
+      run_plot(opt, dir / "bench.csv", dir);
+    }
+    report["elapsed_s"] = elapsed_s();
+    io::write_text(dir / "report.json", report.dump(2) + "\n");
+    out.commit();
+    std::fprintf(stderr, "[%6.1f s] done\n", elapsed_s());
+    std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra-bench: " << e.what() << "\n";
+    return 1;
+  }
+}

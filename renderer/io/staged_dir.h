@@ -1,0 +1,29 @@
+#pragma once
+// An output directory that appears whole or not at all: files are written under
+// `DIR.partial-<pid>` and renamed to DIR by commit(); without commit() the staging directory is
+// removed, so a failure leaves a previous DIR untouched and nothing half-written.
+#include <filesystem>
+#include <string>
+
+namespace penumbra::io {
+
+class StagedDirectory {
+ public:
+  // Throws std::runtime_error when `target` exists and is not a previous output of the same
+  // kind (a directory that is empty or holds `marker`, e.g. "report.json").
+  StagedDirectory(const std::string& target, const std::string& marker);
+  ~StagedDirectory();
+  StagedDirectory(const StagedDirectory&) = delete;
+  StagedDirectory& operator=(const StagedDirectory&) = delete;
+
+  const std::filesystem::path& path() const { return staging_; }  // write here
+  const std::filesystem::path& target() const { return target_; }
+  void commit();  // replaces the target with the staging directory
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path staging_;
+  bool committed_ = false;
+};
+
+}  // namespace penumbra::io

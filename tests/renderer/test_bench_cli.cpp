@@ -1,0 +1,230 @@
+// penumbra-bench end to end at tiny sizes: the CSV and report.json have their documented shape,
+// every technique of the settings table gets rows, a configuration equal to its own reference
+// measures zero error, and bad input is refused in one line with nothing written.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shadows/settings.h"
+#include "subprocess.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace penumbra {
+namespace {
+
+const std::vector<std::string> kColumns = {
+    "scene", "technique", "variant", "filter_radius_ws", "resolution_texels", "adaptive", "width_px", "height_px", "frames",
+    "timing_method", "frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "reference_kind",
+    "reference_resolution_texels", "reference_samples", "mean_abs", "rmse", "max_abs", "ssim", "psnr_db",
+    "share_above_1_255", "pareto", "s_xy", "filter_radius_texels", "settings"};
+
+// Fields of one CSV line; a field in double quotes may hold commas.
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) out.emplace_back();
+    else out.back() += c;
+  }
+  return out;
+}
+
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p, std::vector<std::string>& header) {
+  std::istringstream in(test::read_file(p));
+  std::string line;
+  std::getline(in, line);
+  header = csv_fields(line);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    const auto f = csv_fields(line);
+    EXPECT_EQ(f.size(), header.size()) << line;
+    std::map<std::string, std::string> row;
+    for (std::size_t i = 0; i < std::min(f.size(), header.size()); ++i) row[header[i]] = f[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+int line_count(const std::string& text) {
+  if (text.empty()) return 0;
+  const auto n = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  return text.back() == '\n' ? n : n + 1;
+}
+
+class BenchCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    tmp_ = fs::temp_directory_path() / ("penumbra-bench-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
+    fs::remove_all(tmp_);
+    fs::create_directories(tmp_ / "scratch");
+    fs::create_directories(tmp_ / "work");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!HasFailure()) fs::remove_all(tmp_, ec);
+  }
+  test::Result bench(std::vector<std::string> args) {
+    const std::vector<std::string> tiny = {"--scenes", "two-planes", "--resolutions", "64,256", "--radii", "0.05",
+                                           "--reference-resolution", "256", "--area-samples", "4", "--area-resolution", "256",
+                                           "--width", "64", "--height", "36", "--frames", "2", "--warmup", "1"};
+    // Tiny defaults first, each dropped where the test gives its own value.
+    std::vector<std::string> all;
+    for (std::size_t i = 0; i + 1 < tiny.size(); i += 2)
+      if (std::find(args.begin(), args.end(), tiny[i]) == args.end()) all.insert(all.end(), {tiny[i], tiny[i + 1]});
+    args.insert(args.begin(), all.begin(), all.end());
+    return test::run_exe(PENUMBRA_BENCH_EXE, args, tmp_ / "scratch");
+  }
+  fs::path work() const { return tmp_ / "work"; }
+
+  // A refused run: status ≠ 0, one line on stderr naming each needle, nothing in work/.
+  void expect_refused(const std::vector<std::string>& args, const std::vector<std::string>& needles) {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"-o", (work() / "out").string()});
+    const test::Result r = bench(a);
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    for (const auto& n : needles) EXPECT_THAT(r.err, HasSubstr(n));
+    EXPECT_TRUE(fs::is_empty(work())) << "a refused run left output";
+  }
+
+  fs::path tmp_;
+};
+
+TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
+  const fs::path out = work() / "out";
+  const test::Result r = bench({"-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("wrote"));
+  EXPECT_THAT(r.err, HasSubstr("8/8")) << "progress on stderr";
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(out)) files.insert(e.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"bench.csv", "report.json", "pareto-two-planes.png", "pareto-two-planes.svg"}));
+  EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(work()), fs::directory_iterator()).size(), 1u) << "no staging left";
+
+  std::vector<std::string> header;
+  const auto rows = read_csv(out / "bench.csv", header);
+  EXPECT_EQ(header, kColumns);
+  // hard, pcss: one variant each; pcf, vsm: one per radius (one radius here); two resolutions.
+  const auto techniques = shadows::technique_names();
+  EXPECT_EQ(rows.size(), 2 * techniques.size());
+  std::set<std::string> seen;
+  std::map<std::string, int> front_size;
+  for (const auto& row : rows) {
+    seen.insert(row.at("technique"));
+    EXPECT_EQ(row.at("scene"), "two-planes");
+    EXPECT_THAT(row.at("timing_method"), ::testing::AnyOf("wall_finish", "gpu_timer"));
+    EXPECT_GT(std::stod(row.at("frame_ms_median")), 0);
+    EXPECT_LE(std::stod(row.at("frame_ms_min")), std::stod(row.at("frame_ms_median")));
+    EXPECT_GE(std::stod(row.at("frame_ms_max")), std::stod(row.at("frame_ms_median")));
+    EXPECT_GT(std::stod(row.at("floor_ms")), 0);
+    EXPECT_EQ(row.at("frames"), "2");
+    const double ssim = std::stod(row.at("ssim")), mean_abs = std::stod(row.at("mean_abs"));
+    EXPECT_GE(mean_abs, 0);
+    EXPECT_LE(std::stod(row.at("max_abs")), 1);
+    EXPECT_LE(ssim, 1 + 1e-9);
+    front_size[row.at("variant")] += row.at("pareto") == "1";
+    if (row.at("technique") == "pcss") {
+      EXPECT_EQ(row.at("reference_kind"), "area_light");
+      EXPECT_EQ(row.at("reference_samples"), "4");
+      EXPECT_EQ(row.at("filter_radius_ws"), "");
+      EXPECT_GT(mean_abs, 0) << "PCSS is not the area-light average";
+    } else {
+      EXPECT_EQ(row.at("reference_kind"), "same_filter");
+      EXPECT_EQ(row.at("reference_resolution_texels"), "256");
+      if (row.at("resolution_texels") == "256") {
+        // The reference configuration itself: the same settings at the reference's size.
+        EXPECT_EQ(mean_abs, 0) << row.at("variant");
+        EXPECT_EQ(std::stod(row.at("max_abs")), 0) << row.at("variant");
+        EXPECT_EQ(ssim, 1) << row.at("variant");
+        EXPECT_EQ(row.at("psnr_db"), "inf");
+      }
+    }
+    if (row.at("technique") == "pcf" || row.at("technique") == "vsm") {
+      EXPECT_EQ(row.at("filter_radius_ws"), "0.05");
+      EXPECT_THAT(row.at("settings"), HasSubstr("radius_unit=world"));
+    }
+  }
+  EXPECT_EQ(seen, std::set<std::string>(techniques.begin(), techniques.end())) << "every technique of the table gets rows";
+  // `pareto` within a variant: a row off the front is beaten by another row (no slower, no less
+  // accurate); the fastest row, and the fastest of the most accurate, are on it.
+  for (const auto& [variant, n] : front_size) {
+    std::vector<std::pair<double, double>> pts;  // (ms, error)
+    std::vector<bool> front;
+    for (const auto& row : rows) {
+      if (row.at("variant") != variant) continue;
+      pts.emplace_back(std::stod(row.at("frame_ms_median")), std::stod(row.at("mean_abs")));
+      front.push_back(row.at("pareto") == "1");
+    }
+    std::size_t fastest = 0, best = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (pts[i].first < pts[fastest].first) fastest = i;
+      if (pts[i].second < pts[best].second || (pts[i].second == pts[best].second && pts[i].first < pts[best].first)) best = i;
+      if (front[i]) continue;
+      bool beaten = false;
+      for (std::size_t j = 0; j < pts.size(); ++j)
+        beaten |= j != i && pts[j].first <= pts[i].first && pts[j].second <= pts[i].second;
+      EXPECT_TRUE(beaten) << variant << " row " << i;
+    }
+    EXPECT_TRUE(front[fastest]) << variant;
+    EXPECT_TRUE(front[best]) << variant;
+  }
+
+  const nlohmann::json report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_EQ(report.at("tool"), "penumbra-bench");
+  EXPECT_EQ(report.at("rows").size(), rows.size());
+  ASSERT_EQ(report.at("scenes").size(), 1u);
+  EXPECT_EQ(report.at("scenes")[0].at("references").size(), techniques.size());
+  EXPECT_GT(report.at("scenes")[0].at("floor_ms").at("median").get<double>(), 0);
+  EXPECT_EQ(report.at("rows")[0].at("frame_ms").size(), 2u);
+  EXPECT_TRUE(report.contains("device"));
+  const auto png = fs::file_size(out / "pareto-two-planes.png");
+  EXPECT_GT(png, 10000u) << "a real plot";
+}
+
+TEST_F(BenchCli, NoPlotWritesNoImages) {
+  const fs::path out = work() / "out";
+  const test::Result r = bench({"--techniques", "hard", "--no-plot", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(out)) files.insert(e.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"bench.csv", "report.json"}));
+}
+
+TEST_F(BenchCli, BadInputIsRefusedInOneLineWithNothingWritten) {
+  expect_refused({"--techniques", "pcf,fancy"}, {"--techniques", "fancy"});
+  expect_refused({"--resolutions", "64,0"}, {"--resolutions", "'64,0'"});
+  expect_refused({"--radii", "-1"}, {"--radii", "'-1'"});
+  expect_refused({"--scenes", "no-such-scene"}, {"no-such-scene"});
+  expect_refused({"--frames", "0"}, {"--frames"});
+  expect_refused({"--pcf.kernel", "hexagon"}, {"--pcf.kernel", "hexagon"});
+  expect_refused({"--plot-script", "/nonexistent/plot.py"}, {"--plot-script", "/nonexistent/plot.py"});
+  expect_refused({"--resolutions", "65536"}, {"GL_MAX_TEXTURE_SIZE"});
+}
+
+TEST_F(BenchCli, ForeignDirectoryIsLeftUntouched) {
+  const fs::path out = work() / "out";
+  fs::create_directories(out);
+  { std::ofstream(out / "notes.txt") << "mine\n"; }
+  const test::Result r = bench({"--techniques", "hard", "--no-plot", "-o", out.string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr(out.string()));
+  EXPECT_EQ(test::read_file(out / "notes.txt"), "mine\n");
+}
+
+}  // namespace
+}  // namespace penumbra

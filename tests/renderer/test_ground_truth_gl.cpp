@@ -1,0 +1,205 @@
+// Ground-truth references (renderer/metrics/ground_truth.h): the sampling of the emitter, and
+// the area-light average against the analytic soft shadow of a straight edge (label `gl`).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "gl_test_env.h"
+#include "metrics/ground_truth.h"
+#include "metrics/image_error.h"
+
+namespace penumbra::metrics {
+namespace {
+
+// Fraction of the unit disk with first coordinate below s: the visibility across the edge of
+// a half-plane blocker lit by a uniform disk emitter, s in half-penumbra units from the centre.
+double disk_fraction_below(double s) {
+  if (s <= -1) return 0;
+  if (s >= 1) return 1;
+  return (s * std::sqrt(1 - s * s) + std::asin(s) + std::numbers::pi / 2) / std::numbers::pi;
+}
+
+// Orthographic camera straight down over world x in [centre.x ± half] for an image of
+// width × height pixels (image x = world x, square pixels).
+void look_down(scene::Scene& s, glm::vec2 centre, float half, int width, int height) {
+  s.camera.projection = scene::Camera::Projection::orthographic;
+  s.camera.position = {centre.x, 20, centre.y};
+  s.camera.target = {centre.x, 0, centre.y};
+  s.camera.up = {0, 0, -1};
+  s.camera.ortho_height_ws = 2 * half * static_cast<float>(height) / static_cast<float>(width);
+  s.camera.near_ws = 19.5f;
+  s.camera.far_ws = 40;
+}
+
+std::vector<double> column_means(const io::ImageF& img) {
+  std::vector<double> m(static_cast<std::size_t>(img.width), 0.0);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) m[static_cast<std::size_t>(x)] += img.at(x, y);
+  for (auto& v : m) v /= img.height;
+  return m;
+}
+
+struct ProfileError {
+  double mean_abs = 0, max_abs = 0;
+};
+
+// Compares the column profile of `vis` (a top-down view of width 2·half centred on x0) with the
+// analytic disk-emitter profile of an edge at world x = edge_x and half-penumbra `half_penumbra`.
+ProfileError against_analytic(const io::ImageF& vis, float x0, float half, double edge_x, double half_penumbra) {
+  const auto profile = column_means(vis);
+  ProfileError e;
+  for (int i = 0; i < vis.width; ++i) {
+    const double x = x0 - half + (i + 0.5) * 2 * half / vis.width;
+    const double d = std::abs(profile[static_cast<std::size_t>(i)] - disk_fraction_below((x - edge_x) / half_penumbra));
+    e.mean_abs += d / vis.width;
+    e.max_abs = std::max(e.max_abs, d);
+  }
+  return e;
+}
+
+TEST(StratifiedDisk, OnePointPerStratumInsideTheDiskAndDeterministic) {
+  for (int k : {1, 4, 8, 16}) {
+    const auto pts = stratified_disk(k);
+    ASSERT_EQ(pts.size(), static_cast<std::size_t>(k * k));
+    glm::vec2 mean(0);
+    int inner = 0;
+    for (const auto& p : pts) {
+      EXPECT_LE(glm::length(p), 1.0f + 1e-6f);
+      mean += p / static_cast<float>(pts.size());
+      if (glm::length(p) < 0.5f) ++inner;
+    }
+    if (k % 4 == 0) {
+      // The concentric map sends the square [-1/2, 1/2]² onto the disk of radius 1/2: exactly a
+      // quarter of the strata, so exactly a quarter of the points (the map preserves area).
+      EXPECT_EQ(inner, k * k / 4) << k;
+      EXPECT_LT(glm::length(mean), 0.6f / static_cast<float>(k)) << k;
+    }
+    EXPECT_EQ(pts, stratified_disk(k)) << "same points on every call";
+  }
+  EXPECT_THROW(stratified_disk(0), std::invalid_argument);
+}
+
+TEST(LightSample, DirectionalTiltsWithinTheConeSpotMovesAcrossTheAxis) {
+  scene::Light sun;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -1, 0.2f));
+  sun.size = 4;  // degrees, angular diameter
+  for (glm::vec2 uv : {glm::vec2(1, 0), glm::vec2(0, -1), glm::vec2(0.6f, 0.8f), glm::vec2(0.3f, 0.1f)}) {
+    const scene::Light l = light_sample(sun, uv);
+    const double angle = glm::degrees(std::acos(std::min(1.0f, glm::dot(l.direction, sun.direction))));
+    EXPECT_NEAR(angle, glm::degrees(std::atan(glm::length(uv) * std::tan(glm::radians(2.0)))), 1e-3);
+    EXPECT_EQ(l.size, 0);
+  }
+  scene::Light spot;
+  spot.type = scene::Light::Type::spot;
+  spot.position = {1, 10, 2};
+  spot.direction = glm::normalize(glm::vec3(0, -1, 0.5f));
+  spot.size = 2;  // width
+  const scene::Light l = light_sample(spot, {0.6f, -0.8f});
+  EXPECT_NEAR(glm::length(l.position - spot.position), 1.0, 1e-5);
+  EXPECT_NEAR(glm::dot(l.position - spot.position, spot.direction), 0.0, 1e-5);
+  EXPECT_EQ(l.direction, spot.direction);
+  spot.size = 0;
+  EXPECT_EQ(light_sample(spot, {1, 0}).position, spot.position);
+}
+
+TEST(ReferenceKind, PcssAgainstTheAreaLightOthersAgainstThemselves) {
+  EXPECT_EQ(reference_kind("pcss"), ReferenceKind::area_light);
+  for (auto name : shadows::technique_names()) {
+    if (name != "pcss") {
+      EXPECT_EQ(reference_kind(name), ReferenceKind::same_filter) << name;
+    }
+  }
+}
+
+// The two-planes scene: half-plane blocker at height h over a receiver, spot emitter of width W
+// at height H. Full penumbra W h / (H − h) (the PCSS formula with z_R = H, z_B = H − h).
+TEST(AreaLight, SpotOverTwoPlanesMatchesTheAnalyticPenumbraAndConverges) {
+  const float h = 3, H = 10, W = 1;
+  scene::Scene s = scene::make_two_planes_scene(h, H, W);
+  const float half = 0.5f;
+  look_down(s, {0, 0}, half, 400, 16);
+  shadows::Renderer r;
+  r.set_scene(s);
+  const double half_penumbra = 0.5 * W * h / (H - h);
+  std::vector<double> errors;
+  for (int per_side : {2, 4, 8, 16}) {
+    const io::ImageF vis = area_light_visibility(r, 400, 16, per_side, 2048, {});
+    ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
+    const ProfileError e = against_analytic(vis, 0, half, 0, half_penumbra);
+    errors.push_back(e.mean_abs);
+    if (per_side == 16) {
+      EXPECT_LT(e.mean_abs, 0.003);
+      EXPECT_LT(e.max_abs, 0.03);
+      // The 10–90 % width of the disk profile is 2 · 0.6870 half-penumbrae (disk_fraction_below(0.687) ≈ 0.9).
+      const auto profile = column_means(vis);
+      int first = -1, last = -1;
+      for (int i = 0; i < vis.width; ++i) {
+        if (first < 0 && profile[static_cast<std::size_t>(i)] > 0.1) first = i;
+        if (profile[static_cast<std::size_t>(i)] < 0.9) last = i;
+      }
+      const double width_10_90 = (last - first + 1) * 2.0 * half / vis.width;
+      EXPECT_NEAR(width_10_90, 2 * 0.6870 * half_penumbra, 0.03 * 2 * half_penumbra);
+    }
+  }
+  EXPECT_EQ(r.scene().light.position, s.light.position) << "the scene light is restored";
+  // Stratified sampling: the error falls roughly as N^-3/4 (measured 0.041, 0.016, 0.0064, 0.0020).
+  for (std::size_t i = 1; i < errors.size(); ++i) EXPECT_LT(errors[i], 0.6 * errors[i - 1]) << "N = " << (1 << (2 * i + 2));
+  RecordProperty("mean_abs_error_n4_16_64_256",
+                 std::to_string(errors[0]) + " " + std::to_string(errors[1]) + " " + std::to_string(errors[2]) + " " + std::to_string(errors[3]));
+}
+
+TEST(AreaLight, SunOverASquareMatchesTheAnalyticPenumbra) {
+  // Square occluder (side 2, height 1) under a sun straight down of angular diameter 4°:
+  // half-penumbra at the receiver h · tan(2°).
+  scene::Scene s = scene::make_square_scene(2, 1);
+  s.light.size = 4;
+  const float half = 0.1f;
+  look_down(s, {1, 0}, half, 320, 16);
+  shadows::Renderer r;
+  r.set_scene(s);
+  const io::ImageF vis = area_light_visibility(r, 320, 16, 16, 2048, {});
+  const ProfileError e = against_analytic(vis, 1, half, 1, std::tan(glm::radians(2.0)));
+  EXPECT_LT(e.mean_abs, 0.003);
+  EXPECT_LT(e.max_abs, 0.03);
+}
+
+TEST(Reference, AreaLightForPcssAndTheSameSettingsAtHighResolutionOtherwise) {
+  scene::Scene s = scene::make_two_planes_scene(3, 10, 1);
+  look_down(s, {0, 0}, 0.5f, 64, 8);
+  shadows::Renderer r;
+  r.set_scene(s);
+  shadows::ShadowSettings pcss;
+  pcss.technique = shadows::Technique::pcss;
+  const Reference area = make_reference(r, pcss, 64, 8, {.area_samples = 10, .area_resolution_texels = 512});
+  EXPECT_EQ(area.kind, ReferenceKind::area_light);
+  EXPECT_EQ(area.samples, 16) << "rounded up to a square";
+  EXPECT_EQ(area.resolution_texels, 512);
+  EXPECT_EQ(area.visibility.width, 64);
+  EXPECT_EQ(area.visibility.height, 8);
+  EXPECT_TRUE(area.note.empty()) << area.note;
+
+  shadows::ShadowSettings pcf;
+  pcf.technique = shadows::Technique::pcf;
+  pcf.pcf.radius_unit = shadows::RadiusUnit::world;
+  pcf.pcf.radius = 0.05f;
+  const Reference same = make_reference(r, pcf, 64, 8, {.filter_resolution_texels = 1024});
+  EXPECT_EQ(same.kind, ReferenceKind::same_filter);
+  EXPECT_EQ(same.resolution_texels, 1024);
+  shadows::ShadowSettings direct = pcf;
+  direct.map.resolution_texels = 1024;
+  r.render(direct, 64, 8);
+  const ImageError e = compare(same.visibility, r.read_visibility());
+  EXPECT_EQ(e.max_abs, 0) << "the reference is exactly the same filter at the reference size";
+  EXPECT_NE(same.description.find("1024"), std::string::npos) << same.description;
+}
+
+}  // namespace
+}  // namespace penumbra::metrics
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
+  return RUN_ALL_TESTS();
+}
