@@ -297,10 +297,7 @@ int main(int argc, char** argv) {
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
   app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")->required();
-  apps::add_table_options(app, "map", opt.base.map);
-  apps::add_table_options(app, "pcf", opt.base.pcf);
-  apps::add_table_options(app, "pcss", opt.base.pcss);
-  apps::add_table_options(app, "vsm", opt.base.vsm);
+  apps::add_settings_options(app, opt.base);
 
   try {
     app.parse(argc, argv);
@@ -391,7 +388,7 @@ int main(int argc, char** argv) {
           ref = references.back().get();
           if (area) area_reference[scene.name] = ref;
           if (!ref->note.empty()) std::fprintf(stderr, "  note: %s\n", ref->note.c_str());
-          scene_report["references"].push_back({{"for", area ? v.technique : v.label},
+          scene_report["references"].push_back({{"for", area ? "every area-light technique" : v.label},
                                                 {"kind", metrics::to_string(ref->kind)},
                                                 {"resolution_texels", ref->resolution_texels},
                                                 {"samples", ref->samples},

@@ -22,7 +22,6 @@
 
 namespace fs = std::filesystem;
 using namespace penumbra;
-using apps::add_table_options;
 
 namespace {
 
@@ -66,13 +65,7 @@ int main(int argc, char** argv) {
                  "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
       ->check(CLI::Range(0.0, 1e6));
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
-  add_table_options(app, "map", base.map);
-  add_table_options(app, "pcf", base.pcf);
-  add_table_options(app, "pcss", base.pcss);
-  add_table_options(app, "vsm", base.vsm);
-  add_table_options(app, "edtsm", base.edtsm);
-  add_table_options(app, "edtssm", base.edtssm);
-  add_table_options(app, "erosion", base.erosion);
+  apps::add_settings_options(app, base);
 
   try {
     app.parse(argc, argv);

@@ -14,8 +14,9 @@
 namespace penumbra::metrics {
 namespace {
 
-// Techniques whose picture stands for an area light's soft shadow.
-constexpr std::array<std::string_view, 1> kAreaLightTechniques = {"pcss"};
+// Techniques whose picture stands for an area light's soft shadow (their penumbra grows with
+// the light's size and the blocker-receiver distance).
+constexpr std::array<std::string_view, 3> kAreaLightTechniques = {"pcss", "edtssm", "erosion"};
 
 // Shirley and Chiu's concentric map from [-1, 1]² to the unit disk (area-preserving).
 glm::vec2 concentric(glm::vec2 p) {

@@ -2,7 +2,8 @@
 // Ground-truth visibility images for the bench, rendered through the public Renderer API.
 //
 // Two kinds of reference:
-//   area_light   For techniques that approximate an area light's soft shadow (PCSS): the mean of
+//   area_light   For techniques that approximate an area light's soft shadow (PCSS, EDT soft
+//                shadows, erosion soft shadows): the mean of
 //                N hard shadows, each from a point light placed on a stratified sample of the
 //                emitter, every map fitted and high-resolution (4096² by default). The emitter
 //                follows the scene's light conventions (scene/scene.h):
@@ -15,7 +16,8 @@
 //                The spot's cone factor is evaluated per sample, so within W/2 of the cone's
 //                edge the reference averages the cone as well (the built-in scenes keep their
 //                receivers well inside it).
-//   same_filter  For fixed-radius filters and everything else: the same settings on an 8192²
+//   same_filter  For fixed-radius filters and everything else (hard, PCF, VSM, EDTSM's fixed
+//                world-space penumbra): the same settings on an 8192²
 //                map (clamped to GL_MAX_TEXTURE_SIZE, halved while the device refuses the
 //                allocation; either is reported in `note`). A filter radius is only "the same
 //                filter" at another resolution when it is given in world units

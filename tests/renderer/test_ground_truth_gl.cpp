@@ -104,12 +104,10 @@ TEST(LightSample, DirectionalTiltsWithinTheConeSpotMovesAcrossTheAxis) {
   EXPECT_EQ(light_sample(spot, {1, 0}).position, spot.position);
 }
 
-TEST(ReferenceKind, PcssAgainstTheAreaLightOthersAgainstThemselves) {
-  EXPECT_EQ(reference_kind("pcss"), ReferenceKind::area_light);
+TEST(ReferenceKind, SoftShadowTechniquesAgainstTheAreaLightOthersAgainstThemselves) {
   for (auto name : shadows::technique_names()) {
-    if (name != "pcss") {
-      EXPECT_EQ(reference_kind(name), ReferenceKind::same_filter) << name;
-    }
+    const bool soft = name == "pcss" || name == "edtssm" || name == "erosion";
+    EXPECT_EQ(reference_kind(name), soft ? ReferenceKind::area_light : ReferenceKind::same_filter) << name;
   }
 }
 
