@@ -41,6 +41,7 @@ inline void add_settings_options(CLI::App& app, shadows::ShadowSettings& s) {
   add_table_options(app, "pcf", s.pcf);
   add_table_options(app, "pcss", s.pcss);
   add_table_options(app, "vsm", s.vsm);
+  add_table_options(app, "adaptive", s.adaptive);
   add_table_options(app, "edtsm", s.edtsm);
   add_table_options(app, "edtssm", s.edtssm);
   add_table_options(app, "erosion", s.erosion);

@@ -171,11 +171,15 @@ int main(int argc, char** argv) {
           else screen += st.median_ms;
         }
         const bool screen_space = shadows::is_screen_space(v.settings.technique);
-        std::printf("%-12s %6d %s %s %s %s %s\n", v.name.c_str(), res, fmt_ms(shadow_map).c_str(),
+        // The resolution used: the rule's with adaptive.enabled, one entry per cascade.
+        std::string used;
+        for (const auto& c : info.cascades) used += (used.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+        std::printf("%-12s %6s %s %s %s %s %s\n", v.name.c_str(), used.c_str(), fmt_ms(shadow_map).c_str(),
                     v.settings.technique == shadows::Technique::vsm ? fmt_ms(vsm_blur).c_str() : "        -",
                     screen_space ? fmt_ms(screen).c_str() : "        -", fmt_ms(shading).c_str(), fmt_ms(total).c_str());
         std::fflush(stdout);
         summary["renders"].push_back({{"name", dir_name}, {"technique", v.name}, {"resolution_texels", res},
+                                      {"resolution_used_texels", info.resolution_texels}, {"cascades", info.cascades.size()},
                                       {"timing_method", gl::to_string(shown)}, {"total_ms", total},
                                       {"timings", report["timings"]}});
         if (resolutions.size() == 1 || res == resolutions.back()) {

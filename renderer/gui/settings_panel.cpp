@@ -59,6 +59,7 @@ template bool settings_panel<shadows::ShadowMapParams>(const char*, shadows::Sha
 template bool settings_panel<shadows::PcfParams>(const char*, shadows::PcfParams&);
 template bool settings_panel<shadows::PcssParams>(const char*, shadows::PcssParams&);
 template bool settings_panel<shadows::VsmParams>(const char*, shadows::VsmParams&);
+template bool settings_panel<shadows::AdaptiveParams>(const char*, shadows::AdaptiveParams&);
 template bool settings_panel<shadows::EdtsmParams>(const char*, shadows::EdtsmParams&);
 template bool settings_panel<shadows::EdtssmParams>(const char*, shadows::EdtssmParams&);
 template bool settings_panel<shadows::ErosionParams>(const char*, shadows::ErosionParams&);
@@ -85,6 +86,7 @@ bool shadow_settings_panel(shadows::ShadowSettings& s) {
     case shadows::Technique::erosion: changed |= settings_panel("erosion", s.erosion); break;
   }
   if (ImGui::CollapsingHeader("shadow map and bias", ImGuiTreeNodeFlags_DefaultOpen)) changed |= settings_panel("map", s.map);
+  if (ImGui::CollapsingHeader("adaptive resolution")) changed |= settings_panel("adaptive", s.adaptive);
   return changed;
 }
 

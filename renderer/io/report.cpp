@@ -1,5 +1,7 @@
 #include "io/report.h"
 
+#include <cmath>
+
 namespace penumbra::io {
 
 nlohmann::json to_json(const gl::ContextInfo& info) {
@@ -35,6 +37,28 @@ nlohmann::json frame_report(const shadows::FrameInfo& frame, const shadows::Shad
   if (frame.filter_radius_texels > 0) j["filter_radius_texels"] = frame.filter_radius_texels;
   j["passes_run"] = frame.passes;
   j["timings"] = to_json(stats);
+  j["adaptive"] = frame.adaptive;
+  j["resolution_source"] = frame.resolution_source;
+  j["storage"] = frame.storage;
+  j["atlas_texels"] = {frame.atlas_width, frame.atlas_height};
+  nlohmann::json cascades = nlohmann::json::array();
+  for (const auto& c : frame.cascades) {
+    nlohmann::json cj{{"resolution_texels", c.resolution_texels},
+                      {"split_view_depth_ws", {c.split_near_ws, c.split_far_ws}},
+                      {"extent_ws", c.light.extent_ws},
+                      {"s_xy", c.light.s_xy},
+                      {"atlas_origin_texels", {c.atlas_x, c.atlas_y}}};
+    if (frame.adaptive) cj["required_texels"] = std::isfinite(c.required_texels) ? nlohmann::json(c.required_texels) : nlohmann::json("inf");
+    cascades.push_back(cj);
+  }
+  j["cascades"] = cascades;
+  if (frame.pcss_requirement.valid) {
+    const auto& r = frame.pcss_requirement;
+    j["pcss_requirement"] = {{"required_texels", r.required_texels},
+                             {"evaluated_pixels", r.evaluated_pixels},
+                             {"clamped_fraction", r.clamped_fraction},
+                             {"above_max_fraction", r.above_max_fraction}};
+  }
   return j;
 }
 

@@ -12,17 +12,45 @@ layout(binding = 3) uniform sampler2D u_moments;                   // VSM moment
 uniform bool u_light_perspective;
 uniform float u_light_near_ws;
 uniform float u_light_far_ws;
-uniform float u_light_extent_ws;    // directional: side of the map; spot: unfitted near-plane width
 uniform float u_light_s_xy;         // fitting scale
 uniform float u_light_tan_half_fov; // spot
-uniform float u_shadow_res;         // texels per side
 uniform float u_rpdb_max;           // largest |d depth / d uv| trusted by the receiver-plane bias
 uniform bool u_receiver_plane_bias;
 uniform vec2 u_poisson[64];         // unit-disk taps, the outermost at radius 1
 
+// The map being sampled (one cascade, or the only map), set by the shading pass before a
+// technique runs. Maps live in an atlas: a region of g_shadow_res^2 texels surrounded by a guard
+// band of at least two texels cleared to the far depth (lit), so that every lookup clamped into
+// the band behaves like a lit border, whatever the neighbouring regions hold.
+float g_shadow_res = 1.0;       // texels per side of the map
+float g_light_extent_ws = 1.0;  // directional: side of the map; spot: unfitted near-plane width
+vec4 g_region = vec4(0.0, 0.0, 1.0, 1.0);  // atlas uv of the map's corner (xy) and per map uv (zw)
+
+// The maps of this frame: one per cascade (a spot light or an uncascaded frame has one). All
+// cascades share the light view and its depth range; they differ in the xy window, the
+// resolution and the atlas region. use_cascade(i) points the globals above at cascade i.
+const int MAX_CASCADES = 4;
+uniform int u_cascade_count;
+uniform mat4 u_cascade_view_projection[MAX_CASCADES];
+uniform vec4 u_cascade_region[MAX_CASCADES];
+uniform float u_cascade_res[MAX_CASCADES];
+uniform float u_cascade_extent_ws[MAX_CASCADES];
+
+void use_cascade(int i) {
+  g_shadow_res = u_cascade_res[i];
+  g_region = u_cascade_region[i];
+  g_light_extent_ws = u_cascade_extent_ws[i];
+}
+
+// Atlas uv of map uv `uv`; lookups beyond the map are clamped into its guard band.
+vec2 atlas_uv(vec2 uv) {
+  float band = 1.0 / g_shadow_res;
+  return g_region.xy + clamp(uv, vec2(-band), vec2(1.0 + band)) * g_region.zw;
+}
+
 // Shadow-map uv per world unit at light-view depth `depth_ws`.
 float uv_per_ws(float depth_ws) {
-  if (!u_light_perspective) return 1.0 / u_light_extent_ws;
+  if (!u_light_perspective) return 1.0 / g_light_extent_ws;
   return u_light_s_xy / (2.0 * max(depth_ws, 1e-6) * u_light_tan_half_fov);
 }
 

@@ -1,11 +1,13 @@
 // Camera pass: Lambert shading with the technique's visibility (TECHNIQUE_* and KERNEL_GRID
-// are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer) and
-// the light visibility in [0, 1] (shadow test * spot cone).
+// are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer), the
+// light visibility in [0, 1] (shadow test * spot cone) and, with PCSS_REQUIREMENT, the per-pixel
+// resolution requirement the adaptive rule reduces on the GPU (pcss_requirement.comp).
 // Screen-space techniques run it twice: with SCREEN_SPACE_GBUFFER it writes the G-buffer (world
 // position and eye depth signed by the input test before the spot cone, shadow-map
 // coordinates); the second time
 // it takes the visibility the post passes left in u_screen_visibility (SCREEN_SPACE_VISIBILITY),
 // or, for erosion, PCF scaled by the eroded penumbra width found there (TECHNIQUE_EROSION).
+// Screen-space techniques use one map (no cascades).
 #include "common.glsl"
 #include "shadow_hard.glsl"
 #include "shadow_pcf.glsl"
@@ -15,7 +17,11 @@
 in vec3 v_world;
 in vec3 v_normal;
 
-uniform mat4 u_light_view_projection;
+uniform float u_cascade_far_ws[MAX_CASCADES];  // camera view depth where cascade i ends
+uniform float u_cascade_blend;                 // blend band, fraction of a cascade's depth range
+uniform bool u_show_cascades;                  // tint by cascade (debug overlay)
+uniform mat4 u_camera_view;
+
 uniform mat4 u_light_view;
 uniform vec3 u_light_direction;   // direction light travels
 uniform vec3 u_light_position;    // spot
@@ -45,21 +51,24 @@ layout(location = 1) out vec4 o_light;     // shadow-map uv, biased reference de
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_visibility;
 #endif
+#if defined(PCSS_REQUIREMENT)
+layout(location = 2) out vec2 o_requirement;  // (1 / filter radius in map uv, cascade + 0.5 if clamped)
+#endif
 
-void main() {
-  vec3 n = normalize(v_normal);
-  if (!gl_FrontFacing) n = -n;
-  vec3 to_light = u_light_perspective ? normalize(u_light_position - v_world) : -u_light_direction;
-  float n_dot_l = dot(n, to_light);
+vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (G-buffer pass)
 
-  float depth_ws = -(u_light_view * vec4(v_world, 1.0)).z;
-  float texel_ws = 1.0 / (uv_per_ws(depth_ws) * u_shadow_res);
-  float sin_angle = sqrt(clamp(1.0 - n_dot_l * n_dot_l, 0.0, 1.0));
+// Visibility from cascade i. `gradient0` is the receiver-plane gradient in cascade 0's uv; the
+// cascades' uv differ by a scale only (same light view), so it carries over.
+float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gradient0, out float filter_uv) {
+  use_cascade(i);
+  filter_uv = 0.0;
+  float texel_ws = 1.0 / (uv_per_ws(depth_ws) * g_shadow_res);
   vec3 lookup = v_world + n * (u_normal_offset_texels * texel_ws * sin_angle);
-  vec4 clip = u_light_view_projection * vec4(lookup, 1.0);
+  vec4 clip = u_cascade_view_projection[i] * vec4(lookup, 1.0);
   vec3 sc = clip.xyz / clip.w * 0.5 + 0.5;
-  vec2 gradient = receiver_plane_gradient(sc);  // uniform control flow: derivatives are valid here
+  vec2 gradient = gradient0 * (g_light_extent_ws / u_cascade_extent_ws[0]);
   g_constant_bias = u_depth_bias_texels * texel_ws * depth_per_ws(depth_ws);
+  g_sc = sc;
 
   float visibility;
 #if defined(SCREEN_SPACE_VISIBILITY)
@@ -71,14 +80,13 @@ void main() {
 #elif defined(TECHNIQUE_HARD)
   visibility = shadow_hard(sc);
 #elif defined(TECHNIQUE_PCF)
-  float radius_uv = u_pcf_radius_ws >= 0.0 ? u_pcf_radius_ws * uv_per_ws(depth_ws) : u_pcf_radius_texels / u_shadow_res;
+  float radius_uv = u_pcf_radius_ws >= 0.0 ? u_pcf_radius_ws * uv_per_ws(depth_ws) : u_pcf_radius_texels / g_shadow_res;
 #  if defined(KERNEL_GRID)
-  visibility = pcf_grid(sc, gradient, radius_uv * u_shadow_res, u_max_grid_taps);
+  visibility = pcf_grid(sc, gradient, radius_uv * g_shadow_res, u_max_grid_taps);
 #  else
   visibility = pcf_poisson(sc, gradient, radius_uv, u_taps, poisson_rotation(u_rotate));
 #  endif
 #elif defined(TECHNIQUE_PCSS)
-  float filter_uv;
 #  if defined(KERNEL_GRID)
   const bool grid = true;
 #  else
@@ -92,12 +100,46 @@ void main() {
 #else
 #  error "no TECHNIQUE_* defined"
 #endif
+  return clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
+}
 
-  visibility = clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
+void main() {
+  vec3 n = normalize(v_normal);
+  if (!gl_FrontFacing) n = -n;
+  vec3 to_light = u_light_perspective ? normalize(u_light_position - v_world) : -u_light_direction;
+  float n_dot_l = dot(n, to_light);
+  float sin_angle = sqrt(clamp(1.0 - n_dot_l * n_dot_l, 0.0, 1.0));
+  float depth_ws = -(u_light_view * vec4(v_world, 1.0)).z;
+
+  // Receiver-plane gradient in cascade 0's uv, in uniform control flow (derivatives are valid).
+  use_cascade(0);
+  float texel0_ws = 1.0 / (uv_per_ws(depth_ws) * g_shadow_res);
+  vec4 clip0 = u_cascade_view_projection[0] * vec4(v_world + n * (u_normal_offset_texels * texel0_ws * sin_angle), 1.0);
+  vec2 gradient0 = receiver_plane_gradient(clip0.xyz / clip0.w * 0.5 + 0.5);
+
+  // Cascade by camera depth; inside the blend band at a cascade's far end, mix with the next.
+  float view_depth = -(u_camera_view * vec4(v_world, 1.0)).z;
+  int cascade = 0;
+  while (cascade < u_cascade_count - 1 && view_depth > u_cascade_far_ws[cascade]) ++cascade;
+  float filter_uv;
+  float visibility = cascade_visibility(cascade, n, sin_angle, depth_ws, gradient0, filter_uv);
+  float requirement = filter_uv > 0.0 ? 1.0 / filter_uv : 0.0;
+  bool clamped = filter_uv > 0.0 && g_pcss_clamped;
+  if (cascade < u_cascade_count - 1) {
+    float begin = cascade == 0 ? 0.0 : u_cascade_far_ws[cascade - 1];
+    float band = u_cascade_blend * (u_cascade_far_ws[cascade] - begin);
+    float t = band > 0.0 ? (view_depth - (u_cascade_far_ws[cascade] - band)) / band : -1.0;
+    if (t > 0.0) {
+      float next_filter_uv;
+      float next = cascade_visibility(cascade + 1, n, sin_angle, depth_ws, gradient0, next_filter_uv);
+      visibility = mix(visibility, next, clamp(t, 0.0, 1.0));
+    }
+  }
+
 #if defined(SCREEN_SPACE_GBUFFER)
   float eye_z = max(dot(v_world - u_camera_position, u_camera_forward), 1e-6);
   o_position = vec4(v_world, visibility > 0.5 ? eye_z : -eye_z);
-  o_light = vec4(sc.xy, sc.z - g_constant_bias, depth_ws);
+  o_light = vec4(g_sc.xy, g_sc.z - g_constant_bias, depth_ws);
   return;
 #endif
   if (u_light_perspective) {
@@ -106,8 +148,15 @@ void main() {
   }
   float direct = max(n_dot_l, 0.0) * visibility;
   vec3 radiance = u_albedo * u_light_color * (u_ambient + (1.0 - u_ambient) * direct);
+  if (u_show_cascades) {
+    const vec3 tint[MAX_CASCADES] = vec3[](vec3(1.0, 0.55, 0.55), vec3(0.55, 1.0, 0.55), vec3(0.55, 0.55, 1.0), vec3(1.0, 1.0, 0.5));
+    radiance *= tint[cascade];
+  }
 #if !defined(SCREEN_SPACE_GBUFFER)
   o_color = vec4(radiance, 1.0);
   o_visibility = visibility;
+#endif
+#if defined(PCSS_REQUIREMENT)
+  o_requirement = vec2(requirement, float(cascade) + (clamped ? 0.5 : 0.0));
 #endif
 }

@@ -11,7 +11,7 @@ float overlap(float a0, float a1, float b0, float b1) {
 // `max_taps` texels per axis are sampled with a stride (one comparison per stride^2 cell).
 float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
   if (radius_texels <= 0.0) return shadow_hard(sc);
-  vec2 p = sc.xy * u_shadow_res;
+  vec2 p = sc.xy * g_shadow_res;
   vec2 lo = p - radius_texels;
   vec2 hi = p + radius_texels;
   ivec2 first = ivec2(floor(lo));
@@ -24,9 +24,9 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
       vec2 wy = vec2(overlap(float(j), float(j + 1), lo.y, hi.y), overlap(float(j + 1), float(j + 2), lo.y, hi.y));
       for (int i = first.x; i <= last.x; i += 2) {
         vec2 wx = vec2(overlap(float(i), float(i + 1), lo.x, hi.x), overlap(float(i + 1), float(i + 2), lo.x, hi.x));
-        vec2 corner = vec2(i + 1, j + 1) / u_shadow_res;
+        vec2 corner = vec2(i + 1, j + 1) / g_shadow_res;
         // Gather order: (i, j+1), (i+1, j+1), (i+1, j), (i, j).
-        vec4 t = textureGather(u_shadow_cmp_nearest, corner, reference_depth(sc, corner - sc.xy, gradient));
+        vec4 t = textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient));
         sum += dot(t, vec4(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x));
       }
     }
@@ -37,8 +37,8 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
     float wy = overlap(float(j), float(j + stride), lo.y, hi.y);
     for (int i = first.x; i <= last.x; i += stride) {
       float wx = overlap(float(i), float(i + stride), lo.x, hi.x);
-      vec2 centre = (vec2(i, j) + 0.5 * float(stride)) / u_shadow_res;
-      sum += wx * wy * texture(u_shadow_cmp_nearest, vec3(centre, reference_depth(sc, centre - sc.xy, gradient)));
+      vec2 centre = (vec2(i, j) + 0.5 * float(stride)) / g_shadow_res;
+      sum += wx * wy * texture(u_shadow_cmp_nearest, vec3(atlas_uv(centre), reference_depth(sc, centre - sc.xy, gradient)));
     }
   }
   return sum * norm;
@@ -46,11 +46,11 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
 
 // Poisson-disk PCF over a disk of radius `radius_uv`; each tap is a hardware 2x2 comparison.
 float pcf_poisson(vec3 sc, vec2 gradient, float radius_uv, int taps, mat2 rotation) {
-  if (radius_uv <= 0.0) return texture(u_shadow_cmp, vec3(sc.xy, reference_depth(sc, vec2(0.0), gradient)));
+  if (radius_uv <= 0.0) return texture(u_shadow_cmp, vec3(atlas_uv(sc.xy), reference_depth(sc, vec2(0.0), gradient)));
   float sum = 0.0;
   for (int i = 0; i < taps; ++i) {
     vec2 o = rotation * u_poisson[i] * radius_uv;
-    sum += texture(u_shadow_cmp, vec3(sc.xy + o, reference_depth(sc, o, gradient)));
+    sum += texture(u_shadow_cmp, vec3(atlas_uv(sc.xy + o), reference_depth(sc, o, gradient)));
   }
   return sum / float(taps);
 }

@@ -9,13 +9,13 @@ uniform float u_pcss_search_scale;
 // Search radius (uv) of the blocker search for a receiver at light-view depth z_r.
 float pcss_search_uv(float z_r) {
   if (u_light_perspective) return u_pcss_light_radius_uv * (z_r - u_light_near_ws) / z_r;
-  return u_pcss_tan_half_angle * (z_r - u_light_near_ws) / u_light_extent_ws;
+  return u_pcss_tan_half_angle * (z_r - u_light_near_ws) / g_light_extent_ws;
 }
 
 // Filter radius (uv) for receiver depth z_r and mean blocker depth z_b, before the clamp.
 float pcss_filter_uv(float z_r, float z_b) {
   if (u_light_perspective) return u_pcss_light_radius_uv * (z_r - z_b) / z_b * u_light_near_ws / z_r;
-  return u_pcss_tan_half_angle * (z_r - z_b) / u_light_extent_ws;
+  return u_pcss_tan_half_angle * (z_r - z_b) / g_light_extent_ws;
 }
 
 // Blocker search: true when a blocker was found, with `z_b` their mean light-view depth (world units).
@@ -25,7 +25,7 @@ bool pcss_blocker_depth(vec3 sc, vec2 gradient, float z_r, int blocker_taps, mat
   int blockers = 0;
   for (int i = 0; i < blocker_taps; ++i) {
     vec2 o = rotation * u_poisson[i] * search;
-    float d = textureLod(u_shadow_depth, sc.xy + o, 0.0).r;
+    float d = textureLod(u_shadow_depth, atlas_uv(sc.xy + o), 0.0).r;
     if (d < reference_depth(sc, o, gradient)) {
       blocker_sum += linear_depth_ws(d);
       ++blockers;
@@ -35,13 +35,20 @@ bool pcss_blocker_depth(vec3 sc, vec2 gradient, float z_r, int blocker_taps, mat
   return blockers > 0;
 }
 
+// Whether the last shadow_pcss call's filter radius was raised to the minimum penumbra.
+bool g_pcss_clamped = false;
+
 // Returns visibility; `filter_uv` receives the filter radius used (0 when no blocker was found).
 float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
                   int max_grid_taps, mat2 rotation, out float filter_uv) {
   filter_uv = 0.0;
+  g_pcss_clamped = false;
   float z_b;
   if (!pcss_blocker_depth(sc, gradient, z_r, blocker_taps, rotation, z_b)) return 1.0;  // no blocker: fully lit
-  filter_uv = max(pcss_filter_uv(z_r, z_b), u_pcss_min_penumbra_ws * uv_per_ws(z_r));
-  if (grid) return pcf_grid(sc, gradient, filter_uv * u_shadow_res, max_grid_taps);
+  float min_uv = u_pcss_min_penumbra_ws * uv_per_ws(z_r);
+  filter_uv = pcss_filter_uv(z_r, z_b);
+  g_pcss_clamped = filter_uv < min_uv;
+  filter_uv = max(filter_uv, min_uv);
+  if (grid) return pcf_grid(sc, gradient, filter_uv * g_shadow_res, max_grid_taps);
   return pcf_poisson(sc, gradient, filter_uv, filter_taps, rotation);
 }

@@ -13,7 +13,7 @@ float chebyshev_upper_bound(vec2 moments, float t, float min_variance) {
 
 // Visibility for a receiver at normalized linear depth t.
 float shadow_vsm(vec2 uv, float t) {
-  vec2 moments = textureLod(u_moments, uv, 0.0).rg;
+  vec2 moments = textureLod(u_moments, atlas_uv(uv), 0.0).rg;
   float p = chebyshev_upper_bound(moments, t, max(u_vsm_min_variance, 1e-12));
   return clamp((p - u_vsm_bleed_reduction) / (1.0 - u_vsm_bleed_reduction), 0.0, 1.0);
 }

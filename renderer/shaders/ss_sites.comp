@@ -22,6 +22,7 @@ void main() {
   ivec2 size = textureSize(u_gbuffer_position, 0);
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, size))) return;
+  use_cascade(0);  // screen-space techniques sample the one map
 
   bool site = false;
   vec4 here = gbuffer(p);

@@ -8,22 +8,23 @@ layout(binding = 0) uniform sampler2D u_source;
 layout(binding = 0, rg32f) uniform writeonly image2D u_target;
 
 uniform float u_radius_texels;
-uniform int u_axis;  // 0: along x (one invocation per row), 1: along y
+uniform int u_axis;      // 0: along x (one invocation per row), 1: along y
+uniform ivec2 u_origin;  // the map's region in the atlas: u_size^2 texels from u_origin
+uniform int u_size;
 
-// Texel i of the line (clamped to the edge); `line` indexes rows for axis 0, columns for axis 1.
+// Texel i of the line (clamped to the map's edge); `line` indexes rows for axis 0, columns for axis 1.
 vec2 fetch(int i, int line, int len) {
   i = clamp(i, 0, len - 1);
-  return texelFetch(u_source, u_axis == 0 ? ivec2(i, line) : ivec2(line, i), 0).rg;
+  return texelFetch(u_source, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), 0).rg;
 }
 
 void store(int i, int line, vec2 v) {
-  imageStore(u_target, u_axis == 0 ? ivec2(i, line) : ivec2(line, i), vec4(v, 0.0, 0.0));
+  imageStore(u_target, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), vec4(v, 0.0, 0.0));
 }
 
 void main() {
-  ivec2 size = textureSize(u_source, 0);
-  int len = u_axis == 0 ? size.x : size.y;
-  int lines = u_axis == 0 ? size.y : size.x;
+  int len = u_size;
+  int lines = u_size;
   int line = int(gl_GlobalInvocationID.x);
   if (line >= lines) return;
 

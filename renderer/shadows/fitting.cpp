@@ -5,6 +5,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "adaptive/cascades.h"
+
 namespace penumbra::shadows {
 
 Polyhedron box_polyhedron(const scene::Aabb& b) {
@@ -221,6 +223,115 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
     }
   }
   return f;
+}
+
+std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camera_aspect) {
+  const scene::Camera& cam = scene.camera;
+  const std::vector<glm::dvec3> psr = potential_receivers(scene, camera_aspect);
+  if (psr.empty()) return {cam.near_ws, cam.far_ws};
+  const glm::dmat4 view(cam.view());
+  double lo = 1e300, hi = -1e300;
+  for (const auto& p : psr) {
+    const double z = -(view * glm::dvec4(p, 1)).z;
+    lo = std::min(lo, z), hi = std::max(hi, z);
+  }
+  const float near_ws = std::clamp(static_cast<float>(lo), cam.near_ws, cam.far_ws);
+  const float far_ws = std::clamp(static_cast<float>(hi), near_ws, cam.far_ws);
+  return {near_ws, far_ws};
+}
+
+namespace {
+
+// The eight world-space corners of the camera frustum between view depths z0 and z1.
+std::array<glm::dvec3, 8> slice_corners(const scene::Camera& cam, float aspect, double z0, double z1) {
+  const glm::dmat4 to_world = glm::inverse(glm::dmat4(cam.view()));
+  std::array<glm::dvec3, 8> c{};
+  const double tan_half = std::tan(glm::radians(static_cast<double>(cam.fov_y_deg)) / 2);
+  for (int i = 0; i < 8; ++i) {
+    const double z = (i & 4) ? z1 : z0;
+    const double half_h = cam.projection == scene::Camera::Projection::perspective ? z * tan_half : cam.ortho_height_ws / 2.0;
+    const double half_w = half_h * aspect;
+    const glm::dvec4 p(((i & 1) ? half_w : -half_w), ((i & 2) ? half_h : -half_h), -z, 1);
+    c[static_cast<std::size_t>(i)] = glm::dvec3(to_world * p);
+  }
+  return c;
+}
+
+}  // namespace
+
+Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request) {
+  Cascades out;
+  const auto res_of = [&](int i) {
+    if (request.resolution_texels.empty()) return 2048;
+    const std::size_t k = std::min(static_cast<std::size_t>(i), request.resolution_texels.size() - 1);
+    return std::max(request.resolution_texels[k], 1);
+  };
+  FitRequest single{true, request.camera_aspect, res_of(0), request.pad_texels, request.pad_ws};
+  const std::array<float, 2> range = receiver_depth_range(scene, request.camera_aspect);
+  if (scene.light.type == scene::Light::Type::spot || request.count <= 1 ||
+      potential_receivers(scene, request.camera_aspect).empty()) {
+    out.frames.push_back(compute_light_frame(scene, single));
+    out.splits_ws = {range[0], range[1]};
+    return out;
+  }
+  // The shared light view and depth range: those of the unfitted map (all casters).
+  FitRequest unfitted = single;
+  unfitted.fit = false;
+  const LightFrame base = compute_light_frame(scene, unfitted);
+  const double unfitted_side = base.extent_ws;
+  const glm::dmat4 light_view(base.view);
+
+  const std::vector<double> splits = adaptive::cascade_splits(range[0], range[1], request.count, request.lambda);
+  for (double z : splits) out.splits_ws.push_back(static_cast<float>(z));
+  const scene::Camera& cam = scene.camera;
+  for (int i = 0; i < request.count; ++i) {
+    const double z0 = splits[static_cast<std::size_t>(i)], z1 = splits[static_cast<std::size_t>(i) + 1];
+    const int res = res_of(i);
+    double cx = 0, cy = 0, half = 0;
+    // The slice's receivers, clipped like the single fitted map.
+    scene::Camera slice_camera = cam;
+    slice_camera.near_ws = static_cast<float>(z0);
+    slice_camera.far_ws = static_cast<float>(z1);
+    Polyhedron psr = box_polyhedron(scene.bounds());
+    for (const auto& plane : camera_planes(slice_camera, request.camera_aspect)) psr = clip(psr, plane);
+    const std::vector<glm::dvec3> v = vertices(psr);
+    if (!v.empty()) {
+      double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
+      for (const auto& p : v) {
+        const glm::dvec4 q = light_view * glm::dvec4(p, 1);
+        lo_x = std::min(lo_x, q.x), hi_x = std::max(hi_x, q.x), lo_y = std::min(lo_y, q.y), hi_y = std::max(hi_y, q.y);
+      }
+      cx = (lo_x + hi_x) / 2, cy = (lo_y + hi_y) / 2;
+      half = std::max({hi_x - lo_x, hi_y - lo_y, 1e-6}) / 2;
+    } else {
+      // Nothing of the scene in the slice: the bounding sphere of its corners.
+      const auto corners = slice_corners(cam, request.camera_aspect, z0, z1);
+      glm::dvec3 centre(0);
+      for (const auto& c : corners) centre += c / 8.0;
+      for (const auto& c : corners) half = std::max(half, glm::distance(c, centre));
+      const glm::dvec4 q = light_view * glm::dvec4(centre, 1);
+      cx = q.x, cy = q.y;
+    }
+    half = padded_half(half, res, request.pad_texels, request.pad_ws);
+    if (request.stabilize) {
+      // Size in quarter-octave steps, so that small camera moves keep it; room for the snap
+      // (< 1 texel per side); the window's corner snapped to whole texels, so that a translating
+      // camera moves the window in texel steps and rasterized edges stay put between steps.
+      half = std::exp2(std::ceil(std::log2(half) * 4) / 4);
+      half *= static_cast<double>(res) / std::max(res - 2, 1);
+      const double texel = 2 * half / res;
+      cx = std::floor(cx / texel) * texel;
+      cy = std::floor(cy / texel) * texel;
+    }
+    LightFrame f = base;
+    f.projection = glm::ortho(static_cast<float>(cx - half), static_cast<float>(cx + half), static_cast<float>(cy - half),
+                              static_cast<float>(cy + half), base.near_ws, base.far_ws);
+    f.extent_ws = static_cast<float>(2 * half);
+    f.s_xy = static_cast<float>(unfitted_side / (2 * half));
+    f.fitted = true;
+    out.frames.push_back(f);
+  }
+  return out;
 }
 
 }  // namespace penumbra::shadows

@@ -52,6 +52,33 @@ struct FitRequest {
 
 LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& request);
 
+// Cascades for a directional light: the camera's view depth range where receivers can be seen
+// (PSR) is split, and each slice gets its own orthographic window in the shared light view and
+// depth range (so one receiver-plane gradient serves all), fitted to the slice's receivers (the
+// scene bounds clipped by the slice's frustum). Stabilized cascades round the window's size up to
+// quarter-octave steps (small camera moves keep it) and snap its centre to whole texels, so
+// shadow edges do not crawl as the camera moves.
+struct CascadeRequest {
+  int count = 1;
+  float lambda = 0.75f;                  // adaptive::cascade_splits
+  bool stabilize = true;
+  float camera_aspect = 16.0f / 9.0f;
+  std::vector<int> resolution_texels;    // per cascade (snapping, padding); missing entries use the last
+  float pad_texels = 0;
+  float pad_ws = 0;
+};
+
+struct Cascades {
+  std::vector<LightFrame> frames;
+  std::vector<float> splits_ws;  // count + 1 camera view depths; cascade i covers [splits[i], splits[i+1]]
+};
+
+// An empty PSR (nothing visible) gives one unfitted frame. Spot lights are not cascaded: one frame.
+Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request);
+
+// Camera view-depth range [near, far] of the potential receivers; {cam near, cam far} when empty.
+std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camera_aspect);
+
 // PSR vertices (world space) for the scene's camera and light; empty when nothing is visible.
 std::vector<glm::dvec3> potential_receivers(const scene::Scene& scene, float camera_aspect);
 

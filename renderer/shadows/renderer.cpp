@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <random>
 #include <stdexcept>
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include "adaptive/cascades.h"
+#include "adaptive/resolution_rule.h"
 #include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
 
@@ -42,8 +46,15 @@ std::vector<glm::vec2> poisson_disk(int taps) {
   return pts;
 }
 
+namespace {
+
+constexpr int kGuardTexels = 2;  // far-depth band around each map in a shared atlas (see atlas_uv in common.glsl)
+constexpr int kMaxCascades = 4;
+
+}  // namespace
+
 struct Renderer::Maps {
-  int resolution = 0;
+  int width = 0, height = 0;
   bool moments = false;
   gl::Texture depth;
   gl::Framebuffer depth_fbo;
@@ -53,14 +64,31 @@ struct Renderer::Maps {
 
 struct Renderer::Targets {
   int width = 0, height = 0;
-  gl::Texture color, visibility, depth;
+  bool requirement = false;
+  gl::Texture color, visibility, requirement_tex, depth;
   gl::Framebuffer fbo;
 };
 
-Renderer::Renderer() {
+// Hysteresis per cascade, and the PCSS requirement buffers (two, so that the frame reads the one
+// written a frame earlier and never waits for the GPU).
+struct Renderer::Adaptive {
+  std::string key;  // what the controllers were made for; a change restarts them
+  std::vector<adaptive::ResolutionController> controllers;
+  gl::Buffer requirement[2];
+  bool requirement_pending[2] = {false, false};
+  int requirement_cascades[2] = {0, 0};
+  float requirement_c[2] = {0, 0};
+  int frame = 0;
+  PcssRequirementInfo last;  // the newest measured requirement
+  int last_cascades = 0;     // cascade count it was measured with
+  float last_c = 0;
+};
+
+Renderer::Renderer() : adaptive_(std::make_unique<Adaptive>()) {
   depth_program_ = shaders_.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
   moments_program_ = shaders_.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_moments.frag"}});
   blur_program_ = shaders_.program({{GL_COMPUTE_SHADER, "vsm_blur.comp"}});
+  requirement_program_ = shaders_.program({{GL_COMPUTE_SHADER, "pcss_requirement.comp"}});
   gl::SamplerDesc d;
   d.depth_compare = true;
   cmp_linear_ = gl::Sampler(d);
@@ -68,9 +96,9 @@ Renderer::Renderer() {
   cmp_nearest_ = gl::Sampler(d);
   d.depth_compare = false;
   raw_nearest_ = gl::Sampler(d);
-  gl::SamplerDesc m;
-  m.wrap = GL_CLAMP_TO_EDGE;
-  moments_linear_ = gl::Sampler(m);
+  // Beyond the map the border's moments (1, 1) are the far depth: lit, like the depth samplers'
+  // border and the guard band of an atlas region.
+  moments_linear_ = gl::Sampler(gl::SamplerDesc{});
   gl::check_errors("renderer setup");
 }
 
@@ -80,7 +108,16 @@ void Renderer::set_scene(const scene::Scene& s) {
   scene_ = s;
   meshes_.clear();
   for (const auto& o : scene_.objects) meshes_.push_back(std::make_unique<scene::GpuMesh>(*o.mesh));
+  reset_adaptive();
   gl::check_errors("scene upload");
+}
+
+void Renderer::reset_adaptive() {
+  adaptive_->key.clear();
+  adaptive_->controllers.clear();
+  adaptive_->requirement_pending[0] = adaptive_->requirement_pending[1] = false;
+  adaptive_->last = {};
+  adaptive_->last_cascades = 0;
 }
 
 const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuffer) {
@@ -96,6 +133,8 @@ const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuff
     const Kernel kernel = s.technique == Technique::pcss ? s.pcss.kernel : s.pcf.kernel;
     if (kernel == Kernel::grid) defines.push_back({"KERNEL_GRID", "1"});
   }
+  if (s.technique == Technique::pcss && s.adaptive.enabled && s.adaptive.pcss == PcssRequirement::per_pixel)
+    defines.push_back({"PCSS_REQUIREMENT", "1"});
   std::string key;
   for (const auto& d : defines) key += d.name + ";";
   auto it = shading_programs_.find(key);
@@ -131,23 +170,69 @@ void set_mat4(const gl::Program& p, const char* name, const glm::mat4& m) {
   glProgramUniformMatrix4fv(p.id(), p.location(name), 1, GL_FALSE, glm::value_ptr(m));
 }
 
+// World-space radius the adaptive rule hides texels with, for the technique's filter; 0 when the
+// technique has none (hard shadows). Radii given in texels are taken at map.resolution_texels of
+// the single fitted map: "the filter the user sees at the configured resolution".
+float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws) {
+  const auto ws = [&](float radius, RadiusUnit unit) {
+    return unit == RadiusUnit::world ? radius : radius * single.texel_ws(mid_depth_ws, s.map.resolution_texels);
+  };
+  switch (s.technique) {
+    case Technique::pcf: return ws(s.pcf.radius, s.pcf.radius_unit);
+    case Technique::vsm: return ws(s.vsm.radius, s.vsm.radius_unit);
+    case Technique::pcss: return s.pcss.min_penumbra_ws;
+    default: return 0;  // hard and screen-space techniques: no shadow-map filter
+  }
+}
+
+// The rule for one map: directional c · L / r_ws; spot: c / r_uv at the far end of the depth
+// range, where a world-space radius spans the fewest texels.
+double rule_texels(float c, const LightFrame& f, float radius_ws) {
+  if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
+  const double uv_per_ws = f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
+  return adaptive::required_texels_uv(c, radius_ws * uv_per_ws);
+}
+
+// Region corners for `res` per cascade: one row of up to two cells, then a second row.
+struct AtlasLayout {
+  int width = 0, height = 0;
+  std::vector<glm::ivec2> origin;  // inner corner of each region
+};
+AtlasLayout layout_atlas(const std::vector<int>& cell_texels, int guard) {
+  AtlasLayout a;
+  int cell = 0;
+  for (int t : cell_texels) cell = std::max(cell, t + 2 * guard);
+  const int n = static_cast<int>(cell_texels.size());
+  for (int i = 0; i < n; ++i) a.origin.emplace_back((i % 2) * cell + guard, (i / 2) * cell + guard);
+  if (n == 1) {
+    a.width = a.height = cell_texels[0] + 2 * guard;
+  } else {
+    a.width = std::min(n, 2) * cell;
+    a.height = ((n + 1) / 2) * cell;
+  }
+  return a;
+}
 
 }  // namespace
 
 FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px, gl::PassTimer* timer) {
   if (width_px < 1 || height_px < 1) throw std::runtime_error("render: image size must be positive");
-  const int res = s.map.resolution_texels;
-  if (res < 1) throw std::runtime_error("render: shadow-map resolution must be at least 1 texel");
+  if (s.map.resolution_texels < 1) throw std::runtime_error("render: shadow-map resolution must be at least 1 texel");
+  const AdaptiveParams& ap = s.adaptive;
+  if (ap.enabled && (ap.min_texels < 1 || ap.max_texels < ap.min_texels))
+    throw std::runtime_error("render: adaptive.min_texels must be >= 1 and <= adaptive.max_texels");
   FrameInfo info;
-  info.resolution_texels = res;
   info.width_px = width_px;
   info.height_px = height_px;
+  info.adaptive = ap.enabled;
   const bool vsm = s.technique == Technique::vsm;
   const scene::Light& light = scene_.light;
+  const bool directional = light.type == scene::Light::Type::directional;
   const float aspect = static_cast<float>(width_px) / static_cast<float>(height_px);
+  Adaptive& ad = *adaptive_;
 
   // Padding of the fitted frustum by the filter's reach.
-  FitRequest fit{s.map.fit, aspect, res, 0, 0};
+  FitRequest fit{s.map.fit, aspect, s.map.resolution_texels, 0, 0};
   const float tan_half_angle = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
   if (s.technique == Technique::pcf) {
     (s.pcf.radius_unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = s.pcf.radius;
@@ -164,41 +249,186 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   } else if (s.technique == Technique::edtsm) {
     fit.pad_texels = 1;
   }
-  info.light = compute_light_frame(scene_, fit);
-  const LightFrame& lf = info.light;
-  const glm::mat4 light_vp = lf.view_projection();
-  const float mid_depth = 0.5f * (lf.near_ws + lf.far_ws);
-  const float texel_mid_ws = lf.texel_ws(mid_depth, res);
 
-  // (Re)allocate the maps for this resolution and technique.
-  if (!maps_ || maps_->resolution != res || maps_->moments != vsm) {
+  // The PCSS requirement measured by the previous frame (its buffer's GPU work is done by now on
+  // any pipelined GPU; reading it here costs no stall).
+  if (const int other = 1 - ad.frame % 2; ad.requirement_pending[other]) {
+    std::uint32_t raw[16] = {};
+    glGetNamedBufferSubData(ad.requirement[other].id(), 0, sizeof raw, raw);
+    ad.requirement_pending[other] = false;
+    PcssRequirementInfo r;
+    r.valid = true;
+    double evaluated = 0, clamped = 0, above = 0;
+    for (int i = 0; i < ad.requirement_cascades[other]; ++i) {
+      float max_inverse_uv = 0;
+      std::memcpy(&max_inverse_uv, &raw[i], sizeof max_inverse_uv);
+      r.required_texels.push_back(static_cast<double>(ad.requirement_c[other]) * max_inverse_uv);
+      evaluated += raw[4 + i];
+      clamped += raw[8 + i];
+      above += raw[12 + i];
+    }
+    r.evaluated_pixels = evaluated;
+    r.clamped_fraction = evaluated > 0 ? clamped / evaluated : 0;
+    r.above_max_fraction = evaluated > 0 ? above / evaluated : 0;
+    ad.last = r;
+    ad.last_cascades = ad.requirement_cascades[other];
+    ad.last_c = ad.requirement_c[other];
+  }
+
+  // --- plan: cascades, the rule, resolutions ---------------------------------------------------
+  const LightFrame single = compute_light_frame(scene_, fit);
+  const float radius_ws = rule_radius_ws(s, single, 0.5f * (single.near_ws + single.far_ws));
+  const int fixed_res = s.map.resolution_texels;
+  const int largest = ap.enabled ? ap.max_texels : fixed_res;
+  auto cascades_for = [&](int count, const std::vector<int>& res) {
+    CascadeRequest r{count, s.map.cascade_lambda, s.map.cascade_stabilize, aspect, res, fit.pad_texels, fit.pad_ws};
+    if (count <= 1) r.count = 1;
+    Cascades c = count <= 1 ? Cascades{{compute_light_frame(scene_, FitRequest{s.map.fit, aspect, res.front(), fit.pad_texels, fit.pad_ws})},
+                                       {}}
+                            : compute_cascades(scene_, r);
+    if (c.splits_ws.empty()) {
+      const auto range = receiver_depth_range(scene_, aspect);
+      c.splits_ws = {range[0], range[1]};
+    }
+    return c;
+  };
+  auto requirements = [&](const Cascades& c) {
+    std::vector<double> req;
+    for (const auto& f : c.frames) req.push_back(rule_texels(ap.c, f, radius_ws));
+    return req;
+  };
+  // Screen-space techniques work on one map.
+  int count = directional && !is_screen_space(s.technique) ? s.map.cascades : 1;
+  if (count == 0) {
+    const adaptive::CascadeChoice choice = adaptive::choose_cascade_count(kMaxCascades, largest, [&](int n) {
+      return requirements(cascades_for(n, std::vector<int>(static_cast<std::size_t>(n), largest)));
+    });
+    count = choice.count;
+  }
+  count = std::clamp(count, 1, kMaxCascades);
+
+  std::vector<int> res(static_cast<std::size_t>(count), fixed_res);
+  info.resolution_source = "fixed";
+  if (ap.enabled) {
+    const std::string key = std::to_string(count) + "/" + std::to_string(ap.min_texels) + "/" + std::to_string(ap.max_texels) + "/" +
+                            std::to_string(ap.quantum_texels) + "/" + std::to_string(ap.shrink_delay_frames) + "/" +
+                            std::string(to_string(s.technique));
+    if (key != ad.key) {
+      ad.key = key;
+      ad.controllers.clear();
+      adaptive::ResolutionController::Params params;
+      params.limits = {ap.min_texels, ap.max_texels, ap.quantum_texels};
+      params.shrink_delay_frames = ap.shrink_delay_frames;
+      for (int i = 0; i < count; ++i) ad.controllers.emplace_back(params);
+    }
+    // The requirement, from frames sized at the previous resolutions (padding and snapping are in
+    // texels, so the extents move slightly with the resolution; the rule's answer barely does).
+    std::vector<int> previous(static_cast<std::size_t>(count));
+    for (int i = 0; i < count; ++i) {
+      const int cur = ad.controllers[static_cast<std::size_t>(i)].current();
+      previous[static_cast<std::size_t>(i)] = cur > 0 ? cur : largest;
+    }
+    std::vector<double> req = requirements(cascades_for(count, previous));
+    info.resolution_source = s.technique == Technique::pcss ? "pcss_min_penumbra" : "rule";
+    if (s.technique == Technique::pcss && ap.pcss == PcssRequirement::per_pixel && ad.last.valid &&
+        ad.last_cascades == count) {
+      // Measured last frame: c / r_filter over the visible pixels, never above the min-penumbra bound.
+      for (int i = 0; i < count; ++i) {
+        const double measured = ad.last.required_texels[static_cast<std::size_t>(i)] * ap.c / ad.last_c;
+        req[static_cast<std::size_t>(i)] = std::min(req[static_cast<std::size_t>(i)], measured);
+      }
+      info.resolution_source = "pcss_per_pixel";
+      info.pcss_requirement = ad.last;
+    }
+    for (int i = 0; i < count; ++i) res[static_cast<std::size_t>(i)] = ad.controllers[static_cast<std::size_t>(i)].update(req[static_cast<std::size_t>(i)]);
+    const Cascades final_cascades = cascades_for(count, res);
+    for (int i = 0; i < count; ++i) {
+      CascadeInfo ci;
+      ci.light = final_cascades.frames[static_cast<std::size_t>(i)];
+      ci.resolution_texels = res[static_cast<std::size_t>(i)];
+      ci.required_texels = req[static_cast<std::size_t>(i)];
+      ci.split_near_ws = final_cascades.splits_ws[static_cast<std::size_t>(i)];
+      ci.split_far_ws = final_cascades.splits_ws[std::min(static_cast<std::size_t>(i) + 1, final_cascades.splits_ws.size() - 1)];
+      info.cascades.push_back(ci);
+    }
+  } else {
+    const Cascades c = cascades_for(count, res);
+    for (int i = 0; i < count; ++i) {
+      CascadeInfo ci;
+      ci.light = c.frames[static_cast<std::size_t>(i)];
+      ci.resolution_texels = fixed_res;
+      ci.split_near_ws = c.splits_ws[static_cast<std::size_t>(i)];
+      ci.split_far_ws = c.splits_ws[std::min(static_cast<std::size_t>(i) + 1, c.splits_ws.size() - 1)];
+      info.cascades.push_back(ci);
+    }
+  }
+  info.light = info.cascades.front().light;
+  info.resolution_texels = info.cascades.front().resolution_texels;
+  const LightFrame& lf = info.light;
+  const float mid_depth = 0.5f * (lf.near_ws + lf.far_ws);
+  const float texel_mid_ws = lf.texel_ws(mid_depth, info.resolution_texels);
+
+  // --- storage -------------------------------------------------------------------------------
+  const bool subrect = ap.enabled && ap.storage == Storage::subrect;
+  info.storage = subrect ? "subrect" : "realloc";
+  std::vector<int> cells(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) cells[static_cast<std::size_t>(i)] = subrect ? ap.max_texels : res[static_cast<std::size_t>(i)];
+  // A single map that fills its texture needs no guard band: the sampler's border is lit.
+  const int guard = count == 1 && !subrect ? 0 : kGuardTexels;
+  const AtlasLayout layout = layout_atlas(cells, guard);
+  for (int i = 0; i < count; ++i) {
+    info.cascades[static_cast<std::size_t>(i)].atlas_x = layout.origin[static_cast<std::size_t>(i)].x;
+    info.cascades[static_cast<std::size_t>(i)].atlas_y = layout.origin[static_cast<std::size_t>(i)].y;
+  }
+  info.atlas_width = layout.width;
+  info.atlas_height = layout.height;
+  if (!maps_ || maps_->width != layout.width || maps_->height != layout.height || maps_->moments != vsm) {
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    if (layout.width > max_size || layout.height > max_size)
+      throw std::runtime_error("render: shadow atlas " + std::to_string(layout.width) + "x" + std::to_string(layout.height) +
+                               " exceeds GL_MAX_TEXTURE_SIZE " + std::to_string(max_size) +
+                               " (lower map.resolution_texels, adaptive.max_texels or map.cascades)");
     maps_.reset();
     auto m = std::make_unique<Maps>();
-    m->resolution = res;
+    m->width = layout.width;
+    m->height = layout.height;
     m->moments = vsm;
-    m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, res, res, 1}, "shadow depth map");
+    m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, layout.width, layout.height, 1}, "shadow depth atlas");
     const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
     glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
     const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
     m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
     if (vsm) {
-      m->moments_tex = gl::Texture({GL_RG32F, res, res, 1}, "VSM moments");
-      m->moments_tmp = gl::Texture({GL_RG32F, res, res, 1}, "VSM blur temporary");
+      m->moments_tex = gl::Texture({GL_RG32F, layout.width, layout.height, 1}, "VSM moments");
+      m->moments_tmp = gl::Texture({GL_RG32F, layout.width, layout.height, 1}, "VSM blur temporary");
       const gl::Framebuffer::Attachment att[] = {{&m->moments_tex, GL_COLOR_ATTACHMENT0}, {&m->depth, GL_DEPTH_ATTACHMENT}};
       m->moments_fbo = gl::Framebuffer(att, "VSM moments framebuffer");
     }
     maps_ = std::move(m);
+    info.reallocated = true;
   }
-  if (!targets_ || targets_->width != width_px || targets_->height != height_px) {
+  const bool want_requirement = s.technique == Technique::pcss && ap.enabled && ap.pcss == PcssRequirement::per_pixel;
+  if (!targets_ || targets_->width != width_px || targets_->height != height_px || targets_->requirement != want_requirement) {
     targets_.reset();
     auto t = std::make_unique<Targets>();
     t->width = width_px;
     t->height = height_px;
+    t->requirement = want_requirement;
     t->color = gl::Texture({GL_SRGB8_ALPHA8, width_px, height_px, 1}, "lit colour");
     t->visibility = gl::Texture({GL_R32F, width_px, height_px, 1}, "visibility");
     t->depth = gl::Texture({GL_DEPTH_COMPONENT32F, width_px, height_px, 1}, "camera depth");
-    const gl::Framebuffer::Attachment att[] = {{&t->color, GL_COLOR_ATTACHMENT0}, {&t->visibility, GL_COLOR_ATTACHMENT1}, {&t->depth, GL_DEPTH_ATTACHMENT}};
-    t->fbo = gl::Framebuffer(att, "camera framebuffer");
+    if (want_requirement) {
+      t->requirement_tex = gl::Texture({GL_RG32F, width_px, height_px, 1}, "PCSS requirement");
+      const gl::Framebuffer::Attachment att[] = {{&t->color, GL_COLOR_ATTACHMENT0},
+                                                 {&t->visibility, GL_COLOR_ATTACHMENT1},
+                                                 {&t->requirement_tex, GL_COLOR_ATTACHMENT2},
+                                                 {&t->depth, GL_DEPTH_ATTACHMENT}};
+      t->fbo = gl::Framebuffer(att, "camera framebuffer");
+    } else {
+      const gl::Framebuffer::Attachment att[] = {{&t->color, GL_COLOR_ATTACHMENT0}, {&t->visibility, GL_COLOR_ATTACHMENT1}, {&t->depth, GL_DEPTH_ATTACHMENT}};
+      t->fbo = gl::Framebuffer(att, "camera framebuffer");
+    }
     targets_ = std::move(t);
   }
 
@@ -212,25 +442,34 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     ScopedPass pass(timer, "shadow_map", info.passes);
     const gl::Program& prog = vsm ? moments_program_ : depth_program_;
     (vsm ? maps_->moments_fbo : maps_->depth_fbo).bind();
-    glViewport(0, 0, res, res);
     glEnable(GL_DEPTH_CLAMP);  // casters in front of the fitted near plane still occlude
-    if (vsm) {
-      const float far_moments[4] = {1, 1, 0, 0};
-      glClearBufferfv(GL_COLOR, 0, far_moments);
-    } else {
-      glEnable(GL_POLYGON_OFFSET_FILL);
-      glPolygonOffset(s.map.slope_bias, s.map.offset_bias);
-    }
-    const float one = 1;
-    glClearBufferfv(GL_DEPTH, 0, &one);
+    glEnable(GL_SCISSOR_TEST);
     prog.use();
-    set_mat4(prog, "u_light_view_projection", light_vp);
-    set_mat4(prog, "u_light_view", lf.view);
-    if (vsm) {
-      set_float(prog, "u_light_near_ws", lf.near_ws);
-      set_float(prog, "u_light_far_ws", lf.far_ws);
+    for (const auto& c : info.cascades) {
+      // Clear the region and its guard band only: the rest of a sub-rectangle atlas is never read.
+      const int r = c.resolution_texels;
+      glScissor(c.atlas_x - guard, c.atlas_y - guard, r + 2 * guard, r + 2 * guard);
+      if (vsm) {
+        const float far_moments[4] = {1, 1, 0, 0};
+        glClearBufferfv(GL_COLOR, 0, far_moments);
+      }
+      const float one = 1;
+      glClearBufferfv(GL_DEPTH, 0, &one);
+      glViewport(c.atlas_x, c.atlas_y, r, r);
+      glScissor(c.atlas_x, c.atlas_y, r, r);
+      if (!vsm) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset(s.map.slope_bias, s.map.offset_bias);
+      }
+      set_mat4(prog, "u_light_view_projection", c.light.view_projection());
+      set_mat4(prog, "u_light_view", c.light.view);
+      if (vsm) {
+        set_float(prog, "u_light_near_ws", c.light.near_ws);
+        set_float(prog, "u_light_far_ws", c.light.far_ws);
+      }
+      draw_scene(prog, false);
     }
-    draw_scene(prog, false);
+    glDisable(GL_SCISSOR_TEST);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
     gl::check_errors("shadow_map pass");
@@ -242,19 +481,25 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     info.filter_radius_texels = radius_texels;
     ScopedPass pass(timer, "vsm_blur", info.passes);
     blur_program_.use();
-    set_float(blur_program_, "u_radius_texels", radius_texels);
-    const GLuint groups = static_cast<GLuint>((res + 63) / 64);
     glBindSampler(0, 0);
-    set_int(blur_program_, "u_axis", 0);
-    maps_->moments_tex.bind(0);
-    glBindImageTexture(0, maps_->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-    glDispatchCompute(groups, 1, 1);
-    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-    set_int(blur_program_, "u_axis", 1);
-    maps_->moments_tmp.bind(0);
-    glBindImageTexture(0, maps_->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-    glDispatchCompute(groups, 1, 1);
-    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    for (const auto& c : info.cascades) {
+      // World-space radii span a different number of texels in each cascade.
+      const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
+      set_float(blur_program_, "u_radius_texels", s.vsm.radius_unit == RadiusUnit::texels ? s.vsm.radius : s.vsm.radius / texel);
+      glProgramUniform2i(blur_program_.id(), blur_program_.location("u_origin"), c.atlas_x, c.atlas_y);
+      set_int(blur_program_, "u_size", c.resolution_texels);
+      const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
+      set_int(blur_program_, "u_axis", 0);
+      maps_->moments_tex.bind(0);
+      glBindImageTexture(0, maps_->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      glDispatchCompute(groups, 1, 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      set_int(blur_program_, "u_axis", 1);
+      maps_->moments_tmp.bind(0);
+      glBindImageTexture(0, maps_->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      glDispatchCompute(groups, 1, 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
     gl::check_errors("vsm_blur pass");
   } else if (s.technique == Technique::pcf) {
     info.filter_radius_texels = s.pcf.radius_unit == RadiusUnit::texels ? s.pcf.radius : s.pcf.radius / texel_mid_ws;
@@ -263,21 +508,33 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   // --- shading (and, for screen-space techniques, the G-buffer and post passes) --------------
   const scene::Camera& cam = scene_.camera;
   const bool light_size_used = s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion;
-  // Light frame, biases and the technique's uniforms: shared by both camera passes and the
-  // screen-space compute passes (uniforms a program lacks are ignored).
+  // Light frame, cascades, biases and the technique's uniforms: shared by both camera passes and
+  // the screen-space compute passes (uniforms a program lacks are ignored).
   auto set_shading_uniforms = [&](const gl::Program& prog) {
     set_mat4(prog, "u_view_projection", cam.projection_matrix(aspect) * cam.view());
-    set_mat4(prog, "u_light_view_projection", light_vp);
+    set_mat4(prog, "u_camera_view", cam.view());
     set_mat4(prog, "u_light_view", lf.view);
     set_int(prog, "u_light_perspective", lf.perspective ? 1 : 0);
     set_float(prog, "u_light_near_ws", lf.near_ws);
     set_float(prog, "u_light_far_ws", lf.far_ws);
-    set_float(prog, "u_light_extent_ws", lf.extent_ws);
     set_float(prog, "u_light_s_xy", lf.s_xy);
     set_float(prog, "u_light_tan_half_fov", std::tan(glm::radians(lf.fov_deg) / 2));
-    set_float(prog, "u_shadow_res", static_cast<float>(res));
+    set_int(prog, "u_cascade_count", count);
+    set_float(prog, "u_cascade_blend", count > 1 ? s.map.cascade_blend : 0.0f);
+    set_int(prog, "u_show_cascades", show_cascades_ ? 1 : 0);
+    for (int i = 0; i < count; ++i) {
+      const CascadeInfo& c = info.cascades[static_cast<std::size_t>(i)];
+      const std::string at = "[" + std::to_string(i) + "]";
+      set_mat4(prog, ("u_cascade_view_projection" + at).c_str(), c.light.view_projection());
+      const glm::vec4 region(static_cast<float>(c.atlas_x) / layout.width, static_cast<float>(c.atlas_y) / layout.height,
+                             static_cast<float>(c.resolution_texels) / layout.width, static_cast<float>(c.resolution_texels) / layout.height);
+      glProgramUniform4fv(prog.id(), prog.location(("u_cascade_region" + at).c_str()), 1, glm::value_ptr(region));
+      set_float(prog, ("u_cascade_res" + at).c_str(), static_cast<float>(c.resolution_texels));
+      set_float(prog, ("u_cascade_extent_ws" + at).c_str(), c.light.extent_ws);
+      set_float(prog, ("u_cascade_far_ws" + at).c_str(), c.split_far_ws);
+    }
     // Trust receiver slopes up to 85° from the light: |d depth/d uv| ≤ tan 85° · extent / depth range.
-    set_float(prog, "u_rpdb_max", std::tan(glm::radians(85.0f)) * texel_mid_ws * static_cast<float>(res) / std::max(lf.far_ws - lf.near_ws, 1e-6f));
+    set_float(prog, "u_rpdb_max", std::tan(glm::radians(85.0f)) * texel_mid_ws * static_cast<float>(info.resolution_texels) / std::max(lf.far_ws - lf.near_ws, 1e-6f));
     set_int(prog, "u_receiver_plane_bias", s.map.receiver_plane_bias ? 1 : 0);
     set_vec3(prog, "u_light_direction", glm::normalize(light.direction));
     set_vec3(prog, "u_light_position", light.position);
@@ -375,12 +632,20 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     ScopedPass pass(timer, "shading", info.passes);
     const gl::Program& prog = shading_program(s);
     targets_->fbo.bind();
+    if (want_requirement) {
+      const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+      glNamedFramebufferDrawBuffers(targets_->fbo.id(), 3, bufs);
+    }
     glViewport(0, 0, width_px, height_px);
     glEnable(GL_FRAMEBUFFER_SRGB);
     const float sky[4] = {0.45f, 0.55f, 0.7f, 1};
     const float lit = 1, far_depth = 1;
     glClearBufferfv(GL_COLOR, 0, sky);
     glClearBufferfv(GL_COLOR, 1, &lit);
+    if (want_requirement) {
+      const float none[4] = {0, 0, 0, 0};
+      glClearBufferfv(GL_COLOR, 2, none);
+    }
     if (screen_result) {
       // The G-buffer pass left the depth: shade exactly the fragments it kept.
       glDepthFunc(GL_LEQUAL);
@@ -399,8 +664,30 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     glDepthMask(GL_TRUE);
     gl::check_errors("shading pass");
   }
+
+  // --- PCSS requirement (adaptive, per pixel) ------------------------------------------------
+  if (want_requirement) {
+    ScopedPass pass(timer, "pcss_requirement", info.passes);
+    const int slot = ad.frame % 2;
+    if (!ad.requirement[slot].id()) ad.requirement[slot] = gl::Buffer(16 * sizeof(std::uint32_t), nullptr, 0);
+    const std::uint32_t zero = 0;
+    glClearNamedBufferData(ad.requirement[slot].id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    requirement_program_.use();
+    targets_->requirement_tex.bind(0);
+    glBindSampler(0, 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ad.requirement[slot].id());
+    set_float(requirement_program_, "u_limit_inverse_uv", static_cast<float>(ap.max_texels) / ap.c);
+    glDispatchCompute(static_cast<GLuint>((width_px + 15) / 16), static_cast<GLuint>((height_px + 15) / 16), 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    ad.requirement_pending[slot] = true;
+    ad.requirement_cascades[slot] = count;
+    ad.requirement_c[slot] = ap.c;
+    gl::check_errors("pcss_requirement pass");
+  }
+  ++ad.frame;
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (timer) timer->poll(false);
+  last_cascades_ = info.cascades;
   return info;
 }
 
@@ -454,9 +741,19 @@ io::ImageF Renderer::read_screen_space_input() const {
   return vis;
 }
 
-io::ImageF Renderer::read_shadow_depth() const {
+io::ImageF Renderer::read_shadow_depth(int cascade) const {
   if (!maps_) throw std::logic_error("read_shadow_depth before render");
-  return read_texture<float>(maps_->depth, GL_DEPTH_COMPONENT, GL_FLOAT, 1);
+  if (cascade < 0 || cascade >= static_cast<int>(last_cascades_.size()))
+    throw std::out_of_range("read_shadow_depth: no cascade " + std::to_string(cascade));
+  const CascadeInfo& c = last_cascades_[static_cast<std::size_t>(cascade)];
+  const int r = c.resolution_texels;
+  io::ImageF img{r, r, 1, std::vector<float>(static_cast<std::size_t>(r) * r)};
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glGetTextureSubImage(maps_->depth.id(), 0, c.atlas_x, c.atlas_y, 0, r, r, 1, GL_DEPTH_COMPONENT, GL_FLOAT,
+                       static_cast<GLsizei>(img.pixels.size() * sizeof(float)), img.pixels.data());
+  gl::check_errors("shadow map read-back");
+  flip_rows(img);
+  return img;
 }
 
 }  // namespace penumbra::shadows

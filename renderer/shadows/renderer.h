@@ -1,11 +1,19 @@
 #pragma once
-// The frame: shadow-map pass(es) → (VSM blur) → (G-buffer and screen-space passes) → shading
-// pass, each with a contract:
-//   shadow_map  reads the scene, writes the depth map (and, for VSM, the moments)
-//   vsm_blur    reads/writes the moments (VSM only)
-//   gbuffer + post passes   screen-space techniques only (screen_space.h)
-//   shading     reads the maps, writes lit colour (sRGB 8-bit) and visibility (float)
+// The frame: shadow-map pass(es) → (VSM blur) → shading pass → (PCSS requirement), each with a
+// contract:
+//   shadow_map        reads the scene, writes the depth map of every cascade (and, for VSM, the
+//                     moments) into its region of the shadow atlas
+//   vsm_blur          reads/writes the moments (VSM only)
+//   gbuffer + post    screen-space techniques only (screen_space.h); they use one map
+//   shading           reads the maps, writes lit colour (sRGB 8-bit) and visibility (float)
+//   pcss_requirement  adaptive PCSS with per-pixel requirement only: reduces the shading pass's
+//                     per-pixel c / r_filter to a maximum per cascade, read back one frame later
 // A frame runs only the passes its technique needs; FrameInfo lists those that ran.
+//
+// Storage: every map is a region of one atlas texture, surrounded by a guard band cleared to the
+// far depth. `adaptive.storage = subrect` keeps an atlas sized for adaptive.max_texels per cascade
+// and renders into the part the frame needs (UVs scaled accordingly); `realloc` sizes the atlas
+// to the frame and reallocates it whenever a resolution changes.
 #include <map>
 #include <memory>
 #include <string>
@@ -22,13 +30,38 @@
 
 namespace penumbra::shadows {
 
-struct FrameInfo {
+struct CascadeInfo {
   LightFrame light;
   int resolution_texels = 0;
+  double required_texels = 0;     // the rule's requirement before clamping (adaptive; else 0)
+  float split_near_ws = 0;        // camera view-depth range the cascade covers
+  float split_far_ws = 0;
+  int atlas_x = 0, atlas_y = 0;   // the region's corner in the atlas (texels)
+};
+
+// The per-pixel PCSS requirement of the frame it was measured in (adaptive, pcss = per_pixel).
+struct PcssRequirementInfo {
+  bool valid = false;              // false until a frame has been measured
+  std::vector<double> required_texels;  // per cascade: c · max over pixels of 1 / r_filter_uv
+  double evaluated_pixels = 0;     // pixels that ran a PCSS filter
+  double clamped_fraction = 0;     // of those, share whose radius was raised to the minimum penumbra
+  double above_max_fraction = 0;   // share that needed more than adaptive.max_texels
+};
+
+struct FrameInfo {
+  LightFrame light;                // cascade 0
+  int resolution_texels = 0;       // cascade 0
   int width_px = 0;
   int height_px = 0;
   std::vector<std::string> passes;
   float filter_radius_texels = 0;  // PCF/VSM radius in texels (directional light; spot: at mid depth)
+  std::vector<CascadeInfo> cascades;  // one entry when not cascaded
+  bool adaptive = false;
+  std::string resolution_source;   // "fixed", "rule", "pcss_per_pixel", "pcss_min_penumbra"
+  std::string storage;             // "subrect" or "realloc"
+  int atlas_width = 0, atlas_height = 0;
+  bool reallocated = false;        // the atlas was (re)allocated this frame
+  PcssRequirementInfo pcss_requirement;  // as used for this frame's resolution (measured one frame earlier)
 };
 
 // Poisson-disk taps in the unit disk (deterministic best-candidate set, outermost tap at radius 1).
@@ -54,18 +87,23 @@ class Renderer {
 
   // Copies the last frame's lit colour into framebuffer `target` (0: the window) at its size.
   void present(GLuint target, int width_px, int height_px) const;
-  // The last frame's depth map (for debug views); 0 before the first frame.
+  // The last frame's shadow atlas (for debug views); 0 before the first frame.
   GLuint shadow_map_texture() const;
+  // Forgets the adaptive state (hysteresis, last PCSS requirement), e.g. after a scene change.
+  void reset_adaptive();
+  // Tints the image by cascade (debug overlay).
+  void set_show_cascades(bool on) { show_cascades_ = on; }
 
   io::Image8 read_color() const;       // RGBA, sRGB-encoded
   io::ImageF read_visibility() const;  // one channel
-  io::ImageF read_shadow_depth() const;  // the depth map of the last frame, one channel
+  io::ImageF read_shadow_depth(int cascade = 0) const;  // a depth map of the last frame, one channel
   // The input (hard) visibility of the last screen-space frame, before its post passes.
   io::ImageF read_screen_space_input() const;
 
  private:
   struct Maps;
   struct Targets;
+  struct Adaptive;
   // `gbuffer`: the first camera pass of a screen-space technique.
   const gl::Program& shading_program(const ShadowSettings& s, bool gbuffer = false);
   void draw_scene(const gl::Program& program, bool shading);
@@ -74,14 +112,18 @@ class Renderer {
   gl::Program depth_program_;
   gl::Program moments_program_;
   gl::Program blur_program_;
+  gl::Program requirement_program_;
   std::map<std::string, gl::Program> shading_programs_;
   gl::Sampler cmp_linear_, cmp_nearest_, raw_nearest_, moments_linear_;
   scene::Scene scene_;
   std::vector<std::unique_ptr<scene::GpuMesh>> meshes_;
   std::unique_ptr<Maps> maps_;
   std::unique_ptr<Targets> targets_;
-  std::map<int, std::vector<glm::vec2>> poisson_;
+  std::unique_ptr<Adaptive> adaptive_;
+  std::vector<CascadeInfo> last_cascades_;
+  bool show_cascades_ = false;
   std::unique_ptr<ScreenSpace> screen_space_;  // made on the first screen-space frame
+  std::map<int, std::vector<glm::vec2>> poisson_;
 };
 
 }  // namespace penumbra::shadows

@@ -13,6 +13,8 @@ namespace {
 constexpr std::array<std::string_view, 7> kTechniques = {"hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"};
 constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
 constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
+constexpr std::array<std::string_view, 2> kStorage = {"subrect", "realloc"};
+constexpr std::array<std::string_view, 2> kPcssRequirement = {"per_pixel", "min_penumbra"};
 
 // The double nearest to a float's shortest decimal form (0.2f → 0.2, not 0.20000000298...), so that
 // printed, reported and range-checked values are the ones a user typed.
@@ -55,6 +57,22 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_REAL(ShadowMapParams, normal_offset_texels, "texels", 0, 16, "lookup offset along the surface normal"),
     PENUMBRA_REAL(ShadowMapParams, depth_bias_texels, "texels", 0, 64, "constant receiver depth offset, in texel widths at the receiver"),
     PENUMBRA_BOOL(ShadowMapParams, receiver_plane_bias, "per-tap reference depth from the receiver's depth gradient"),
+    PENUMBRA_INT(ShadowMapParams, cascades, "", 0, 4, "directional light: cascade count, 0 = as few as the resolution rule allows"),
+    PENUMBRA_REAL(ShadowMapParams, cascade_lambda, "", 0, 1, "cascade splits: 0 uniform, 1 logarithmic, between: practical"),
+    PENUMBRA_REAL(ShadowMapParams, cascade_blend, "", 0, 0.5, "blend band at each cascade's far end (fraction of its depth range)"),
+    PENUMBRA_BOOL(ShadowMapParams, cascade_stabilize, "cascade windows in quarter-octave sizes snapped to whole texels (no crawling)"),
+};
+
+const Setting<AdaptiveParams> kAdaptiveTable[] = {
+    PENUMBRA_BOOL(AdaptiveParams, enabled, "choose the resolution from the filter with res = c / r_uv"),
+    PENUMBRA_REAL(AdaptiveParams, c, "texels", 0.01, 100, "filter radius per hidden texel (calibration.json)"),
+    PENUMBRA_INT(AdaptiveParams, min_texels, "texels", 1, 65536, "smallest resolution"),
+    PENUMBRA_INT(AdaptiveParams, max_texels, "texels", 1, 65536, "largest resolution (sub-rectangle storage allocates this)"),
+    PENUMBRA_INT(AdaptiveParams, quantum_texels, "texels", 1, 4096, "resolutions are rounded up to a multiple of this"),
+    PENUMBRA_INT(AdaptiveParams, shrink_delay_frames, "frames", 0, 100000, "frames a smaller requirement must hold before shrinking"),
+    PENUMBRA_CHOICE(AdaptiveParams, storage, Storage, kStorage, "subrect: part of a preallocated max-size map; realloc: a map per size"),
+    PENUMBRA_CHOICE(AdaptiveParams, pcss, PcssRequirement, kPcssRequirement,
+                    "PCSS: per_pixel = GPU max of c / r_filter over the last frame; min_penumbra = c / minimum penumbra"),
 };
 
 const Setting<PcfParams> kPcfTable[] = {
@@ -148,6 +166,7 @@ std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*)
 std::span<const Setting<PcfParams>> settings_table(const PcfParams*) { return kPcfTable; }
 std::span<const Setting<PcssParams>> settings_table(const PcssParams*) { return kPcssTable; }
 std::span<const Setting<VsmParams>> settings_table(const VsmParams*) { return kVsmTable; }
+std::span<const Setting<AdaptiveParams>> settings_table(const AdaptiveParams*) { return kAdaptiveTable; }
 std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*) { return kEdtsmTable; }
 std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*) { return kEdtssmTable; }
 std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*) { return kErosionTable; }
@@ -213,6 +232,7 @@ PENUMBRA_INSTANTIATE(ShadowMapParams)
 PENUMBRA_INSTANTIATE(PcfParams)
 PENUMBRA_INSTANTIATE(PcssParams)
 PENUMBRA_INSTANTIATE(VsmParams)
+PENUMBRA_INSTANTIATE(AdaptiveParams)
 PENUMBRA_INSTANTIATE(EdtsmParams)
 PENUMBRA_INSTANTIATE(EdtssmParams)
 PENUMBRA_INSTANTIATE(ErosionParams)
@@ -222,6 +242,7 @@ nlohmann::json to_json(const ShadowMapParams& p) { return table_json(p); }
 nlohmann::json to_json(const PcfParams& p) { return table_json(p); }
 nlohmann::json to_json(const PcssParams& p) { return table_json(p); }
 nlohmann::json to_json(const VsmParams& p) { return table_json(p); }
+nlohmann::json to_json(const AdaptiveParams& p) { return table_json(p); }
 nlohmann::json to_json(const EdtsmParams& p) { return table_json(p); }
 nlohmann::json to_json(const EdtssmParams& p) { return table_json(p); }
 nlohmann::json to_json(const ErosionParams& p) { return table_json(p); }
@@ -230,6 +251,7 @@ nlohmann::json to_json(const ShadowSettings& s) {
   nlohmann::json j;
   j["technique"] = std::string(to_string(s.technique));
   j["map"] = to_json(s.map);
+  j["adaptive"] = to_json(s.adaptive);
   switch (s.technique) {
     case Technique::hard: break;
     case Technique::pcf: j["pcf"] = to_json(s.pcf); break;

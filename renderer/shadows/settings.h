@@ -13,6 +13,8 @@ namespace penumbra::shadows {
 enum class Technique { hard, pcf, pcss, vsm, edtsm, edtssm, erosion };
 enum class Kernel { grid, poisson };
 enum class RadiusUnit { texels, world };
+enum class Storage { subrect, realloc };
+enum class PcssRequirement { per_pixel, min_penumbra };
 
 std::span<const std::string_view> technique_names();  // "hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"
 std::string_view to_string(Technique t);
@@ -27,6 +29,25 @@ struct ShadowMapParams {
   float normal_offset_texels = 0.75f; // lookup moved along the normal, in texels at the receiver
   float depth_bias_texels = 0.5f;     // receiver moved toward the light by this many texel widths
   bool receiver_plane_bias = true;    // per-tap depth from the receiver's depth gradient
+  // Cascades (directional lights, shadow-map techniques): 1 = one map; 2..4 = that many; 0 = as
+  // few as the resolution rule allows for the view (adaptive/cascades.h).
+  int cascades = 1;
+  float cascade_lambda = 0.75f;       // split scheme: 0 uniform, 1 logarithmic, between: practical
+  float cascade_blend = 0.1f;         // blend band at a cascade's far end, fraction of its depth range
+  bool cascade_stabilize = true;      // window size in quarter-octave steps, corner snapped to texels
+};
+
+// Adaptive resolution: res = c / r_uv (Kreuzer 2017 eq. 5.3/5.6) per map or cascade, clamped,
+// quantized and rate-limited (adaptive/resolution_rule.h). Off: map.resolution_texels is used.
+struct AdaptiveParams {
+  bool enabled = false;
+  float c = 3.47f;                    // texels; from calibration.json
+  int min_texels = 32;
+  int max_texels = 4096;
+  int quantum_texels = 32;
+  int shrink_delay_frames = 30;       // frames a smaller requirement must hold before shrinking
+  Storage storage = Storage::subrect; // sub-rectangle of a max-size texture, or a texture per size
+  PcssRequirement pcss = PcssRequirement::per_pixel;  // GPU max of c / r_filter (one frame late), or c / min penumbra
 };
 
 struct PcfParams {
@@ -94,6 +115,7 @@ struct ErosionParams {
 struct ShadowSettings {
   Technique technique = Technique::pcf;
   ShadowMapParams map;
+  AdaptiveParams adaptive;
   PcfParams pcf;
   PcssParams pcss;
   VsmParams vsm;
@@ -123,6 +145,7 @@ std::span<const Setting<ShadowMapParams>> settings_table(const ShadowMapParams*)
 std::span<const Setting<PcfParams>> settings_table(const PcfParams*);
 std::span<const Setting<PcssParams>> settings_table(const PcssParams*);
 std::span<const Setting<VsmParams>> settings_table(const VsmParams*);
+std::span<const Setting<AdaptiveParams>> settings_table(const AdaptiveParams*);
 std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*);
 std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*);
 std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*);
@@ -140,6 +163,7 @@ nlohmann::json to_json(const ShadowMapParams& p);
 nlohmann::json to_json(const PcfParams& p);
 nlohmann::json to_json(const PcssParams& p);
 nlohmann::json to_json(const VsmParams& p);
+nlohmann::json to_json(const AdaptiveParams& p);
 nlohmann::json to_json(const EdtsmParams& p);
 nlohmann::json to_json(const EdtssmParams& p);
 nlohmann::json to_json(const ErosionParams& p);

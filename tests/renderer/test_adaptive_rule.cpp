@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 
+#include "adaptive/cascades.h"
 #include "adaptive/resolution_rule.h"
 
 namespace penumbra::adaptive {
@@ -148,6 +149,51 @@ TEST_F(CalibrationFile, BadFilesNameTheField) {
     }
   }
   EXPECT_THROW(load_calibration("/nonexistent/calibration.json"), CalibrationError);
+}
+
+TEST(CascadeSplits, PracticalSchemeBetweenUniformAndLogarithmic) {
+  const auto uniform = cascade_splits(1, 100, 4, 0);
+  const auto logarithmic = cascade_splits(1, 100, 4, 1);
+  const auto practical = cascade_splits(1, 100, 4, 0.5);
+  ASSERT_EQ(uniform.size(), 5u);
+  EXPECT_DOUBLE_EQ(uniform[1], 1 + 99 * 0.25);
+  EXPECT_NEAR(logarithmic[2], 10, 1e-9);  // sqrt(1 * 100)
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_NEAR(practical[i], 0.5 * (uniform[i] + logarithmic[i]), 1e-9);
+  for (const auto& z : {uniform, logarithmic, practical}) {
+    EXPECT_EQ(z.front(), 1);
+    EXPECT_EQ(z.back(), 100);
+    for (std::size_t i = 1; i < z.size(); ++i) EXPECT_GT(z[i], z[i - 1]);
+  }
+}
+
+TEST(CascadeSplits, DegenerateInputIsRepaired) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& z : {cascade_splits(0, 100, 3, 1), cascade_splits(-5, 100, 3, 0.75), cascade_splits(5, 5, 2, 0.5),
+                        cascade_splits(5, 1, 2, 0.5), cascade_splits(nan, nan, 2, nan), cascade_splits(1, 10, 0, 2)}) {
+    ASSERT_GE(z.size(), 2u);
+    EXPECT_GT(z.front(), 0);
+    for (std::size_t i = 0; i < z.size(); ++i) EXPECT_TRUE(std::isfinite(z[i]));
+    for (std::size_t i = 1; i < z.size(); ++i) EXPECT_GT(z[i], z[i - 1]);
+  }
+  EXPECT_EQ(cascade_splits(1, 10, 0, 0.5).size(), 2u);  // count < 1 means one cascade
+}
+
+TEST(CascadeCount, FewestThatFitAndOneForASceneThatFitsOneMap) {
+  // The requirement of a view split n ways: each cascade covers 1/n of an extent needing 3000 texels.
+  auto required = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), 3000.0 / n); };
+  EXPECT_EQ(choose_cascade_count(4, 4096, required).count, 1);
+  const CascadeChoice two = choose_cascade_count(4, 2048, required);
+  EXPECT_EQ(two.count, 2);
+  EXPECT_TRUE(two.fits);
+  EXPECT_EQ(choose_cascade_count(4, 1000, required).count, 3);
+  const CascadeChoice none = choose_cascade_count(4, 100, required);
+  EXPECT_EQ(none.count, 4);
+  EXPECT_FALSE(none.fits);
+  // Infinite (hard shadows) and NaN requirements never fit.
+  auto inf = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), std::numeric_limits<double>::infinity()); };
+  EXPECT_FALSE(choose_cascade_count(4, 8192, inf).fits);
+  auto nan = [](int n) { return std::vector<double>(static_cast<std::size_t>(n), std::nan("")); };
+  EXPECT_FALSE(choose_cascade_count(2, 8192, nan).fits);
 }
 
 }  // namespace

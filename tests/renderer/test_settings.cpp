@@ -29,6 +29,8 @@ std::string section_of<PcssParams>() { return "pcss"; }
 template <>
 std::string section_of<VsmParams>() { return "vsm"; }
 template <>
+std::string section_of<AdaptiveParams>() { return "adaptive"; }
+template <>
 std::string section_of<EdtsmParams>() { return "edtsm"; }
 template <>
 std::string section_of<EdtssmParams>() { return "edtssm"; }
@@ -186,6 +188,7 @@ TEST(Settings, DefaultsLieWithinTheirRanges) {
   check_defaults_in_range<PcfParams>();
   check_defaults_in_range<PcssParams>();
   check_defaults_in_range<VsmParams>();
+  check_defaults_in_range<AdaptiveParams>();
   check_defaults_in_range<EdtsmParams>();
   check_defaults_in_range<EdtssmParams>();
   check_defaults_in_range<ErosionParams>();
@@ -196,6 +199,7 @@ TEST(Settings, SetFromStringAcceptsValuesInRange) {
   check_accepts_valid<PcfParams>();
   check_accepts_valid<PcssParams>();
   check_accepts_valid<VsmParams>();
+  check_accepts_valid<AdaptiveParams>();
   check_accepts_valid<EdtsmParams>();
   check_accepts_valid<EdtssmParams>();
   check_accepts_valid<ErosionParams>();
@@ -206,6 +210,7 @@ TEST(Settings, SetFromStringRejectsBadValuesNamingTheKey) {
   check_rejects_invalid<PcfParams>();
   check_rejects_invalid<PcssParams>();
   check_rejects_invalid<VsmParams>();
+  check_rejects_invalid<AdaptiveParams>();
   check_rejects_invalid<EdtsmParams>();
   check_rejects_invalid<EdtssmParams>();
   check_rejects_invalid<ErosionParams>();
@@ -254,6 +259,7 @@ TEST(Settings, ValueToStringRoundTripsEveryNonRealRow) {
   check_round_trip<PcfParams>(false);
   check_round_trip<PcssParams>(false);
   check_round_trip<VsmParams>(false);
+  check_round_trip<AdaptiveParams>(false);
   check_round_trip<EdtsmParams>(false);
   check_round_trip<EdtssmParams>(false);
   check_round_trip<ErosionParams>(false);
@@ -284,6 +290,7 @@ TEST(Settings, ToJsonHasEveryKeyOfTheActiveTechnique) {
   set_non_defaults(s.pcf);
   set_non_defaults(s.pcss);
   set_non_defaults(s.vsm);
+  set_non_defaults(s.adaptive);
   set_non_defaults(s.edtsm);
   set_non_defaults(s.edtssm);
   set_non_defaults(s.erosion);
@@ -294,6 +301,8 @@ TEST(Settings, ToJsonHasEveryKeyOfTheActiveTechnique) {
     EXPECT_EQ(j.at("technique").get<std::string>(), name);
     ASSERT_TRUE(j.contains("map")) << j.dump();
     check_json_section(j["map"], s.map);
+    ASSERT_TRUE(j.contains("adaptive")) << j.dump();
+    check_json_section(j["adaptive"], s.adaptive);
     // Exactly the active technique's section: the report must not carry unused parameters.
     EXPECT_EQ(j.contains("pcf"), s.technique == Technique::pcf) << j.dump();
     EXPECT_EQ(j.contains("pcss"), s.technique == Technique::pcss) << j.dump();
