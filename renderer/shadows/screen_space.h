@@ -1,7 +1,8 @@
 #pragma once
 // The screen-space shadow techniques (EDTSM, EDTSSM, erosion) share one frame shape:
-//   gbuffer   (raster) the scene with the input hard shadows; writes world position, the input
-//             visibility and shadow-map coordinates per pixel (the camera depth is shared)
+//   gbuffer   (raster) the scene with the input hard shadows; writes world position, the eye
+//             depth signed by the input test and shadow-map coordinates per pixel (the camera
+//             depth is shared)
 //   post passes (compute) that read the G-buffer and the shadow map and produce, per pixel, the
 //             visibility (EDTSM, EDTSSM) or the eroded penumbra width (erosion)
 //   shading   (raster, depth test LEQUAL against the G-buffer's depth) lights the scene with it.
@@ -10,7 +11,6 @@
 // pieces below. Choices not fixed by the papers: docs/alternatives.md.
 #include <functional>
 #include <map>
-#include <memory>
 #include <string>
 #include <vector>
 
