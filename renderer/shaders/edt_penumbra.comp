@@ -13,6 +13,9 @@ layout(binding = 0, rg32f) uniform writeonly image2D u_penumbra;  // intensity, 
 
 uniform float u_penumbra_ws;  // EDTSM: P
 uniform float u_beta;         // EDTSSM: P = beta * w_p(site)
+// Measure D from the silhouette between the two site pixels rather than from the site's centre
+// (the paper): D + half a pixel, so penumbrae narrower than a pixel stay hard.
+uniform bool u_edge_between_pixels;
 
 void main() {
   ivec2 size = textureSize(u_gbuffer_position, 0);
@@ -31,6 +34,7 @@ void main() {
     float width = u_penumbra_ws;
 #endif
     float d = distance(here.xyz, there.xyz);
+    if (u_edge_between_pixels) d += 0.5 / px_per_ws(eye_depth(here));
     if (width > 0.0 && d < 0.5 * width && same_surface(eye_depth(here), eye_depth(there)))
       intensity = hard > 0.5 ? 0.5 + d / width : 0.5 - d / width;
   }

@@ -18,6 +18,7 @@ const gl::Texture& run_edtsm(ScreenSpace& ss, const EdtsmParams& p, const PostPa
     ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
     ss.edt().nearest().bind(7);
     glProgramUniform1f(prog.id(), prog.location("u_penumbra_ws"), p.penumbra_ws);
+    glProgramUniform1i(prog.id(), prog.location("u_edge_between_pixels"), p.edge_between_pixels ? 1 : 0);
     glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch_pixels(ss.width(), ss.height());
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);

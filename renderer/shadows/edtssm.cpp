@@ -23,6 +23,7 @@ const gl::Texture& run_edtssm(ScreenSpace& ss, const EdtssmParams& p, const Post
     ss.edt().nearest().bind(7);
     ss.site_width().bind(8);
     glProgramUniform1f(prog.id(), prog.location("u_beta"), p.beta);
+    glProgramUniform1i(prog.id(), prog.location("u_edge_between_pixels"), p.edge_between_pixels ? 1 : 0);
     glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch_pixels(ss.width(), ss.height());
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);

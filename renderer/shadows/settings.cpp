@@ -101,6 +101,9 @@ const Setting<VsmParams> kVsmTable[] = {
     PENUMBRA_REAL(VsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
 };
 
+constexpr std::string_view kEdgeHelp =
+    "measure D from the silhouette between the two site pixels (D + half a pixel: sub-pixel penumbrae stay hard) "
+    "instead of from the site pixel's centre (the paper: site pixels are 1/2)";
 constexpr std::string_view kDepthThresholdHelp =
     "largest relative eye-depth difference |dz|/z between pixels treated as one surface (edge-aware sites, EDT and filter)";
 
@@ -109,6 +112,7 @@ const Setting<EdtsmParams> kEdtsmTable[] = {
     PENUMBRA_REAL(EdtsmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
     PENUMBRA_REAL(EdtsmParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
     PENUMBRA_INT(EdtsmParams, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),
+    PENUMBRA_BOOL(EdtsmParams, edge_between_pixels, kEdgeHelp),
 };
 
 const Setting<EdtssmParams> kEdtssmTable[] = {
@@ -118,6 +122,7 @@ const Setting<EdtssmParams> kEdtssmTable[] = {
     PENUMBRA_REAL(EdtssmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
     PENUMBRA_REAL(EdtssmParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
     PENUMBRA_INT(EdtssmParams, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),
+    PENUMBRA_BOOL(EdtssmParams, edge_between_pixels, kEdgeHelp),
 };
 
 const Setting<ErosionParams> kErosionTable[] = {

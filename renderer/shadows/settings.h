@@ -86,6 +86,7 @@ struct EdtsmParams {
   float filter_ws = 0.1f;             // w_filter: mean-filter width, world units (screen size w z_screen / z_eye)
   float depth_threshold = 0.05f;      // largest relative eye-depth difference treated as one surface
   int max_filter_px = 64;             // clamp of the mean filter's width in pixels
+  bool edge_between_pixels = false;   // D from the silhouette between the site pixels (D + 1/2 px), not the site centre
 };
 
 // EDT soft shadows (Macedo & Apolinario 2017): PCSS blocker search at silhouette pixels only ->
@@ -97,6 +98,7 @@ struct EdtssmParams {
   float filter_ws = 0.05f;            // w_filter, world units
   float depth_threshold = 0.05f;
   int max_filter_px = 64;
+  bool edge_between_pixels = false;
 };
 
 // Contact-hardening soft shadows by erosion (Klein, Nischwitz & Obermeier 2012): hard shadows ->

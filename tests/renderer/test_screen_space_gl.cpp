@@ -59,7 +59,7 @@ class Edtsm : public ::testing::Test {
   static constexpr float kWsPerPx = 1.0f / kPixels;
   static constexpr int kHalfPenumbraPx = 20;
 
-  io::ImageF render(float filter_ws, io::ImageF* input = nullptr) {
+  io::ImageF render(float filter_ws, io::ImageF* input = nullptr, bool edge_between_pixels = false) {
     scene::Scene s = scene::make_square_scene(2, 1);
     look_down(s, {1, 0}, 0.5f);
     ShadowSettings st;
@@ -67,6 +67,7 @@ class Edtsm : public ::testing::Test {
     st.map.resolution_texels = 1024;
     st.edtsm.penumbra_ws = 2 * kHalfPenumbraPx * kWsPerPx;
     st.edtsm.filter_ws = filter_ws;
+    st.edtsm.edge_between_pixels = edge_between_pixels;
     shadows::Renderer r;
     r.set_scene(s);
     const shadows::FrameInfo info = r.render(st, kPixels, kPixels);
@@ -110,6 +111,26 @@ TEST_F(Edtsm, IntensityIsHalfAtTheSitesLinearInWorldDistanceAndExactlyZeroOrOneA
     ++rows_checked;
   }
   EXPECT_GT(rows_checked, 30);
+}
+
+TEST_F(Edtsm, EdgeBetweenPixelsPutsOneHalfOnTheSilhouetteItself) {
+  // D measured from the silhouette between the site pixels: each site is half a pixel from it.
+  io::ImageF hard;
+  const io::ImageF vis = render(0, &hard, true);
+  for (int y = 50; y < kPixels - 50; y += 7) {
+    int s0 = -1;
+    for (int x = 0; x + 1 < kPixels; ++x)
+      if (hard.at(x, y) == 0.0f && hard.at(x + 1, y) == 1.0f) s0 = x;
+    ASSERT_GT(s0, kHalfPenumbraPx + 2) << "row " << y;
+    EXPECT_NEAR(vis.at(s0, y) + vis.at(s0 + 1, y), 1.0, 1e-5) << "1/2 halfway between the sites, row " << y;
+    for (int k = 0; k < kHalfPenumbraPx; ++k) {
+      const double d_px = k + 0.5;
+      EXPECT_NEAR(vis.at(s0 - k, y), 0.5 - d_px / (2 * kHalfPenumbraPx), 1e-4) << "row " << y << ", k " << k;
+      EXPECT_NEAR(vis.at(s0 + 1 + k, y), 0.5 + d_px / (2 * kHalfPenumbraPx), 1e-4) << "row " << y << ", k " << k;
+    }
+    EXPECT_EQ(vis.at(s0 - kHalfPenumbraPx, y), 0.0f);
+    EXPECT_EQ(vis.at(s0 + 1 + kHalfPenumbraPx, y), 1.0f);
+  }
 }
 
 TEST_F(Edtsm, MeanFilterKeepsTheEdgeAndTheRampMonotone) {
