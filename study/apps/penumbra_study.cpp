@@ -7,6 +7,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "gl/context.h"
@@ -15,6 +16,9 @@
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
 #include "stimuli/stimulus.h"
+#ifdef PENUMBRA_STUDY_GUI
+#include "gui/study_gui.h"
+#endif
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -68,6 +72,24 @@ std::vector<std::pair<std::string, double>> parse_key_values(const std::string& 
   return out;
 }
 
+// Removes "key=value" from "name:k=v,k=v" and returns the value, if the key is there.
+std::optional<std::string> take_key(std::string& spec, const std::string& key) {
+  const std::size_t colon = spec.find(':');
+  if (colon == std::string::npos) return std::nullopt;
+  for (std::size_t pos = colon + 1; pos < spec.size();) {
+    std::size_t end = spec.find(',', pos);
+    if (end == std::string::npos) end = spec.size();
+    if (spec.compare(pos, key.size() + 1, key + "=") == 0) {
+      std::string value = spec.substr(pos + key.size() + 1, end - pos - key.size() - 1);
+      spec.erase(pos == colon + 1 ? pos : pos - 1, end - pos + 1);
+      if (spec.back() == ':') spec.pop_back();
+      return value;
+    }
+    pos = end + 1;
+  }
+  return std::nullopt;
+}
+
 // "psychometric:c=3.0,beta=3.5,lapse=0.02" -> the planted model (same for every condition).
 observers::PlantedModel parse_psychometric(const std::string& spec) {
   observers::PlantedModel m;
@@ -88,29 +110,76 @@ struct RunOptions {
   std::string participant = "sim";
   bool headless = false;
   int pace_ms = 0;
+  int stop_after = 0;
   std::uint64_t observer_seed = 7;
+  bool participant_given = false;
+#ifdef PENUMBRA_STUDY_GUI
+  study_gui::GuiOptions gui;
+#endif
 };
 
+procedure::Session open_session(const RunOptions& o, const std::string& observer) {
+  if (!o.resume.empty()) return procedure::Session::resume(o.resume);
+  if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
+  return procedure::Session::create(procedure::load_config(o.config), o.output, o.participant,
+                                    {{"observer", observer}, {"config_file", o.config.string()}});
+}
+
+// A participant session in the windows (study/gui); the same Session, so the same log.
+int run_participant(const RunOptions& o) {
+#ifdef PENUMBRA_STUDY_GUI
+  if (o.resume.empty() && !o.participant_given) throw std::invalid_argument("run: --participant is required for a participant session");
+  procedure::Session session = open_session(o, "participant");
+  return study_gui::run_session(session, o.gui);
+#else
+  (void)o;
+  throw std::runtime_error("run: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); only --headless runs");
+#endif
+}
+
 int run_study(const RunOptions& o) {
-  if (!o.headless) throw std::runtime_error("run: only --headless is built into this binary; use penumbra-study-gui for participants");
+  if (!o.headless) return run_participant(o);
   const bool image_observer = o.observer.rfind("image", 0) == 0;
   if (!image_observer && o.observer.rfind("psychometric", 0) != 0)
     throw std::invalid_argument("--observer '" + o.observer + "': expected psychometric:c=..,beta=..,lapse=.. or image:noise=..,blur_arcmin=..");
-  procedure::Session session = [&] {
-    if (!o.resume.empty()) return procedure::Session::resume(o.resume);
-    if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
-    return procedure::Session::create(procedure::load_config(o.config), o.output, o.participant,
-                                      {{"observer", o.observer}, {"config_file", o.config.string()}});
-  }();
-  const observers::PlantedModel model = image_observer ? observers::PlantedModel{} : parse_psychometric(o.observer);
+  procedure::Session session = open_session(o, o.observer);
+  const bool yesno = session.config().task == "yesno";
+  std::string observer_spec = o.observer;
+  double false_alarm = 0.05;  // yesno: the observer's rate of "jagged" for a straight edge
+  if (const auto fa = take_key(observer_spec, "fa")) {
+    try {
+      false_alarm = std::stod(*fa);
+    } catch (const std::exception&) {
+      false_alarm = -1;
+    }
+    if (!(false_alarm > 0 && false_alarm < 0.5)) throw std::invalid_argument("--observer: fa: expected a rate in (0, 0.5)");
+  }
+  observers::PlantedModel model = image_observer ? observers::PlantedModel{} : parse_psychometric(observer_spec);
+  if (yesno && !image_observer) {
+    // The same detection function F as in 2afc (threshold where F reaches the 2afc F*), with
+    // hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa.
+    const double f_star = (model.p_threshold - model.guess) / (1 - model.guess - model.lapse);
+    model.guess = false_alarm;
+    model.p_threshold = false_alarm + (1 - false_alarm - model.lapse) * f_star;
+  }
   observers::ImageObserverParams image_params;
   image_params.pixels_per_degree = 60.0 / session.config().display.arcmin(1.0);
+  image_params.false_alarm = false_alarm;
   if (image_observer) {
-    for (const auto& [k, v] : parse_key_values(o.observer)) {
+    if (const auto criterion = take_key(observer_spec, "criterion")) {
+      if (*criterion != "local" && *criterion != "global")
+        throw std::invalid_argument("--observer: criterion: expected local or global");
+      image_params.criterion = *criterion == "local" ? observers::StraightnessCriterion::local
+                                                     : observers::StraightnessCriterion::global;
+    }
+    for (const auto& [k, v] : parse_key_values(observer_spec)) {
       if (k == "noise") image_params.noise_sd = v;
       else if (k == "blur_arcmin") image_params.blur_sigma_arcmin = v;
       else if (k == "ppd") image_params.pixels_per_degree = v;
-      else throw std::invalid_argument("--observer: unknown image parameter '" + k + "' (noise, blur_arcmin, ppd)");
+      else if (k == "weber") image_params.weber = v;
+      else if (k == "window") image_params.window_r = v;
+      else throw std::invalid_argument("--observer: unknown image parameter '" + k +
+                                                          "' (noise, blur_arcmin, ppd, weber, window, fa, criterion=global)");
     }
   }
   std::unique_ptr<gl::HeadlessContext> context;
@@ -123,16 +192,23 @@ int run_study(const RunOptions& o) {
   for (std::size_t r = 0; r < session.config().rounds.size(); ++r) conditions[session.condition(static_cast<int>(r))] = model;
   while (const auto plan = session.next()) {
     bool correct = false;
+    const std::uint64_t trial_seed = observers::derive_seed(o.observer_seed, static_cast<std::uint64_t>(plan->trial));
     if (image_observer) {
       const stimuli::StimulusPair pair = renderer->render(plan->stimulus);
-      observers::ImageObserver eye(image_params, observers::derive_seed(o.observer_seed, plan->trial));
-      if (session.config().task != "2afc") throw std::invalid_argument("the image observer answers 2afc trials only");
-      const bool left_jagged = plan->target == "left";
-      const io::Image8& left = left_jagged ? pair.artifact : pair.line;
-      const io::Image8& right = left_jagged ? pair.line : pair.artifact;
-      correct = eye.first_is_jagged(left, right, plan->stimulus, pair.geometry) == left_jagged;
+      observers::ImageObserver eye(image_params, trial_seed);
+      if (yesno) {
+        const bool jagged = plan->target == "jagged";
+        correct = eye.judges_jagged(jagged ? pair.artifact : pair.line, plan->stimulus, pair.geometry) == jagged;
+      } else {
+        const bool left_jagged = plan->target == "left";
+        const io::Image8& left = left_jagged ? pair.artifact : pair.line;
+        const io::Image8& right = left_jagged ? pair.line : pair.artifact;
+        correct = eye.first_is_jagged(left, right, plan->stimulus, pair.geometry) == left_jagged;
+      }
+    } else if (yesno && plan->target == "straight") {
+      correct = !(observers::Random(trial_seed).uniform() < false_alarm);
     } else {
-      observers::PsychometricObserver observer(conditions, observers::derive_seed(o.observer_seed, plan->trial));
+      observers::PsychometricObserver observer(conditions, trial_seed);
       correct = observer.respond({session.condition(plan->round), plan->stimulus.artifact_px,
                                   plan->stimulus.filter_radius_px}).correct;
     }
@@ -140,6 +216,7 @@ int run_study(const RunOptions& o) {
     if (session.config().task == "2afc") response = correct == (plan->target == "left") ? "left" : "right";
     else response = correct == (plan->target == "straight") ? "yes" : "no";
     session.record(*plan, response, 0.0);
+    if (o.stop_after > 0 && session.trials_done() >= o.stop_after) break;
     if (o.pace_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(o.pace_ms));
   }
   std::cout << "session " << session.session_id() << ": " << session.trials_done() << " trials in "
@@ -176,7 +253,7 @@ int main(int argc, char** argv) {
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str();
   stim->add_option("-o,--output", stim_out, "output directory")->required();
 
-  auto* run = app.add_subcommand("run", "run a study session (headless with a simulated observer)");
+  auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
   RunOptions ro;
   run->add_option("--config", ro.config, "study config JSON (data/studies/)");
   run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)");
@@ -186,10 +263,15 @@ int main(int argc, char** argv) {
   run->add_option("--participant", ro.participant, "participant id")->capture_default_str();
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
   run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)");
+  run->add_option("--stop-after", ro.stop_after, "headless: stop once the session has this many trials (resumable)");
+#ifdef PENUMBRA_STUDY_GUI
+  study_gui::add_options(*run, ro.gui);
+#endif
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
+    ro.participant_given = run->count("--participant") > 0;
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
     std::cerr << "penumbra-study: " << e.what() << "\n";

@@ -1,8 +1,12 @@
 #include "observers/image_observer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <vector>
+
+#include "quest/psychometric.h"
 
 namespace penumbra::observers {
 
@@ -38,61 +42,161 @@ std::vector<double> gaussian_blur(const std::vector<double>& img, int n, double 
   return out;
 }
 
+// Golden-section search for the minimum of f on [lo, hi]; returns the argument, f there in *f_min.
+template <class F>
+double golden_min(F f, double lo, double hi, double* f_min) {
+  const double phi = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 40 && hi - lo > 1e-3; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = f(x2);
+    }
+  }
+  *f_min = std::min(f1, f2);
+  return f1 < f2 ? x1 : x2;
+}
+
+double band_half_width(const stimuli::StimulusSpec& spec) { return spec.filter_radius_px + spec.artifact_px + 2; }
+
 }  // namespace
 
-double ImageObserver::straightness_residual(const io::Image8& image, const stimuli::StimulusSpec& spec,
-                                            const stimuli::Geometry& g, bool add_noise) {
+std::vector<ImageObserver::Sample> ImageObserver::band_samples(const io::Image8& image,
+                                                                const stimuli::StimulusSpec& spec,
+                                                                const stimuli::Geometry& g, bool add_noise) {
   const int n = image.width;
   std::vector<double> lum(static_cast<std::size_t>(n) * n);
   for (std::size_t i = 0; i < lum.size(); ++i) lum[i] = stimuli::decode(image.pixels[i], spec.transfer);
   lum = gaussian_blur(lum, n, params_.blur_sigma_arcmin / 60.0 * params_.pixels_per_degree);
   // The band around the edge where the stimulus is not flat; noise outside it is the same for
   // both images and only adds variance.
-  const double r = spec.filter_radius_px, norm = std::sqrt(1 + g.line_m * g.line_m);
-  const double band = r + spec.artifact_px + 2;
-  struct Px {
-    double u;  // canonical q.y - m q.x
-    double v;
-  };
-  std::vector<Px> px;
+  const double norm = std::sqrt(1 + g.line_m * g.line_m), band = band_half_width(spec);
+  std::vector<Sample> out;
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
-      const double u = q.y - g.line_m * q.x;
-      if (std::abs(u - g.line_b) / norm > band) continue;
-      double v = lum[static_cast<std::size_t>(y) * n + x];
+      const double v = (q.y - g.line_m * q.x - g.line_b) / norm;
+      if (std::abs(v) > band) continue;
+      double l = lum[static_cast<std::size_t>(y) * n + x];
       if (add_noise) {
         // Box–Muller from the platform-independent uniforms.
         const double u1 = 1.0 - random_.uniform(), u2 = random_.uniform();
-        v += params_.noise_sd * std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+        l += params_.noise_sd * std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
       }
-      px.push_back({u, v});
+      out.push_back({(q.x + g.line_m * q.y) / norm, v, l});
     }
-  auto sse = [&](double b) {
-    double e = 0;
-    for (const Px& p : px) {
-      const double d = p.v - spec.lit_linear * disk_edge((p.u - b) / norm, r);
-      e += d * d;
+  return out;
+}
+
+double ImageObserver::straightness_residual(const io::Image8& image, const stimuli::StimulusSpec& spec,
+                                            const stimuli::Geometry& g, bool add_noise) {
+  const std::vector<Sample> px = band_samples(image, spec, g, add_noise);
+  const double r = spec.filter_radius_px;
+  auto sse = [&](double e) {
+    double sum = 0;
+    for (const Sample& p : px) {
+      const double d = p.luminance - spec.lit_linear * disk_edge(p.v - e, r);
+      sum += d * d;
     }
-    return e;
+    return sum;
   };
-  // Golden-section search for the edge offset within one texel of the drawn edge.
-  double lo = g.line_b - spec.artifact_px, hi = g.line_b + spec.artifact_px;
-  const double phi = 0.5 * (std::sqrt(5.0) - 1);
-  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = sse(x1), f2 = sse(x2);
-  for (int it = 0; it < 40 && hi - lo > 1e-3; ++it) {
-    if (f1 < f2) {
-      hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = sse(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = sse(x2);
+  double best = 0;
+  golden_min(sse, -spec.artifact_px, spec.artifact_px, &best);  // the edge's offset, within a texel
+  return best;
+}
+
+std::vector<double> ImageObserver::edge_trace(const io::Image8& image, const stimuli::StimulusSpec& spec,
+                                              const stimuli::Geometry& g, bool add_noise) {
+  std::vector<Sample> px = band_samples(image, spec, g, add_noise);
+  std::sort(px.begin(), px.end(), [](const Sample& a, const Sample& b) { return a.s < b.s; });
+  const double r = spec.filter_radius_px, a = spec.artifact_px, band = band_half_width(spec);
+  const double step = std::max(0.25, std::min(r, a) / 4);
+  std::vector<double> trace;
+  for (std::size_t begin = 0; begin < px.size();) {
+    const double slice = std::floor(px[begin].s);
+    std::size_t end = begin;
+    double v_min = band, v_max = -band;
+    while (end < px.size() && std::floor(px[end].s) == slice) {
+      v_min = std::min(v_min, px[end].v);
+      v_max = std::max(v_max, px[end].v);
+      ++end;
     }
+    // Only slices that cross the whole band (not cut by the stimulus border) trace the edge.
+    if (v_min < -band + 1.5 && v_max > band - 1.5) {
+      auto sse = [&](double e) {
+        double sum = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+          const double d = px[i].luminance - spec.lit_linear * disk_edge(px[i].v - e, r);
+          sum += d * d;
+        }
+        return sum;
+      };
+      // A coarse scan first: a jagged edge's slice can sit up to a texel away from the original.
+      double best_e = 0, best = INFINITY;
+      for (double e = -a - 1; e <= a + 1; e += step) {
+        const double f = sse(e);
+        if (f < best) best = f, best_e = e;
+      }
+      trace.push_back(golden_min(sse, best_e - step, best_e + step, &best));
+    }
+    begin = end;
   }
-  return std::min(f1, f2);
+  return trace;
+}
+
+double ImageObserver::local_deviation(const io::Image8& image, const stimuli::StimulusSpec& spec,
+                                      const stimuli::Geometry& g, bool add_noise) {
+  const std::vector<double> e = edge_trace(image, spec, g, add_noise);
+  const double r = spec.filter_radius_px;
+  const int n = static_cast<int>(e.size());
+  if (n < 4) throw std::runtime_error("image observer: the edge crosses fewer than 4 px of the stimulus");
+  const int window = std::min(n, std::max(4, static_cast<int>(std::ceil(params_.window_r * r))));
+  const int stride = std::max(1, window / 4);
+  double worst = 0;
+  for (int start = 0;; start += stride) {
+    start = std::min(start, n - window);
+    // Least-squares line through the window, then the RMS of what it leaves.
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (int i = 0; i < window; ++i) {
+      const double x = i, y = e[static_cast<std::size_t>(start + i)];
+      sx += x, sy += y, sxx += x * x, sxy += x * y;
+    }
+    const double w = window, slope = (w * sxy - sx * sy) / (w * sxx - sx * sx), offset = (sy - slope * sx) / w;
+    double ss = 0;
+    for (int i = 0; i < window; ++i) {
+      const double d = e[static_cast<std::size_t>(start + i)] - (offset + slope * i);
+      ss += d * d;
+    }
+    worst = std::max(worst, std::sqrt(ss / w));
+    if (start + window >= n) break;
+  }
+  return worst / r;
+}
+
+double ImageObserver::decision(const io::Image8& image, const stimuli::StimulusSpec& spec, const stimuli::Geometry& g) {
+  if (params_.criterion == StraightnessCriterion::global) return straightness_residual(image, spec, g, true);
+  const double u1 = 1.0 - random_.uniform(), u2 = random_.uniform();
+  const double z = std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+  return local_deviation(image, spec, g, params_.noise_sd > 0) + params_.weber * z;
 }
 
 bool ImageObserver::first_is_jagged(const io::Image8& first, const io::Image8& second,
                                     const stimuli::StimulusSpec& spec, const stimuli::Geometry& g) {
-  return straightness_residual(first, spec, g, true) > straightness_residual(second, spec, g, true);
+  const double d_first = decision(first, spec, g);
+  return d_first > decision(second, spec, g);
+}
+
+bool ImageObserver::judges_jagged(const io::Image8& image, const stimuli::StimulusSpec& spec,
+                                  const stimuli::Geometry& g) {
+  if (params_.criterion != StraightnessCriterion::local)
+    throw std::invalid_argument("image observer: yes/no answers need the local criterion");
+  if (!(params_.false_alarm > 0 && params_.false_alarm < 1))
+    throw std::invalid_argument("image observer: false_alarm must be in (0, 1)");
+  // A straight edge's deviation is ~0, so its decision variable is N(0, weber): exceeding
+  // z(1 - fa) * weber happens with probability fa.
+  const double criterion = std::sqrt(2.0) * psychometric::inverse_erf(1 - 2 * params_.false_alarm) * params_.weber;
+  return decision(image, spec, g) > criterion;
 }
 
 }  // namespace penumbra::observers

@@ -105,19 +105,27 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     rc.contrast = r.number((*rounds)[i], p, "contrast", 1.0, 0.01, 1.0);
     c.rounds.push_back(rc);
   }
+  // yesno feeds QUEST the jagged trials only (hit = "not straight"): its guess rate is the
+  // false-alarm rate, and p_threshold puts the threshold at the same point of the underlying
+  // detection function F as 2afc's .82 does (F = 0.6465 with delta .01; docs/study.md).
+  const bool yesno = c.task == "yesno";
+  const double default_gamma = yesno ? 0.05 : 0.5, default_p = yesno ? 0.658 : 0.82;
   if (const auto* q = r.find(j, "quest")) {
     r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range"});
     c.quest.t_guess = r.number(*q, "quest.", "t_guess", -0.5, -5, 5);
     c.quest.t_guess_sd = r.number(*q, "quest.", "t_guess_sd", 1.0, 0.01, 100);
-    c.quest.p_threshold = r.number(*q, "quest.", "p_threshold", 0.82, 0.5, 0.999);
+    c.quest.p_threshold = r.number(*q, "quest.", "p_threshold", default_p, 0.01, 0.999);
     c.quest.beta = r.number(*q, "quest.", "beta", 3.5, 0.1, 100);
     c.quest.delta = r.number(*q, "quest.", "delta", 0.01, 0, 0.5);
-    c.quest.gamma = r.number(*q, "quest.", "gamma", 0.5, 0, 0.99);
+    c.quest.gamma = r.number(*q, "quest.", "gamma", default_gamma, 0, 0.99);
+    if (c.quest.p_threshold <= c.quest.gamma) r.fail("quest.p_threshold", "expected above quest.gamma");
     c.quest.grain = r.number(*q, "quest.", "grain", 0.01, 1e-4, 1);
     if (r.find(*q, "range")) c.quest.range = r.number(*q, "quest.", "range", 5, 0.1, 100);
   } else {
     c.quest.t_guess = -0.5;
     c.quest.t_guess_sd = 1.0;
+    c.quest.gamma = default_gamma;
+    c.quest.p_threshold = default_p;
   }
   if (const auto* b = r.find(j, "intensity_bounds")) {
     if (!b->is_array() || b->size() != 2 || !(*b)[0].is_number() || !(*b)[1].is_number() ||

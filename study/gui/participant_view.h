@@ -1,0 +1,68 @@
+#pragma once
+// What the participant sees: a neutral grey screen, the stimuli copied 1:1 into physical
+// framebuffer pixels (no scaling, no filtering: a framebuffer blit of exactly the stimulus size
+// at integer positions), the question, two answer buttons, a quiet progress line, and the
+// welcome / break / pause / end screens. Nothing else.
+#include <string>
+#include <vector>
+
+#include "gl/objects.h"
+#include "io/image_io.h"
+
+namespace penumbra::study_gui {
+
+class GuiWindow;
+
+// Where the stimuli go, in framebuffer pixels (origin top-left): centred, side by side with a
+// gap of half a stimulus for 2afc, one in the middle for yesno.
+struct StimulusLayout {
+  int size_px = 0;
+  int count = 0;
+  int x_px[2] = {0, 0};  // left edges
+  int y_px = 0;          // top edge
+};
+// Throws when the framebuffer cannot hold the stimuli with room for the question and buttons.
+StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count);
+
+// The two answers: first = left (2afc) / yes (yesno); second = right / no.
+enum class Answer { none, first, second };
+// Left arrow or F -> first; right arrow or J -> second (GLFW key codes).
+Answer answer_for_key(int key);
+// The log's response for an answer: left|right (2afc), yes|no (yesno).
+std::string response_for(Answer answer, const std::string& task);
+
+// Display value of the background (8-bit, the same on all channels).
+inline constexpr int kBackgroundValue = 128;
+
+class ParticipantView {
+ public:
+  // Needs the participant window's contexts current (sets that ImGui context's style).
+  explicit ParticipantView(std::string task);
+
+  // The trial's images (8-bit grey, top row first, all the same square size), left to right.
+  void set_stimuli(const std::vector<const io::Image8*>& images);
+
+  // One frame's content (between GuiWindow::begin_frame and end_frame). The background is
+  // cleared by each. Returns the answer clicked with a button, if any.
+  Answer draw_trial(GuiWindow& window, const std::string& progress);
+  // Title, body and one button (or none when `button` is empty); true when the button is clicked.
+  bool draw_message(GuiWindow& window, const std::string& title, const std::string& body, const std::string& button,
+                    const std::string& progress);
+  // Only the background and the progress line (between trials).
+  void draw_blank(GuiWindow& window, const std::string& progress);
+
+  const StimulusLayout& layout() const { return layout_; }
+
+ private:
+  void clear(GuiWindow& window);
+  void begin_overlay(GuiWindow& window);
+  void progress_line(GuiWindow& window, const std::string& progress);
+
+  std::string task_;
+  gl::Texture textures_[2];
+  gl::Framebuffer framebuffers_[2];
+  int count_ = 0, size_px_ = 0;
+  StimulusLayout layout_;
+};
+
+}  // namespace penumbra::study_gui

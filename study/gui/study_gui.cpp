@@ -1,0 +1,336 @@
+#include "gui/study_gui.h"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <CLI/CLI.hpp>
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+#include "gui/admin_view.h"
+#include "gui/gui_window.h"
+#include "gui/participant_view.h"
+#include "stimuli/stimulus.h"
+
+namespace penumbra::study_gui {
+
+namespace fs = std::filesystem;
+
+void add_options(CLI::App& run, GuiOptions& o) {
+  run.add_option("--monitor", o.monitor, "participant monitor (GLFW index; default: the config's display.monitor)");
+  run.add_option("--windowed", o.windowed, "participant view in a WxH window instead of full screen (testing)");
+  run.add_flag("--admin-panel", o.admin_panel, "single monitor: the admin view is a panel in the participant window, F12 shows/hides it");
+  run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(CLI::Range(0.0, 10000.0));
+  run.add_option("--screenshot", o.screenshot_dir, "write participant.png and admin.png into DIR at the first stimulus, then stop");
+}
+
+namespace {
+
+enum class Screen { welcome, blank, trial, pause, rest, finished };
+
+const char* describe(Screen s) {
+  switch (s) {
+    case Screen::welcome: return "welcome screen";
+    case Screen::blank: return "blank (between trials)";
+    case Screen::trial: return "trial on screen";
+    case Screen::pause: return "paused";
+    case Screen::rest: return "break screen";
+    case Screen::finished: return "end screen";
+  }
+  return "";
+}
+
+void parse_size(const std::string& s, int& w, int& h) {
+  char x = 0;
+  char extra = 0;
+  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 64 || h < 64 || w > 16384 || h > 16384)
+    throw std::invalid_argument("--windowed '" + s + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
+}
+
+std::string instructions(const std::string& task) {
+  const std::string left = "\xe2\x86\x90", right = "\xe2\x86\x92";
+  if (task == "2afc")
+    return "Each trial shows two shadow edges. One was drawn from a jagged original,\n"
+           "the other from a straight line. Choose the one from the jagged original:\n" +
+           left + " or F for the left one, " + right + " or J for the right one, or click a button.\n"
+           "Take your time. If you are unsure, guess.";
+  return "Each trial shows one shadow edge. Was it drawn from a straight original line?\n" + left +
+         " or F: yes, straight.   " + right + " or J: no, jagged.   Or click a button.\n"
+         "Take your time. If you are unsure, guess.";
+}
+
+void write_rgb_png(const fs::path& path, const io::Image8& rgba) {
+  io::Image8 rgb{rgba.width, rgba.height, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(rgba.width) * rgba.height * 3)};
+  for (std::size_t i = 0; i < static_cast<std::size_t>(rgba.width) * rgba.height; ++i)
+    for (int c = 0; c < 3; ++c) rgb.pixels[i * 3 + c] = rgba.pixels[i * 4 + c];
+  io::write_png(path, rgb);
+}
+
+void say(const std::string& line) { std::cout << line << std::endl; }  // operators and the GUI test read this
+
+}  // namespace
+
+int run_session(procedure::Session& session, const GuiOptions& o) {
+  const procedure::StudyConfig& config = session.config();
+  const bool two = config.task == "2afc";
+  int win_w = 0, win_h = 0;
+  if (!o.windowed.empty()) parse_size(o.windowed, win_w, win_h);
+
+  Glfw glfw;
+  const auto monitors = glfw.monitors();
+  const int monitor = o.monitor >= 0 ? o.monitor : config.display.monitor;
+  if (monitors.empty()) throw std::runtime_error("no monitor connected");
+  if (monitor < 0 || monitor >= static_cast<int>(monitors.size()))
+    throw std::invalid_argument("--monitor " + std::to_string(monitor) + ": only " + std::to_string(monitors.size()) +
+                                " monitor(s) connected (0.." + std::to_string(monitors.size() - 1) + ")");
+  const bool fullscreen = o.windowed.empty();
+  if (fullscreen && !o.admin_panel && monitors.size() < 2)
+    throw std::invalid_argument("one monitor only: the admin window would cover or sit under the participant's screen; "
+                                "use --admin-panel (F12 toggles it) or --windowed WxH");
+  if (fullscreen) {
+    const GLFWvidmode* mode = glfwGetVideoMode(monitors[static_cast<std::size_t>(monitor)]);
+    if (mode->width != config.display.width_px || mode->height != config.display.height_px)
+      std::cerr << "penumbra-study: warning: monitor " << monitor << " runs at " << mode->width << "x" << mode->height
+                << " px but the config's display is " << config.display.width_px << "x" << config.display.height_px
+                << " px; arcmin values in the log follow the config\n";
+  }
+
+  WindowSpec ps;
+  ps.title = "Penumbra study";
+  ps.width = win_w;
+  ps.height = win_h;
+  ps.fullscreen_on = fullscreen ? monitors[static_cast<std::size_t>(monitor)] : nullptr;
+  ps.x = fullscreen ? -1 : 0;
+  ps.y = 0;
+  ps.vsync = true;
+  ps.font_px = 22;
+  ps.large_font_px = 30;
+  std::unique_ptr<GuiWindow> admin;  // destroyed last: the objects below need the participant's context
+  GuiWindow participant(ps);
+  participant.make_current();
+  ParticipantView view(config.task);   // styles the participant's ImGui context
+  stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
+  struct CurrentOnExit {
+    GuiWindow& window;
+    ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
+  } current_on_exit{participant};
+
+  if (!o.admin_panel) {
+    WindowSpec as;
+    as.title = "Penumbra study - admin";
+    as.width = 1120;
+    as.height = 780;
+    if (fullscreen) {
+      const GLFWmonitor* other = nullptr;
+      for (std::size_t i = 0; i < monitors.size(); ++i)
+        if (static_cast<int>(i) != monitor) {
+          other = monitors[i];
+          break;
+        }
+      int x = 0, y = 0, w = 0, h = 0;
+      glfwGetMonitorWorkarea(const_cast<GLFWmonitor*>(other), &x, &y, &w, &h);
+      as.x = x + 20;
+      as.y = y + 40;
+      as.width = std::min(as.width, w - 40);
+      as.height = std::min(as.height, h - 80);
+    } else {
+      as.x = win_w + 10;
+      as.y = 0;
+    }
+    as.font_px = 16;
+    admin = std::make_unique<GuiWindow>(as);
+  }
+  bool panel_visible = !o.screenshot_dir.empty();
+
+  Screen screen = Screen::welcome;
+  std::optional<procedure::TrialPlan> plan;
+  double blank_until = 0, onset_s = -1, last_mouse_s = 0, admin_drawn_s = -1;
+  int break_done_at = session.trials_done();  // a resumed session starts with the welcome screen instead
+  bool paused = false, stop = false, screenshot_due = false;
+  AdminStatus status;
+  const bool resumed = session.trials_done() > 0;
+
+  auto progress = [&] {
+    const int round = session.current_round(), n = static_cast<int>(session.rounds().size());
+    if (plan && plan->practice) return std::string("Practice");
+    if (round >= n) return std::string();
+    return "Part " + std::to_string(round + 1) + " of " + std::to_string(n);
+  };
+  // Chooses what comes next: the end, a break, or the next trial after a blank interval.
+  auto advance = [&] {
+    plan = session.next();
+    if (!plan) {
+      screen = Screen::finished;
+      say("session complete: " + std::to_string(session.trials_done()) + " trials in " + session.dir().string());
+      return;
+    }
+    if (session.break_due() && break_done_at != session.trials_done()) {
+      screen = Screen::rest;
+      say("break after " + std::to_string(session.trials_done()) + " trials");
+      return;
+    }
+    participant.make_current();  // the renderer's GL context (advance may run in the admin's frame)
+    const stimuli::StimulusPair pair = renderer.render(plan->stimulus);
+    if (two) {
+      const bool left_jagged = plan->target == "left";
+      view.set_stimuli({left_jagged ? &pair.artifact : &pair.line, left_jagged ? &pair.line : &pair.artifact});
+    } else {
+      view.set_stimuli({plan->target == "jagged" ? &pair.artifact : &pair.line});
+    }
+    screen = Screen::blank;
+    blank_until = glfw.now_s() + o.iti_ms / 1000.0;
+  };
+  auto answer = [&](Answer a, double when_s) {
+    const std::string response = response_for(a, config.task);
+    const double rt_ms = std::max(0.0, (when_s - onset_s) * 1000.0);
+    const trial_log::TrialRow row = session.record(*plan, response, rt_ms);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "trial %d: %s (%s), %.0f ms", row.trial, response.c_str(),
+                  row.correct ? "correct" : "wrong", rt_ms);
+    status.last_answer = buf;
+    say(buf);
+    advance();
+  };
+  auto start = [&] {
+    if (screen == Screen::welcome) {
+      advance();
+    } else if (screen == Screen::rest) {
+      break_done_at = session.trials_done();
+      advance();
+    }
+  };
+  auto apply_admin = [&](const AdminActions& a) {
+    if (a.toggle_pause && screen != Screen::finished) {
+      paused = !paused;
+      say(paused ? "paused by the experimenter" : "resumed by the experimenter");
+      if (paused && (screen == Screen::blank || screen == Screen::trial)) screen = Screen::pause;
+      if (!paused && screen == Screen::pause) advance();  // the withdrawn trial comes again (same plan)
+    }
+    if (a.end_round) {
+      say("round " + std::to_string(session.current_round() + 1) + " ended by the experimenter");
+      session.end_round();
+      if (screen == Screen::blank || screen == Screen::trial) advance();
+    }
+    if (a.quit) stop = true;
+  };
+
+  if (!o.screenshot_dir.empty()) advance();  // straight to the first trial
+
+  while (!stop) {
+    const double frame_start = glfw.now_s();
+    if (participant.close_requested() || (admin && admin->close_requested())) break;
+    for (const Press& p : participant.take_presses()) {
+      if (p.mouse_button >= 0) {
+        last_mouse_s = p.time_s;
+        continue;
+      }
+      if (p.key == GLFW_KEY_ESCAPE) stop = true;
+      else if (p.key == GLFW_KEY_F12 && o.admin_panel) panel_visible = !panel_visible;
+      else if (p.key == GLFW_KEY_SPACE && !paused) start();
+      else if (screen == Screen::trial && onset_s >= 0 && p.time_s >= onset_s && answer_for_key(p.key) != Answer::none)
+        answer(answer_for_key(p.key), p.time_s);
+    }
+    if (admin) admin->take_presses();
+    if (stop) break;
+    if (screen == Screen::blank && glfw.now_s() >= blank_until) {
+      screen = Screen::trial;
+      onset_s = -1;
+    }
+
+    // Participant frame.
+    participant.begin_frame();
+    const Screen drawn = screen;
+    switch (screen) {
+      case Screen::welcome:
+        if (view.draw_message(participant, resumed ? "Welcome back" : "Shadow edges", instructions(config.task),
+                              paused ? "" : "Start   (Space)", progress()))
+          start();
+        break;
+      case Screen::rest:
+        if (view.draw_message(participant, "Break", "Rest your eyes for a moment.\nContinue when you are ready.",
+                              paused ? "" : "Continue   (Space)", progress()))
+          start();
+        break;
+      case Screen::pause:
+        view.draw_message(participant, "Please wait", "The experimenter has paused the session.", "", progress());
+        break;
+      case Screen::finished:
+        view.draw_message(participant, "Thank you!", "The session is complete.\nPlease tell the experimenter.", "", "");
+        break;
+      case Screen::blank:
+        view.draw_blank(participant, progress());
+        break;
+      case Screen::trial: {
+        const Answer clicked = view.draw_trial(participant, progress());
+        if (clicked != Answer::none && onset_s >= 0) answer(clicked, std::max(last_mouse_s, onset_s));
+        break;
+      }
+    }
+    status.screen = describe(screen);
+    status.paused = paused;
+    if (o.admin_panel && panel_visible) {
+      ImGui::PushFont(participant.body_font());
+      ImGui::SetNextWindowPos({12, 12}, ImGuiCond_FirstUseEver);
+      ImGui::SetNextWindowSize({900, 620}, ImGuiCond_FirstUseEver);
+      ImGui::SetNextWindowBgAlpha(0.96f);
+      ImGui::Begin("Admin (F12 hides)");
+      apply_admin(draw_admin(session, status));
+      ImGui::End();
+      ImGui::PopFont();
+    }
+    participant.end_frame();
+    const bool first_trial_frame = drawn == Screen::trial && screen == Screen::trial && onset_s < 0;
+    if (first_trial_frame && !o.screenshot_dir.empty()) {
+      fs::create_directories(o.screenshot_dir);
+      write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
+      screenshot_due = true;
+    }
+    participant.swap();
+    if (first_trial_frame) {
+      glFinish();  // the swap has been executed: the stimulus is on its way to the screen
+      onset_s = glfw.now_s();
+      participant.take_presses();  // anything pressed before the onset is not an answer
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "trial %d on screen (round %d, %s, r %.2f px, %s)", plan->trial, plan->round + 1,
+                    plan->staircase_name.c_str(), plan->stimulus.filter_radius_px, plan->practice ? "practice" : "QUEST");
+      say(buf);
+    }
+
+    // Admin window, at most ten times a second (it must not steal the participant's frames).
+    if (admin && (screenshot_due || frame_start - admin_drawn_s >= 0.1)) {
+      admin_drawn_s = frame_start;
+      admin->begin_frame();
+      glClearColor(0.09f, 0.10f, 0.11f, 1);
+      glClear(GL_COLOR_BUFFER_BIT);
+      ImGui::SetNextWindowPos({0, 0});
+      ImGui::SetNextWindowSize(ImGui::GetIO().DisplaySize);
+      ImGui::Begin("##admin", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings);
+      const AdminActions actions = draw_admin(session, status);
+      ImGui::End();
+      admin->end_frame();
+      if (screenshot_due) write_rgb_png(o.screenshot_dir / "admin.png", admin->read_back());
+      admin->swap();
+      apply_admin(actions);
+    }
+    if (screenshot_due) {
+      say("wrote " + (o.screenshot_dir / "participant.png").string() + (admin ? " and admin.png" : ""));
+      break;
+    }
+    // Where the swap does not wait for the display (no vsync, e.g. Xvfb), do not spin: wait for
+    // input up to ~120 frames a second. Input times come from the callbacks, so RTs do not suffer.
+    glfw.wait_events(std::max(0.0, frame_start + 1.0 / 120 - glfw.now_s()));
+  }
+  if (screen != Screen::finished)
+    say("stopped after " + std::to_string(session.trials_done()) + " trials; continue with: penumbra-study run --resume " +
+        session.dir().string());
+  return 0;
+}
+
+}  // namespace penumbra::study_gui

@@ -1,0 +1,32 @@
+#pragma once
+// `penumbra-study run` with a participant: the participant view full screen on one monitor and
+// the admin view in a second window (or, on a single monitor, a panel the experimenter toggles
+// with F12). Answers go through the same Session::record as headless runs, so the log is written
+// the same way: one fsynced row per answered trial. Escape or closing a window stops the session
+// between trials; the directory stays resumable (`--resume DIR`).
+#include <filesystem>
+#include <string>
+
+#include "procedure/session.h"
+
+namespace CLI {
+class App;
+}
+
+namespace penumbra::study_gui {
+
+struct GuiOptions {
+  int monitor = -1;            // participant monitor (GLFW index); -1: the config's display.monitor
+  std::string windowed;        // "WxH": a window instead of full screen (testing, demos)
+  bool admin_panel = false;    // single-monitor setups: the admin view is a panel (F12) in the participant window
+  double iti_ms = 400;         // blank screen between trials
+  std::filesystem::path screenshot_dir;  // write participant.png (+ admin.png) at the first stimulus onset, then stop
+};
+
+// Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot to `run`.
+void add_options(CLI::App& run, GuiOptions& options);
+
+// Runs the session until it is finished or stopped. Returns the process exit code (0).
+int run_session(procedure::Session& session, const GuiOptions& options);
+
+}  // namespace penumbra::study_gui
