@@ -14,6 +14,7 @@ packages=(
   libassimp-dev libcli11-dev nlohmann-json3-dev
   python3-matplotlib
   xvfb xauth fonts-dejavu-core
+  xdotool  # the study GUI test types keys and clicks into the participant window under Xvfb
 )
 
 missing=()

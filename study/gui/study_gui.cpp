@@ -222,6 +222,7 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
   };
 
   if (!o.screenshot_dir.empty()) advance();  // straight to the first trial
+  else say("welcome screen: waiting for Space");
 
   while (!stop) {
     const double frame_start = glfw.now_s();

@@ -112,35 +112,46 @@ std::vector<double> ImageObserver::edge_trace(const io::Image8& image, const sti
   std::sort(px.begin(), px.end(), [](const Sample& a, const Sample& b) { return a.s < b.s; });
   const double r = spec.filter_radius_px, a = spec.artifact_px, band = band_half_width(spec);
   const double step = std::max(0.25, std::min(r, a) / 4);
-  std::vector<double> trace;
+  // Slices of 1 px along the edge, each with how far it reaches across the edge on both sides.
+  struct Slice {
+    std::size_t begin, end;
+    double reach;
+  };
+  std::vector<Slice> slices;
+  double max_reach = 0;
   for (std::size_t begin = 0; begin < px.size();) {
     const double slice = std::floor(px[begin].s);
     std::size_t end = begin;
     double v_min = band, v_max = -band;
-    while (end < px.size() && std::floor(px[end].s) == slice) {
+    for (; end < px.size() && std::floor(px[end].s) == slice; ++end) {
       v_min = std::min(v_min, px[end].v);
       v_max = std::max(v_max, px[end].v);
-      ++end;
     }
-    // Only slices that cross the whole band (not cut by the stimulus border) trace the edge.
-    if (v_min < -band + 1.5 && v_max > band - 1.5) {
-      auto sse = [&](double e) {
-        double sum = 0;
-        for (std::size_t i = begin; i < end; ++i) {
-          const double d = px[i].luminance - spec.lit_linear * disk_edge(px[i].v - e, r);
-          sum += d * d;
-        }
-        return sum;
-      };
-      // A coarse scan first: a jagged edge's slice can sit up to a texel away from the original.
-      double best_e = 0, best = INFINITY;
-      for (double e = -a - 1; e <= a + 1; e += step) {
-        const double f = sse(e);
-        if (f < best) best = f, best_e = e;
-      }
-      trace.push_back(golden_min(sse, best_e - step, best_e + step, &best));
-    }
+    slices.push_back({begin, end, std::min(-v_min, v_max)});
+    max_reach = std::max(max_reach, slices.back().reach);
     begin = end;
+  }
+  // Slices cut short by the stimulus border (near its corners) do not trace the edge; where the
+  // band is wider than the stimulus (radius near its half size) the best-covered half suffices.
+  const double needed = std::min(band - 1.5, 0.5 * max_reach);
+  std::vector<double> trace;
+  for (const Slice& sl : slices) {
+    if (sl.reach < needed) continue;
+    auto sse = [&](double e) {
+      double sum = 0;
+      for (std::size_t i = sl.begin; i < sl.end; ++i) {
+        const double d = px[i].luminance - spec.lit_linear * disk_edge(px[i].v - e, r);
+        sum += d * d;
+      }
+      return sum;
+    };
+    // A coarse scan first: a jagged edge's slice can sit up to a texel away from the original.
+    double best_e = 0, best = INFINITY;
+    for (double e = -a - 1; e <= a + 1; e += step) {
+      const double f = sse(e);
+      if (f < best) best = f, best_e = e;
+    }
+    trace.push_back(golden_min(sse, best_e - step, best_e + step, &best));
   }
   return trace;
 }

@@ -1,0 +1,254 @@
+// The participant and admin windows under Xvfb (run through run_under_xvfb.sh): xdotool presses
+// keys and clicks buttons, the log gains one row per answer with the response of the key or
+// button and the target side; Escape stops between trials and --resume finishes the session; the
+// screenshot holds the trial's stimuli pixel for pixel, the jagged one where the log says.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "gl/context.h"
+#include "gui/participant_view.h"
+#include "io/image_io.h"
+#include "log/trial_log.h"
+#include "procedure/session.h"
+#include "stimuli/stimulus.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+using namespace std::chrono_literals;
+
+const std::string kExe = PENUMBRA_STUDY_EXE;
+constexpr int kWidth = 800, kHeight = 520, kSize = 160;
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-gui-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A short session: 1 practice trial, two staircases of 2..3 trials, a break after 4 trials.
+fs::path tiny_config(const std::string& task) {
+  const fs::path p = fresh("config-" + task + ".json");
+  std::ofstream(p) << R"({"name": "gui-test", "task": ")" << task << R"(", "artifact_px": [10, 20],
+    "rounds": [{"pattern": "stair", "contrast": 1.0}],
+    "stopping": {"min_trials": 2, "max_trials": 3, "sd_below": 0.01},
+    "practice_trials": 1, "break_every_trials": 4, "seed": 5, "stimulus": {"size_px": 160}})";
+  return p;
+}
+
+std::vector<std::string> windowed(std::vector<std::string> args) {
+  for (const char* a : {"--windowed", "800x520", "--iti-ms", "50"}) args.push_back(a);
+  return args;
+}
+
+// penumbra-study in the background, its stdout and stderr in a file.
+class App {
+ public:
+  explicit App(const std::vector<std::string>& args) : capture_(fresh("capture-" + std::to_string(++count_))) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int fd = ::open(capture_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(fd, 1);
+      dup2(fd, 2);
+      std::vector<char*> argv{const_cast<char*>(kExe.c_str())};
+      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      execv(kExe.c_str(), argv.data());
+      _exit(127);
+    }
+  }
+  ~App() {
+    if (running()) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    fs::remove(capture_);
+  }
+  std::string output() const { return slurp(capture_); }
+  bool running() {
+    if (pid_ > 0 && waitpid(pid_, &status_, WNOHANG) == pid_) pid_ = -1;
+    return pid_ > 0;
+  }
+  // Until the app printed one of `texts`: its index, or -1 when it exited first or after 20 s.
+  int wait_for_any(const std::vector<std::string>& texts) {
+    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
+      const bool alive = running();
+      const std::string out = output();
+      for (std::size_t i = 0; i < texts.size(); ++i)
+        if (out.find(texts[i]) != std::string::npos) return static_cast<int>(i);
+      if (!alive) return -1;
+      std::this_thread::sleep_for(15ms);
+    }
+    return -1;
+  }
+  bool wait_for(const std::string& text) { return wait_for_any({text}) == 0; }
+  // The exit code, or -1 when it did not exit normally within 20 s.
+  int wait_exit() {
+    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
+      if (!running()) return WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
+      std::this_thread::sleep_for(15ms);
+    }
+    return -1;
+  }
+
+ private:
+  fs::path capture_;
+  pid_t pid_ = -1;
+  int status_ = 0;
+  static inline int count_ = 0;
+};
+
+// xdotool on the participant window (found by its exact title) with real XTEST input.
+bool xdo(const std::string& args) {
+  const std::string cmd =
+      "xdotool search --sync --name '^Penumbra study$' windowfocus --sync " + args + " >/dev/null 2>&1";
+  return std::system(cmd.c_str()) == 0;
+}
+
+class StudyGui : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no X display: run through run_under_xvfb.sh";
+  }
+};
+
+TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
+  const fs::path config = tiny_config("2afc"), dir = fresh("session");
+  const auto layout = study_gui::stimulus_layout(kWidth, kHeight, kSize, 2);
+  // Button centres; the window sits at the screen origin (Xvfb runs no window manager).
+  auto click = [&](int side) {
+    return "mousemove " + std::to_string(layout.x_px[side] + kSize / 2) + " " +
+           std::to_string(layout.y_px + kSize + 36 + 27) + " click 1";
+  };
+  struct Input {
+    std::string xdo, response;
+  };
+  std::vector<Input> inputs{{"key f", "left"}, {"key Right", "right"}, {click(1), "right"}, {click(0), "left"}};
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-test"}));
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    ASSERT_TRUE(xdo("key space"));
+    for (std::size_t t = 0; t < inputs.size(); ++t) {
+      ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + " on screen")) << app.output();
+      ASSERT_TRUE(xdo(inputs[t].xdo));
+      ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
+    }
+    ASSERT_TRUE(app.wait_for("break after 4 trials")) << app.output();
+    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(app.wait_for("trial 4 on screen")) << app.output();
+    xdo("key Escape");  // mid-trial: that trial is not logged (xdotool may fail as the window closes)
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    EXPECT_NE(app.output().find("stopped after 4 trials; continue with: penumbra-study run --resume"), std::string::npos)
+        << app.output();
+  }
+  const auto first = trial_log::read(dir / "trials.csv");  // validates every row
+  ASSERT_EQ(first.rows.size(), 4u);
+  EXPECT_FALSE(first.torn_tail);
+  EXPECT_EQ(first.rows[0].practice, 1);
+  {
+    App app(windowed({"run", "--resume", dir.string()}));
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    ASSERT_TRUE(xdo("key space"));
+    for (int t = 4;; ++t) {
+      ASSERT_LT(t, 20) << "the session should end after at most 7 trials";
+      const int next = app.wait_for_any({"trial " + std::to_string(t) + " on screen", "session complete"});
+      ASSERT_GE(next, 0) << app.output();
+      if (next == 1) break;
+      const bool left = t % 2 == 0;
+      inputs.push_back({left ? "key Left" : "key j", left ? "left" : "right"});
+      ASSERT_TRUE(xdo(inputs.back().xdo));
+      ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
+    }
+    ASSERT_TRUE(app.wait_for("session complete")) << app.output();
+    xdo("key Escape");
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    EXPECT_EQ(app.output().find("stopped after"), std::string::npos) << app.output();
+  }
+  const auto log = trial_log::read(dir / "trials.csv").rows;
+  ASSERT_EQ(log.size(), inputs.size());
+  ASSERT_GE(log.size(), 5u);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const auto& r = log[i];
+    EXPECT_EQ(r.trial, static_cast<int>(i));
+    EXPECT_EQ(r.task, "2afc");
+    EXPECT_EQ(r.participant, "gui-test");
+    EXPECT_EQ(r.response, inputs[i].response) << "trial " << i << ": " << inputs[i].xdo;
+    EXPECT_EQ(r.correct, r.response == r.target ? 1 : 0) << "trial " << i;
+    EXPECT_GT(r.rt_ms, 0.0) << "trial " << i;
+    EXPECT_LT(r.rt_ms, 20000.0) << "trial " << i;
+  }
+  // The log replays through the procedure (every row what it would have asked) to a finished session.
+  procedure::Session replay = procedure::Session::resume(dir);
+  EXPECT_FALSE(replay.next().has_value());
+  fs::remove_all(dir);
+  fs::remove(config);
+}
+
+// The participant screenshot at the first trial: the stimuli copied 1:1 (every pixel equal to the
+// rendered image), the jagged one on the target side (2afc) or shown when the target is jagged
+// (yesno), the neutral background around them; and an admin window was drawn.
+TEST_F(StudyGui, StimuliAreShownPixelForPixelWhereTheLogSays) {
+  gl::HeadlessContext context;
+  stimuli::StimulusRenderer renderer;
+  for (const std::string task : {"2afc", "yesno"}) {
+    SCOPED_TRACE(task);
+    const fs::path config = tiny_config(task), dir = fresh("shot-" + task), shots = fresh("shots-" + task);
+    {
+      App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "shot",
+                        "--screenshot", shots.string()}));
+      ASSERT_EQ(app.wait_exit(), 0) << app.output();
+    }
+    ASSERT_TRUE(fs::exists(shots / "admin.png"));
+    const io::Image8 shot = io::read_image8(shots / "participant.png");
+    ASSERT_EQ(shot.width, kWidth);
+    ASSERT_EQ(shot.height, kHeight);
+    procedure::Session session = procedure::Session::resume(dir);  // nothing answered: trial 0 comes again
+    const auto plan = session.next();
+    ASSERT_TRUE(plan.has_value());
+    const stimuli::StimulusPair pair = renderer.render(plan->stimulus);
+    const bool two = task == "2afc";
+    std::vector<const io::Image8*> expected;
+    if (two) {
+      const bool left_jagged = plan->target == "left";
+      expected = {left_jagged ? &pair.artifact : &pair.line, left_jagged ? &pair.line : &pair.artifact};
+    } else {
+      expected = {plan->target == "jagged" ? &pair.artifact : &pair.line};
+    }
+    const auto layout = study_gui::stimulus_layout(kWidth, kHeight, kSize, two ? 2 : 1);
+    EXPECT_EQ(layout.y_px, (kHeight - kSize) / 2);
+    const int span = layout.x_px[layout.count - 1] + kSize - layout.x_px[0];
+    EXPECT_LE(std::abs(layout.x_px[0] - (kWidth - span - layout.x_px[0])), 1) << "stimuli centred";
+    for (int i = 0; i < layout.count; ++i) {
+      int wrong = 0;
+      for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x)
+          for (int c = 0; c < 3; ++c)
+            wrong += shot.at(layout.x_px[i] + x, layout.y_px + y, c) != expected[static_cast<std::size_t>(i)]->at(x, y);
+      EXPECT_EQ(wrong, 0) << "stimulus " << i;
+      // One pixel outside each corner is background.
+      EXPECT_EQ(shot.at(layout.x_px[i] - 1, layout.y_px - 1, 0), study_gui::kBackgroundValue);
+      EXPECT_EQ(shot.at(layout.x_px[i] + kSize, layout.y_px + kSize, 1), study_gui::kBackgroundValue);
+    }
+    EXPECT_NE(pair.artifact.pixels, pair.line.pixels);  // the comparison above can tell them apart
+    fs::remove_all(dir);
+    fs::remove_all(shots);
+    fs::remove(config);
+  }
+}
+
+}  // namespace
