@@ -67,7 +67,8 @@ void staircase_plot(const procedure::Staircase& sc, double max_radius_px, int ma
   dl->AddRect(p0, p1, frame);
   // Published rule r = 3.47 a, and the current estimate with its +-1 sd band.
   const float y_pub = py(kPublishedC * sc.artifact_px);
-  dl->AddLine({p0.x, y_pub}, {p1.x, y_pub}, IM_COL32(120, 120, 90, 160), 1.0f);
+  for (float x = p0.x; x < p1.x; x += 10)  // dashed
+    dl->AddLine({x, y_pub}, {std::min(x + 5, p1.x), y_pub}, IM_COL32(200, 185, 100, 220), 1.5f);
   if (!sc.filter_radius_px.empty()) {
     const double m = sc.quest.mean(), sd = sc.quest.sd();
     const float y_est = py(radius_at(sc.artifact_px, m));
@@ -147,15 +148,20 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
   const float avail = ImGui::GetContentRegionAvail().x;
   const float spacing = ImGui::GetStyle().ItemSpacing.x;
   const float w = (avail - spacing * static_cast<float>(per_row - 1)) / static_cast<float>(per_row);
+  // The plots take the height left, less the legend and the earlier-rounds header below them.
+  const int plot_rows = (static_cast<int>(staircases.size()) + per_row - 1) / per_row;
+  const float line = ImGui::GetFrameHeightWithSpacing();
+  const float h = std::clamp((ImGui::GetContentRegionAvail().y - 2.5f * line) / static_cast<float>(plot_rows) - line,
+                             150.0f, 420.0f);
   for (std::size_t i = 0; i < staircases.size(); ++i) {
     const auto& sc = staircases[i];
     if (i % static_cast<std::size_t>(per_row) != 0) ImGui::SameLine();
     ImGui::BeginGroup();
     ImGui::Text("%s: filter radius (px) per trial", sc.name.c_str());
-    staircase_plot(sc, max_radius, config.max_trials, w, 190);
+    staircase_plot(sc, max_radius, config.max_trials, w, h);
     ImGui::EndGroup();
   }
-  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   olive: published r = 3.47 a");
+  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   dashed: published r = 3.47 a");
 
   if (shown_round > 0 && ImGui::CollapsingHeader("Earlier rounds")) {
     for (int r = 0; r < shown_round; ++r)

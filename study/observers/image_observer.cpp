@@ -204,9 +204,21 @@ bool ImageObserver::judges_jagged(const io::Image8& image, const stimuli::Stimul
     throw std::invalid_argument("image observer: yes/no answers need the local criterion");
   if (!(params_.false_alarm > 0 && params_.false_alarm < 1))
     throw std::invalid_argument("image observer: false_alarm must be in (0, 1)");
-  // A straight edge's deviation is ~0, so its decision variable is N(0, weber): exceeding
-  // z(1 - fa) * weber happens with probability fa.
-  const double criterion = std::sqrt(2.0) * psychometric::inverse_erf(1 - 2 * params_.false_alarm) * params_.weber;
+  // The observer knows what a straight edge at this blur looks like on this display: its own
+  // straight template (the analytic filtered edge, quantized to 8 bits like the stimulus) has a
+  // small deviation d0 (quantization). A straight stimulus then gives d0 + N(0, weber), which
+  // exceeds d0 + z(1 - fa) weber with probability fa.
+  io::Image8 straight{image.width, image.height, 1, std::vector<std::uint8_t>(image.pixels.size())};
+  const int n = image.width;
+  const double norm = std::sqrt(1 + g.line_m * g.line_m);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
+      const double v = (q.y - g.line_m * q.x - g.line_b) / norm;
+      straight.at(x, y) = stimuli::encode(spec.lit_linear * disk_edge(v, spec.filter_radius_px), spec.transfer);
+    }
+  const double d0 = local_deviation(straight, spec, g, false);
+  const double criterion = d0 + std::sqrt(2.0) * psychometric::inverse_erf(1 - 2 * params_.false_alarm) * params_.weber;
   return decision(image, spec, g) > criterion;
 }
 

@@ -233,6 +233,65 @@ TEST(ImageObserver, SeesTheStaircaseAtSmallRadiiAndNotAtLargeOnes) {
   EXPECT_GE(right, 19);
 }
 
+// The local criterion: a step is seen by its bend while the filter is small, hidden once it is
+// several texels wide (the global fit still sees the sub-texel shift there); the relative
+// deviation depends on r / a only, so thresholds scale with a.
+TEST(ImageObserver, LocalCriterionHidesTheStepAtLargeRadiiAndScalesWithTheArtifact) {
+  stimuli::StimulusRenderer renderer;
+  observers::ImageObserver eye({}, 3);
+  auto deviation = [&](stimuli::Pattern pattern, double a, double ratio, bool jagged) {
+    StimulusSpec spec;
+    spec.pattern = pattern;
+    spec.artifact_px = a;
+    spec.filter_radius_px = ratio * a;
+    spec.seed = 21;
+    const auto pair = renderer.render(spec);
+    return eye.local_deviation(jagged ? pair.artifact : pair.line, spec, pair.geometry, false);
+  };
+  const double weber = observers::ImageObserverParams{}.weber;
+  for (double a : {5.0, 20.0}) {
+    SCOPED_TRACE(a);
+    EXPECT_GT(deviation(stimuli::Pattern::step, a, 1.5, true), 2 * weber);
+    EXPECT_LT(deviation(stimuli::Pattern::step, a, 6.0, true), weber);
+    EXPECT_GT(deviation(stimuli::Pattern::stair, a, 1.0, true), 2 * weber);
+    EXPECT_LT(deviation(stimuli::Pattern::stair, a, 6.0, true), 0.2 * weber);
+    EXPECT_LT(deviation(stimuli::Pattern::step, a, 1.5, false), 0.5 * weber);  // the straight partner: 8-bit steps only
+  }
+  // Scale invariance: a = 5 and a = 20 at the same r / a differ by little.
+  const double d5 = deviation(stimuli::Pattern::step, 5, 3, true), d20 = deviation(stimuli::Pattern::step, 20, 3, true);
+  EXPECT_NEAR(d5 / d20, 1.0, 0.2);
+  // The global criterion still separates the step at r = 6 a (what people do not see).
+  StimulusSpec spec;
+  spec.pattern = stimuli::Pattern::step;
+  spec.filter_radius_px = 60;
+  const auto pair = renderer.render(spec);
+  observers::ImageObserver global({0.0, 0.0, 60.0, observers::StraightnessCriterion::global}, 3);
+  EXPECT_GT(global.straightness_residual(pair.artifact, spec, pair.geometry, false),
+            20 * global.straightness_residual(pair.line, spec, pair.geometry, false) + 1e-3);
+}
+
+// yes/no: "jagged" for a visible staircase, the false-alarm rate for straight edges.
+TEST(ImageObserver, YesNoAnswersFollowTheCriterion) {
+  stimuli::StimulusRenderer renderer;
+  StimulusSpec spec;
+  spec.filter_radius_px = 5;  // a = 10: plainly jagged
+  spec.size_px = 96;
+  const auto sharp = renderer.render(spec);
+  observers::ImageObserverParams params;
+  params.false_alarm = 0.1;
+  observers::ImageObserver eye(params, 5);
+  int hits = 0, false_alarms = 0;
+  constexpr int n = 300;
+  for (int i = 0; i < n; ++i) {
+    hits += eye.judges_jagged(sharp.artifact, spec, sharp.geometry);
+    false_alarms += eye.judges_jagged(sharp.line, spec, sharp.geometry);
+  }
+  EXPECT_EQ(hits, n);
+  EXPECT_NEAR(false_alarms / double(n), 0.1, 0.05);  // binomial sd 0.017
+  observers::ImageObserver global({0.02, 0.0, 60.0, observers::StraightnessCriterion::global}, 5);
+  EXPECT_THROW(global.judges_jagged(sharp.line, spec, sharp.geometry), std::invalid_argument);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

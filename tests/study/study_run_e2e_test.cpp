@@ -150,6 +150,68 @@ TEST(StudyRun, SigkillAtARandomTrialThenResumeEqualsAnUninterruptedRun) {
   fs::remove(cap);
 }
 
+// yes/no: half the trials show the straight edge; only the jagged ones feed QUEST (its guess rate
+// is the false-alarm rate), and the staircases still find the planted threshold.
+TEST(StudyRun, HeadlessYesNoFeedsQuestTheJaggedTrialsAndConverges) {
+  const fs::path config = fresh("yesno.json"), dir = fresh("yesno");
+  {
+    std::ifstream in(kConfig);
+    std::string text(std::istreambuf_iterator<char>(in), {});
+    const std::string from = "\"task\": \"2afc\"";
+    ASSERT_NE(text.find(from), std::string::npos);
+    text.replace(text.find(from), from.size(), "\"task\": \"yesno\"");
+    // Drop the 2afc QUEST block: yesno gets its own defaults (gamma 0.05, p_threshold 0.658).
+    const auto q = text.find("\"quest\"");
+    text.erase(q, text.find('}', q) + 3 - q);
+    std::ofstream(config) << text;
+  }
+  std::string out;
+  ASSERT_EQ(run({"run", "--config", config.string(), "--observer", kObserver + ",fa=0.05", "--headless", "-o", dir.string()},
+                &out),
+            0)
+      << out;
+  const auto rows = trial_log::read(dir / "trials.csv").rows;
+  std::map<std::string, std::vector<const trial_log::TrialRow*>> jagged;
+  std::map<std::string, double> last_mean;
+  int straight = 0, false_alarms = 0;
+  for (const auto& r : rows) {
+    EXPECT_EQ(r.task, "yesno");
+    ASSERT_TRUE(r.target == "jagged" || r.target == "straight") << r.target;
+    ASSERT_TRUE(r.response == "yes" || r.response == "no") << r.response;
+    EXPECT_EQ(r.correct, (r.response == "yes") == (r.target == "straight") ? 1 : 0);
+    if (r.practice) continue;
+    const std::string key = std::to_string(r.round) + "/" + r.staircase;
+    if (r.target == "straight") {
+      ++straight;
+      false_alarms += r.response == "no";
+      if (last_mean.count(key)) {
+        EXPECT_EQ(r.quest_mean, last_mean[key]) << "a straight trial moved QUEST";
+      }
+    } else {
+      jagged[key].push_back(&r);
+    }
+    last_mean[key] = r.quest_mean;
+  }
+  ASSERT_EQ(jagged.size(), 12u);
+  ASSERT_GT(straight, 100);
+  EXPECT_NEAR(static_cast<double>(false_alarms) / straight, 0.05, 0.04);
+  const double planted = -std::log10(3.0);
+  double sum_error = 0;
+  for (const auto& [name, js] : jagged) {
+    EXPECT_GE(js.size(), 10u) << name;  // the stopping rule counts QUEST (jagged) trials
+    EXPECT_LE(js.size(), 40u) << name;
+    EXPECT_NEAR(js.back()->quest_mean, planted, 0.3) << name;
+    sum_error += js.back()->quest_mean - planted;
+  }
+  EXPECT_NEAR(sum_error / 12, 0.0, 0.1);
+  std::ifstream in(dir / "session.json");
+  const std::string json(std::istreambuf_iterator<char>(in), {});
+  EXPECT_NE(json.find("\"gamma\": 0.05"), std::string::npos);
+  EXPECT_NE(json.find("\"p_threshold\": 0.658"), std::string::npos);
+  fs::remove_all(dir);
+  fs::remove(config);
+}
+
 TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   const fs::path dir = fresh("refuse");
   ASSERT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string()}), 0);
