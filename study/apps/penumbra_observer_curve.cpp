@@ -3,7 +3,8 @@
 // orientation), takes the observer's noise-free local deviations of the jagged and the straight
 // image, and turns their difference into P(correct) = Phi(diff / (sqrt 2 weber)) (2afc: both
 // decisions carry independent N(0, weber) noise). The implied c is the r / a beyond which P stays
-// below p_threshold: the filter that hides the artifact for every larger radius.
+// below p_threshold (interpolated in log r / a at the last crossing): the filter that hides the
+// artifact for every larger radius.
 //   penumbra-observer-curve --pattern step --artifact-px 5,10,20
 #include <CLI/CLI.hpp>
 
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
                 pattern.c_str(), contrast, params.window_r, params.weber, params.blur_sigma_arcmin,
                 params.pixels_per_degree, seeds);
     for (double a : artifacts) {
-      double implied = NAN;
+      double implied = NAN, last_ratio = NAN, last_p = NAN;
       std::printf("a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", a);
       for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
         stimuli::StimulusSpec spec;
@@ -68,11 +69,17 @@ int main(int argc, char** argv) {
           straight += eye.local_deviation(pair.line, spec, pair.geometry, false) / seeds;
         }
         const double p = 0.5 * std::erfc(-(jagged - straight) / (2 * params.weber));  // Phi(d / (sqrt2 w))
-        if (p >= p_threshold) implied = NAN;
-        else if (std::isnan(implied)) implied = ratio;
+        if (p >= p_threshold) {
+          implied = NAN;
+        } else if (std::isnan(implied)) {  // crossed down: interpolate in log r/a
+          implied = std::isnan(last_p) ? ratio
+                                       : last_ratio * std::pow(ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
+        }
+        last_ratio = ratio;
+        last_p = p;
         std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p);
       }
-      std::printf("  implied c (hidden for every r/a >= c on the grid): %.2f\n", implied);
+      std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %.2f\n", implied);
       std::fflush(stdout);
     }
   } catch (const std::exception& e) {

@@ -66,6 +66,8 @@ GuiWindow::GuiWindow(const WindowSpec& spec) {
   glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_FALSE);
   glfwWindowHint(GLFW_SRGB_CAPABLE, GLFW_FALSE);
   glfwWindowHint(GLFW_SAMPLES, 0);
+  glfwWindowHint(GLFW_FOCUSED, spec.focused ? GLFW_TRUE : GLFW_FALSE);
+  glfwWindowHint(GLFW_FOCUS_ON_SHOW, spec.focused ? GLFW_TRUE : GLFW_FALSE);
   int width = spec.width, height = spec.height;
   if (spec.fullscreen_on) {
     const GLFWvidmode* mode = glfwGetVideoMode(spec.fullscreen_on);

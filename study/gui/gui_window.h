@@ -34,6 +34,7 @@ struct WindowSpec {
   GLFWmonitor* fullscreen_on = nullptr;  // full screen at the monitor's current video mode
   int x = -1, y = -1;                    // windowed position; -1: where the system puts it
   bool vsync = false;
+  bool focused = true;  // take the keyboard focus when opened
   float font_px = 18;       // body text
   float large_font_px = 0;  // a second, larger font (0: none)
 };

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -128,14 +129,14 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
     as.width = 1120;
     as.height = 780;
     if (fullscreen) {
-      const GLFWmonitor* other = nullptr;
+      GLFWmonitor* other = nullptr;
       for (std::size_t i = 0; i < monitors.size(); ++i)
         if (static_cast<int>(i) != monitor) {
           other = monitors[i];
           break;
         }
       int x = 0, y = 0, w = 0, h = 0;
-      glfwGetMonitorWorkarea(const_cast<GLFWmonitor*>(other), &x, &y, &w, &h);
+      glfwGetMonitorWorkarea(other, &x, &y, &w, &h);
       as.x = x + 20;
       as.y = y + 40;
       as.width = std::min(as.width, w - 40);
@@ -145,7 +146,9 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
       as.y = 0;
     }
     as.font_px = 16;
+    as.focused = false;  // the keyboard belongs to the participant
     admin = std::make_unique<GuiWindow>(as);
+    glfwFocusWindow(participant.window());
   }
   bool panel_visible = !o.screenshot_dir.empty();
 
@@ -227,7 +230,14 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
   while (!stop) {
     const double frame_start = glfw.now_s();
     if (participant.close_requested() || (admin && admin->close_requested())) break;
-    for (const Press& p : participant.take_presses()) {
+    // One keyboard: keys typed while the admin window has the focus (after a click there) count
+    // as the participant's; the admin window itself takes only mouse input.
+    std::vector<Press> presses = participant.take_presses();
+    if (admin)
+      for (const Press& p : admin->take_presses())
+        if (p.key >= 0) presses.push_back(p);
+    std::sort(presses.begin(), presses.end(), [](const Press& a, const Press& b) { return a.time_s < b.time_s; });
+    for (const Press& p : presses) {
       if (p.mouse_button >= 0) {
         last_mouse_s = p.time_s;
         continue;
@@ -238,7 +248,6 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
       else if (screen == Screen::trial && onset_s >= 0 && p.time_s >= onset_s && answer_for_key(p.key) != Answer::none)
         answer(answer_for_key(p.key), p.time_s);
     }
-    if (admin) admin->take_presses();
     if (stop) break;
     if (screen == Screen::blank && glfw.now_s() >= blank_until) {
       screen = Screen::trial;
