@@ -153,20 +153,10 @@ TEST(StudyRun, SigkillAtARandomTrialThenResumeEqualsAnUninterruptedRun) {
 // yes/no: half the trials show the straight edge; only the jagged ones feed QUEST (its guess rate
 // is the false-alarm rate), and the staircases still find the planted threshold.
 TEST(StudyRun, HeadlessYesNoFeedsQuestTheJaggedTrialsAndConverges) {
-  const fs::path config = fresh("yesno.json"), dir = fresh("yesno");
-  {
-    std::ifstream in(kConfig);
-    std::string text(std::istreambuf_iterator<char>(in), {});
-    const std::string from = "\"task\": \"2afc\"";
-    ASSERT_NE(text.find(from), std::string::npos);
-    text.replace(text.find(from), from.size(), "\"task\": \"yesno\"");
-    // Drop the 2afc QUEST block: yesno gets its own defaults (gamma 0.05, p_threshold 0.658).
-    const auto q = text.find("\"quest\"");
-    text.erase(q, text.find('}', q) + 3 - q);
-    std::ofstream(config) << text;
-  }
+  const std::string config = PENUMBRA_DATA_DIR "/studies/default-yesno.json";  // no quest block: yesno defaults
+  const fs::path dir = fresh("yesno");
   std::string out;
-  ASSERT_EQ(run({"run", "--config", config.string(), "--observer", kObserver + ",fa=0.05", "--headless", "-o", dir.string()},
+  ASSERT_EQ(run({"run", "--config", config, "--observer", kObserver + ",fa=0.05", "--headless", "-o", dir.string()},
                 &out),
             0)
       << out;
@@ -209,7 +199,6 @@ TEST(StudyRun, HeadlessYesNoFeedsQuestTheJaggedTrialsAndConverges) {
   EXPECT_NE(json.find("\"gamma\": 0.05"), std::string::npos);
   EXPECT_NE(json.find("\"p_threshold\": 0.658"), std::string::npos);
   fs::remove_all(dir);
-  fs::remove(config);
 }
 
 TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
