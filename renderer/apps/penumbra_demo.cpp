@@ -1,0 +1,379 @@
+// penumbra-demo: adaptive shadow-map resolution against a fixed resolution.
+//
+//   --headless  for each technique, renders the scene along a fixed camera path twice, once at a
+//               fixed resolution (default 2048²) and once with the adaptive rule res = c / r_uv,
+//               and reports frame time (median and spread over the path), per-pass times, the
+//               resolution used, and the image difference (max abs, SSIM, share of pixels off by
+//               more than 1/255). Writes report.json, frames.csv, side-by-side images and a bar
+//               chart (scripts/plot_demo.py) into -o DIR; prints a table.
+//   windowed    the same renderer in a window with a panel: technique and filter, fitting,
+//               adaptive on/off, c and its calibration file, the resolution in use per cascade,
+//               shadow-map and cascade overlays, fps and per-pass times.
+#include <epoxy/gl.h>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/constants.hpp>
+
+#include "adaptive/resolution_rule.h"
+#include "apps/cli_options.h"
+#include "gl/context.h"
+#include "gl/timer.h"
+#include "io/image_io.h"
+#include "io/report.h"
+#include "io/staged_dir.h"
+#include "metrics/image_error.h"
+#include "scene/scene.h"
+#include "shadows/renderer.h"
+
+#if PENUMBRA_DEMO_GUI
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+
+#include "gl/window.h"
+#include "gui/settings_panel.h"
+#endif
+
+extern char** environ;
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The demo's defaults: filters sized in world units (the rule needs a world-space radius), grid
+// kernels (exact, deterministic: the two images differ only by the map's resolution).
+shadows::ShadowSettings demo_defaults() {
+  shadows::ShadowSettings s;
+  s.technique = shadows::Technique::pcf;
+  s.map.resolution_texels = 2048;
+  s.pcf.kernel = shadows::Kernel::grid;
+  s.pcf.radius = 0.12f;
+  s.pcf.radius_unit = shadows::RadiusUnit::world;
+  s.pcss.kernel = shadows::Kernel::grid;
+  s.pcss.min_penumbra_ws = 0.12f;
+  s.vsm.radius = 0.12f;
+  s.vsm.radius_unit = shadows::RadiusUnit::world;
+  return s;
+}
+
+// The fixed camera path: a quarter orbit around the scene camera's target while zooming in to
+// 60 % of the distance and back, at the scene camera's elevation.
+scene::Camera path_camera(const scene::Camera& start, int i, int n) {
+  scene::Camera c = start;
+  const glm::vec3 d = start.position - start.target;
+  const float distance = glm::length(d);
+  const float pitch = std::asin(std::clamp(d.y / std::max(distance, 1e-6f), -1.0f, 1.0f));
+  const float t = n > 1 ? static_cast<float>(i) / static_cast<float>(n - 1) : 0.0f;
+  const float yaw = std::atan2(d.x, d.z) + glm::radians(90.0f) * (t - 0.5f);
+  const float r = distance * (1.0f - 0.4f * std::sin(glm::pi<float>() * t));
+  c.position = c.target + r * glm::vec3(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
+  return c;
+}
+
+struct Spread {
+  double median = 0, p10 = 0, p90 = 0, min = 0, max = 0;
+};
+Spread spread(std::vector<double> v) {
+  Spread s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  auto at = [&](double q) { return v[static_cast<std::size_t>(std::lround(q * static_cast<double>(v.size() - 1)))]; };
+  s.median = at(0.5), s.p10 = at(0.1), s.p90 = at(0.9), s.min = v.front(), s.max = v.back();
+  return s;
+}
+nlohmann::json to_json(const Spread& s) {
+  return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"max", s.max}};
+}
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// One frame: wall clock from the first GL call to glFinish (the method on software GL; on a GPU
+// the per-pass GPU timer figures go to report.json beside it).
+struct Timed {
+  shadows::FrameInfo info;
+  double ms = 0;
+};
+Timed timed_render(shadows::Renderer& r, const shadows::ShadowSettings& s, int w, int h, gl::PassTimer& timer) {
+  glFinish();
+  const double t0 = now_ms();
+  Timed t;
+  t.info = r.render(s, w, h, &timer);
+  glFinish();
+  t.ms = now_ms() - t0;
+  return t;
+}
+
+// Fixed | adaptive | |difference| × 10 (grey), side by side.
+io::Image8 side_by_side(const io::Image8& a, const io::Image8& b) {
+  io::Image8 out{a.width * 3, a.height, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(a.width) * 3 * a.height * 4)};
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      int diff = 0;
+      for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(a.at(x, y, c)) - int(b.at(x, y, c))));
+      for (int c = 0; c < 4; ++c) {
+        out.at(x, y, c) = a.at(x, y, c);
+        out.at(x + a.width, y, c) = b.at(x, y, c);
+        out.at(x + 2 * a.width, y, c) = c == 3 ? 255 : static_cast<std::uint8_t>(std::min(255, diff * 10));
+      }
+    }
+  return out;
+}
+
+void run_plot(const std::string& python, const std::string& script, const fs::path& report, const fs::path& dir) {
+  std::vector<std::string> args = {python, script, report.string(), dir.string()};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
+    throw std::runtime_error("--python " + python + ": cannot be started (use --no-plot to skip the chart)");
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(script + " failed; use --no-plot to skip the chart");
+}
+
+struct Options {
+  std::string scene = "demo";
+  std::vector<std::string> techniques = {"pcf", "pcss"};
+  int frames = 16;
+  int width = 1280, height = 720;
+  std::string calibration = PENUMBRA_SOURCE_DIR "/data/calibration/default.json";
+  bool ci_upper = false;
+  std::string output = "out/demo";
+  std::string python = "/usr/bin/python3";
+  std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_demo.py";
+  bool plot = true;
+};
+
+int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptive::Calibration& cal) {
+  gl::HeadlessContext ctx;
+  const scene::Scene scene = scene::load_scene(opt.scene);
+  io::StagedDirectory out(opt.output, "report.json");
+  const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
+
+  nlohmann::json report;
+  report["scene"] = scene.name;
+  report["device"] = io::to_json(ctx.info());
+  report["image_px"] = {opt.width, opt.height};
+  report["path_frames"] = opt.frames;
+  report["frame_time_method"] = "wall_finish";
+  report["pass_time_method"] = gl::to_string(method);
+  report["calibration"] = {{"file", cal.source}, {"c", base.adaptive.c}, {"ci95", {cal.ci95_lo, cal.ci95_hi}}, {"bound", opt.ci_upper ? "ci95_hi" : "c"}};
+  std::string csv = "technique,frame,fixed_ms,adaptive_ms,fixed_texels,adaptive_texels,cascades,ssim,max_abs,share_above_1_255\n";
+
+  std::printf("penumbra-demo: %s at %dx%d on %s; %d path frames; c = %.3g (%s)\n", scene.name.c_str(), opt.width, opt.height,
+              ctx.info().renderer.c_str(), opt.frames, base.adaptive.c, cal.source.c_str());
+  std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])\n");
+  std::printf("%-6s %24s %24s %8s %14s %8s %9s %9s\n", "tech", "fixed", "adaptive", "speedup", "adaptive res", "min SSIM",
+              "max diff", ">1/255");
+  const int total = static_cast<int>(opt.techniques.size()) * opt.frames;
+  int done = 0;
+  for (const std::string& name : opt.techniques) {
+    shadows::ShadowSettings fixed = base;
+    fixed.technique = shadows::technique_from_string(name);
+    fixed.adaptive.enabled = false;
+    shadows::ShadowSettings adapt = fixed;
+    adapt.adaptive.enabled = true;
+
+    shadows::Renderer rf, ra;
+    rf.set_scene(scene);
+    ra.set_scene(scene);
+    gl::PassTimer timer_f(method == gl::TimingMethod::gpu_timer), timer_a(method == gl::TimingMethod::gpu_timer);
+    // Warm-up (shader compilation, allocation) at the path's first camera; not timed.
+    rf.scene().camera = ra.scene().camera = path_camera(scene.camera, 0, opt.frames);
+    rf.render(fixed, opt.width, opt.height);
+    ra.render(adapt, opt.width, opt.height);
+
+    std::vector<double> ms_f, ms_a, ssim, max_abs, share, res_a;
+    io::Image8 shown_f, shown_a;
+    shadows::FrameInfo last_a;
+    for (int i = 0; i < opt.frames; ++i) {
+      std::fprintf(stderr, "\r[%d/%d] %s frame %d/%d ", ++done, total, name.c_str(), i + 1, opt.frames);
+      std::fflush(stderr);
+      rf.scene().camera = ra.scene().camera = path_camera(scene.camera, i, opt.frames);
+      const Timed f = timed_render(rf, fixed, opt.width, opt.height, timer_f);
+      const Timed a = timed_render(ra, adapt, opt.width, opt.height, timer_a);
+      const io::Image8 img_f = rf.read_color(), img_a = ra.read_color();
+      const metrics::ImageError e = metrics::compare(img_f, img_a);
+      ms_f.push_back(f.ms), ms_a.push_back(a.ms);
+      ssim.push_back(e.ssim), max_abs.push_back(e.max_abs), share.push_back(e.share_above_threshold);
+      res_a.push_back(a.info.resolution_texels);
+      std::string cascades;
+      for (const auto& c : a.info.cascades) cascades += (cascades.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+      char row[256];
+      std::snprintf(row, sizeof row, "%s,%d,%.4f,%.4f,%d,%d,%s,%.6f,%.6f,%.6f\n", name.c_str(), i, f.ms, a.ms,
+                    f.info.resolution_texels, a.info.resolution_texels, cascades.c_str(), e.ssim, e.max_abs, e.share_above_threshold);
+      csv += row;
+      if (i == opt.frames / 2) shown_f = img_f, shown_a = img_a;
+      last_a = a.info;
+    }
+    std::fprintf(stderr, "\r%60s\r", "");
+    timer_f.poll(true);
+    timer_a.poll(true);
+    io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"), side_by_side(shown_f, shown_a));
+
+    const Spread sf = spread(ms_f), sa = spread(ms_a), sr = spread(res_a);
+    const double speedup = sf.median / std::max(sa.median, 1e-9);
+    const double min_ssim = *std::min_element(ssim.begin(), ssim.end());
+    const double worst_diff = *std::max_element(max_abs.begin(), max_abs.end());
+    const double worst_share = *std::max_element(share.begin(), share.end());
+    double mean_ssim = 0;
+    for (double v : ssim) mean_ssim += v / static_cast<double>(ssim.size());
+    nlohmann::json t;
+    t["technique"] = name;
+    t["settings_fixed"] = shadows::to_json(fixed);
+    t["settings_adaptive"] = shadows::to_json(adapt);
+    t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(timer_f.stats())}};
+    t["adaptive"] = {{"resolution_texels", to_json(sr)},
+                     {"storage", last_a.storage},
+                     {"resolution_source", last_a.resolution_source},
+                     {"frame_ms", to_json(sa)},
+                     {"passes", io::to_json(timer_a.stats())}};
+    if (last_a.pcss_requirement.valid)
+      t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", last_a.pcss_requirement.clamped_fraction},
+                                           {"above_max_fraction", last_a.pcss_requirement.above_max_fraction}};
+    t["speedup_median"] = speedup;
+    t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_ssim}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
+    report["techniques"].push_back(t);
+
+    char range[64];
+    std::snprintf(range, sizeof range, "%.0f..%.0f", sr.min, sr.max);
+    std::printf("%-6s %8.1f [%6.1f, %6.1f] %8.1f [%6.1f, %6.1f] %7.2fx %14s %8.4f %9.4f %9.4f\n", name.c_str(), sf.median, sf.p10,
+                sf.p90, sa.median, sa.p10, sa.p90, speedup, range, min_ssim, worst_diff, worst_share);
+    std::fflush(stdout);
+  }
+  io::write_text(out.path() / "frames.csv", csv);
+  io::write_text(out.path() / "report.json", report.dump(2) + "\n");
+  if (opt.plot) run_plot(opt.python, opt.plot_script, out.path() / "report.json", out.path());
+  out.commit();
+  std::printf("wrote %s/\n", opt.output.c_str());
+  return 0;
+}
+
+#if PENUMBRA_DEMO_GUI
+int run_windowed(const Options& opt, shadows::ShadowSettings settings, const adaptive::Calibration& cal) {
+  scene::Scene scene = scene::load_scene(opt.scene);
+  gl::WindowContext window(opt.width, opt.height, "Penumbra demo - " + scene.name);
+  shadows::Renderer renderer;
+  renderer.set_scene(scene);
+  settings.adaptive.enabled = true;
+  gl::PassTimer timer(!window.info().software);
+  bool show_map = true, show_cascades = false, animate = true;
+  int frame = 0, path_i = 0;
+  double fps = 0, last = now_ms();
+  while (!window.should_close()) {
+    window.begin_frame();
+    if (animate) renderer.scene().camera = path_camera(scene.camera, path_i++ % (4 * opt.frames), 4 * opt.frames);
+    int fb_w = 0, fb_h = 0;
+    window.framebuffer_size(fb_w, fb_h);
+    if (frame % 30 == 0) timer.clear();
+    renderer.set_show_cascades(show_cascades);
+    const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+    renderer.present(0, fb_w, fb_h);
+    const double t = now_ms();
+    fps = 0.9 * fps + 0.1 * 1000.0 / std::max(t - last, 1e-3);
+    last = t;
+
+    ImGui::SetNextWindowPos({10, 10}, ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize({460, 0}, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Penumbra demo");
+    ImGui::PushItemWidth(200);
+    ImGui::Text("%s | %s | %.1f fps", scene.name.c_str(), window.info().renderer.c_str(), fps);
+    ImGui::Checkbox("camera path", &animate);
+    ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
+    ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, cal.source.c_str());
+    gui::shadow_settings_panel(settings);
+    float light_size = renderer.scene().light.size;
+    if (ImGui::DragFloat(renderer.scene().light.type == scene::Light::Type::spot ? "light width [world]" : "light angle [deg]",
+                         &light_size, 0.02f, 0.0f, 45.0f))
+      renderer.scene().light.size = light_size;
+    ImGui::Separator();
+    ImGui::Text("resolution (%s, %s storage, atlas %dx%d)", info.resolution_source.c_str(), info.storage.c_str(), info.atlas_width,
+                info.atlas_height);
+    for (std::size_t i = 0; i < info.cascades.size(); ++i) {
+      const auto& c = info.cascades[i];
+      ImGui::Text("  cascade %zu: %d^2 (rule %.0f), depth %.1f-%.1f, extent %.2f ws", i, c.resolution_texels, c.required_texels,
+                  c.split_near_ws, c.split_far_ws, c.light.extent_ws);
+    }
+    if (info.pcss_requirement.valid)
+      ImGui::Text("PCSS: %.1f %% of pixels at the min penumbra, %.1f %% above the max map", 100 * info.pcss_requirement.clamped_fraction,
+                  100 * info.pcss_requirement.above_max_fraction);
+    for (const auto& st : timer.stats()) ImGui::Text("%-16s %7.2f ms (%s)", st.pass.c_str(), st.median_ms, gl::to_string(st.method));
+    ImGui::Checkbox("cascade overlay", &show_cascades);
+    ImGui::Checkbox("show shadow map", &show_map);
+    if (show_map && renderer.shadow_map_texture())
+      ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200}, {0, 1}, {1, 0});
+    ImGui::PopItemWidth();
+    ImGui::End();
+    window.render_ui();
+    ++frame;
+    window.swap();
+  }
+  return 0;
+}
+#endif
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Adaptive shadow-map resolution against a fixed resolution: frame time and image difference."};
+  Options opt;
+  bool headless = false;
+  shadows::ShadowSettings base = demo_defaults();
+  app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
+  app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
+  app.add_option("--techniques", opt.techniques, "techniques to compare (comma separated)")->delimiter(',');
+  app.add_option("--frames", opt.frames, "camera-path frames per technique")->check(CLI::Range(1, 100000));
+  app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(16, 16384));
+  app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(16, 16384));
+  app.add_option("--fixed-resolution", base.map.resolution_texels, "resolution of the fixed comparison, texels per side")
+      ->check(CLI::Range(1, 65536));
+  app.add_option("--calibration", opt.calibration, "calibration.json with the constant c");
+  app.add_flag("--ci-upper", opt.ci_upper, "use the upper bound of c's 95 % interval (more conservative)");
+  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)");
+  app.add_option("--python", opt.python, "Python with matplotlib that draws the chart");
+  app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
+  apps::add_settings_options(app, base);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "penumbra-demo: " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    for (const auto& t : opt.techniques) shadows::technique_from_string(t);
+    const adaptive::Calibration cal = adaptive::load_calibration(opt.calibration);
+    base.adaptive.c = static_cast<float>(opt.ci_upper ? cal.ci95_hi : cal.c);
+    if (headless) return run_headless(opt, base, cal);
+#if PENUMBRA_DEMO_GUI
+    return run_windowed(opt, base, cal);
+#else
+    std::cerr << "penumbra-demo: built without GUI support; use --headless\n";
+    return 2;
+#endif
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra-demo: " << e.what() << "\n";
+    return 1;
+  }
+}

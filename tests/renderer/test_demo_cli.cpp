@@ -1,0 +1,87 @@
+// penumbra-demo --headless end to end at a tiny size: report.json, frames.csv and the images have
+// their documented shape, the adaptive run used the rule's resolution and stayed close to the
+// fixed image; bad input is refused in one line with nothing written.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "subprocess.h"
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+namespace penumbra {
+namespace {
+
+class DemoCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("penumbra-demo-test-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  test::Result demo(std::vector<std::string> args) { return test::run_exe(PENUMBRA_DEMO_EXE, args, dir_); }
+  fs::path dir_;
+};
+
+TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
+  const fs::path out = dir_ / "out";
+  const auto r = demo({"--headless", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss", "--no-plot",
+                       "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("speedup"));
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  ASSERT_EQ(report.at("techniques").size(), 2u);
+  for (const auto& t : report["techniques"]) {
+    SCOPED_TRACE(t.at("technique").get<std::string>());
+    EXPECT_EQ(t.at("fixed").at("resolution_texels").get<int>(), 2048);
+    const auto& res = t.at("adaptive").at("resolution_texels");
+    EXPECT_GE(res.at("min").get<double>(), 32);
+    EXPECT_LT(res.at("max").get<double>(), 2048);  // the demo's filters need less than the fixed map
+    EXPECT_GT(t.at("adaptive").at("frame_ms").at("median").get<double>(), 0);
+    EXPECT_GT(t.at("speedup_median").get<double>(), 0);
+    EXPECT_GE(t.at("image").at("ssim_min").get<double>(), 0.99);
+    EXPECT_LE(t.at("image").at("max_abs_max").get<double>(), 0.25);
+    EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png")));
+  }
+  EXPECT_EQ(report.at("techniques")[1].at("adaptive").at("resolution_source"), "pcss_per_pixel");
+  std::istringstream csv(test::read_file(out / "frames.csv"));
+  std::string line;
+  int rows = -1;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 6);
+}
+
+TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
+  const fs::path out = dir_ / "out";
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const Case cases[] = {
+      {{"--headless", "--techniques", "pcf,nope"}, "unknown technique 'nope'"},
+      {{"--headless", "--calibration", (dir_ / "missing.json").string()}, "missing.json"},
+      {{"--headless", "--pcf.radius", "-1"}, "pcf.radius"},
+      {{"--headless", "--scene", "nowhere"}, "nowhere"},
+  };
+  for (const auto& c : cases) {
+    std::vector<std::string> args = c.args;
+    args.insert(args.end(), {"--frames", "1", "--width", "32", "--height", "32", "--no-plot", "-o", out.string()});
+    const auto r = demo(args);
+    EXPECT_NE(r.exit_code, 0) << c.says;
+    EXPECT_THAT(r.err, HasSubstr(c.says));
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.says;
+  }
+}
+
+}  // namespace
+}  // namespace penumbra
