@@ -129,8 +129,7 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
 int run_participant(const RunOptions& o) {
 #ifdef PENUMBRA_STUDY_GUI
   if (o.resume.empty() && !o.participant_given) throw std::invalid_argument("run: --participant is required for a participant session");
-  procedure::Session session = open_session(o, "participant");
-  return study_gui::run_session(session, o.gui);
+  return study_gui::run_session([&] { return open_session(o, "participant"); }, o.gui);
 #else
   (void)o;
   throw std::runtime_error("run: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); only --headless runs");

@@ -107,13 +107,13 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
   ImGui::Text("Participant sees: %s", status.screen.c_str());
   if (!status.last_answer.empty()) ImGui::TextDisabled("Last: %s", status.last_answer.c_str());
 
-  if (ImGui::Button(status.paused ? "Resume" : "Pause", {110, 0})) actions.toggle_pause = true;
+  if (ImGui::Button(status.paused ? "Resume" : "Pause")) actions.toggle_pause = true;
   ImGui::SameLine();
   ImGui::BeginDisabled(round >= n_rounds);
-  if (ImGui::Button("End round", {110, 0})) ImGui::OpenPopup("End round?");
+  if (ImGui::Button("End round")) ImGui::OpenPopup("End round?");
   ImGui::EndDisabled();
   ImGui::SameLine();
-  if (ImGui::Button("Save and quit", {130, 0})) ImGui::OpenPopup("Quit?");
+  if (ImGui::Button("Save and quit")) ImGui::OpenPopup("Quit?");
   actions.end_round = confirm("End round?", "End this round now? Its staircases keep their current estimates.");
   actions.quit = confirm("Quit?", "Stop the session? Every answered trial is saved; --resume continues it.");
   ImGui::Separator();

@@ -95,6 +95,7 @@ GuiWindow::GuiWindow(const WindowSpec& spec) {
   io.IniFilename = nullptr;  // no imgui.ini in the participant's working directory
   body_font_ = add_font(spec.font_px);
   if (spec.large_font_px > 0) large_font_ = add_font(spec.large_font_px);
+  if (spec.small_font_px > 0) small_font_ = add_font(spec.small_font_px);
   // Our callbacks first; ImGui's are called from them with the right context current.
   glfwSetKeyCallback(window_, on_key);
   glfwSetCharCallback(window_, on_char);

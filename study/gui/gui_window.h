@@ -37,6 +37,7 @@ struct WindowSpec {
   bool focused = true;  // take the keyboard focus when opened
   float font_px = 18;       // body text
   float large_font_px = 0;  // a second, larger font (0: none)
+  float small_font_px = 0;  // a third, smaller one (0: none)
 };
 
 // A key or mouse-button press with the time it was seen (glfwGetTime, in seconds).
@@ -72,6 +73,7 @@ class GuiWindow {
   std::vector<Press> take_presses();
   ImFont* body_font() const { return body_font_; }
   ImFont* large_font() const { return large_font_; }
+  ImFont* small_font() const { return small_font_; }
 
  private:
   static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods);
@@ -85,6 +87,7 @@ class GuiWindow {
   ImGuiContext* imgui_ = nullptr;
   ImFont* body_font_ = nullptr;
   ImFont* large_font_ = nullptr;
+  ImFont* small_font_ = nullptr;
   std::vector<Press> presses_;
 };
 

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -25,7 +26,8 @@ namespace penumbra::study_gui {
 namespace fs = std::filesystem;
 
 void add_options(CLI::App& run, GuiOptions& o) {
-  run.add_option("--monitor", o.monitor, "participant monitor (GLFW index; default: the config's display.monitor)");
+  run.add_option("--monitor", o.monitor, "participant monitor (GLFW index; default: the config's display.monitor)")
+      ->check(CLI::Range(0, 16));
   run.add_option("--windowed", o.windowed, "participant view in a WxH window instead of full screen (testing)");
   run.add_flag("--admin-panel", o.admin_panel, "single monitor: the admin view is a panel in the participant window, F12 shows/hides it");
   run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(CLI::Range(0.0, 10000.0));
@@ -78,23 +80,31 @@ void say(const std::string& line) { std::cout << line << std::endl; }  // operat
 
 }  // namespace
 
-int run_session(procedure::Session& session, const GuiOptions& o) {
-  const procedure::StudyConfig& config = session.config();
-  const bool two = config.task == "2afc";
+int run_session(const std::function<procedure::Session()>& open_session, const GuiOptions& o) {
+  // Everything that can refuse comes before the session is opened, so a refusal leaves no
+  // new session directory behind.
   int win_w = 0, win_h = 0;
   if (!o.windowed.empty()) parse_size(o.windowed, win_w, win_h);
-
   Glfw glfw;
   const auto monitors = glfw.monitors();
-  const int monitor = o.monitor >= 0 ? o.monitor : config.display.monitor;
   if (monitors.empty()) throw std::runtime_error("no monitor connected");
-  if (monitor < 0 || monitor >= static_cast<int>(monitors.size()))
-    throw std::invalid_argument("--monitor " + std::to_string(monitor) + ": only " + std::to_string(monitors.size()) +
-                                " monitor(s) connected (0.." + std::to_string(monitors.size() - 1) + ")");
+  const int n_monitors = static_cast<int>(monitors.size());
+  auto check_monitor = [&](int m, const std::string& what) {
+    if (m >= n_monitors)
+      throw std::invalid_argument(what + " " + std::to_string(m) + ": only " + std::to_string(n_monitors) +
+                                  " monitor(s) connected (0.." + std::to_string(n_monitors - 1) + ")");
+  };
+  if (o.monitor >= 0) check_monitor(o.monitor, "--monitor");
   const bool fullscreen = o.windowed.empty();
-  if (fullscreen && !o.admin_panel && monitors.size() < 2)
+  if (fullscreen && !o.admin_panel && n_monitors < 2)
     throw std::invalid_argument("one monitor only: the admin window would cover or sit under the participant's screen; "
                                 "use --admin-panel (F12 toggles it) or --windowed WxH");
+
+  procedure::Session session = open_session();
+  const procedure::StudyConfig& config = session.config();
+  const bool two = config.task == "2afc";
+  const int monitor = o.monitor >= 0 ? o.monitor : config.display.monitor;
+  check_monitor(monitor, "display.monitor");
   if (fullscreen) {
     const GLFWvidmode* mode = glfwGetVideoMode(monitors[static_cast<std::size_t>(monitor)]);
     if (mode->width != config.display.width_px || mode->height != config.display.height_px)
@@ -113,6 +123,7 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
   ps.vsync = true;
   ps.font_px = 22;
   ps.large_font_px = 30;
+  ps.small_font_px = o.admin_panel ? 16 : 0;
   std::unique_ptr<GuiWindow> admin;  // destroyed last: the objects below need the participant's context
   GuiWindow participant(ps);
   participant.make_current();
@@ -286,14 +297,17 @@ int run_session(procedure::Session& session, const GuiOptions& o) {
     status.screen = describe(screen);
     status.paused = paused;
     if (o.admin_panel && panel_visible) {
-      ImGui::PushFont(participant.body_font());
+      ImGui::PushFont(participant.small_font());
+      ImGui::PushStyleVar(ImGuiStyleVar_FramePadding, {8, 4});
       ImGui::SetNextWindowPos({12, 12}, ImGuiCond_FirstUseEver);
       ImGui::SetNextWindowSize({900, 620}, ImGuiCond_FirstUseEver);
       ImGui::SetNextWindowBgAlpha(0.96f);
       ImGui::Begin("Admin (F12 hides)");
-      apply_admin(draw_admin(session, status));
+      const AdminActions actions = draw_admin(session, status);
       ImGui::End();
+      ImGui::PopStyleVar();
       ImGui::PopFont();
+      apply_admin(actions);
     }
     participant.end_frame();
     const bool first_trial_frame = drawn == Screen::trial && screen == Screen::trial && onset_s < 0;

@@ -5,6 +5,7 @@
 // the same way: one fsynced row per answered trial. Escape or closing a window stops the session
 // between trials; the directory stays resumable (`--resume DIR`).
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "procedure/session.h"
@@ -26,7 +27,9 @@ struct GuiOptions {
 // Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot to `run`.
 void add_options(CLI::App& run, GuiOptions& options);
 
-// Runs the session until it is finished or stopped. Returns the process exit code (0).
-int run_session(procedure::Session& session, const GuiOptions& options);
+// Opens the windows, then the session (`open_session` creates or resumes it: after every check
+// that can refuse, so a refusal leaves no new session behind), and runs it until it is finished
+// or stopped. Returns the process exit code (0).
+int run_session(const std::function<procedure::Session()>& open_session, const GuiOptions& options);
 
 }  // namespace penumbra::study_gui

@@ -199,6 +199,33 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
   fs::remove(config);
 }
 
+// Refusals are one line, exit 1, and leave no session directory behind.
+TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
+  const fs::path config = tiny_config("2afc"), dir = fresh("refused");
+  struct Case {
+    std::vector<std::string> extra;
+    std::string message;
+  };
+  const std::vector<Case> cases{
+      {{"--windowed", "big"}, "penumbra-study: --windowed 'big': expected WIDTHxHEIGHT in pixels, e.g. 1280x800\n"},
+      {{"--monitor", "5", "--admin-panel"}, "penumbra-study: --monitor 5: only 1 monitor(s) connected (0..0)\n"},
+      {{}, "penumbra-study: one monitor only: the admin window would cover or sit under the participant's screen; use "
+           "--admin-panel (F12 toggles it) or --windowed WxH\n"}};
+  for (const Case& c : cases) {
+    std::vector<std::string> args{"run", "--config", config.string(), "-o", dir.string(), "--participant", "x"};
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    App app(args);
+    EXPECT_EQ(app.wait_exit(), 1);
+    EXPECT_EQ(app.output(), c.message);
+    EXPECT_FALSE(fs::exists(dir));
+  }
+  App no_participant({"run", "--config", config.string(), "-o", dir.string(), "--windowed", "800x520"});
+  EXPECT_EQ(no_participant.wait_exit(), 1);
+  EXPECT_EQ(no_participant.output(), "penumbra-study: run: --participant is required for a participant session\n");
+  EXPECT_FALSE(fs::exists(dir));
+  fs::remove(config);
+}
+
 // The participant screenshot at the first trial: the stimuli copied 1:1 (every pixel equal to the
 // rendered image), the jagged one on the target side (2afc) or shown when the target is jagged
 // (yesno), the neutral background around them; and an admin window was drawn.
