@@ -66,7 +66,7 @@ def plot_scene(scene, rows, out_dir):
                 marker = "*" if r["adaptive"] else "o"
                 size = 11 if r["adaptive"] else 6
                 ax.plot(x, y, marker, ms=size, color=color, mfc=color if r["pareto"] else "white", mew=1.2)
-                label = "adaptive" if r["adaptive"] else str(r["resolution_texels"])
+                label = f"adaptive {r['resolution_texels']}" if r["adaptive"] else str(r["resolution_texels"])
                 ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6.5, color="0.25")
         ax.axvline(floor, color="0.4", ls="--", lw=0.8)
         ax.text(floor, 0.02, " unshadowed", transform=ax.get_xaxis_transform(), fontsize=6.5, color="0.4", va="bottom")

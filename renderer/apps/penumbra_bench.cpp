@@ -50,6 +50,7 @@ struct Options {
   int width = 640, height = 360, frames = 5, warmup = 1;
   metrics::ReferenceOptions reference;
   shadows::ShadowSettings base;
+  bool adaptive = true;  // one adaptive row per variant the rule applies to
   bool plot = true;
   std::string python = "/usr/bin/python3";
   std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_bench.py";
@@ -85,6 +86,9 @@ struct Row {
   bool pareto = false;
   float s_xy = 1;
   float filter_radius_texels = 0;
+  std::string resolution_source = "fixed";  // FrameInfo::resolution_source: fixed, rule, pcss_per_pixel, ...
+  double required_texels = NAN;             // adaptive: the rule's requirement before clamping
+  int cascades = 1;
   std::string settings;
 };
 
@@ -117,6 +121,7 @@ std::vector<Variant> make_variants(const Options& opt) {
   for (const auto& name : names) {
     shadows::ShadowSettings s = opt.base;
     s.technique = shadows::technique_from_string(name);
+    s.adaptive.enabled = false;  // fixed rows; the adaptive row of a variant switches it on
     shadows::ShadowSettings probe = s;
     if (set_radius_ws(probe, 1)) {
       for (double r : opt.radii_ws) {
@@ -129,6 +134,14 @@ std::vector<Variant> make_variants(const Options& opt) {
     }
   }
   return out;
+}
+
+// Whether the adaptive rule has a filter size to work from (renderer/shadows/renderer.cpp,
+// rule_radius_ws): PCF and VSM radii, PCSS's penumbra. For the others (hard, screen-space) it
+// would only ever pick adaptive.max_texels, a row that repeats a fixed one.
+bool has_rule_radius(const Variant& v) {
+  const shadows::Technique t = v.settings.technique;
+  return t == shadows::Technique::pcf || t == shadows::Technique::vsm || t == shadows::Technique::pcss;
 }
 
 // K frames after `warmup` untimed ones (which absorb allocation and shader compilation). Each
@@ -166,6 +179,7 @@ FrameTimes time_frames(shadows::Renderer& r, const shadows::ShadowSettings& s, i
 shadows::ShadowSettings unshadowed(const shadows::ShadowSettings& base) {
   shadows::ShadowSettings s = base;
   s.technique = shadows::Technique::hard;
+  s.adaptive.enabled = false;
   s.map.resolution_texels = 1;
   s.map.fit = false;
   return s;
@@ -198,7 +212,8 @@ std::string csv_number(double v) {
 const char* kCsvHeader =
     "scene,technique,variant,filter_radius_ws,resolution_texels,adaptive,width_px,height_px,frames,timing_method,"
     "frame_ms_median,frame_ms_min,frame_ms_max,floor_ms,reference_kind,reference_resolution_texels,reference_samples,"
-    "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,s_xy,filter_radius_texels,settings";
+    "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,s_xy,filter_radius_texels,resolution_source,required_texels,"
+    "cascades,settings";
 
 std::string csv_row(const Row& r, const Options& opt) {
   std::ostringstream o;
@@ -209,7 +224,8 @@ std::string csv_row(const Row& r, const Options& opt) {
     << r.reference->resolution_texels << ',' << r.reference->samples << ',' << csv_number(r.error.mean_abs) << ','
     << csv_number(r.error.rmse) << ',' << csv_number(r.error.max_abs) << ',' << csv_number(r.error.ssim) << ','
     << csv_number(r.error.psnr_db) << ',' << csv_number(r.error.share_above_threshold) << ',' << (r.pareto ? 1 : 0) << ','
-    << csv_number(r.s_xy) << ',' << csv_number(r.filter_radius_texels) << ",\"" << r.settings << "\"";
+    << csv_number(r.s_xy) << ',' << csv_number(r.filter_radius_texels) << ',' << r.resolution_source << ','
+    << csv_number(r.required_texels) << ',' << r.cascades << ",\"" << r.settings << "\"";
   return o.str();
 }
 
@@ -228,6 +244,9 @@ nlohmann::json row_json(const Row& r) {
                       {"error", metrics::to_json(r.error)},
                       {"pareto", r.pareto},
                       {"s_xy", r.s_xy},
+                      {"resolution_source", r.resolution_source},
+                      {"required_texels", std::isfinite(r.required_texels) ? nlohmann::json(r.required_texels) : nlohmann::json(nullptr)},
+                      {"cascades", r.cascades},
                       {"settings", r.settings}};
   return j;
 }
@@ -293,6 +312,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick,
                "a few-minute run: scenes demo,two-planes, resolutions 256,1024,4096, radius 0.05, 320x180, 3 frames, "
                "16 area samples (options given explicitly still win)");
+  bool no_adaptive = false;
+  app.add_flag("--no-adaptive", no_adaptive, "skip the adaptive rows (one per PCF/VSM radius and for PCSS; --adaptive.* sets the rule)");
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
@@ -314,6 +335,7 @@ int main(int argc, char** argv) {
       preset("--area-samples", opt.reference.area_samples, 16);
     }
     opt.plot = !no_plot;
+    opt.adaptive = !no_adaptive;
     opt.scenes = split(scenes_arg);
     for (const auto& s : opt.scenes)
       if (s.empty()) throw CLI::ValidationError("--scenes", "expected scene names or files separated by commas, got '" + scenes_arg + "'");
@@ -355,10 +377,14 @@ int main(int argc, char** argv) {
     const bool gpu = !ctx.software;
 
     const std::vector<Variant> variants = make_variants(opt);
-    const int total_rows = static_cast<int>(scenes.size() * variants.size() * opt.resolutions.size());
-    std::fprintf(stderr, "penumbra-bench: %zu scenes x %zu variants x %zu resolutions = %d rows at %dx%d, %d frames each, on %s (%s)\n",
-                 scenes.size(), variants.size(), opt.resolutions.size(), total_rows, opt.width, opt.height, opt.frames,
-                 ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
+    int adaptive_variants = 0;
+    for (const auto& v : variants) adaptive_variants += opt.adaptive && has_rule_radius(v);
+    const int total_rows = static_cast<int>(scenes.size() * (variants.size() * opt.resolutions.size() + static_cast<std::size_t>(adaptive_variants)));
+    std::fprintf(stderr,
+                 "penumbra-bench: %zu scenes x (%zu variants x %zu resolutions + %d adaptive) = %d rows at %dx%d, %d frames each, "
+                 "on %s (%s)\n",
+                 scenes.size(), variants.size(), opt.resolutions.size(), adaptive_variants, total_rows, opt.width, opt.height,
+                 opt.frames, ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
 
     std::vector<Row> rows;
     std::vector<std::unique_ptr<metrics::Reference>> references;  // rows point into these
@@ -396,22 +422,39 @@ int main(int argc, char** argv) {
                                                 {"note", ref->note},
                                                 {"render_ms", ref->render_ms}});
         }
-        for (int res : opt.resolutions) {
-          Row row{scene.name, v.technique, v.label, v.radius_ws, res};
-          shadows::ShadowSettings s = v.settings;
-          s.map.resolution_texels = res;
-          row.times = time_frames(renderer, s, opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
+        auto measure = [&](const shadows::ShadowSettings& s, int warmup) {
+          Row row{scene.name, v.technique, v.label, v.radius_ws, s.map.resolution_texels};
+          row.times = time_frames(renderer, s, opt.width, opt.height, warmup, opt.frames, gpu, info);
           row.floor_ms = floor.median();
           row.reference = ref;
           row.error = metrics::compare(ref->visibility, renderer.read_visibility());
           row.s_xy = info.light.s_xy;
           row.filter_radius_texels = info.filter_radius_texels;
+          row.resolution_texels = info.resolution_texels;
+          row.adaptive = info.adaptive;
+          row.resolution_source = info.resolution_source;
+          row.cascades = static_cast<int>(info.cascades.size());
+          if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.settings = shadows::describe(s);
-          rows.push_back(row);
           ++done;
-          std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %d^2: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
-                       total_rows, scene.name.c_str(), v.label.c_str(), res, row.times.median(), row.error.mean_abs,
-                       row.error.max_abs, row.error.ssim);
+          std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %s%d^2: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
+                       total_rows, scene.name.c_str(), v.label.c_str(), row.adaptive ? "adaptive " : "", row.resolution_texels,
+                       row.times.median(), row.error.mean_abs, row.error.max_abs, row.error.ssim);
+          return row;
+        };
+        for (int res : opt.resolutions) {
+          shadows::ShadowSettings s = v.settings;
+          s.map.resolution_texels = res;
+          rows.push_back(measure(s, opt.warmup));
+        }
+        if (opt.adaptive && has_rule_radius(v)) {
+          // The rule's resolution for this filter, in steady state: a fresh controller grows at
+          // once, and a PCSS per-pixel requirement (measured one frame late) may then shrink it
+          // after adaptive.shrink_delay_frames frames; the warmup covers both.
+          shadows::ShadowSettings s = v.settings;
+          s.adaptive.enabled = true;
+          renderer.reset_adaptive();
+          rows.push_back(measure(s, std::max(opt.warmup, s.adaptive.shrink_delay_frames + 2)));
         }
       }
       scene_reports.push_back(scene_report);

@@ -28,7 +28,7 @@ const std::vector<std::string> kColumns = {
     "scene", "technique", "variant", "filter_radius_ws", "resolution_texels", "adaptive", "width_px", "height_px", "frames",
     "timing_method", "frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "reference_kind",
     "reference_resolution_texels", "reference_samples", "mean_abs", "rmse", "max_abs", "ssim", "psnr_db",
-    "share_above_1_255", "pareto", "s_xy", "filter_radius_texels", "settings"};
+    "share_above_1_255", "pareto", "s_xy", "filter_radius_texels", "resolution_source", "required_texels", "cascades", "settings"};
 
 // Fields of one CSV line; a field in double quotes may hold commas.
 std::vector<std::string> csv_fields(const std::string& line) {
@@ -109,7 +109,8 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
   const test::Result r = bench({"-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("wrote"));
-  const std::string n_rows = std::to_string(2 * shadows::technique_names().size());
+  // Two fixed resolutions per technique (one radius), plus one adaptive row each for PCF, VSM, PCSS.
+  const std::string n_rows = std::to_string(2 * shadows::technique_names().size() + 3);
   EXPECT_THAT(r.err, HasSubstr(n_rows + "/" + n_rows)) << "progress on stderr";
   std::set<std::string> files;
   for (const auto& e : fs::directory_iterator(out)) files.insert(e.path().filename().string());
@@ -119,9 +120,11 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
   std::vector<std::string> header;
   const auto rows = read_csv(out / "bench.csv", header);
   EXPECT_EQ(header, kColumns);
-  // hard, pcss: one variant each; pcf, vsm: one per radius (one radius here); two resolutions.
+  // hard, pcss, ...: one variant each; pcf, vsm: one per radius (one radius here); two
+  // resolutions; an adaptive row for the variants the rule applies to.
   const auto techniques = shadows::technique_names();
-  EXPECT_EQ(rows.size(), 2 * techniques.size());
+  EXPECT_EQ(rows.size(), 2 * techniques.size() + 3);
+  std::set<std::string> adaptive_techniques;
   std::set<std::string> seen, same_filter_variants;
   std::map<std::string, int> front_size;
   int area_rows = 0;
@@ -139,6 +142,16 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
     EXPECT_LE(std::stod(row.at("max_abs")), 1);
     EXPECT_LE(ssim, 1 + 1e-9);
     front_size[row.at("variant")] += row.at("pareto") == "1";
+    if (row.at("adaptive") == "1") {
+      adaptive_techniques.insert(row.at("technique"));
+      EXPECT_THAT(row.at("resolution_source"), ::testing::AnyOf("rule", "pcss_per_pixel", "pcss_min_penumbra"));
+      const double required = std::stod(row.at("required_texels")), res = std::stod(row.at("resolution_texels"));
+      EXPECT_GT(required, 0);
+      // Rounded up to the quantum and clamped to [adaptive.min_texels, adaptive.max_texels].
+      EXPECT_TRUE(res >= std::min(required, 4096.0) && res <= 4096 && res >= 32) << res << " for " << required;
+      continue;  // the reference-resolution checks below are for fixed rows
+    }
+    EXPECT_EQ(row.at("resolution_source"), "fixed");
     if (row.at("technique") == "pcss") {
       EXPECT_EQ(row.at("reference_kind"), "area_light");
       EXPECT_GT(mean_abs, 0) << "PCSS is not the area-light average";
@@ -165,6 +178,7 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
     }
   }
   EXPECT_EQ(seen, std::set<std::string>(techniques.begin(), techniques.end())) << "every technique of the table gets rows";
+  EXPECT_EQ(adaptive_techniques, (std::set<std::string>{"pcf", "pcss", "vsm"}));
   // `pareto` within a variant: a row off the front is beaten by another row (no slower, no less
   // accurate); the fastest row, and the fastest of the most accurate, are on it.
   for (const auto& [variant, n] : front_size) {
@@ -203,10 +217,12 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
   EXPECT_GT(png, 10000u) << "a real plot";
 }
 
-TEST_F(BenchCli, NoPlotWritesNoImages) {
+TEST_F(BenchCli, NoPlotAndNoAdaptiveWriteNeither) {
   const fs::path out = work() / "out";
-  const test::Result r = bench({"--techniques", "hard", "--no-plot", "-o", out.string()});
+  const test::Result r = bench({"--techniques", "hard,pcf", "--no-plot", "--no-adaptive", "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> header;
+  EXPECT_EQ(read_csv(out / "bench.csv", header).size(), 4u) << "no adaptive rows";
   std::set<std::string> files;
   for (const auto& e : fs::directory_iterator(out)) files.insert(e.path().filename().string());
   EXPECT_EQ(files, (std::set<std::string>{"bench.csv", "report.json"}));
