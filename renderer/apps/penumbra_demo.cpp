@@ -162,6 +162,8 @@ struct Options {
   std::string python = "/usr/bin/python3";
   std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_demo.py";
   bool plot = true;
+  std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
+  int screenshot_frames = 10;
 };
 
 int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptive::Calibration& cal) {
@@ -320,12 +322,22 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings, const ada
     for (const auto& st : timer.stats()) ImGui::Text("%-16s %7.2f ms (%s)", st.pass.c_str(), st.median_ms, gl::to_string(st.method));
     ImGui::Checkbox("cascade overlay", &show_cascades);
     ImGui::Checkbox("show shadow map", &show_map);
-    if (show_map && renderer.shadow_map_texture())
-      ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200}, {0, 1}, {1, 0});
+    if (show_map && renderer.shadow_map_texture() && info.atlas_width > 0) {
+      // Cascade 0's region of the atlas (flipped: GL's rows run bottom up).
+      const auto& c = info.cascades.front();
+      const float w = static_cast<float>(info.atlas_width), h = static_cast<float>(info.atlas_height);
+      const float r = static_cast<float>(c.resolution_texels);
+      ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200},
+                   {c.atlas_x / w, (c.atlas_y + r) / h}, {(c.atlas_x + r) / w, c.atlas_y / h});
+    }
     ImGui::PopItemWidth();
     ImGui::End();
     window.render_ui();
     ++frame;
+    if (!opt.screenshot.empty() && frame >= opt.screenshot_frames) {
+      io::write_png(opt.screenshot, window.read_back());
+      break;
+    }
     window.swap();
   }
   return 0;
@@ -352,6 +364,8 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the chart");
   app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
+  app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
+  app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);
   try {
     app.parse(argc, argv);

@@ -114,15 +114,7 @@ int main(int argc, char** argv) {
       window.render_ui();
       ++frame;
       if (!screenshot.empty() && frame >= std::max(frames, 2)) {
-        io::Image8 shot{fb_w, fb_h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(fb_w) * fb_h * 4)};
-        glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-        glReadBuffer(GL_BACK);
-        glPixelStorei(GL_PACK_ALIGNMENT, 1);
-        glReadPixels(0, 0, fb_w, fb_h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
-        for (int y = 0; y < fb_h / 2; ++y)
-          std::swap_ranges(shot.pixels.begin() + y * fb_w * 4, shot.pixels.begin() + (y + 1) * fb_w * 4,
-                           shot.pixels.begin() + (fb_h - 1 - y) * fb_w * 4);
-        io::write_png(screenshot, shot);
+        io::write_png(screenshot, window.read_back());
         break;
       }
       window.swap();

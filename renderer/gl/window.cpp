@@ -4,7 +4,10 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include <imgui.h>
 #include <backends/imgui_impl_glfw.h>
@@ -76,5 +79,20 @@ void WindowContext::render_ui() {
 void WindowContext::swap() { glfwSwapBuffers(window_); }
 
 void WindowContext::framebuffer_size(int& width, int& height) const { glfwGetFramebufferSize(window_, &width, &height); }
+
+io::Image8 WindowContext::read_back() const {
+  int w = 0, h = 0;
+  framebuffer_size(w, h);
+  io::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
+  const std::size_t row = static_cast<std::size_t>(w) * 4;
+  for (int y = 0; y < h / 2; ++y)
+    std::swap_ranges(shot.pixels.begin() + static_cast<std::ptrdiff_t>(y * row), shot.pixels.begin() + static_cast<std::ptrdiff_t>((y + 1) * row),
+                     shot.pixels.begin() + static_cast<std::ptrdiff_t>((h - 1 - y) * row));
+  return shot;
+}
 
 }  // namespace penumbra::gl

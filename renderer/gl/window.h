@@ -4,6 +4,7 @@
 #include <string>
 
 #include "gl/context.h"
+#include "io/image_io.h"
 
 struct GLFWwindow;
 
@@ -27,6 +28,8 @@ class WindowContext {
   void render_ui();
   void swap();
   void framebuffer_size(int& width, int& height) const;
+  // The back buffer as RGBA, top row first: between render_ui and swap, the frame with its panel.
+  io::Image8 read_back() const;
 
  private:
   GLFWwindow* window_ = nullptr;

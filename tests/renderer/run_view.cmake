@@ -1,10 +1,14 @@
-# Runs penumbra-view under xvfb-run and checks that it wrote a screenshot of a plausible size.
+# Runs a windowed app (penumbra-view, or penumbra-demo with FRAMES_FLAG=--screenshot-frames)
+# under xvfb-run and checks that it wrote a screenshot of a plausible size.
+if(NOT FRAMES_FLAG)
+  set(FRAMES_FLAG --frames)
+endif()
 file(REMOVE ${OUT})
 execute_process(COMMAND ${XVFB_RUN} -a -s "-screen 0 800x600x24" ${VIEW} --scene box --width 800 --height 600
-                        --screenshot ${OUT} --frames 3
+                        --screenshot ${OUT} ${FRAMES_FLAG} 3
                 RESULT_VARIABLE rc ERROR_VARIABLE err TIMEOUT 170)
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "penumbra-view exited with ${rc}: ${err}")
+  message(FATAL_ERROR "${VIEW} exited with ${rc}: ${err}")
 endif()
 file(SIZE ${OUT} size)
 if(size LESS 8000)  # a blank 800x600 PNG is under 3 kB; the box scene with the panel is ~15 kB
