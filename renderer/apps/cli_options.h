@@ -38,13 +38,10 @@ void add_table_options(CLI::App& app, const std::string& section, P& params) {
 // Every section of the shadow settings: --map.*, and one group per technique's parameters.
 inline void add_settings_options(CLI::App& app, shadows::ShadowSettings& s) {
   add_table_options(app, "map", s.map);
-  add_table_options(app, "pcf", s.pcf);
-  add_table_options(app, "pcss", s.pcss);
-  add_table_options(app, "vsm", s.vsm);
   add_table_options(app, "adaptive", s.adaptive);
-  add_table_options(app, "edtsm", s.edtsm);
-  add_table_options(app, "edtssm", s.edtssm);
-  add_table_options(app, "erosion", s.erosion);
+  shadows::for_each_technique_section(s, [&](std::string_view section, auto& params) {
+    add_table_options(app, std::string(section), params);
+  });
 }
 
 // "a,b,c" → numbers in [lo, hi]; integers only when T is integral. Throws CLI::ValidationError

@@ -95,17 +95,19 @@ struct Row {
 // Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
 // at every resolution and at the reference's. False for techniques without such a radius.
 bool set_radius_ws(shadows::ShadowSettings& s, double radius_ws) {
-  if (s.technique == shadows::Technique::pcf) {
-    s.pcf.radius_unit = shadows::RadiusUnit::world;
-    s.pcf.radius = static_cast<float>(radius_ws);
+  auto set = [&](auto& params) {
+    params.radius_unit = shadows::RadiusUnit::world;
+    params.radius = static_cast<float>(radius_ws);
     return true;
+  };
+  switch (s.technique) {
+    case shadows::Technique::pcf: return set(s.pcf);
+    case shadows::Technique::vsm: return set(s.vsm);
+    case shadows::Technique::rpcf: return set(s.rpcf);
+    case shadows::Technique::msm: return set(s.msm);
+    case shadows::Technique::evsm: return set(s.evsm);
+    default: return false;
   }
-  if (s.technique == shadows::Technique::vsm) {
-    s.vsm.radius_unit = shadows::RadiusUnit::world;
-    s.vsm.radius = static_cast<float>(radius_ws);
-    return true;
-  }
-  return false;
 }
 
 std::string format_radius(double r) {

@@ -2,6 +2,7 @@
 // visibility buffer (EXR) and report.json with per-pass times. Runs headless (EGL).
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -92,11 +93,10 @@ int main(int argc, char** argv) {
       add_variant(shadows::Technique::hard, "hard", {});
       add_variant(shadows::Technique::pcf, "pcf-grid", shadows::Kernel::grid);
       add_variant(shadows::Technique::pcf, "pcf-poisson", shadows::Kernel::poisson);
-      add_variant(shadows::Technique::pcss, "pcss", {});
-      add_variant(shadows::Technique::vsm, "vsm", {});
-      add_variant(shadows::Technique::edtsm, "edtsm", {});
-      add_variant(shadows::Technique::edtssm, "edtssm", {});
-      add_variant(shadows::Technique::erosion, "erosion", {});
+      for (auto name : shadows::technique_names()) {
+        const auto t = shadows::technique_from_string(name);
+        if (t != shadows::Technique::hard && t != shadows::Technique::pcf) add_variant(t, std::string(name), {});
+      }
     } else {
       const auto t = shadows::technique_from_string(technique_arg);
       std::string name = technique_arg;
@@ -175,7 +175,9 @@ int main(int argc, char** argv) {
         std::string used;
         for (const auto& c : info.cascades) used += (used.empty() ? "" : "+") + std::to_string(c.resolution_texels);
         std::printf("%-12s %6s %s %s %s %s %s\n", v.name.c_str(), used.c_str(), fmt_ms(shadow_map).c_str(),
-                    v.settings.technique == shadows::Technique::vsm ? fmt_ms(vsm_blur).c_str() : "        -",
+                    std::find(info.passes.begin(), info.passes.end(), "vsm_blur") != info.passes.end()
+                        ? fmt_ms(vsm_blur).c_str()
+                        : "        -",
                     screen_space ? fmt_ms(screen).c_str() : "        -", fmt_ms(shading).c_str(), fmt_ms(total).c_str());
         std::fflush(stdout);
         summary["renders"].push_back({{"name", dir_name}, {"technique", v.name}, {"resolution_texels", res},

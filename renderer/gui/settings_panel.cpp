@@ -63,6 +63,10 @@ template bool settings_panel<shadows::AdaptiveParams>(const char*, shadows::Adap
 template bool settings_panel<shadows::EdtsmParams>(const char*, shadows::EdtsmParams&);
 template bool settings_panel<shadows::EdtssmParams>(const char*, shadows::EdtssmParams&);
 template bool settings_panel<shadows::ErosionParams>(const char*, shadows::ErosionParams&);
+template bool settings_panel<shadows::RbsmParams>(const char*, shadows::RbsmParams&);
+template bool settings_panel<shadows::RpcfParams>(const char*, shadows::RpcfParams&);
+template bool settings_panel<shadows::MsmParams>(const char*, shadows::MsmParams&);
+template bool settings_panel<shadows::EvsmParams>(const char*, shadows::EvsmParams&);
 
 bool shadow_settings_panel(shadows::ShadowSettings& s) {
   bool changed = false;
@@ -76,15 +80,9 @@ bool shadow_settings_panel(shadows::ShadowSettings& s) {
     }
     ImGui::EndCombo();
   }
-  switch (s.technique) {
-    case shadows::Technique::hard: break;
-    case shadows::Technique::pcf: changed |= settings_panel("pcf", s.pcf); break;
-    case shadows::Technique::pcss: changed |= settings_panel("pcss", s.pcss); break;
-    case shadows::Technique::vsm: changed |= settings_panel("vsm", s.vsm); break;
-    case shadows::Technique::edtsm: changed |= settings_panel("edtsm", s.edtsm); break;
-    case shadows::Technique::edtssm: changed |= settings_panel("edtssm", s.edtssm); break;
-    case shadows::Technique::erosion: changed |= settings_panel("erosion", s.erosion); break;
-  }
+  shadows::visit_technique_section(s, [&](std::string_view section, auto& params) {
+    changed |= settings_panel(std::string(section).c_str(), params);
+  });
   if (ImGui::CollapsingHeader("shadow map and bias", ImGuiTreeNodeFlags_DefaultOpen)) changed |= settings_panel("map", s.map);
   if (ImGui::CollapsingHeader("adaptive resolution")) changed |= settings_panel("adaptive", s.adaptive);
   return changed;

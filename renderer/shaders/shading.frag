@@ -13,6 +13,9 @@
 #include "shadow_pcf.glsl"
 #include "shadow_pcss.glsl"
 #include "shadow_vsm.glsl"
+#include "shadow_rbsm.glsl"
+#include "shadow_msm.glsl"
+#include "shadow_evsm.glsl"
 
 in vec3 v_world;
 in vec3 v_normal;
@@ -97,6 +100,17 @@ float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gr
 #elif defined(TECHNIQUE_VSM)
   float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
   visibility = shadow_vsm(sc.xy, t);
+#elif defined(TECHNIQUE_RBSM)
+  visibility = shadow_rbsm(sc, gradient);
+#elif defined(TECHNIQUE_RPCF)
+  float rpcf_radius_texels = u_rpcf_radius_ws >= 0.0 ? u_rpcf_radius_ws * uv_per_ws(depth_ws) * g_shadow_res : u_rpcf_radius_texels;
+  visibility = shadow_rpcf(sc, gradient, rpcf_radius_texels, u_rpcf_max_grid_taps);
+#elif defined(TECHNIQUE_MSM)
+  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
+  visibility = shadow_msm(sc.xy, t);
+#elif defined(TECHNIQUE_EVSM)
+  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
+  visibility = shadow_evsm(sc.xy, t);
 #else
 #  error "no TECHNIQUE_* defined"
 #endif

@@ -2,10 +2,27 @@
 // with the two edge texels weighted by coverage (the same box as the grid PCF). One invocation
 // slides the window along a whole line, so the cost does not depend on r; the running sum is
 // Kahan-compensated so that long lines keep the precision the variance needs.
+// The same blur serves every moments technique: the renderer defines MOMENTS_CHANNELS (2: VSM,
+// 4: MSM, EVSM) and MOMENTS_FORMAT (the image format, e.g. rgba16f); the default is VSM's.
+// DIRECT_SUMS (EVSM) sums each window anew instead of sliding it (see below).
 layout(local_size_x = 64) in;
 
+#if !defined(MOMENTS_CHANNELS)
+#  define MOMENTS_CHANNELS 2
+#  define MOMENTS_FORMAT rg32f
+#endif
+#if MOMENTS_CHANNELS == 4
+#  define moments_t vec4
+#  define MOMENTS_SWIZZLE rgba
+#  define AS_VEC4(v) (v)
+#else
+#  define moments_t vec2
+#  define MOMENTS_SWIZZLE rg
+#  define AS_VEC4(v) vec4((v), 0.0, 0.0)
+#endif
+
 layout(binding = 0) uniform sampler2D u_source;
-layout(binding = 0, rg32f) uniform writeonly image2D u_target;
+layout(binding = 0, MOMENTS_FORMAT) uniform writeonly image2D u_target;
 
 uniform float u_radius_texels;
 uniform int u_axis;      // 0: along x (one invocation per row), 1: along y
@@ -13,13 +30,13 @@ uniform ivec2 u_origin;  // the map's region in the atlas: u_size^2 texels from 
 uniform int u_size;
 
 // Texel i of the line (clamped to the map's edge); `line` indexes rows for axis 0, columns for axis 1.
-vec2 fetch(int i, int line, int len) {
+moments_t fetch(int i, int line, int len) {
   i = clamp(i, 0, len - 1);
-  return texelFetch(u_source, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), 0).rg;
+  return texelFetch(u_source, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), 0).MOMENTS_SWIZZLE;
 }
 
-void store(int i, int line, vec2 v) {
-  imageStore(u_target, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), vec4(v, 0.0, 0.0));
+void store(int i, int line, moments_t v) {
+  imageStore(u_target, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), AS_VEC4(v));
 }
 
 void main() {
@@ -41,19 +58,35 @@ void main() {
   float w_right = b - floor(b);          // coverage of texel i + full_hi + 1
   float norm = 1.0 / (2.0 * r);
 
-  precise vec2 sum = vec2(0.0);
-  precise vec2 comp = vec2(0.0);
+#if defined(DIRECT_SUMS)
+  // Every texel sums its own window (cost proportional to r, clamped to the line): a sliding sum
+  // keeps an error proportional to the largest value that ever passed through it, which EVSM's
+  // warped moments (up to e^84 beside 1) turn into streaks.
+  for (int i = 0; i < len; ++i) {
+    int lo = i + full_lo, hi = i + full_hi;
+    int first = clamp(lo, 0, len), last = clamp(hi, -1, len - 1);
+    moments_t total = float(clamp(-lo, 0, hi - lo + 1)) * fetch(0, line, len) +
+                      float(clamp(hi - (len - 1), 0, hi - lo + 1)) * fetch(len - 1, line, len);
+    for (int j = first; j <= last; ++j) total += fetch(j, line, len);
+    total += w_left * fetch(lo - 1, line, len) + w_right * fetch(hi + 1, line, len);
+    store(i, line, total * norm);
+  }
+  return;
+#endif
+
+  precise moments_t sum = moments_t(0.0);
+  precise moments_t comp = moments_t(0.0);
   for (int j = full_lo; j <= full_hi; ++j) {
-    precise vec2 y = fetch(j, line, len) - comp;
-    precise vec2 t = sum + y;
+    precise moments_t y = fetch(j, line, len) - comp;
+    precise moments_t t = sum + y;
     comp = (t - sum) - y;
     sum = t;
   }
   for (int i = 0; i < len; ++i) {
-    vec2 total = sum + w_left * fetch(i + full_lo - 1, line, len) + w_right * fetch(i + full_hi + 1, line, len);
+    moments_t total = sum + w_left * fetch(i + full_lo - 1, line, len) + w_right * fetch(i + full_hi + 1, line, len);
     store(i, line, total * norm);
-    precise vec2 y = (fetch(i + full_hi + 1, line, len) - fetch(i + full_lo, line, len)) - comp;
-    precise vec2 t = sum + y;
+    precise moments_t y = (fetch(i + full_hi + 1, line, len) - fetch(i + full_lo, line, len)) - comp;
+    precise moments_t t = sum + y;
     comp = (t - sum) - y;
     sum = t;
   }

@@ -1,16 +1,23 @@
 #include "shadows/renderer.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include <glm/gtc/type_ptr.hpp>
 
 #include "adaptive/cascades.h"
 #include "adaptive/resolution_rule.h"
+#include "shadows/evsm.h"
+#include "shadows/moments.h"
+#include "shadows/msm.h"
+#include "shadows/rbsm.h"
 #include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
 
@@ -55,7 +62,7 @@ constexpr int kMaxCascades = 4;
 
 struct Renderer::Maps {
   int width = 0, height = 0;
-  bool moments = false;
+  GLenum moments_format = 0;  // 0: depth only
   gl::Texture depth;
   gl::Framebuffer depth_fbo;
   gl::Texture moments_tex, moments_tmp;
@@ -86,8 +93,6 @@ struct Renderer::Adaptive {
 
 Renderer::Renderer() : adaptive_(std::make_unique<Adaptive>()) {
   depth_program_ = shaders_.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
-  moments_program_ = shaders_.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_moments.frag"}});
-  blur_program_ = shaders_.program({{GL_COMPUTE_SHADER, "vsm_blur.comp"}});
   requirement_program_ = shaders_.program({{GL_COMPUTE_SHADER, "pcss_requirement.comp"}});
   gl::SamplerDesc d;
   d.depth_compare = true;
@@ -96,8 +101,8 @@ Renderer::Renderer() : adaptive_(std::make_unique<Adaptive>()) {
   cmp_nearest_ = gl::Sampler(d);
   d.depth_compare = false;
   raw_nearest_ = gl::Sampler(d);
-  // Beyond the map the border's moments (1, 1) are the far depth: lit, like the depth samplers'
-  // border and the guard band of an atlas region.
+  // Beyond the map the border reads as the far depth: lit, like the depth samplers' border and the
+  // guard band of an atlas region. Each frame sets the border to its technique's far moments.
   moments_linear_ = gl::Sampler(gl::SamplerDesc{});
   gl::check_errors("renderer setup");
 }
@@ -120,6 +125,13 @@ void Renderer::reset_adaptive() {
   adaptive_->last_cascades = 0;
 }
 
+const gl::Program& Renderer::cached_program(const std::string& key, const std::vector<gl::ShaderStage>& stages,
+                                            const std::vector<gl::ShaderDefine>& defines) {
+  auto it = programs_.find(key);
+  if (it == programs_.end()) it = programs_.emplace(key, shaders_.program(stages, defines)).first;
+  return it->second;
+}
+
 const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuffer) {
   std::vector<gl::ShaderDefine> defines;
   if (is_screen_space(s.technique)) {
@@ -128,19 +140,17 @@ const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuff
     else if (s.technique == Technique::erosion) defines.push_back({"TECHNIQUE_EROSION", "1"});
     else defines.push_back({"SCREEN_SPACE_VISIBILITY", "1"});
   } else {
-    const char* names[] = {"TECHNIQUE_HARD", "TECHNIQUE_PCF", "TECHNIQUE_PCSS", "TECHNIQUE_VSM"};
-    defines.push_back({names[static_cast<int>(s.technique)], "1"});
+    std::string technique = "TECHNIQUE_";  // TECHNIQUE_<NAME> from the technique's name
+    for (char c : to_string(s.technique)) technique += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    defines.push_back({technique, "1"});
     const Kernel kernel = s.technique == Technique::pcss ? s.pcss.kernel : s.pcf.kernel;
     if (kernel == Kernel::grid) defines.push_back({"KERNEL_GRID", "1"});
   }
   if (s.technique == Technique::pcss && s.adaptive.enabled && s.adaptive.pcss == PcssRequirement::per_pixel)
     defines.push_back({"PCSS_REQUIREMENT", "1"});
-  std::string key;
+  std::string key = "shading:";
   for (const auto& d : defines) key += d.name + ";";
-  auto it = shading_programs_.find(key);
-  if (it == shading_programs_.end())
-    it = shading_programs_.emplace(key, shaders_.program({{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shading.frag"}}, defines)).first;
-  return it->second;
+  return cached_program(key, {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shading.frag"}}, defines);
 }
 
 void Renderer::draw_scene(const gl::Program& program, bool shading) {
@@ -180,6 +190,9 @@ float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mi
   switch (s.technique) {
     case Technique::pcf: return ws(s.pcf.radius, s.pcf.radius_unit);
     case Technique::vsm: return ws(s.vsm.radius, s.vsm.radius_unit);
+    case Technique::rpcf: return ws(s.rpcf.radius, s.rpcf.radius_unit);
+    case Technique::msm: return ws(s.msm.radius, s.msm.radius_unit);
+    case Technique::evsm: return ws(s.evsm.radius, s.evsm.radius_unit);
     case Technique::pcss: return s.pcss.min_penumbra_ws;
     default: return 0;  // hard and screen-space techniques: no shadow-map filter
   }
@@ -191,6 +204,29 @@ double rule_texels(float c, const LightFrame& f, float radius_ws) {
   if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
   const double uv_per_ws = f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
   return adaptive::required_texels_uv(c, radius_ws * uv_per_ws);
+}
+
+// The filtered-moments layout of the techniques that pre-filter moments (VSM, MSM, EVSM).
+std::optional<MomentsLayout> moments_layout(const ShadowSettings& s) {
+  switch (s.technique) {
+    case Technique::vsm: return MomentsLayout{GL_RG32F, "shadow_moments.frag", {1, 1, 0, 0}};
+    case Technique::msm: return msm_layout();
+    case Technique::evsm: return evsm_layout(s.evsm);
+    default: return std::nullopt;
+  }
+}
+
+// The filter radius and its unit of the techniques with a fixed filter box or disk; nullopt for
+// the others.
+std::optional<std::pair<float, RadiusUnit>> fixed_filter_radius(const ShadowSettings& s) {
+  switch (s.technique) {
+    case Technique::pcf: return std::pair{s.pcf.radius, s.pcf.radius_unit};
+    case Technique::vsm: return std::pair{s.vsm.radius, s.vsm.radius_unit};
+    case Technique::rpcf: return std::pair{s.rpcf.radius, s.rpcf.radius_unit};
+    case Technique::msm: return std::pair{s.msm.radius, s.msm.radius_unit};
+    case Technique::evsm: return std::pair{s.evsm.radius, s.evsm.radius_unit};
+    default: return std::nullopt;
+  }
 }
 
 // Region corners for `res` per cascade: one row of up to two cells, then a second row.
@@ -225,7 +261,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   info.width_px = width_px;
   info.height_px = height_px;
   info.adaptive = ap.enabled;
-  const bool vsm = s.technique == Technique::vsm;
+  const std::optional<MomentsLayout> moments = moments_layout(s);
+  const auto filter_radius = fixed_filter_radius(s);
   const scene::Light& light = scene_.light;
   const bool directional = light.type == scene::Light::Type::directional;
   const float aspect = static_cast<float>(width_px) / static_cast<float>(height_px);
@@ -234,10 +271,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   // Padding of the fitted frustum by the filter's reach.
   FitRequest fit{s.map.fit, aspect, s.map.resolution_texels, 0, 0};
   const float tan_half_angle = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
-  if (s.technique == Technique::pcf) {
-    (s.pcf.radius_unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = s.pcf.radius;
-  } else if (vsm) {
-    (s.vsm.radius_unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = s.vsm.radius;
+  if (filter_radius) {
+    (filter_radius->second == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = filter_radius->first;
   } else if (s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion) {
     const scene::Aabb b = scene_.bounds();
     const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
@@ -246,8 +281,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
                                                                   : s.erosion.search_scale;
     fit.pad_ws = search_scale * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
     fit.pad_texels = 1;
-  } else if (s.technique == Technique::edtsm) {
-    fit.pad_texels = 1;
+  } else if (s.technique == Technique::edtsm || s.technique == Technique::rbsm) {
+    fit.pad_texels = 1;  // the revectorization reads the neighbours of every receiver texel
   }
 
   // The PCSS requirement measured by the previous frame (its buffer's GPU work is done by now on
@@ -382,7 +417,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   }
   info.atlas_width = layout.width;
   info.atlas_height = layout.height;
-  if (!maps_ || maps_->width != layout.width || maps_->height != layout.height || maps_->moments != vsm) {
+  const GLenum moments_format = moments ? moments->format : 0;
+  if (!maps_ || maps_->width != layout.width || maps_->height != layout.height || maps_->moments_format != moments_format) {
     GLint max_size = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
     if (layout.width > max_size || layout.height > max_size)
@@ -393,17 +429,17 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     auto m = std::make_unique<Maps>();
     m->width = layout.width;
     m->height = layout.height;
-    m->moments = vsm;
+    m->moments_format = moments_format;
     m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, layout.width, layout.height, 1}, "shadow depth atlas");
     const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
     glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
     const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
     m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
-    if (vsm) {
-      m->moments_tex = gl::Texture({GL_RG32F, layout.width, layout.height, 1}, "VSM moments");
-      m->moments_tmp = gl::Texture({GL_RG32F, layout.width, layout.height, 1}, "VSM blur temporary");
+    if (moments) {
+      m->moments_tex = gl::Texture({moments_format, layout.width, layout.height, 1}, "shadow moments");
+      m->moments_tmp = gl::Texture({moments_format, layout.width, layout.height, 1}, "moments blur temporary");
       const gl::Framebuffer::Attachment att[] = {{&m->moments_tex, GL_COLOR_ATTACHMENT0}, {&m->depth, GL_DEPTH_ATTACHMENT}};
-      m->moments_fbo = gl::Framebuffer(att, "VSM moments framebuffer");
+      m->moments_fbo = gl::Framebuffer(att, "moments framebuffer");
     }
     maps_ = std::move(m);
     info.reallocated = true;
@@ -440,8 +476,11 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   // --- shadow map ----------------------------------------------------------------------------
   {
     ScopedPass pass(timer, "shadow_map", info.passes);
-    const gl::Program& prog = vsm ? moments_program_ : depth_program_;
-    (vsm ? maps_->moments_fbo : maps_->depth_fbo).bind();
+    const gl::Program& prog =
+        moments ? cached_program(std::string("moments:") + moments->fragment_shader,
+                                 {{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, moments->fragment_shader}})
+                : depth_program_;
+    (moments ? maps_->moments_fbo : maps_->depth_fbo).bind();
     glEnable(GL_DEPTH_CLAMP);  // casters in front of the fitted near plane still occlude
     glEnable(GL_SCISSOR_TEST);
     prog.use();
@@ -449,23 +488,21 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       // Clear the region and its guard band only: the rest of a sub-rectangle atlas is never read.
       const int r = c.resolution_texels;
       glScissor(c.atlas_x - guard, c.atlas_y - guard, r + 2 * guard, r + 2 * guard);
-      if (vsm) {
-        const float far_moments[4] = {1, 1, 0, 0};
-        glClearBufferfv(GL_COLOR, 0, far_moments);
-      }
+      if (moments) glClearBufferfv(GL_COLOR, 0, moments->far_moments.data());
       const float one = 1;
       glClearBufferfv(GL_DEPTH, 0, &one);
       glViewport(c.atlas_x, c.atlas_y, r, r);
       glScissor(c.atlas_x, c.atlas_y, r, r);
-      if (!vsm) {
+      if (!moments) {
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset(s.map.slope_bias, s.map.offset_bias);
       }
       set_mat4(prog, "u_light_view_projection", c.light.view_projection());
       set_mat4(prog, "u_light_view", c.light.view);
-      if (vsm) {
+      if (moments) {
         set_float(prog, "u_light_near_ws", c.light.near_ws);
         set_float(prog, "u_light_far_ws", c.light.far_ws);
+        if (s.technique == Technique::evsm) set_evsm_uniforms(prog, s.evsm);
       }
       draw_scene(prog, false);
     }
@@ -475,34 +512,39 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     gl::check_errors("shadow_map pass");
   }
 
-  // --- VSM blur ------------------------------------------------------------------------------
-  if (vsm) {
-    const float radius_texels = s.vsm.radius_unit == RadiusUnit::texels ? s.vsm.radius : s.vsm.radius / texel_mid_ws;
-    info.filter_radius_texels = radius_texels;
+  if (filter_radius)
+    info.filter_radius_texels = filter_radius->second == RadiusUnit::texels ? filter_radius->first : filter_radius->first / texel_mid_ws;
+
+  // --- moments blur (VSM, MSM, EVSM) ---------------------------------------------------------
+  if (moments) {
+    const char* qualifier = image_format_qualifier(moments->format);
+    std::vector<gl::ShaderDefine> blur_defines = {{"MOMENTS_CHANNELS", std::to_string(channel_count(moments->format))},
+                                                  {"MOMENTS_FORMAT", qualifier}};
+    if (moments->direct_sums) blur_defines.push_back({"DIRECT_SUMS", "1"});
+    const gl::Program& blur = cached_program(std::string("blur:") + qualifier + (moments->direct_sums ? ":direct" : ""),
+                                             {{GL_COMPUTE_SHADER, "vsm_blur.comp"}}, blur_defines);
     ScopedPass pass(timer, "vsm_blur", info.passes);
-    blur_program_.use();
+    blur.use();
     glBindSampler(0, 0);
     for (const auto& c : info.cascades) {
       // World-space radii span a different number of texels in each cascade.
       const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
-      set_float(blur_program_, "u_radius_texels", s.vsm.radius_unit == RadiusUnit::texels ? s.vsm.radius : s.vsm.radius / texel);
-      glProgramUniform2i(blur_program_.id(), blur_program_.location("u_origin"), c.atlas_x, c.atlas_y);
-      set_int(blur_program_, "u_size", c.resolution_texels);
+      set_float(blur, "u_radius_texels", filter_radius->second == RadiusUnit::texels ? filter_radius->first : filter_radius->first / texel);
+      glProgramUniform2i(blur.id(), blur.location("u_origin"), c.atlas_x, c.atlas_y);
+      set_int(blur, "u_size", c.resolution_texels);
       const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
-      set_int(blur_program_, "u_axis", 0);
+      set_int(blur, "u_axis", 0);
       maps_->moments_tex.bind(0);
-      glBindImageTexture(0, maps_->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      glBindImageTexture(0, maps_->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments->format);
       glDispatchCompute(groups, 1, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-      set_int(blur_program_, "u_axis", 1);
+      set_int(blur, "u_axis", 1);
       maps_->moments_tmp.bind(0);
-      glBindImageTexture(0, maps_->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      glBindImageTexture(0, maps_->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments->format);
       glDispatchCompute(groups, 1, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     gl::check_errors("vsm_blur pass");
-  } else if (s.technique == Technique::pcf) {
-    info.filter_radius_texels = s.pcf.radius_unit == RadiusUnit::texels ? s.pcf.radius : s.pcf.radius / texel_mid_ws;
   }
 
   // --- shading (and, for screen-space techniques, the G-buffer and post passes) --------------
@@ -564,9 +606,17 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       // One disk for both steps, sized for the larger tap count; the filter step takes its own
       // count from the front (the best-candidate order spreads any prefix).
       set_int(prog, "u_taps", s.pcss.filter_taps);
-    } else if (vsm) {
+    } else if (s.technique == Technique::vsm) {
       set_float(prog, "u_vsm_min_variance", s.vsm.min_variance);
       set_float(prog, "u_vsm_bleed_reduction", s.vsm.bleed_reduction);
+    } else if (s.technique == Technique::rbsm) {
+      set_rbsm_uniforms(prog, s.rbsm);
+    } else if (s.technique == Technique::rpcf) {
+      set_rpcf_uniforms(prog, s.rpcf);
+    } else if (s.technique == Technique::msm) {
+      set_msm_uniforms(prog, s.msm);
+    } else if (s.technique == Technique::evsm) {
+      set_evsm_uniforms(prog, s.evsm);
     } else if (s.technique == Technique::edtssm) {
       taps = s.edtssm.blocker_taps;
     } else if (s.technique == Technique::erosion) {
@@ -593,7 +643,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     cmp_linear_.bind(0);
     cmp_nearest_.bind(1);
     raw_nearest_.bind(2);
-    if (vsm) {
+    if (moments) {
+      glSamplerParameterfv(moments_linear_.id(), GL_TEXTURE_BORDER_COLOR, moments->far_moments.data());
       maps_->moments_tex.bind(3);
       moments_linear_.bind(3);
     }

@@ -1,9 +1,9 @@
 #pragma once
-// The frame: shadow-map pass(es) → (VSM blur) → shading pass → (PCSS requirement), each with a
-// contract:
-//   shadow_map        reads the scene, writes the depth map of every cascade (and, for VSM, the
-//                     moments) into its region of the shadow atlas
-//   vsm_blur          reads/writes the moments (VSM only)
+// The frame: shadow-map pass(es) → (moments blur) → shading pass → (PCSS requirement), each
+// with a contract:
+//   shadow_map        reads the scene, writes the depth map of every cascade (and, for VSM, MSM
+//                     and EVSM, the moments) into its region of the shadow atlas
+//   vsm_blur          reads/writes the moments (the filtered-moments techniques VSM, MSM, EVSM)
 //   gbuffer + post    screen-space techniques only (screen_space.h); they use one map
 //   shading           reads the maps, writes lit colour (sRGB 8-bit) and visibility (float)
 //   pcss_requirement  adaptive PCSS with per-pixel requirement only: reduces the shading pass's
@@ -54,7 +54,7 @@ struct FrameInfo {
   int width_px = 0;
   int height_px = 0;
   std::vector<std::string> passes;
-  float filter_radius_texels = 0;  // PCF/VSM radius in texels (directional light; spot: at mid depth)
+  float filter_radius_texels = 0;  // PCF/RPCF/VSM/MSM/EVSM radius in texels (directional light; spot: at mid depth)
   std::vector<CascadeInfo> cascades;  // one entry when not cascaded
   bool adaptive = false;
   std::string resolution_source;   // "fixed", "rule", "pcss_per_pixel", "pcss_min_penumbra"
@@ -106,14 +106,15 @@ class Renderer {
   struct Adaptive;
   // `gbuffer`: the first camera pass of a screen-space technique.
   const gl::Program& shading_program(const ShadowSettings& s, bool gbuffer = false);
+  // The program built from `stages` with `defines`, compiled on first use and kept under `key`.
+  const gl::Program& cached_program(const std::string& key, const std::vector<gl::ShaderStage>& stages,
+                                    const std::vector<gl::ShaderDefine>& defines = {});
   void draw_scene(const gl::Program& program, bool shading);
 
   gl::ShaderLibrary shaders_;
   gl::Program depth_program_;
-  gl::Program moments_program_;
-  gl::Program blur_program_;
   gl::Program requirement_program_;
-  std::map<std::string, gl::Program> shading_programs_;
+  std::map<std::string, gl::Program> programs_;  // shading, moments and blur programs by key
   gl::Sampler cmp_linear_, cmp_nearest_, raw_nearest_, moments_linear_;
   scene::Scene scene_;
   std::vector<std::unique_ptr<scene::GpuMesh>> meshes_;

@@ -10,9 +10,11 @@
 namespace penumbra::shadows {
 namespace {
 
-constexpr std::array<std::string_view, 7> kTechniques = {"hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"};
+constexpr std::array<std::string_view, 11> kTechniques = {"hard", "pcf", "pcss", "vsm", "edtsm", "edtssm",
+                                                          "erosion", "rbsm", "rpcf", "msm", "evsm"};
 constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
 constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
+constexpr std::array<std::string_view, 2> kMomentFormats = {"rgba32f", "rgba16f"};
 constexpr std::array<std::string_view, 2> kStorage = {"subrect", "realloc"};
 constexpr std::array<std::string_view, 2> kPcssRequirement = {"per_pixel", "min_penumbra"};
 
@@ -134,6 +136,36 @@ const Setting<ErosionParams> kErosionTable[] = {
     PENUMBRA_REAL(ErosionParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
 };
 
+const Setting<RbsmParams> kRbsmTable[] = {
+    PENUMBRA_INT(RbsmParams, max_search_texels, "texels", 1, 256,
+                 "texels walked along a silhouette step in each direction; longer steps are revectorized as if straight"),
+};
+
+const Setting<RpcfParams> kRpcfTable[] = {
+    PENUMBRA_REAL(RpcfParams, radius, "radius_unit", 0, 1e6, "half side of the filter box"),
+    PENUMBRA_CHOICE(RpcfParams, radius_unit, RadiusUnit, kUnits, "unit of the radius: shadow-map texels or world units"),
+    PENUMBRA_INT(RpcfParams, max_grid_taps, "taps", 2, 256, "texels per axis integrated exactly before the box is strided"),
+    PENUMBRA_INT(RpcfParams, max_search_texels, "texels", 1, 256, "texels walked along a silhouette step in each direction"),
+};
+
+const Setting<MsmParams> kMsmTable[] = {
+    PENUMBRA_REAL(MsmParams, radius, "radius_unit", 0, 1e6, "box-blur radius of the moments"),
+    PENUMBRA_CHOICE(MsmParams, radius_unit, RadiusUnit, kUnits, "unit of the radius: shadow-map texels or world units"),
+    PENUMBRA_REAL(MsmParams, moment_bias, "", 1e-9, 0.1, "moment bias alpha toward (0, 0.63, 0, 0.63)"),
+    PENUMBRA_REAL(MsmParams, depth_bias, "depth", 0, 0.1, "receiver depth offset, depth in [-1, 1] over the light's depth range"),
+    PENUMBRA_REAL(MsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
+};
+
+const Setting<EvsmParams> kEvsmTable[] = {
+    PENUMBRA_REAL(EvsmParams, radius, "radius_unit", 0, 1e6, "box-blur radius of the moments"),
+    PENUMBRA_CHOICE(EvsmParams, radius_unit, RadiusUnit, kUnits, "unit of the radius: shadow-map texels or world units"),
+    PENUMBRA_CHOICE(EvsmParams, format, MomentFormat, kMomentFormats, "storage of the four warped moments"),
+    PENUMBRA_REAL(EvsmParams, positive_exponent, "", 0, 42, "c+ of exp(c+ x); clamped to 42 (rgba32f) or 5.54 (rgba16f)"),
+    PENUMBRA_REAL(EvsmParams, negative_exponent, "", 0, 42, "c- of -exp(-c- x); clamped like c+"),
+    PENUMBRA_REAL(EvsmParams, min_variance, "depth^2", 0, 1, "variance floor before the warp"),
+    PENUMBRA_REAL(EvsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
+};
+
 #undef PENUMBRA_REAL
 #undef PENUMBRA_INT
 #undef PENUMBRA_BOOL
@@ -175,6 +207,10 @@ std::span<const Setting<AdaptiveParams>> settings_table(const AdaptiveParams*) {
 std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*) { return kEdtsmTable; }
 std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*) { return kEdtssmTable; }
 std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*) { return kErosionTable; }
+std::span<const Setting<RbsmParams>> settings_table(const RbsmParams*) { return kRbsmTable; }
+std::span<const Setting<RpcfParams>> settings_table(const RpcfParams*) { return kRpcfTable; }
+std::span<const Setting<MsmParams>> settings_table(const MsmParams*) { return kMsmTable; }
+std::span<const Setting<EvsmParams>> settings_table(const EvsmParams*) { return kEvsmTable; }
 
 template <class P>
 void set_from_string(const Setting<P>& s, P& params, std::string_view value) {
@@ -241,6 +277,10 @@ PENUMBRA_INSTANTIATE(AdaptiveParams)
 PENUMBRA_INSTANTIATE(EdtsmParams)
 PENUMBRA_INSTANTIATE(EdtssmParams)
 PENUMBRA_INSTANTIATE(ErosionParams)
+PENUMBRA_INSTANTIATE(RbsmParams)
+PENUMBRA_INSTANTIATE(RpcfParams)
+PENUMBRA_INSTANTIATE(MsmParams)
+PENUMBRA_INSTANTIATE(EvsmParams)
 #undef PENUMBRA_INSTANTIATE
 
 nlohmann::json to_json(const ShadowMapParams& p) { return table_json(p); }
@@ -251,21 +291,17 @@ nlohmann::json to_json(const AdaptiveParams& p) { return table_json(p); }
 nlohmann::json to_json(const EdtsmParams& p) { return table_json(p); }
 nlohmann::json to_json(const EdtssmParams& p) { return table_json(p); }
 nlohmann::json to_json(const ErosionParams& p) { return table_json(p); }
+nlohmann::json to_json(const RbsmParams& p) { return table_json(p); }
+nlohmann::json to_json(const RpcfParams& p) { return table_json(p); }
+nlohmann::json to_json(const MsmParams& p) { return table_json(p); }
+nlohmann::json to_json(const EvsmParams& p) { return table_json(p); }
 
 nlohmann::json to_json(const ShadowSettings& s) {
   nlohmann::json j;
   j["technique"] = std::string(to_string(s.technique));
   j["map"] = to_json(s.map);
   j["adaptive"] = to_json(s.adaptive);
-  switch (s.technique) {
-    case Technique::hard: break;
-    case Technique::pcf: j["pcf"] = to_json(s.pcf); break;
-    case Technique::pcss: j["pcss"] = to_json(s.pcss); break;
-    case Technique::vsm: j["vsm"] = to_json(s.vsm); break;
-    case Technique::edtsm: j["edtsm"] = to_json(s.edtsm); break;
-    case Technique::edtssm: j["edtssm"] = to_json(s.edtssm); break;
-    case Technique::erosion: j["erosion"] = to_json(s.erosion); break;
-  }
+  visit_technique_section(s, [&](std::string_view section, const auto& params) { j[std::string(section)] = to_json(params); });
   return j;
 }
 
@@ -274,15 +310,7 @@ std::string describe(const ShadowSettings& s) {
   auto add = [&](const auto& params) {
     for (const auto& row : settings_table(&params)) out += " " + std::string(row.key) + "=" + value_to_string(row, params);
   };
-  switch (s.technique) {
-    case Technique::hard: break;
-    case Technique::pcf: add(s.pcf); break;
-    case Technique::pcss: add(s.pcss); break;
-    case Technique::vsm: add(s.vsm); break;
-    case Technique::edtsm: add(s.edtsm); break;
-    case Technique::edtssm: add(s.edtssm); break;
-    case Technique::erosion: add(s.erosion); break;
-  }
+  visit_technique_section(s, [&](std::string_view, const auto& params) { add(params); });
   return out;
 }
 

@@ -10,13 +10,14 @@
 
 namespace penumbra::shadows {
 
-enum class Technique { hard, pcf, pcss, vsm, edtsm, edtssm, erosion };
+enum class Technique { hard, pcf, pcss, vsm, edtsm, edtssm, erosion, rbsm, rpcf, msm, evsm };
 enum class Kernel { grid, poisson };
 enum class RadiusUnit { texels, world };
+enum class MomentFormat { rgba32f, rgba16f };
 enum class Storage { subrect, realloc };
 enum class PcssRequirement { per_pixel, min_penumbra };
 
-std::span<const std::string_view> technique_names();  // "hard", "pcf", "pcss", "vsm", "edtsm", "edtssm", "erosion"
+std::span<const std::string_view> technique_names();  // "hard", "pcf", ..., "msm", "evsm" (Technique order)
 std::string_view to_string(Technique t);
 Technique technique_from_string(std::string_view name);  // throws std::invalid_argument
 
@@ -113,6 +114,40 @@ struct ErosionParams {
   float depth_threshold = 0.05f;      // edges only between pixels of one surface
 };
 
+// Revectorization-based shadow mapping (Macedo & Apolinario 2016): hard shadows whose texel
+// staircase is replaced by the line through the steps' risers (docs/alternatives.md).
+struct RbsmParams {
+  int max_search_texels = 16;         // texels walked along a silhouette step in each direction
+};
+
+// RPCF: the box PCF of the revectorized hard shadow, each texel under the box integrated exactly.
+struct RpcfParams {
+  float radius = 2;                   // half side of the box, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  int max_grid_taps = 16;             // texels per axis before the box is strided
+  int max_search_texels = 16;         // as RbsmParams
+};
+
+// Moment shadow maps (Peters & Klein 2015), Hamburger 4MSM on plain RGBA32F moments.
+struct MsmParams {
+  float radius = 2;                   // box-blur radius of the moments, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  float moment_bias = 3e-5f;          // alpha: b' = (1 - alpha) b + alpha (0, 0.63, 0, 0.63)
+  float depth_bias = 0;               // subtracted from the receiver's depth in [-1, 1]
+  float bleed_reduction = 0;          // visibility below this maps to 0, rest rescaled to [0, 1]
+};
+
+// Exponential variance shadow maps (Lauritzen & McCool 2008): VSM of exp(c+ x) and -exp(-c- x).
+struct EvsmParams {
+  float radius = 2;                   // box-blur radius of the moments, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  MomentFormat format = MomentFormat::rgba32f;
+  float positive_exponent = 40;       // c+, clamped to the format's limit (42 float32, 5.54 float16)
+  float negative_exponent = 5;        // c-, clamped likewise
+  float min_variance = 1e-6f;         // in normalized depth^2, carried through the warp's slope
+  float bleed_reduction = 0;          // as VsmParams
+};
+
 // Everything a frame needs to know about its shadows.
 struct ShadowSettings {
   Technique technique = Technique::pcf;
@@ -124,6 +159,10 @@ struct ShadowSettings {
   EdtsmParams edtsm;
   EdtssmParams edtssm;
   ErosionParams erosion;
+  RbsmParams rbsm;
+  RpcfParams rpcf;
+  MsmParams msm;
+  EvsmParams evsm;
 };
 
 enum class SettingType { real, integer, boolean, choice };
@@ -151,6 +190,10 @@ std::span<const Setting<AdaptiveParams>> settings_table(const AdaptiveParams*);
 std::span<const Setting<EdtsmParams>> settings_table(const EdtsmParams*);
 std::span<const Setting<EdtssmParams>> settings_table(const EdtssmParams*);
 std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*);
+std::span<const Setting<RbsmParams>> settings_table(const RbsmParams*);
+std::span<const Setting<RpcfParams>> settings_table(const RpcfParams*);
+std::span<const Setting<MsmParams>> settings_table(const MsmParams*);
+std::span<const Setting<EvsmParams>> settings_table(const EvsmParams*);
 
 // Sets one row from its textual value ("2.5", "true", "poisson"); throws std::invalid_argument
 // naming the key, the value and the accepted range or choices.
@@ -169,6 +212,36 @@ nlohmann::json to_json(const AdaptiveParams& p);
 nlohmann::json to_json(const EdtsmParams& p);
 nlohmann::json to_json(const EdtssmParams& p);
 nlohmann::json to_json(const ErosionParams& p);
+nlohmann::json to_json(const RbsmParams& p);
+nlohmann::json to_json(const RpcfParams& p);
+nlohmann::json to_json(const MsmParams& p);
+nlohmann::json to_json(const EvsmParams& p);
+
+// Calls f(section, params) for every technique's parameters section ("pcf", s.pcf), ..., in
+// technique order, so front ends need no list of their own. `hard` has no section.
+template <class S, class F>
+void for_each_technique_section(S& s, F&& f) {
+  f("pcf", s.pcf);
+  f("pcss", s.pcss);
+  f("vsm", s.vsm);
+  f("edtsm", s.edtsm);
+  f("edtssm", s.edtssm);
+  f("erosion", s.erosion);
+  f("rbsm", s.rbsm);
+  f("rpcf", s.rpcf);
+  f("msm", s.msm);
+  f("evsm", s.evsm);
+}
+
+// Calls f(section, params) for the section of `s.technique`; not at all for `hard`.
+template <class S, class F>
+void visit_technique_section(S& s, F&& f) {
+  const std::string_view name = to_string(s.technique);
+  for_each_technique_section(s, [&](std::string_view section, auto& params) {
+    if (section == name) f(section, params);
+  });
+}
+
 
 // The parameters relevant to `s.technique`, as "section.key=value" pairs (for names and reports).
 std::string describe(const ShadowSettings& s);

@@ -157,12 +157,15 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const fs::path out = work_ / "out";
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm", "edtsm", "edtssm", "erosion"};
+  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm", "edtsm", "edtssm", "erosion",
+                                         "rbsm", "rpcf", "msm", "evsm"};
   std::set<std::string> expected = renders;
   expected.insert({"montage.png", "report.json"});
   EXPECT_EQ(listing(out), expected);
   const std::map<std::string, std::vector<std::string>> special = {
       {"vsm", {"shadow_map", "vsm_blur", "shading"}},
+      {"msm", {"shadow_map", "vsm_blur", "shading"}},
+      {"evsm", {"shadow_map", "vsm_blur", "shading"}},
       {"edtsm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"edtssm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"erosion", {"shadow_map", "gbuffer", "edges", "erosion_minmax", "erosion", "shading"}}};

@@ -266,8 +266,8 @@ void expect_finite_render(const scene::Scene& s, const ShadowSettings& st, const
 
 std::vector<ShadowSettings> every_technique(int resolution) {
   std::vector<ShadowSettings> out;
-  for (Technique t : {Technique::hard, Technique::pcf, Technique::pcss, Technique::vsm, Technique::edtsm,
-                      Technique::edtssm, Technique::erosion}) {
+  for (auto name : shadows::technique_names()) {
+    const Technique t = shadows::technique_from_string(name);
     for (Kernel k : {Kernel::grid, Kernel::poisson}) {
       if (k == Kernel::grid && t != Technique::pcf && t != Technique::pcss) continue;
       ShadowSettings st = settings(t, resolution, true);
@@ -276,6 +276,9 @@ std::vector<ShadowSettings> every_technique(int resolution) {
       out.push_back(st);
     }
   }
+  ShadowSettings half_float = settings(Technique::evsm, resolution, true);
+  half_float.evsm.format = shadows::MomentFormat::rgba16f;
+  out.push_back(half_float);
   return out;
 }
 
@@ -302,6 +305,9 @@ TEST(Extremes, FilterRadiusZeroAndThousandTexels) {
     for (auto st : every_technique(512)) {
       st.pcf.radius = radius;
       st.vsm.radius = radius;
+      st.rpcf.radius = radius;
+      st.msm.radius = radius;
+      st.evsm.radius = radius;
       expect_finite_render(s, st, shadows::describe(st));
     }
   }

@@ -1,0 +1,188 @@
+// Revectorization-based shadow mapping (Macedo & Apolinario 2016) and RPCF, the box PCF of the
+// revectorized shadow. Texel space: p = sc.xy * g_shadow_res; texel t = floor(p) covers
+// [t, t + 1). Every test is the nearest-texel comparison of a texel centre against the receiver
+// plane through the fragment, so all tests of one fragment agree on what "own side" means.
+// Procedure and the choices the paper leaves open: docs/alternatives.md.
+uniform int u_rbsm_max_search;       // texels walked along a silhouette step in each direction
+uniform float u_rpcf_radius_texels;  // used when u_rpcf_radius_ws < 0
+uniform float u_rpcf_radius_ws;
+uniform int u_rpcf_max_grid_taps;
+
+// Shadow test of texel t (1 lit, 0 shadowed) for the receiver plane through sc.
+float rbsm_test(vec3 sc, vec2 gradient, ivec2 t) {
+  vec2 centre = (vec2(t) + 0.5) / g_shadow_res;
+  return textureLod(u_shadow_cmp_nearest, vec3(atlas_uv(centre), reference_depth(sc, centre - sc.xy, gradient)), 0.0);
+}
+
+// Walks from texel t along e over the step whose edge faces n (t and t + n differ). Returns
+// (texels walked beyond t, height of the revectorized silhouette where the step ends), heights
+// measured along n in texels with t's row at [0, 1] and the step's edge at 1: 0.5 where the
+// silhouette steps one texel into the own side, 1.5 where it steps one texel away, 1 where the
+// step ends in a corner (a riser longer than one texel) or the walk found no end.
+vec2 rbsm_walk(vec3 sc, vec2 gradient, ivec2 t, ivec2 n, ivec2 e, float own) {
+  for (int k = 1; k <= u_rbsm_max_search; ++k) {
+    ivec2 a = t + k * e;  // next texel on the own row
+    if (rbsm_test(sc, gradient, a) != own) {
+      return vec2(float(k - 1), rbsm_test(sc, gradient, a - n) == own ? 0.5 : 1.0);
+    }
+    ivec2 b = a + n;  // its neighbour across the edge
+    if (rbsm_test(sc, gradient, b) == own) {
+      return vec2(float(k - 1), rbsm_test(sc, gradient, b + n) == own ? 1.0 : 1.5);
+    }
+  }
+  return vec2(float(u_rbsm_max_search), 1.0);
+}
+
+// The revectorized line of the silhouette edge between texel t and t + n, as an affine function
+// g(f) = dot(g.xy, f) + g.z of the position f in [0, 1]^2 inside t: g > 0 on t's side. The line
+// joins the heights at both ends of the step (rbsm_walk), linear in the normalized position
+// along the step.
+vec3 rbsm_edge_line(vec3 sc, vec2 gradient, ivec2 t, ivec2 n, float own) {
+  ivec2 e = ivec2(abs(n.y), abs(n.x));
+  vec2 ahead = rbsm_walk(sc, gradient, t, n, e, own);
+  vec2 behind = rbsm_walk(sc, gradient, t, n, -e, own);
+  // A one-texel step next to a longer perpendicular one is the riser of a staircase running the
+  // other way: that staircase's lines pass through its midpoint, it keeps its border.
+  if (ahead.x + behind.x == 0.0 && (ahead.y == 1.0 || behind.y == 1.0)) ahead.y = behind.y = 1.0;
+  // height(along) = behind.y + slope * (along + behind.x); g = height - across.
+  float slope = (ahead.y - behind.y) / (behind.x + ahead.x + 1.0);
+  bool positive = n.x + n.y > 0;
+  vec3 g = vec3(0.0, 0.0, behind.y + slope * behind.x - (positive ? 0.0 : 1.0));
+  float across_sign = positive ? -1.0 : 1.0;  // across = f (toward +n) or 1 - f (toward -n)
+  if (e.x != 0) g.xy = vec2(slope, across_sign);
+  else g.xy = vec2(across_sign, slope);
+  return g;
+}
+
+const ivec2 kRbsmNormals[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
+
+// Revectorized hard visibility (0 or 1) at texel-space point p, tested against the receiver
+// plane through sc. A point keeps its texel's test unless the line of one of the texel's
+// silhouette edges puts it on the other side.
+float rbsm_visibility_at(vec3 sc, vec2 gradient, vec2 p) {
+  ivec2 t = ivec2(floor(p));
+  vec2 f = p - vec2(t);
+  float own = rbsm_test(sc, gradient, t);
+  for (int i = 0; i < 4; ++i) {
+    ivec2 n = kRbsmNormals[i];
+    if (rbsm_test(sc, gradient, t + n) == own) continue;
+    vec3 g = rbsm_edge_line(sc, gradient, t, n, own);
+    if (dot(g.xy, f) + g.z <= 0.0) return 1.0 - own;
+  }
+  return own;
+}
+
+// RBSM: revectorized hard visibility at the fragment (0 or 1).
+float shadow_rbsm(vec3 sc, vec2 gradient) {
+  return rbsm_visibility_at(sc, gradient, sc.xy * g_shadow_res);
+}
+
+// Integral over x in [x0, x1] of clamp(a + b x, lo, hi).
+float rbsm_clamped_integral(float a, float b, float x0, float x1, float lo, float hi) {
+  if (abs(b) < 1e-6) return clamp(a + b * 0.5 * (x0 + x1), lo, hi) * (x1 - x0);
+  // G' = clamp(u, lo, hi), continuous: lo u below lo, (lo^2 + u^2) / 2 between, then linear.
+  vec2 u = vec2(a + b * x0, a + b * x1);
+  vec2 c = clamp(u, lo, hi);
+  vec2 g = 0.5 * (lo * lo + c * c) + lo * min(u - lo, 0.0) + hi * max(u - hi, 0.0);
+  return (g.y - g.x) / b;
+}
+
+// Area of the part of the rectangle [lo, hi] (texel-local) where dot(g.xy, f) + g.z > 0.
+float rbsm_halfplane_area(vec2 lo, vec2 hi, vec3 g) {
+  bool along_x = abs(g.y) >= abs(g.x);  // integrate over x the extent in y, or the converse
+  vec2 w = along_x ? g.xy : g.yx;
+  vec2 l = along_x ? lo : lo.yx;
+  vec2 h = along_x ? hi : hi.yx;
+  if (w.y == 0.0) return g.z > 0.0 ? (hi.x - lo.x) * (hi.y - lo.y) : 0.0;
+  // Boundary v*(u) = a + b u; the positive side lies above it when w.y > 0.
+  float below = rbsm_clamped_integral(-g.z / w.y, -w.x / w.y, l.x, h.x, l.y, h.y) - l.y * (h.x - l.x);
+  return w.y > 0.0 ? (h.x - l.x) * (h.y - l.y) - below : below;
+}
+
+// Integral of the revectorized visibility over the part [lo, hi] of texel t (texel-local):
+// exact where one silhouette edge crosses the texel, 4x4 stratified points where several do.
+float rbsm_texel_integral(vec3 sc, vec2 gradient, ivec2 t, vec2 lo, vec2 hi) {
+  float own = rbsm_test(sc, gradient, t);
+  float area = (hi.x - lo.x) * (hi.y - lo.y);
+  vec3 lines[4];
+  bool crossing[4];
+  int count = 0;
+  vec3 last_line = vec3(0.0);
+  for (int i = 0; i < 4; ++i) {
+    crossing[i] = rbsm_test(sc, gradient, t + kRbsmNormals[i]) != own;
+    lines[i] = crossing[i] ? rbsm_edge_line(sc, gradient, t, kRbsmNormals[i], own) : vec3(0.0, 0.0, 1.0);
+    if (crossing[i]) {
+      ++count;
+      last_line = lines[i];
+    }
+  }
+  float own_area;
+  if (count == 0) {
+    own_area = area;
+  } else if (count == 1) {
+    own_area = rbsm_halfplane_area(lo, hi, last_line);
+  } else {
+    float kept = 0.0;
+    for (int j = 0; j < 4; ++j) {
+      for (int i = 0; i < 4; ++i) {
+        vec2 f = mix(lo, hi, (vec2(i, j) + 0.5) / 4.0);
+        bool keep = true;
+        for (int k = 0; k < 4; ++k) keep = keep && dot(lines[k].xy, f) + lines[k].z > 0.0;
+        kept += keep ? 1.0 : 0.0;
+      }
+    }
+    own_area = area * kept / 16.0;
+  }
+  return own > 0.5 ? own_area : area - own_area;
+}
+
+// Whether the tests of every texel in [first, last] (2x2 gathers; an odd span reads one more
+// column or row) equal `value`.
+bool rbsm_uniform(vec3 sc, vec2 gradient, ivec2 first, ivec2 last, float value) {
+  for (int j = first.y; j <= last.y; j += 2) {
+    for (int i = first.x; i <= last.x; i += 2) {
+      vec2 corner = vec2(i + 1, j + 1) / g_shadow_res;
+      vec4 t = textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient));
+      if (any(notEqual(t, vec4(value)))) return false;
+    }
+  }
+  return true;
+}
+
+// RPCF: the mean of the revectorized visibility over the square p +- radius (texels), each texel
+// integrated over the part the square covers (rbsm_texel_integral). Kernels wider than
+// `max_taps` texels per axis take one revectorized test per stride^2 cell, weighted by the
+// cell's coverage, as pcf_grid does; radius 0 is RBSM.
+float shadow_rpcf(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
+  vec2 p = sc.xy * g_shadow_res;
+  if (radius_texels <= 0.0) return rbsm_visibility_at(sc, gradient, p);
+  vec2 lo = p - radius_texels;
+  vec2 hi = p + radius_texels;
+  ivec2 first = ivec2(floor(lo));
+  ivec2 last = ivec2(ceil(hi)) - 1;
+  int span = last.x - first.x + 1;
+  float norm = 1.0 / (4.0 * radius_texels * radius_texels);
+  float sum = 0.0;
+  if (span <= max_taps) {
+    // No silhouette under the box or next to it: every texel keeps its test.
+    float centre = rbsm_test(sc, gradient, ivec2(floor(p)));
+    if (rbsm_uniform(sc, gradient, first - 1, last + 1, centre)) return centre;
+    for (int j = first.y; j <= last.y; ++j) {
+      for (int i = first.x; i <= last.x; ++i) {
+        vec2 t = vec2(i, j);
+        vec2 a = clamp(lo - t, 0.0, 1.0), b = clamp(hi - t, 0.0, 1.0);
+        if (b.x > a.x && b.y > a.y) sum += rbsm_texel_integral(sc, gradient, ivec2(i, j), a, b);
+      }
+    }
+    return sum * norm;
+  }
+  int stride = (span + max_taps - 1) / max_taps;
+  for (int j = first.y; j <= last.y; j += stride) {
+    float wy = overlap(float(j), float(j + stride), lo.y, hi.y);
+    for (int i = first.x; i <= last.x; i += stride) {
+      float wx = overlap(float(i), float(i + stride), lo.x, hi.x);
+      sum += wx * wy * rbsm_visibility_at(sc, gradient, vec2(i, j) + 0.5 * float(stride));
+    }
+  }
+  return sum * norm;
+}
