@@ -139,12 +139,9 @@ std::vector<Variant> make_variants(const Options& opt) {
 }
 
 // Whether the adaptive rule has a filter size to work from (renderer/shadows/renderer.cpp,
-// rule_radius_ws): PCF and VSM radii, PCSS's penumbra. For the others (hard, screen-space) it
-// would only ever pick adaptive.max_texels, a row that repeats a fixed one.
-bool has_rule_radius(const Variant& v) {
-  const shadows::Technique t = v.settings.technique;
-  return t == shadows::Technique::pcf || t == shadows::Technique::vsm || t == shadows::Technique::pcss;
-}
+// rule_radius_ws): the swept radius of a fixed-radius filter, PCSS's penumbra. For the others
+// (hard, screen-space) it would only ever pick adaptive.max_texels, a row that repeats a fixed one.
+bool has_rule_radius(const Variant& v) { return !std::isnan(v.radius_ws) || v.settings.technique == shadows::Technique::pcss; }
 
 // K frames after `warmup` untimed ones (which absorb allocation and shader compilation). Each
 // frame is bracketed by glFinish and timed with the wall clock; on a GPU a GL_TIME_ELAPSED query
@@ -299,7 +296,7 @@ int main(int argc, char** argv) {
   app.add_option("--scenes", scenes_arg, "built-in scene names or scene files (.json), comma-separated");
   app.add_option("--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all");
   app.add_option("--resolutions", resolutions_arg, "shadow-map texels per side, comma-separated");
-  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (pcf, vsm), world units, comma-separated");
+  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (pcf, vsm, rpcf, msm, evsm), world units, comma-separated");
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--frames", opt.frames, "timed frames per configuration (median and min/max reported)")->check(CLI::Range(1, 1000));
@@ -315,7 +312,7 @@ int main(int argc, char** argv) {
                "a few-minute run: scenes demo,two-planes, resolutions 256,1024,4096, radius 0.05, 320x180, 3 frames, "
                "16 area samples (options given explicitly still win)");
   bool no_adaptive = false;
-  app.add_flag("--no-adaptive", no_adaptive, "skip the adaptive rows (one per PCF/VSM radius and for PCSS; --adaptive.* sets the rule)");
+  app.add_flag("--no-adaptive", no_adaptive, "skip the adaptive rows (one per fixed-filter radius and for PCSS; --adaptive.* sets the rule)");
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
