@@ -99,40 +99,73 @@ float rbsm_halfplane_area(vec2 lo, vec2 hi, vec3 g) {
   return w.y > 0.0 ? (h.x - l.x) * (h.y - l.y) - below : below;
 }
 
-// Integral of the revectorized visibility over the part [lo, hi] of texel t (texel-local):
-// exact where one silhouette edge crosses the texel, 4x4 stratified points where several do.
+// Area of the part of the rectangle [lo, hi] (texel-local) on the positive side of every line
+// `use_line` marks. The region is the intersection of up to 8 half-planes n.p + c >= 0 (the
+// rectangle's 4 and the lines); by Green's theorem its area is half the sum, over each
+// half-plane's boundary line clipped to all the others, of the cross product of the clipped
+// segment's ends, traversed with the inside on the left. No polygon is built (no arrays indexed
+// at run time, which software rasterizers handle slowly); a boundary that coincides exactly with
+// an earlier one is counted once.
+float rbsm_clipped_area(vec2 lo, vec2 hi, vec3 lines[4], bool use_line[4]) {
+  vec3 planes[8] = vec3[8](vec3(1.0, 0.0, -lo.x), vec3(-1.0, 0.0, hi.x), vec3(0.0, 1.0, -lo.y), vec3(0.0, -1.0, hi.y),
+                           lines[0], lines[1], lines[2], lines[3]);
+  bool used[8] = bool[8](true, true, true, true, use_line[0], use_line[1], use_line[2], use_line[3]);
+  float twice_area = 0.0;
+  for (int i = 0; i < 8; ++i) {
+    if (!used[i]) continue;
+    vec2 n = planes[i].xy;
+    float nn = dot(n, n);
+    if (nn == 0.0) continue;
+    vec2 origin = -planes[i].z * n / nn;
+    vec2 dir = vec2(n.y, -n.x);  // inside (along n) lies on the left
+    float t0 = -1e30, t1 = 1e30;
+    for (int j = 0; j < 8; ++j) {
+      if (j == i || !used[j]) continue;
+      float a = dot(planes[j].xy, origin) + planes[j].z;
+      float b = dot(planes[j].xy, dir);
+      if (b > 0.0) t0 = max(t0, -a / b);
+      else if (b < 0.0) t1 = min(t1, -a / b);
+      else if (a < 0.0 || (a == 0.0 && j < i)) t1 = t0;  // outside, or the same boundary again
+    }
+    if (t1 > t0) {
+      vec2 p0 = origin + t0 * dir, p1 = origin + t1 * dir;
+      twice_area += p0.x * p1.y - p1.x * p0.y;
+    }
+  }
+  return max(0.5 * twice_area, 0.0);
+}
+
+// Integral of the revectorized visibility over the part [lo, hi] of texel t (texel-local): the
+// area on the texel's own side of all its silhouette lines, in closed form for one line and by
+// polygon clipping where several cross the texel.
 float rbsm_texel_integral(vec3 sc, vec2 gradient, ivec2 t, vec2 lo, vec2 hi) {
   float own = rbsm_test(sc, gradient, t);
   float area = (hi.x - lo.x) * (hi.y - lo.y);
   vec3 lines[4];
-  bool crossing[4];
+  bool cuts[4];  // the line passes through the rectangle (lines that leave it whole are dropped)
   int count = 0;
+  bool empty = false;
   vec3 last_line = vec3(0.0);
   for (int i = 0; i < 4; ++i) {
-    crossing[i] = rbsm_test(sc, gradient, t + kRbsmNormals[i]) != own;
-    lines[i] = crossing[i] ? rbsm_edge_line(sc, gradient, t, kRbsmNormals[i], own) : vec3(0.0, 0.0, 1.0);
-    if (crossing[i]) {
-      ++count;
-      last_line = lines[i];
-    }
+    cuts[i] = false;
+    lines[i] = vec3(0.0, 0.0, 1.0);
+    if (rbsm_test(sc, gradient, t + kRbsmNormals[i]) == own) continue;
+    vec3 g = rbsm_edge_line(sc, gradient, t, kRbsmNormals[i], own);
+    vec4 at_corners = g.x * vec4(lo.x, hi.x, hi.x, lo.x) + g.y * vec4(lo.y, lo.y, hi.y, hi.y) + g.z;
+    float g_min = min(min(at_corners.x, at_corners.y), min(at_corners.z, at_corners.w));
+    float g_max = max(max(at_corners.x, at_corners.y), max(at_corners.z, at_corners.w));
+    if (g_max <= 0.0) empty = true;
+    if (g_min >= 0.0) continue;
+    lines[i] = g;
+    cuts[i] = true;
+    ++count;
+    last_line = g;
   }
   float own_area;
-  if (count == 0) {
-    own_area = area;
-  } else if (count == 1) {
-    own_area = rbsm_halfplane_area(lo, hi, last_line);
-  } else {
-    float kept = 0.0;
-    for (int j = 0; j < 4; ++j) {
-      for (int i = 0; i < 4; ++i) {
-        vec2 f = mix(lo, hi, (vec2(i, j) + 0.5) / 4.0);
-        bool keep = true;
-        for (int k = 0; k < 4; ++k) keep = keep && dot(lines[k].xy, f) + lines[k].z > 0.0;
-        kept += keep ? 1.0 : 0.0;
-      }
-    }
-    own_area = area * kept / 16.0;
-  }
+  if (empty) own_area = 0.0;
+  else if (count == 0) own_area = area;
+  else if (count == 1) own_area = rbsm_halfplane_area(lo, hi, last_line);
+  else own_area = rbsm_clipped_area(lo, hi, lines, cuts);
   return own > 0.5 ? own_area : area - own_area;
 }
 

@@ -247,6 +247,55 @@ TEST_P(StaircaseRule, EachTechniquesOwnConstant) {
   EXPECT_LT(c_edtsm, 1.25 * kC);
 }
 
+// The shadow-map-side alternatives on the same patterns: RBSM (no kernel: one residual), RPCF,
+// MSM and EVSM with their box radius r texels, against the same reference (docs/alternatives.md,
+// "Does r = c·a apply" under the map-side techniques).
+TEST_P(StaircaseRule, MapSideTechniquesOwnConstant) {
+  const std::string pattern = GetParam().name;
+  const std::vector<double> radii = {0.25, 0.5, 1, 1.5, 2, 2.5, 3, 3.47, 4};
+  auto sweep = [&](const std::string& name, const std::function<ShadowSettings(double)>& make) {
+    std::vector<double> out;
+    for (double r : radii) out.push_back(residual(make(r)));
+    report(name, radii, out);
+    return out;
+  };
+  auto with = [](Technique t, double r) {
+    ShadowSettings st;
+    st.technique = t;
+    st.pcf.kernel = shadows::Kernel::grid;
+    st.pcf.radius = st.rpcf.radius = st.msm.radius = st.evsm.radius = static_cast<float>(r);
+    st.msm.moment_bias = 3e-5f;
+    return st;
+  };
+  ShadowSettings hard;
+  hard.technique = Technique::hard;
+  ShadowSettings rbsm;
+  rbsm.technique = Technique::rbsm;
+  const double hard_residual = residual(hard), rbsm_residual = residual(rbsm);
+  const auto pcf = sweep("pcf grid (r = radius)", [&](double r) { return with(Technique::pcf, r); });
+  const auto rpcf = sweep("rpcf (r = radius)", [&](double r) { return with(Technique::rpcf, r); });
+  const auto msm = sweep("msm (r = blur radius)", [&](double r) { return with(Technique::msm, r); });
+  const auto evsm = sweep("evsm (r = blur radius)", [&](double r) { return with(Technique::evsm, r); });
+  const double threshold = pcf[7];  // r = 3.47 texels
+  const double c_rpcf = radius_at(radii, rpcf, threshold), c_msm = radius_at(radii, msm, threshold),
+               c_evsm = radius_at(radii, evsm, threshold), c_pcf = radius_at(radii, pcf, threshold);
+  std::printf("%s: residual hard %.3f px, rbsm %.3f px; reference (pcf grid r = %.2f) %.3f px\n", pattern.c_str(), hard_residual,
+              rbsm_residual, kC, threshold);
+  std::printf("%s: own c (texels): pcf grid %.2f, rpcf %.2f, msm %.2f, evsm %.2f\n", pattern.c_str(), c_pcf, c_rpcf, c_msm, c_evsm);
+  RecordProperty(pattern + "_rbsm_residual_px", std::to_string(rbsm_residual));
+  RecordProperty(pattern + "_c_rpcf_texels", std::to_string(c_rpcf));
+  RecordProperty(pattern + "_c_msm_texels", std::to_string(c_msm));
+  RecordProperty(pattern + "_c_evsm_texels", std::to_string(c_evsm));
+  // RBSM straightens the steps but, unfiltered, is no substitute for the filter.
+  EXPECT_LT(rbsm_residual, hard_residual);
+  // MSM and EVSM filter the moments with the same box as the grid PCF: on one straight edge (two
+  // depths) they equal it, so the rule carries over with the same c.
+  EXPECT_NEAR(c_msm, c_pcf, 0.25);
+  EXPECT_NEAR(c_evsm, c_pcf, 0.25);
+  // RPCF filters an already straightened edge: it needs a smaller radius than PCF.
+  EXPECT_LT(c_rpcf, c_pcf);
+}
+
 INSTANTIATE_TEST_SUITE_P(Patterns, StaircaseRule, ::testing::ValuesIn(kPatterns),
                          [](const auto& param_info) { return std::string(param_info.param.name); });
 
