@@ -83,6 +83,10 @@ void WindowContext::framebuffer_size(int& width, int& height) const { glfwGetFra
 io::Image8 WindowContext::read_back() const {
   int w = 0, h = 0;
   framebuffer_size(w, h);
+  return read_back_buffer(w, h);
+}
+
+io::Image8 read_back_buffer(int w, int h) {
   io::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
   glReadBuffer(GL_BACK);

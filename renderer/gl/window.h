@@ -10,6 +10,10 @@ struct GLFWwindow;
 
 namespace penumbra::gl {
 
+// The current context's default framebuffer's back buffer (width × height) as RGBA, top row
+// first: between drawing the UI and swapping, the frame as shown.
+io::Image8 read_back_buffer(int width, int height);
+
 class WindowContext {
  public:
   // Throws std::runtime_error with GLFW's message if no window can be opened (e.g. no display).

@@ -1,5 +1,7 @@
 #include "gui/gui_window.h"
 
+#include "gl/window.h"
+
 #include <epoxy/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -199,17 +201,7 @@ float GuiWindow::framebuffer_scale() const {
 io::Image8 GuiWindow::read_back() const {
   int w = 0, h = 0;
   framebuffer_size(w, h);
-  io::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-  glReadBuffer(GL_BACK);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
-  const std::size_t row = static_cast<std::size_t>(w) * 4;
-  for (int y = 0; y < h / 2; ++y)
-    std::swap_ranges(shot.pixels.begin() + static_cast<std::ptrdiff_t>(y * row),
-                     shot.pixels.begin() + static_cast<std::ptrdiff_t>((y + 1) * row),
-                     shot.pixels.begin() + static_cast<std::ptrdiff_t>((h - 1 - y) * row));
-  return shot;
+  return gl::read_back_buffer(w, h);
 }
 
 std::vector<Press> GuiWindow::take_presses() { return std::exchange(presses_, {}); }
