@@ -135,8 +135,11 @@ const gl::Program& Renderer::cached_program(const std::string& key, const std::v
 const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuffer) {
   std::vector<gl::ShaderDefine> defines;
   if (is_screen_space(s.technique)) {
-    // First pass: the input shadows (plain hard shadows; the revectorized ones once RBSM exists).
-    if (gbuffer) defines.push_back({"TECHNIQUE_HARD", "1"}), defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
+    // First pass: the input shadows (EDTSM/EDTSSM: revectorized or plain hard; erosion: hard).
+    if (gbuffer) {
+      defines.push_back({screen_space_rbsm_input(s) ? "TECHNIQUE_RBSM" : "TECHNIQUE_HARD", "1"});
+      defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
+    }
     else if (s.technique == Technique::erosion) defines.push_back({"TECHNIQUE_EROSION", "1"});
     else defines.push_back({"SCREEN_SPACE_VISIBILITY", "1"});
   } else {
@@ -624,6 +627,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       set_int(prog, "u_taps", s.erosion.taps);
       set_int(prog, "u_rotate", s.erosion.rotate ? 1 : 0);
     }
+    if (screen_space_rbsm_input(s)) set_rbsm_uniforms(prog, s.rbsm);  // the G-buffer's revectorized input
     if (light_size_used) {
       set_float(prog, "u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
       set_float(prog, "u_pcss_tan_half_angle", tan_half_angle);

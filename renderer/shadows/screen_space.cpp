@@ -13,6 +13,11 @@ bool is_screen_space(Technique t) {
   return t == Technique::edtsm || t == Technique::edtssm || t == Technique::erosion;
 }
 
+bool screen_space_rbsm_input(const ShadowSettings& s) {
+  return (s.technique == Technique::edtsm && s.edtsm.input == ShadowInput::rbsm) ||
+         (s.technique == Technique::edtssm && s.edtssm.input == ShadowInput::rbsm);
+}
+
 void dispatch_pixels(int width, int height) {
   glDispatchCompute(static_cast<GLuint>((width + 7) / 8), static_cast<GLuint>((height + 7) / 8), 1);
 }

@@ -23,6 +23,9 @@
 namespace penumbra::shadows {
 
 bool is_screen_space(Technique t);
+// Whether the G-buffer pass draws revectorized (RBSM) input shadows: EDTSM and EDTSSM with
+// input = rbsm (their default, as the papers). Erosion, as its paper, starts from the hard test.
+bool screen_space_rbsm_input(const ShadowSettings& s);
 
 // The camera's metric as the post passes need it.
 struct ScreenView {

@@ -15,6 +15,7 @@ constexpr std::array<std::string_view, 11> kTechniques = {"hard", "pcf", "pcss",
 constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
 constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
 constexpr std::array<std::string_view, 2> kMomentFormats = {"rgba32f", "rgba16f"};
+constexpr std::array<std::string_view, 2> kInputs = {"hard", "rbsm"};
 constexpr std::array<std::string_view, 2> kStorage = {"subrect", "realloc"};
 constexpr std::array<std::string_view, 2> kPcssRequirement = {"per_pixel", "min_penumbra"};
 
@@ -103,6 +104,8 @@ const Setting<VsmParams> kVsmTable[] = {
     PENUMBRA_REAL(VsmParams, bleed_reduction, "", 0, 0.999, "light-bleeding reduction threshold"),
 };
 
+constexpr std::string_view kInputHelp =
+    "input hard shadows: rbsm (revectorized, as the papers; parameters from the rbsm table) or hard (plain test)";
 constexpr std::string_view kEdgeHelp =
     "measure D from the silhouette between the two site pixels (D + half a pixel: sub-pixel penumbrae stay hard) "
     "instead of from the site pixel's centre (the paper: site pixels are 1/2)";
@@ -110,6 +113,7 @@ constexpr std::string_view kDepthThresholdHelp =
     "largest relative eye-depth difference |dz|/z between pixels treated as one surface (edge-aware sites, EDT and filter)";
 
 const Setting<EdtsmParams> kEdtsmTable[] = {
+    PENUMBRA_CHOICE(EdtsmParams, input, ShadowInput, kInputs, kInputHelp),
     PENUMBRA_REAL(EdtsmParams, penumbra_ws, "world", 0, 1e6, "P: fake-penumbra width; I = 1/2 -+ D/P for D <= P/2"),
     PENUMBRA_REAL(EdtsmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
     PENUMBRA_REAL(EdtsmParams, depth_threshold, "", 0, 10, kDepthThresholdHelp),
@@ -118,6 +122,7 @@ const Setting<EdtsmParams> kEdtsmTable[] = {
 };
 
 const Setting<EdtssmParams> kEdtssmTable[] = {
+    PENUMBRA_CHOICE(EdtssmParams, input, ShadowInput, kInputs, kInputHelp),
     PENUMBRA_REAL(EdtssmParams, beta, "", 0, 1e6, "beta: penumbra scale; alpha = 1/2 -+ d / (beta w_p) for d <= beta w_p / 2"),
     PENUMBRA_INT(EdtssmParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search at silhouette pixels"),
     PENUMBRA_REAL(EdtssmParams, search_scale, "", 1, 8, "blocker-search radius over its geometric bound"),

@@ -13,6 +13,7 @@ namespace penumbra::shadows {
 enum class Technique { hard, pcf, pcss, vsm, edtsm, edtssm, erosion, rbsm, rpcf, msm, evsm };
 enum class Kernel { grid, poisson };
 enum class RadiusUnit { texels, world };
+enum class ShadowInput { hard, rbsm };  // the input shadows of EDTSM / EDTSSM
 enum class MomentFormat { rgba32f, rgba16f };
 enum class Storage { subrect, realloc };
 enum class PcssRequirement { per_pixel, min_penumbra };
@@ -83,6 +84,7 @@ struct VsmParams {
 // EDT shadow mapping (Macedo & Apolinario 2016): hard shadows -> 3x3 sites -> exact EDT ->
 // I = 1/2 -+ D/P for D <= P/2 (D in world units between G-buffer positions) -> edge-aware mean filter.
 struct EdtsmParams {
+  ShadowInput input = ShadowInput::rbsm;  // the paper's: revectorized hard shadows (uses the rbsm table)
   float penumbra_ws = 0.2f;           // P: full fake-penumbra width, world units
   float filter_ws = 0.1f;             // w_filter: mean-filter width, world units (screen size w z_screen / z_eye)
   float depth_threshold = 0.05f;      // largest relative eye-depth difference treated as one surface
@@ -93,6 +95,7 @@ struct EdtsmParams {
 // EDT soft shadows (Macedo & Apolinario 2017): PCSS blocker search at silhouette pixels only ->
 // w_p = w_light (z_R - z_avg) / z_avg -> EDT propagates w_p -> alpha = 1/2 -+ d / (beta w_p) -> mean filter.
 struct EdtssmParams {
+  ShadowInput input = ShadowInput::rbsm;
   float beta = 1.0f;                  // penumbra scale (w_p is in world units here; the paper's 750 was for light-space units)
   int blocker_taps = 25;              // Poisson taps of the blocker search at silhouette pixels
   float search_scale = 1.0f;          // blocker-search radius over its geometric bound

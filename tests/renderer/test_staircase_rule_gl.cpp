@@ -191,9 +191,10 @@ TEST_P(StaircaseRule, EachTechniquesOwnConstant) {
   });
 
   // EDTSM, EDT only: half-penumbra P/2 = r texels, no mean filter.
-  const auto edt_only = sweep("edtsm, EDT only (r = P/2)", [&](double r) {
+  const auto edt_only = sweep("edtsm hard, EDT only (r = P/2)", [&](double r) {
     ShadowSettings st;
     st.technique = Technique::edtsm;
+    st.edtsm.input = shadows::ShadowInput::hard;
     st.edtsm.penumbra_ws = static_cast<float>(2 * r * texel_ws_);
     st.edtsm.filter_ws = 0;
     return residual(st);
@@ -202,10 +203,21 @@ TEST_P(StaircaseRule, EachTechniquesOwnConstant) {
   // whose convex corners round off, but nowhere near the reference.
   for (double v : edt_only) EXPECT_GT(v, 5 * threshold) << "the EDT alone keeps the staircase";
 
-  // EDTSM, mean filter half-width r texels on a fixed 2-texel ramp (P = 4 texels).
-  const auto edtsm = sweep("edtsm (r = w_filter/2, P = 4 tx)", [&](double r) {
+  // The same on the revectorized input (RBSM, the paper's): the EDT starts from straight lines.
+  const auto edt_rbsm = sweep("edtsm rbsm, EDT only (r = P/2)", [&](double r) {
     ShadowSettings st;
     st.technique = Technique::edtsm;
+    st.edtsm.input = shadows::ShadowInput::rbsm;
+    st.edtsm.penumbra_ws = static_cast<float>(2 * r * texel_ws_);
+    st.edtsm.filter_ws = 0;
+    return residual(st);
+  });
+
+  // EDTSM, mean filter half-width r texels on a fixed 2-texel ramp (P = 4 texels).
+  const auto edtsm = sweep("edtsm hard (r = w_filter/2, P = 4 tx)", [&](double r) {
+    ShadowSettings st;
+    st.technique = Technique::edtsm;
+    st.edtsm.input = shadows::ShadowInput::hard;
     st.edtsm.penumbra_ws = 4 * texel_ws_;
     st.edtsm.filter_ws = static_cast<float>(2 * r * texel_ws_);
     st.edtsm.max_filter_px = 1024;
@@ -223,9 +235,10 @@ TEST_P(StaircaseRule, EachTechniquesOwnConstant) {
   });
 
   // EDTSSM: beta w_p / 2 = r texels, no filter, then with a filter of the penumbra's width.
-  const auto edtssm = sweep("edtssm, EDT only (r = w_p/2)", [&](double r) {
+  const auto edtssm = sweep("edtssm hard, EDT only (r = w_p/2)", [&](double r) {
     ShadowSettings st;
     st.technique = Technique::edtssm;
+    st.edtssm.input = shadows::ShadowInput::hard;
     st.edtssm.filter_ws = 0;
     return residual(st, static_cast<float>(glm::degrees(2 * std::atan(r * texel_ws_))));
   });
@@ -235,8 +248,10 @@ TEST_P(StaircaseRule, EachTechniquesOwnConstant) {
   const double c_erosion = radius_at(radii, erosion, threshold);
   const double c_poisson = radius_at(radii, poisson, threshold);
   std::printf("%s: reference residual (pcf grid r = %.2f texels): %.3f px\n", pattern.c_str(), kC, threshold);
-  std::printf("%s: own c (texels): edtsm mean filter %.2f, erosion %.2f, pcf poisson-32 %.2f, EDT alone %.2f\n",
-              pattern.c_str(), c_edtsm, c_erosion, c_poisson, radius_at(radii, edt_only, threshold));
+  const double c_edt_rbsm = radius_at(radii, edt_rbsm, threshold);
+  std::printf("%s: own c (texels): edtsm mean filter %.2f, erosion %.2f, pcf poisson-32 %.2f, EDT alone %.2f, EDT on rbsm %.2f\n",
+              pattern.c_str(), c_edtsm, c_erosion, c_poisson, radius_at(radii, edt_only, threshold), c_edt_rbsm);
+  RecordProperty(pattern + "_c_edt_on_rbsm_texels", std::to_string(c_edt_rbsm));
   RecordProperty(pattern + "_c_edtsm_filter_texels", std::to_string(c_edtsm));
   RecordProperty(pattern + "_c_erosion_texels", std::to_string(c_erosion));
   RecordProperty(pattern + "_c_pcf_poisson32_texels", std::to_string(c_poisson));
