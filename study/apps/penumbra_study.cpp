@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "apps/reference_command.h"
 #include "gl/context.h"
 #include "io/image_io.h"
 #include "observers/image_observer.h"
@@ -267,8 +268,11 @@ int main(int argc, char** argv) {
   study_gui::add_options(*run, ro.gui);
 #endif
 
+  const study_app::ReferenceCommand reference(app);
+
   CLI11_PARSE(app, argc, argv);
   try {
+    if (reference.parsed()) return reference.run();
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
     ro.participant_given = run->count("--participant") > 0;
     if (run->parsed()) return run_study(ro);

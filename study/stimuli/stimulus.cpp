@@ -162,12 +162,14 @@ struct StimulusRenderer::Impl {
 StimulusRenderer::StimulusRenderer() : impl_(std::make_unique<Impl>()) {}
 StimulusRenderer::~StimulusRenderer() = default;
 
-StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in) {
+StimulusPair StimulusRenderer::render(const StimulusSpec& spec) { return render(spec, make_geometry(spec)); }
+
+StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometry& geometry) {
   validate(spec_in);
   StimulusSpec spec = spec_in;
   spec.filter_radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
   StimulusPair pair;
-  pair.geometry = make_geometry(spec);
+  pair.geometry = geometry;
   const Geometry& g = pair.geometry;
   const float a = static_cast<float>(spec.artifact_px);
   const float extent = a * static_cast<float>(g.map_texels);

@@ -88,6 +88,9 @@ class StimulusRenderer {
   StimulusRenderer& operator=(const StimulusRenderer&) = delete;
 
   StimulusPair render(const StimulusSpec& spec);
+  // The same with a given geometry (e.g. make_geometry(spec) with the straight partner's line
+  // moved); the shadow map must cover the stimulus plus the radius, as make_geometry's does.
+  StimulusPair render(const StimulusSpec& spec, const Geometry& geometry);
   // The shadow map of the last render: 1 = lit texel, 0 = occluded, row 0 = canonical bottom.
   const std::vector<std::uint8_t>& last_shadow_map() const { return last_map_; }
 

@@ -1,0 +1,99 @@
+#include "apps/reference_command.h"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+#include "gl/context.h"
+#include "io/image_io.h"
+
+namespace penumbra::study_app {
+
+namespace fs = std::filesystem;
+
+ReferenceCommand::ReferenceCommand(CLI::App& app) {
+  command_ = app.add_subcommand(
+      "reference", "reference filter size: the smallest radius at which jagged and straight 8-bit stimuli are identical");
+  command_->add_option("--pattern", patterns_, "stair and/or step")->delimiter(',')->capture_default_str();
+  command_->add_option("--contrast", contrasts_, "lit levels in linear light")->delimiter(',')->capture_default_str();
+  command_->add_option("--artifact-px", artifact_px_, "artifact sizes (px)")->delimiter(',')->capture_default_str();
+  command_->add_option("--partner", partner_,
+                       "straight partner: original (the study's) or mean-line (through the staircase's mean; stair only)")
+      ->capture_default_str();
+  command_->add_option("--kernel", kernel_, "disk, grid or poisson")->capture_default_str();
+  command_->add_option("--taps", poisson_taps_, "Poisson taps")->capture_default_str();
+  command_->add_option("--size-px", size_px_, "stimulus side (px)")->capture_default_str();
+  command_->add_option("--transfer", transfer_, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
+  command_->add_option("--seeds", search_.seeds, "edge phases/orientations to check (the result is the worst)")
+      ->delimiter(',')->capture_default_str();
+  command_->add_option("--r-min", search_.r_min_px, "smallest radius scanned (px)")->capture_default_str();
+  command_->add_option("--r-max", search_.r_max_px, "largest radius scanned (px); 0 = size/2")->capture_default_str();
+  command_->add_option("--growth", search_.growth, "ratio between scanned radii")->capture_default_str();
+  command_->add_option("--resolution", search_.resolution_px, "bisection resolution (px)")->capture_default_str();
+  command_->add_option("--tolerance-levels", search_.tolerance_levels,
+                       "identical = no pixel differs by more than this many 8-bit levels (0: exactly identical)")
+      ->capture_default_str();
+  command_->add_flag("--no-progress", no_progress_, "no progress line on stderr");
+  command_->add_option("-o,--output", output_, "output JSON file")->required();
+}
+
+int ReferenceCommand::run() const {
+  stimuli::ReferenceSearch search = search_;
+  search.partner = stimuli::parse_partner(partner_);
+  std::vector<stimuli::StimulusSpec> specs;
+  for (const std::string& pattern : patterns_) {
+    for (double contrast : contrasts_) {
+      for (double a : artifact_px_) {
+        stimuli::StimulusSpec spec;
+        spec.pattern = stimuli::parse_pattern(pattern);
+        spec.lit_linear = contrast;
+        spec.artifact_px = a;
+        spec.kernel = stimuli::parse_kernel(kernel_);
+        spec.poisson_taps = poisson_taps_;
+        spec.size_px = size_px_;
+        spec.transfer = stimuli::parse_transfer(transfer_);
+        spec.filter_radius_px = 1.0;
+        stimuli::validate(spec);  // before any rendering: bad options fail at once
+        if (search.partner == stimuli::Partner::mean_line && spec.pattern != stimuli::Pattern::stair)
+          throw std::invalid_argument("--partner mean-line: defined for the stair pattern only");
+        specs.push_back(spec);
+      }
+    }
+  }
+  gl::HeadlessContext context;
+  stimuli::StimulusRenderer renderer;
+  nlohmann::json entries = nlohmann::json::array();
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const auto progress = [&](int done, int total) {
+      if (no_progress_) return;
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::fprintf(stderr, "\rreference %zu/%zu (%s a=%g contrast %g) seed %d/%d, %.0f s ", i + 1, specs.size(),
+                   stimuli::to_string(specs[i].pattern).c_str(), specs[i].artifact_px, specs[i].lit_linear, done,
+                   total, s);
+      std::fflush(stderr);
+    };
+    const stimuli::Reference ref = stimuli::find_reference(renderer, specs[i], search, progress);
+    entries.push_back(stimuli::to_json(ref));
+  }
+  if (!no_progress_) std::fputc('\n', stderr);
+  const nlohmann::json out = {
+      {"what", "reference filter size: smallest filter radius (px) at which the 8-bit stimuli drawn from the jagged "
+               "shadow map and from the straight original are pixel-identical, worst over the seeds; null when they "
+               "still differ at r_max"},
+      {"renderer", context.info().renderer},
+      {"entries", entries}};
+  if (output_.has_parent_path()) fs::create_directories(output_.parent_path());
+  io::write_text(output_, out.dump(2) + "\n");
+  for (const auto& e : entries) {
+    const auto& r = e["reference_filter_radius_px"];
+    std::printf("%-5s contrast %-4g a %-4g %s partner: reference r = %s%s\n", e["pattern"].get<std::string>().c_str(),
+                e["contrast"].get<double>(), e["artifact_px"].get<double>(), e["partner"].get<std::string>().c_str(),
+                r.is_null() ? "none <= r_max" : (std::to_string(r.get<double>()) + " px").c_str(),
+                e["monotone"].get<bool>() ? "" : "  (not monotone in r)");
+  }
+  std::cout << "wrote " << output_.string() << "\n";
+  return 0;
+}
+
+}  // namespace penumbra::study_app
