@@ -111,6 +111,26 @@ T core(Model model, const T& x, const T& alpha, const T& beta) {
   return T(NAN);
 }
 
+// 1 - F(x), evaluated directly so that it keeps its relative precision where F is close to 1 (the
+// fitter's log(1 - psi) far above threshold).
+template <typename T>
+T core_complement(Model model, const T& x, const T& alpha, const T& beta) {
+  using std::erfc;
+  using std::exp;
+  using std::pow;
+  switch (model) {
+    case Model::weibull:
+      return exp(-pow(x / alpha, beta));
+    case Model::log_weibull:
+      return exp(-pow10(T(beta * (x - alpha))));
+    case Model::normal:
+      return T(0.5) * erfc(beta * (x - alpha) / T(std::numbers::sqrt2));
+    case Model::logistic:
+      return T(1.0) / (T(1.0) + exp(beta * (x - alpha)));
+  }
+  return T(NAN);
+}
+
 // Inverse of the core: the x at which F(x) = f, for 0 < f < 1.
 template <typename T>
 T core_inverse(Model model, const T& f, const T& alpha, const T& beta) {

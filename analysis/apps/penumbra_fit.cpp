@@ -1,0 +1,192 @@
+// penumbra-fit: thresholds and the constant c of r = c a from the study's logs (docs/fit.md).
+//   penumbra-fit SESSION_DIR... -o OUT [--reference reference.json] [--bootstrap 1000]
+//   penumbra-fit psychometric --input data.csv [--format counts|trials] [--family log-weibull]
+#include <CLI/CLI.hpp>
+#include <glog/logging.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+#include "data/dataset.h"
+#include "data/level_data.h"
+#include "data/reference_table.h"
+#include "fit/model_fit.h"
+#include "fit/study_fit.h"
+#include "report/outputs.h"
+#include "report/progress.h"
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+using namespace penumbra::analysis;
+
+namespace {
+
+struct ModelOptions {
+  std::string family = "log-weibull";
+  double guess = 0.5;
+  std::optional<double> lapse;
+  double lapse_max = 0.06;
+  std::optional<double> p_threshold;
+};
+
+void add_model_options(CLI::App& app, ModelOptions& o) {
+  app.add_option("--family", o.family, "log-weibull (QUEST's), weibull, normal or logistic")->capture_default_str();
+  app.add_option("--guess", o.guess, "guess rate gamma (fixed)")->capture_default_str();
+  auto* lapse = app.add_option("--lapse", o.lapse, "hold the lapse rate lambda at this value");
+  app.add_option("--lapse-max", o.lapse_max, "otherwise lambda is free in [0, this]")->capture_default_str()->excludes(lapse);
+  app.add_option("--p-threshold", o.p_threshold,
+                 "percent correct that defines the threshold (default: QUEST's pThreshold from session.json, else 0.82)");
+}
+
+psychometric::Model parse_family(const std::string& name) {
+  const auto model = psychometric::parse_model(name);
+  if (!model) throw std::invalid_argument("--family '" + name + "': expected log-weibull, weibull, normal or logistic");
+  return *model;
+}
+
+LapseSpec lapse_of(const ModelOptions& o) {
+  LapseSpec l;
+  l.fixed = o.lapse;
+  l.max = o.lapse_max;
+  if (o.lapse && !(*o.lapse >= 0 && *o.lapse < 1 - o.guess))
+    throw std::invalid_argument("--lapse: expected a value in [0, 1 - guess)");
+  if (!o.lapse && !(o.lapse_max > 0 && o.lapse_max < 1 - o.guess))
+    throw std::invalid_argument("--lapse-max: expected a value in (0, 1 - guess)");
+  return l;
+}
+
+int run_psychometric(const fs::path& input, const std::string& format, const ModelOptions& o) {
+  LevelFormat f;
+  if (format == "counts") f = LevelFormat::counts;
+  else if (format == "trials") f = LevelFormat::trials;
+  else throw std::invalid_argument("--format '" + format + "': expected counts or trials");
+  ModelSpec spec;
+  spec.family = parse_family(o.family);
+  spec.guess = o.guess;
+  spec.lapse = lapse_of(o);
+  spec.p_threshold = o.p_threshold.value_or(0.82);
+  std::vector<BinomialRow> rows = read_level_data(input, f);
+  spec.groups.push_back({rows, 0, 0.0});
+  const FitResult fit = analysis::fit(spec);
+  const double beta = std::exp(fit.params.log_beta);
+  const double u = fit.params.u[0];
+  const bool weibull = spec.family == psychometric::Model::weibull;
+  const double threshold = weibull ? std::pow(10.0, u) : u;
+  const double threshold_se = weibull ? threshold * std::log(10.0) * fit.se(0) : fit.se(0);
+  nlohmann::json out = {
+      {"input", input.string()},
+      {"format", format},
+      {"family", psychometric::model_name(spec.family)},
+      {"model", "psi(x) = gamma + (1 - gamma - lambda) F(x; alpha, beta)"},
+      {"parameters", {{"alpha", number(alpha_of(spec, u, beta, fit.params.lambda))},
+                      {"beta", number(beta)},
+                      {"gamma", spec.guess},
+                      {"lambda", number(fit.params.lambda)}}},
+      {"standard_errors", {{"alpha", number(alpha_se(spec, fit, 0))},
+                           {"beta", number(beta * fit.se(fit.index_log_beta()))},
+                           {"lambda", number(fit.se(fit.index_lambda()))}}},
+      {"lapse", spec.lapse.fixed ? nlohmann::json{{"fixed", *spec.lapse.fixed}}
+                                 : nlohmann::json{{"bounds", {0.0, spec.lapse.max}}}},
+      {"threshold", {{"p_correct", spec.p_threshold}, {"x", number(threshold)}, {"se", number(threshold_se)}}},
+      {"negative_log_likelihood", number(fit.nll)},
+      {"deviance", number(fit.deviance)},
+      {"trials", fit.trials},
+      {"levels", rows.size()},
+      {"converged", fit.converged},
+      {"flags", fit.flags.list}};
+  std::cout << out.dump(2) << "\n";
+  return 0;
+}
+
+struct StudyOptions {
+  std::vector<fs::path> inputs;
+  fs::path output;
+  std::optional<fs::path> reference;
+  std::optional<std::string> condition;
+  int bootstrap = 1000;
+  std::uint64_t seed = 1;
+  int threads = 0;
+  bool no_progress = false;
+};
+
+int run_study(const StudyOptions& so, const ModelOptions& mo) {
+  if (so.output.empty()) throw std::invalid_argument("-o/--output DIR is required");
+  StudyFitOptions options;
+  options.family = parse_family(mo.family);
+  options.guess = mo.guess;
+  options.lapse = lapse_of(mo);
+  options.p_threshold = mo.p_threshold;
+  options.bootstrap = so.bootstrap;
+  options.seed = so.seed;
+  options.threads = so.threads;
+  std::optional<ReferenceTable> reference;
+  if (so.reference) reference = load_reference_table(*so.reference);  // fail before the long work
+  const Dataset data = load_dataset(so.inputs);
+  const auto start = std::chrono::steady_clock::now();
+  const StudyFit fit = [&] {
+    ProgressBar bar("bootstrap", !so.no_progress && ::isatty(STDERR_FILENO));
+    options.progress = [&bar](int done, int total) { bar(done, total); };
+    return fit_study(data, options);
+  }();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  calibration_condition(fit, so.condition);  // an unknown --condition fails before anything is written
+
+  std::vector<std::string> inputs;
+  for (const fs::path& p : so.inputs) inputs.push_back(p.string());
+  const std::string created = utc_now();
+  const ReferenceTable* ref = reference ? &*reference : nullptr;
+  const nlohmann::json calibration = calibration_json(fit, so.condition, created, inputs);
+  nlohmann::json report = report_json(fit, ref, inputs, created);
+  report["fit_seconds"] = seconds;
+  report["threads"] = so.threads > 0 ? so.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::string summary = summary_text(fit, ref, so.condition);
+  fs::create_directories(so.output);
+  write_file_atomic(so.output / "report.json", report.dump(1) + "\n");
+  write_file_atomic(so.output / "summary.txt", summary);
+  write_file_atomic(so.output / "calibration.json", calibration.dump(2) + "\n");
+  std::cout << summary;
+  std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
+              so.output.string().c_str());
+  std::printf("plots: /usr/bin/python3 scripts/plot_fit.py %s\n", so.output.string().c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Ceres logs a rank-deficient covariance as an error; the fit reports it as a flag instead.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  CLI::App app{"penumbra-fit: thresholds and the constant c of r = c a from penumbra-study logs (docs/fit.md)"};
+  StudyOptions so;
+  ModelOptions study_model;
+  app.add_option("inputs", so.inputs, "session directories (trials.csv + session.json) or trial CSV files");
+  app.add_option("-o,--output", so.output, "output directory: calibration.json, report.json, summary.txt");
+  app.add_option("--reference", so.reference, "reference filter sizes from penumbra-study reference");
+  app.add_option("--condition", so.condition, "calibration.json takes c from this condition (e.g. stair/1) instead of the largest");
+  app.add_option("--bootstrap", so.bootstrap, "resamples of the bootstrap over participants (0: none)")->capture_default_str();
+  app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str();
+  app.add_option("--threads", so.threads, "bootstrap threads (0: all cores)")->capture_default_str();
+  app.add_flag("--no-progress", so.no_progress, "no progress bar on stderr");
+  add_model_options(app, study_model);
+
+  auto* psychometric = app.add_subcommand("psychometric", "fit one data set and print JSON");
+  fs::path input;
+  std::string format = "counts";
+  ModelOptions single_model;
+  psychometric->add_option("--input", input, "CSV: level,n_correct,n_total (counts) or level,correct (trials)")->required();
+  psychometric->add_option("--format", format, "counts or trials")->capture_default_str();
+  add_model_options(*psychometric, single_model);
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (psychometric->parsed()) return run_psychometric(input, format, single_model);
+    return run_study(so, study_model);
+  } catch (const std::exception& e) {
+    std::cerr << "penumbra-fit: " << e.what() << "\n";
+    return 1;
+  }
+}

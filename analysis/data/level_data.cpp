@@ -1,0 +1,79 @@
+#include "data/level_data.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+namespace penumbra::analysis {
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> f;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    f.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) return f;
+    start = comma + 1;
+  }
+}
+
+}  // namespace
+
+std::vector<BinomialRow> read_level_data(const std::filesystem::path& path, LevelFormat format) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open");
+  const std::vector<std::string> names = format == LevelFormat::counts
+                                             ? std::vector<std::string>{"level", "n_correct", "n_total"}
+                                             : std::vector<std::string>{"level", "correct"};
+  std::vector<BinomialRow> rows;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> f = split(line);
+    const std::string where = path.string() + ":" + std::to_string(number) + ": ";
+    if (number == 1 && f == names) continue;
+    if (f.size() != names.size())
+      throw std::runtime_error(where + "expected " + std::to_string(names.size()) + " columns (" +
+                               (format == LevelFormat::counts ? "level,n_correct,n_total" : "level,correct") +
+                               "), found " + std::to_string(f.size()));
+    auto value = [&](std::size_t i) {
+      double v = 0;
+      const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
+      if (f[i].empty() || ec != std::errc() || p != f[i].data() + f[i].size() || !std::isfinite(v))
+        throw std::runtime_error(where + "column '" + names[i] + "': expected a finite number (found '" + f[i] + "')");
+      return v;
+    };
+    auto fail = [&](std::size_t i, const std::string& what) {
+      throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + f[i] + "')");
+    };
+    BinomialRow r;
+    r.x = value(0);
+    if (format == LevelFormat::counts) {
+      r.n_correct = value(1);
+      r.n_total = value(2);
+      if (r.n_total != std::floor(r.n_total) || r.n_total < 1) fail(2, "expected an integer >= 1");
+      if (r.n_correct != std::floor(r.n_correct) || r.n_correct < 0 || r.n_correct > r.n_total)
+        fail(1, "expected an integer in [0, n_total]");
+    } else {
+      r.n_correct = value(1);
+      r.n_total = 1;
+      if (r.n_correct != 0 && r.n_correct != 1) fail(1, "expected 0 or 1");
+    }
+    rows.push_back(r);
+  }
+  if (rows.empty()) throw std::runtime_error(path.string() + ": no data rows");
+  return rows;
+}
+
+}  // namespace penumbra::analysis

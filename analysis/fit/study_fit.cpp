@@ -1,0 +1,366 @@
+#include "fit/study_fit.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "fit/statistics.h"
+#include "observers/random.h"
+
+namespace penumbra::analysis {
+
+namespace psy = psychometric;
+
+double model_x(psy::Model family, double intensity) {
+  return family == psy::Model::weibull ? std::pow(10.0, intensity) : intensity;
+}
+
+namespace {
+
+double z_of(double level) { return std::sqrt(chi2_1_quantile(level)); }
+
+// Rows at one stimulus level merged (the likelihood is the same; the fit has fewer residuals).
+std::vector<BinomialRow> merge_rows(std::vector<BinomialRow> rows) {
+  std::sort(rows.begin(), rows.end(), [](const BinomialRow& a, const BinomialRow& b) { return a.x < b.x; });
+  std::vector<BinomialRow> out;
+  for (const BinomialRow& r : rows) {
+    if (!out.empty() && out.back().x == r.x) {
+      out.back().n_correct += r.n_correct;
+      out.back().n_total += r.n_total;
+    } else {
+      out.push_back(r);
+    }
+  }
+  return out;
+}
+
+// c = 10^-u: a lower u bound is an upper c bound.
+Interval c_interval(double u_lo, double u_hi, bool lo_open, bool hi_open) {
+  return {std::pow(10.0, -u_hi), std::pow(10.0, -u_lo), hi_open, lo_open};
+}
+
+Interval wald_c(const FitResult& f, int index, double level) {
+  const double u = f.params.u[static_cast<std::size_t>(index)], se = f.se(index), z = z_of(level);
+  if (!std::isfinite(se)) return {};
+  return c_interval(u - z * se, u + z * se, false, false);
+}
+
+ModelSpec base_spec(const StudyFitOptions& o, double p_threshold) {
+  ModelSpec s;
+  s.family = o.family;
+  s.guess = o.guess;
+  s.p_threshold = p_threshold;
+  s.lapse = o.lapse;
+  return s;
+}
+
+void fit_participants(ConditionFit& cf, const std::map<std::string, std::vector<Group>>& by_participant,
+                      const StudyFitOptions& o) {
+  std::vector<double> log_c;
+  for (const auto& [name, groups] : by_participant) {
+    ParticipantFit pf;
+    pf.participant = name;
+    ModelSpec spec = cf.spec;
+    spec.groups = groups;
+    spec.u_min = cf.linear.u_min;
+    spec.u_max = cf.linear.u_max;
+    pf.fit = fit(spec);
+    pf.c = std::pow(10.0, -pf.fit.params.u[0]);
+    const Interval w = wald_c(pf.fit, 0, o.level);
+    pf.c_lo = w.lo;
+    pf.c_hi = w.hi;
+    pf.flags = pf.fit.flags;
+    log_c.push_back(std::log10(pf.c));
+    cf.participants.push_back(pf);
+  }
+  if (cf.participants.size() < 4) return;  // too few for a robust spread
+  const double m = median(log_c), spread = mad_sd(log_c);
+  for (ParticipantFit& pf : cf.participants) {
+    // The participant's own uncertainty widens the yardstick, so a tight group does not flag noise.
+    const double se = pf.fit.se(0);
+    const double scale = std::sqrt(spread * spread + (std::isfinite(se) ? se * se : 0.0));
+    if (!(scale > 0)) continue;
+    pf.robust_z = (std::log10(pf.c) - m) / scale;
+    if (std::abs(pf.robust_z) > o.outlier_z) {
+      pf.flags.add("far_from_rest");
+      cf.flags.add("participant_far_from_rest");
+    }
+  }
+}
+
+void fit_linearity(ConditionFit& cf, const std::vector<std::pair<std::size_t, Group>>& sized_groups,
+                   const StudyFitOptions& o) {
+  const int k = static_cast<int>(cf.artifact_px.size());
+  if (k < 2) {
+    cf.flags.add("one_artifact_size");
+    return;
+  }
+  // Free per-size thresholds.
+  ModelSpec per_size = cf.spec;
+  per_size.groups.clear();
+  per_size.thresholds = k;
+  for (const auto& [size_index, group] : sized_groups) {
+    Group g = group;
+    g.threshold_index = static_cast<int>(size_index);
+    per_size.groups.push_back(g);
+  }
+  Parameters start = cf.linear.params;
+  start.u.assign(static_cast<std::size_t>(k), cf.linear.params.u[0]);
+  cf.per_size = fit(per_size, start);
+  cf.linearity_tested = true;
+  cf.lr_linear_stat = std::max(0.0, 2.0 * (cf.linear.nll - cf.per_size.nll));
+  cf.lr_linear_dof = k - 1;
+  cf.lr_linear_p = chi2_survival(cf.lr_linear_stat, cf.lr_linear_dof);
+  for (int i = 0; i < k; ++i) {
+    SizeThreshold st;
+    st.artifact_px = cf.artifact_px[static_cast<std::size_t>(i)];
+    for (const auto& [size_index, group] : sized_groups)
+      if (static_cast<int>(size_index) == i)
+        for (const BinomialRow& r : group.rows) st.trials += static_cast<int>(r.n_total);
+    st.u = cf.per_size.params.u[static_cast<std::size_t>(i)];
+    st.se_u = cf.per_size.se(i);
+    st.c = std::pow(10.0, -st.u);
+    const Interval w = wald_c(cf.per_size, i, o.level);
+    st.c_lo = w.lo;
+    st.c_hi = w.hi;
+    cf.sizes.push_back(st);
+  }
+  // Power law r = k a^p around a_ref = geometric mean of the sizes.
+  double log_sum = 0;
+  for (double a : cf.artifact_px) log_sum += std::log10(a);
+  cf.a_ref_px = std::pow(10.0, log_sum / k);
+  ModelSpec power = cf.spec;
+  power.groups.clear();
+  power.power_law = true;
+  for (const auto& [size_index, group] : sized_groups) {
+    Group g = group;
+    g.threshold_index = 0;
+    g.offset = std::log10(cf.artifact_px[size_index] / cf.a_ref_px);
+    power.groups.push_back(g);
+  }
+  cf.power = fit(power, cf.linear.params);
+  cf.power_law_tested = true;
+  const double s = cf.power.params.s;
+  cf.exponent = 1.0 - s;
+  cf.exponent_se = cf.power.se(cf.power.index_s());
+  if (std::isfinite(cf.exponent_se)) {
+    const double z = z_of(o.level);
+    cf.exponent_wald = {cf.exponent - z * cf.exponent_se, cf.exponent + z * cf.exponent_se, false, false};
+  }
+  cf.k_px = std::pow(10.0, -cf.power.params.u[0] + s * std::log10(cf.a_ref_px));
+  cf.lr_power_stat = std::max(0.0, 2.0 * (cf.linear.nll - cf.power.nll));
+  cf.lr_power_p = chi2_survival(cf.lr_power_stat, 1);
+}
+
+void recompute_quest(StaircaseFit& sf, const SessionInfo& session, const std::vector<const Trial*>& trials) {
+  sf.logged_quest_mean = trials.back()->row.quest_mean;
+  sf.logged_quest_sd = trials.back()->row.quest_sd;
+  if (!session.quest) return;
+  quest::Quest q(*session.quest, session.quest_dim);
+  for (const Trial* t : trials) q.update(t->row.intensity, t->row.correct);
+  sf.quest_recomputed = true;
+  sf.quest_mean = q.mean();
+  sf.quest_sd = q.sd();
+  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); };
+  sf.quest_matches_log = same(sf.quest_mean, sf.logged_quest_mean) && same(sf.quest_sd, sf.logged_quest_sd);
+  if (!sf.quest_matches_log) sf.flags.add("quest_replay_differs");
+}
+
+}  // namespace
+
+BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector<std::vector<Group>>& participants,
+                                        const Parameters& start, int resamples, std::uint64_t seed, int threads,
+                                        double level, const std::function<void()>& one_done) {
+  BootstrapSummary out;
+  if (participants.size() < 2 || resamples < 1) return out;
+  out.resamples = resamples;
+  std::vector<double> log_c(static_cast<std::size_t>(resamples), NAN);
+  std::vector<char> flagged(static_cast<std::size_t>(resamples), 0);
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int i = next++; i < resamples; i = next++) {
+      observers::Random random(observers::derive_seed(seed, static_cast<std::uint64_t>(i)));
+      ModelSpec spec = base;
+      spec.groups.clear();
+      for (std::size_t j = 0; j < participants.size(); ++j) {
+        const auto& pick = participants[random.bits() % participants.size()];
+        spec.groups.insert(spec.groups.end(), pick.begin(), pick.end());
+      }
+      const FitResult f = fit(spec, start, false);
+      log_c[static_cast<std::size_t>(i)] = -f.params.u[0];
+      flagged[static_cast<std::size_t>(i)] =
+          f.flags.has("threshold_at_bound") || f.flags.has("not_converged") ? 1 : 0;
+      if (one_done) one_done();
+    }
+  };
+  const int n_threads = std::max(1, std::min(threads, resamples));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n_threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  for (char f : flagged) out.flagged += f;
+  const double tail = 0.5 * (1.0 - level);
+  out.c = {std::pow(10.0, percentile(log_c, tail)), std::pow(10.0, percentile(log_c, 1.0 - tail)), false, false};
+  double mean = 0;
+  for (double v : log_c) mean += v;
+  mean /= static_cast<double>(log_c.size());
+  double ss = 0;
+  for (double v : log_c) ss += (v - mean) * (v - mean);
+  out.sd_log10_c = log_c.size() > 1 ? std::sqrt(ss / static_cast<double>(log_c.size() - 1)) : NAN;
+  for (double v : log_c) out.c_values.push_back(std::pow(10.0, v));
+  return out;
+}
+
+StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
+  if (!(options.level > 0 && options.level < 1)) throw std::invalid_argument("confidence level must be in (0, 1)");
+  if (options.bootstrap < 0) throw std::invalid_argument("bootstrap resamples must be >= 0");
+  StudyFit out;
+  out.options = options;
+  out.sessions = static_cast<int>(data.sessions.size());
+  out.trials = static_cast<int>(data.trials.size());
+  out.practice_rows_excluded = data.practice_rows;
+  // pThreshold: the option, else the sessions' QUEST value when they agree, else QUEST's default.
+  std::set<double> p_thresholds;
+  for (const SessionInfo& s : data.sessions) {
+    if (s.quest) p_thresholds.insert(s.quest->p_threshold);
+    else out.notes.push_back(s.log_file + ": no session.json with QUEST parameters; QUEST posterior not recomputed");
+    if (s.torn_tail) out.notes.push_back(s.log_file + ": last line torn (an unanswered trial); ignored");
+  }
+  out.p_threshold = options.p_threshold ? *options.p_threshold
+                                        : (p_thresholds.size() == 1 ? *p_thresholds.begin() : 0.82);
+  if (!options.p_threshold && p_thresholds.size() > 1)
+    out.notes.push_back("sessions use different QUEST pThreshold values; thresholds are at 0.82");
+  const int threads = options.threads > 0 ? options.threads
+                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+  // Conditions in order of first appearance.
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<const Trial*>> by_condition;
+  for (const Trial& t : data.trials) {
+    const std::string name = condition_name(t.row.pattern, t.row.contrast);
+    if (!by_condition.count(name)) order.push_back(name);
+    by_condition[name].push_back(&t);
+  }
+  int total_bootstrap = 0;
+  for (const std::string& name : order) {
+    std::set<std::string> people;
+    for (const Trial* t : by_condition[name]) people.insert(t->row.participant);
+    if (people.size() >= 2) total_bootstrap += options.bootstrap;
+  }
+  std::atomic<int> bootstrap_done{0};
+  std::mutex progress_mutex;
+  const auto one_done = [&] {
+    const int done = ++bootstrap_done;
+    if (!options.progress) return;
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    options.progress(done, total_bootstrap);
+  };
+
+  std::map<std::string, double> condition_lambda;
+  for (const std::string& name : order) {
+    const auto& trials = by_condition[name];
+    ConditionFit cf;
+    cf.condition = name;
+    cf.pattern = trials.front()->row.pattern;
+    cf.contrast = trials.front()->row.contrast;
+    cf.trials = static_cast<int>(trials.size());
+    std::set<double> sizes;
+    for (const Trial* t : trials) sizes.insert(t->row.artifact_px);
+    cf.artifact_px.assign(sizes.begin(), sizes.end());
+    // Groups per (participant, size).
+    std::map<std::pair<std::string, std::size_t>, std::vector<BinomialRow>> rows;
+    for (const Trial* t : trials) {
+      const std::size_t size_index = static_cast<std::size_t>(
+          std::lower_bound(cf.artifact_px.begin(), cf.artifact_px.end(), t->row.artifact_px) - cf.artifact_px.begin());
+      rows[{t->row.participant, size_index}].push_back(
+          {model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
+    }
+    std::vector<std::pair<std::size_t, Group>> sized_groups;
+    std::map<std::string, std::vector<Group>> by_participant;
+    cf.spec = base_spec(options, out.p_threshold);
+    for (auto& [key, r] : rows) {
+      Group g{merge_rows(std::move(r)), 0, 0.0};
+      sized_groups.emplace_back(key.second, g);
+      by_participant[key.first].push_back(g);
+      cf.spec.groups.push_back(g);
+    }
+    cf.participant_count = static_cast<int>(by_participant.size());
+    cf.linear = fit(cf.spec);
+    cf.spec.u_min = cf.linear.u_min;  // every later fit of this condition shares the bounds
+    cf.spec.u_max = cf.linear.u_max;
+    cf.flags = cf.linear.flags;
+    cf.c = std::pow(10.0, -cf.linear.params.u[0]);
+    const ProfileInterval profile = profile_interval(cf.spec, cf.linear, 0, options.level);
+    cf.c_profile = c_interval(profile.lo, profile.hi, profile.lo_open, profile.hi_open);
+    if (profile.lo_open || profile.hi_open) cf.flags.add("interval_open");
+    cf.c_wald = wald_c(cf.linear, 0, options.level);
+    fit_linearity(cf, sized_groups, options);
+    fit_participants(cf, by_participant, options);
+    if (by_participant.size() < 2) {
+      cf.flags.add("one_participant");
+    } else if (options.bootstrap > 0) {
+      std::vector<std::vector<Group>> groups;
+      for (auto& [name_p, g] : by_participant) groups.push_back(g);
+      cf.bootstrap = bootstrap_participants(cf.spec, groups, cf.linear.params, options.bootstrap,
+                                            observers::derive_seed(options.seed, out.conditions.size()), threads,
+                                            options.level, one_done);
+      const double profile_width = std::log10(cf.c_profile.hi / cf.c_profile.lo);
+      const double boot_width = std::log10(cf.bootstrap.c.hi / cf.bootstrap.c.lo);
+      if (std::isfinite(profile_width) && boot_width > 1.5 * profile_width) cf.flags.add("participants_differ");
+    }
+    condition_lambda[name] = cf.linear.params.lambda;
+    out.conditions.push_back(std::move(cf));
+  }
+
+  // Staircases: (session, round, staircase) in log order.
+  std::map<std::tuple<std::size_t, int, std::string>, std::vector<const Trial*>> staircases;
+  std::vector<std::tuple<std::size_t, int, std::string>> staircase_order;
+  for (const Trial& t : data.trials) {
+    const auto key = std::make_tuple(t.session, t.row.round, t.row.staircase);
+    if (!staircases.count(key)) staircase_order.push_back(key);
+    staircases[key].push_back(&t);
+  }
+  for (const auto& key : staircase_order) {
+    const auto& trials = staircases[key];
+    const SessionInfo& session = data.sessions[std::get<0>(key)];
+    const trial_log::TrialRow& first = trials.front()->row;
+    StaircaseFit sf;
+    sf.participant = session.participant;
+    sf.session_id = session.session_id;
+    sf.condition = condition_name(first.pattern, first.contrast);
+    sf.staircase = first.staircase;
+    sf.artifact_px = first.artifact_px;
+    sf.round = first.round;
+    ModelSpec spec = base_spec(options, out.p_threshold);
+    spec.lapse.fixed = condition_lambda.at(sf.condition);
+    std::vector<BinomialRow> rows;
+    for (const Trial* t : trials) {
+      if (t->row.artifact_px != first.artifact_px || condition_name(t->row.pattern, t->row.contrast) != sf.condition)
+        throw std::runtime_error(session.log_file + ":" + std::to_string(t->line) + ": staircase '" + sf.staircase +
+                                 "' of round " + std::to_string(sf.round) + " changes artifact size or condition");
+      rows.push_back({model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
+      sf.track.push_back({t->row.trial, t->row.intensity, t->row.filter_radius_px, t->row.correct, t->row.clamped != 0});
+    }
+    spec.groups.push_back({merge_rows(std::move(rows)), 0, 0.0});
+    sf.fit = fit(spec);
+    sf.flags = sf.fit.flags;
+    sf.c = std::pow(10.0, -sf.fit.params.u[0]);
+    const Interval w = wald_c(sf.fit, 0, options.level);
+    sf.c_lo = w.lo;
+    sf.c_hi = w.hi;
+    recompute_quest(sf, session, trials);
+    const double final_sd = sf.quest_recomputed ? sf.quest_sd : sf.logged_quest_sd;
+    sf.converged = final_sd <= session.sd_below && !sf.fit.flags.has("threshold_at_bound") &&
+                   !sf.fit.flags.has("covariance_failed") && !sf.fit.flags.has("not_converged");
+    if (!sf.converged) sf.flags.add("staircase_not_converged");
+    out.staircases.push_back(std::move(sf));
+  }
+  return out;
+}
+
+}  // namespace penumbra::analysis

@@ -1,0 +1,137 @@
+#pragma once
+// The whole analysis of a study's logs (issue 5): per staircase, per participant and per
+// condition (pattern x contrast).
+//
+// Intensity is u = log10(artifact_px / filter_radius_px). The rule r_threshold(a) = c a means the
+// threshold intensity is u = log10(a / (c a)) = -log10 c for every a, so:
+//   linear model    one threshold u for all sizes and participants (+ shared slope and lapse):
+//                   c = 10^-u, 95 % interval by profile likelihood, and a bootstrap over
+//                   participants;
+//   per-size model  one u_k per artifact size (same slope and lapse): c_k = 10^-u_k; the
+//                   likelihood-ratio test against the linear model (K - 1 dof) is the linearity
+//                   check;
+//   power law       r = k a^p  <=>  u(a) = log10 a - log10 r = u_0 - (p - 1) log10(a / a_ref), with
+//                   a_ref the geometric mean of the sizes: fitted as u_0 + s log10(a / a_ref),
+//                   p = 1 - s; p = 1 is the linear model (LR test, 1 dof).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/dataset.h"
+#include "fit/model_fit.h"
+
+namespace penumbra::analysis {
+
+struct StudyFitOptions {
+  psychometric::Model family = psychometric::Model::log_weibull;
+  double guess = 0.5;
+  std::optional<double> p_threshold;  // default: the sessions' QUEST pThreshold, else 0.82
+  LapseSpec lapse;                    // joint fits; staircase fits hold lambda at the condition's
+  double level = 0.95;
+  int bootstrap = 1000;               // resamples over participants; 0 = none
+  std::uint64_t seed = 1;
+  int threads = 0;                    // 0: hardware concurrency
+  double outlier_z = 3.0;             // participants farther than this (robust z of log10 c) are flagged
+  std::function<void(int done, int total)> progress;  // bootstrap progress, called from worker threads (serialized)
+};
+
+struct TrackPoint {
+  int trial = 0;
+  double intensity = 0, filter_radius_px = 0;
+  int correct = 0;
+  bool clamped = false;
+};
+
+struct StaircaseFit {
+  std::string participant, session_id, condition, staircase;
+  double artifact_px = 0;
+  int round = 0;
+  FitResult fit;  // u = fit.params.u[0]
+  double c = NAN, c_lo = NAN, c_hi = NAN;  // 10^-u and its Wald interval
+  // QUEST posterior after the last trial, recomputed from the log (when session.json has QUEST's
+  // parameters) and as logged.
+  bool quest_recomputed = false;
+  double quest_mean = NAN, quest_sd = NAN;
+  double logged_quest_mean = NAN, logged_quest_sd = NAN;
+  bool quest_matches_log = true;
+  bool converged = true;
+  Flags flags;  // not_converged (QUEST sd above the study's sd_below, or an ill-conditioned fit), quest_replay_differs
+  std::vector<TrackPoint> track;
+};
+
+struct SizeThreshold {
+  double artifact_px = 0;
+  int trials = 0;
+  double u = NAN, se_u = NAN;
+  double c = NAN, c_lo = NAN, c_hi = NAN;  // Wald interval from the per-size model
+};
+
+struct ParticipantFit {
+  std::string participant;
+  FitResult fit;
+  double c = NAN, c_lo = NAN, c_hi = NAN;  // Wald
+  double robust_z = NAN;                   // (log10 c - median) / robust spread over participants
+  Flags flags;                             // far_from_rest, plus the fit's
+};
+
+struct Interval {
+  double lo = NAN, hi = NAN;
+  bool lo_open = false, hi_open = false;
+};
+
+struct BootstrapSummary {
+  int resamples = 0;
+  int flagged = 0;  // resamples whose fit ended at a bound or did not converge (kept, bounded)
+  Interval c;       // percentile interval
+  double sd_log10_c = NAN;
+  std::vector<double> c_values;
+};
+
+struct ConditionFit {
+  std::string condition, pattern;
+  double contrast = 1;
+  int trials = 0, participant_count = 0;
+  std::vector<double> artifact_px;  // sorted
+  ModelSpec spec;                   // the linear model's data and settings
+  FitResult linear;
+  double c = NAN;
+  Interval c_profile, c_wald;
+  BootstrapSummary bootstrap;
+  // Linearity.
+  bool linearity_tested = false;
+  FitResult per_size;
+  std::vector<SizeThreshold> sizes;
+  double lr_linear_stat = NAN, lr_linear_dof = 0, lr_linear_p = NAN;
+  bool power_law_tested = false;
+  FitResult power;
+  double a_ref_px = NAN, exponent = NAN, exponent_se = NAN, k_px = NAN;
+  Interval exponent_wald;
+  double lr_power_stat = NAN, lr_power_p = NAN;
+  std::vector<ParticipantFit> participants;
+  Flags flags;
+};
+
+struct StudyFit {
+  StudyFitOptions options;
+  double p_threshold = 0.82;
+  int sessions = 0, trials = 0, practice_rows_excluded = 0;
+  std::vector<std::string> notes;  // torn logs, missing session.json, ...
+  std::vector<ConditionFit> conditions;
+  std::vector<StaircaseFit> staircases;
+};
+
+// Throws std::invalid_argument for bad options.
+StudyFit fit_study(const Dataset& data, const StudyFitOptions& options);
+
+// Bootstrap over participants of the linear model: `participants[i]` holds participant i's groups.
+BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector<std::vector<Group>>& participants,
+                                        const Parameters& start, int resamples, std::uint64_t seed, int threads,
+                                        double level, const std::function<void()>& one_done = {});
+
+// The stimulus level of a logged intensity in the family's x units (the ratio for the Weibull).
+double model_x(psychometric::Model family, double intensity);
+
+}  // namespace penumbra::analysis

@@ -1,0 +1,356 @@
+#include "report/outputs.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace penumbra::analysis {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+void write_file_atomic(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error(path.string() + ": cannot write");
+    }
+  }
+  fs::rename(tmp, path);
+}
+
+namespace {
+
+Json interval(const Interval& i) {
+  return {{"lo", number(i.lo)}, {"hi", number(i.hi)}, {"lo_open", i.lo_open}, {"hi_open", i.hi_open}};
+}
+
+std::string fmt(const char* format, double v) {
+  if (!std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+std::string join(const std::vector<std::string>& v, const char* sep = ",") {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+}  // namespace
+
+Json to_json(const FitResult& f, const ModelSpec& spec) {
+  Json u = Json::array(), se_u = Json::array();
+  for (std::size_t i = 0; i < f.params.u.size(); ++i) {
+    u.push_back(number(f.params.u[i]));
+    se_u.push_back(number(f.se(static_cast<int>(i))));
+  }
+  const double beta = std::exp(f.params.log_beta);
+  Json j = {{"family", psychometric::model_name(spec.family)},
+            {"guess", spec.guess},
+            {"p_threshold", spec.p_threshold},
+            {"lapse", spec.lapse.fixed ? Json{{"fixed", *spec.lapse.fixed}} : Json{{"max", spec.lapse.max}}},
+            {"u", u},
+            {"se_u", se_u},
+            {"beta", number(beta)},
+            {"se_beta", number(beta * f.se(f.index_log_beta()))},
+            {"lambda", number(f.params.lambda)},
+            {"se_lambda", number(f.se(f.index_lambda()))},
+            {"corr_u0_log_beta", number(f.correlation(0, f.index_log_beta()))},
+            {"nll", number(f.nll)},
+            {"deviance", number(f.deviance)},
+            {"trials", f.trials},
+            {"converged", f.converged},
+            {"iterations", f.iterations},
+            {"u_bounds", {number(f.u_min), number(f.u_max)}},
+            {"flags", f.flags.list}};
+  if (spec.power_law) {
+    j["s"] = number(f.params.s);
+    j["se_s"] = number(f.se(f.index_s()));
+  }
+  return j;
+}
+
+const ConditionFit& calibration_condition(const StudyFit& fit, const std::optional<std::string>& wanted) {
+  if (fit.conditions.empty()) throw std::invalid_argument("no conditions were fitted");
+  if (wanted) {
+    std::vector<std::string> names;
+    for (const ConditionFit& c : fit.conditions) {
+      if (c.condition == *wanted) return c;
+      names.push_back(c.condition);
+    }
+    throw std::invalid_argument("--condition '" + *wanted + "': not in the data (" + join(names, ", ") + ")");
+  }
+  const ConditionFit* worst = &fit.conditions.front();
+  for (const ConditionFit& c : fit.conditions)
+    if (c.c > worst->c) worst = &c;
+  return *worst;
+}
+
+Json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition, const std::string& created_utc,
+                      const std::vector<std::string>& inputs) {
+  const ConditionFit& chosen = calibration_condition(fit, condition);
+  Json per = Json::array();
+  for (const ConditionFit& c : fit.conditions) {
+    per.push_back({{"condition", c.condition},
+                   {"pattern", c.pattern},
+                   {"contrast", c.contrast},
+                   {"c", number(c.c)},
+                   {"ci95", {number(std::min(c.c_profile.lo, c.c)), number(std::max(c.c_profile.hi, c.c))}},
+                   {"ci95_bootstrap", {number(c.bootstrap.c.lo), number(c.bootstrap.c.hi)}},
+                   {"trials", c.trials},
+                   {"participants", c.participant_count},
+                   {"flags", c.flags.list}});
+  }
+  std::ostringstream source;
+  source << "penumbra-fit: joint maximum-likelihood fit of r = c a (" << psychometric::model_name(fit.options.family)
+         << ", threshold at " << fit.p_threshold << " correct, shared slope and lapse) to " << fit.trials
+         << " trials from " << fit.sessions << " sessions; ci95 by profile likelihood; "
+         << (condition ? "condition chosen by --condition" : "the condition with the largest c (worst case)")
+         << "; inputs: " << join(inputs, " ");
+  return {{"c", number(chosen.c)},
+          {"ci95", {number(std::min(chosen.c_profile.lo, chosen.c)), number(std::max(chosen.c_profile.hi, chosen.c))}},
+          {"condition", chosen.condition},
+          {"source", source.str()},
+          {"per_condition", per},
+          {"flags", chosen.flags.list},
+          {"created_utc", created_utc}};
+}
+
+Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std::vector<std::string>& inputs,
+                 const std::string& created_utc) {
+  Json conditions = Json::array();
+  for (const ConditionFit& c : fit.conditions) {
+    Json sizes = Json::array();
+    for (std::size_t i = 0; i < c.artifact_px.size(); ++i) {
+      const double a = c.artifact_px[i];
+      Json s = {{"artifact_px", a}, {"r_linear_px", number(c.c * a)}};
+      if (c.linearity_tested) {
+        const SizeThreshold& t = c.sizes[i];
+        s["trials"] = t.trials;
+        s["c"] = number(t.c);
+        s["c_wald"] = {number(t.c_lo), number(t.c_hi)};
+        s["r_threshold_px"] = number(t.c * a);
+        s["r_threshold_wald_px"] = {number(t.c_lo * a), number(t.c_hi * a)};
+      }
+      if (reference) {
+        const ReferenceEntry* e = reference->find(c.pattern, c.contrast, a);
+        s["reference_filter_radius_px"] = e && e->reference_px ? Json(*e->reference_px) : Json(nullptr);
+        if (e && !e->reference_px) s["reference_note"] = "images still differ at r_max = " + fmt("%g", e->r_max_px) + " px";
+        if (!e) s["reference_note"] = "not in the reference file";
+      }
+      sizes.push_back(s);
+    }
+    Json participants = Json::array();
+    for (const ParticipantFit& p : c.participants) {
+      participants.push_back({{"participant", p.participant},
+                              {"c", number(p.c)},
+                              {"c_wald", {number(p.c_lo), number(p.c_hi)}},
+                              {"robust_z", number(p.robust_z)},
+                              {"beta", number(std::exp(p.fit.params.log_beta))},
+                              {"lambda", number(p.fit.params.lambda)},
+                              {"trials", p.fit.trials},
+                              {"flags", p.flags.list}});
+    }
+    Json j = {{"condition", c.condition},
+              {"pattern", c.pattern},
+              {"contrast", c.contrast},
+              {"trials", c.trials},
+              {"participants", c.participant_count},
+              {"artifact_px", c.artifact_px},
+              {"c", number(c.c)},
+              {"ci95_profile", interval(c.c_profile)},
+              {"ci95_wald", interval(c.c_wald)},
+              {"bootstrap", {{"resamples", c.bootstrap.resamples},
+                             {"flagged", c.bootstrap.flagged},
+                             {"ci95", interval(c.bootstrap.c)},
+                             {"sd_log10_c", number(c.bootstrap.sd_log10_c)},
+                             {"c_values", c.bootstrap.c_values}}},
+              {"linear_fit", to_json(c.linear, c.spec)},
+              {"sizes", sizes},
+              {"participant_fits", participants},
+              {"flags", c.flags.list}};
+    if (c.linearity_tested) {
+      ModelSpec per_size = c.spec;
+      per_size.thresholds = static_cast<int>(c.artifact_px.size());
+      j["linearity"] = {{"per_size_fit", to_json(c.per_size, per_size)},
+                        {"lr_statistic", number(c.lr_linear_stat)},
+                        {"dof", c.lr_linear_dof},
+                        {"p_value", number(c.lr_linear_p)}};
+    }
+    if (c.power_law_tested) {
+      ModelSpec power = c.spec;
+      power.power_law = true;
+      j["power_law"] = {{"model", "r = k a^p, fitted as u = u0 + s log10(a / a_ref), p = 1 - s"},
+                        {"a_ref_px", number(c.a_ref_px)},
+                        {"exponent", number(c.exponent)},
+                        {"exponent_se", number(c.exponent_se)},
+                        {"exponent_wald95", {number(c.exponent_wald.lo), number(c.exponent_wald.hi)}},
+                        {"k_px", number(c.k_px)},
+                        {"lr_statistic_vs_linear", number(c.lr_power_stat)},
+                        {"p_value_vs_linear", number(c.lr_power_p)},
+                        {"fit", to_json(c.power, power)}};
+    }
+    conditions.push_back(j);
+  }
+  Json staircases = Json::array();
+  for (const StaircaseFit& s : fit.staircases) {
+    Json track = Json::array();
+    for (const TrackPoint& t : s.track)
+      track.push_back({t.trial, t.intensity, t.filter_radius_px, t.correct, t.clamped ? 1 : 0});
+    ModelSpec spec;
+    spec.family = fit.options.family;
+    spec.guess = fit.options.guess;
+    spec.p_threshold = fit.p_threshold;
+    spec.lapse.fixed = s.fit.params.lambda;
+    Json j = {{"participant", s.participant},
+              {"session_id", s.session_id},
+              {"condition", s.condition},
+              {"round", s.round},
+              {"staircase", s.staircase},
+              {"artifact_px", s.artifact_px},
+              {"c", number(s.c)},
+              {"c_wald", {number(s.c_lo), number(s.c_hi)}},
+              {"r_threshold_px", number(s.c * s.artifact_px)},
+              {"alpha", number(alpha_of(spec, s.fit.params.u[0], std::exp(s.fit.params.log_beta), s.fit.params.lambda))},
+              {"fit", to_json(s.fit, spec)},
+              {"quest", {{"recomputed", s.quest_recomputed},
+                         {"mean", number(s.quest_mean)},
+                         {"sd", number(s.quest_sd)},
+                         {"logged_mean", number(s.logged_quest_mean)},
+                         {"logged_sd", number(s.logged_quest_sd)},
+                         {"matches_log", s.quest_matches_log},
+                         {"c_from_mean", number(std::pow(10.0, -(s.quest_recomputed ? s.quest_mean : s.logged_quest_mean)))}}},
+              {"converged", s.converged},
+              {"flags", s.flags.list},
+              {"track_columns", {"trial", "intensity", "filter_radius_px", "correct", "clamped"}},
+              {"track", track}};
+    staircases.push_back(j);
+  }
+  Json reference_info = nullptr;
+  if (reference) reference_info = {{"file", reference->file}, {"entries", reference->entries.size()}};
+  return {{"tool", "penumbra-fit"},
+          {"created_utc", created_utc},
+          {"inputs", inputs},
+          {"intensity", "u = log10(artifact_px / filter_radius_px); c = 10^-u; r_threshold = c * artifact_px"},
+          {"options", {{"family", psychometric::model_name(fit.options.family)},
+                       {"guess", fit.options.guess},
+                       {"p_threshold", fit.p_threshold},
+                       {"lapse", fit.options.lapse.fixed ? Json{{"fixed", *fit.options.lapse.fixed}}
+                                                         : Json{{"max", fit.options.lapse.max}}},
+                       {"bootstrap", fit.options.bootstrap},
+                       {"seed", fit.options.seed}}},
+          {"sessions", fit.sessions},
+          {"trials", fit.trials},
+          {"practice_rows_excluded", fit.practice_rows_excluded},
+          {"notes", fit.notes},
+          {"published_c", 3.47},
+          {"reference", reference_info},
+          {"conditions", conditions},
+          {"staircases", staircases}};
+}
+
+std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
+                         const std::optional<std::string>& wanted) {
+  std::ostringstream o;
+  o << "penumbra-fit: " << fit.trials << " trials (" << fit.practice_rows_excluded << " practice rows excluded) from "
+    << fit.sessions << " sessions; " << psychometric::model_name(fit.options.family) << ", threshold at "
+    << fit.p_threshold << " correct, guess " << fit.options.guess << ", lapse "
+    << (fit.options.lapse.fixed ? "fixed " + fmt("%g", *fit.options.lapse.fixed) : "in [0, " + fmt("%g", fit.options.lapse.max) + "]")
+    << "\n\n";
+  char line[512];
+  std::snprintf(line, sizeof line, "%-10s %6s %5s %7s %17s %17s %6s %6s %9s %14s  %s\n", "condition", "trials",
+                "ppl", "c", "95% profile", "95% bootstrap", "beta", "lapse", "lin. p", "exponent p", "flags");
+  o << line;
+  for (const ConditionFit& c : fit.conditions) {
+    const std::string profile = "[" + fmt("%.3f", c.c_profile.lo) + ", " + fmt("%.3f", c.c_profile.hi) + "]";
+    const std::string boot = c.bootstrap.resamples ? "[" + fmt("%.3f", c.bootstrap.c.lo) + ", " + fmt("%.3f", c.bootstrap.c.hi) + "]" : "-";
+    const std::string exponent = c.power_law_tested ? fmt("%.3f", c.exponent) + " +- " + fmt("%.3f", c.exponent_se) : "-";
+    std::snprintf(line, sizeof line, "%-10s %6d %5d %7.3f %17s %17s %6s %6s %9s %14s  %s\n", c.condition.c_str(),
+                  c.trials, c.participant_count, c.c, profile.c_str(), boot.c_str(),
+                  fmt("%.2f", std::exp(c.linear.params.log_beta)).c_str(), fmt("%.3f", c.linear.params.lambda).c_str(),
+                  c.linearity_tested ? fmt("%.3g", c.lr_linear_p).c_str() : "-", exponent.c_str(),
+                  join(c.flags.list).c_str());
+    o << line;
+  }
+  o << "\nthreshold filter radius per artifact size (free per-size thresholds, Wald 95 %)";
+  if (reference) o << " and reference filter size";
+  o << "\n";
+  std::snprintf(line, sizeof line, "%-10s %6s %6s %9s %21s %9s %11s\n", "condition", "a_px", "trials", "r_px",
+                "95% Wald", "c*a_px", "reference");
+  o << line;
+  for (const ConditionFit& c : fit.conditions) {
+    for (std::size_t i = 0; i < c.artifact_px.size(); ++i) {
+      const double a = c.artifact_px[i];
+      std::string ref = "-";
+      if (reference) {
+        const ReferenceEntry* e = reference->find(c.pattern, c.contrast, a);
+        ref = !e ? "n/a" : e->reference_px ? fmt("%.2f", *e->reference_px) : "> " + fmt("%g", e->r_max_px);
+      }
+      if (c.linearity_tested) {
+        const SizeThreshold& t = c.sizes[i];
+        const std::string wald = "[" + fmt("%.2f", t.c_lo * a) + ", " + fmt("%.2f", t.c_hi * a) + "]";
+        std::snprintf(line, sizeof line, "%-10s %6g %6d %9.2f %21s %9.2f %11s\n", c.condition.c_str(), a, t.trials,
+                      t.c * a, wald.c_str(), c.c * a, ref.c_str());
+      } else {
+        std::snprintf(line, sizeof line, "%-10s %6g %6s %9s %21s %9.2f %11s\n", c.condition.c_str(), a, "-", "-", "-",
+                      c.c * a, ref.c_str());
+      }
+      o << line;
+    }
+  }
+  o << "\nper participant c (joint linear fit of the participant's trials, Wald 95 %)\n";
+  for (const ConditionFit& c : fit.conditions) {
+    for (const ParticipantFit& p : c.participants) {
+      std::snprintf(line, sizeof line, "%-10s %-12s c %7.3f [%s, %s]  z %6s  %s\n", c.condition.c_str(),
+                    p.participant.c_str(), p.c, fmt("%.3f", p.c_lo).c_str(), fmt("%.3f", p.c_hi).c_str(),
+                    fmt("%+.2f", p.robust_z).c_str(), join(p.flags.list).c_str());
+      o << line;
+    }
+  }
+  int not_converged = 0, differs = 0;
+  for (const StaircaseFit& s : fit.staircases) {
+    not_converged += s.converged ? 0 : 1;
+    differs += s.quest_matches_log ? 0 : 1;
+  }
+  o << "\nstaircases: " << fit.staircases.size() << ", not converged: " << not_converged
+    << ", QUEST replay differing from the log: " << differs << "\n";
+  for (const StaircaseFit& s : fit.staircases) {
+    if (s.converged && s.quest_matches_log) continue;
+    std::snprintf(line, sizeof line, "  %-12s %-10s %-6s c %7.3f  QUEST sd %s  %s\n", s.participant.c_str(),
+                  s.condition.c_str(), s.staircase.c_str(), s.c,
+                  fmt("%.3f", s.quest_recomputed ? s.quest_sd : s.logged_quest_sd).c_str(), join(s.flags.list).c_str());
+    o << line;
+  }
+  for (const std::string& n : fit.notes) o << "note: " << n << "\n";
+  const ConditionFit& chosen = calibration_condition(fit, wanted);
+  o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.c_profile.lo) << ", "
+    << fmt("%.3f", chosen.c_profile.hi) << "] from " << chosen.condition
+    << (wanted ? " (--condition)" : " (largest c)") << "; published c = 3.47\n";
+  return o.str();
+}
+
+}  // namespace penumbra::analysis

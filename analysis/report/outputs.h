@@ -1,0 +1,39 @@
+#pragma once
+// What penumbra-fit writes: calibration.json (the contract in shared/DESIGN.md, read by the
+// renderer's adaptive::load_calibration), report.json (every number, for people and the plotting
+// script) and a plain-text summary table.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "data/reference_table.h"
+#include "fit/model_fit.h"
+#include "fit/study_fit.h"
+
+namespace penumbra::analysis {
+
+// A number, or null when it is not finite (JSON has no NaN).
+nlohmann::json number(double v);
+nlohmann::json to_json(const FitResult& fit, const ModelSpec& spec);
+
+// The condition whose c goes into calibration.json: `wanted`, or the one with the largest c.
+// Throws std::invalid_argument naming the conditions for an unknown `wanted`.
+const ConditionFit& calibration_condition(const StudyFit& fit, const std::optional<std::string>& wanted);
+
+nlohmann::json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition,
+                                const std::string& created_utc, const std::vector<std::string>& inputs);
+nlohmann::json report_json(const StudyFit& fit, const ReferenceTable* reference, const std::vector<std::string>& inputs,
+                           const std::string& created_utc);
+std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
+                         const std::optional<std::string>& calibration_condition);
+
+// Writes `text` to `path` through a temporary file in the same folder and a rename, so a reader
+// never sees half a file.
+void write_file_atomic(const std::filesystem::path& path, const std::string& text);
+
+std::string utc_now();
+
+}  // namespace penumbra::analysis

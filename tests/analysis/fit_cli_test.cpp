@@ -1,0 +1,184 @@
+// penumbra-fit end to end: session directories in, calibration.json (read back by the renderer's
+// reader), report.json and summary.txt out; bad input gives one line naming the file and line and
+// writes nothing; the psychometric subcommand; and the real pipeline penumbra-study run -> fit.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "adaptive/resolution_rule.h"
+#include "data/simulate.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-fit-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+int run(const std::string& args, std::string* output) {
+  const std::string command = std::string(PENUMBRA_FIT_EXE) + " " + args + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
+  const int status = ::pclose(pipe);
+  if (output) *output = out;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::vector<fs::path> simulated_sessions(const fs::path& dir, int participants) {
+  analysis::SimulatedStudy s;
+  s.participants = participants;
+  s.trials_per_staircase = 25;
+  s.conditions[0].planted.c_true = 3.0;
+  s.seed = 3;
+  return analysis::write_sessions(s, analysis::simulate_study(s), dir);
+}
+
+TEST(FitCli, FitsSessionDirectoriesAndWritesTheContract) {
+  const fs::path dir = fresh("ok");
+  const auto sessions = simulated_sessions(dir / "sessions", 4);
+  std::string args;
+  for (const auto& s : sessions) args += s.string() + " ";
+  std::string out;
+  ASSERT_EQ(run(args + "-o " + (dir / "out").string() + " --bootstrap 30 --threads 2", &out), 0) << out;
+  EXPECT_NE(out.find("calibration: c = "), std::string::npos) << out;
+  const adaptive::Calibration cal = adaptive::load_calibration(dir / "out" / "calibration.json");
+  EXPECT_NEAR(cal.c, 3.0, 0.3);
+  EXPECT_EQ(cal.condition, "stair/1");
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "out" / "report.json"));
+  EXPECT_EQ(report["trials"], 4 * 3 * 25);
+  EXPECT_EQ(report["staircases"].size(), 12u);
+  EXPECT_EQ(report["conditions"][0]["bootstrap"]["resamples"], 30);
+  EXPECT_TRUE(report["conditions"][0]["linearity"]["p_value"].is_number());
+  EXPECT_TRUE(report["staircases"][0]["quest"]["matches_log"].get<bool>());
+  EXPECT_NE(read(dir / "out" / "summary.txt").find("stair/1"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(FitCli, BadRowNamesFileLineAndColumnAndWritesNothing) {
+  const fs::path dir = fresh("bad");
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  const fs::path log = sessions[1] / "trials.csv";
+  std::string text = read(log);
+  // Line 4: the intensity column (11th) becomes nan.
+  std::size_t line_start = 0;
+  for (int i = 0; i < 3; ++i) line_start = text.find('\n', line_start) + 1;
+  std::size_t field = line_start;
+  for (int i = 0; i < 10; ++i) field = text.find(',', field) + 1;
+  text.replace(field, text.find(',', field) - field, "nan");
+  std::ofstream(log) << text;
+  std::string out;
+  EXPECT_EQ(run(sessions[0].string() + " " + sessions[1].string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find(log.string() + ":4: column 'intensity'"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_EQ(run((dir / "nothing").string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find("no such file"), std::string::npos) << out;
+  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "out").string() + " --condition step/1", &out), 1);
+  EXPECT_NE(out.find("--condition 'step/1'"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "calibration.json"));
+  EXPECT_EQ(run(sessions[0].string() + " " + sessions[0].string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find("given twice"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+TEST(FitCli, PsychometricSubcommandPrintsTheFitAsJson) {
+  const fs::path dir = fresh("psy");
+  std::ofstream(dir / "counts.csv") << "level,n_correct,n_total\n-1.0,26,50\n-0.8,28,50\n-0.6,37,50\n"
+                                       "-0.4,46,50\n-0.2,49,50\n0.0,50,50\n";
+  std::string out;
+  ASSERT_EQ(run("psychometric --input " + (dir / "counts.csv").string(), &out), 0) << out;
+  const nlohmann::json j = nlohmann::json::parse(out);
+  for (const char* key : {"alpha", "beta", "gamma", "lambda"}) EXPECT_TRUE(j["parameters"][key].is_number()) << key;
+  EXPECT_TRUE(j["standard_errors"]["alpha"].is_number());
+  EXPECT_TRUE(j["standard_errors"]["beta"].is_number());
+  EXPECT_GT(j["negative_log_likelihood"].get<double>(), 0);
+  EXPECT_GE(j["deviance"].get<double>(), 0);
+  const double x = j["threshold"]["x"];
+  EXPECT_GT(x, -0.7);
+  EXPECT_LT(x, -0.3);
+  EXPECT_EQ(j["trials"], 300);
+  // Fixed lapse, another family, another percent correct.
+  ASSERT_EQ(run("psychometric --input " + (dir / "counts.csv").string() +
+                    " --family logistic --lapse 0.01 --p-threshold 0.75",
+                &out), 0) << out;
+  const nlohmann::json k = nlohmann::json::parse(out);
+  EXPECT_EQ(k["parameters"]["lambda"], 0.01);
+  EXPECT_TRUE(k["standard_errors"]["lambda"].is_null());
+  EXPECT_LT(k["threshold"]["x"].get<double>(), x);
+  // Trial rows.
+  std::ofstream trials(dir / "trials.csv");
+  for (int i = 0; i < 40; ++i) trials << (i % 8) * 0.1 - 0.8 << "," << (i % 8 >= 3 || i % 2 == 0 ? 1 : 0) << "\n";
+  trials.close();
+  ASSERT_EQ(run("psychometric --format trials --input " + (dir / "trials.csv").string(), &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["trials"], 40);
+  // All correct: bounded and flagged, not NaN.
+  std::ofstream(dir / "all.csv") << "-1,10,10\n-0.5,10,10\n";
+  ASSERT_EQ(run("psychometric --input " + (dir / "all.csv").string(), &out), 0) << out;
+  const nlohmann::json all = nlohmann::json::parse(out);
+  EXPECT_TRUE(all["threshold"]["x"].is_number());
+  EXPECT_NE(all["flags"].dump().find("all_correct"), std::string::npos);
+  // Malformed rows: one line naming file, line and column.
+  std::ofstream(dir / "bad.csv") << "level,n_correct,n_total\n-1.0,26,50\n-0.8,abc,50\n";
+  EXPECT_EQ(run("psychometric --input " + (dir / "bad.csv").string(), &out), 1);
+  EXPECT_NE(out.find("bad.csv:3: column 'n_correct'"), std::string::npos) << out;
+  std::ofstream(dir / "nan.csv") << "nan,1,2\n";
+  EXPECT_EQ(run("psychometric --input " + (dir / "nan.csv").string(), &out), 1);
+  EXPECT_NE(out.find("nan.csv:1: column 'level'"), std::string::npos) << out;
+  std::ofstream(dir / "more.csv") << "-1,3,2\n";
+  EXPECT_EQ(run("psychometric --input " + (dir / "more.csv").string(), &out), 1);
+  EXPECT_NE(out.find("column 'n_correct'"), std::string::npos) << out;
+  EXPECT_EQ(run("psychometric --input " + (dir / "counts.csv").string() + " --family gompertz", &out), 1);
+  EXPECT_NE(out.find("--family 'gompertz'"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+#ifdef PENUMBRA_STUDY_EXE
+// The real pipeline: penumbra-study run --headless writes sessions, penumbra-fit reads them.
+TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
+  const fs::path dir = fresh("pipeline");
+  nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/default.json"));
+  config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
+  config["artifact_px"] = {5, 20};
+  config["stopping"] = {{"min_trials", 30}, {"max_trials", 30}, {"sd_below", 0.1}};
+  std::ofstream(dir / "study.json") << config.dump();
+  std::string sessions;
+  for (int p = 1; p <= 3; ++p) {
+    const fs::path session = dir / ("p" + std::to_string(p));
+    const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
+                                " --observer psychometric:c=4.0,beta=3.5,lapse=0.01 --headless --participant p" +
+                                std::to_string(p) + " --observer-seed " + std::to_string(p) + " -o " +
+                                session.string() + " > /dev/null";
+    ASSERT_EQ(std::system(command.c_str()), 0);
+    sessions += session.string() + " ";
+  }
+  std::string out;
+  ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 20", &out), 0) << out;
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "fit" / "report.json"));
+  EXPECT_EQ(report["trials"], 3 * 2 * 30);
+  EXPECT_EQ(report["practice_rows_excluded"], 3 * 4);
+  for (const auto& s : report["staircases"]) EXPECT_TRUE(s["quest"]["matches_log"].get<bool>());
+  EXPECT_NEAR(adaptive::load_calibration(dir / "fit" / "calibration.json").c, 4.0, 0.6);
+  fs::remove_all(dir);
+}
+#endif
+
+}  // namespace

@@ -1,0 +1,195 @@
+// The study analysis on simulated studies (the study's procedure and planted observer, no GL):
+// recovery of c, the linearity check and the power-law exponent, QUEST recomputed from the log,
+// outlying participants, degenerate studies, the bootstrap, and calibration.json read back by the
+// renderer's reader.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <unistd.h>
+
+#include "adaptive/resolution_rule.h"
+#include "data/simulate.h"
+#include "fit/study_fit.h"
+#include "report/outputs.h"
+
+namespace {
+
+using namespace penumbra;
+using namespace penumbra::analysis;
+
+SimulatedStudy study_with(double c_true, std::uint64_t seed) {
+  SimulatedStudy s;
+  s.participants = 10;
+  s.artifact_px = {5, 10, 20};
+  s.trials_per_staircase = 40;
+  s.conditions[0].planted.c_true = c_true;
+  s.conditions[0].planted.lapse = 0.01;
+  s.seed = seed;
+  return s;
+}
+
+StudyFitOptions quick() {
+  StudyFitOptions o;
+  o.bootstrap = 0;
+  o.threads = 2;
+  return o;
+}
+
+// About 10 participants x 3 sizes x 40 trials: the fitted c is within 5 % of the planted one.
+TEST(StudyFit, RecoversPlantedC) {
+  for (double c_true : {2.0, 3.47, 5.0}) {
+    const SimulatedStudy s = study_with(c_true, 100 + static_cast<std::uint64_t>(c_true * 100));
+    const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), quick());
+    ASSERT_EQ(f.conditions.size(), 1u);
+    const ConditionFit& c = f.conditions[0];
+    EXPECT_EQ(c.trials, 1200);
+    EXPECT_EQ(c.participant_count, 10);
+    EXPECT_NEAR(c.c / c_true, 1.0, 0.05) << "planted " << c_true << " fitted " << c.c;
+    EXPECT_LT(c.c_profile.lo, c.c);
+    EXPECT_GT(c.c_profile.hi, c.c);
+    EXPECT_LT(c.c_profile.hi / c.c_profile.lo, 1.2);  // about +-5 %: the interval is informative
+    EXPECT_TRUE(std::isfinite(c.c_wald.lo));
+    EXPECT_EQ(f.staircases.size(), 30u);
+    for (const StaircaseFit& sf : f.staircases) {
+      EXPECT_TRUE(sf.quest_recomputed);
+      EXPECT_TRUE(sf.quest_matches_log) << sf.participant << " " << sf.staircase;
+    }
+  }
+}
+
+// Sizes and planted per-size c from r = k a^p with p = 0.7: the linear model is rejected and the
+// exponent recovered; with p = 1 neither happens.
+TEST(StudyFit, LinearityCheckAndPowerLawExponent) {
+  for (double p : {0.7, 1.0}) {
+    Dataset data;
+    const double k = 3.0 * std::pow(10.0, 1.0 - p);  // r(10) = 30 px either way
+    for (double a : {5.0, 10.0, 20.0}) {
+      SimulatedStudy s = study_with(k * std::pow(a, p) / a, 7 + static_cast<std::uint64_t>(a));
+      s.artifact_px = {a};
+      s.trials_per_staircase = 60;
+      const Dataset part = as_dataset(s, simulate_study(s));
+      for (Trial t : part.trials) {
+        t.session = data.sessions.size() + t.session;
+        t.row.session_id += "-a" + std::to_string(int(a));
+        data.trials.push_back(t);
+      }
+      for (SessionInfo info : part.sessions) {
+        info.session_id += "-a" + std::to_string(int(a));
+        data.sessions.push_back(info);
+      }
+    }
+    const StudyFit f = fit_study(data, quick());
+    const ConditionFit& c = f.conditions[0];
+    ASSERT_TRUE(c.linearity_tested);
+    ASSERT_EQ(c.sizes.size(), 3u);
+    EXPECT_EQ(c.lr_linear_dof, 2);
+    if (p < 1) {
+      EXPECT_LT(c.lr_linear_p, 1e-3);
+      EXPECT_LT(c.lr_power_p, 1e-3);
+    } else {
+      EXPECT_GT(c.lr_linear_p, 0.01);
+    }
+    EXPECT_NEAR(c.exponent, p, 3 * c.exponent_se) << "p = " << p;
+    EXPECT_LT(c.exponent_se, 0.06);
+    EXPECT_NEAR(c.k_px, k, 0.15 * k);
+    // Per-size thresholds: r_k = c_k a against the planted r.
+    for (const SizeThreshold& st : c.sizes)
+      EXPECT_NEAR(st.c * st.artifact_px / (k * std::pow(st.artifact_px, p)), 1.0, 0.1) << st.artifact_px;
+  }
+}
+
+TEST(StudyFit, FlagsAParticipantFarFromTheRest) {
+  SimulatedStudy s = study_with(3.0, 42);
+  std::vector<SimulatedSession> sessions = simulate_study(s);
+  SimulatedStudy odd = s;
+  odd.participants = 1;
+  odd.conditions[0].planted.c_true = 8.0;
+  odd.seed = 4242;
+  SimulatedSession outlier = simulate_study(odd)[0];
+  outlier.participant = "odd";
+  for (auto& r : outlier.rows) {
+    r.participant = "odd";
+    r.session_id = "odd-sim";
+  }
+  sessions.push_back(outlier);
+  const StudyFit f = fit_study(as_dataset(s, sessions), quick());
+  int flagged = 0;
+  for (const ParticipantFit& p : f.conditions[0].participants) {
+    if (p.flags.has("far_from_rest")) {
+      ++flagged;
+      EXPECT_EQ(p.participant, "odd");
+    }
+  }
+  EXPECT_EQ(flagged, 1);
+  EXPECT_TRUE(f.conditions[0].flags.has("participant_far_from_rest"));
+}
+
+TEST(StudyFit, DegenerateStudiesNeverGiveANaNc) {
+  SimulatedStudy s = study_with(3.0, 9);
+  s.participants = 2;
+  s.trials_per_staircase = 5;
+  std::vector<SimulatedSession> sessions = simulate_study(s);
+  for (auto mode : {0, 1, 2}) {
+    std::vector<SimulatedSession> edited = sessions;
+    for (auto& session : edited) {
+      for (auto& r : session.rows) {
+        r.correct = mode == 0 ? 1 : mode == 1 ? 0 : r.correct;  // all correct / all wrong / as simulated
+        r.response = (r.correct == 1) == (r.target == "left") ? "left" : "right";
+      }
+      if (mode == 2) session.rows.resize(1);  // one trial per participant
+    }
+    const StudyFit f = fit_study(as_dataset(s, edited), quick());
+    const ConditionFit& c = f.conditions[0];
+    EXPECT_TRUE(std::isfinite(c.c) && c.c > 0) << mode;
+    EXPECT_FALSE(c.flags.list.empty()) << mode;
+    EXPECT_TRUE(std::isfinite(c.c_profile.lo) && std::isfinite(c.c_profile.hi)) << mode;
+    for (const StaircaseFit& sf : f.staircases) EXPECT_TRUE(std::isfinite(sf.c)) << mode;
+  }
+}
+
+TEST(StudyFit, BootstrapIsSeededAndIndependentOfThreads) {
+  SimulatedStudy s = study_with(3.47, 77);
+  s.participants = 6;
+  s.trials_per_staircase = 20;
+  const Dataset data = as_dataset(s, simulate_study(s));
+  StudyFitOptions o = quick();
+  o.bootstrap = 40;
+  o.threads = 1;
+  const StudyFit one = fit_study(data, o);
+  o.threads = 3;
+  const StudyFit three = fit_study(data, o);
+  EXPECT_EQ(one.conditions[0].bootstrap.c_values, three.conditions[0].bootstrap.c_values);
+  EXPECT_LT(one.conditions[0].bootstrap.c.lo, one.conditions[0].c);
+  EXPECT_GT(one.conditions[0].bootstrap.c.hi, one.conditions[0].c);
+  o.seed = 2;
+  EXPECT_NE(fit_study(data, o).conditions[0].bootstrap.c_values, one.conditions[0].bootstrap.c_values);
+}
+
+// calibration.json as the renderer reads it (the renderer never links analysis; this test links both).
+TEST(StudyFit, CalibrationRoundTripsThroughTheRenderersReader) {
+  SimulatedStudy s = study_with(3.47, 5);
+  s.conditions.push_back({"step", 1.0, s.conditions[0].planted});
+  s.conditions[1].planted.c_true = 4.5;
+  const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), quick());
+  ASSERT_EQ(f.conditions.size(), 2u);
+  const auto dir = std::filesystem::temp_directory_path() / ("penumbra-cal-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const nlohmann::json j = calibration_json(f, std::nullopt, "2024-01-01T00:00:00Z", {"sim"});
+  write_file_atomic(dir / "calibration.json", j.dump(2));
+  const adaptive::Calibration cal = adaptive::load_calibration(dir / "calibration.json");
+  const ConditionFit& worst = f.conditions[1];
+  EXPECT_EQ(cal.condition, "step/1");
+  EXPECT_DOUBLE_EQ(cal.c, worst.c);
+  EXPECT_NEAR(cal.c, 4.5, 0.05 * 4.5);
+  EXPECT_DOUBLE_EQ(cal.ci95_lo, worst.c_profile.lo);
+  EXPECT_DOUBLE_EQ(cal.ci95_hi, worst.c_profile.hi);
+  EXPECT_EQ(j["per_condition"].size(), 2u);
+  const nlohmann::json stair = calibration_json(f, std::string("stair/1"), "2024-01-01T00:00:00Z", {"sim"});
+  write_file_atomic(dir / "stair.json", stair.dump(2));
+  EXPECT_EQ(adaptive::load_calibration(dir / "stair.json").condition, "stair/1");
+  EXPECT_THROW(calibration_json(f, std::string("stair/0.5"), "", {}), std::invalid_argument);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
