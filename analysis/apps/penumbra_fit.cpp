@@ -105,7 +105,7 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
 struct StudyOptions {
   std::vector<fs::path> inputs;
   fs::path output;
-  std::optional<fs::path> reference;
+  std::vector<fs::path> references;
   std::optional<std::string> condition;
   int bootstrap = 1000;
   std::uint64_t seed = 1;
@@ -123,8 +123,18 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   options.bootstrap = so.bootstrap;
   options.seed = so.seed;
   options.threads = so.threads;
+  // Read before the long work so a bad file fails at once. Several files (e.g. one per partner or
+  // pattern) are searched in order; the first entry for a (pattern, contrast, size) wins.
   std::optional<ReferenceTable> reference;
-  if (so.reference) reference = load_reference_table(*so.reference);  // fail before the long work
+  for (const fs::path& path : so.references) {
+    ReferenceTable table = load_reference_table(path);
+    if (!reference) {
+      reference = std::move(table);
+      continue;
+    }
+    reference->file += ", " + table.file;
+    reference->entries.insert(reference->entries.end(), table.entries.begin(), table.entries.end());
+  }
   const Dataset data = load_dataset(so.inputs);
   const auto start = std::chrono::steady_clock::now();
   const StudyFit fit = [&] {
@@ -165,7 +175,8 @@ int main(int argc, char** argv) {
   ModelOptions study_model;
   app.add_option("inputs", so.inputs, "session directories (trials.csv + session.json) or trial CSV files");
   app.add_option("-o,--output", so.output, "output directory: calibration.json, report.json, summary.txt");
-  app.add_option("--reference", so.reference, "reference filter sizes from penumbra-study reference");
+  app.add_option("--reference", so.references,
+                 "reference filter sizes from penumbra-study reference (repeatable; the first match wins)");
   app.add_option("--condition", so.condition, "calibration.json takes c from this condition (e.g. stair/1) instead of the largest");
   app.add_option("--bootstrap", so.bootstrap, "resamples of the bootstrap over participants (0: none)")->capture_default_str();
   app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str();

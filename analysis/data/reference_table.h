@@ -18,7 +18,7 @@ struct ReferenceEntry {
 };
 
 struct ReferenceTable {
-  std::string file;
+  std::string file;  // the file(s) read, comma-separated
   std::vector<ReferenceEntry> entries;
   const ReferenceEntry* find(const std::string& pattern, double contrast, double artifact_px) const;
 };

@@ -70,6 +70,28 @@ TEST(FitCli, FitsSessionDirectoriesAndWritesTheContract) {
   EXPECT_TRUE(report["conditions"][0]["linearity"]["p_value"].is_number());
   EXPECT_TRUE(report["staircases"][0]["quest"]["matches_log"].get<bool>());
   EXPECT_NE(read(dir / "out" / "summary.txt").find("stair/1"), std::string::npos);
+
+  // Reference sizes (the format penumbra-study reference writes) appear beside the thresholds.
+  const nlohmann::json reference = {
+      {"entries", {{{"pattern", "stair"}, {"contrast", 1.0}, {"artifact_px", 5.0}, {"reference_filter_radius_px", 93.25},
+                    {"monotone", true}, {"search", {{"r_max_px", 160.0}}}},
+                   {{"pattern", "stair"}, {"contrast", 1.0}, {"artifact_px", 10.0},
+                    {"reference_filter_radius_px", nullptr}, {"search", {{"r_max_px", 160.0}}}}}}};
+  std::ofstream(dir / "reference.json") << reference.dump();
+  ASSERT_EQ(run(args + "-o " + (dir / "ref").string() + " --bootstrap 0 --reference " + (dir / "reference.json").string(),
+                &out), 0) << out;
+  const nlohmann::json with_ref = nlohmann::json::parse(read(dir / "ref" / "report.json"));
+  const auto& sizes = with_ref["conditions"][0]["sizes"];
+  EXPECT_EQ(sizes[0]["reference_filter_radius_px"], 93.25);
+  EXPECT_TRUE(sizes[1]["reference_filter_radius_px"].is_null());
+  EXPECT_NE(sizes[1]["reference_note"].get<std::string>().find("160"), std::string::npos);
+  EXPECT_EQ(sizes[2]["reference_note"], "not in the reference file");
+  EXPECT_NE(out.find("93.25"), std::string::npos) << out;
+  std::ofstream(dir / "bad_reference.json") << R"({"entries": [{"pattern": "stair", "contrast": "full"}]})";
+  EXPECT_EQ(run(args + "-o " + (dir / "ref2").string() + " --reference " + (dir / "bad_reference.json").string(), &out),
+            1);
+  EXPECT_NE(out.find("entries[0].contrast: expected a number"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "ref2"));
   fs::remove_all(dir);
 }
 
