@@ -106,17 +106,28 @@ def plot_thresholds(report, out_dir):
             text += "\nflags: " + ", ".join(cond["flags"])
         ax.text(0.03, 0.97, text, transform=ax.transAxes, va="top", fontsize=8,
                 bbox=dict(fc="white", ec="0.8", alpha=0.9))
+        # Head room above the data for the text box; the legend is shared below the panels.
+        tops = [c * a_max, PUBLISHED_C * a_max, ci["hi"] * a_max]
+        tops += [s["r_threshold_px"] for s in stairs if s["r_threshold_px"] is not None]
+        tops += [size.get("reference_filter_radius_px") or 0 for size in cond["sizes"]]
         ax.set_xlim(0, a_max)
-        ax.set_ylim(0, None)
+        ax.set_ylim(0, 1.4 * max(tops))
         ax.set_title("%s  (%d trials, %d participants)" % (cond["condition"], cond["trials"], cond["participants"]),
                      fontsize=10)
         ax.set_xlabel("artifact size a (px)")
         ax.set_ylabel("threshold filter radius r (px)")
-        ax.legend(loc="lower right", fontsize=7)
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[len(conditions):]:
         ax.axis("off")
-    fig.tight_layout()
+    handles, labels = {}, []
+    for ax in axes.flat:
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            key = label if not label.startswith("fit r") else "fit"
+            if key not in handles:
+                handles[key] = h
+                labels.append(label if key != "fit" else "fitted r = c a")
+    fig.legend(list(handles.values()), labels, loc="lower center", ncol=3, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     save(fig, out_dir, "thresholds")
 
 

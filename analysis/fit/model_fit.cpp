@@ -34,29 +34,35 @@ namespace {
 
 constexpr double kTiny = 1e-300;
 
-// log psi and log(1 - psi) at x for a group threshold u; 1 - psi is computed from 1 - F so that it
-// keeps its precision far above threshold, and both are kept away from log(0).
+// The model at one group threshold u, with what does not depend on x computed once.
 template <typename T>
-void log_probabilities(const ModelSpec& spec, double x, const T& u, const T& log_beta, const T& lambda, T* log_p,
-                       T* log_q) {
-  using std::exp;
-  using std::log;
-  using std::log1p;
-  using std::pow;
-  const T beta = exp(log_beta);
-  const T gamma(spec.guess);
-  const T threshold_x = spec.family == psy::Model::weibull ? T(pow(T(10.0), u)) : u;
-  const T alpha = psy::alpha_for_threshold(spec.family, threshold_x, T(spec.p_threshold), beta, gamma, lambda);
-  const T scale = T(1.0) - gamma - lambda;
-  const T f = psy::core(spec.family, T(x), alpha, beta);
-  const T f_complement = psy::core_complement(spec.family, T(x), alpha, beta);
-  T p = gamma + scale * f;
-  T q = lambda + scale * f_complement;
-  if (p < T(kTiny)) p = T(kTiny);
-  if (q < T(kTiny)) q = T(kTiny);
-  *log_p = q < T(0.5) ? T(log1p(-q)) : T(log(p));
-  *log_q = log(q);
-}
+struct GroupModel {
+  T alpha, beta, gamma, lambda, scale;
+  GroupModel(const ModelSpec& spec, const T& u, const T& log_beta, const T& lambda_in) {
+    using std::exp;
+    using std::pow;
+    beta = exp(log_beta);
+    gamma = T(spec.guess);
+    lambda = lambda_in;
+    const T threshold_x = spec.family == psy::Model::weibull ? T(pow(T(10.0), u)) : u;
+    alpha = psy::alpha_for_threshold(spec.family, threshold_x, T(spec.p_threshold), beta, gamma, lambda);
+    scale = T(1.0) - gamma - lambda;
+  }
+  // log psi and log(1 - psi) at x; 1 - psi is built from 1 - F so that it keeps its precision far
+  // above threshold, and both stay away from log(0).
+  void log_probabilities(psy::Model family, double x, T* log_p, T* log_q) const {
+    using std::log;
+    using std::log1p;
+    T f, f_complement;
+    psy::core_and_complement(family, T(x), alpha, beta, &f, &f_complement);
+    T p = gamma + scale * f;
+    T q = lambda + scale * f_complement;
+    if (p < T(kTiny)) p = T(kTiny);
+    if (q < T(kTiny)) q = T(kTiny);
+    *log_p = q < T(0.5) ? T(log1p(-q)) : T(log(p));
+    *log_q = log(q);
+  }
+};
 
 template <typename T>
 T probability(const ModelSpec& spec, double x, const T& u, const T& log_beta, const T& lambda) {
@@ -76,11 +82,11 @@ struct GroupNllCost {
   template <typename T>
   bool operator()(const T* u, const T* s, const T* log_beta, const T* lambda, T* residuals) const {
     using std::sqrt;
-    const T threshold = u[0] + s[0] * group->offset;
+    const GroupModel<T> model(*spec, u[0] + s[0] * group->offset, log_beta[0], lambda[0]);
     for (std::size_t i = 0; i < group->rows.size(); ++i) {
       const BinomialRow& row = group->rows[i];
       T log_p, log_q;
-      log_probabilities(*spec, row.x, threshold, log_beta[0], lambda[0], &log_p, &log_q);
+      model.log_probabilities(spec->family, row.x, &log_p, &log_q);
       const double k = row.n_correct, m = row.n_total - row.n_correct;
       residuals[2 * i] = k > 0 ? T(sqrt(T(-2.0 * k) * log_p)) : T(0.0);
       residuals[2 * i + 1] = m > 0 ? T(sqrt(T(-2.0 * m) * log_q)) : T(0.0);
@@ -426,10 +432,11 @@ FitResult solve(const ModelSpec& spec, const Bounds& b, Parameters start, const 
 double negative_log_likelihood(const ModelSpec& spec, const Parameters& params) {
   double nll = 0;
   for (const Group& g : spec.groups) {
-    const double u = params.u.at(static_cast<std::size_t>(g.threshold_index)) + params.s * g.offset;
+    const GroupModel<double> model(spec, params.u.at(static_cast<std::size_t>(g.threshold_index)) + params.s * g.offset,
+                                   params.log_beta, params.lambda);
     for (const BinomialRow& r : g.rows) {
       double log_p = 0, log_q = 0;
-      log_probabilities(spec, r.x, u, params.log_beta, params.lambda, &log_p, &log_q);
+      model.log_probabilities(spec.family, r.x, &log_p, &log_q);
       if (r.n_correct > 0) nll -= r.n_correct * log_p;
       if (r.n_total - r.n_correct > 0) nll -= (r.n_total - r.n_correct) * log_q;
     }

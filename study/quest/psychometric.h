@@ -111,24 +111,32 @@ T core(Model model, const T& x, const T& alpha, const T& beta) {
   return T(NAN);
 }
 
-// 1 - F(x), evaluated directly so that it keeps its relative precision where F is close to 1 (the
-// fitter's log(1 - psi) far above threshold).
+// F(x) and 1 - F(x) together, each with its own relative precision (1 - F where F is close to 1,
+// F where it is close to 0): what a likelihood needs for log(psi) and log(1 - psi).
 template <typename T>
-T core_complement(Model model, const T& x, const T& alpha, const T& beta) {
+void core_and_complement(Model model, const T& x, const T& alpha, const T& beta, T* f, T* f_complement) {
   using std::erfc;
   using std::exp;
+  using std::expm1;
   using std::pow;
   switch (model) {
     case Model::weibull:
-      return exp(-pow(x / alpha, beta));
-    case Model::log_weibull:
-      return exp(-pow10(T(beta * (x - alpha))));
+    case Model::log_weibull: {
+      const T z = model == Model::weibull ? T(pow(x / alpha, beta)) : pow10(T(beta * (x - alpha)));
+      *f = -expm1(-z);
+      *f_complement = exp(-z);
+      return;
+    }
     case Model::normal:
-      return T(0.5) * erfc(beta * (x - alpha) / T(std::numbers::sqrt2));
+      *f = T(0.5) * erfc(-beta * (x - alpha) / T(std::numbers::sqrt2));
+      *f_complement = T(0.5) * erfc(beta * (x - alpha) / T(std::numbers::sqrt2));
+      return;
     case Model::logistic:
-      return T(1.0) / (T(1.0) + exp(beta * (x - alpha)));
+      *f = T(1.0) / (T(1.0) + exp(-beta * (x - alpha)));
+      *f_complement = T(1.0) / (T(1.0) + exp(beta * (x - alpha)));
+      return;
   }
-  return T(NAN);
+  *f = *f_complement = T(NAN);
 }
 
 // Inverse of the core: the x at which F(x) = f, for 0 < f < 1.

@@ -64,6 +64,36 @@ TEST(ModelFit, RecoversPlantedParametersForEveryFamily) {
   }
 }
 
+// F and 1 - F sum to 1, and each keeps its relative precision where it is tiny (far above or
+// below threshold), where 1 - core() would round to 0.
+TEST(ModelFit, CoreAndComplementKeepTheirPrecision) {
+  for (psy::Model family : {psy::Model::log_weibull, psy::Model::normal, psy::Model::logistic, psy::Model::weibull}) {
+    const bool weibull = family == psy::Model::weibull;
+    const double alpha = weibull ? 0.3 : -0.5, beta = weibull ? 3.5 : 4.0;
+    for (double x : {-0.9, -0.5, -0.2, 0.4}) {
+      const double xx = weibull ? std::pow(10.0, x) : x;
+      double f = 0, fc = 0;
+      psy::core_and_complement(family, xx, alpha, beta, &f, &fc);
+      EXPECT_NEAR(f + fc, 1.0, 1e-15) << psy::model_name(family) << " " << x;
+      EXPECT_NEAR(f, psy::core(family, xx, alpha, beta), 1e-15) << psy::model_name(family) << " " << x;
+    }
+    // Far above threshold (1 - F ~ 1e-19 .. 1e-44: 1 - core() is exactly 0 there) and far below.
+    const double above = family == psy::Model::log_weibull ? 0.0
+                         : family == psy::Model::weibull   ? 1.12
+                         : family == psy::Model::normal    ? 3.0
+                                                           : 10.0;
+    double f = 0, fc = 0;
+    psy::core_and_complement(family, above, alpha, beta, &f, &fc);
+    EXPECT_GT(fc, 0.0) << psy::model_name(family);
+    EXPECT_LT(fc, 1e-16) << psy::model_name(family);
+    EXPECT_EQ(1.0 - psy::core(family, above, alpha, beta), 0.0) << psy::model_name(family);
+    psy::core_and_complement(family, weibull ? 1e-3 : family == psy::Model::logistic ? -10.0 : -4.0, alpha, beta, &f,
+                             &fc);
+    EXPECT_GT(f, 0.0) << psy::model_name(family);
+    EXPECT_LT(f, 1e-8) << psy::model_name(family);
+  }
+}
+
 TEST(ModelFit, NegativeLogLikelihoodHasNoBinomialCoefficients) {
   const std::vector<BinomialRow> rows = {{-0.8, 3, 5}, {-0.5, 7, 8}, {-0.2, 10, 10}};
   const ModelSpec spec = one_group(psy::Model::log_weibull, rows);
