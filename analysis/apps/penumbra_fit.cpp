@@ -27,7 +27,7 @@ namespace {
 
 struct ModelOptions {
   std::string family = "log-weibull";
-  double guess = 0.5;
+  std::optional<double> guess;
   std::optional<double> lapse;
   double lapse_max = 0.06;
   std::optional<double> p_threshold;
@@ -35,7 +35,8 @@ struct ModelOptions {
 
 void add_model_options(CLI::App& app, ModelOptions& o) {
   app.add_option("--family", o.family, "log-weibull (QUEST's), weibull, normal or logistic")->capture_default_str();
-  app.add_option("--guess", o.guess, "guess rate gamma (fixed)")->capture_default_str();
+  app.add_option("--guess", o.guess,
+                 "guess rate gamma, fixed (default 0.5; for session logs the sessions' QUEST gamma)");
   auto* lapse = app.add_option("--lapse", o.lapse, "hold the lapse rate lambda at this value");
   app.add_option("--lapse-max", o.lapse_max, "otherwise lambda is free in [0, this]")->capture_default_str()->excludes(lapse);
   app.add_option("--p-threshold", o.p_threshold,
@@ -52,9 +53,10 @@ LapseSpec lapse_of(const ModelOptions& o) {
   LapseSpec l;
   l.fixed = o.lapse;
   l.max = o.lapse_max;
-  if (o.lapse && !(*o.lapse >= 0 && *o.lapse < 1 - o.guess))
+  const double guess = o.guess.value_or(0.5);
+  if (o.lapse && !(*o.lapse >= 0 && *o.lapse < 1 - guess))
     throw std::invalid_argument("--lapse: expected a value in [0, 1 - guess)");
-  if (!o.lapse && !(o.lapse_max > 0 && o.lapse_max < 1 - o.guess))
+  if (!o.lapse && !(o.lapse_max > 0 && o.lapse_max < 1 - guess))
     throw std::invalid_argument("--lapse-max: expected a value in (0, 1 - guess)");
   return l;
 }
@@ -66,7 +68,7 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
   else throw std::invalid_argument("--format '" + format + "': expected counts or trials");
   ModelSpec spec;
   spec.family = parse_family(o.family);
-  spec.guess = o.guess;
+  spec.guess = o.guess.value_or(0.5);
   spec.lapse = lapse_of(o);
   spec.p_threshold = o.p_threshold.value_or(0.82);
   std::vector<BinomialRow> rows = read_level_data(input, f);

@@ -107,6 +107,11 @@ Dataset load_dataset(const std::vector<fs::path>& inputs) {
         ++data.practice_rows;
         continue;
       }
+      if (row.task == "yesno" && row.target == "straight") {
+        ++data.catch_rows;
+        data.catch_false_alarms += row.response == "no" ? 1 : 0;
+        continue;
+      }
       data.trials.push_back({row, index, line});
     }
     if (info.session_id.empty()) continue;  // an empty log (header only) adds nothing

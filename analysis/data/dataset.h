@@ -1,7 +1,7 @@
 #pragma once
 // The study's trial logs as the fitter sees them: session directories (trials.csv + session.json)
 // or bare trial CSVs, read through the study's validating reader (penumbra_study_log, no GL).
-// Practice rows are counted and left out.
+// Practice rows and yes/no catch trials are counted and left out.
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -32,6 +32,10 @@ struct Dataset {
   std::vector<SessionInfo> sessions;
   std::vector<Trial> trials;  // practice excluded, in log order per session
   int practice_rows = 0;
+  // yes/no: straight (catch) trials say nothing about the artifact's visibility; like QUEST
+  // (study/procedure/session.cpp) the fits use the jagged trials only, where correct = detected.
+  int catch_rows = 0;
+  int catch_false_alarms = 0;  // catch trials answered "not straight"
 };
 
 // Throws std::runtime_error naming the file (and line and column for log rows) on bad input: a

@@ -50,10 +50,10 @@ Interval wald_c(const FitResult& f, int index, double level) {
   return c_interval(u - z * se, u + z * se, false, false);
 }
 
-ModelSpec base_spec(const StudyFitOptions& o, double p_threshold) {
+ModelSpec base_spec(const StudyFitOptions& o, double p_threshold, double guess) {
   ModelSpec s;
   s.family = o.family;
-  s.guess = o.guess;
+  s.guess = guess;
   s.p_threshold = p_threshold;
   s.lapse = o.lapse;
   return s;
@@ -225,9 +225,12 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.trials = static_cast<int>(data.trials.size());
   out.practice_rows_excluded = data.practice_rows;
   // pThreshold: the option, else the sessions' QUEST value when they agree, else QUEST's default.
-  std::set<double> p_thresholds;
+  std::set<double> p_thresholds, gammas;
   for (const SessionInfo& s : data.sessions) {
-    if (s.quest) p_thresholds.insert(s.quest->p_threshold);
+    if (s.quest) {
+      p_thresholds.insert(s.quest->p_threshold);
+      gammas.insert(s.quest->gamma);
+    }
     else out.notes.push_back(s.log_file + ": no session.json with QUEST parameters; QUEST posterior not recomputed");
     if (s.torn_tail) out.notes.push_back(s.log_file + ": last line torn (an unanswered trial); ignored");
   }
@@ -235,6 +238,13 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
                                         : (p_thresholds.size() == 1 ? *p_thresholds.begin() : 0.82);
   if (!options.p_threshold && p_thresholds.size() > 1)
     out.notes.push_back("sessions use different QUEST pThreshold values; thresholds are at 0.82");
+  out.guess = options.guess ? *options.guess : (gammas.size() == 1 ? *gammas.begin() : 0.5);
+  if (!options.guess && gammas.size() > 1)
+    out.notes.push_back("sessions use different QUEST gamma values; the guess rate is 0.5");
+  if (data.catch_rows > 0)
+    out.notes.push_back("yesno: " + std::to_string(data.catch_rows) +
+                        " straight (catch) trials left out of the fits, as QUEST does; false-alarm rate " +
+                        format_number(double(data.catch_false_alarms) / data.catch_rows));
   const int threads = options.threads > 0 ? options.threads
                                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 
@@ -282,7 +292,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     }
     std::vector<std::pair<std::size_t, Group>> sized_groups;
     std::map<std::string, std::vector<Group>> by_participant;
-    cf.spec = base_spec(options, out.p_threshold);
+    cf.spec = base_spec(options, out.p_threshold, out.guess);
     for (auto& [key, r] : rows) {
       Group g{merge_rows(std::move(r)), 0, 0.0};
       sized_groups.emplace_back(key.second, g);
@@ -336,7 +346,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     sf.staircase = first.staircase;
     sf.artifact_px = first.artifact_px;
     sf.round = first.round;
-    ModelSpec spec = base_spec(options, out.p_threshold);
+    ModelSpec spec = base_spec(options, out.p_threshold, out.guess);
     spec.lapse.fixed = condition_lambda.at(sf.condition);
     std::vector<BinomialRow> rows;
     for (const Trial* t : trials) {

@@ -27,7 +27,7 @@ namespace penumbra::analysis {
 
 struct StudyFitOptions {
   psychometric::Model family = psychometric::Model::log_weibull;
-  double guess = 0.5;
+  std::optional<double> guess;       // default: the sessions' QUEST gamma (0.5 for 2afc), else 0.5
   std::optional<double> p_threshold;  // default: the sessions' QUEST pThreshold, else 0.82
   LapseSpec lapse;                    // joint fits; staircase fits hold lambda at the condition's
   double level = 0.95;
@@ -117,6 +117,7 @@ struct ConditionFit {
 struct StudyFit {
   StudyFitOptions options;
   double p_threshold = 0.82;
+  double guess = 0.5;
   int sessions = 0, trials = 0, practice_rows_excluded = 0;
   std::vector<std::string> notes;  // torn logs, missing session.json, ...
   std::vector<ConditionFit> conditions;

@@ -223,7 +223,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
       track.push_back({t.trial, t.intensity, t.filter_radius_px, t.correct, t.clamped ? 1 : 0});
     ModelSpec spec;
     spec.family = fit.options.family;
-    spec.guess = fit.options.guess;
+    spec.guess = fit.guess;
     spec.p_threshold = fit.p_threshold;
     spec.lapse.fixed = s.fit.params.lambda;
     Json j = {{"participant", s.participant},
@@ -257,7 +257,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
           {"inputs", inputs},
           {"intensity", "u = log10(artifact_px / filter_radius_px); c = 10^-u; r_threshold = c * artifact_px"},
           {"options", {{"family", psychometric::model_name(fit.options.family)},
-                       {"guess", fit.options.guess},
+                       {"guess", fit.guess},
                        {"p_threshold", fit.p_threshold},
                        {"lapse", fit.options.lapse.fixed ? Json{{"fixed", *fit.options.lapse.fixed}}
                                                          : Json{{"max", fit.options.lapse.max}}},
@@ -278,7 +278,7 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
   std::ostringstream o;
   o << "penumbra-fit: " << fit.trials << " trials (" << fit.practice_rows_excluded << " practice rows excluded) from "
     << fit.sessions << " sessions; " << psychometric::model_name(fit.options.family) << ", threshold at "
-    << fit.p_threshold << " correct, guess " << fit.options.guess << ", lapse "
+    << fit.p_threshold << " correct, guess " << fit.guess << ", lapse "
     << (fit.options.lapse.fixed ? "fixed " + fmt("%g", *fit.options.lapse.fixed) : "in [0, " + fmt("%g", fit.options.lapse.max) + "]")
     << "\n\n";
   char line[512];
