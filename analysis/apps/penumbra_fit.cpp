@@ -17,7 +17,7 @@
 #include "fit/model_fit.h"
 #include "fit/study_fit.h"
 #include "report/outputs.h"
-#include "report/progress.h"
+#include "common/progress_bar.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/progress_bar.h"
 #include "observers/staircase_simulation.h"
 #include "quest/psychometric.h"
 #include "quest/quest.h"
@@ -23,6 +23,7 @@
 namespace {
 
 using Json = nlohmann::ordered_json;
+using penumbra::ProgressBar;
 using penumbra::quest::Quest;
 using penumbra::quest::QuestParams;
 
@@ -166,36 +167,6 @@ int run_replay(const CLI::App& command, const QuestOptions& options, const std::
   return 0;
 }
 
-// A one-line progress bar on stderr, shown only once a run has taken more than half a second.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled), start_(Clock::now()) {}
-  ~ProgressBar() {
-    if (shown_) std::fputc('\n', stderr);
-  }
-  void operator()(int done, int total) {
-    if (!enabled_) return;
-    const auto now = Clock::now();
-    if (!shown_ && now - start_ < std::chrono::milliseconds(500)) return;
-    if (shown_ && done < total && now - last_ < std::chrono::milliseconds(100)) return;
-    shown_ = true;
-    last_ = now;
-    constexpr int kWidth = 40;
-    const int filled = static_cast<int>(static_cast<long long>(kWidth) * done / total);
-    const double elapsed_s = std::chrono::duration<double>(now - start_).count();
-    const double eta_s = done > 0 ? elapsed_s * (total - done) / done : 0.0;
-    std::fprintf(stderr, "\rsimulate [%s%s] %d/%d runs, %.0f s left ", std::string(filled, '#').c_str(),
-                 std::string(kWidth - filled, '.').c_str(), done, total, eta_s);
-    std::fflush(stderr);
-  }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  bool enabled_;
-  bool shown_ = false;
-  Clock::time_point start_, last_;
-};
-
 double median(std::vector<double> values) {
   if (values.empty()) return NAN;
   std::sort(values.begin(), values.end());
@@ -238,7 +209,7 @@ int run_simulate(const CLI::App& command, const QuestOptions& options, penumbra:
     config.planted.lapse = penumbra::psychometric::quest_lapse(config.quest.delta, config.quest.gamma);
   if (command.count("--observer-pthreshold") == 0) config.planted.p_threshold = config.quest.p_threshold;
 
-  ProgressBar bar(!no_progress);
+  ProgressBar bar("simulate", !no_progress, " runs");
   const auto result = penumbra::observers::simulate_runs(config, [&bar](int done, int total) { bar(done, total); });
 
   std::vector<double> means, modes, sds, trials_to_sd;
