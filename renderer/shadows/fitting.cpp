@@ -266,7 +266,7 @@ Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& reque
     const std::size_t k = std::min(static_cast<std::size_t>(i), request.resolution_texels.size() - 1);
     return std::max(request.resolution_texels[k], 1);
   };
-  FitRequest single{true, request.camera_aspect, res_of(0), request.pad_texels, request.pad_ws};
+  FitRequest single{request.fit, request.camera_aspect, res_of(0), request.pad_texels, request.pad_ws};
   const std::array<float, 2> range = receiver_depth_range(scene, request.camera_aspect);
   if (scene.light.type == scene::Light::Type::spot || request.count <= 1 ||
       potential_receivers(scene, request.camera_aspect).empty()) {

@@ -66,6 +66,7 @@ struct CascadeRequest {
   std::vector<int> resolution_texels;    // per cascade (snapping, padding); missing entries use the last
   float pad_texels = 0;
   float pad_ws = 0;
+  bool fit = true;                       // one map only: fit it to the receivers (cascades always are)
 };
 
 struct Cascades {
@@ -73,7 +74,8 @@ struct Cascades {
   std::vector<float> splits_ws;  // count + 1 camera view depths; cascade i covers [splits[i], splits[i+1]]
 };
 
-// An empty PSR (nothing visible) gives one unfitted frame. Spot lights are not cascaded: one frame.
+// count <= 1, a spot light (never cascaded) or an empty PSR give one frame, fitted as
+// `request.fit` says (an empty PSR cannot be fitted). splits_ws always has frames + 1 entries.
 Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request);
 
 // Camera view-depth range [near, far] of the potential receivers; {cam near, cam far} when empty.

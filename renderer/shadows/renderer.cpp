@@ -319,16 +319,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   const int fixed_res = s.map.resolution_texels;
   const int largest = ap.enabled ? ap.max_texels : fixed_res;
   auto cascades_for = [&](int count, const std::vector<int>& res) {
-    CascadeRequest r{count, s.map.cascade_lambda, s.map.cascade_stabilize, aspect, res, fit.pad_texels, fit.pad_ws};
-    if (count <= 1) r.count = 1;
-    Cascades c = count <= 1 ? Cascades{{compute_light_frame(scene_, FitRequest{s.map.fit, aspect, res.front(), fit.pad_texels, fit.pad_ws})},
-                                       {}}
-                            : compute_cascades(scene_, r);
-    if (c.splits_ws.empty()) {
-      const auto range = receiver_depth_range(scene_, aspect);
-      c.splits_ws = {range[0], range[1]};
-    }
-    return c;
+    return compute_cascades(scene_, CascadeRequest{count, s.map.cascade_lambda, s.map.cascade_stabilize, aspect, res,
+                                                   fit.pad_texels, fit.pad_ws, s.map.fit});
   };
   auto requirements = [&](const Cascades& c) {
     std::vector<double> req;
@@ -344,8 +336,10 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     count = choice.count;
   }
   count = std::clamp(count, 1, kMaxCascades);
+  if (!single.receivers_visible) count = 1;  // nothing to split (compute_cascades returns one map)
 
   std::vector<int> res(static_cast<std::size_t>(count), fixed_res);
+  std::vector<double> req(static_cast<std::size_t>(count), 0.0);
   info.resolution_source = "fixed";
   if (ap.enabled) {
     const std::string key = std::to_string(count) + "/" + std::to_string(ap.min_texels) + "/" + std::to_string(ap.max_texels) + "/" +
@@ -366,7 +360,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       const int cur = ad.controllers[static_cast<std::size_t>(i)].current();
       previous[static_cast<std::size_t>(i)] = cur > 0 ? cur : largest;
     }
-    std::vector<double> req = requirements(cascades_for(count, previous));
+    req = requirements(cascades_for(count, previous));
     info.resolution_source = s.technique == Technique::pcss ? "pcss_min_penumbra" : "rule";
     if (s.technique == Technique::pcss && ap.pcss == PcssRequirement::per_pixel && ad.last.valid &&
         ad.last_cascades == count) {
@@ -379,26 +373,17 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       info.pcss_requirement = ad.last;
     }
     for (int i = 0; i < count; ++i) res[static_cast<std::size_t>(i)] = ad.controllers[static_cast<std::size_t>(i)].update(req[static_cast<std::size_t>(i)]);
-    const Cascades final_cascades = cascades_for(count, res);
-    for (int i = 0; i < count; ++i) {
-      CascadeInfo ci;
-      ci.light = final_cascades.frames[static_cast<std::size_t>(i)];
-      ci.resolution_texels = res[static_cast<std::size_t>(i)];
-      ci.required_texels = req[static_cast<std::size_t>(i)];
-      ci.split_near_ws = final_cascades.splits_ws[static_cast<std::size_t>(i)];
-      ci.split_far_ws = final_cascades.splits_ws[std::min(static_cast<std::size_t>(i) + 1, final_cascades.splits_ws.size() - 1)];
-      info.cascades.push_back(ci);
-    }
-  } else {
-    const Cascades c = cascades_for(count, res);
-    for (int i = 0; i < count; ++i) {
-      CascadeInfo ci;
-      ci.light = c.frames[static_cast<std::size_t>(i)];
-      ci.resolution_texels = fixed_res;
-      ci.split_near_ws = c.splits_ws[static_cast<std::size_t>(i)];
-      ci.split_far_ws = c.splits_ws[std::min(static_cast<std::size_t>(i) + 1, c.splits_ws.size() - 1)];
-      info.cascades.push_back(ci);
-    }
+  }
+  const Cascades cascades = cascades_for(count, res);
+  for (int i = 0; i < count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    CascadeInfo ci;
+    ci.light = cascades.frames[k];
+    ci.resolution_texels = res[k];
+    ci.required_texels = req[k];
+    ci.split_near_ws = cascades.splits_ws[k];
+    ci.split_far_ws = cascades.splits_ws[k + 1];
+    info.cascades.push_back(ci);
   }
   info.light = info.cascades.front().light;
   info.resolution_texels = info.cascades.front().resolution_texels;

@@ -286,6 +286,13 @@ TEST(Cascades, AutomaticCountIsOneWhenOneMapSufficesAndEachFitsOtherwise) {
   EXPECT_GT(f.info.cascades.size(), 1u);
   for (const auto& c : f.info.cascades) EXPECT_LE(c.resolution_texels, 768);
   EXPECT_TRUE(test::all_finite_in(f.visibility, 0, 1));
+  // A view that sees no receiver (camera looking up at the sky) has nothing to split: one map.
+  scene::Scene sky = scene;
+  sky.camera.target = sky.camera.position + glm::vec3(0, 10, 0.1f);
+  s.map.cascades = 3;
+  f = render(sky, s);
+  EXPECT_EQ(f.info.cascades.size(), 1u);
+  EXPECT_TRUE(test::all_finite_in(f.visibility, 0, 1));
   // A spot light is never cascaded.
   scene::Scene spot = scene::make_builtin_scene("two-planes");
   s.map.cascades = 3;
