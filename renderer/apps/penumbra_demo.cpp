@@ -153,6 +153,7 @@ void run_plot(const std::string& python, const std::string& script, const fs::pa
 
 struct Options {
   std::string scene = "demo";
+  float light_size = -1;       // >= 0: overrides the scene light's size
   std::vector<std::string> techniques = {"pcf", "pcss"};
   int frames = 16;
   int width = 1280, height = 720;
@@ -168,7 +169,8 @@ struct Options {
 
 int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptive::Calibration& cal) {
   gl::HeadlessContext ctx;
-  const scene::Scene scene = scene::load_scene(opt.scene);
+  scene::Scene scene = scene::load_scene(opt.scene);
+  if (opt.light_size >= 0) scene.light.size = opt.light_size;
   io::StagedDirectory out(opt.output, "report.json");
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
 
@@ -176,6 +178,9 @@ int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptiv
   report["scene"] = scene.name;
   report["device"] = io::to_json(ctx.info());
   report["image_px"] = {opt.width, opt.height};
+  report["light"] = {{"type", scene.light.type == scene::Light::Type::spot ? "spot" : "directional"},
+                     {"size", scene.light.size},
+                     {"size_unit", scene.light.type == scene::Light::Type::spot ? "world" : "deg"}};
   report["path_frames"] = opt.frames;
   report["frame_time_method"] = "wall_finish";
   report["pass_time_method"] = gl::to_string(method);
@@ -274,6 +279,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptiv
 #if PENUMBRA_DEMO_GUI
 int run_windowed(const Options& opt, shadows::ShadowSettings settings, const adaptive::Calibration& cal) {
   scene::Scene scene = scene::load_scene(opt.scene);
+  if (opt.light_size >= 0) scene.light.size = opt.light_size;
   gl::WindowContext window(opt.width, opt.height, "Penumbra demo - " + scene.name);
   shadows::Renderer renderer;
   renderer.set_scene(scene);
@@ -353,6 +359,9 @@ int main(int argc, char** argv) {
   shadows::ShadowSettings base = demo_defaults();
   app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
+  app.add_option("--light-size", opt.light_size,
+                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--techniques", opt.techniques, "techniques to compare (comma separated)")->delimiter(',');
   app.add_option("--frames", opt.frames, "camera-path frames per technique")->check(CLI::Range(1, 100000));
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(16, 16384));

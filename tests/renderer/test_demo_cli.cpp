@@ -60,6 +60,25 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   EXPECT_EQ(rows, 6);
 }
 
+// --light-size reaches the renderer: a wider light widens PCSS's penumbrae, so fewer pixels are
+// held at the minimum penumbra.
+TEST_F(DemoCli, LightSizeOverridesTheScene) {
+  auto clamped_share = [&](const std::string& size) {
+    const fs::path out = dir_ / ("light-" + size);
+    const auto r = demo({"--headless", "--frames", "2", "--width", "192", "--height", "108", "--techniques", "pcss", "--no-plot",
+                         "--light-size", size, "-o", out.string()});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+    EXPECT_EQ(report.at("light").at("size").get<double>(), std::stod(size));
+    EXPECT_EQ(report.at("light").at("size_unit"), "deg");
+    return report.at("techniques")[0].at("adaptive").at("pcss_requirement").at("clamped_fraction").get<double>();
+  };
+  const double small = clamped_share("3");
+  const double large = clamped_share("12");
+  EXPECT_GT(small, 0.9);
+  EXPECT_LT(large, small - 0.1);
+}
+
 TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
   const fs::path out = dir_ / "out";
   struct Case {
@@ -71,6 +90,7 @@ TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
       {{"--headless", "--calibration", (dir_ / "missing.json").string()}, "missing.json"},
       {{"--headless", "--pcf.radius", "-1"}, "pcf.radius"},
       {{"--headless", "--scene", "nowhere"}, "nowhere"},
+      {{"--headless", "--light-size", "-2"}, "--light-size"},
   };
   for (const auto& c : cases) {
     std::vector<std::string> args = c.args;
