@@ -84,6 +84,7 @@ struct Row {
   const metrics::Reference* reference = nullptr;
   metrics::ImageError error;
   bool pareto = false;
+  bool pareto_spread = false;
   float s_xy = 1;
   float filter_radius_texels = 0;
   std::string resolution_source = "fixed";  // FrameInfo::resolution_source: fixed, rule, pcss_per_pixel, ...
@@ -185,17 +186,20 @@ shadows::ShadowSettings unshadowed(const shadows::ShadowSettings& base) {
 }
 
 // Marks, within each (scene, variant) group, the rows no other row beats in both frame time and
-// error (mean absolute visibility error): lower or equal in both and lower in one.
+// error (mean absolute visibility error): lower or equal in both and lower in one. `pareto` compares
+// median frame times; `pareto_spread` reads frame times whose [min, max] ranges overlap as a tie
+// (another row beats this one if it is no less accurate and not slower beyond the spread, and
+// either more accurate or faster beyond it: its slowest frame faster than this row's fastest).
 void mark_pareto(std::vector<Row>& rows) {
   for (auto& a : rows) {
-    a.pareto = true;
+    a.pareto = a.pareto_spread = true;
     for (const auto& b : rows) {
       if (&a == &b || a.scene != b.scene || a.variant != b.variant) continue;
       const double am = a.times.median(), bm = b.times.median();
-      if (bm <= am && b.error.mean_abs <= a.error.mean_abs && (bm < am || b.error.mean_abs < a.error.mean_abs)) {
-        a.pareto = false;
-        break;
-      }
+      const double ae = a.error.mean_abs, be = b.error.mean_abs;
+      if (bm <= am && be <= ae && (bm < am || be < ae)) a.pareto = false;
+      const bool b_faster = b.times.max() < a.times.min(), b_slower = b.times.min() > a.times.max();
+      if (be <= ae && !b_slower && (be < ae || b_faster)) a.pareto_spread = false;
     }
   }
 }
@@ -211,7 +215,7 @@ std::string csv_number(double v) {
 const char* kCsvHeader =
     "scene,technique,variant,filter_radius_ws,resolution_texels,adaptive,width_px,height_px,frames,timing_method,"
     "frame_ms_median,frame_ms_min,frame_ms_max,floor_ms,reference_kind,reference_resolution_texels,reference_samples,"
-    "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,s_xy,filter_radius_texels,resolution_source,required_texels,"
+    "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,pareto_spread,s_xy,filter_radius_texels,resolution_source,required_texels,"
     "cascades,settings";
 
 std::string csv_row(const Row& r, const Options& opt) {
@@ -223,6 +227,7 @@ std::string csv_row(const Row& r, const Options& opt) {
     << r.reference->resolution_texels << ',' << r.reference->samples << ',' << csv_number(r.error.mean_abs) << ','
     << csv_number(r.error.rmse) << ',' << csv_number(r.error.max_abs) << ',' << csv_number(r.error.ssim) << ','
     << csv_number(r.error.psnr_db) << ',' << csv_number(r.error.share_above_threshold) << ',' << (r.pareto ? 1 : 0) << ','
+    << (r.pareto_spread ? 1 : 0) << ','
     << csv_number(r.s_xy) << ',' << csv_number(r.filter_radius_texels) << ',' << r.resolution_source << ','
     << csv_number(r.required_texels) << ',' << r.cascades << ",\"" << r.settings << "\"";
   return o.str();
@@ -242,6 +247,7 @@ nlohmann::json row_json(const Row& r) {
                       {"reference_kind", metrics::to_string(r.reference->kind)},
                       {"error", metrics::to_json(r.error)},
                       {"pareto", r.pareto},
+                      {"pareto_spread", r.pareto_spread},
                       {"s_xy", r.s_xy},
                       {"resolution_source", r.resolution_source},
                       {"required_texels", std::isfinite(r.required_texels) ? nlohmann::json(r.required_texels) : nlohmann::json(nullptr)},
@@ -459,6 +465,9 @@ int main(int argc, char** argv) {
       scene_reports.push_back(scene_report);
     }
     mark_pareto(rows);
+    int adaptive_rows = 0, on_front = 0, on_spread_front = 0;
+    for (const auto& r : rows)
+      if (r.adaptive) ++adaptive_rows, on_front += r.pareto, on_spread_front += r.pareto_spread;
 
     const fs::path& dir = out.path();
     std::string csv = std::string(kCsvHeader) + "\n";
@@ -481,6 +490,7 @@ int main(int argc, char** argv) {
                        {"area_resolution_texels", opt.reference.area_resolution_texels},
                        {"filter_resolution_texels", opt.reference.filter_resolution_texels}}},
         {"error_metric_for_pareto", "mean_abs (visibility, whole image)"},
+        {"adaptive_on_front", {{"rows", adaptive_rows}, {"pareto", on_front}, {"pareto_spread", on_spread_front}}},
         {"scenes", scene_reports},
         {"rows", nlohmann::json::array()}};
     for (const auto& r : rows) report["rows"].push_back(row_json(r));
@@ -492,6 +502,9 @@ int main(int argc, char** argv) {
     io::write_text(dir / "report.json", report.dump(2) + "\n");
     out.commit();
     std::fprintf(stderr, "[%6.1f s] done\n", elapsed_s());
+    if (adaptive_rows > 0)
+      std::cout << "adaptive rows on their variant's Pareto front: " << on_front << " of " << adaptive_rows << " (medians), "
+                << on_spread_front << " of " << adaptive_rows << " (frame-time spreads that overlap are ties)\n";
     std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
     return 0;
   } catch (const std::exception& e) {

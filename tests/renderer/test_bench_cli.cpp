@@ -28,7 +28,7 @@ const std::vector<std::string> kColumns = {
     "scene", "technique", "variant", "filter_radius_ws", "resolution_texels", "adaptive", "width_px", "height_px", "frames",
     "timing_method", "frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "reference_kind",
     "reference_resolution_texels", "reference_samples", "mean_abs", "rmse", "max_abs", "ssim", "psnr_db",
-    "share_above_1_255", "pareto", "s_xy", "filter_radius_texels", "resolution_source", "required_texels", "cascades", "settings"};
+    "share_above_1_255", "pareto", "pareto_spread", "s_xy", "filter_radius_texels", "resolution_source", "required_texels", "cascades", "settings"};
 
 // Fields of one CSV line; a field in double quotes may hold commas.
 std::vector<std::string> csv_fields(const std::string& line) {
@@ -205,9 +205,32 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
     EXPECT_TRUE(front[fastest]) << variant;
     EXPECT_TRUE(front[best]) << variant;
   }
+  // `pareto_spread`: frame-time ranges [min, max] that overlap are a tie. A row is off that front
+  // exactly when another row is no less accurate, not slower beyond the spread, and more accurate
+  // or faster beyond it.
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& a = rows[i];
+    bool beaten = false;
+    for (std::size_t j = 0; j < rows.size(); ++j) {
+      const auto& b = rows[j];
+      if (j == i || b.at("variant") != a.at("variant")) continue;
+      const double ae = std::stod(a.at("mean_abs")), be = std::stod(b.at("mean_abs"));
+      const bool b_faster = std::stod(b.at("frame_ms_max")) < std::stod(a.at("frame_ms_min"));
+      const bool b_slower = std::stod(b.at("frame_ms_min")) > std::stod(a.at("frame_ms_max"));
+      beaten |= be <= ae && !b_slower && (be < ae || b_faster);
+    }
+    EXPECT_EQ(a.at("pareto_spread") == "1", !beaten) << a.at("variant") << " row " << i;
+  }
 
   const nlohmann::json report = nlohmann::json::parse(test::read_file(out / "report.json"));
   EXPECT_EQ(report.at("tool"), "penumbra-bench");
+  int adaptive_rows = 0, on_front = 0, on_spread_front = 0;
+  for (const auto& row : rows)
+    if (row.at("adaptive") == "1") ++adaptive_rows, on_front += row.at("pareto") == "1", on_spread_front += row.at("pareto_spread") == "1";
+  EXPECT_EQ(report.at("adaptive_on_front"),
+            (nlohmann::json{{"rows", adaptive_rows}, {"pareto", on_front}, {"pareto_spread", on_spread_front}}));
+  EXPECT_THAT(r.out, HasSubstr("adaptive rows on their variant's Pareto front: " + std::to_string(on_front) + " of " +
+                               std::to_string(adaptive_rows)));
   EXPECT_EQ(report.at("rows").size(), rows.size());
   ASSERT_EQ(report.at("scenes").size(), 1u);
   // One area-light reference per scene, shared by every soft-shadow technique; one per other variant.
