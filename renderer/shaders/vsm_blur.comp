@@ -4,7 +4,8 @@
 // Kahan-compensated so that long lines keep the precision the variance needs.
 // The same blur serves every moments technique: the renderer defines MOMENTS_CHANNELS (2: VSM,
 // 4: MSM, EVSM) and MOMENTS_FORMAT (the image format, e.g. rgba16f); the default is VSM's.
-// DIRECT_SUMS (EVSM) sums each window anew instead of sliding it (see below).
+// DIRECT_SUMS (EVSM) sums each window anew instead of sliding it, one texel per invocation (see
+// below); the sliding blur runs one invocation per line.
 layout(local_size_x = 64) in;
 
 #if !defined(MOMENTS_CHANNELS)
@@ -47,7 +48,12 @@ void main() {
 
   float r = u_radius_texels;
   if (r <= 0.5) {  // the window lies inside one texel
+#if defined(DIRECT_SUMS)
+    int i = int(gl_GlobalInvocationID.y);
+    if (i < len) store(i, line, fetch(i, line, len));
+#else
     for (int i = 0; i < len; ++i) store(i, line, fetch(i, line, len));
+#endif
     return;
   }
   // Window of texel i: [i + a, i + b]; full texels i+full_lo .. i+full_hi, partial ones at the ends.
@@ -59,18 +65,21 @@ void main() {
   float norm = 1.0 / (2.0 * r);
 
 #if defined(DIRECT_SUMS)
-  // Every texel sums its own window (cost proportional to r, clamped to the line): a sliding sum
-  // keeps an error proportional to the largest value that ever passed through it, which EVSM's
-  // warped moments (up to e^84 beside 1) turn into streaks.
-  for (int i = 0; i < len; ++i) {
-    int lo = i + full_lo, hi = i + full_hi;
-    int first = clamp(lo, 0, len), last = clamp(hi, -1, len - 1);
-    moments_t total = float(clamp(-lo, 0, hi - lo + 1)) * fetch(0, line, len) +
-                      float(clamp(hi - (len - 1), 0, hi - lo + 1)) * fetch(len - 1, line, len);
-    for (int j = first; j <= last; ++j) total += fetch(j, line, len);
-    total += w_left * fetch(lo - 1, line, len) + w_right * fetch(hi + 1, line, len);
-    store(i, line, total * norm);
-  }
+  // Each invocation sums the window of one texel, i = gl_GlobalInvocationID.y (the renderer
+  // dispatches u_size texels per line): a sliding sum keeps an error proportional to the largest
+  // value that ever passed through it, which EVSM's warped moments (up to e^84 beside 1) turn into
+  // streaks. One texel per invocation also keeps every invocation's loop short: llvmpipe ends an
+  // invocation's loops after 65535 iterations in all, which a whole line of windows (len * 2r)
+  // exceeds at 2048^2 and r = 16 texels.
+  int i = int(gl_GlobalInvocationID.y);
+  if (i >= len) return;
+  int lo = i + full_lo, hi = i + full_hi;
+  int first = clamp(lo, 0, len), last = clamp(hi, -1, len - 1);
+  moments_t total = float(clamp(-lo, 0, hi - lo + 1)) * fetch(0, line, len) +
+                    float(clamp(hi - (len - 1), 0, hi - lo + 1)) * fetch(len - 1, line, len);
+  for (int j = first; j <= last; ++j) total += fetch(j, line, len);
+  total += w_left * fetch(lo - 1, line, len) + w_right * fetch(hi + 1, line, len);
+  store(i, line, total * norm);
   return;
 #endif
 

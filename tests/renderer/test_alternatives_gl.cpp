@@ -345,6 +345,36 @@ TEST(Moments, FilteredResultApproximatesBoxPcfOnTwoPlanes) {
   }
 }
 
+TEST(Moments, WideBlurOnALargeMapCoversTheWholeMap) {
+  // 2048 texels per line and a 24-texel radius: a blur that walked a whole line of windows in one
+  // invocation ran 2048 * 49 loop iterations, past llvmpipe's 65535 per invocation, and left the
+  // end of every line unwritten (a dark block in the lit half). Lit wherever box PCF is lit.
+  scene::Scene s = scene::make_two_planes_scene(3, 10, 1);
+  const int res = 2048, n = 160;
+  const float radius = 24;
+  ShadowSettings pcf = settings(Technique::pcf, res, true);
+  pcf.pcf.kernel = Kernel::grid;
+  pcf.pcf.radius = radius;
+  pcf.pcf.max_grid_taps = 64;
+  shadows::Renderer r;
+  r.set_scene(s);
+  r.render(pcf, n, n * 9 / 16);
+  const io::ImageF reference = r.read_visibility();
+  for (const auto& st : filtered_variants(res, true, radius)) {
+    r.render(st, n, n * 9 / 16);
+    const io::ImageF vis = r.read_visibility();
+    int dark = 0, checked = 0;
+    for (int y = 0; y < vis.height; ++y)
+      for (int x = 0; x < vis.width; ++x) {
+        if (reference.at(x, y) < 1.0f) continue;
+        ++checked;
+        dark += vis.at(x, y) < 0.98f;
+      }
+    EXPECT_GT(checked, vis.width * vis.height / 4) << name_of(st);
+    EXPECT_EQ(dark, 0) << name_of(st);
+  }
+}
+
 TEST(Moments, NeverDarkerThanBoxPcfOfTheSameRadius) {
   // Chebyshev (VSM, EVSM) and the Hamburger bound (MSM) bound the lit fraction from above, so
   // where the box PCF of the same radius is fully lit they must be lit too: no streaks, no acne.
