@@ -1,12 +1,36 @@
 #include "io/staged_dir.h"
 
+#include <cerrno>
+#include <csignal>
 #include <stdexcept>
+#include <string_view>
 #include <system_error>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace penumbra::io {
+
+namespace {
+
+// Removes `<target>.partial-<pid>` directories of processes that no longer exist (runs killed
+// before their destructor could clean up). Directories of live processes are left alone.
+void remove_abandoned_staging(const fs::path& target) {
+  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = target.filename().string() + ".partial-";
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(parent, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string_view digits = std::string_view(name).substr(prefix.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string_view::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(std::string(digits)));
+    if (pid <= 0 || !entry.is_directory(ec)) continue;
+    if (::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+  }
+}
+
+}  // namespace
 
 StagedDirectory::StagedDirectory(const std::string& target, const std::string& marker) {
   // "out/" and "out" name the same directory; without the trailing separator the staging
@@ -15,6 +39,7 @@ StagedDirectory::StagedDirectory(const std::string& target, const std::string& m
   if (!target_.has_filename() && target_.has_parent_path()) target_ = target_.parent_path();
   if (fs::exists(target_) && (!fs::is_directory(target_) || (!fs::is_empty(target_) && !fs::exists(target_ / marker))))
     throw std::runtime_error(target + ": exists and is not a previous output (no " + marker + "); choose another output directory");
+  remove_abandoned_staging(target_);
   staging_ = target_.string() + ".partial-" + std::to_string(::getpid());
   fs::remove_all(staging_);
   fs::create_directories(staging_);

@@ -208,9 +208,8 @@ TEST_F(RenderCli, PreviousOutputIsKeptWhenARunFails) {
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
 }
 
-// Disabled until penumbra_render.cpp strips a trailing '/' from --output: with "-o out/" the
-// staging directory becomes out/.partial-PID, inside the output; the final remove_all(out) deletes
-// it (and a previous output) and the rename fails, so the run exits 1 having destroyed the old run.
+// "-o out/" names the same directory as "-o out": the staging directory lands beside it (not
+// inside, where replacing the output would delete it) and the previous output is replaced.
 TEST_F(RenderCli, OutputWithTrailingSlashIsReplacedOnSuccess) {
   const fs::path out = work_ / "out";
   ASSERT_EQ(run_render(small_args({"--technique", "hard", "-o", out.string()}), scratch_).exit_code, 0);
