@@ -19,10 +19,8 @@
 #include <string>
 #include <vector>
 
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include "cli_options.h"
+#include "run_python.h"
 #include "gl/context.h"
 #include "gl/objects.h"
 #include "gl/timer.h"
@@ -34,8 +32,6 @@
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
-
-extern char** environ;
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -254,22 +250,6 @@ nlohmann::json row_json(const Row& r) {
                       {"cascades", r.cascades},
                       {"settings", r.settings}};
   return j;
-}
-
-// Runs `python script csv outdir`; throws naming the script when it fails.
-void run_plot(const Options& opt, const fs::path& csv, const fs::path& dir) {
-  std::vector<std::string> args = {opt.python, opt.plot_script, csv.string(), dir.string()};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, opt.python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
-    throw std::runtime_error("--python " + opt.python + ": cannot be started (use --no-plot to skip the plots)");
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(opt.plot_script + " failed (status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
-                             "); use --no-plot to skip the plots");
 }
 
 std::string join(const std::vector<std::string>& v) {
@@ -496,7 +476,7 @@ int main(int argc, char** argv) {
     for (const auto& r : rows) report["rows"].push_back(row_json(r));
     if (opt.plot) {
       std::fprintf(stderr, "[%6.1f s] plotting...\n", elapsed_s());
-      run_plot(opt, dir / "bench.csv", dir);
+      apps::run_python_script(opt.python, opt.plot_script, {(dir / "bench.csv").string(), dir.string()}, "the plots");
     }
     report["elapsed_s"] = elapsed_s();
     io::write_text(dir / "report.json", report.dump(2) + "\n");

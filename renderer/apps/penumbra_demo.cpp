@@ -14,8 +14,6 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,6 +29,7 @@
 
 #include "adaptive/resolution_rule.h"
 #include "apps/cli_options.h"
+#include "apps/run_python.h"
 #include "gl/context.h"
 #include "gl/timer.h"
 #include "io/image_io.h"
@@ -49,7 +48,6 @@
 #include "gui/settings_panel.h"
 #endif
 
-extern char** environ;
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -135,20 +133,6 @@ io::Image8 side_by_side(const io::Image8& a, const io::Image8& b) {
       }
     }
   return out;
-}
-
-void run_plot(const std::string& python, const std::string& script, const fs::path& report, const fs::path& dir) {
-  std::vector<std::string> args = {python, script, report.string(), dir.string()};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
-    throw std::runtime_error("--python " + python + ": cannot be started (use --no-plot to skip the chart)");
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(script + " failed; use --no-plot to skip the chart");
 }
 
 struct Options {
@@ -270,7 +254,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptiv
   }
   io::write_text(out.path() / "frames.csv", csv);
   io::write_text(out.path() / "report.json", report.dump(2) + "\n");
-  if (opt.plot) run_plot(opt.python, opt.plot_script, out.path() / "report.json", out.path());
+  if (opt.plot)
+    apps::run_python_script(opt.python, opt.plot_script, {(out.path() / "report.json").string(), out.path().string()}, "the chart");
   out.commit();
   std::printf("wrote %s/\n", opt.output.c_str());
   return 0;
