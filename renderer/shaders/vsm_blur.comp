@@ -43,13 +43,17 @@ void store(int i, int line, moments_t v) {
 void main() {
   int len = u_size;
   int lines = u_size;
+#if defined(DIRECT_SUMS)
+  int line = int(gl_GlobalInvocationID.y);  // x: the texel along the line (see below)
+#else
   int line = int(gl_GlobalInvocationID.x);
+#endif
   if (line >= lines) return;
 
   float r = u_radius_texels;
   if (r <= 0.5) {  // the window lies inside one texel
 #if defined(DIRECT_SUMS)
-    int i = int(gl_GlobalInvocationID.y);
+    int i = int(gl_GlobalInvocationID.x);
     if (i < len) store(i, line, fetch(i, line, len));
 #else
     for (int i = 0; i < len; ++i) store(i, line, fetch(i, line, len));
@@ -65,13 +69,14 @@ void main() {
   float norm = 1.0 / (2.0 * r);
 
 #if defined(DIRECT_SUMS)
-  // Each invocation sums the window of one texel, i = gl_GlobalInvocationID.y (the renderer
-  // dispatches u_size texels per line): a sliding sum keeps an error proportional to the largest
+  // Each invocation sums the window of one texel: i = gl_GlobalInvocationID.x of line
+  // gl_GlobalInvocationID.y (the renderer dispatches ceil(u_size / 64) x u_size groups; neighbouring
+  // invocations read overlapping windows). A sliding sum keeps an error proportional to the largest
   // value that ever passed through it, which EVSM's warped moments (up to e^84 beside 1) turn into
   // streaks. One texel per invocation also keeps every invocation's loop short: llvmpipe ends an
   // invocation's loops after 65535 iterations in all, which a whole line of windows (len * 2r)
   // exceeds at 2048^2 and r = 16 texels.
-  int i = int(gl_GlobalInvocationID.y);
+  int i = int(gl_GlobalInvocationID.x);
   if (i >= len) return;
   int lo = i + full_lo, hi = i + full_hi;
   int first = clamp(lo, 0, len), last = clamp(hi, -1, len - 1);

@@ -521,17 +521,18 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       glProgramUniform2i(blur.id(), blur.location("u_origin"), c.atlas_x, c.atlas_y);
       set_int(blur, "u_size", c.resolution_texels);
       const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
-      // Sliding sums: one invocation per line; direct sums: one per texel (vsm_blur.comp).
-      const GLuint texels_per_line = moments->direct_sums ? static_cast<GLuint>(c.resolution_texels) : 1;
+      // Sliding sums: one invocation per line (x); direct sums: one per texel, x along the line and
+      // y the line (vsm_blur.comp). The map is square, so both grids are `groups` x (1 or res).
+      const GLuint lines_y = moments->direct_sums ? static_cast<GLuint>(c.resolution_texels) : 1;
       set_int(blur, "u_axis", 0);
       maps_->moments_tex.bind(0);
       glBindImageTexture(0, maps_->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments->format);
-      glDispatchCompute(groups, texels_per_line, 1);
+      glDispatchCompute(groups, lines_y, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
       set_int(blur, "u_axis", 1);
       maps_->moments_tmp.bind(0);
       glBindImageTexture(0, maps_->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments->format);
-      glDispatchCompute(groups, texels_per_line, 1);
+      glDispatchCompute(groups, lines_y, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     gl::check_errors("vsm_blur pass");
