@@ -353,9 +353,3 @@ TEST(PcssRequirement, PerPixelMaximumMatchesTheTwoPlaneFormula) {
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

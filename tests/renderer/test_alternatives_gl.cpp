@@ -21,30 +21,9 @@ namespace {
 using shadows::Kernel;
 using shadows::ShadowSettings;
 using shadows::Technique;
-
-// Top-down orthographic camera over [cx ± half] × [cz ± half] (image x = world x, image row =
-// world z) that sees only y < 0.5.
-void look_down(scene::Scene& s, glm::vec2 centre, float half) {
-  s.camera.projection = scene::Camera::Projection::orthographic;
-  s.camera.position = {centre.x, 20, centre.y};
-  s.camera.target = {centre.x, 0, centre.y};
-  s.camera.up = {0, 0, -1};
-  s.camera.ortho_height_ws = 2 * half;
-  s.camera.near_ws = 19.5f;
-  s.camera.far_ws = 40;
-}
-
-float pixel_to_world(int i, int n, float centre, float half) {
-  return centre - half + (static_cast<float>(i) + 0.5f) * 2 * half / static_cast<float>(n);
-}
-
-ShadowSettings settings(Technique t, int resolution, bool fit) {
-  ShadowSettings s;
-  s.technique = t;
-  s.map.resolution_texels = resolution;
-  s.map.fit = fit;
-  return s;
-}
+using test::look_down;
+using test::pixel_to_world;
+using test::settings;
 
 io::ImageF render_visibility(const scene::Scene& s, const ShadowSettings& st, int n) {
   shadows::Renderer r;
@@ -427,9 +406,3 @@ TEST(Evsm, ExponentsAreClampedToTheFormat) {
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

@@ -213,9 +213,3 @@ TEST_F(EdtTest, TimingAt720p) {
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

@@ -21,26 +21,6 @@ double disk_fraction_below(double s) {
   return (s * std::sqrt(1 - s * s) + std::asin(s) + std::numbers::pi / 2) / std::numbers::pi;
 }
 
-// Orthographic camera straight down over world x in [centre.x ± half] for an image of
-// width × height pixels (image x = world x, square pixels).
-void look_down(scene::Scene& s, glm::vec2 centre, float half, int width, int height) {
-  s.camera.projection = scene::Camera::Projection::orthographic;
-  s.camera.position = {centre.x, 20, centre.y};
-  s.camera.target = {centre.x, 0, centre.y};
-  s.camera.up = {0, 0, -1};
-  s.camera.ortho_height_ws = 2 * half * static_cast<float>(height) / static_cast<float>(width);
-  s.camera.near_ws = 19.5f;
-  s.camera.far_ws = 40;
-}
-
-std::vector<double> column_means(const io::ImageF& img) {
-  std::vector<double> m(static_cast<std::size_t>(img.width), 0.0);
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x) m[static_cast<std::size_t>(x)] += img.at(x, y);
-  for (auto& v : m) v /= img.height;
-  return m;
-}
-
 struct ProfileError {
   double mean_abs = 0, max_abs = 0;
 };
@@ -48,7 +28,7 @@ struct ProfileError {
 // Compares the column profile of `vis` (a top-down view of width 2·half centred on x0) with the
 // analytic disk-emitter profile of an edge at world x = edge_x and half-penumbra `half_penumbra`.
 ProfileError against_analytic(const io::ImageF& vis, float x0, float half, double edge_x, double half_penumbra) {
-  const auto profile = column_means(vis);
+  const auto profile = test::column_means(vis, 0, vis.height);
   ProfileError e;
   for (int i = 0; i < vis.width; ++i) {
     const double x = x0 - half + (i + 0.5) * 2 * half / vis.width;
@@ -117,7 +97,7 @@ TEST(AreaLight, SpotOverTwoPlanesMatchesTheAnalyticPenumbraAndConverges) {
   const float h = 3, H = 10, W = 1;
   scene::Scene s = scene::make_two_planes_scene(h, H, W);
   const float half = 0.5f;
-  look_down(s, {0, 0}, half, 400, 16);
+  test::look_down(s, {0, 0}, half, 0.5f, 400.0f / 16);
   shadows::Renderer r;
   r.set_scene(s);
   const double half_penumbra = 0.5 * W * h / (H - h);
@@ -131,7 +111,7 @@ TEST(AreaLight, SpotOverTwoPlanesMatchesTheAnalyticPenumbraAndConverges) {
       EXPECT_LT(e.mean_abs, 0.003);
       EXPECT_LT(e.max_abs, 0.03);
       // The 10–90 % width of the disk profile is 2 · 0.6870 half-penumbrae (disk_fraction_below(0.687) ≈ 0.9).
-      const auto profile = column_means(vis);
+      const auto profile = test::column_means(vis, 0, vis.height);
       int first = -1, last = -1;
       for (int i = 0; i < vis.width; ++i) {
         if (first < 0 && profile[static_cast<std::size_t>(i)] > 0.1) first = i;
@@ -154,7 +134,7 @@ TEST(AreaLight, SunOverASquareMatchesTheAnalyticPenumbra) {
   scene::Scene s = scene::make_square_scene(2, 1);
   s.light.size = 4;
   const float half = 0.1f;
-  look_down(s, {1, 0}, half, 320, 16);
+  test::look_down(s, {1, 0}, half, 0.5f, 320.0f / 16);
   shadows::Renderer r;
   r.set_scene(s);
   const io::ImageF vis = area_light_visibility(r, 320, 16, 16, 2048, {});
@@ -187,7 +167,7 @@ TEST(AreaLightSlow, DemoSceneReferenceConvergesBelowTheErrorsItMeasures) {
 
 TEST(Reference, AreaLightForPcssAndTheSameSettingsAtHighResolutionOtherwise) {
   scene::Scene s = scene::make_two_planes_scene(3, 10, 1);
-  look_down(s, {0, 0}, 0.5f, 64, 8);
+  test::look_down(s, {0, 0}, 0.5f, 0.5f, 64.0f / 8);
   shadows::Renderer r;
   r.set_scene(s);
   shadows::ShadowSettings pcss;
@@ -217,9 +197,3 @@ TEST(Reference, AreaLightForPcssAndTheSameSettingsAtHighResolutionOtherwise) {
 
 }  // namespace
 }  // namespace penumbra::metrics
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

@@ -21,26 +21,8 @@ namespace {
 
 using shadows::ShadowSettings;
 using shadows::Technique;
-
-// Top-down orthographic camera over [cx ± half] × [cz ± half] that sees only y < max_y (the
-// receiver, not the occluders above it); image x = world x.
-void look_down(scene::Scene& s, glm::vec2 centre, float half, float max_y = 0.5f) {
-  s.camera.projection = scene::Camera::Projection::orthographic;
-  s.camera.position = {centre.x, 20, centre.y};
-  s.camera.target = {centre.x, 0, centre.y};
-  s.camera.up = {0, 0, -1};
-  s.camera.ortho_height_ws = 2 * half;
-  s.camera.near_ws = 20 - max_y;
-  s.camera.far_ws = 40;
-}
-
-std::vector<double> column_means(const io::ImageF& img, int y0, int y1) {
-  std::vector<double> m(static_cast<std::size_t>(img.width), 0.0);
-  for (int y = y0; y < y1; ++y)
-    for (int x = 0; x < img.width; ++x) m[static_cast<std::size_t>(x)] += img.at(x, y);
-  for (auto& v : m) v /= (y1 - y0);
-  return m;
-}
+using test::column_means;
+using test::look_down;
 
 // World x where an increasing profile first crosses `level` (linear interpolation).
 double crossing(const std::vector<double>& p, double level, double x0, double ws_per_px) {
@@ -273,9 +255,3 @@ INSTANTIATE_TEST_SUITE_P(ScreenSpace, ParallelPlanes,
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

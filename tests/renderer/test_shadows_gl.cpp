@@ -17,40 +17,10 @@ namespace {
 using shadows::Kernel;
 using shadows::ShadowSettings;
 using shadows::Technique;
-
-// Top-down orthographic camera over [cx ± half] × [cz ± half] (world x right, world z down) that
-// sees only y < 0.5, i.e. the receiver and not the occluders above it.
-void look_down(scene::Scene& s, glm::vec2 centre, float half) {
-  s.camera.projection = scene::Camera::Projection::orthographic;
-  s.camera.position = {centre.x, 20, centre.y};
-  s.camera.target = {centre.x, 0, centre.y};
-  s.camera.up = {0, 0, -1};
-  s.camera.ortho_height_ws = 2 * half;
-  s.camera.near_ws = 19.5f;
-  s.camera.far_ws = 40;
-}
-
-// World x (or z) of pixel column (or row) i in an n-pixel top-down view of width 2·half.
-float pixel_to_world(int i, int n, float centre, float half) {
-  return centre - half + (static_cast<float>(i) + 0.5f) * 2 * half / static_cast<float>(n);
-}
-
-ShadowSettings settings(Technique t, int resolution, bool fit) {
-  ShadowSettings s;
-  s.technique = t;
-  s.map.resolution_texels = resolution;
-  s.map.fit = fit;
-  return s;
-}
-
-// Column means of rows [y0, y1) of a one-channel image.
-std::vector<double> column_means(const io::ImageF& img, int y0, int y1) {
-  std::vector<double> m(static_cast<std::size_t>(img.width), 0.0);
-  for (int y = y0; y < y1; ++y)
-    for (int x = 0; x < img.width; ++x) m[static_cast<std::size_t>(x)] += img.at(x, y);
-  for (auto& v : m) v /= (y1 - y0);
-  return m;
-}
+using test::column_means;
+using test::look_down;
+using test::pixel_to_world;
+using test::settings;
 
 // Distance (world units) between the first column above `lo` and the last column below `hi`
 // of an increasing profile.
@@ -364,9 +334,3 @@ TEST(Extremes, MaximumTextureSizeIsRenderedOrRefusedClearly) {
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}

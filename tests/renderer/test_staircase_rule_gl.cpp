@@ -316,9 +316,3 @@ INSTANTIATE_TEST_SUITE_P(Patterns, StaircaseRule, ::testing::ValuesIn(kPatterns)
 
 }  // namespace
 }  // namespace penumbra
-
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new penumbra::test::GlEnvironment);
-  return RUN_ALL_TESTS();
-}
