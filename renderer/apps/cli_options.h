@@ -1,9 +1,12 @@
 #pragma once
-// Command-line helpers shared by the apps: options generated from a settings table, and
-// comma-separated number lists. Errors are CLI::ValidationError naming the option.
+// Command-line helpers shared by the apps: options generated from a settings table,
+// comma-separated number lists, the light-size override, and parsing with one-line errors.
+// Errors are CLI::ValidationError naming the option.
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -71,6 +74,27 @@ std::vector<T> parse_list(const std::string& option, const std::string& text, T 
     pos = comma + 1;
   }
   return out;
+}
+
+// --light-size: overrides the scene light's size; `size` < 0 (its default here) keeps the scene's.
+inline void add_light_size_option(CLI::App& app, float& size) {
+  app.add_option("--light-size", size,
+                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
+      ->check(CLI::Range(0.0, 1e6));
+}
+
+// Parses the command line. Returns the exit status to leave with — 0 after --help, 2 after a
+// parse error (one line "<tool>: <error>" on stderr) — or nullopt to go on.
+inline std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv, const char* tool) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 2;
+  }
+  return std::nullopt;
 }
 
 }  // namespace penumbra::apps

@@ -344,9 +344,7 @@ int main(int argc, char** argv) {
   shadows::ShadowSettings base = demo_defaults();
   app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
-  app.add_option("--light-size", opt.light_size,
-                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
-      ->check(CLI::Range(0.0, 1e6));
+  apps::add_light_size_option(app, opt.light_size);
   app.add_option("--techniques", opt.techniques, "techniques to compare (comma separated)")->delimiter(',');
   app.add_option("--frames", opt.frames, "camera-path frames per technique")->check(CLI::Range(1, 100000));
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(16, 16384));
@@ -361,14 +359,7 @@ int main(int argc, char** argv) {
   app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "penumbra-demo: " << e.what() << "\n";
-    return 2;
-  }
+  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-demo")) return *status;
   try {
     for (const auto& t : opt.techniques) shadows::technique_from_string(t);
     const adaptive::Calibration cal = adaptive::load_calibration(opt.calibration);

@@ -62,20 +62,11 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "image height in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--frames", frames, "timed frames per render (median reported)")->check(CLI::Range(1, 1000));
   app.add_option("--warmup", warmup, "untimed frames before timing")->check(CLI::Range(0, 100));
-  app.add_option("--light-size", light_size,
-                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
-      ->check(CLI::Range(0.0, 1e6));
+  apps::add_light_size_option(app, light_size);
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
   apps::add_settings_options(app, base);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "penumbra-render: " << e.what() << "\n";
-    return 2;
-  }
+  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-render")) return *status;
 
   try {
     const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);

@@ -14,6 +14,7 @@
 
 #include <glm/gtc/constants.hpp>
 
+#include "apps/cli_options.h"
 #include "gl/timer.h"
 #include "gl/window.h"
 #include "gui/settings_panel.h"
@@ -50,14 +51,7 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "window height")->check(CLI::Range(64, 8192));
   app.add_option("--screenshot", screenshot, "write the window (with the panel) to this PNG after --frames frames, then exit");
   app.add_option("--frames", frames, "frames to run before --screenshot (0: run until closed)")->check(CLI::Range(0, 1000000));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "penumbra-view: " << e.what() << "\n";
-    return 2;
-  }
+  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-view")) return *status;
   try {
     scene::Scene scene = scene::load_scene(scene_arg);
     gl::WindowContext window(width, height, "Penumbra — " + scene.name);
