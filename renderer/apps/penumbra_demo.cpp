@@ -48,7 +48,6 @@
 #include "gui/settings_panel.h"
 #endif
 
-
 using namespace penumbra;
 namespace fs = std::filesystem;
 
