@@ -2,7 +2,8 @@
 // to its maximum and counts, per cascade, the pixels that evaluated a filter, those whose radius
 // was raised to the minimum penumbra, and those that need more than the largest map (Kreuzer 2017
 // eq. 5.12: res = max over fragments of c / r_filter). Positive floats order like their bits, so
-// atomicMax on the bits is a float max. One global atomic per workgroup and counter.
+// atomicMax on the bits is a float max. One global atomic per workgroup and counter; a workgroup
+// covers 64 x 64 pixels (the renderer dispatches ceil(width / 64) x ceil(height / 64) groups).
 layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(binding = 0) uniform sampler2D u_requirement;  // (1 / r_uv or 0, cascade + 0.5 if clamped)
@@ -19,6 +20,10 @@ shared uint s_evaluated[4];
 shared uint s_clamped[4];
 shared uint s_above[4];
 
+// Each invocation reduces a BLOCK x BLOCK square of pixels in registers first, so that shared
+// atomics and workgroup barriers (costly on software GL) are paid per 16 pixels, not per pixel.
+const int BLOCK = 4;
+
 void main() {
   uint lane = gl_LocalInvocationIndex;
   if (lane < 4u) {
@@ -28,17 +33,28 @@ void main() {
     s_above[lane] = 0u;
   }
   barrier();
-  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  uint m[4] = uint[](0u, 0u, 0u, 0u), e[4] = uint[](0u, 0u, 0u, 0u);
+  uint c[4] = uint[](0u, 0u, 0u, 0u), a[4] = uint[](0u, 0u, 0u, 0u);
   ivec2 size = textureSize(u_requirement, 0);
-  if (all(lessThan(p, size))) {
-    vec2 r = texelFetch(u_requirement, p, 0).rg;
-    if (r.x > 0.0) {
-      int cascade = clamp(int(r.y), 0, 3);
-      atomicMax(s_max[cascade], floatBitsToUint(r.x));
-      atomicAdd(s_evaluated[cascade], 1u);
-      if (fract(r.y) > 0.25) atomicAdd(s_clamped[cascade], 1u);
-      if (r.x > u_limit_inverse_uv) atomicAdd(s_above[cascade], 1u);
+  ivec2 origin = ivec2(gl_GlobalInvocationID.xy) * BLOCK;
+  for (int y = 0; y < BLOCK; ++y)
+    for (int x = 0; x < BLOCK; ++x) {
+      ivec2 p = origin + ivec2(x, y);
+      if (any(greaterThanEqual(p, size))) continue;
+      vec2 r = texelFetch(u_requirement, p, 0).rg;
+      if (r.x <= 0.0) continue;
+      int k = clamp(int(r.y), 0, 3);
+      m[k] = max(m[k], floatBitsToUint(r.x));
+      e[k] += 1u;
+      if (fract(r.y) > 0.25) c[k] += 1u;
+      if (r.x > u_limit_inverse_uv) a[k] += 1u;
     }
+  for (int k = 0; k < 4; ++k) {
+    if (e[k] == 0u) continue;
+    atomicMax(s_max[k], m[k]);
+    atomicAdd(s_evaluated[k], e[k]);
+    atomicAdd(s_clamped[k], c[k]);
+    atomicAdd(s_above[k], a[k]);
   }
   barrier();
   if (lane < 4u && s_evaluated[lane] > 0u) {

@@ -720,7 +720,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     glBindSampler(0, 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ad.requirement[slot].id());
     set_float(requirement_program_, "u_limit_inverse_uv", static_cast<float>(ap.max_texels) / ap.c);
-    glDispatchCompute(static_cast<GLuint>((width_px + 15) / 16), static_cast<GLuint>((height_px + 15) / 16), 1);
+    glDispatchCompute(static_cast<GLuint>((width_px + 63) / 64), static_cast<GLuint>((height_px + 63) / 64), 1);  // 64^2 px per group
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     ad.requirement_pending[slot] = true;
     ad.requirement_cascades[slot] = count;
@@ -773,6 +773,11 @@ io::Image8 Renderer::read_color() const {
 io::ImageF Renderer::read_visibility() const {
   if (!targets_) throw std::logic_error("read_visibility before render");
   return read_texture<float>(targets_->visibility, GL_RED, GL_FLOAT, 1);
+}
+
+io::ImageF Renderer::read_pcss_requirement() const {
+  if (!targets_ || !targets_->requirement) throw std::logic_error("read_pcss_requirement before a per-pixel PCSS frame");
+  return read_texture<float>(targets_->requirement_tex, GL_RG, GL_FLOAT, 2);
 }
 
 io::ImageF Renderer::read_screen_space_input() const {

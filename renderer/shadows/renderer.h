@@ -99,6 +99,10 @@ class Renderer {
   io::ImageF read_shadow_depth(int cascade = 0) const;  // a depth map of the last frame, one channel
   // The input (hard) visibility of the last screen-space frame, before its post passes.
   io::ImageF read_screen_space_input() const;
+  // The last frame's per-pixel PCSS requirement (adaptive, pcss = per_pixel), two channels:
+  // 1 / filter radius in map uv (0 where no filter ran) and cascade + 0.5 where the minimum
+  // penumbra clamped it; what pcss_requirement.comp reduces.
+  io::ImageF read_pcss_requirement() const;
 
  private:
   struct Maps;

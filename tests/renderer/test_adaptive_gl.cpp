@@ -351,5 +351,47 @@ TEST(PcssRequirement, PerPixelMaximumMatchesTheTwoPlaneFormula) {
   EXPECT_EQ(clamped.pcss_requirement.above_max_fraction, 0);
 }
 
+TEST(PcssRequirement, ReductionMatchesTheImageItReduces) {
+  // The GPU reduction (blocks of pixels per invocation, 64 x 64 per workgroup) against the same
+  // reduction on the CPU of the requirement image it read, on an odd-sized image (partial blocks at
+  // the right and bottom edges), with unclamped, clamped and above-maximum pixels.
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  ShadowSettings s;
+  s.technique = Technique::pcss;
+  s.pcss.kernel = Kernel::grid;
+  s.pcss.min_penumbra_ws = 0.02f;
+  s.adaptive.enabled = true;
+  s.adaptive.max_texels = 1024;
+  shadows::Renderer r;
+  r.set_scene(scene);
+  const int w = 333, h = 197;
+  r.render(s, w, h);
+  const io::ImageF req = r.read_pcss_requirement();
+  const auto next = r.render(s, w, h);  // reports the previous frame's reduction
+  ASSERT_TRUE(next.pcss_requirement.valid);
+  ASSERT_EQ(req.width, w);
+  ASSERT_EQ(req.channels, 2);
+  double max_inverse_uv = 0, evaluated = 0, clamped = 0, above = 0;
+  const double limit = s.adaptive.max_texels / s.adaptive.c;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float inv = req.at(x, y, 0), tag = req.at(x, y, 1);
+      if (inv <= 0) continue;
+      ASSERT_LT(tag, 1.0f) << "one map: cascade 0";
+      max_inverse_uv = std::max(max_inverse_uv, static_cast<double>(inv));
+      ++evaluated;
+      clamped += tag > 0.25f;
+      above += inv > static_cast<float>(limit);
+    }
+  EXPECT_GT(evaluated, 1000);
+  EXPECT_GT(clamped, 0);
+  EXPECT_LT(clamped, evaluated);
+  EXPECT_GT(above, 0);
+  EXPECT_EQ(next.pcss_requirement.evaluated_pixels, evaluated);
+  EXPECT_DOUBLE_EQ(next.pcss_requirement.clamped_fraction, clamped / evaluated);
+  EXPECT_DOUBLE_EQ(next.pcss_requirement.above_max_fraction, above / evaluated);
+  EXPECT_DOUBLE_EQ(next.pcss_requirement.required_texels[0], static_cast<double>(s.adaptive.c) * max_inverse_uv);
+}
+
 }  // namespace
 }  // namespace penumbra
