@@ -72,4 +72,13 @@ inline std::vector<double> column_means(const io::ImageF& img, int y0, int y1) {
   return m;
 }
 
+// Position where an increasing profile first crosses `level` (linear interpolation between pixel
+// centres), for profile pixel i at x0 + (i + 0.5) * ws_per_px; NaN when it never does.
+inline double crossing(const std::vector<double>& p, double level, double x0, double ws_per_px) {
+  for (std::size_t i = 1; i < p.size(); ++i)
+    if (p[i - 1] < level && p[i] >= level)
+      return x0 + ws_per_px * (static_cast<double>(i - 1) + 0.5 + (level - p[i - 1]) / (p[i] - p[i - 1]));
+  return NAN;
+}
+
 }  // namespace penumbra::test

@@ -22,15 +22,8 @@ namespace {
 using shadows::ShadowSettings;
 using shadows::Technique;
 using test::column_means;
+using test::crossing;
 using test::look_down;
-
-// World x where an increasing profile first crosses `level` (linear interpolation).
-double crossing(const std::vector<double>& p, double level, double x0, double ws_per_px) {
-  for (std::size_t i = 1; i < p.size(); ++i)
-    if (p[i - 1] < level && p[i] >= level)
-      return x0 + ws_per_px * (static_cast<double>(i - 1) + 0.5 + (level - p[i - 1]) / (p[i] - p[i - 1]));
-  return NAN;
-}
 
 // ---- EDTSM ---------------------------------------------------------------------------------------
 

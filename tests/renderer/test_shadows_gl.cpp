@@ -18,6 +18,7 @@ using shadows::Kernel;
 using shadows::ShadowSettings;
 using shadows::Technique;
 using test::column_means;
+using test::crossing;
 using test::look_down;
 using test::pixel_to_world;
 using test::settings;
@@ -31,14 +32,6 @@ double transition_width(const std::vector<double>& profile, double lo, double hi
     if (profile[static_cast<std::size_t>(i)] < hi) last = i;
   }
   return (last - first + 1) * static_cast<double>(ws_per_px);
-}
-
-// World x where an increasing profile crosses `level` (linear interpolation).
-double crossing(const std::vector<double>& p, double level, float x0, float ws_per_px) {
-  for (std::size_t i = 1; i < p.size(); ++i)
-    if (p[i - 1] < level && p[i] >= level)
-      return x0 + ws_per_px * (static_cast<double>(i - 1) + 0.5 + (level - p[i - 1]) / (p[i] - p[i - 1]));
-  return NAN;
 }
 
 // ---- 1. hard shadow footprint ------------------------------------------------------------------
