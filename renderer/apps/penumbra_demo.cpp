@@ -294,10 +294,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings, const ada
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
     ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, cal.source.c_str());
     gui::shadow_settings_panel(settings);
-    float light_size = renderer.scene().light.size;
-    if (ImGui::DragFloat(renderer.scene().light.type == scene::Light::Type::spot ? "light width [world]" : "light angle [deg]",
-                         &light_size, 0.02f, 0.0f, 45.0f))
-      renderer.scene().light.size = light_size;
+    gui::light_size_control(renderer.scene().light);
     ImGui::Separator();
     ImGui::Text("resolution (%s, %s storage, atlas %dx%d)", info.resolution_source.c_str(), info.storage.c_str(), info.atlas_width,
                 info.atlas_height);

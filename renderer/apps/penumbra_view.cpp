@@ -91,10 +91,7 @@ int main(int argc, char** argv) {
       ImGui::PushItemWidth(200);
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
       gui::shadow_settings_panel(settings);
-      float light_size = renderer.scene().light.size;
-      if (ImGui::DragFloat(renderer.scene().light.type == scene::Light::Type::spot ? "light width [world]" : "light angle [deg]",
-                           &light_size, 0.02f, 0.0f, 45.0f))
-        renderer.scene().light.size = light_size;
+      gui::light_size_control(renderer.scene().light);
       ImGui::Separator();
       ImGui::Text("map %d^2, %s, s_xy %.2f, extent %.2f ws", info.resolution_texels, info.light.fitted ? "fitted" : "unfitted",
                   info.light.s_xy, info.light.extent_ws);

@@ -88,4 +88,9 @@ bool shadow_settings_panel(shadows::ShadowSettings& s) {
   return changed;
 }
 
+bool light_size_control(scene::Light& light) {
+  return ImGui::DragFloat(light.type == scene::Light::Type::spot ? "light width [world]" : "light angle [deg]", &light.size,
+                          0.02f, 0.0f, 45.0f);
+}
+
 }  // namespace penumbra::gui
