@@ -12,6 +12,7 @@
 #include "gl/context.h"
 #include "io/image_io.h"
 #include "scene/scene.h"
+#include "shadows/renderer.h"
 #include "shadows/settings.h"
 
 namespace penumbra::test {
@@ -61,6 +62,14 @@ inline shadows::ShadowSettings settings(shadows::Technique t, int resolution, bo
   s.map.resolution_texels = resolution;
   s.map.fit = fit;
   return s;
+}
+
+// The light visibility of one n x n frame of `s` with settings `st`, from a fresh renderer.
+inline io::ImageF render_visibility(const scene::Scene& s, const shadows::ShadowSettings& st, int n) {
+  shadows::Renderer r;
+  r.set_scene(s);
+  r.render(st, n, n);
+  return r.read_visibility();
 }
 
 // Column means of rows [y0, y1) of a one-channel image.

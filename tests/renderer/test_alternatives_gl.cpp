@@ -23,14 +23,8 @@ using shadows::ShadowSettings;
 using shadows::Technique;
 using test::look_down;
 using test::pixel_to_world;
+using test::render_visibility;
 using test::settings;
-
-io::ImageF render_visibility(const scene::Scene& s, const ShadowSettings& st, int n) {
-  shadows::Renderer r;
-  r.set_scene(s);
-  r.render(st, n, n);
-  return r.read_visibility();
-}
 
 // ---- RBSM: the staircase of a rotated square's edge ----------------------------------------------
 

@@ -24,6 +24,7 @@ using shadows::Technique;
 using test::column_means;
 using test::crossing;
 using test::look_down;
+using test::render_visibility;
 
 // ---- EDTSM ---------------------------------------------------------------------------------------
 
@@ -141,10 +142,7 @@ TEST_F(Edtsm, PenumbraIsViewpointInvariantInWorldUnits) {
     st.map.resolution_texels = 2048;
     st.edtsm.penumbra_ws = 0.2f;
     st.edtsm.filter_ws = 0.1f;
-    shadows::Renderer r;
-    r.set_scene(s);
-    r.render(st, n, n);
-    const io::ImageF vis = r.read_visibility();
+    const io::ImageF vis = render_visibility(s, st, n);
     ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
     const auto profile = column_means(vis, n / 2 - 20, n / 2 + 20);
     const double ws_per_px = 2 * height * std::tan(glm::radians(fov_deg) / 2) / n;  // on the receiver
@@ -203,10 +201,7 @@ double measured_width(Technique t, float blocker_height, double* centre) {
   st.technique = t;
   st.map.resolution_texels = 2048;
   st.edtssm.filter_ws = 0;  // the formula, before the skeleton filter
-  shadows::Renderer r;
-  r.set_scene(s);
-  r.render(st, n, n);
-  const io::ImageF vis = r.read_visibility();
+  const io::ImageF vis = render_visibility(s, st, n);
   EXPECT_TRUE(test::all_finite_in(vis, 0, 1));
   const auto profile = column_means(vis, n / 2 - 100, n / 2 + 100);
   int first = -1, last = -1;

@@ -21,6 +21,7 @@ using test::column_means;
 using test::crossing;
 using test::look_down;
 using test::pixel_to_world;
+using test::render_visibility;
 using test::settings;
 
 // Distance (world units) between the first column above `lo` and the last column below `hi`
@@ -89,10 +90,7 @@ TEST_P(PcfEdge, HalfAtTheEdgeMonotoneAndTwoRadiiWide) {
   ShadowSettings st = settings(Technique::pcf, res, false);
   st.pcf.kernel = kernel;
   st.pcf.radius = radius;
-  shadows::Renderer r;
-  r.set_scene(s);
-  r.render(st, n, n);
-  const io::ImageF vis = r.read_visibility();
+  const io::ImageF vis = render_visibility(s, st, n);
   ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
   const auto profile = column_means(vis, n / 2 - 100, n / 2 + 100);  // z in ±0.25, far from corners
   const float x0 = 1 - half;
@@ -147,10 +145,7 @@ TEST(Pcss, PenumbraMatchesTheParallelPlanesFormula) {
     ShadowSettings st = settings(Technique::pcss, 2048, true);
     st.pcss.kernel = Kernel::grid;
     st.pcss.min_penumbra_ws = 0;
-    shadows::Renderer r;
-    r.set_scene(s);
-    r.render(st, n, n);
-    const io::ImageF vis = r.read_visibility();
+    const io::ImageF vis = render_visibility(s, st, n);
     ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
     const auto profile = column_means(vis, n / 2 - 50, n / 2 + 50);
     // 10-90 % of a linear ramp is 80 % of its full width.
