@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   std::string output;
   int width = 1280, height = 720, frames = 5, warmup = 1;
   float light_size = -1;
+  int path_frame = -1;
   shadows::ShadowSettings base;
 
   app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
@@ -63,6 +64,8 @@ int main(int argc, char** argv) {
   app.add_option("--frames", frames, "timed frames per render (median reported)")->check(CLI::Range(1, 1000));
   app.add_option("--warmup", warmup, "untimed frames before timing")->check(CLI::Range(0, 100));
   apps::add_light_size_option(app, light_size);
+  app.add_option("--path-frame", path_frame, "view from this frame of the scene's camera path instead of its camera")
+      ->check(CLI::Range(0, 10'000'000));
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
   apps::add_settings_options(app, base);
 
@@ -72,6 +75,13 @@ int main(int argc, char** argv) {
     const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);
     scene::Scene scene = scene::load_scene(scene_arg);
     if (light_size >= 0) scene.light.size = light_size;
+    if (path_frame >= 0) {
+      if (scene.camera_path.empty()) throw std::runtime_error("--path-frame: scene '" + scene.name + "' has no camera path");
+      if (path_frame >= scene.camera_path.frames())
+        throw std::runtime_error("--path-frame: " + std::to_string(path_frame) + " is beyond the path's last frame " +
+                                 std::to_string(scene.camera_path.frames() - 1));
+      scene.camera = scene.camera_path.at(scene.camera, path_frame);
+    }
 
     std::vector<Variant> variants;
     auto add_variant = [&](shadows::Technique t, const std::string& name, shadows::Kernel kernel) {

@@ -95,6 +95,56 @@ MeshData make_lattice(float width, float height, int bars_x, int bars_y, float b
   return m;
 }
 
+MeshData make_tube(const std::vector<glm::vec3>& points, const std::vector<float>& radii, int sides) {
+  MeshData m;
+  const std::size_t n = points.size();
+  if (n < 2 || radii.size() != n || sides < 3) return m;
+  // Ring frames: the first normal is any perpendicular of the first tangent; each next one is the
+  // previous normal with its component along the new tangent removed (parallel transport).
+  glm::vec3 normal(0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec3 prev = points[i > 0 ? i - 1 : 0], next = points[i + 1 < n ? i + 1 : n - 1];
+    glm::vec3 tangent = next - prev;
+    tangent = glm::length(tangent) > 0 ? glm::normalize(tangent) : glm::vec3(0, 1, 0);
+    if (i == 0) {
+      const glm::vec3 helper = std::abs(tangent.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+      normal = glm::normalize(glm::cross(helper, tangent));
+    } else {
+      const glm::vec3 projected = normal - tangent * glm::dot(normal, tangent);
+      if (glm::length(projected) > 1e-6f) normal = glm::normalize(projected);
+    }
+    const glm::vec3 binormal = glm::cross(tangent, normal);
+    for (int s = 0; s < sides; ++s) {
+      const float a = 2 * std::numbers::pi_v<float> * static_cast<float>(s) / static_cast<float>(sides);
+      const glm::vec3 radial = std::cos(a) * normal + std::sin(a) * binormal;
+      m.vertices.push_back({points[i] + radii[i] * radial, radial});
+    }
+  }
+  const auto ring = static_cast<std::uint32_t>(sides);
+  for (std::uint32_t i = 0; i + 1 < static_cast<std::uint32_t>(n); ++i) {
+    for (std::uint32_t s = 0; s < ring; ++s) {
+      const std::uint32_t a = i * ring + s, b = i * ring + (s + 1) % ring, c = a + ring, d = b + ring;
+      m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+    }
+  }
+  return m;
+}
+
+MeshData make_beam(const glm::vec3& a, const glm::vec3& b, float width) {
+  const glm::vec3 axis = b - a;
+  const float length = glm::length(axis);
+  if (!(length > 0)) return {};
+  const glm::vec3 dir = axis / length;
+  const glm::vec3 helper = std::abs(dir.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  const glm::vec3 side = glm::normalize(glm::cross(helper, dir));
+  const glm::vec3 up = glm::cross(dir, side);
+  // The box's x runs along the beam; the columns are a right-handed frame (no mirroring).
+  glm::mat4 m(glm::vec4(dir, 0), glm::vec4(up, 0), glm::vec4(glm::cross(dir, up), 0), glm::vec4((a + b) * 0.5f, 1));
+  MeshData out;
+  out.append(make_box({length, width, width}), m);
+  return out;
+}
+
 GpuMesh::GpuMesh(const MeshData& mesh)
     : vertices_(mesh.vertices.size() * sizeof(Vertex), mesh.vertices.data()),
       indices_(mesh.indices.size() * sizeof(std::uint32_t), mesh.indices.data()),

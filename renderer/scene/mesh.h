@@ -50,6 +50,12 @@ MeshData make_sphere(float radius, int segments = 48, int rings = 24);
 // A lattice of thin square bars in the xy plane: `bars_x` vertical and `bars_y` horizontal bars of
 // width `bar_width` over a `width` × `height` frame of depth `bar_width`.
 MeshData make_lattice(float width, float height, int bars_x, int bars_y, float bar_width);
+// An open tube (no end caps) of `sides` sides along the polyline `points`, radius `radii[i]` at
+// point i (same count, at least two points): branches, wires, poles. Its rings follow the polyline
+// by parallel transport, so a bent tube does not twist.
+MeshData make_tube(const std::vector<glm::vec3>& points, const std::vector<float>& radii, int sides);
+// A straight bar of square cross-section `width` from `a` to `b` (a lattice member).
+MeshData make_beam(const glm::vec3& a, const glm::vec3& b, float width);
 
 // GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.
 class GpuMesh {

@@ -5,6 +5,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "scene/outdoor.h"
+
 namespace penumbra::scene {
 
 glm::mat4 Camera::view() const {
@@ -20,6 +22,46 @@ glm::mat4 Camera::projection_matrix(float aspect) const {
     return glm::ortho(-w, w, -h, h, near_ws, far_ws);
   }
   return glm::perspective(glm::radians(fov_y_deg), aspect, near_ws, far_ws);
+}
+
+Camera CameraPath::at(const Camera& base, double frame) const {
+  Camera c = base;
+  if (keys.empty()) return c;
+  if (keys.size() == 1 || frame <= keys.front().frame) {
+    c.position = keys.front().position, c.target = keys.front().target;
+    return c;
+  }
+  if (frame >= keys.back().frame) {
+    c.position = keys.back().position, c.target = keys.back().target;
+    return c;
+  }
+  std::size_t k = 0;
+  while (k + 2 < keys.size() && frame >= keys[k + 1].frame) ++k;
+  const auto time = [&](std::size_t i) { return static_cast<double>(keys[i].frame); };
+  // Monotone tangents (Fritsch and Butland): per coordinate, zero where the secants on either
+  // side of a key differ in sign, else their weighted harmonic mean; the secant at the ends.
+  const auto tangent = [&](std::size_t i, auto member) {
+    const auto secant = [&](std::size_t a) { return glm::dvec3(keys[a + 1].*member - keys[a].*member) / (time(a + 1) - time(a)); };
+    if (i == 0) return secant(0);
+    if (i + 1 == keys.size()) return secant(i - 1);
+    const glm::dvec3 before = secant(i - 1), after = secant(i);
+    const double h0 = time(i) - time(i - 1), h1 = time(i + 1) - time(i);
+    const double w0 = 2 * h1 + h0, w1 = h1 + 2 * h0;
+    glm::dvec3 m(0);
+    for (int axis = 0; axis < 3; ++axis)
+      if (before[axis] * after[axis] > 0) m[axis] = (w0 + w1) / (w0 / before[axis] + w1 / after[axis]);
+    return m;
+  };
+  const double span = time(k + 1) - time(k);
+  const double t = (frame - time(k)) / span;
+  const double h00 = (1 + 2 * t) * (1 - t) * (1 - t), h10 = t * (1 - t) * (1 - t), h01 = t * t * (3 - 2 * t), h11 = t * t * (t - 1);
+  const auto hermite = [&](auto member) {
+    return glm::vec3(h00 * glm::dvec3(keys[k].*member) + h10 * span * tangent(k, member) + h01 * glm::dvec3(keys[k + 1].*member) +
+                     h11 * span * tangent(k + 1, member));
+  };
+  c.position = hermite(&CameraKey::position);
+  c.target = hermite(&CameraKey::target);
+  return c;
 }
 
 Aabb Scene::bounds() const {
@@ -58,7 +100,8 @@ Object tilted_object(glm::vec3 at, float tilt_deg) {
   return {"tilted", share(make_plane(5, 5)), m, {0.8f, 0.8f, 0.8f}};
 }
 
-constexpr std::array<std::string_view, 8> kNames = {"demo", "box", "sphere", "fence", "tilted", "square", "two-planes", "empty"};
+constexpr std::array<std::string_view, 10> kNames = {"demo",       "box",     "sphere",       "fence", "tilted", "square",
+                                                     "two-planes", "outdoor", "outdoor-spot", "empty"};
 
 }  // namespace
 
@@ -142,6 +185,12 @@ Scene make_builtin_scene(std::string_view name) {
   }
   if (name == "square") return make_square_scene(2, 1);
   if (name == "two-planes") return make_two_planes_scene(3, 10, 1);
+  if (name == "outdoor") return make_outdoor_scene({});
+  if (name == "outdoor-spot") {
+    OutdoorOptions o;
+    o.light = OutdoorLight::floodlight;
+    return make_outdoor_scene(o);
+  }
   if (name == "empty") return base("empty");
   std::string names;
   for (auto n : kNames) names += (names.empty() ? "" : ", ") + std::string(n);

@@ -30,6 +30,26 @@ struct Camera {
   glm::mat4 projection_matrix(float aspect) const;
 };
 
+// A camera path: keys at increasing frame numbers, the first at frame 0. Position and target each
+// follow a piecewise cubic Hermite curve through the keys over the frame numbers, with monotone
+// tangents per coordinate (Fritsch and Butland, as in PCHIP): the camera passes through every key
+// at its frame, moves smoothly, and never overshoots a key (a walk at eye height followed by a
+// climb does not dip below the ground before climbing).
+struct CameraKey {
+  int frame = 0;
+  glm::vec3 position{0};
+  glm::vec3 target{0};
+};
+
+struct CameraPath {
+  std::vector<CameraKey> keys;
+
+  bool empty() const { return keys.empty(); }
+  int frames() const { return keys.empty() ? 0 : keys.back().frame + 1; }
+  // `base` (projection, fov, clip planes) moved to frame `frame` of the path (clamped to it).
+  Camera at(const Camera& base, double frame) const;
+};
+
 struct Light {
   enum class Type { directional, spot };
   Type type = Type::directional;
@@ -55,6 +75,7 @@ struct Scene {
   std::vector<Object> objects;
   Camera camera;
   Light light;
+  CameraPath camera_path;  // empty unless the scene defines one
 
   // World-space bounds of all objects (empty for an empty scene).
   Aabb bounds() const;
@@ -69,7 +90,8 @@ class SceneError : public std::runtime_error {
 // Built-in procedural scenes: "demo" (the default: box, sphere, fence, tilted panel on a ground
 // plane), "box", "sphere", "fence", "tilted" (grazing receiver for acne/bias), "square" (analytic
 // square occluder, light and orthographic camera straight down), "two-planes" (half-plane blocker
-// over a receiver under a spot light), "empty".
+// over a receiver under a spot light), "outdoor" and "outdoor-spot" (scene/outdoor.h: a town of
+// about a million triangles with a camera path, under the sun or a floodlight), "empty".
 std::span<const std::string_view> builtin_scene_names();
 Scene make_builtin_scene(std::string_view name);
 
@@ -81,6 +103,11 @@ Scene make_two_planes_scene(float blocker_height_ws, float light_height_ws, floa
 
 // Loads a JSON scene file (format in docs/scene-format.md); models through Assimp.
 Scene load_scene_file(const std::filesystem::path& path);
+// Writes `scene` as a scene file at `path` (ending in .json) that load_scene_file reads back:
+// camera, light, camera path, and every object as a model, its mesh with the object's transform
+// applied, in glTF 2.0 binary `<stem>/<index>-<name>.glb` beside the file (so a user's own glTF
+// can take any object's place). The .json is written last. Throws SceneError naming the file.
+void write_scene_file(const Scene& scene, const std::filesystem::path& path);
 // A built-in name or a path to a scene file.
 Scene load_scene(std::string_view name_or_path);
 

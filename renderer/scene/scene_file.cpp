@@ -2,9 +2,12 @@
 // path, on one line, so a typo in a sweep's scene is caught before anything is rendered.
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <initializer_list>
 #include <map>
@@ -16,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -292,6 +296,32 @@ Light read_light(const SceneReader& r, const json& j, const std::string& path) {
   return l;
 }
 
+CameraPath read_camera_path(const SceneReader& r, const json& j, const std::string& path) {
+  r.require_object(j, path);
+  r.check_keys(j, path, {"keys"});
+  const std::string keys_path = child(path, "keys");
+  const json& keys = r.required(j, path, "keys", "a path needs its keys");
+  if (!keys.is_array() || keys.size() < 2) r.fail(keys_path, "expected an array of at least 2 keys, got " + describe(keys));
+  CameraPath out;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const std::string at = element(keys_path, i);
+    const json& k = keys[i];
+    r.require_object(k, at);
+    r.check_keys(k, at, {"frame", "position", "target"});
+    CameraKey key;
+    key.frame = r.integer(r.required(k, at, "frame", "every key needs its frame"), child(at, "frame"), 0, 10'000'000);
+    key.position = r.vec3(r.required(k, at, "position", "every key needs a position"), child(at, "position"));
+    key.target = r.vec3(r.required(k, at, "target", "every key needs a target"), child(at, "target"));
+    if (i == 0 && key.frame != 0) r.fail(child(at, "frame"), "the first key must be at frame 0, got " + std::to_string(key.frame));
+    if (i > 0 && key.frame <= out.keys.back().frame)
+      r.fail(child(at, "frame"), "frames must increase from key to key, got " + std::to_string(key.frame) + " after " +
+                                     std::to_string(out.keys.back().frame));
+    if (key.position == key.target) r.fail(child(at, "target"), "must differ from the key's position");
+    out.keys.push_back(key);
+  }
+  return out;
+}
+
 // Normals Assimp could not make (a vertex used only by degenerate triangles, a file's own bad
 // normals) are rebuilt from the area-weighted normals of the triangles around the vertex.
 void repair_normals(MeshData& m) {
@@ -479,19 +509,126 @@ json parse(const std::filesystem::path& path, const std::string& text) {
   }
 }
 
+// --- writing ---------------------------------------------------------------------------------
+
+// Shortest decimal that reads back as the same float.
+std::string number(float f) {
+  char buf[32];
+  for (int digits = 6; digits <= 9; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, static_cast<double>(f));
+    if (std::strtof(buf, nullptr) == f) break;
+  }
+  return buf;
+}
+std::string vec3_text(const glm::vec3& v) { return "[" + number(v.x) + ", " + number(v.y) + ", " + number(v.z) + "]"; }
+std::string quoted(const std::string& s) { return json(s).dump(); }
+
+// The mesh with `model` applied, as glTF 2.0 binary (positions and normals; materials are not
+// part of the format, the scene file carries the albedo).
+void write_glb(const MeshData& mesh, const glm::mat4& model, const std::filesystem::path& file) {
+  MeshData world;
+  world.append(mesh, model);
+  aiScene scene;
+  scene.mRootNode = new aiNode("root");
+  scene.mRootNode->mNumMeshes = 1;
+  scene.mRootNode->mMeshes = new unsigned[1]{0};
+  scene.mNumMaterials = 1;
+  scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};
+  scene.mNumMeshes = 1;
+  scene.mMeshes = new aiMesh*[1]{new aiMesh()};
+  aiMesh& m = *scene.mMeshes[0];
+  m.mMaterialIndex = 0;
+  m.mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  m.mNumVertices = static_cast<unsigned>(world.vertices.size());
+  m.mVertices = new aiVector3D[m.mNumVertices];
+  m.mNormals = new aiVector3D[m.mNumVertices];
+  for (unsigned i = 0; i < m.mNumVertices; ++i) {
+    const Vertex& v = world.vertices[i];
+    m.mVertices[i] = {v.position.x, v.position.y, v.position.z};
+    m.mNormals[i] = {v.normal.x, v.normal.y, v.normal.z};
+  }
+  m.mNumFaces = static_cast<unsigned>(world.indices.size() / 3);
+  m.mFaces = new aiFace[m.mNumFaces];
+  for (unsigned f = 0; f < m.mNumFaces; ++f) {
+    m.mFaces[f].mNumIndices = 3;
+    m.mFaces[f].mIndices = new unsigned[3]{world.indices[3 * f], world.indices[3 * f + 1], world.indices[3 * f + 2]};
+  }
+  Assimp::Exporter exporter;
+  if (exporter.Export(&scene, "glb2", file.string()) != aiReturn_SUCCESS)
+    throw SceneError(one_line(file.string() + ": cannot write model: " + exporter.GetErrorString()));
+}
+
+// A file name from an object's name: letters, digits, '-' and '_' kept, the rest '_'.
+std::string file_stem(std::size_t index, const std::string& name) {
+  std::string out = std::to_string(index) + "-";
+  for (char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+  return out;
+}
+
 }  // namespace
+
+void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
+  if (path.extension() != ".json") throw SceneError(one_line(path.string() + ": a scene file must end in .json"));
+  const std::filesystem::path models = path.stem();
+  std::error_code ec;
+  std::filesystem::create_directories(path.parent_path() / models, ec);
+  if (ec) throw SceneError(one_line((path.parent_path() / models).string() + ": cannot create folder: " + ec.message()));
+
+  const Camera& c = scene.camera;
+  const Light& l = scene.light;
+  std::ostringstream o;
+  o << "{\n  \"name\": " << quoted(scene.name) << ",\n";
+  o << "  \"camera\": {\"projection\": \"" << (c.projection == Camera::Projection::perspective ? "perspective" : "orthographic")
+    << "\", \"position\": " << vec3_text(c.position) << ", \"target\": " << vec3_text(c.target) << ", \"up\": " << vec3_text(c.up)
+    << ",\n             \"fov_y_deg\": " << number(c.fov_y_deg) << ", \"ortho_height_ws\": " << number(c.ortho_height_ws)
+    << ", \"near_ws\": " << number(c.near_ws) << ", \"far_ws\": " << number(c.far_ws) << "},\n";
+  o << "  \"light\": {\"type\": \"" << (l.type == Light::Type::directional ? "directional" : "spot") << "\", \"direction\": "
+    << vec3_text(l.direction);
+  if (l.type == Light::Type::spot) o << ", \"position\": " << vec3_text(l.position) << ", \"spot_fov_deg\": " << number(l.spot_fov_deg);
+  o << ", \"size\": " << number(l.size) << ", \"color\": " << vec3_text(l.color) << ", \"ambient\": " << number(l.ambient) << "},\n";
+  if (!scene.camera_path.empty()) {
+    o << "  \"camera_path\": {\"keys\": [\n";
+    for (std::size_t i = 0; i < scene.camera_path.keys.size(); ++i) {
+      const CameraKey& k = scene.camera_path.keys[i];
+      o << "    {\"frame\": " << k.frame << ", \"position\": " << vec3_text(k.position) << ", \"target\": " << vec3_text(k.target) << "}"
+        << (i + 1 < scene.camera_path.keys.size() ? "," : "") << "\n";
+    }
+    o << "  ]},\n";
+  }
+  o << "  \"objects\": [\n";
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    const Object& obj = scene.objects[i];
+    const std::filesystem::path model = models / (file_stem(i, obj.name) + ".glb");
+    write_glb(*obj.mesh, obj.model, path.parent_path() / model);
+    o << "    {\"name\": " << quoted(obj.name) << ", \"shape\": \"model\", \"path\": " << quoted(model.generic_string())
+      << ", \"albedo\": " << vec3_text(obj.albedo) << "}" << (i + 1 < scene.objects.size() ? "," : "") << "\n";
+  }
+  o << "  ]\n}\n";
+
+  // The scene file last, through a temporary name: a reader never sees a half-written file.
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << o.str();
+    out.close();
+    if (!out) throw SceneError(one_line(path.string() + ": cannot write scene file"));
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw SceneError(one_line(path.string() + ": cannot write scene file: " + ec.message()));
+}
 
 Scene load_scene_file(const std::filesystem::path& path) {
   const json doc = parse(path, read_text(path));
   const SceneReader r(path);
   r.require_object(doc, "");
-  r.check_keys(doc, "", {"name", "camera", "light", "objects"});
+  r.check_keys(doc, "", {"name", "camera", "light", "camera_path", "objects"});
 
   Scene scene;
   scene.name = path.stem().string();
   if (const json* v = r.find(doc, "name")) scene.name = r.string(*v, "name");
   if (const json* v = r.find(doc, "camera")) scene.camera = read_camera(r, *v, "camera");
   if (const json* v = r.find(doc, "light")) scene.light = read_light(r, *v, "light");
+  if (const json* v = r.find(doc, "camera_path")) scene.camera_path = read_camera_path(r, *v, "camera_path");
   if (const json* v = r.find(doc, "objects")) {
     if (!v->is_array()) r.fail("objects", "expected an array of objects, got " + describe(*v));
     ObjectReader objects(r);

@@ -299,6 +299,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"scene_unknown_name", {"--scene", "nosuchscene"}, {"scene", "'nosuchscene'"}},
         BadCase{"scene_missing_file", {"--scene", "/nonexistent/x.json"}, {"/nonexistent/x.json"}},
         BadCase{"scene_bad_field", {"--scene", "{bad_scene}"}, {"{bad_scene}", "camera.fov_deg"}},
+        BadCase{"path_frame_without_path", {"--path-frame", "3"}, {"--path-frame", "'demo' has no camera path"}},
+        BadCase{"path_frame_beyond_path", {"--scene", "outdoor", "--path-frame", "360"}, {"--path-frame", "359"}},
         BadCase{"unknown_option", {"--bogus"}, {"--bogus"}},
         BadCase{"missing_output", {"--technique", "hard"}, {"--output"}, false}),
     [](const ::testing::TestParamInfo<BadCase>& param_info) { return param_info.param.name; });

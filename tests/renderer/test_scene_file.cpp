@@ -250,7 +250,29 @@ INSTANTIATE_TEST_SUITE_P(
                 "objects[0].path: model 'lines.obj' contains no triangles"},
         BadCase{"ModelWithOnlyDegenerateTriangles", R"({"objects": [{"shape": "model", "path": "flat.obj"}]})",
                 "objects[0].path: model 'flat.obj' contains no triangles"},
-        BadCase{"EmptyFile", "", ":1:1: malformed JSON"}),
+        BadCase{"EmptyFile", "", ":1:1: malformed JSON"},
+        BadCase{"PathWithOneKey", R"({"camera_path": {"keys": [{"frame": 0, "position": [0, 1, 0], "target": [1, 1, 0]}]}})",
+                "camera_path.keys: expected an array of at least 2 keys, got an array of 1 element"},
+        BadCase{"PathNotFromFrameZero",
+                R"({"camera_path": {"keys": [{"frame": 1, "position": [0, 1, 0], "target": [1, 1, 0]},
+                                             {"frame": 5, "position": [1, 1, 0], "target": [2, 1, 0]}]}})",
+                "camera_path.keys[0].frame: the first key must be at frame 0, got 1"},
+        BadCase{"PathFramesNotIncreasing",
+                R"({"camera_path": {"keys": [{"frame": 0, "position": [0, 1, 0], "target": [1, 1, 0]},
+                                             {"frame": 0, "position": [1, 1, 0], "target": [2, 1, 0]}]}})",
+                "camera_path.keys[1].frame: frames must increase from key to key, got 0 after 0"},
+        BadCase{"PathKeyLooksAtItself",
+                R"({"camera_path": {"keys": [{"frame": 0, "position": [0, 1, 0], "target": [1, 1, 0]},
+                                             {"frame": 3, "position": [1, 1, 0], "target": [1, 1, 0]}]}})",
+                "camera_path.keys[1].target: must differ from the key's position"},
+        BadCase{"PathKeyMisspelt",
+                R"({"camera_path": {"keys": [{"frame": 0, "positon": [0, 1, 0], "target": [1, 1, 0]},
+                                             {"frame": 3, "position": [1, 1, 0], "target": [2, 1, 0]}]}})",
+                "camera_path.keys[0].positon: unknown key"},
+        BadCase{"PathFractionalFrame",
+                R"({"camera_path": {"keys": [{"frame": 0, "position": [0, 1, 0], "target": [1, 1, 0]},
+                                             {"frame": 2.5, "position": [1, 1, 0], "target": [2, 1, 0]}]}})",
+                "camera_path.keys[1].frame: expected an integer"}),
     [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
 
 // The complete example in docs/scene-format.md stays a valid scene.
@@ -276,6 +298,76 @@ TEST(SceneFile, MissingSceneFile) {
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("no-such-scene.json: cannot read scene file"), std::string::npos) << e.what();
   }
+}
+
+TEST(SceneFile, CameraPathPassesThroughItsKeys) {
+  TempDir dir;
+  const Scene s = load_scene_file(dir.write("p.json", R"({"camera": {"fov_y_deg": 40},
+    "camera_path": {"keys": [{"frame": 0, "position": [0, 2, 0], "target": [10, 2, 0]},
+                             {"frame": 10, "position": [10, 2, 0], "target": [20, 2, 0]},
+                             {"frame": 40, "position": [10, 32, 0], "target": [0, 0, 0]}]}})"));
+  const CameraPath& p = s.camera_path;
+  ASSERT_EQ(p.keys.size(), 3u);
+  EXPECT_EQ(p.frames(), 41);
+  for (const CameraKey& k : p.keys) {
+    const Camera c = p.at(s.camera, k.frame);
+    expect_near(c.position, k.position);
+    expect_near(c.target, k.target);
+    EXPECT_FLOAT_EQ(c.fov_y_deg, 40);  // the scene camera's lens is kept
+  }
+  // Clamped beyond the ends; continuous in between (no jump larger than the keys' spacing allows).
+  expect_near(p.at(s.camera, -5).position, p.keys.front().position);
+  expect_near(p.at(s.camera, 100).position, p.keys.back().position);
+  for (double f = 0; f < 40; f += 0.25)
+    EXPECT_LT(glm::distance(p.at(s.camera, f).position, p.at(s.camera, f + 0.25).position), 0.6f) << f;
+}
+
+TEST(SceneFile, WrittenSceneReadsBack) {
+  TempDir dir;
+  Scene s = load_scene_file(kScenes / "shapes.json");
+  s.camera_path.keys = {{0, {0, 2, 9}, {0, 1, 0}}, {30, {5, 12, 9}, {0, 0, 0}}};
+  write_scene_file(s, dir.path() / "out" / "copy.json");
+  EXPECT_FALSE(fs::exists(dir.path() / "out" / "copy.json.tmp"));
+  const Scene back = load_scene_file(dir.path() / "out" / "copy.json");
+  EXPECT_EQ(back.name, s.name);
+  ASSERT_EQ(back.objects.size(), s.objects.size());
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    SCOPED_TRACE(s.objects[i].name);
+    EXPECT_EQ(back.objects[i].name, s.objects[i].name);
+    // The reader drops zero-area triangles (the sphere's poles, where float rounding decides which
+    // of the thin ones have zero area); every other one comes back.
+    MeshData placed;
+    placed.append(*s.objects[i].mesh, s.objects[i].model);
+    std::size_t with_area = 0;
+    for (std::size_t t = 0; t < placed.indices.size(); t += 3) {
+      const glm::vec3 a = placed.vertices[placed.indices[t]].position;
+      with_area += glm::cross(placed.vertices[placed.indices[t + 1]].position - a, placed.vertices[placed.indices[t + 2]].position - a) !=
+                   glm::vec3(0);
+    }
+    if (with_area == triangles(s.objects[i])) EXPECT_EQ(triangles(back.objects[i]), with_area);
+    else EXPECT_NEAR(static_cast<double>(triangles(back.objects[i])), static_cast<double>(with_area), 0.01 * static_cast<double>(with_area));
+    expect_near(back.objects[i].albedo, s.objects[i].albedo);
+    // The transform is baked into the written mesh.
+    const Aabb want = s.objects[i].mesh->bounds().transformed(s.objects[i].model);
+    const Aabb got = back.objects[i].mesh->bounds().transformed(back.objects[i].model);
+    expect_near(got.lo, want.lo, 1e-3f);
+    expect_near(got.hi, want.hi, 1e-3f);
+    expect_unit_normals(*back.objects[i].mesh);
+  }
+  expect_near(back.camera.position, s.camera.position);
+  EXPECT_FLOAT_EQ(back.camera.far_ws, s.camera.far_ws);
+  EXPECT_EQ(back.light.type, s.light.type);
+  expect_near(back.light.position, s.light.position);
+  expect_near(back.light.direction, s.light.direction);
+  EXPECT_FLOAT_EQ(back.light.size, s.light.size);
+  ASSERT_EQ(back.camera_path.keys.size(), 2u);
+  EXPECT_EQ(back.camera_path.keys[1].frame, 30);
+  expect_near(back.camera_path.keys[1].position, {5, 12, 9});
+}
+
+TEST(SceneFile, WritingRefusesANameWithoutJson) {
+  TempDir dir;
+  EXPECT_THROW(write_scene_file(Scene{}, dir.path() / "scene.txt"), SceneError);
 }
 
 TEST(SceneFile, LoadSceneDispatchesOnJsonExtension) {

@@ -16,3 +16,9 @@ target_link_libraries(test_render_cli PRIVATE penumbra_renderer GTest::gmock GTe
 target_compile_definitions(test_render_cli PRIVATE PENUMBRA_RENDER_EXE="$<TARGET_FILE:penumbra-render>")
 add_dependencies(test_render_cli penumbra-render)
 gtest_discover_tests(test_render_cli PROPERTIES LABELS e2e TIMEOUT 300)
+
+add_executable(test_scene_cli ${CMAKE_CURRENT_LIST_DIR}/test_scene_cli.cpp)
+target_link_libraries(test_scene_cli PRIVATE penumbra_scene GTest::gmock GTest::gtest_main penumbra_warnings)
+target_compile_definitions(test_scene_cli PRIVATE PENUMBRA_SCENE_EXE="$<TARGET_FILE:penumbra-scene>")
+add_dependencies(test_scene_cli penumbra-scene)
+gtest_discover_tests(test_scene_cli PROPERTIES LABELS e2e TIMEOUT 120)
