@@ -92,10 +92,7 @@ io::Image8 read_back_buffer(int w, int h) {
   glReadBuffer(GL_BACK);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
-  const std::size_t row = static_cast<std::size_t>(w) * 4;
-  for (int y = 0; y < h / 2; ++y)
-    std::swap_ranges(shot.pixels.begin() + static_cast<std::ptrdiff_t>(y * row), shot.pixels.begin() + static_cast<std::ptrdiff_t>((y + 1) * row),
-                     shot.pixels.begin() + static_cast<std::ptrdiff_t>((h - 1 - y) * row));
+  io::flip_vertical(shot);
   return shot;
 }
 

@@ -1,5 +1,7 @@
 #pragma once
 // Images on the CPU and their files (OpenImageIO). Rows are stored top row first.
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -19,6 +21,16 @@ struct Image {
 };
 using Image8 = Image<std::uint8_t>;
 using ImageF = Image<float>;
+
+// Reverses the row order in place: GL reads rows bottom up, these images store them top down.
+template <class T>
+void flip_vertical(Image<T>& img) {
+  const std::size_t row = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.channels);
+  for (int y = 0; y < img.height / 2; ++y)
+    std::swap_ranges(img.pixels.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * row),
+                     img.pixels.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y + 1) * row),
+                     img.pixels.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(img.height - 1 - y) * row));
+}
 
 // Write through a temporary file in the same folder and rename, so a reader never sees half a
 // file. Throw std::runtime_error naming the path on failure.
