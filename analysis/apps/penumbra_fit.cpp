@@ -73,7 +73,13 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
   spec.p_threshold = o.p_threshold.value_or(0.82);
   std::vector<BinomialRow> rows = read_level_data(input, f);
   spec.groups.push_back({rows, 0, 0.0});
-  const FitResult fit = analysis::fit(spec);
+  const FitResult fit = [&] {
+    try {
+      return analysis::fit(spec);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(input.string() + ": " + e.what());
+    }
+  }();
   const double beta = std::exp(fit.params.log_beta);
   const double u = fit.params.u[0];
   const bool weibull = spec.family == psychometric::Model::weibull;

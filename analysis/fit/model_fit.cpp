@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -158,6 +159,13 @@ Bounds bounds_of(const ModelSpec& spec) {
   b.u_min = spec.u_min.value_or(lo - 1.0);
   b.u_max = spec.u_max.value_or(hi + 1.0);
   if (!(b.u_min < b.u_max)) throw std::invalid_argument("threshold bounds must satisfy min < max");
+  // Levels such as 1e308 and -1e308 are finite but their span is not: the start grid would hold
+  // no finite point.
+  if (!std::isfinite(b.u_max - b.u_min)) {
+    char span[96];
+    std::snprintf(span, sizeof span, "from %g to %g", lo, hi);
+    throw std::invalid_argument(std::string("stimulus levels span more than a double can hold (") + span + ")");
+  }
   b.log_beta_min = std::log(spec.slope.min);
   b.log_beta_max = std::log(spec.slope.max);
   return b;
@@ -187,6 +195,7 @@ Parameters grid_start(const ModelSpec& spec, const Bounds& b) {
       }
     }
   }
+  if (p.u.empty()) throw std::invalid_argument("the likelihood is not finite anywhere on the start grid");
   return p;
 }
 

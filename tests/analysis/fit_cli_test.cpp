@@ -173,6 +173,18 @@ TEST(FitCli, PsychometricSubcommandPrintsTheFitAsJson) {
   fs::remove_all(dir);
 }
 
+// Issue 14.1: levels 1e308 and -1e308 are finite, but their span is not; the fit died with SIGSEGV.
+TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
+  const fs::path dir = fresh("huge");
+  std::ofstream(dir / "huge.csv") << "level,n_correct,n_total\n1e308,9,10\n-1e308,5,10\n";
+  std::string out;
+  EXPECT_EQ(run("psychometric --input " + (dir / "huge.csv").string(), &out), 1) << out;
+  EXPECT_NE(out.find((dir / "huge.csv").string() + ": stimulus levels span more than a double can hold"),
+            std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  fs::remove_all(dir);
+}
+
 #ifdef PENUMBRA_STUDY_EXE
 // The real pipeline: penumbra-study run --headless writes sessions, penumbra-fit reads them. yes/no:
 // the straight (catch) trials are left out as QUEST leaves them out, and QUEST's gamma and
