@@ -95,6 +95,11 @@ Dataset load_dataset(const std::vector<fs::path>& inputs) {
     for (const trial_log::TrialRow& row : read.rows) {
       ++line;
       const std::string where = info.log_file + ":" + std::to_string(line) + ": ";
+      // The study numbers trials 0, 1, 2, ... across the session and appends one row per trial: any
+      // other sequence is a duplicated, reordered or lost row (e.g. two processes on one session).
+      if (row.trial != line - 2)
+        throw std::runtime_error(where + "column 'trial': expected " + std::to_string(line - 2) + ", found " +
+                                 std::to_string(row.trial) + " (rows duplicated, reordered or missing)");
       if (info.session_id.empty()) info.session_id = row.session_id;
       if (info.participant.empty()) info.participant = row.participant;
       if (row.session_id != info.session_id)

@@ -40,7 +40,8 @@ struct Dataset {
 
 // Throws std::runtime_error naming the file (and line and column for log rows) on bad input: a
 // missing path, a directory without trials.csv, invalid session.json fields, a session given
-// twice, rows whose session_id or participant disagree with session.json, no trials at all.
+// twice, rows whose session_id or participant disagree with session.json, trial numbers other than
+// 0, 1, 2, ... in row order, no trials at all.
 Dataset load_dataset(const std::vector<std::filesystem::path>& inputs);
 
 // "stair/1", "step/0.5": pattern and contrast, as the study names a round's condition.

@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cmath>
+#include <functional>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -13,6 +15,7 @@
 #include "apps/reference_command.h"
 #include "gl/context.h"
 #include "io/image_io.h"
+#include "json/json_input.h"
 #include "observers/image_observer.h"
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
@@ -61,12 +64,17 @@ std::vector<std::pair<std::string, double>> parse_key_values(const std::string& 
     const std::size_t comma = body.find(',', pos);
     const std::string kv = body.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     const std::size_t eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("--observer: '" + kv + "': expected key=value");
+    if (eq == std::string::npos) throw std::invalid_argument("--observer: '" + json_input::printable(kv) + "': expected key=value");
+    const std::string value = kv.substr(eq + 1);
+    std::size_t used = 0;
+    double v = NAN;
     try {
-      out.emplace_back(kv.substr(0, eq), std::stod(kv.substr(eq + 1)));
+      v = std::stod(value, &used);
     } catch (const std::exception&) {
-      throw std::invalid_argument("--observer: '" + kv + "': expected a number");
     }
+    if (used != value.size() || !std::isfinite(v))
+      throw std::invalid_argument("--observer: '" + json_input::printable(kv) + "': expected a finite number");
+    out.emplace_back(kv.substr(0, eq), v);
     if (comma == std::string::npos) break;
     pos = comma + 1;
   }
@@ -100,9 +108,81 @@ observers::PlantedModel parse_psychometric(const std::string& spec) {
     else if (k == "beta") m.slope = v;
     else if (k == "lapse") m.lapse = v;
     else if (k == "p_threshold") m.p_threshold = v;
-    else throw std::invalid_argument("--observer: unknown parameter '" + k + "' (c, beta, lapse, p_threshold)");
+    else throw std::invalid_argument("--observer: unknown parameter '" + json_input::printable(k) + "' (c, beta, lapse, p_threshold)");
   }
   return m;
+}
+
+// The simulated observer of a headless run, checked in full before any session is opened or
+// created (a rejected --observer leaves nothing behind).
+struct ObserverSetup {
+  std::string spec;  // as given; recorded in session.json and restored by --resume
+  bool image = false;
+  double false_alarm = 0.05;  // yesno: the observer's rate of "jagged" for a straight edge
+  observers::PlantedModel model;
+  observers::ImageObserverParams image_params;
+};
+
+ObserverSetup parse_observer(const std::string& given, const procedure::StudyConfig& config) {
+  ObserverSetup setup;
+  setup.spec = given;
+  setup.image = given.rfind("image", 0) == 0;
+  if (!setup.image && given.rfind("psychometric", 0) != 0)
+    throw std::invalid_argument("--observer '" + json_input::printable(given) +
+                                "': expected psychometric:c=..,beta=..,lapse=.. or image:noise=..,blur_arcmin=..");
+  const bool yesno = config.task == "yesno";
+  std::string observer_spec = given;
+  if (const auto fa = take_key(observer_spec, "fa")) {
+    try {
+      setup.false_alarm = std::stod(*fa);
+    } catch (const std::exception&) {
+      setup.false_alarm = -1;
+    }
+    if (!(setup.false_alarm > 0 && setup.false_alarm < 0.5))
+      throw std::invalid_argument("--observer: fa: expected a rate in (0, 0.5)");
+  }
+  if (setup.image) {
+    auto& p = setup.image_params;
+    p.pixels_per_degree = 60.0 / config.display.arcmin(1.0);
+    p.false_alarm = setup.false_alarm;
+    if (const auto criterion = take_key(observer_spec, "criterion")) {
+      if (*criterion != "local" && *criterion != "global")
+        throw std::invalid_argument("--observer: criterion: expected local or global");
+      p.criterion = *criterion == "local" ? observers::StraightnessCriterion::local : observers::StraightnessCriterion::global;
+    }
+    for (const auto& [k, v] : parse_key_values(observer_spec)) {
+      const bool positive = k == "ppd" || k == "weber" || k == "window";
+      if (positive ? !(v > 0) : !(v >= 0))
+        throw std::invalid_argument("--observer: " + k + ": expected a number " + (positive ? "> 0" : ">= 0"));
+      if (k == "noise") p.noise_sd = v;
+      else if (k == "blur_arcmin") p.blur_sigma_arcmin = v;
+      else if (k == "ppd") p.pixels_per_degree = v;
+      else if (k == "weber") p.weber = v;
+      else if (k == "window") p.window_r = v;
+      else throw std::invalid_argument("--observer: unknown image parameter '" + json_input::printable(k) +
+                                       "' (noise, blur_arcmin, ppd, weber, window, fa, criterion=global)");
+    }
+    return setup;
+  }
+  observers::PlantedModel& model = setup.model;
+  model = parse_psychometric(observer_spec);
+  if (yesno) {
+    // The same detection function F as in 2afc (threshold where F reaches the 2afc F*), with
+    // hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa.
+    const double f_star = (model.p_threshold - model.guess) / (1 - model.guess - model.lapse);
+    model.guess = setup.false_alarm;
+    model.p_threshold = setup.false_alarm + (1 - setup.false_alarm - model.lapse) * f_star;
+  }
+  if (!(model.lapse >= 0 && model.lapse < 1 - model.guess))
+    throw std::invalid_argument("--observer: lapse: expected a rate in [0, 1 - guess)");
+  try {
+    observers::PsychometricObserver probe({{"any", model}}, 0);
+  } catch (const std::invalid_argument& e) {
+    std::string what = e.what();
+    if (const auto colon = what.rfind("': "); colon != std::string::npos) what = what.substr(colon + 3);
+    throw std::invalid_argument("--observer: " + what);
+  }
+  return setup;
 }
 
 struct RunOptions {
@@ -113,17 +193,40 @@ struct RunOptions {
   int pace_ms = 0;
   int stop_after = 0;
   std::uint64_t observer_seed = 7;
-  bool participant_given = false;
+  // Which options the command line gave (a resumed session takes the rest from session.json).
+  bool participant_given = false, observer_given = false, observer_seed_given = false;
 #ifdef PENUMBRA_STUDY_GUI
   study_gui::GuiOptions gui;
 #endif
 };
 
-procedure::Session open_session(const RunOptions& o, const std::string& observer) {
-  if (!o.resume.empty()) return procedure::Session::resume(o.resume);
+// A resume continues the run session.json records: its config, participant, observer and observer
+// seed. An option that says otherwise is refused, not ignored.
+void check_resume_options(const RunOptions& o, const nlohmann::json& session) {
+  if (!o.config.empty())
+    throw std::invalid_argument("--config: not with --resume (the session's config is in its session.json)");
+  if (!o.output.empty()) throw std::invalid_argument("-o: not with --resume (the session stays in its directory)");
+  const std::string participant = session.at("participant").get<std::string>();
+  if (o.participant_given && o.participant != participant)
+    throw std::invalid_argument("--participant '" + json_input::printable(o.participant) + "': the session is '" +
+                                json_input::printable(participant) + "' (session.json)");
+}
+
+procedure::Session open_session(const RunOptions& o, const std::string& observer,
+                                const std::function<void(const nlohmann::json&, const procedure::StudyConfig&)>& accept = {}) {
+  if (!o.resume.empty())
+    return procedure::Session::resume(o.resume, [&](const nlohmann::json& session, const procedure::StudyConfig& config) {
+      check_resume_options(o, session);
+      if (accept) accept(session, config);
+    });
   if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
-  return procedure::Session::create(procedure::load_config(o.config), o.output, o.participant,
-                                    {{"observer", observer}, {"config_file", o.config.string()}});
+  const procedure::StudyConfig config = procedure::load_config(o.config);
+  nlohmann::json extra = {{"observer", observer}, {"config_file", o.config.string()}};
+  if (accept) {
+    accept(extra, config);
+    extra["observer_seed"] = o.observer_seed;
+  }
+  return procedure::Session::create(config, o.output, o.participant, extra);
 }
 
 // A participant session in the windows (study/gui); the same Session, so the same log.
@@ -139,49 +242,35 @@ int run_participant(const RunOptions& o) {
 
 int run_study(const RunOptions& o) {
   if (!o.headless) return run_participant(o);
-  const bool image_observer = o.observer.rfind("image", 0) == 0;
-  if (!image_observer && o.observer.rfind("psychometric", 0) != 0)
-    throw std::invalid_argument("--observer '" + o.observer + "': expected psychometric:c=..,beta=..,lapse=.. or image:noise=..,blur_arcmin=..");
-  procedure::Session session = open_session(o, o.observer);
+  ObserverSetup setup;
+  std::uint64_t observer_seed = o.observer_seed;
+  procedure::Session session = open_session(o, o.observer, [&](const nlohmann::json& session_json, const procedure::StudyConfig& config) {
+    std::string spec = o.observer;
+    if (!o.resume.empty()) {
+      const std::string recorded = session_json.value("observer", std::string());
+      if (recorded == "participant")
+        throw std::invalid_argument("--headless: the session was run by a participant; resume it without --headless");
+      if (!recorded.empty()) {
+        if (o.observer_given && o.observer != recorded)
+          throw std::invalid_argument("--observer '" + json_input::printable(o.observer) + "': the session was run with '" +
+                                      json_input::printable(recorded) + "' (session.json); leave --observer out to continue it");
+        spec = recorded;
+      }
+      if (session_json.contains("observer_seed")) {
+        const std::uint64_t seed = session_json["observer_seed"].get<std::uint64_t>();
+        if (o.observer_seed_given && o.observer_seed != seed)
+          throw std::invalid_argument("--observer-seed " + std::to_string(o.observer_seed) + ": the session was run with " +
+                                      std::to_string(seed) + " (session.json)");
+        observer_seed = seed;
+      }
+    }
+    setup = parse_observer(spec, config);
+  });
   const bool yesno = session.config().task == "yesno";
-  std::string observer_spec = o.observer;
-  double false_alarm = 0.05;  // yesno: the observer's rate of "jagged" for a straight edge
-  if (const auto fa = take_key(observer_spec, "fa")) {
-    try {
-      false_alarm = std::stod(*fa);
-    } catch (const std::exception&) {
-      false_alarm = -1;
-    }
-    if (!(false_alarm > 0 && false_alarm < 0.5)) throw std::invalid_argument("--observer: fa: expected a rate in (0, 0.5)");
-  }
-  observers::PlantedModel model = image_observer ? observers::PlantedModel{} : parse_psychometric(observer_spec);
-  if (yesno && !image_observer) {
-    // The same detection function F as in 2afc (threshold where F reaches the 2afc F*), with
-    // hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa.
-    const double f_star = (model.p_threshold - model.guess) / (1 - model.guess - model.lapse);
-    model.guess = false_alarm;
-    model.p_threshold = false_alarm + (1 - false_alarm - model.lapse) * f_star;
-  }
-  observers::ImageObserverParams image_params;
-  image_params.pixels_per_degree = 60.0 / session.config().display.arcmin(1.0);
-  image_params.false_alarm = false_alarm;
-  if (image_observer) {
-    if (const auto criterion = take_key(observer_spec, "criterion")) {
-      if (*criterion != "local" && *criterion != "global")
-        throw std::invalid_argument("--observer: criterion: expected local or global");
-      image_params.criterion = *criterion == "local" ? observers::StraightnessCriterion::local
-                                                     : observers::StraightnessCriterion::global;
-    }
-    for (const auto& [k, v] : parse_key_values(observer_spec)) {
-      if (k == "noise") image_params.noise_sd = v;
-      else if (k == "blur_arcmin") image_params.blur_sigma_arcmin = v;
-      else if (k == "ppd") image_params.pixels_per_degree = v;
-      else if (k == "weber") image_params.weber = v;
-      else if (k == "window") image_params.window_r = v;
-      else throw std::invalid_argument("--observer: unknown image parameter '" + k +
-                                                          "' (noise, blur_arcmin, ppd, weber, window, fa, criterion=global)");
-    }
-  }
+  const bool image_observer = setup.image;
+  const double false_alarm = setup.false_alarm;
+  const observers::PlantedModel model = setup.model;
+  const observers::ImageObserverParams image_params = setup.image_params;
   std::unique_ptr<gl::HeadlessContext> context;
   std::unique_ptr<stimuli::StimulusRenderer> renderer;
   if (image_observer) {
@@ -192,7 +281,7 @@ int run_study(const RunOptions& o) {
   for (std::size_t r = 0; r < session.config().rounds.size(); ++r) conditions[session.condition(static_cast<int>(r))] = model;
   while (const auto plan = session.next()) {
     bool correct = false;
-    const std::uint64_t trial_seed = observers::derive_seed(o.observer_seed, static_cast<std::uint64_t>(plan->trial));
+    const std::uint64_t trial_seed = observers::derive_seed(observer_seed, static_cast<std::uint64_t>(plan->trial));
     if (image_observer) {
       const stimuli::StimulusPair pair = renderer->render(plan->stimulus);
       observers::ImageObserver eye(image_params, trial_seed);
@@ -275,6 +364,8 @@ int main(int argc, char** argv) {
     if (reference.parsed()) return reference.run();
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
     ro.participant_given = run->count("--participant") > 0;
+    ro.observer_given = run->count("--observer") > 0;
+    ro.observer_seed_given = run->count("--observer-seed") > 0;
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
     std::cerr << "penumbra-study: " << e.what() << "\n";

@@ -6,9 +6,12 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
+#include <set>
+#include <algorithm>
 #include <stdexcept>
 
 #include "io/image_io.h"
+#include "json/json_input.h"
 #include "observers/random.h"
 
 namespace penumbra::procedure {
@@ -33,6 +36,105 @@ std::string fmt(double v) {
   std::snprintf(b, sizeof b, "%g", v);
   return b;
 }
+
+// Names go into every row of the log: no separators, no control bytes, and short (a megabyte
+// participant string made each row a megabyte).
+constexpr std::size_t kMaxName = 200;
+std::string name_problem(const std::string& name) {
+  if (name.empty() || name.size() > kMaxName ||
+      std::any_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == ',' || c == '"'; }))
+    return "expected a non-empty name of at most " + std::to_string(kMaxName) + " bytes without , \" or control characters";
+  return "";
+}
+
+// The QUEST block session.json records beside the config (read by the fitter).
+nlohmann::json quest_block(const StudyConfig& config) {
+  quest::Quest q(config.quest);
+  return {{"t_guess", q.params().t_guess}, {"t_guess_sd", q.params().t_guess_sd},
+          {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta},
+          {"delta", q.params().delta}, {"gamma", q.params().gamma},
+          {"grain", q.params().grain}, {"dim", q.dim()},
+          {"intensity", "log10(artifact_px / filter_radius_px)"}};
+}
+
+bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+// session.json as resume reads it: every field checked for type, size and agreement with the
+// config block, since each is carried into the continued rows (or read by the fitter).
+struct SessionRecord {
+  StudyConfig config;
+  std::string session_id, participant;
+  std::vector<std::pair<int, int>> ended;  // (round, after_trial)
+};
+
+SessionRecord check_session_json(const nlohmann::json& j, const std::string& file) {
+  auto fail = [&](const std::string& field, const std::string& what) -> void {
+    throw std::runtime_error(file + ": " + field + ": " + what);
+  };
+  if (!j.is_object()) fail("(top level)", "expected an object");
+  static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
+                                              "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
+                                              "observer_seed", "config_file"};
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
+  for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
+    if (!j.contains(key)) fail(key, "missing");
+  auto text = [&](const char* key, std::size_t max) {
+    if (!j.contains(key)) return std::string();
+    if (!j[key].is_string()) fail(key, "expected a string");
+    const std::string v = j[key].get<std::string>();
+    if (v.size() > max) fail(key, "longer than " + std::to_string(max) + " bytes");
+    return v;
+  };
+  SessionRecord r;
+  r.session_id = text("session_id", 2 * kMaxName);
+  if (const std::string bad = name_problem(r.session_id); !bad.empty()) fail("session_id", bad);
+  r.participant = text("participant", kMaxName);
+  if (const std::string bad = name_problem(r.participant); !bad.empty()) fail("participant", bad);
+  text("created_utc", 64);
+  text("observer", 1000);
+  text("config_file", 4096);
+  if (j.contains("log") && j["log"] != "trials.csv") fail("log", "expected \"trials.csv\"");
+  if (j.contains("observer_seed") && !j["observer_seed"].is_number_unsigned())
+    fail("observer_seed", "expected a non-negative integer");
+  if (j.contains("software") && !j["software"].is_object()) fail("software", "expected an object");
+  r.config = parse_config(j["config"], file + " (config)");
+  if (!j["seed"].is_number_unsigned() || j["seed"].get<std::uint64_t>() != r.config.seed)
+    fail("seed", "expected the config's seed (" + std::to_string(r.config.seed) + ")");
+  const nlohmann::json quest = quest_block(r.config);
+  if (!j["quest"].is_object()) fail("quest", "expected an object");
+  for (auto it = j["quest"].begin(); it != j["quest"].end(); ++it)
+    if (!quest.contains(it.key())) fail("quest." + json_input::printable(it.key()), "unknown field");
+  for (auto it = quest.begin(); it != quest.end(); ++it) {
+    const auto found = j["quest"].find(it.key());
+    const bool equal = found != j["quest"].end() &&
+                       (it->is_number() ? found->is_number() && same(found->get<double>(), it->get<double>())
+                                        : *found == *it);
+    if (!equal) fail("quest." + it.key(), "differs from the config's QUEST (expected " + it->dump() + ")");
+  }
+  if (j["display"] != to_json(r.config)["display"]) fail("display", "differs from config.display");
+  if (j.contains("ended_rounds")) {
+    const auto& e = j["ended_rounds"];
+    if (!e.is_array() || e.size() > r.config.rounds.size()) fail("ended_rounds", "expected an array of at most one entry per round");
+    for (std::size_t i = 0; i < e.size(); ++i) {
+      const std::string f = "ended_rounds[" + std::to_string(i) + "]";
+      if (!e[i].is_object() || e[i].size() != 2 || !e[i].contains("round") || !e[i].contains("after_trial") ||
+          !e[i]["round"].is_number_unsigned() || !e[i]["after_trial"].is_number_unsigned() ||
+          e[i]["round"].get<std::uint64_t>() >= r.config.rounds.size() || e[i]["after_trial"].get<std::uint64_t>() > 1000000)
+        fail(f, "expected {\"round\": 0.." + std::to_string(r.config.rounds.size() - 1) + ", \"after_trial\": n}");
+      r.ended.emplace_back(e[i]["round"].get<int>(), e[i]["after_trial"].get<int>());
+    }
+  }
+  if (j.contains("resumed_utc")) {
+    const auto& e = j["resumed_utc"];
+    if (!e.is_array()) fail("resumed_utc", "expected an array of times");
+    for (std::size_t i = 0; i < e.size(); ++i)
+      if (!e[i].is_string() || e[i].get<std::string>().size() > 64)
+        fail("resumed_utc[" + std::to_string(i) + "]", "expected a time (a string)");
+  }
+  return r;
+}
+
 }  // namespace
 
 std::string Session::condition(int round) const {
@@ -52,12 +154,13 @@ void Session::init_staircases() {
 
 Session Session::create(const StudyConfig& config, const fs::path& dir, const std::string& participant,
                         const nlohmann::json& extra) {
-  if (participant.empty() || participant.find_first_of(",\"\n\r") != std::string::npos)
-    throw std::runtime_error("participant '" + participant + "': expected a non-empty name without , \" or newlines");
-  if (fs::exists(dir / "session.json") || fs::exists(dir / "trials.csv"))
-    throw std::runtime_error(dir.string() + ": already holds a session; refusing to overwrite it (use --resume)");
+  if (const std::string bad = name_problem(participant); !bad.empty())
+    throw std::runtime_error("participant '" + json_input::printable(participant) + "': " + bad);
   fs::create_directories(dir);
   Session s;
+  s.lock_ = trial_log::DirectoryLock(dir);
+  if (fs::exists(dir / "session.json") || fs::exists(dir / "trials.csv"))
+    throw std::runtime_error(dir.string() + ": already holds a session; refusing to overwrite it (use --resume)");
   s.config_ = config;
   s.dir_ = dir;
   s.participant_ = participant;
@@ -67,18 +170,13 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
     if (c != '-' && c != ':') compact += c;
   s.session_id_ = participant + "-" + compact;
   s.init_staircases();
-  quest::Quest q(config.quest);
   s.session_json_ = {{"session_id", s.session_id_},
                      {"participant", participant},
                      {"created_utc", stamp},
                      {"software", {{"name", "penumbra-study"}, {"version", "0.1.0"}}},
                      {"seed", config.seed},
                      {"config", to_json(config)},
-                     {"quest", {{"t_guess", q.params().t_guess}, {"t_guess_sd", q.params().t_guess_sd},
-                                {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta},
-                                {"delta", q.params().delta}, {"gamma", q.params().gamma},
-                                {"grain", q.params().grain}, {"dim", q.dim()},
-                                {"intensity", "log10(artifact_px / filter_radius_px)"}}},
+                     {"quest", quest_block(config)},
                      {"display", to_json(config)["display"]},
                      {"log", "trials.csv"},
                      {"ended_rounds", nlohmann::json::array()},
@@ -89,35 +187,26 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
   return s;
 }
 
-Session Session::resume(const fs::path& dir) {
+Session Session::resume(const fs::path& dir, const std::function<void(const nlohmann::json&, const StudyConfig&)>& accept) {
   const fs::path json_path = dir / "session.json", log_path = dir / "trials.csv";
   if (!fs::exists(json_path)) throw std::runtime_error(json_path.string() + ": no session to resume");
   Session s;
-  {
-    std::ifstream in(json_path);
-    try {
-      s.session_json_ = nlohmann::json::parse(in);
-    } catch (const std::exception& e) {
-      throw std::runtime_error(json_path.string() + ": not valid JSON: " + e.what());
-    }
-  }
+  s.lock_ = trial_log::DirectoryLock(dir);
+  // Nothing is written until session.json, the log and the caller's options all agree: a refused
+  // resume leaves every byte as it was. session.json is small and flat; the bounds refuse an edited
+  // one that would make resume allocate or write without bound.
+  s.session_json_ = json_input::read_file(json_path, {.max_bytes = 1 << 20, .max_depth = 8});
+  const SessionRecord record = check_session_json(s.session_json_, json_path.string());
   s.dir_ = dir;
-  s.config_ = parse_config(s.session_json_.at("config"), json_path.string() + " (config)");
-  s.session_id_ = s.session_json_.at("session_id").get<std::string>();
-  s.participant_ = s.session_json_.at("participant").get<std::string>();
+  s.config_ = record.config;
+  s.session_id_ = record.session_id;
+  s.participant_ = record.participant;
   s.init_staircases();
-  std::vector<int> ended;
-  for (const auto& e : s.session_json_.value("ended_rounds", nlohmann::json::array()))
-    ended.push_back(e.at("after_trial").get<int>());
-  std::vector<int> ended_round;
-  for (const auto& e : s.session_json_.value("ended_rounds", nlohmann::json::array()))
-    ended_round.push_back(e.at("round").get<int>());
 
-  trial_log::ReadResult log = trial_log::read(log_path);
-  if (log.torn_tail) fs::resize_file(log_path, log.complete_bytes);
+  const trial_log::ReadResult log = trial_log::read(log_path);
   auto apply_ended = [&](int trials_done) {
-    for (std::size_t k = 0; k < ended.size(); ++k)
-      if (ended[k] == trials_done) s.ended_rounds_.at(static_cast<std::size_t>(ended_round[k])) = true;
+    for (const auto& [round, after] : record.ended)
+      if (after == trials_done) s.ended_rounds_.at(static_cast<std::size_t>(round)) = true;
   };
   apply_ended(0);
   for (std::size_t i = 0; i < log.rows.size(); ++i) {
@@ -125,15 +214,37 @@ Session Session::resume(const fs::path& dir) {
     const std::string where = log_path.string() + ":" + std::to_string(i + 2) + ": ";
     const auto plan = s.next();
     if (!plan) throw std::runtime_error(where + "a trial after the session had finished");
-    if (row.session_id != s.session_id_) throw std::runtime_error(where + "session_id differs from session.json");
+    auto differs = [&](const char* column, const std::string& expected, const std::string& found) {
+      throw std::runtime_error(where + "column '" + column + "': '" + json_input::printable(found) +
+                               "' where session.json and the replayed procedure give '" +
+                               json_input::printable(expected) + "'");
+    };
+    if (row.session_id != s.session_id_) differs("session_id", s.session_id_, row.session_id);
+    if (row.participant != s.participant_) differs("participant", s.participant_, row.participant);
+    if (row.task != s.config_.task) differs("task", s.config_.task, row.task);
     if (row.trial != plan->trial || row.staircase != plan->staircase_name || row.round != plan->round ||
         row.practice != (plan->practice ? 1 : 0) || row.target != plan->target ||
-        row.stimulus_seed != plan->stimulus.seed ||
-        std::abs(row.filter_radius_px - plan->stimulus.filter_radius_px) > 1e-9 * plan->stimulus.filter_radius_px)
+        row.stimulus_seed != plan->stimulus.seed || row.pattern != stimuli::to_string(plan->stimulus.pattern) ||
+        row.kernel != stimuli::to_string(plan->stimulus.kernel) || !same(row.contrast, plan->stimulus.lit_linear) ||
+        !same(row.artifact_px, plan->stimulus.artifact_px) ||
+        !same(row.filter_radius_px, plan->stimulus.filter_radius_px) ||
+        !same(row.requested_filter_radius_px, plan->requested_filter_radius_px) ||
+        row.clamped != (plan->clamped ? 1 : 0))
       throw std::runtime_error(where + "does not match the replayed procedure (was the config or software changed?)");
+    // The display as the rows recorded it: an edited size or distance changes every angle.
+    if (!same(row.artifact_arcmin, s.config_.display.arcmin(row.artifact_px)) ||
+        !same(row.filter_radius_arcmin, s.config_.display.arcmin(row.filter_radius_px)))
+      differs("artifact_arcmin", fmt(s.config_.display.arcmin(row.artifact_px)), fmt(row.artifact_arcmin));
     s.apply(*plan, row.correct == 1);
+    // The QUEST block as the rows recorded it: every posterior after the update.
+    const quest::Quest& q = s.rounds_[static_cast<std::size_t>(plan->round)][static_cast<std::size_t>(plan->staircase)].quest;
+    if (!same(row.quest_mean, q.mean()) || !same(row.quest_sd, q.sd()))
+      differs("quest_mean", fmt(q.mean()), fmt(row.quest_mean));
     apply_ended(s.trials_done_);
   }
+  if (accept) accept(s.session_json_, s.config_);
+  // Only now may the torn last line (the trial on screen when the process died) be cut.
+  if (log.torn_tail) fs::resize_file(log_path, log.complete_bytes);
   s.session_json_["resumed_utc"].push_back(utc_now());
   s.write_session_json();
   s.writer_ = std::make_unique<trial_log::Writer>(log_path, false);

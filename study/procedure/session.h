@@ -4,12 +4,14 @@
 // randomness of trial t comes from derive_seed(config.seed, t), so replaying the log through
 // the same procedure restores every staircase exactly and continues as if never interrupted.
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "log/directory_lock.h"
 #include "log/trial_log.h"
 #include "procedure/config.h"
 #include "quest/quest.h"
@@ -41,11 +43,19 @@ struct Staircase {
 
 class Session {
  public:
-  // A new session in `dir` (created; refused when it already holds a session).
+  // A new session in `dir` (created; refused when it already holds a session). Both create and
+  // resume lock the directory first (trial_log::DirectoryLock) and hold it for the Session's life,
+  // so a second process on the same directory is refused before it reads or writes anything.
   static Session create(const StudyConfig& config, const std::filesystem::path& dir, const std::string& participant,
                         const nlohmann::json& extra);
-  // Replays dir/trials.csv. A torn last line (the trial on screen when the process died) is cut off.
-  static Session resume(const std::filesystem::path& dir);
+  // Replays dir/trials.csv after checking session.json (types, sizes, nesting, agreement with its
+  // config block) and every row against it (participant, session id, seed, design, display, QUEST
+  // posteriors). `accept`, when given, sees the checked session.json and its config and may throw to refuse (e.g.
+  // a command-line option that contradicts it). Only after all of that is a torn last line (the
+  // trial on screen when the process died) cut off and anything written: a refused resume leaves
+  // every byte as it was.
+  static Session resume(const std::filesystem::path& dir,
+                        const std::function<void(const nlohmann::json&, const StudyConfig&)>& accept = {});
 
   // The next trial, or nothing when every round is finished.
   std::optional<TrialPlan> next() const;
@@ -72,6 +82,7 @@ class Session {
   trial_log::TrialRow make_row(const TrialPlan& plan, const std::string& response, double rt_ms, bool correct) const;
   void write_session_json() const;
 
+  trial_log::DirectoryLock lock_;  // first member: released after the writer is closed
   StudyConfig config_;
   std::filesystem::path dir_;
   std::string session_id_, participant_;

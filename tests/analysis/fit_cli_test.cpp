@@ -173,6 +173,39 @@ TEST(FitCli, PsychometricSubcommandPrintsTheFitAsJson) {
   fs::remove_all(dir);
 }
 
+// Issue 14.2: two processes on one session left duplicated trial numbers, and the fit went on.
+TEST(FitCli, RefusesALogWithDuplicatedOrReorderedTrialNumbers) {
+  const fs::path dir = fresh("dup");
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  const fs::path log = sessions[1] / "trials.csv";
+  const std::string text = read(log);
+  std::vector<std::string> lines;
+  for (std::size_t pos = 0; pos < text.size();) {
+    const std::size_t nl = text.find('\n', pos);
+    lines.push_back(text.substr(pos, nl + 1 - pos));
+    pos = nl + 1;
+  }
+  auto write = [&](const std::vector<std::string>& ls) {
+    std::ofstream o(log, std::ios::trunc);
+    for (const auto& l : ls) o << l;
+  };
+  std::vector<std::string> duplicated = lines;
+  duplicated.insert(duplicated.begin() + 5, lines[4]);  // line 6 repeats trial 3
+  write(duplicated);
+  std::string out;
+  EXPECT_EQ(run(sessions[0].string() + " " + sessions[1].string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find(log.string() + ":6: column 'trial': expected 4, found 3"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  std::vector<std::string> swapped = lines;
+  std::swap(swapped[7], swapped[8]);
+  write(swapped);
+  EXPECT_EQ(run(sessions[1].string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find(log.string() + ":8: column 'trial': expected 6, found 7"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
 // Issue 14.1: levels 1e308 and -1e308 are finite, but their span is not; the fit died with SIGSEGV.
 TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
   const fs::path dir = fresh("huge");

@@ -10,11 +10,15 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <random>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
+#include "log/directory_lock.h"
 #include "log/trial_log.h"
 
 namespace {
@@ -217,6 +221,192 @@ TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   EXPECT_FALSE(fs::exists(fresh("never")));
   fs::remove_all(dir);
   fs::remove(bad);
+}
+
+std::string bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Issue 14.2: two resumes of one directory at once both exited 0 and interleaved their rows. The
+// directory lock refuses the second before it reads or writes a byte, naming the holder's pid.
+TEST(StudyRun, ASessionDirectoryIsOwnedByOneProcess) {
+  const fs::path dir = fresh("locked");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(),
+                 "--stop-after", "20"}),
+            0);
+  const std::string log = bytes(dir / "trials.csv"), json = bytes(dir / "session.json");
+  std::string out;
+  {
+    const trial_log::DirectoryLock held(dir);
+    EXPECT_EQ(run({"run", "--resume", dir.string(), "--observer", kObserver, "--headless"}, &out), 1);
+    EXPECT_EQ(out, "penumbra-study: " + dir.string() + ": in use by another process (pid " +
+                       std::to_string(::getpid()) + "); refusing to touch it\n");
+    EXPECT_EQ(bytes(dir / "trials.csv"), log);
+    EXPECT_EQ(bytes(dir / "session.json"), json);
+  }
+  // A real second process: the first resume holds the directory while it runs.
+  const fs::path cap = fresh("locked-capture");
+  const pid_t first = spawn({"run", "--resume", dir.string(), "--observer", kObserver, "--headless", "--pace-ms", "20"},
+                            cap);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (bytes(dir / "trials.csv").size() == log.size() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  EXPECT_EQ(run({"run", "--resume", dir.string(), "--observer", kObserver, "--headless"}, &out), 1);
+  EXPECT_NE(out.find("(pid " + std::to_string(first) + ")"), std::string::npos) << out;
+  EXPECT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string()}, &out), 1);
+  EXPECT_NE(out.find("in use by another process"), std::string::npos) << out;
+  ASSERT_EQ(kill(first, SIGKILL), 0);
+  int status = 0;
+  waitpid(first, &status, 0);
+  // The kernel dropped the dead process's lock: resuming finishes the session, every trial once.
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--observer", kObserver, "--headless"}, &out), 0) << out;
+  const auto rows = trial_log::read(dir / "trials.csv").rows;
+  for (std::size_t i = 0; i < rows.size(); ++i) ASSERT_EQ(rows[i].trial, static_cast<int>(i));
+  fs::remove_all(dir);
+  fs::remove(cap);
+}
+
+int lines_of(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+// Issue 14.3 and 14.5: resume trusted session.json (an edited participant, display, seed or QUEST
+// block was carried into the continued rows; a huge or deeply nested file made it allocate without
+// bound), and a refused resume had already cut the torn tail of the log.
+TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
+  const fs::path dir = fresh("edited");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(),
+                 "--stop-after", "30"}),
+            0);
+  { std::ofstream(dir / "trials.csv", std::ios::app) << "torn,half a ro"; }  // the trial on screen at a kill
+  const std::string log = bytes(dir / "trials.csv"), original = bytes(dir / "session.json");
+  const nlohmann::json j = nlohmann::json::parse(original);
+  auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json e = j;
+    edit(e);
+    return e.dump(2);
+  };
+  const std::string deep = [&] {
+    std::string nest(100000, '[');
+    nest += std::string(100000, ']');
+    std::string t = original;
+    t.replace(t.find("\"resumed_utc\": []"), 17, "\"resumed_utc\": " + nest);
+    return t;
+  }();
+  const std::string duplicate = [&] {
+    std::string t = original;
+    t.insert(t.find("\"participant\""), "\"participant\": \"other\",\n  ");
+    return t;
+  }();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {edited([](nlohmann::json& e) { e["participant"] = "other"; }), "trials.csv:2: column 'participant': 'sim' where session.json and the replayed procedure give 'other'"},
+      {edited([](nlohmann::json& e) {
+         e["config"]["display"]["width_mm"] = 52.7;
+         e["display"]["width_mm"] = 52.7;
+       }),
+       "column 'artifact_arcmin'"},
+      {edited([](nlohmann::json& e) {
+         e["config"]["seed"] = 2;
+         e["seed"] = 2;
+       }),
+       "does not match the replayed procedure"},
+      {edited([](nlohmann::json& e) {
+         e["config"]["quest"]["beta"] = 2.5;
+         e["quest"]["beta"] = 2.5;
+       }),
+       "column 'quest_mean'"},
+      {edited([](nlohmann::json& e) { e["quest"]["beta"] = 2.5; }), "session.json: quest.beta: differs from the config's QUEST"},
+      {edited([](nlohmann::json& e) { e["seed"] = 2; }), "session.json: seed: expected the config's seed (1)"},
+      {edited([](nlohmann::json& e) { e["participant"] = std::string(300, 'p'); }), "session.json: participant: longer than 200 bytes"},
+      {edited([](nlohmann::json& e) { e["participant"] = std::string(10 << 20, 'p'); }), "session.json: larger than"},
+      {edited([](nlohmann::json& e) { e["ended_rounds"] = {{{"round", 9}, {"after_trial", 3}}}; }), "ended_rounds[0]"},
+      {edited([](nlohmann::json& e) { e.erase("config"); }), "session.json: config: missing"},
+      {deep, "session.json: resumed_utc[0][0][0][0][0][0][0]: nested deeper than 8 levels"},
+      {duplicate, "session.json: participant: duplicate key"},
+  };
+  for (const auto& [text, expected] : cases) {
+    { std::ofstream(dir / "session.json", std::ios::trunc) << text; }
+    std::string out;
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 1) << expected;
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10)) << expected;
+    EXPECT_NE(out.find(expected), std::string::npos) << out.substr(0, 300);
+    EXPECT_EQ(lines_of(out), 1) << out.substr(0, 300);
+    EXPECT_LT(out.size(), 600u) << expected;
+    EXPECT_EQ(bytes(dir / "trials.csv"), log) << expected;
+    EXPECT_EQ(bytes(dir / "session.json"), text) << expected;
+  }
+  // The untouched session.json resumes: the torn tail is cut, and the session finishes.
+  { std::ofstream(dir / "session.json", std::ios::trunc) << original; }
+  std::string out;
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 0) << out;
+  const auto rows = trial_log::read(dir / "trials.csv");
+  EXPECT_FALSE(rows.torn_tail);
+  EXPECT_GT(rows.rows.size(), 100u);
+  fs::remove_all(dir);
+}
+
+// Issue 14.4 and the resume half of 14.8: a session started with c=8 and resumed without
+// --observer went on with the default c=3. The observer and its seed come from session.json; an
+// option that contradicts the recorded run is refused, and so is --config beside --resume.
+TEST(StudyRun, ResumeRestoresTheRecordedObserverAndRefusesContradictions) {
+  const std::string observer = "psychometric:c=8,beta=3.5,lapse=0.02";
+  const fs::path whole = fresh("observer-whole"), dir = fresh("observer");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", observer, "--observer-seed", "11", "--headless", "-o",
+                 whole.string()}),
+            0);
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", observer, "--observer-seed", "11", "--headless", "-o",
+                 dir.string(), "--stop-after", "40"}),
+            0);
+  const std::string log = bytes(dir / "trials.csv"), json = bytes(dir / "session.json");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
+      {{"--observer", kObserver}, "--observer '" + kObserver + "': the session was run with '" + observer + "'"},
+      {{"--observer-seed", "7"}, "--observer-seed 7: the session was run with 11"},
+      {{"--config", kConfig}, "--config: not with --resume"},
+      {{"--participant", "someone"}, "--participant 'someone': the session is 'sim'"},
+  };
+  for (const auto& [options, expected] : refused) {
+    std::vector<std::string> args = {"run", "--resume", dir.string(), "--headless"};
+    args.insert(args.end(), options.begin(), options.end());
+    std::string out;
+    EXPECT_EQ(run(args, &out), 1) << expected;
+    EXPECT_NE(out.find(expected), std::string::npos) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+    EXPECT_EQ(bytes(dir / "trials.csv"), log);
+    EXPECT_EQ(bytes(dir / "session.json"), json);
+  }
+  std::string out;
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 0) << out;
+  EXPECT_EQ(comparable(trial_log::read(dir / "trials.csv").rows), comparable(trial_log::read(whole / "trials.csv").rows));
+  fs::remove_all(whole);
+  fs::remove_all(dir);
+}
+
+// Issue 14.6: a rejected --observer created the session directory (session.json and a header-only
+// log), so the same -o was refused afterwards.
+TEST(StudyRun, ARejectedObserverCreatesNothing) {
+  const fs::path dir = fresh("rejected-observer");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"psychometric:c=-1", "--observer: c_true must be positive"},
+      {"psychometric:c=nan", "--observer: 'c=nan': expected a finite number"},
+      {"psychometric:c=3x", "--observer: 'c=3x': expected a finite number"},
+      {"psychometric:lapse=0.7", "--observer: lapse: expected a rate in [0, 1 - guess)"},
+      {"psychometric:fa=0.9", "--observer: fa: expected a rate in (0, 0.5)"},
+      {"psychometric:gain=2", "--observer: unknown parameter 'gain'"},
+      {"image:noise=-1", "--observer: noise: expected a number >= 0"},
+      {"bogus", "--observer 'bogus': expected psychometric"},
+  };
+  for (const auto& [observer, expected] : cases) {
+    std::string out;
+    EXPECT_EQ(run({"run", "--config", kConfig, "--observer", observer, "--headless", "-o", dir.string()}, &out), 1)
+        << observer;
+    EXPECT_NE(out.find("penumbra-study: " + expected), std::string::npos) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+    EXPECT_FALSE(fs::exists(dir)) << observer;
+  }
+  EXPECT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(), "--stop-after",
+                 "5"}),
+            0);
+  fs::remove_all(dir);
 }
 
 }  // namespace
