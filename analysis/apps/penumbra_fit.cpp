@@ -18,6 +18,7 @@
 #include "fit/study_fit.h"
 #include "report/outputs.h"
 #include "common/progress_bar.h"
+#include "io/staged_dir.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -162,10 +163,13 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   report["fit_seconds"] = seconds;
   report["threads"] = so.threads > 0 ? so.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::string summary = summary_text(fit, ref, so.condition);
-  fs::create_directories(so.output);
-  write_file_atomic(so.output / "report.json", report.dump(1) + "\n");
-  write_file_atomic(so.output / "summary.txt", summary);
-  write_file_atomic(so.output / "calibration.json", calibration.dump(2) + "\n");
+  // The three files are one output: staged together and swapped in as a unit, so a failure (a full
+  // disk) never leaves a new report beside an old calibration.
+  io::StagedDirectory out(so.output.string(), "calibration.json");
+  write_file_atomic(out.path() / "report.json", report.dump(1) + "\n");
+  write_file_atomic(out.path() / "summary.txt", summary);
+  write_file_atomic(out.path() / "calibration.json", calibration.dump(2) + "\n");
+  out.commit();
   std::cout << summary;
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
               so.output.string().c_str());

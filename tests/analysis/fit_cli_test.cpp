@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -203,6 +204,31 @@ TEST(FitCli, RefusesALogWithDuplicatedOrReorderedTrialNumbers) {
   EXPECT_EQ(run(sessions[1].string() + " -o " + (dir / "out").string(), &out), 1);
   EXPECT_NE(out.find(log.string() + ":8: column 'trial': expected 6, found 7"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+// Issue 14.7: a write that failed after the first file (calibration.json on a full disk) left the
+// new report.json and summary.txt beside the old calibration. The three files are now one output:
+// staged together and swapped in as a unit. Here the old output's calibration.json is a directory,
+// which made the old code's last rename fail; the staged output replaces the whole directory.
+TEST(FitCli, OutputsAreReplacedAsOneUnit) {
+  const fs::path dir = fresh("unit");
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  const std::string inputs = sessions[0].string() + " " + sessions[1].string();
+  const fs::path out_dir = dir / "out";
+  std::string out;
+  ASSERT_EQ(run(inputs + " -o " + out_dir.string() + " --bootstrap 0", &out), 0) << out;
+  fs::remove(out_dir / "calibration.json");
+  fs::create_directories(out_dir / "calibration.json" / "in-the-way");
+  ASSERT_EQ(run(inputs + " -o " + out_dir.string() + " --bootstrap 5", &out), 0) << out;
+  ASSERT_TRUE(fs::is_regular_file(out_dir / "calibration.json"));
+  const nlohmann::json report = nlohmann::json::parse(read(out_dir / "report.json"));
+  const nlohmann::json calibration = nlohmann::json::parse(read(out_dir / "calibration.json"));
+  EXPECT_EQ(report["created_utc"], calibration["created_utc"]);
+  EXPECT_EQ(report["conditions"][0]["bootstrap"]["resamples"], 5);
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  EXPECT_EQ(names, (std::set<std::string>{"out", "sessions"}));  // no staging left behind
   fs::remove_all(dir);
 }
 

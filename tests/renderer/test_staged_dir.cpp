@@ -2,10 +2,12 @@
 // directories of killed runs do not pile up beside it.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <string>
+#include <thread>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -57,6 +59,40 @@ TEST_F(StagedDir, CommitReplacesAPreviousOutputAndNothingElseRemains) {
   }
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
   EXPECT_EQ(listing(work_ / "out"), (std::set<std::string>{"report.json", "more.csv"}));
+}
+
+// Issue 14.7: commit() removed the previous output before renaming the new one in, so a kill in
+// between left no output at all. A reader watching the target must always find a whole output.
+TEST_F(StagedDir, AtEveryInstantTheOldOrTheNewOutputExists) {
+  const fs::path target = work_ / "out";
+  {
+    StagedDirectory out(target.string(), "report.json");
+    std::ofstream(out.path() / "report.json") << "0\n";
+    out.commit();
+  }
+  std::atomic<bool> done = false;
+  std::atomic<long> looks = 0, missing = 0;
+  std::thread watcher([&] {
+    while (!done) {
+      std::error_code ec;
+      if (!fs::exists(target / "report.json", ec)) ++missing;
+      ++looks;
+    }
+  });
+  for (int i = 1; i <= 300; ++i) {
+    StagedDirectory out(target.string(), "report.json");
+    std::ofstream(out.path() / "report.json") << i << "\n";
+    out.commit();
+  }
+  done = true;
+  watcher.join();
+  EXPECT_GT(looks, 300);
+  EXPECT_EQ(missing, 0) << "the output was missing in " << missing << " of " << looks << " looks";
+  EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
+  std::ifstream in(target / "report.json");
+  std::string text;
+  std::getline(in, text);
+  EXPECT_EQ(text, "300");
 }
 
 TEST_F(StagedDir, WithoutCommitThePreviousOutputIsUntouched) {

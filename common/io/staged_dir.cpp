@@ -1,6 +1,9 @@
 #include "io/staged_dir.h"
 
 #include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
 #include <csignal>
 #include <stdexcept>
 #include <string_view>
@@ -51,10 +54,30 @@ StagedDirectory::~StagedDirectory() {
 }
 
 void StagedDirectory::commit() {
-  if (fs::exists(target_)) fs::remove_all(target_);
   if (target_.has_parent_path()) fs::create_directories(target_.parent_path());
+  std::error_code ec;
+  if (!fs::exists(target_, ec)) {
+    fs::rename(staging_, target_);
+    committed_ = true;
+    return;
+  }
+  // Swap the new output in and the old one out in one step: at every instant a reader (or a kill)
+  // finds either the old or the new output in full. The old one then sits at the staging path.
+  if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target_.c_str(), RENAME_EXCHANGE) == 0) {
+    committed_ = true;
+    fs::remove_all(staging_, ec);
+    return;
+  }
+  if (errno != EINVAL && errno != ENOSYS)
+    throw std::runtime_error(target_.string() + ": cannot replace the previous output: " + std::strerror(errno));
+  // A file system without the exchange: move the old output aside, the new one in, then delete the
+  // old (a kill in between leaves the old output whole at <target>.old-<pid>).
+  const fs::path old = target_.string() + ".old-" + std::to_string(::getpid());
+  fs::remove_all(old, ec);
+  fs::rename(target_, old);
   fs::rename(staging_, target_);
   committed_ = true;
+  fs::remove_all(old, ec);
 }
 
 }  // namespace penumbra::io

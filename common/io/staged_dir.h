@@ -1,7 +1,8 @@
 #pragma once
 // An output directory that appears whole or not at all: files are written under
-// `DIR.partial-<pid>` and renamed to DIR by commit(); without commit() the staging directory is
-// removed, so a failure leaves a previous DIR untouched and nothing half-written. Staging
+// `DIR.partial-<pid>` and swapped with DIR by commit() in one renameat2(RENAME_EXCHANGE), so at
+// every instant DIR holds the old or the new output in full; without commit() the staging
+// directory is removed, so a failure leaves a previous DIR untouched and nothing half-written. Staging
 // directories of killed runs (their process gone) are removed by the next run to the same DIR.
 #include <filesystem>
 #include <string>
