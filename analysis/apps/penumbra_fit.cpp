@@ -18,6 +18,7 @@
 #include "fit/study_fit.h"
 #include "report/outputs.h"
 #include "common/progress_bar.h"
+#include "cli/checks.h"
 #include "io/staged_dir.h"
 
 namespace fs = std::filesystem;
@@ -190,9 +191,11 @@ int main(int argc, char** argv) {
   app.add_option("--reference", so.references,
                  "reference filter sizes from penumbra-study reference (repeatable; the first match wins)");
   app.add_option("--condition", so.condition, "calibration.json takes c from this condition (e.g. stair/1) instead of the largest");
-  app.add_option("--bootstrap", so.bootstrap, "resamples of the bootstrap over participants (0: none)")->capture_default_str();
-  app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str();
-  app.add_option("--threads", so.threads, "bootstrap threads (0: all cores)")->capture_default_str();
+  app.add_option("--bootstrap", so.bootstrap, "resamples of the bootstrap over participants (0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000000));
+  app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str()->check(cli::non_negative_integer());
+  app.add_option("--threads", so.threads, "bootstrap threads (0: all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   app.add_flag("--no-progress", so.no_progress, "no progress bar on stderr");
   add_model_options(app, study_model);
 

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json/json_input.h"
+
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -32,14 +34,7 @@ double number_field(const nlohmann::json& j, const std::string& file, const std:
 // session.json's QUEST block and stopping rule; absent fields are an error only where present
 // blocks are malformed (a bare log is fine, it just has no QUEST to recompute).
 void read_session_json(const fs::path& path, SessionInfo& info) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::runtime_error(path.string() + ": malformed JSON at byte " + std::to_string(e.byte));
-  }
+  const nlohmann::json j = json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 8});
   const std::string file = path.string();
   if (!j.is_object()) throw std::runtime_error(file + ": expected an object");
   for (const char* key : {"session_id", "participant"}) {

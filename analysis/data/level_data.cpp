@@ -9,6 +9,8 @@ namespace penumbra::analysis {
 
 namespace {
 
+constexpr double kMaxCount = 2147483647.0;
+
 std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r");
   if (b == std::string::npos) return "";
@@ -62,7 +64,9 @@ std::vector<BinomialRow> read_level_data(const std::filesystem::path& path, Leve
     if (format == LevelFormat::counts) {
       r.n_correct = value(1);
       r.n_total = value(2);
-      if (r.n_total != std::floor(r.n_total) || r.n_total < 1) fail(2, "expected an integer >= 1");
+      // The fit counts trials in an int: a count of 2^31 or more would wrap.
+      if (r.n_total != std::floor(r.n_total) || r.n_total < 1 || r.n_total > kMaxCount)
+        fail(2, "expected an integer in [1, 2147483647]");
       if (r.n_correct != std::floor(r.n_correct) || r.n_correct < 0 || r.n_correct > r.n_total)
         fail(1, "expected an integer in [0, n_total]");
     } else {

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "json/json_input.h"
+
 namespace penumbra::analysis {
 
 const ReferenceEntry* ReferenceTable::find(const std::string& pattern, double contrast, double artifact_px) const {
@@ -16,14 +18,7 @@ const ReferenceEntry* ReferenceTable::find(const std::string& pattern, double co
 }
 
 ReferenceTable load_reference_table(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open the reference file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::runtime_error(path.string() + ": malformed JSON at byte " + std::to_string(e.byte));
-  }
+  const nlohmann::json j = json_input::read_file(path, {.max_bytes = 16 << 20, .max_depth = 16});
   ReferenceTable table;
   table.file = path.string();
   if (!j.is_object() || !j.contains("entries") || !j["entries"].is_array())

@@ -126,7 +126,7 @@ void validate(const ModelSpec& spec) {
   if (!(spec.slope.min > 0 && spec.slope.min < spec.slope.max && std::isfinite(spec.slope.max)))
     throw std::invalid_argument("slope bounds must satisfy 0 < min < max");
   if (spec.thresholds < 1) throw std::invalid_argument("at least one threshold");
-  int trials = 0;
+  double trials = 0;
   for (const Group& g : spec.groups) {
     if (g.threshold_index < 0 || g.threshold_index >= spec.thresholds)
       throw std::invalid_argument("group threshold index out of range");
@@ -137,10 +137,11 @@ void validate(const ModelSpec& spec) {
         throw std::invalid_argument("the Weibull needs stimulus levels > 0 (use log-weibull for log units)");
       if (!(r.n_total >= 1 && r.n_correct >= 0 && r.n_correct <= r.n_total && std::isfinite(r.n_total)))
         throw std::invalid_argument("counts must satisfy 0 <= n_correct <= n_total, n_total >= 1");
-      trials += static_cast<int>(r.n_total);
+      trials += r.n_total;
     }
   }
   if (trials == 0) throw std::invalid_argument("no trials to fit");
+  if (trials > std::numeric_limits<int>::max()) throw std::invalid_argument("more than 2147483647 trials in all");
 }
 
 struct Bounds {

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json/json_input.h"
+
 namespace penumbra::adaptive {
 
 double required_texels_uv(double c, double radius_uv) {
@@ -62,14 +64,16 @@ namespace {
 }
 }  // namespace
 
+namespace {
+constexpr double kMinC = 0.01, kMaxC = 1000.0;
+}  // namespace
+
 Calibration load_calibration(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw CalibrationError(path.string() + ": cannot open calibration file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw CalibrationError(path.string() + ": malformed JSON at byte " + std::to_string(e.byte));
+    j = json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 16});
+  } catch (const json_input::JsonError& e) {
+    throw CalibrationError(e.what());
   }
   if (!j.is_object()) fail(path, "(top level)", "expected an object");
   Calibration cal;
@@ -77,7 +81,10 @@ Calibration load_calibration(const std::filesystem::path& path) {
   if (!j.contains("c")) fail(path, "c", "missing");
   if (!j["c"].is_number()) fail(path, "c", "expected a number");
   cal.c = j["c"].get<double>();
-  if (!std::isfinite(cal.c) || cal.c <= 0) fail(path, "c", "expected a positive number, got " + j["c"].dump());
+  // The renderer keeps c as a float: bounds that no texel count leaves keep 1e308 from becoming
+  // inf and 1e-300 from becoming 0.
+  if (!(cal.c >= kMinC && cal.c <= kMaxC))
+    fail(path, "c", "expected a positive number in [0.01, 1000] texels, got " + json_input::printable(j["c"].dump()));
   cal.ci95_lo = cal.ci95_hi = cal.c;
   if (j.contains("ci95")) {
     const auto& ci = j["ci95"];
@@ -85,7 +92,7 @@ Calibration load_calibration(const std::filesystem::path& path) {
       fail(path, "ci95", "expected [lo, hi]");
     cal.ci95_lo = ci[0].get<double>();
     cal.ci95_hi = ci[1].get<double>();
-    if (!(cal.ci95_lo > 0 && cal.ci95_lo <= cal.c && cal.c <= cal.ci95_hi && std::isfinite(cal.ci95_hi)))
+    if (!(cal.ci95_lo > 0 && cal.ci95_lo <= cal.c && cal.c <= cal.ci95_hi && cal.ci95_hi <= kMaxC))
       fail(path, "ci95", "expected 0 < lo <= c <= hi, got " + ci.dump());
   }
   if (j.contains("condition")) {

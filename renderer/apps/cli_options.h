@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/checks.h"
 #include "shadows/settings.h"
 
 namespace penumbra::apps {
@@ -80,7 +81,7 @@ std::vector<T> parse_list(const std::string& option, const std::string& text, T 
 inline void add_light_size_option(CLI::App& app, float& size) {
   app.add_option("--light-size", size,
                  "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(cli::finite_range(0.0, 1e6));
 }
 
 // Parses the command line. Returns the exit status to leave with — 0 after --help, 2 after a

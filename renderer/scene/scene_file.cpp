@@ -26,6 +26,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include "json/json_input.h"
 #include "scene/scene.h"
 
 namespace penumbra::scene {
@@ -61,65 +62,8 @@ std::string fmt(float f) {
   return s.str();
 }
 
-std::string child(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-std::string element(const std::string& path, std::size_t i) { return path + "[" + std::to_string(i) + "]"; }
-
-// 1-based line and column of the 1-based byte position `byte` in `text`.
-std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t byte) {
-  const std::size_t pos = std::min(byte == 0 ? 0 : byte - 1, text.size());
-  const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(pos), '\n'));
-  const std::size_t last_newline = text.rfind('\n', pos == 0 ? std::string_view::npos : pos - 1);
-  const std::size_t column = last_newline == std::string_view::npos || pos == 0 ? pos + 1 : pos - last_newline;
-  return {line, column};
-}
-
-// nlohmann keeps the last of two equal keys without a word; a duplicated key is as silent a
-// mistake as a misspelt one, so the parse callback tracks the field path and rejects it.
-struct DuplicateKey {
-  std::string path;
-};
-
-class DuplicateKeyCheck {
- public:
-  bool operator()(int /*depth*/, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start: frames_.push_back({false, 0, {}, {}}); break;
-      case json::parse_event_t::array_start: frames_.push_back({true, 0, {}, {}}); break;
-      case json::parse_event_t::key: {
-        Frame& f = frames_.back();
-        f.key = parsed.get<std::string>();
-        if (!f.keys.insert(f.key).second) throw DuplicateKey{path()};
-        break;
-      }
-      case json::parse_event_t::object_end:
-      case json::parse_event_t::array_end:
-        frames_.pop_back();
-        element_done();
-        break;
-      case json::parse_event_t::value: element_done(); break;
-    }
-    return true;
-  }
-
- private:
-  struct Frame {
-    bool array;
-    std::size_t index;
-    std::string key;
-    std::set<std::string> keys;
-  };
-  void element_done() {
-    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
-  }
-  std::string path() const {
-    std::string p;
-    for (const Frame& f : frames_) p = f.array ? element(p, f.index) : child(p, f.key);
-    return p;
-  }
-  std::vector<Frame> frames_;
-};
+using json_input::child;
+using json_input::element;
 
 // Reads one parsed scene document; every accessor checks type, range and finiteness.
 class SceneReader {
@@ -481,31 +425,12 @@ std::string read_text(const std::filesystem::path& path) {
   return text.str();
 }
 
+// Duplicate keys, overflow and syntax errors are refused by the shared strict reader.
 json parse(const std::filesystem::path& path, const std::string& text) {
-  const auto where = [&](std::size_t byte) {
-    const auto [line, column] = line_column(text, byte);
-    return path.string() + ":" + std::to_string(line) + ":" + std::to_string(column) + ": ";
-  };
-  // nlohmann's messages start with "[json.exception.x.n] " and repeat the position we print.
-  const auto strip = [](std::string msg) {
-    if (const auto p = msg.find("] "); msg.starts_with("[json.exception") && p != std::string::npos) msg.erase(0, p + 2);
-    if (msg.starts_with("parse error at line"))
-      if (const auto p = msg.find(": "); p != std::string::npos) msg.erase(0, p + 2);
-    return msg;
-  };
   try {
-    return json::parse(text, DuplicateKeyCheck{});
-  } catch (const json::parse_error& e) {
-    throw SceneError(one_line(where(e.byte) + "malformed JSON: " + strip(e.what())));
-  } catch (const DuplicateKey& d) {
-    throw SceneError(one_line(path.string() + ": " + d.path + ": duplicate key"));
-  } catch (const json::exception& e) {
-    // Number overflow ("number overflow parsing '1e400'") carries no position: find the token.
-    std::string msg = strip(e.what());
-    std::string prefix = path.string() + ": ";
-    if (const auto a = msg.find('\''), b = msg.rfind('\''); a != std::string::npos && b > a + 1)
-      if (const auto at = text.find(msg.substr(a + 1, b - a - 1)); at != std::string::npos) prefix = where(at + 1);
-    throw SceneError(one_line(prefix + "malformed JSON: " + msg));
+    return json_input::parse(text, path.string());
+  } catch (const json_input::JsonError& e) {
+    throw SceneError(one_line(e.what()));
   }
 }
 

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/checks.h"
 #include "common/progress_bar.h"
 #include "observers/staircase_simulation.h"
 #include "quest/psychometric.h"
@@ -272,11 +273,12 @@ int main(int argc, char** argv) {
   simulate->add_option("--c-true", config.planted.c_true, "planted threshold filter radius / artifact size")->required();
   simulate->add_option("--trials", config.trials, "trials per run")->capture_default_str();
   simulate->add_option("--runs", config.runs, "independent runs")->capture_default_str();
-  simulate->add_option("--seed", config.seed, "RNG seed")->capture_default_str();
+  simulate->add_option("--seed", config.seed, "RNG seed")->capture_default_str()->check(penumbra::cli::non_negative_integer());
   simulate->add_option("--method", method_name, "quest | questplus")->capture_default_str();
   simulate->add_option("--placement", simulate_placement, "QUEST placement: quantile | mean | mode")->capture_default_str();
   simulate->add_option("--sd-target", config.sd_target, "report trials until the posterior sd falls below this")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(penumbra::cli::finite_range(0, 100));
   simulate->add_option("--artifact-px", config.artifact_px, "artifact size of the simulated stimuli")->capture_default_str();
   simulate->add_option("--observer-model", model_name, "log-weibull | weibull | normal | logistic")->capture_default_str();
   simulate->add_option("--observer-slope", config.planted.slope, "planted slope (default: --beta)");

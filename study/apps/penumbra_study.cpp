@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "apps/reference_command.h"
+#include "cli/checks.h"
 #include "gl/context.h"
 #include "io/image_io.h"
 #include "json/json_input.h"
@@ -333,13 +334,15 @@ int main(int argc, char** argv) {
   fs::path stim_out;
   stim->add_option("--pattern", pattern, "stair or step")->capture_default_str();
   stim->add_option("--artifact-px", spec.artifact_px, "shadow-map texel size on screen (px)")->required();
-  stim->add_option("--filter-radius-px", spec.filter_radius_px, "PCF radius (px); clamped to [1, size/2]")->required();
+  stim->add_option("--filter-radius-px", spec.filter_radius_px, "PCF radius (px); clamped to [1, size/2]")
+      ->required()
+      ->check(cli::finite_range(0, 1e6));
   stim->add_option("--contrast", spec.lit_linear, "lit level in linear light (1 = full, 0.5 = half)")->capture_default_str();
   stim->add_option("--kernel", kernel, "disk (exact dense disk), grid (box) or poisson")->capture_default_str();
   stim->add_option("--taps", spec.poisson_taps, "Poisson taps")->capture_default_str();
   stim->add_option("--size-px", spec.size_px, "stimulus side (px)")->capture_default_str();
   stim->add_option("--transfer", transfer, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
-  stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str();
+  stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str()->check(cli::non_negative_integer());
   stim->add_option("-o,--output", stim_out, "output directory")->required();
 
   auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
@@ -348,11 +351,15 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)");
   run->add_option("--resume", ro.resume, "continue the session in this directory");
   run->add_option("--observer", ro.observer, "psychometric:c=..,beta=..,lapse=..")->capture_default_str();
-  run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")->capture_default_str();
+  run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")
+      ->capture_default_str()
+      ->check(cli::non_negative_integer());
   run->add_option("--participant", ro.participant, "participant id")->capture_default_str();
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
-  run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)");
-  run->add_option("--stop-after", ro.stop_after, "headless: stop once the session has this many trials (resumable)");
+  run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)")
+      ->check(CLI::Range(0, 60000));
+  run->add_option("--stop-after", ro.stop_after, "headless: stop once the session has this many trials (resumable)")
+      ->check(CLI::Range(0, 1000000));
 #ifdef PENUMBRA_STUDY_GUI
   study_gui::add_options(*run, ro.gui);
 #endif

@@ -16,6 +16,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "cli/checks.h"
 #include "gui/admin_view.h"
 #include "gui/gui_window.h"
 #include "gui/participant_view.h"
@@ -30,7 +31,7 @@ void add_options(CLI::App& run, GuiOptions& o) {
       ->check(CLI::Range(0, 16));
   run.add_option("--windowed", o.windowed, "participant view in a WxH window instead of full screen (testing)");
   run.add_flag("--admin-panel", o.admin_panel, "single monitor: the admin view is a panel in the participant window, F12 shows/hides it");
-  run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(CLI::Range(0.0, 10000.0));
+  run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(cli::finite_range(0.0, 10000.0));
   run.add_option("--screenshot", o.screenshot_dir, "write participant.png and admin.png into DIR at the first stimulus, then stop");
 }
 

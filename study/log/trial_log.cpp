@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "json/json_input.h"
+
 namespace penumbra::trial_log {
 
 const std::vector<std::string>& columns() {
@@ -43,6 +45,34 @@ const std::string& text(const std::string& v, const char* name) {
   return v;
 }
 
+// UTF-8 (no overlong forms, surrogates or code points above U+10FFFF) without control characters.
+bool valid_text(const std::string& s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x20 || c == 0x7f) return false;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    int n = 0;
+    unsigned cp = 0;
+    if (c >= 0xc2 && c <= 0xdf) n = 1, cp = c & 0x1f;
+    else if (c >= 0xe0 && c <= 0xef) n = 2, cp = c & 0x0f;
+    else if (c >= 0xf0 && c <= 0xf4) n = 3, cp = c & 0x07;
+    else return false;
+    if (i + static_cast<std::size_t>(n) >= s.size()) return false;
+    for (int k = 1; k <= n; ++k) {
+      const auto d = static_cast<unsigned char>(s[i + static_cast<std::size_t>(k)]);
+      if ((d & 0xc0) != 0x80) return false;
+      cp = (cp << 6) | (d & 0x3f);
+    }
+    if ((n == 2 && (cp < 0x800 || (cp >= 0xd800 && cp <= 0xdfff))) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)))
+      return false;
+    i += static_cast<std::size_t>(n) + 1;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string format_row(const TrialRow& r) {
@@ -71,7 +101,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
     throw std::runtime_error(where + "expected " + std::to_string(columns().size()) + " columns, found " +
                              std::to_string(f.size()));
   auto fail = [&](std::size_t i, const std::string& what) -> void {
-    throw std::runtime_error(where + "column '" + columns()[i] + "': " + what + " (found '" + f[i] + "')");
+    throw std::runtime_error(where + "column '" + columns()[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
   };
   auto real = [&](std::size_t i) {
     double v = 0;
@@ -94,8 +124,13 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
     fail(i, "expected " + list);
     return std::string();
   };
+  // Free text as the writer writes it: no quotes or control bytes (a '\r' of a CRLF file included),
+  // valid UTF-8, short; so every accepted row is written back unchanged and is safe in a report.
   auto nonempty = [&](std::size_t i) {
     if (f[i].empty()) fail(i, "expected a value");
+    if (f[i].size() > 400) fail(i, "expected at most 400 bytes");
+    if (f[i].find('"') != std::string::npos || !valid_text(f[i]))
+      fail(i, "expected UTF-8 text without quotes or control characters");
     return f[i];
   };
   TrialRow r;

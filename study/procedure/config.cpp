@@ -5,6 +5,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "json/json_input.h"
+
 namespace penumbra::procedure {
 
 double Display::arcmin(double px) const {
@@ -175,15 +177,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
 }
 
 StudyConfig load_config(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open the study config");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::runtime_error(path.string() + ": not valid JSON: " + e.what());
-  }
-  return parse_config(j, path.string());
+  return parse_config(json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 16}), path.string());
 }
 
 nlohmann::json to_json(const StudyConfig& c) {

@@ -232,6 +232,28 @@ TEST(FitCli, OutputsAreReplacedAsOneUnit) {
   fs::remove_all(dir);
 }
 
+// Issue 14.8: counts of 2^31 and more wrapped to negative; negative seeds and thread counts were
+// taken; a duplicated key in session.json was read as its last value.
+TEST(FitCli, ValuesThatWouldChangeSilentlyAreRefused) {
+  const fs::path dir = fresh("silent");
+  std::string out;
+  std::ofstream(dir / "big.csv") << "-1,2147483648,2147483648\n0,1,2\n";
+  EXPECT_EQ(run("psychometric --input " + (dir / "big.csv").string(), &out), 1) << out;
+  EXPECT_NE(out.find("big.csv:1: column 'n_total': expected an integer in [1, 2147483647]"), std::string::npos) << out;
+  const auto sessions = simulated_sessions(dir / "sessions", 1);
+  EXPECT_NE(run(sessions[0].string() + " -o " + (dir / "out").string() + " --seed -1", &out), 0) << out;
+  EXPECT_NE(out.find("--seed"), std::string::npos) << out;
+  EXPECT_NE(run(sessions[0].string() + " -o " + (dir / "out").string() + " --threads -1", &out), 0) << out;
+  EXPECT_NE(out.find("--threads"), std::string::npos) << out;
+  std::string json = read(sessions[0] / "session.json");
+  json.insert(json.find('{') + 1, "\"participant\": \"x\",");
+  std::ofstream(sessions[0] / "session.json", std::ios::trunc) << json;
+  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "out").string(), &out), 1) << out;
+  EXPECT_NE(out.find("session.json: participant: duplicate key"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
 // Issue 14.1: levels 1e308 and -1e308 are finite, but their span is not; the fit died with SIGSEGV.
 TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
   const fs::path dir = fresh("huge");

@@ -135,7 +135,14 @@ TEST_F(CalibrationFile, BadFilesNameTheField) {
       {R"({"c": 3, "ci95": [1]})", ": ci95: expected [lo, hi]"},
       {R"({"c": 3, "condition": 7})", ": condition: expected a string"},
       {R"([1, 2])", ": (top level): expected an object"},
-      {R"({"c": 3,)", ": malformed JSON"},
+      {R"({"c": 3,)", ":1:9: malformed JSON"},
+      // Issue 14.8: c is kept as a float; 1e308 became inf and 1e-300 became 0. A duplicated key
+      // was read as its last value.
+      {R"({"c": 1e308})", ": c: expected a positive number in [0.01, 1000] texels"},
+      {R"({"c": 1e-300})", ": c: expected a positive number in [0.01, 1000] texels"},
+      {R"({"c": 3, "ci95": [2, 1e300]})", ": ci95: expected 0 < lo <= c <= hi"},
+      {R"({"c": 3, "c": 4})", ": c: duplicate key"},
+      {R"({"c": 1e400})", ":1:7: malformed JSON: number overflow"},
   };
   for (const auto& c : cases) {
     const auto p = write(c.text);

@@ -290,6 +290,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"resolution_above_device_limit", {"--resolution", "65536"}, {"--resolution", "65536"}},
         BadCase{"pcf_radius_negative", {"--pcf.radius", "-1"}, {"--pcf.radius", "'-1'"}},
         BadCase{"pcf_radius_nan", {"--pcf.radius", "nan"}, {"--pcf.radius", "'nan'"}},
+        BadCase{"light_size_nan", {"--light-size", "nan"}, {"--light-size", "expected a finite number"}},  // issue 14.8
         BadCase{"pcf_taps_not_integer", {"--pcf.poisson_taps", "2.5"}, {"--pcf.poisson_taps", "'2.5'"}},
         BadCase{"pcf_kernel_unknown", {"--pcf.kernel", "box"}, {"--pcf.kernel", "'box'", "poisson"}},
         BadCase{"technique_unknown", {"--technique", "foo"}, {"--technique", "foo"}},

@@ -106,6 +106,8 @@ TEST(PenumbraQuestCli, BadInputGetsOneLineErrorAndNonZeroExit) {
       {"simulate --trials 5", "--c-true is required"},
       {"simulate --c-true 3 --trials 0", "trials must be at least 1"},
       {"simulate --c-true 3 --method staircase", "--method: 'staircase'"},
+      {"simulate --c-true 3 --sd-target nan", "--sd-target: expected a finite number"},  // issue 14.8
+      {"simulate --c-true 3 --seed -1", "--seed: expected a non-negative integer"},
       {"frobnicate", ""},
       {"", ""},
   };

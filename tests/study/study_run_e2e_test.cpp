@@ -409,4 +409,23 @@ TEST(StudyRun, ARejectedObserverCreatesNothing) {
   fs::remove_all(dir);
 }
 
+// Issue 14.8: NaN passed range checks and negative seeds, paces and stop counts were taken (a
+// seed of -1 became 2^64 - 1). Each is refused before anything is created.
+TEST(StudyRun, NaNAndNegativeOptionsAreRefusedBeforeAnythingIsCreated) {
+  const fs::path dir = fresh("negative");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--observer-seed", "-1"}, "--observer-seed"},
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--pace-ms", "-5"}, "--pace-ms"},
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--stop-after", "-3"}, "--stop-after"},
+      {{"stimulus", "--artifact-px", "10", "--filter-radius-px", "nan", "-o", dir.string()}, "--filter-radius-px"},
+      {{"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--seed", "-2", "-o", dir.string()}, "--seed"},
+  };
+  for (const auto& [args, option] : cases) {
+    std::string out;
+    EXPECT_NE(run(args, &out), 0) << option;
+    EXPECT_NE(out.find(option), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir)) << option;
+  }
+}
+
 }  // namespace

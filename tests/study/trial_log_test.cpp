@@ -91,6 +91,19 @@ TEST(TrialLog, ReaderNamesFileLineAndColumn) {
   wrong_intensity.replace(wrong_intensity.find(",2afc,") + 6, 4, "0.25");
   EXPECT_NE(message(write(wrong_intensity)).find("column 'intensity'"), std::string::npos);
   EXPECT_NE(message(write("a,b\n")).find(":2: expected 25 columns, found 2"), std::string::npos);
+  // Free text the writer would refuse (a quote, a CR of a CRLF file, bytes that are not UTF-8) is
+  // refused by the reader too, and the value is echoed short and escaped.
+  for (const auto& [participant, shown] : std::vector<std::pair<std::string, std::string>>{
+           {"p\"1", "p\"1"}, {"p1\r", "p1\\x0d"}, {"p\xff" "1", "p\\xff1"}, {"p\xc0\xaf", "p\\xc0\\xaf"}}) {
+    std::string row = good;
+    row.replace(row.find(",p1,"), 4, "," + participant + ",");
+    EXPECT_EQ(message(write(row)), (dir / "t.csv").string() +
+                                       ":2: column 'participant': expected UTF-8 text without quotes or control "
+                                       "characters (found '" + shown + "')");
+  }
+  std::string long_name = good;
+  long_name.replace(long_name.find(",p1,"), 4, "," + std::string(100000, 'p') + ",");
+  EXPECT_LT(message(write(long_name)).size(), 300u);
   std::ofstream(dir / "h.csv") << "trial,response\n";
   EXPECT_NE(message(dir / "h.csv").find("h.csv:1: the header"), std::string::npos);
 
@@ -133,6 +146,16 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
   EXPECT_EQ(with("quest", {{"beta", "steep"}}), "study.json: quest.beta: expected a number");
   EXPECT_EQ(with("artifact_px", {5, 5}), "study.json: artifact_px[1]: duplicate artifact size");
   EXPECT_EQ(with("colour", 1), "study.json: colour: unknown field");
+  // Issue 14.8: a duplicated key in the file was read as its last value.
+  const fs::path dup = fs::temp_directory_path() / ("penumbra-dup-" + std::to_string(::getpid()) + ".json");
+  std::ofstream(dup) << R"({"rounds": [{"pattern": "stair"}], "stopping": {"max_trials": 40, "max_trials": 4}})";
+  try {
+    procedure::load_config(dup);
+    ADD_FAILURE() << "a duplicated key was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), dup.string() + ": stopping.max_trials: duplicate key");
+  }
+  fs::remove(dup);
   EXPECT_EQ(with("display", {{"transfer", "pq"}}),
             "study.json: display.transfer: transfer function 'pq': expected srgb, gamma2.2 or linear");
   EXPECT_EQ(config_error(nlohmann::json::object()),

@@ -1,0 +1,40 @@
+#pragma once
+// Command-line checks that CLI11's own let slip: CLI::Range compares with < and >, so NaN (every
+// comparison false) passes it; an unsigned option takes "-1" as 2^64 - 1. Header only (CLI11).
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace penumbra::cli {
+
+// A finite number in [lo, hi].
+inline CLI::Validator finite_range(double lo, double hi) {
+  char range[64];
+  std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
+  const std::string text = range;
+  return CLI::Validator(
+      [lo, hi, text](std::string& input) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(input.c_str(), &end);
+        if (input.empty() || end != input.c_str() + input.size() || !(v >= lo && v <= hi))
+          return "expected a finite number in " + text;
+        return {};
+      },
+      "FLOAT in " + text, "FINITE_RANGE");
+}
+
+// Digits only: no sign, so nothing wraps.
+inline CLI::Validator non_negative_integer() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        if (input.empty() || input.find_first_not_of("0123456789") != std::string::npos)
+          return "expected a non-negative integer";
+        return {};
+      },
+      "UINT", "NON_NEGATIVE_INTEGER");
+}
+
+}  // namespace penumbra::cli
