@@ -32,6 +32,7 @@
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
+#include "shadows/technique.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -92,19 +93,10 @@ struct Row {
 // Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
 // at every resolution and at the reference's. False for techniques without such a radius.
 bool set_radius_ws(shadows::ShadowSettings& s, double radius_ws) {
-  auto set = [&](auto& params) {
-    params.radius_unit = shadows::RadiusUnit::world;
-    params.radius = static_cast<float>(radius_ws);
-    return true;
-  };
-  switch (s.technique) {
-    case shadows::Technique::pcf: return set(s.pcf);
-    case shadows::Technique::vsm: return set(s.vsm);
-    case shadows::Technique::rpcf: return set(s.rpcf);
-    case shadows::Technique::msm: return set(s.msm);
-    case shadows::Technique::evsm: return set(s.evsm);
-    default: return false;
-  }
+  const shadows::TechniqueEntry& entry = shadows::technique_entry(s.technique);
+  if (!entry.set_filter_radius) return false;
+  entry.set_filter_radius(s, {static_cast<float>(radius_ws), shadows::RadiusUnit::world});
+  return true;
 }
 
 std::string format_radius(double r) {
@@ -135,10 +127,12 @@ std::vector<Variant> make_variants(const Options& opt) {
   return out;
 }
 
-// Whether the adaptive rule has a filter size to work from (renderer/shadows/renderer.cpp,
+// Whether the adaptive rule has a filter size to work from (TechniqueEntry::filter_radius or
 // rule_radius_ws): the swept radius of a fixed-radius filter, PCSS's penumbra. For the others
 // (hard, screen-space) it would only ever pick adaptive.max_texels, a row that repeats a fixed one.
-bool has_rule_radius(const Variant& v) { return !std::isnan(v.radius_ws) || v.settings.technique == shadows::Technique::pcss; }
+bool has_rule_radius(const Variant& v) {
+  return !std::isnan(v.radius_ws) || shadows::technique_entry(v.settings.technique).rule_radius_ws != nullptr;
+}
 
 // K frames after `warmup` untimed ones (which absorb allocation and shader compilation). Each
 // frame is bracketed by glFinish and timed with the wall clock; on a GPU a GL_TIME_ELAPSED query

@@ -17,8 +17,8 @@
 #include "io/staged_dir.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
-#include "shadows/screen_space.h"
 #include "shadows/settings.h"
+#include "shadows/technique.h"
 #include "cli_options.h"
 
 namespace fs = std::filesystem;
@@ -83,26 +83,36 @@ int main(int argc, char** argv) {
       scene.camera = scene.camera_path.at(scene.camera, path_frame);
     }
 
+    // One variant per technique; a technique with a variant setting (PCF's kernel) gets one per
+    // choice under `all`, named "<technique>-<choice>" either way.
     std::vector<Variant> variants;
-    auto add_variant = [&](shadows::Technique t, const std::string& name, shadows::Kernel kernel) {
-      Variant v{name, base};
+    auto add_variants = [&](shadows::Technique t, bool every_choice) {
+      Variant v{std::string(shadows::to_string(t)), base};
       v.settings.technique = t;
-      if (t == shadows::Technique::pcf) v.settings.pcf.kernel = kernel;
-      variants.push_back(v);
+      const std::string_view key = shadows::technique_entry(t).variant_setting;
+      auto for_variant_row = [&](shadows::ShadowSettings& s, auto&& f) {
+        shadows::visit_technique_section(s, [&](std::string_view, auto& params) {
+          for (const auto& row : shadows::settings_table(&params))
+            if (row.key == key && row.type == shadows::SettingType::choice) f(row, params);
+        });
+      };
+      std::vector<std::pair<double, std::string>> choices;  // (index, name)
+      for_variant_row(v.settings, [&](const auto& row, const auto& params) {
+        for (std::size_t i = 0; i < row.choices.size(); ++i)
+          if (every_choice || static_cast<double>(i) == row.get(params)) choices.emplace_back(static_cast<double>(i), row.choices[i]);
+      });
+      if (choices.empty()) variants.push_back(v);
+      for (const auto& [index, choice_name] : choices) {
+        Variant c = v;
+        c.name += "-" + choice_name;
+        for_variant_row(c.settings, [&](const auto& row, auto& params) { row.set(params, index); });
+        variants.push_back(c);
+      }
     };
     if (technique_arg == "all") {
-      add_variant(shadows::Technique::hard, "hard", {});
-      add_variant(shadows::Technique::pcf, "pcf-grid", shadows::Kernel::grid);
-      add_variant(shadows::Technique::pcf, "pcf-poisson", shadows::Kernel::poisson);
-      for (auto name : shadows::technique_names()) {
-        const auto t = shadows::technique_from_string(name);
-        if (t != shadows::Technique::hard && t != shadows::Technique::pcf) add_variant(t, std::string(name), {});
-      }
+      for (auto name : shadows::technique_names()) add_variants(shadows::technique_from_string(name), true);
     } else {
-      const auto t = shadows::technique_from_string(technique_arg);
-      std::string name = technique_arg;
-      if (t == shadows::Technique::pcf) name += base.pcf.kernel == shadows::Kernel::grid ? "-grid" : "-poisson";
-      add_variant(t, name, base.pcf.kernel);
+      add_variants(shadows::technique_from_string(technique_arg), false);
     }
 
     gl::HeadlessContext context;
@@ -171,7 +181,7 @@ int main(int argc, char** argv) {
           else if (st.pass == "shading") shading = st.median_ms;
           else screen += st.median_ms;
         }
-        const bool screen_space = shadows::is_screen_space(v.settings.technique);
+        const bool screen_space = shadows::technique_entry(v.settings.technique).screen_space();
         // The resolution used: the rule's with adaptive.enabled, one entry per cascade.
         std::string used;
         for (const auto& c : info.cascades) used += (used.empty() ? "" : "+") + std::to_string(c.resolution_texels);

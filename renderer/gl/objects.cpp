@@ -1,5 +1,6 @@
 #include "gl/objects.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -88,6 +89,37 @@ Query::Query(GLenum target) {
   GLuint id = 0;
   glCreateQueries(target, 1, &id);
   handle_ = Handle<detail::delete_query>(id);
+}
+
+Program::Program(GLuint id) : handle_(id) {
+  if (!id) return;
+  GLint count = 0;
+  glGetProgramInterfaceiv(id, GL_UNIFORM, GL_ACTIVE_RESOURCES, &count);
+  const GLenum props[] = {GL_NAME_LENGTH, GL_LOCATION};
+  std::string name;
+  for (GLint i = 0; i < count; ++i) {
+    GLint values[2] = {0, -1};
+    glGetProgramResourceiv(id, GL_UNIFORM, static_cast<GLuint>(i), 2, props, 2, nullptr, values);
+    if (values[1] < 0) continue;  // in a uniform block: set through its buffer
+    name.resize(static_cast<std::size_t>(std::max(values[0], 1)));
+    glGetProgramResourceName(id, GL_UNIFORM, static_cast<GLuint>(i), values[0], nullptr, name.data());
+    name.resize(name.find('\0') == std::string::npos ? name.size() : name.find('\0'));
+    locations_.emplace(name, values[1]);
+    // An array is listed once, as "u_x[0]": every element i is at location + i.
+    if (name.size() > 3 && name.ends_with("[0]")) {
+      const std::string base = name.substr(0, name.size() - 3);
+      GLint size = 1;
+      const GLenum array_size = GL_ARRAY_SIZE;
+      glGetProgramResourceiv(id, GL_UNIFORM, static_cast<GLuint>(i), 1, &array_size, 1, nullptr, &size);
+      locations_.emplace(base, values[1]);
+      for (GLint k = 1; k < size; ++k) locations_.emplace(base + "[" + std::to_string(k) + "]", values[1] + k);
+    }
+  }
+}
+
+GLint Program::location(std::string_view name) const {
+  const auto it = locations_.find(name);
+  return it == locations_.end() ? -1 : it->second;
 }
 
 }  // namespace penumbra::gl

@@ -2,12 +2,23 @@
 // One GL name per object, owned with RAII and created from a small descriptor (GL 4.5 DSA).
 #include <epoxy/gl.h>
 
+#include <glm/glm.hpp>
+
 #include <cstddef>
+#include <functional>
+#include <string_view>
+#include <unordered_map>
 #include <span>
 #include <string>
 #include <utility>
 
 namespace penumbra::gl {
+
+// Heterogeneous lookup of std::string keys by std::string_view.
+struct StringHash {
+  using is_transparent = void;
+  std::size_t operator()(std::string_view s) const { return std::hash<std::string_view>{}(s); }
+};
 
 // Move-only owner of one GL name; `Deleter` frees it.
 template <void (*Deleter)(GLuint)>
@@ -138,16 +149,34 @@ class Query {
 };
 
 // A linked GLSL program. Build it with `ShaderLibrary::program`.
+// A linked program. Its active uniforms' locations are resolved once, when it is wrapped (after
+// linking), so setting a uniform by name costs a hash lookup, not a GL query; names the program
+// lacks (optimized out, or not used by this variant) are ignored, as GL ignores location -1.
 class Program {
  public:
   Program() = default;
-  explicit Program(GLuint id) : handle_(id) {}
+  explicit Program(GLuint id);
   GLuint id() const { return handle_.id(); }
   void use() const { glUseProgram(id()); }
-  GLint location(const char* name) const { return glGetUniformLocation(id(), name); }
+  // -1 when the program has no active uniform `name` (arrays: "u_x[2]" and "u_x" for element 0).
+  GLint location(std::string_view name) const;
+
+  void set(std::string_view name, float v) const { glProgramUniform1f(id(), location(name), v); }
+  void set(std::string_view name, int v) const { glProgramUniform1i(id(), location(name), v); }
+  void set(std::string_view name, bool v) const { glProgramUniform1i(id(), location(name), v ? 1 : 0); }
+  void set(std::string_view name, const glm::vec2& v) const { glProgramUniform2fv(id(), location(name), 1, &v.x); }
+  void set(std::string_view name, const glm::ivec2& v) const { glProgramUniform2iv(id(), location(name), 1, &v.x); }
+  void set(std::string_view name, const glm::vec3& v) const { glProgramUniform3fv(id(), location(name), 1, &v.x); }
+  void set(std::string_view name, const glm::vec4& v) const { glProgramUniform4fv(id(), location(name), 1, &v.x); }
+  void set(std::string_view name, const glm::mat3& m) const { glProgramUniformMatrix3fv(id(), location(name), 1, GL_FALSE, &m[0][0]); }
+  void set(std::string_view name, const glm::mat4& m) const { glProgramUniformMatrix4fv(id(), location(name), 1, GL_FALSE, &m[0][0]); }
+  void set(std::string_view name, std::span<const glm::vec2> v) const {
+    if (!v.empty()) glProgramUniform2fv(id(), location(name), static_cast<GLsizei>(v.size()), &v[0].x);
+  }
 
  private:
   Handle<detail::delete_program> handle_;
+  std::unordered_map<std::string, GLint, StringHash, std::equal_to<>> locations_;
 };
 
 }  // namespace penumbra::gl

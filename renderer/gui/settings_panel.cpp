@@ -56,17 +56,10 @@ bool settings_panel(const char* id, P& params) {
 }
 
 template bool settings_panel<shadows::ShadowMapParams>(const char*, shadows::ShadowMapParams&);
-template bool settings_panel<shadows::PcfParams>(const char*, shadows::PcfParams&);
-template bool settings_panel<shadows::PcssParams>(const char*, shadows::PcssParams&);
-template bool settings_panel<shadows::VsmParams>(const char*, shadows::VsmParams&);
 template bool settings_panel<shadows::AdaptiveParams>(const char*, shadows::AdaptiveParams&);
-template bool settings_panel<shadows::EdtsmParams>(const char*, shadows::EdtsmParams&);
-template bool settings_panel<shadows::EdtssmParams>(const char*, shadows::EdtssmParams&);
-template bool settings_panel<shadows::ErosionParams>(const char*, shadows::ErosionParams&);
-template bool settings_panel<shadows::RbsmParams>(const char*, shadows::RbsmParams&);
-template bool settings_panel<shadows::RpcfParams>(const char*, shadows::RpcfParams&);
-template bool settings_panel<shadows::MsmParams>(const char*, shadows::MsmParams&);
-template bool settings_panel<shadows::EvsmParams>(const char*, shadows::EvsmParams&);
+#define PENUMBRA_INSTANTIATE_PANEL(name, P) template bool settings_panel<shadows::P>(const char*, shadows::P&);
+PENUMBRA_TECHNIQUES(PENUMBRA_INSTANTIATE_PANEL)
+#undef PENUMBRA_INSTANTIATE_PANEL
 
 bool shadow_settings_panel(shadows::ShadowSettings& s) {
   bool changed = false;

@@ -14,10 +14,6 @@
 namespace penumbra::metrics {
 namespace {
 
-// Techniques whose picture stands for an area light's soft shadow (their penumbra grows with
-// the light's size and the blocker-receiver distance).
-constexpr std::array<std::string_view, 3> kAreaLightTechniques = {"pcss", "edtssm", "erosion"};
-
 // Shirley and Chiu's concentric map from [-1, 1]² to the unit disk (area-preserving).
 glm::vec2 concentric(glm::vec2 p) {
   if (p.x == 0 && p.y == 0) return {0, 0};
@@ -74,9 +70,7 @@ shadows::FrameInfo render_with_fallback(shadows::Renderer& renderer, shadows::Sh
 std::string_view to_string(ReferenceKind k) { return k == ReferenceKind::area_light ? "area_light" : "same_filter"; }
 
 ReferenceKind reference_kind(std::string_view technique_name) {
-  for (auto name : kAreaLightTechniques)
-    if (name == technique_name) return ReferenceKind::area_light;
-  return ReferenceKind::same_filter;
+  return shadows::technique_entry(shadows::technique_from_string(technique_name)).reference;
 }
 
 std::vector<glm::vec2> stratified_disk(int per_side) {

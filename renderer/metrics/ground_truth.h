@@ -32,15 +32,14 @@
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
+#include "shadows/technique.h"
 
 namespace penumbra::metrics {
 
-enum class ReferenceKind { area_light, same_filter };
+using shadows::ReferenceKind;  // declared by each technique's registry entry (shadows/technique.h)
 std::string_view to_string(ReferenceKind k);
 
-// Which reference a technique is measured against: area_light for the techniques listed in
-// kAreaLightTechniques (ground_truth.cpp; a new soft-shadow technique adds its name there),
-// same_filter for every other one.
+// Which reference a technique is measured against: its registry entry's (TechniqueEntry::reference).
 ReferenceKind reference_kind(std::string_view technique_name);
 
 // per_side² points in the unit disk: one jittered point per cell of a per_side × per_side grid

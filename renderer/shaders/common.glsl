@@ -76,6 +76,19 @@ vec2 receiver_plane_gradient(vec3 sc) {
 }
 #endif
 
+// The technique's fixed filter radius (PCF, RPCF; TechniqueEntry::filter_radius), as the user
+// gave it: in texels of the map being sampled, or in world units at the receiver.
+uniform float u_filter_radius;
+uniform bool u_filter_radius_world;
+
+// The filter radius in uv and in texels of the current map, at light-view depth `depth_ws`.
+float filter_radius_uv(float depth_ws) {
+  return u_filter_radius_world ? u_filter_radius * uv_per_ws(depth_ws) : u_filter_radius / g_shadow_res;
+}
+float filter_radius_texels(float depth_ws) {
+  return u_filter_radius_world ? u_filter_radius * uv_per_ws(depth_ws) * g_shadow_res : u_filter_radius;
+}
+
 // Window-depth change per world unit of light-view depth at `depth_ws`.
 float depth_per_ws(float depth_ws) {
   float n = u_light_near_ws, f = u_light_far_ws;

@@ -36,8 +36,6 @@ uniform vec3 u_albedo;
 uniform float u_normal_offset_texels;
 uniform float u_depth_bias_texels;
 
-uniform float u_pcf_radius_texels;  // used when u_pcf_radius_ws < 0
-uniform float u_pcf_radius_ws;
 uniform int u_taps;
 uniform bool u_rotate;
 uniform int u_max_grid_taps;
@@ -83,7 +81,7 @@ float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gr
 #elif defined(TECHNIQUE_HARD)
   visibility = shadow_hard(sc);
 #elif defined(TECHNIQUE_PCF)
-  float radius_uv = u_pcf_radius_ws >= 0.0 ? u_pcf_radius_ws * uv_per_ws(depth_ws) : u_pcf_radius_texels / g_shadow_res;
+  float radius_uv = filter_radius_uv(depth_ws);
 #  if defined(KERNEL_GRID)
   visibility = pcf_grid(sc, gradient, radius_uv * g_shadow_res, u_max_grid_taps);
 #  else
@@ -103,7 +101,7 @@ float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gr
 #elif defined(TECHNIQUE_RBSM)
   visibility = shadow_rbsm(sc, gradient);
 #elif defined(TECHNIQUE_RPCF)
-  float rpcf_radius_texels = u_rpcf_radius_ws >= 0.0 ? u_rpcf_radius_ws * uv_per_ws(depth_ws) * g_shadow_res : u_rpcf_radius_texels;
+  float rpcf_radius_texels = filter_radius_texels(depth_ws);
   visibility = shadow_rpcf(sc, gradient, rpcf_radius_texels, u_rpcf_max_grid_taps);
 #elif defined(TECHNIQUE_MSM)
   float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);

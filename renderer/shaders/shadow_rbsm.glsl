@@ -4,8 +4,6 @@
 // plane through the fragment, so all tests of one fragment agree on what "own side" means.
 // Procedure and the choices the paper leaves open: docs/alternatives.md.
 uniform int u_rbsm_max_search;       // texels walked along a silhouette step in each direction
-uniform float u_rpcf_radius_texels;  // used when u_rpcf_radius_ws < 0
-uniform float u_rpcf_radius_ws;
 uniform int u_rpcf_max_grid_taps;
 
 // Shadow test of texel t (1 lit, 0 shadowed) for the receiver plane through sc.

@@ -14,12 +14,10 @@
 
 #include "adaptive/cascades.h"
 #include "adaptive/resolution_rule.h"
-#include "shadows/evsm.h"
 #include "shadows/moments.h"
-#include "shadows/msm.h"
-#include "shadows/rbsm.h"
 #include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
+#include "shadows/technique.h"
 
 namespace penumbra::shadows {
 
@@ -133,23 +131,18 @@ const gl::Program& Renderer::cached_program(const std::string& key, const std::v
 }
 
 const gl::Program& Renderer::shading_program(const ShadowSettings& s, bool gbuffer) {
+  const TechniqueEntry& entry = technique_entry(s.technique);
   std::vector<gl::ShaderDefine> defines;
-  if (is_screen_space(s.technique)) {
-    // First pass: the input shadows (EDTSM/EDTSSM: revectorized or plain hard; erosion: hard).
-    if (gbuffer) {
-      defines.push_back({screen_space_rbsm_input(s) ? "TECHNIQUE_RBSM" : "TECHNIQUE_HARD", "1"});
-      defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
-    }
-    else if (s.technique == Technique::erosion) defines.push_back({"TECHNIQUE_EROSION", "1"});
-    else defines.push_back({"SCREEN_SPACE_VISIBILITY", "1"});
+  if (gbuffer) {
+    // The first pass of a screen-space technique: its input shadows, revectorized or hard.
+    const bool rbsm = entry.rbsm_input && entry.rbsm_input(s);
+    defines.push_back({std::string(technique_entry(rbsm ? Technique::rbsm : Technique::hard).define), "1"});
+    defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
   } else {
-    std::string technique = "TECHNIQUE_";  // TECHNIQUE_<NAME> from the technique's name
-    for (char c : to_string(s.technique)) technique += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-    defines.push_back({technique, "1"});
-    const Kernel kernel = s.technique == Technique::pcss ? s.pcss.kernel : s.pcf.kernel;
-    if (kernel == Kernel::grid) defines.push_back({"KERNEL_GRID", "1"});
+    defines.push_back({std::string(entry.define), "1"});
+    if (entry.variant_defines) entry.variant_defines(s, defines);
   }
-  if (s.technique == Technique::pcss && s.adaptive.enabled && s.adaptive.pcss == PcssRequirement::per_pixel)
+  if (entry.per_pixel_requirement && s.adaptive.enabled && s.adaptive.pcss == PcssRequirement::per_pixel)
     defines.push_back({"PCSS_REQUIREMENT", "1"});
   std::string key = "shading:";
   for (const auto& d : defines) key += d.name + ";";
@@ -187,18 +180,12 @@ void set_mat4(const gl::Program& p, const char* name, const glm::mat4& m) {
 // technique has none (hard shadows). Radii given in texels are taken at map.resolution_texels of
 // the single fitted map: "the filter the user sees at the configured resolution".
 float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws) {
-  const auto ws = [&](float radius, RadiusUnit unit) {
-    return unit == RadiusUnit::world ? radius : radius * single.texel_ws(mid_depth_ws, s.map.resolution_texels);
-  };
-  switch (s.technique) {
-    case Technique::pcf: return ws(s.pcf.radius, s.pcf.radius_unit);
-    case Technique::vsm: return ws(s.vsm.radius, s.vsm.radius_unit);
-    case Technique::rpcf: return ws(s.rpcf.radius, s.rpcf.radius_unit);
-    case Technique::msm: return ws(s.msm.radius, s.msm.radius_unit);
-    case Technique::evsm: return ws(s.evsm.radius, s.evsm.radius_unit);
-    case Technique::pcss: return s.pcss.min_penumbra_ws;
-    default: return 0;  // hard and screen-space techniques: no shadow-map filter
+  const TechniqueEntry& entry = technique_entry(s.technique);
+  if (entry.filter_radius) {
+    const FilterRadius r = entry.filter_radius(s);
+    return r.unit == RadiusUnit::world ? r.radius : r.radius * single.texel_ws(mid_depth_ws, s.map.resolution_texels);
   }
+  return entry.rule_radius_ws ? entry.rule_radius_ws(s) : 0.0f;
 }
 
 // The rule for one map: directional c · L / r_ws; spot: c / r_uv at the far end of the depth
@@ -207,29 +194,6 @@ double rule_texels(float c, const LightFrame& f, float radius_ws) {
   if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
   const double uv_per_ws = f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
   return adaptive::required_texels_uv(c, radius_ws * uv_per_ws);
-}
-
-// The filtered-moments layout of the techniques that pre-filter moments (VSM, MSM, EVSM).
-std::optional<MomentsLayout> moments_layout(const ShadowSettings& s) {
-  switch (s.technique) {
-    case Technique::vsm: return MomentsLayout{GL_RG32F, "shadow_moments.frag", {1, 1, 0, 0}};
-    case Technique::msm: return msm_layout();
-    case Technique::evsm: return evsm_layout(s.evsm);
-    default: return std::nullopt;
-  }
-}
-
-// The filter radius and its unit of the techniques with a fixed filter box or disk; nullopt for
-// the others.
-std::optional<std::pair<float, RadiusUnit>> fixed_filter_radius(const ShadowSettings& s) {
-  switch (s.technique) {
-    case Technique::pcf: return std::pair{s.pcf.radius, s.pcf.radius_unit};
-    case Technique::vsm: return std::pair{s.vsm.radius, s.vsm.radius_unit};
-    case Technique::rpcf: return std::pair{s.rpcf.radius, s.rpcf.radius_unit};
-    case Technique::msm: return std::pair{s.msm.radius, s.msm.radius_unit};
-    case Technique::evsm: return std::pair{s.evsm.radius, s.evsm.radius_unit};
-    default: return std::nullopt;
-  }
 }
 
 // Region corners for `res` per cascade: one row of up to two cells, then a second row.
@@ -264,8 +228,9 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   info.width_px = width_px;
   info.height_px = height_px;
   info.adaptive = ap.enabled;
-  const std::optional<MomentsLayout> moments = moments_layout(s);
-  const auto filter_radius = fixed_filter_radius(s);
+  const TechniqueEntry& entry = technique_entry(s.technique);
+  const std::optional<MomentsLayout> moments = entry.moments ? entry.moments(s) : std::nullopt;
+  const std::optional<FilterRadius> filter_radius = entry.filter_radius ? std::optional(entry.filter_radius(s)) : std::nullopt;
   const scene::Light& light = scene_.light;
   const bool directional = light.type == scene::Light::Type::directional;
   const float aspect = static_cast<float>(width_px) / static_cast<float>(height_px);
@@ -274,18 +239,13 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   // Padding of the fitted frustum by the filter's reach.
   FitRequest fit{s.map.fit, aspect, s.map.resolution_texels, 0, 0};
   const float tan_half_angle = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
+  fit.pad_texels = static_cast<float>(entry.pad_texels);
   if (filter_radius) {
-    (filter_radius->second == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = filter_radius->first;
-  } else if (s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion) {
+    (filter_radius->unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = filter_radius->radius;
+  } else if (entry.search_scale) {
     const scene::Aabb b = scene_.bounds();
     const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
-    const float search_scale = s.technique == Technique::pcss     ? s.pcss.search_scale
-                               : s.technique == Technique::edtssm ? s.edtssm.search_scale
-                                                                  : s.erosion.search_scale;
-    fit.pad_ws = search_scale * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
-    fit.pad_texels = 1;
-  } else if (s.technique == Technique::edtsm || s.technique == Technique::rbsm) {
-    fit.pad_texels = 1;  // the revectorization reads the neighbours of every receiver texel
+    fit.pad_ws = entry.search_scale(s) * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
   }
 
   // The PCSS requirement measured by the previous frame (its buffer's GPU work is done by now on
@@ -328,7 +288,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     return req;
   };
   // Screen-space techniques work on one map.
-  int count = directional && !is_screen_space(s.technique) ? s.map.cascades : 1;
+  int count = directional && !entry.screen_space() ? s.map.cascades : 1;
   if (count == 0) {
     const adaptive::CascadeChoice choice = adaptive::choose_cascade_count(kMaxCascades, largest, [&](int n) {
       return requirements(cascades_for(n, std::vector<int>(static_cast<std::size_t>(n), largest)));
@@ -361,8 +321,8 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       previous[static_cast<std::size_t>(i)] = cur > 0 ? cur : largest;
     }
     req = requirements(cascades_for(count, previous));
-    info.resolution_source = s.technique == Technique::pcss ? "pcss_min_penumbra" : "rule";
-    if (s.technique == Technique::pcss && ap.pcss == PcssRequirement::per_pixel && ad.last.valid &&
+    info.resolution_source = entry.per_pixel_requirement ? "pcss_min_penumbra" : "rule";
+    if (entry.per_pixel_requirement && ap.pcss == PcssRequirement::per_pixel && ad.last.valid &&
         ad.last_cascades == count) {
       // Measured last frame: c / r_filter over the visible pixels, never above the min-penumbra bound.
       for (int i = 0; i < count; ++i) {
@@ -432,7 +392,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     maps_ = std::move(m);
     info.reallocated = true;
   }
-  const bool want_requirement = s.technique == Technique::pcss && ap.enabled && ap.pcss == PcssRequirement::per_pixel;
+  const bool want_requirement = entry.per_pixel_requirement && ap.enabled && ap.pcss == PcssRequirement::per_pixel;
   if (!targets_ || targets_->width != width_px || targets_->height != height_px || targets_->requirement != want_requirement) {
     targets_.reset();
     auto t = std::make_unique<Targets>();
@@ -490,7 +450,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
       if (moments) {
         set_float(prog, "u_light_near_ws", c.light.near_ws);
         set_float(prog, "u_light_far_ws", c.light.far_ws);
-        if (s.technique == Technique::evsm) set_evsm_uniforms(prog, s.evsm);
+        if (entry.set_uniforms) entry.set_uniforms(prog, s);
       }
       draw_scene(prog, false);
     }
@@ -501,7 +461,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   }
 
   if (filter_radius)
-    info.filter_radius_texels = filter_radius->second == RadiusUnit::texels ? filter_radius->first : filter_radius->first / texel_mid_ws;
+    info.filter_radius_texels = filter_radius->unit == RadiusUnit::texels ? filter_radius->radius : filter_radius->radius / texel_mid_ws;
 
   // --- moments blur (VSM, MSM, EVSM) ---------------------------------------------------------
   if (moments) {
@@ -517,7 +477,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     for (const auto& c : info.cascades) {
       // World-space radii span a different number of texels in each cascade.
       const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
-      set_float(blur, "u_radius_texels", filter_radius->second == RadiusUnit::texels ? filter_radius->first : filter_radius->first / texel);
+      set_float(blur, "u_radius_texels", filter_radius->unit == RadiusUnit::texels ? filter_radius->radius : filter_radius->radius / texel);
       glProgramUniform2i(blur.id(), blur.location("u_origin"), c.atlas_x, c.atlas_y);
       set_int(blur, "u_size", c.resolution_texels);
       const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
@@ -540,7 +500,6 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
 
   // --- shading (and, for screen-space techniques, the G-buffer and post passes) --------------
   const scene::Camera& cam = scene_.camera;
-  const bool light_size_used = s.technique == Technique::pcss || s.technique == Technique::edtssm || s.technique == Technique::erosion;
   // Light frame, cascades, biases and the technique's uniforms: shared by both camera passes and
   // the screen-space compute passes (uniforms a program lacks are ignored).
   auto set_shading_uniforms = [&](const gl::Program& prog) {
@@ -581,46 +540,18 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     set_vec3(prog, "u_camera_position", cam.position);
     set_vec3(prog, "u_camera_forward", glm::normalize(cam.target - cam.position));
 
-    int taps = 0;
-    if (s.technique == Technique::pcf) {
-      taps = s.pcf.poisson_taps;
-      set_float(prog, "u_pcf_radius_texels", s.pcf.radius_unit == RadiusUnit::texels ? s.pcf.radius : 0.0f);
-      set_float(prog, "u_pcf_radius_ws", s.pcf.radius_unit == RadiusUnit::world ? s.pcf.radius : -1.0f);
-      set_int(prog, "u_rotate", s.pcf.rotate ? 1 : 0);
-      set_int(prog, "u_max_grid_taps", s.pcf.max_grid_taps);
-      set_int(prog, "u_taps", taps);
-    } else if (s.technique == Technique::pcss) {
-      taps = std::max(s.pcss.filter_taps, s.pcss.blocker_taps);
-      set_int(prog, "u_blocker_taps", s.pcss.blocker_taps);
-      set_int(prog, "u_max_grid_taps", s.pcss.max_grid_taps);
-      set_float(prog, "u_pcss_search_scale", s.pcss.search_scale);
-      // One disk for both steps, sized for the larger tap count; the filter step takes its own
-      // count from the front (the best-candidate order spreads any prefix).
-      set_int(prog, "u_taps", s.pcss.filter_taps);
-    } else if (s.technique == Technique::vsm) {
-      set_float(prog, "u_vsm_min_variance", s.vsm.min_variance);
-      set_float(prog, "u_vsm_bleed_reduction", s.vsm.bleed_reduction);
-    } else if (s.technique == Technique::rbsm) {
-      set_rbsm_uniforms(prog, s.rbsm);
-    } else if (s.technique == Technique::rpcf) {
-      set_rpcf_uniforms(prog, s.rpcf);
-    } else if (s.technique == Technique::msm) {
-      set_msm_uniforms(prog, s.msm);
-    } else if (s.technique == Technique::evsm) {
-      set_evsm_uniforms(prog, s.evsm);
-    } else if (s.technique == Technique::edtssm) {
-      taps = s.edtssm.blocker_taps;
-    } else if (s.technique == Technique::erosion) {
-      taps = std::max(s.erosion.taps, s.erosion.blocker_taps);
-      set_int(prog, "u_taps", s.erosion.taps);
-      set_int(prog, "u_rotate", s.erosion.rotate ? 1 : 0);
+    if (filter_radius) {
+      set_float(prog, "u_filter_radius", filter_radius->radius);
+      set_int(prog, "u_filter_radius_world", filter_radius->unit == RadiusUnit::world ? 1 : 0);
     }
-    if (screen_space_rbsm_input(s)) set_rbsm_uniforms(prog, s.rbsm);  // the G-buffer's revectorized input
-    if (light_size_used) {
+    if (entry.set_uniforms) entry.set_uniforms(prog, s);
+    if (entry.rbsm_input && entry.rbsm_input(s)) set_rbsm_uniforms(prog, s.rbsm);  // the G-buffer's revectorized input
+    if (entry.uses_light_size()) {
       set_float(prog, "u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
       set_float(prog, "u_pcss_tan_half_angle", tan_half_angle);
       set_float(prog, "u_pcss_min_penumbra_ws", s.pcss.min_penumbra_ws);
     }
+    const int taps = entry.poisson_taps ? entry.poisson_taps(s) : 0;
     if (taps > 0) {
       auto it = poisson_.find(taps);
       if (it == poisson_.end()) it = poisson_.emplace(taps, poisson_disk(taps)).first;
@@ -643,7 +574,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   };
 
   const gl::Texture* screen_result = nullptr;
-  if (is_screen_space(s.technique)) {
+  if (entry.screen_space()) {
     if (!screen_space_) screen_space_ = std::make_unique<ScreenSpace>(shaders_);
     screen_space_->resize(targets_->depth);
     {
@@ -669,7 +600,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
     ctx.timer = timer;
     ctx.passes = &info.passes;
     bind_shadow_maps();
-    screen_result = &screen_space_->run(s, ctx);
+    screen_result = &entry.post(*screen_space_, s, ctx);
   }
   {
     ScopedPass pass(timer, "shading", info.passes);

@@ -9,15 +9,6 @@
 
 namespace penumbra::shadows {
 
-bool is_screen_space(Technique t) {
-  return t == Technique::edtsm || t == Technique::edtssm || t == Technique::erosion;
-}
-
-bool screen_space_rbsm_input(const ShadowSettings& s) {
-  return (s.technique == Technique::edtsm && s.edtsm.input == ShadowInput::rbsm) ||
-         (s.technique == Technique::edtssm && s.edtssm.input == ShadowInput::rbsm);
-}
-
 void dispatch_pixels(int width, int height) {
   glDispatchCompute(static_cast<GLuint>((width + 7) / 8), static_cast<GLuint>((height + 7) / 8), 1);
 }
@@ -116,16 +107,6 @@ const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float fil
   }
   gl::check_errors("screen-space mean filter");
   return filtered_;
-}
-
-const gl::Texture& ScreenSpace::run(const ShadowSettings& s, const PostPassContext& ctx) {
-  if (!width_) throw std::logic_error("ScreenSpace::run before resize");
-  switch (s.technique) {
-    case Technique::edtsm: return run_edtsm(*this, s.edtsm, ctx);
-    case Technique::edtssm: return run_edtssm(*this, s.edtssm, ctx);
-    case Technique::erosion: return run_erosion(*this, s.erosion, ctx);
-    default: throw std::logic_error("ScreenSpace::run: not a screen-space technique");
-  }
 }
 
 }  // namespace penumbra::shadows

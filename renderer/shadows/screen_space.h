@@ -7,8 +7,8 @@
 //             visibility (EDTSM, EDTSSM) or the eroded penumbra width (erosion)
 //   shading   (raster, depth test LEQUAL against the G-buffer's depth) lights the scene with it.
 // This class owns the G-buffer and the post passes' images and programs; each technique's post
-// passes live in its own file (edtsm.cpp, edtssm.cpp, erosion.cpp) and are built from the
-// pieces below. Choices not fixed by the papers: docs/alternatives.md.
+// passes live in its own file (techniques/edtsm.cpp, edtssm.cpp, erosion.cpp: TechniqueEntry::post)
+// and are built from the pieces below. Choices not fixed by the papers: docs/alternatives.md.
 #include <functional>
 #include <map>
 #include <string>
@@ -21,11 +21,6 @@
 #include "shadows/settings.h"
 
 namespace penumbra::shadows {
-
-bool is_screen_space(Technique t);
-// Whether the G-buffer pass draws revectorized (RBSM) input shadows: EDTSM and EDTSSM with
-// input = rbsm (their default, as the papers). Erosion, as its paper, starts from the hard test.
-bool screen_space_rbsm_input(const ShadowSettings& s);
 
 // The camera's metric as the post passes need it.
 struct ScreenView {
@@ -53,10 +48,6 @@ class ScreenSpace {
   // Colour attachments 0: world position and eye depth signed by the input shadow test (+ lit,
   // - shadowed, 0 nothing drawn), 1: shadow-map coordinates.
   const gl::Framebuffer& gbuffer_framebuffer() const { return gbuffer_fbo_; }
-
-  // Runs the post passes of `s.technique`; returns what the shading pass reads per pixel.
-  // The shadow map must be bound to texture units 0-2 as for the shading pass.
-  const gl::Texture& run(const ShadowSettings& s, const PostPassContext& ctx);
 
   // --- building blocks for the technique files ---
   int width() const { return width_; }
@@ -103,11 +94,6 @@ class ScreenSpace {
   gl::Texture filtered_;
   gl::Texture edges_;
 };
-
-// The post passes of each technique (edtsm.cpp, edtssm.cpp, erosion.cpp).
-const gl::Texture& run_edtsm(ScreenSpace& ss, const EdtsmParams& p, const PostPassContext& ctx);
-const gl::Texture& run_edtssm(ScreenSpace& ss, const EdtssmParams& p, const PostPassContext& ctx);
-const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const PostPassContext& ctx);
 
 // Dispatch helper: one invocation per pixel in 8x8 groups.
 void dispatch_pixels(int width, int height);

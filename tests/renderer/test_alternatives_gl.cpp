@@ -12,7 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gl_test_env.h"
-#include "shadows/evsm.h"
+#include "shadows/techniques/evsm.h"
 #include "shadows/renderer.h"
 
 namespace penumbra {

@@ -1,11 +1,24 @@
-#include "shadows/erosion.h"
-
-#include <algorithm>
+#include "shadows/techniques/erosion.h"
 
 #include "gl/context.h"
 #include "shadows/scoped_pass.h"
+#include "shadows/screen_space.h"
+#include "shadows/settings.h"
+#include "shadows/settings_rows.h"
+
+#include <algorithm>
 
 namespace penumbra::shadows {
+namespace {
+
+const Setting<ErosionParams> kTable[] = {
+    PENUMBRA_INT(ErosionParams, taps, "taps", 1, 64, "Poisson taps of the PCF scaled by the eroded penumbra width"),
+    PENUMBRA_INT(ErosionParams, blocker_taps, "taps", 1, 64, "Poisson taps of the blocker search at edge pixels"),
+    PENUMBRA_REAL(ErosionParams, search_scale, "", 1, 8, "blocker-search radius over its geometric bound"),
+    PENUMBRA_INT(ErosionParams, max_search_px, "px", 1, 4096, "largest erosion search radius on screen"),
+    PENUMBRA_BOOL(ErosionParams, rotate, "rotate the PCF disk per pixel"),
+    PENUMBRA_REAL(ErosionParams, depth_threshold, "", 0, 10, rows::kDepthThresholdHelp),
+};
 
 const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const PostPassContext& ctx) {
   ScreenSpace::SiteSearch search;
@@ -50,6 +63,31 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     gl::check_errors("erosion pass");
   }
   return ss.scratch(0);
+}
+
+}  // namespace
+
+std::span<const Setting<ErosionParams>> settings_table(const ErosionParams*) { return kTable; }
+
+const TechniqueEntry& erosion_technique() {
+  static const TechniqueEntry entry{
+      .name = "erosion",
+      .define = "TECHNIQUE_EROSION",
+      .radius = RadiusReading::none,
+      .reference = ReferenceKind::area_light,
+      .search_scale = [](const ShadowSettings& s) { return s.erosion.search_scale; },
+      .pad_texels = 1,
+      .poisson_taps = [](const ShadowSettings& s) { return std::max(s.erosion.taps, s.erosion.blocker_taps); },
+      .set_uniforms =
+          [](const gl::Program& p, const ShadowSettings& s) {
+            p.set("u_taps", s.erosion.taps);
+            p.set("u_rotate", s.erosion.rotate);
+          },
+      .post = [](ScreenSpace& ss, const ShadowSettings& s, const PostPassContext& ctx) -> const gl::Texture& {
+        return run_erosion(ss, s.erosion, ctx);
+      },
+  };
+  return entry;
 }
 
 }  // namespace penumbra::shadows

@@ -1,0 +1,20 @@
+#pragma once
+// Percentage-closer filtering (Reeves et al. 1987): the mean of the depth test over a fixed
+// box of whole texels (grid, coverage-weighted) or a rotated Poisson disk (shaders/shadow_pcf.glsl).
+#include "shadows/technique.h"
+
+namespace penumbra::shadows {
+
+struct PcfParams {
+  float radius = 2;                   // filter radius, in `radius_unit`
+  RadiusUnit radius_unit = RadiusUnit::texels;
+  Kernel kernel = Kernel::poisson;
+  int poisson_taps = 25;
+  bool rotate = true;                 // per-pixel random rotation of the Poisson disk
+  int max_grid_taps = 32;             // per axis; larger kernels are sampled with a stride
+};
+std::span<const Setting<PcfParams>> settings_table(const PcfParams*);
+
+const TechniqueEntry& pcf_technique();
+
+}  // namespace penumbra::shadows
