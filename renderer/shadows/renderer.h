@@ -1,14 +1,7 @@
 #pragma once
-// The frame: shadow-map pass(es) → (moments blur) → shading pass → (PCSS requirement), each
-// with a contract:
-//   shadow_map        reads the scene, writes the depth map of every cascade (and, for VSM, MSM
-//                     and EVSM, the moments) into its region of the shadow atlas
-//   vsm_blur          reads/writes the moments (the filtered-moments techniques VSM, MSM, EVSM)
-//   gbuffer + post    screen-space techniques only (screen_space.h); they use one map
-//   shading           reads the maps, writes lit colour (sRGB 8-bit) and visibility (float)
-//   pcss_requirement  adaptive PCSS with per-pixel requirement only: reduces the shading pass's
-//                     per-pixel c / r_filter to a maximum per cascade, read back one frame later
-// A frame runs only the passes its technique needs; FrameInfo lists those that ran.
+// The frame: a plan (frame_plan.h: cascades, the resolution rule and its hysteresis, the atlas
+// layout, which passes run), then the passes it lists (passes.h): shadow_map → (vsm_blur) →
+// (gbuffer → post) → shading → (pcss_requirement). FrameInfo lists those that ran.
 //
 // Storage: every map is a region of one atlas texture, surrounded by a guard band cleared to the
 // far depth. `adaptive.storage = subrect` keeps an atlas sized for adaptive.max_texels per cascade
@@ -26,27 +19,10 @@
 #include "io/image_io.h"
 #include "scene/scene.h"
 #include "shadows/fitting.h"
+#include "shadows/frame_plan.h"
 #include "shadows/settings.h"
 
 namespace penumbra::shadows {
-
-struct CascadeInfo {
-  LightFrame light;
-  int resolution_texels = 0;
-  double required_texels = 0;     // the rule's requirement before clamping (adaptive; else 0)
-  float split_near_ws = 0;        // camera view-depth range the cascade covers
-  float split_far_ws = 0;
-  int atlas_x = 0, atlas_y = 0;   // the region's corner in the atlas (texels)
-};
-
-// The per-pixel PCSS requirement of the frame it was measured in (adaptive, pcss = per_pixel).
-struct PcssRequirementInfo {
-  bool valid = false;              // false until a frame has been measured
-  std::vector<double> required_texels;  // per cascade: c · max over pixels of 1 / r_filter_uv
-  double evaluated_pixels = 0;     // pixels that ran a PCSS filter
-  double clamped_fraction = 0;     // of those, share whose radius was raised to the minimum penumbra
-  double above_max_fraction = 0;   // share that needed more than adaptive.max_texels
-};
 
 struct FrameInfo {
   LightFrame light;                // cascade 0
@@ -67,7 +43,8 @@ struct FrameInfo {
 // Poisson-disk taps in the unit disk (deterministic best-candidate set, outermost tap at radius 1).
 std::vector<glm::vec2> poisson_disk(int taps);
 
-class ScreenSpace;
+struct FrameResources;
+class Pass;
 
 class Renderer {
  public:
@@ -105,30 +82,14 @@ class Renderer {
   io::ImageF read_pcss_requirement() const;
 
  private:
-  struct Maps;
-  struct Targets;
-  struct Adaptive;
-  // `gbuffer`: the first camera pass of a screen-space technique.
-  const gl::Program& shading_program(const ShadowSettings& s, bool gbuffer = false);
-  // The program built from `stages` with `defines`, compiled on first use and kept under `key`.
-  const gl::Program& cached_program(const std::string& key, const std::vector<gl::ShaderStage>& stages,
-                                    const std::vector<gl::ShaderDefine>& defines = {});
-  void draw_scene(const gl::Program& program, bool shading);
-
   gl::ShaderLibrary shaders_;
-  gl::Program depth_program_;
-  gl::Program requirement_program_;
-  std::map<std::string, gl::Program> programs_;  // shading, moments and blur programs by key
-  gl::Sampler cmp_linear_, cmp_nearest_, raw_nearest_, moments_linear_;
   scene::Scene scene_;
   std::vector<std::unique_ptr<scene::GpuMesh>> meshes_;
-  std::unique_ptr<Maps> maps_;
-  std::unique_ptr<Targets> targets_;
-  std::unique_ptr<Adaptive> adaptive_;
+  std::unique_ptr<FrameResources> res_;
+  std::vector<std::unique_ptr<Pass>> passes_;
+  AdaptiveState adaptive_;
   std::vector<CascadeInfo> last_cascades_;
   bool show_cascades_ = false;
-  std::unique_ptr<ScreenSpace> screen_space_;  // made on the first screen-space frame
-  std::map<int, std::vector<glm::vec2>> poisson_;
 };
 
 }  // namespace penumbra::shadows

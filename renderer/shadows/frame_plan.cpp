@@ -1,0 +1,185 @@
+#include "shadows/frame_plan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "adaptive/cascades.h"
+
+namespace penumbra::shadows {
+namespace {
+
+// The rule for one map: directional c · L / r_ws; spot: c / r_uv at the far end of the depth
+// range, where a world-space radius spans the fewest texels.
+double rule_texels(float c, const LightFrame& f, float radius_ws) {
+  if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
+  const double uv_per_ws = f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
+  return adaptive::required_texels_uv(c, radius_ws * uv_per_ws);
+}
+
+// Padding of the fitted frustum by the filter's reach: a fixed filter by its radius, a blocker
+// search by its reach at the light's size, and whatever the technique reads beyond a texel.
+FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, const scene::Scene& scene, float aspect,
+                       float tan_half_angle) {
+  FitRequest fit{s.map.fit, aspect, s.map.resolution_texels, static_cast<float>(entry.pad_texels), 0};
+  if (entry.filter_radius) {
+    const FilterRadius r = entry.filter_radius(s);
+    (r.unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = r.radius;
+  } else if (entry.search_scale) {
+    const scene::Aabb b = scene.bounds();
+    const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
+    const scene::Light& light = scene.light;
+    fit.pad_ws = entry.search_scale(s) * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
+  }
+  return fit;
+}
+
+}  // namespace
+
+bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }
+
+float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws) {
+  const TechniqueEntry& entry = technique_entry(s.technique);
+  if (entry.filter_radius) {
+    const FilterRadius r = entry.filter_radius(s);
+    return r.unit == RadiusUnit::world ? r.radius : r.radius * single.texel_ws(mid_depth_ws, s.map.resolution_texels);
+  }
+  return entry.rule_radius_ws ? entry.rule_radius_ws(s) : 0.0f;
+}
+
+AtlasLayout layout_atlas(const std::vector<int>& cell_texels, int guard) {
+  AtlasLayout a;
+  a.guard = guard;
+  int cell = 0;
+  for (int t : cell_texels) cell = std::max(cell, t + 2 * guard);
+  const int n = static_cast<int>(cell_texels.size());
+  for (int i = 0; i < n; ++i) a.origin.emplace_back((i % 2) * cell + guard, (i / 2) * cell + guard);
+  if (n == 1) {
+    a.width = a.height = cell_texels[0] + 2 * guard;
+  } else {
+    a.width = std::min(n, 2) * cell;
+    a.height = ((n + 1) / 2) * cell;
+  }
+  return a;
+}
+
+FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int width_px, int height_px, AdaptiveState& ad) {
+  if (width_px < 1 || height_px < 1) throw std::runtime_error("render: image size must be positive");
+  if (s.map.resolution_texels < 1) throw std::runtime_error("render: shadow-map resolution must be at least 1 texel");
+  const AdaptiveParams& ap = s.adaptive;
+  if (ap.enabled && (ap.min_texels < 1 || ap.max_texels < ap.min_texels))
+    throw std::runtime_error("render: adaptive.min_texels must be >= 1 and <= adaptive.max_texels");
+  FramePlan plan;
+  const TechniqueEntry& entry = technique_entry(s.technique);
+  plan.technique = &entry;
+  plan.width_px = width_px;
+  plan.height_px = height_px;
+  plan.aspect = static_cast<float>(width_px) / static_cast<float>(height_px);
+  plan.moments = entry.moments ? entry.moments(s) : std::nullopt;
+  if (entry.filter_radius) plan.filter_radius = entry.filter_radius(s);
+  const scene::Light& light = scene.light;
+  const bool directional = light.type == scene::Light::Type::directional;
+  plan.tan_half_angle = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
+  const FitRequest fit = fit_request(s, entry, scene, plan.aspect, plan.tan_half_angle);
+
+  // --- cascades and the rule ---
+  const LightFrame single = compute_light_frame(scene, fit);
+  const float radius_ws = rule_radius_ws(s, single, 0.5f * (single.near_ws + single.far_ws));
+  const int fixed_res = s.map.resolution_texels;
+  const int largest = ap.enabled ? ap.max_texels : fixed_res;
+  auto cascades_for = [&](int count, const std::vector<int>& res) {
+    return compute_cascades(scene, CascadeRequest{count, s.map.cascade_lambda, s.map.cascade_stabilize, plan.aspect, res,
+                                                  fit.pad_texels, fit.pad_ws, s.map.fit});
+  };
+  auto requirements = [&](const Cascades& c) {
+    std::vector<double> req;
+    for (const auto& f : c.frames) req.push_back(rule_texels(ap.c, f, radius_ws));
+    return req;
+  };
+  // Screen-space techniques work on one map.
+  int count = directional && !entry.screen_space() ? s.map.cascades : 1;
+  if (count == 0) {
+    const adaptive::CascadeChoice choice = adaptive::choose_cascade_count(kMaxCascades, largest, [&](int n) {
+      return requirements(cascades_for(n, std::vector<int>(static_cast<std::size_t>(n), largest)));
+    });
+    count = choice.count;
+  }
+  count = std::clamp(count, 1, kMaxCascades);
+  if (!single.receivers_visible) count = 1;  // nothing to split (compute_cascades returns one map)
+
+  const auto n = static_cast<std::size_t>(count);
+  std::vector<int> res(n, fixed_res);
+  std::vector<double> req(n, 0.0);
+  plan.resolution_source = "fixed";
+  if (ap.enabled) {
+    const std::string key = std::to_string(count) + "/" + std::to_string(ap.min_texels) + "/" + std::to_string(ap.max_texels) + "/" +
+                            std::to_string(ap.quantum_texels) + "/" + std::to_string(ap.shrink_delay_frames) + "/" +
+                            std::string(entry.name);
+    if (key != ad.key) {
+      ad.key = key;
+      ad.controllers.clear();
+      adaptive::ResolutionController::Params params;
+      params.limits = {ap.min_texels, ap.max_texels, ap.quantum_texels};
+      params.shrink_delay_frames = ap.shrink_delay_frames;
+      for (int i = 0; i < count; ++i) ad.controllers.emplace_back(params);
+    }
+    // The requirement, from frames sized at the previous resolutions (padding and snapping are in
+    // texels, so the extents move slightly with the resolution; the rule's answer barely does).
+    std::vector<int> previous(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int cur = ad.controllers[i].current();
+      previous[i] = cur > 0 ? cur : largest;
+    }
+    req = requirements(cascades_for(count, previous));
+    plan.resolution_source = entry.per_pixel_requirement ? "pcss_min_penumbra" : "rule";
+    if (entry.per_pixel_requirement && ap.pcss == PcssRequirement::per_pixel && ad.last.valid && ad.last_cascades == count) {
+      // Measured last frame: c / r_filter over the visible pixels, never above the min-penumbra bound.
+      for (std::size_t i = 0; i < n; ++i) req[i] = std::min(req[i], ad.last.required_texels[i] * ap.c / ad.last_c);
+      plan.resolution_source = "pcss_per_pixel";
+      plan.used_requirement = ad.last;
+    }
+    for (std::size_t i = 0; i < n; ++i) res[i] = ad.controllers[i].update(req[i]);
+  }
+  const Cascades cascades = cascades_for(count, res);
+  for (std::size_t i = 0; i < n; ++i) {
+    CascadeInfo ci;
+    ci.light = cascades.frames[i];
+    ci.resolution_texels = res[i];
+    ci.required_texels = req[i];
+    ci.split_near_ws = cascades.splits_ws[i];
+    ci.split_far_ws = cascades.splits_ws[i + 1];
+    plan.cascades.push_back(ci);
+  }
+
+  // --- storage ---
+  plan.subrect = ap.enabled && ap.storage == Storage::subrect;
+  std::vector<int> cells(n);
+  for (std::size_t i = 0; i < n; ++i) cells[i] = plan.subrect ? ap.max_texels : res[i];
+  // A single map that fills its texture needs no guard band: the sampler's border is lit.
+  plan.atlas = layout_atlas(cells, count == 1 && !plan.subrect ? 0 : kGuardTexels);
+  for (std::size_t i = 0; i < n; ++i) {
+    plan.cascades[i].atlas_x = plan.atlas.origin[i].x;
+    plan.cascades[i].atlas_y = plan.atlas.origin[i].y;
+  }
+
+  if (plan.filter_radius) {
+    const LightFrame& lf = plan.light();
+    const float texel_mid_ws = lf.texel_ws(0.5f * (lf.near_ws + lf.far_ws), plan.cascades.front().resolution_texels);
+    plan.filter_radius_texels =
+        plan.filter_radius->unit == RadiusUnit::texels ? plan.filter_radius->radius : plan.filter_radius->radius / texel_mid_ws;
+  }
+
+  // --- passes ---
+  plan.pcss_requirement = entry.per_pixel_requirement && ap.enabled && ap.pcss == PcssRequirement::per_pixel;
+  plan.passes.push_back(PassId::shadow_map);
+  if (plan.moments) plan.passes.push_back(PassId::moments_blur);
+  if (entry.screen_space()) {
+    plan.passes.push_back(PassId::gbuffer);
+    plan.passes.push_back(PassId::post);
+  }
+  plan.passes.push_back(PassId::shading);
+  if (plan.pcss_requirement) plan.passes.push_back(PassId::pcss_requirement);
+  return plan;
+}
+
+}  // namespace penumbra::shadows

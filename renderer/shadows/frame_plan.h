@@ -1,0 +1,94 @@
+#pragma once
+// The frame as a plan, made without GL: which maps the frame renders (cascades, their light frames
+// and resolutions from the resolution rule and its hysteresis), where they sit in the shadow
+// atlas, and which passes run. Renderer::render executes the plan (passes.h); tests check it on
+// the CPU.
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "adaptive/resolution_rule.h"
+#include "scene/scene.h"
+#include "shadows/fitting.h"
+#include "shadows/settings.h"
+#include "shadows/technique.h"
+
+namespace penumbra::shadows {
+
+inline constexpr int kMaxCascades = 4;  // MAX_CASCADES in the shaders
+inline constexpr int kGuardTexels = 2;  // far-depth band around each map in a shared atlas (atlas_uv in common.glsl)
+
+struct CascadeInfo {
+  LightFrame light;
+  int resolution_texels = 0;
+  double required_texels = 0;     // the rule's requirement before clamping (adaptive; else 0)
+  float split_near_ws = 0;        // camera view-depth range the cascade covers
+  float split_far_ws = 0;
+  int atlas_x = 0, atlas_y = 0;   // the region's corner in the atlas (texels)
+};
+
+// The per-pixel PCSS requirement of the frame it was measured in (adaptive, pcss = per_pixel).
+struct PcssRequirementInfo {
+  bool valid = false;              // false until a frame has been measured
+  std::vector<double> required_texels;  // per cascade: c · max over pixels of 1 / r_filter_uv
+  double evaluated_pixels = 0;     // pixels that ran a PCSS filter
+  double clamped_fraction = 0;     // of those, share whose radius was raised to the minimum penumbra
+  double above_max_fraction = 0;   // share that needed more than adaptive.max_texels
+};
+
+// The passes a frame can run, in execution order.
+enum class PassId { shadow_map, moments_blur, gbuffer, post, shading, pcss_requirement };
+
+// Region corners per cascade: one row of up to two cells, then a second row. `guard` texels of
+// far depth surround every region.
+struct AtlasLayout {
+  int width = 0, height = 0;
+  int guard = 0;
+  std::vector<glm::ivec2> origin;  // inner corner of each region
+};
+AtlasLayout layout_atlas(const std::vector<int>& cell_texels, int guard);
+
+// What the adaptive rule carries from frame to frame: the hysteresis of each cascade and the
+// newest per-pixel PCSS requirement (measured on the GPU, read back a frame later).
+struct AdaptiveState {
+  std::string key;  // what the controllers were made for; a change restarts them
+  std::vector<adaptive::ResolutionController> controllers;
+  PcssRequirementInfo last;  // the newest measured requirement
+  int last_cascades = 0;     // cascade count it was measured with
+  float last_c = 0;
+  void reset() { *this = {}; }
+};
+
+struct FramePlan {
+  int width_px = 0, height_px = 0;
+  float aspect = 1;
+  const TechniqueEntry* technique = nullptr;
+  std::optional<MomentsLayout> moments;       // filtered-moments techniques
+  std::optional<FilterRadius> filter_radius;  // fixed-filter techniques
+  float tan_half_angle = 0;                   // of the light's angular size (directional)
+  std::vector<CascadeInfo> cascades;          // one entry when not cascaded
+  std::string resolution_source;              // "fixed", "rule", "pcss_per_pixel", "pcss_min_penumbra"
+  bool subrect = false;                       // adaptive sub-rectangle storage (else a map per size)
+  AtlasLayout atlas;
+  bool pcss_requirement = false;              // the frame measures its per-pixel PCSS requirement
+  PcssRequirementInfo used_requirement;       // the measurement this frame's resolution used
+  float filter_radius_texels = 0;             // fixed filter, in texels of cascade 0 at mid depth
+  std::vector<PassId> passes;
+
+  bool runs(PassId p) const;
+  const LightFrame& light() const { return cascades.front().light; }
+};
+
+// Plans one frame of `scene` at width × height. Updates the hysteresis in `state`. Throws
+// std::runtime_error for an empty image, a map below one texel or inconsistent adaptive limits.
+FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int width_px, int height_px, AdaptiveState& state);
+
+// World-space radius the adaptive rule hides texels with, for the technique's filter; 0 when the
+// technique has none. Radii given in texels are taken at map.resolution_texels of the single
+// fitted map `single`: "the filter the user sees at the configured resolution".
+float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws);
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,425 @@
+#include "shadows/passes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+#include "gl/context.h"
+#include "shadows/renderer.h"
+#include "shadows/scoped_pass.h"
+
+namespace penumbra::shadows {
+
+const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std::string& key, const std::vector<gl::ShaderStage>& stages,
+                                     const std::vector<gl::ShaderDefine>& defines) {
+  auto it = programs_.find(key);
+  if (it == programs_.end()) it = programs_.emplace(key, shaders.program(stages, defines)).first;
+  return it->second;
+}
+
+FrameResources::FrameResources(const gl::ShaderLibrary& library) : shaders(library) {
+  depth_program = shaders.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
+  requirement_program = shaders.program({{GL_COMPUTE_SHADER, "pcss_requirement.comp"}});
+  gl::SamplerDesc d;
+  d.depth_compare = true;
+  cmp_linear = gl::Sampler(d);
+  d.min_filter = d.mag_filter = GL_NEAREST;
+  cmp_nearest = gl::Sampler(d);
+  d.depth_compare = false;
+  raw_nearest = gl::Sampler(d);
+  // Beyond the map the border reads as the far depth: lit, like the depth samplers' border and the
+  // guard band of an atlas region. Each frame sets the border to its technique's far moments.
+  moments_linear = gl::Sampler(gl::SamplerDesc{});
+  gl::check_errors("renderer setup");
+}
+
+bool FrameResources::prepare(const FramePlan& plan) {
+  bool reallocated = false;
+  const AtlasLayout& layout = plan.atlas;
+  const GLenum moments_format = plan.moments ? plan.moments->format : 0;
+  if (!maps || maps->width != layout.width || maps->height != layout.height || maps->moments_format != moments_format) {
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    if (layout.width > max_size || layout.height > max_size)
+      throw std::runtime_error("render: shadow atlas " + std::to_string(layout.width) + "x" + std::to_string(layout.height) +
+                               " exceeds GL_MAX_TEXTURE_SIZE " + std::to_string(max_size) +
+                               " (lower map.resolution_texels, adaptive.max_texels or map.cascades)");
+    maps.reset();
+    auto m = std::make_unique<Maps>();
+    m->width = layout.width;
+    m->height = layout.height;
+    m->moments_format = moments_format;
+    m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, layout.width, layout.height, 1}, "shadow depth atlas");
+    const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
+    glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
+    const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
+    m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
+    if (plan.moments) {
+      m->moments_tex = gl::Texture({moments_format, layout.width, layout.height, 1}, "shadow moments");
+      m->moments_tmp = gl::Texture({moments_format, layout.width, layout.height, 1}, "moments blur temporary");
+      const gl::Framebuffer::Attachment att[] = {{&m->moments_tex, GL_COLOR_ATTACHMENT0}, {&m->depth, GL_DEPTH_ATTACHMENT}};
+      m->moments_fbo = gl::Framebuffer(att, "moments framebuffer");
+    }
+    maps = std::move(m);
+    reallocated = true;
+  }
+  const int w = plan.width_px, h = plan.height_px;
+  if (!targets || targets->width != w || targets->height != h || targets->requirement != plan.pcss_requirement) {
+    targets.reset();
+    auto t = std::make_unique<Targets>();
+    t->width = w;
+    t->height = h;
+    t->requirement = plan.pcss_requirement;
+    t->color = gl::Texture({GL_SRGB8_ALPHA8, w, h, 1}, "lit colour");
+    t->visibility = gl::Texture({GL_R32F, w, h, 1}, "visibility");
+    t->depth = gl::Texture({GL_DEPTH_COMPONENT32F, w, h, 1}, "camera depth");
+    std::vector<gl::Framebuffer::Attachment> att = {{&t->color, GL_COLOR_ATTACHMENT0}, {&t->visibility, GL_COLOR_ATTACHMENT1}};
+    if (plan.pcss_requirement) {
+      t->requirement_tex = gl::Texture({GL_RG32F, w, h, 1}, "PCSS requirement");
+      att.push_back({&t->requirement_tex, GL_COLOR_ATTACHMENT2});
+    }
+    att.push_back({&t->depth, GL_DEPTH_ATTACHMENT});
+    t->fbo = gl::Framebuffer(att, "camera framebuffer");
+    targets = std::move(t);
+  }
+  screen_result = nullptr;
+  return reallocated;
+}
+
+void FrameContext::draw_scene(const gl::Program& program, bool shading) const {
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const auto& o = scene.objects[i];
+    program.set("u_model", o.model);
+    if (shading) {
+      program.set("u_normal_matrix", glm::transpose(glm::inverse(glm::mat3(o.model))));
+      program.set("u_albedo", o.albedo);
+    }
+    meshes[i]->draw();
+  }
+}
+
+const gl::Program& FrameContext::shading_program(bool gbuffer) const {
+  const TechniqueEntry& entry = *plan.technique;
+  std::vector<gl::ShaderDefine> defines;
+  if (gbuffer) {
+    // The first pass of a screen-space technique: its input shadows, revectorized or hard.
+    const bool rbsm = entry.rbsm_input && entry.rbsm_input(settings);
+    defines.push_back({std::string(technique_entry(rbsm ? Technique::rbsm : Technique::hard).define), "1"});
+    defines.push_back({"SCREEN_SPACE_GBUFFER", "1"});
+  } else {
+    defines.push_back({std::string(entry.define), "1"});
+    if (entry.variant_defines) entry.variant_defines(settings, defines);
+  }
+  if (plan.pcss_requirement) defines.push_back({"PCSS_REQUIREMENT", "1"});
+  std::string key = "shading:";
+  for (const auto& d : defines) key += d.name + ";";
+  return res.programs.get(res.shaders, key, {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shading.frag"}}, defines);
+}
+
+void FrameContext::bind_shadow_maps() const {
+  res.maps->depth.bind(0);
+  res.maps->depth.bind(1);
+  res.maps->depth.bind(2);
+  res.cmp_linear.bind(0);
+  res.cmp_nearest.bind(1);
+  res.raw_nearest.bind(2);
+  if (plan.moments) {
+    glSamplerParameterfv(res.moments_linear.id(), GL_TEXTURE_BORDER_COLOR, plan.moments->far_moments.data());
+    res.maps->moments_tex.bind(3);
+    res.moments_linear.bind(3);
+  }
+}
+
+void FrameContext::set_frame_uniforms(const gl::Program& prog) const {
+  const ShadowSettings& s = settings;
+  const TechniqueEntry& entry = *plan.technique;
+  const scene::Camera& cam = scene.camera;
+  const scene::Light& light = scene.light;
+  const LightFrame& lf = plan.light();
+  const int count = static_cast<int>(plan.cascades.size());
+  const int res0 = plan.cascades.front().resolution_texels;
+  const float texel_mid_ws = lf.texel_ws(0.5f * (lf.near_ws + lf.far_ws), res0);
+  prog.set("u_view_projection", cam.projection_matrix(plan.aspect) * cam.view());
+  prog.set("u_camera_view", cam.view());
+  prog.set("u_light_view", lf.view);
+  prog.set("u_light_perspective", lf.perspective);
+  prog.set("u_light_near_ws", lf.near_ws);
+  prog.set("u_light_far_ws", lf.far_ws);
+  prog.set("u_light_s_xy", lf.s_xy);
+  prog.set("u_light_tan_half_fov", std::tan(glm::radians(lf.fov_deg) / 2));
+  prog.set("u_cascade_count", count);
+  prog.set("u_cascade_blend", count > 1 ? s.map.cascade_blend : 0.0f);
+  prog.set("u_show_cascades", show_cascades);
+  for (int i = 0; i < count; ++i) {
+    const CascadeInfo& c = plan.cascades[static_cast<std::size_t>(i)];
+    const std::string at = "[" + std::to_string(i) + "]";
+    const float w = static_cast<float>(plan.atlas.width), h = static_cast<float>(plan.atlas.height);
+    prog.set("u_cascade_view_projection" + at, c.light.view_projection());
+    prog.set("u_cascade_region" + at, glm::vec4(static_cast<float>(c.atlas_x) / w, static_cast<float>(c.atlas_y) / h,
+                                                static_cast<float>(c.resolution_texels) / w, static_cast<float>(c.resolution_texels) / h));
+    prog.set("u_cascade_res" + at, static_cast<float>(c.resolution_texels));
+    prog.set("u_cascade_extent_ws" + at, c.light.extent_ws);
+    prog.set("u_cascade_far_ws" + at, c.split_far_ws);
+  }
+  // Trust receiver slopes up to 85° from the light: |d depth/d uv| ≤ tan 85° · extent / depth range.
+  prog.set("u_rpdb_max", std::tan(glm::radians(85.0f)) * texel_mid_ws * static_cast<float>(res0) / std::max(lf.far_ws - lf.near_ws, 1e-6f));
+  prog.set("u_receiver_plane_bias", s.map.receiver_plane_bias);
+  prog.set("u_light_direction", glm::normalize(light.direction));
+  prog.set("u_light_position", light.position);
+  const float half_cone = glm::radians(light.spot_fov_deg) / 2;
+  prog.set("u_spot_cos_outer", std::cos(half_cone));
+  prog.set("u_spot_cos_inner", std::cos(half_cone * 0.9f));
+  prog.set("u_light_color", light.color);
+  prog.set("u_ambient", light.ambient);
+  prog.set("u_normal_offset_texels", s.map.normal_offset_texels);
+  prog.set("u_depth_bias_texels", s.map.depth_bias_texels);
+  prog.set("u_camera_position", cam.position);
+  prog.set("u_camera_forward", glm::normalize(cam.target - cam.position));
+
+  if (plan.filter_radius) {
+    prog.set("u_filter_radius", plan.filter_radius->radius);
+    prog.set("u_filter_radius_world", plan.filter_radius->unit == RadiusUnit::world);
+  }
+  if (entry.set_uniforms) entry.set_uniforms(prog, s);
+  if (entry.rbsm_input && entry.rbsm_input(s)) set_rbsm_uniforms(prog, s.rbsm);  // the G-buffer's revectorized input
+  if (entry.uses_light_size()) {
+    prog.set("u_pcss_light_radius_uv", light.size / 2 * lf.s_xy / std::max(lf.extent_ws, 1e-9f));
+    prog.set("u_pcss_tan_half_angle", plan.tan_half_angle);
+    prog.set("u_pcss_min_penumbra_ws", s.pcss.min_penumbra_ws);
+  }
+  if (const int taps = entry.poisson_taps ? entry.poisson_taps(s) : 0; taps > 0) {
+    auto it = res.poisson.find(taps);
+    if (it == res.poisson.end()) it = res.poisson.emplace(taps, poisson_disk(taps)).first;
+    prog.set("u_poisson", std::span<const glm::vec2>(it->second));
+  }
+}
+
+namespace {
+
+class ShadowMapPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::shadow_map; }
+  const char* name() const override { return "shadow_map"; }
+  unsigned reads() const override { return kSceneMeshes; }
+  unsigned writes() const override { return kDepthAtlas | kMoments; }
+  void execute(FrameContext& f) override {
+    const auto& moments = f.plan.moments;
+    FrameResources& r = f.res;
+    const gl::Program& prog =
+        moments ? r.programs.get(r.shaders, std::string("moments:") + moments->fragment_shader,
+                                 {{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, moments->fragment_shader}})
+                : r.depth_program;
+    (moments ? r.maps->moments_fbo : r.maps->depth_fbo).bind();
+    glEnable(GL_DEPTH_CLAMP);  // casters in front of the fitted near plane still occlude
+    glEnable(GL_SCISSOR_TEST);
+    prog.use();
+    const int guard = f.plan.atlas.guard;
+    for (const auto& c : f.plan.cascades) {
+      // Clear the region and its guard band only: the rest of a sub-rectangle atlas is never read.
+      const int res = c.resolution_texels;
+      glScissor(c.atlas_x - guard, c.atlas_y - guard, res + 2 * guard, res + 2 * guard);
+      if (moments) glClearBufferfv(GL_COLOR, 0, moments->far_moments.data());
+      const float one = 1;
+      glClearBufferfv(GL_DEPTH, 0, &one);
+      glViewport(c.atlas_x, c.atlas_y, res, res);
+      glScissor(c.atlas_x, c.atlas_y, res, res);
+      if (!moments) {
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset(f.settings.map.slope_bias, f.settings.map.offset_bias);
+      }
+      prog.set("u_light_view_projection", c.light.view_projection());
+      prog.set("u_light_view", c.light.view);
+      if (moments) {
+        prog.set("u_light_near_ws", c.light.near_ws);
+        prog.set("u_light_far_ws", c.light.far_ws);
+        if (f.plan.technique->set_uniforms) f.plan.technique->set_uniforms(prog, f.settings);
+      }
+      f.draw_scene(prog, false);
+    }
+    glDisable(GL_SCISSOR_TEST);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
+    gl::check_errors("shadow_map pass");
+  }
+};
+
+class MomentsBlurPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::moments_blur; }
+  const char* name() const override { return "vsm_blur"; }
+  unsigned reads() const override { return kMoments; }
+  unsigned writes() const override { return kMoments; }
+  void execute(FrameContext& f) override {
+    const MomentsLayout& moments = *f.plan.moments;
+    const FilterRadius radius = *f.plan.filter_radius;
+    FrameResources& r = f.res;
+    const char* qualifier = image_format_qualifier(moments.format);
+    std::vector<gl::ShaderDefine> defines = {{"MOMENTS_CHANNELS", std::to_string(channel_count(moments.format))},
+                                             {"MOMENTS_FORMAT", qualifier}};
+    if (moments.direct_sums) defines.push_back({"DIRECT_SUMS", "1"});
+    const gl::Program& blur = r.programs.get(r.shaders, std::string("blur:") + qualifier + (moments.direct_sums ? ":direct" : ""),
+                                             {{GL_COMPUTE_SHADER, "vsm_blur.comp"}}, defines);
+    blur.use();
+    glBindSampler(0, 0);
+    const LightFrame& lf = f.plan.light();
+    const float mid_depth = 0.5f * (lf.near_ws + lf.far_ws);
+    for (const auto& c : f.plan.cascades) {
+      // World-space radii span a different number of texels in each cascade.
+      const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
+      blur.set("u_radius_texels", radius.unit == RadiusUnit::texels ? radius.radius : radius.radius / texel);
+      blur.set("u_origin", glm::ivec2(c.atlas_x, c.atlas_y));
+      blur.set("u_size", c.resolution_texels);
+      const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
+      // Sliding sums: one invocation per line (x); direct sums: one per texel, x along the line and
+      // y the line (vsm_blur.comp). The map is square, so both grids are `groups` x (1 or res).
+      const GLuint lines_y = moments.direct_sums ? static_cast<GLuint>(c.resolution_texels) : 1;
+      blur.set("u_axis", 0);
+      r.maps->moments_tex.bind(0);
+      glBindImageTexture(0, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments.format);
+      glDispatchCompute(groups, lines_y, 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      blur.set("u_axis", 1);
+      r.maps->moments_tmp.bind(0);
+      glBindImageTexture(0, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments.format);
+      glDispatchCompute(groups, lines_y, 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    gl::check_errors("vsm_blur pass");
+  }
+};
+
+class GbufferPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::gbuffer; }
+  const char* name() const override { return "gbuffer"; }
+  unsigned reads() const override { return kSceneMeshes | kDepthAtlas; }
+  unsigned writes() const override { return kGbuffer; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    if (!r.screen_space) r.screen_space = std::make_unique<ScreenSpace>(r.shaders);
+    r.screen_space->resize(r.targets->depth);
+    const gl::Program& prog = f.shading_program(true);
+    r.screen_space->gbuffer_framebuffer().bind();
+    glViewport(0, 0, f.plan.width_px, f.plan.height_px);
+    const float nothing[4] = {0, 0, 0, 0}, far_depth = 1;
+    glClearBufferfv(GL_COLOR, 0, nothing);
+    glClearBufferfv(GL_COLOR, 1, nothing);
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    prog.use();
+    f.bind_shadow_maps();
+    f.set_frame_uniforms(prog);
+    f.draw_scene(prog, true);
+    gl::check_errors("gbuffer pass");
+  }
+};
+
+class PostPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::post; }
+  const char* name() const override { return "post"; }
+  unsigned reads() const override { return kGbuffer | kDepthAtlas; }
+  unsigned writes() const override { return kScreenVisibility; }
+  bool reports_subpasses() const override { return true; }
+  void execute(FrameContext& f) override {
+    const scene::Camera& cam = f.scene.camera;
+    const float height = static_cast<float>(f.plan.height_px);
+    PostPassContext ctx;
+    ctx.view.perspective = cam.projection == scene::Camera::Projection::perspective;
+    ctx.view.px_scale = ctx.view.perspective ? height / (2 * std::tan(glm::radians(cam.fov_y_deg) / 2)) : height / cam.ortho_height_ws;
+    ctx.set_light_uniforms = [&f](const gl::Program& p) { f.set_frame_uniforms(p); };
+    ctx.timer = f.timer;
+    ctx.passes = &f.info.passes;
+    f.bind_shadow_maps();
+    f.res.screen_result = &f.plan.technique->post(*f.res.screen_space, f.settings, ctx);
+  }
+};
+
+class ShadingPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::shading; }
+  const char* name() const override { return "shading"; }
+  unsigned reads() const override { return kSceneMeshes | kDepthAtlas | kMoments | kScreenVisibility; }
+  unsigned writes() const override { return kColor | kVisibility | kRequirementImage; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    const bool requirement = f.plan.pcss_requirement;
+    const gl::Program& prog = f.shading_program(false);
+    r.targets->fbo.bind();
+    if (requirement) {
+      const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+      glNamedFramebufferDrawBuffers(r.targets->fbo.id(), 3, bufs);
+    }
+    glViewport(0, 0, f.plan.width_px, f.plan.height_px);
+    glEnable(GL_FRAMEBUFFER_SRGB);
+    const float sky[4] = {0.45f, 0.55f, 0.7f, 1};
+    const float lit = 1, far_depth = 1;
+    glClearBufferfv(GL_COLOR, 0, sky);
+    glClearBufferfv(GL_COLOR, 1, &lit);
+    if (requirement) {
+      const float none[4] = {0, 0, 0, 0};
+      glClearBufferfv(GL_COLOR, 2, none);
+    }
+    if (r.screen_result) {
+      // The G-buffer pass left the depth: shade exactly the fragments it kept.
+      glDepthFunc(GL_LEQUAL);
+      glDepthMask(GL_FALSE);
+      glBindSampler(4, 0);
+      r.screen_result->bind(4);
+    } else {
+      glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    }
+    prog.use();
+    f.bind_shadow_maps();
+    f.set_frame_uniforms(prog);
+    f.draw_scene(prog, true);
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    gl::check_errors("shading pass");
+  }
+};
+
+class PcssRequirementPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::pcss_requirement; }
+  const char* name() const override { return "pcss_requirement"; }
+  unsigned reads() const override { return kRequirementImage; }
+  unsigned writes() const override { return kRequirementBuffer; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    FrameResources::Requirement& q = r.requirement;
+    const AdaptiveParams& ap = f.settings.adaptive;
+    const int slot = q.frame % 2;
+    if (!q.buffer[slot].id()) q.buffer[slot] = gl::Buffer(16 * sizeof(std::uint32_t), nullptr, 0);
+    const std::uint32_t zero = 0;
+    glClearNamedBufferData(q.buffer[slot].id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    r.requirement_program.use();
+    r.targets->requirement_tex.bind(0);
+    glBindSampler(0, 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, q.buffer[slot].id());
+    r.requirement_program.set("u_limit_inverse_uv", static_cast<float>(ap.max_texels) / ap.c);
+    // 64² pixels per group
+    glDispatchCompute(static_cast<GLuint>((f.plan.width_px + 63) / 64), static_cast<GLuint>((f.plan.height_px + 63) / 64), 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    q.pending[slot] = true;
+    q.cascades[slot] = static_cast<int>(f.plan.cascades.size());
+    q.c[slot] = ap.c;
+    gl::check_errors("pcss_requirement pass");
+  }
+};
+
+}  // namespace
+
+std::vector<std::unique_ptr<Pass>> make_passes() {
+  std::vector<std::unique_ptr<Pass>> passes;
+  passes.push_back(std::make_unique<ShadowMapPass>());
+  passes.push_back(std::make_unique<MomentsBlurPass>());
+  passes.push_back(std::make_unique<GbufferPass>());
+  passes.push_back(std::make_unique<PostPass>());
+  passes.push_back(std::make_unique<ShadingPass>());
+  passes.push_back(std::make_unique<PcssRequirementPass>());
+  return passes;
+}
+
+}  // namespace penumbra::shadows

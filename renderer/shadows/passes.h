@@ -1,0 +1,137 @@
+#pragma once
+// The passes of a frame and what they share. Each pass states its name (as reported in
+// FrameInfo.passes and timed), whether a plan needs it, the resources it reads and writes, and
+// executes against the frame's resources:
+//   shadow_map        scene → depth atlas (+ the moments of a filtered-moments technique)
+//   vsm_blur          moments → moments (box blur in place, through a temporary)
+//   gbuffer           scene, depth atlas → G-buffer + camera depth (screen-space techniques)
+//   post              G-buffer, depth atlas → screen visibility (the technique's post passes,
+//                     each reported under its own name)
+//   shading           scene, depth atlas, moments, screen visibility → colour, visibility
+//                     (+ the per-pixel PCSS requirement image)
+//   pcss_requirement  requirement image → requirement buffer (read back one frame later)
+// Renderer::render runs, in this order, the passes its FramePlan lists.
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gl/objects.h"
+#include "gl/shader_library.h"
+#include "gl/timer.h"
+#include "scene/scene.h"
+#include "shadows/frame_plan.h"
+#include "shadows/screen_space.h"
+
+namespace penumbra::shadows {
+
+struct FrameInfo;
+
+// Resources a pass reads or writes.
+enum Resource : unsigned {
+  kSceneMeshes = 1u << 0,
+  kDepthAtlas = 1u << 1,
+  kMoments = 1u << 2,
+  kGbuffer = 1u << 3,
+  kScreenVisibility = 1u << 4,
+  kColor = 1u << 5,
+  kVisibility = 1u << 6,
+  kRequirementImage = 1u << 7,
+  kRequirementBuffer = 1u << 8,
+};
+
+// Programs compiled on first use and kept by key.
+class ProgramCache {
+ public:
+  const gl::Program& get(const gl::ShaderLibrary& shaders, const std::string& key, const std::vector<gl::ShaderStage>& stages,
+                         const std::vector<gl::ShaderDefine>& defines = {});
+
+ private:
+  std::map<std::string, gl::Program> programs_;
+};
+
+// Everything the passes share across frames: the atlas, the camera targets, samplers, programs,
+// the screen-space state and the PCSS requirement buffers.
+struct FrameResources {
+  struct Maps {
+    int width = 0, height = 0;
+    GLenum moments_format = 0;  // 0: depth only
+    gl::Texture depth;
+    gl::Framebuffer depth_fbo;
+    gl::Texture moments_tex, moments_tmp;
+    gl::Framebuffer moments_fbo;
+  };
+  struct Targets {
+    int width = 0, height = 0;
+    bool requirement = false;
+    gl::Texture color, visibility, requirement_tex, depth;
+    gl::Framebuffer fbo;
+  };
+  // Two requirement buffers, so that a frame reads the one written a frame earlier and never
+  // waits for the GPU.
+  struct Requirement {
+    gl::Buffer buffer[2];
+    bool pending[2] = {false, false};
+    int cascades[2] = {0, 0};
+    float c[2] = {0, 0};
+    int frame = 0;
+  };
+
+  explicit FrameResources(const gl::ShaderLibrary& library);
+
+  // (Re)allocates the atlas and the camera targets for `plan`; true when the atlas was.
+  bool prepare(const FramePlan& plan);
+
+  const gl::ShaderLibrary& shaders;
+  gl::Program depth_program, requirement_program;
+  ProgramCache programs;
+  gl::Sampler cmp_linear, cmp_nearest, raw_nearest, moments_linear;
+  std::unique_ptr<Maps> maps;
+  std::unique_ptr<Targets> targets;
+  std::unique_ptr<ScreenSpace> screen_space;  // made on the first screen-space frame
+  const gl::Texture* screen_result = nullptr;  // this frame's post-pass output
+  Requirement requirement;
+  std::map<int, std::vector<glm::vec2>> poisson;  // Poisson disks by tap count
+};
+
+// One frame being executed.
+struct FrameContext {
+  const ShadowSettings& settings;
+  const FramePlan& plan;
+  const scene::Scene& scene;
+  const std::vector<std::unique_ptr<scene::GpuMesh>>& meshes;
+  FrameResources& res;
+  FrameInfo& info;
+  gl::PassTimer* timer = nullptr;
+  bool show_cascades = false;
+
+  // Draws every mesh with `program`; `shading` also sets normal matrix and albedo.
+  void draw_scene(const gl::Program& program, bool shading) const;
+  // The light frame, cascades, biases and the technique's uniforms, shared by both camera passes
+  // and the screen-space compute passes (uniforms a program lacks are ignored).
+  void set_frame_uniforms(const gl::Program& program) const;
+  // Binds the depth atlas (units 0-2) and the moments (unit 3).
+  void bind_shadow_maps() const;
+  // The shading program of the frame's technique; `gbuffer`: the first camera pass of a
+  // screen-space technique.
+  const gl::Program& shading_program(bool gbuffer) const;
+};
+
+class Pass {
+ public:
+  virtual ~Pass() = default;
+  virtual PassId id() const = 0;
+  virtual const char* name() const = 0;
+  virtual unsigned reads() const = 0;
+  virtual unsigned writes() const = 0;
+  // Whether the pass reports its own sub-passes (post) instead of being timed as one.
+  virtual bool reports_subpasses() const { return false; }
+  bool needed(const FramePlan& plan) const { return plan.runs(id()); }
+  virtual void execute(FrameContext& frame) = 0;
+};
+
+// The frame's passes, in execution order (PassId order).
+std::vector<std::unique_ptr<Pass>> make_passes();
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,247 @@
+// plan_frame on the CPU (no GL): pass selection, cascades, the resolution rule, its hysteresis
+// and the atlas layout, including the extremes the GL tests exercise through whole frames.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "adaptive/resolution_rule.h"
+#include "scene/scene.h"
+#include "shadows/frame_plan.h"
+
+namespace penumbra::shadows {
+namespace {
+
+constexpr int kWidth = 320, kHeight = 180;
+
+FramePlan plan(const ShadowSettings& s, const scene::Scene& scene = scene::make_builtin_scene("demo")) {
+  AdaptiveState state;
+  return plan_frame(s, scene, kWidth, kHeight, state);
+}
+
+ShadowSettings with(Technique t) {
+  ShadowSettings s;
+  s.technique = t;
+  return s;
+}
+
+TEST(FramePlan, PassesFollowTheTechnique) {
+  using P = PassId;
+  EXPECT_EQ(plan(with(Technique::hard)).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  EXPECT_EQ(plan(with(Technique::pcf)).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  for (Technique t : {Technique::vsm, Technique::msm, Technique::evsm})
+    EXPECT_EQ(plan(with(t)).passes, (std::vector<P>{P::shadow_map, P::moments_blur, P::shading})) << to_string(t);
+  for (Technique t : {Technique::edtsm, Technique::edtssm, Technique::erosion})
+    EXPECT_EQ(plan(with(t)).passes, (std::vector<P>{P::shadow_map, P::gbuffer, P::post, P::shading})) << to_string(t);
+  ShadowSettings pcss = with(Technique::pcss);
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  pcss.adaptive.enabled = true;
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading, P::pcss_requirement}));
+  pcss.adaptive.pcss = PcssRequirement::min_penumbra;
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading}));
+}
+
+TEST(FramePlan, FixedSingleMapFillsItsTextureWithoutGuardBand) {
+  ShadowSettings s = with(Technique::pcf);
+  s.map.resolution_texels = 777;
+  const FramePlan p = plan(s);
+  ASSERT_EQ(p.cascades.size(), 1u);
+  EXPECT_EQ(p.cascades[0].resolution_texels, 777);
+  EXPECT_EQ(p.resolution_source, "fixed");
+  EXPECT_EQ(p.atlas.guard, 0);
+  EXPECT_EQ(p.atlas.width, 777);
+  EXPECT_EQ(p.atlas.height, 777);
+  EXPECT_EQ(p.cascades[0].atlas_x, 0);
+  EXPECT_FLOAT_EQ(p.filter_radius_texels, s.pcf.radius);  // radius given in texels
+}
+
+TEST(FramePlan, CascadesSplitTheViewAndTileTheAtlas) {
+  for (int n = 2; n <= 4; ++n) {
+    ShadowSettings s = with(Technique::pcf);
+    s.map.cascades = n;
+    s.map.resolution_texels = 256;
+    const FramePlan p = plan(s);
+    ASSERT_EQ(static_cast<int>(p.cascades.size()), n);
+    EXPECT_EQ(p.atlas.guard, kGuardTexels);
+    EXPECT_EQ(p.atlas.width, 2 * (256 + 2 * kGuardTexels));
+    EXPECT_EQ(p.atlas.height, ((n + 1) / 2) * (256 + 2 * kGuardTexels));
+    for (int i = 0; i < n; ++i) {
+      const CascadeInfo& c = p.cascades[static_cast<std::size_t>(i)];
+      EXPECT_LT(c.split_near_ws, c.split_far_ws);
+      if (i > 0) EXPECT_FLOAT_EQ(c.split_near_ws, p.cascades[static_cast<std::size_t>(i - 1)].split_far_ws);
+      // Each region with its guard band lies inside the atlas and apart from the others.
+      EXPECT_GE(c.atlas_x, kGuardTexels);
+      EXPECT_LE(c.atlas_x + 256 + kGuardTexels, p.atlas.width);
+      EXPECT_LE(c.atlas_y + 256 + kGuardTexels, p.atlas.height);
+      for (int j = 0; j < i; ++j) {
+        const CascadeInfo& o = p.cascades[static_cast<std::size_t>(j)];
+        const bool apart = std::abs(c.atlas_x - o.atlas_x) >= 256 + 2 * kGuardTexels ||
+                           std::abs(c.atlas_y - o.atlas_y) >= 256 + 2 * kGuardTexels;
+        EXPECT_TRUE(apart) << "cascades " << i << " and " << j << " overlap";
+      }
+    }
+    // Nearer cascades cover less of the light's view plane.
+    EXPECT_LT(p.cascades.front().light.extent_ws, p.cascades.back().light.extent_ws);
+  }
+}
+
+TEST(FramePlan, ScreenSpaceAndSpotLightsUseOneMap) {
+  ShadowSettings s = with(Technique::edtsm);
+  s.map.cascades = 4;
+  EXPECT_EQ(plan(s).cascades.size(), 1u);
+  s.technique = Technique::pcf;
+  scene::Scene spot = scene::make_builtin_scene("demo");
+  spot.light.type = scene::Light::Type::spot;
+  spot.light.position = {0, 12, 0};
+  EXPECT_EQ(plan(s, spot).cascades.size(), 1u);
+}
+
+TEST(FramePlan, EmptySceneHasOneMap) {
+  ShadowSettings s = with(Technique::pcf);
+  s.map.cascades = 4;
+  const FramePlan p = plan(s, scene::make_builtin_scene("empty"));
+  EXPECT_EQ(p.cascades.size(), 1u);
+  EXPECT_GT(p.cascades[0].resolution_texels, 0);
+}
+
+TEST(FramePlan, RuleGivesCTimesExtentOverRadius) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.quantum_texels = 1;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = 0.05f;
+  const FramePlan p = plan(s);
+  ASSERT_EQ(p.cascades.size(), 1u);
+  EXPECT_EQ(p.resolution_source, "rule");
+  const double expected = adaptive::required_texels_ws(s.adaptive.c, p.cascades[0].light.extent_ws, 0.05);
+  // The requirement comes from the frame at the previous resolution (here: max_texels), so the
+  // extent differs by the texel-sized padding only.
+  EXPECT_NEAR(p.cascades[0].required_texels, expected, 0.01 * expected);
+  EXPECT_EQ(p.cascades[0].resolution_texels, static_cast<int>(std::ceil(p.cascades[0].required_texels)));
+  // Doubling the radius halves the requirement.
+  s.pcf.radius = 0.1f;
+  EXPECT_NEAR(plan(s).cascades[0].required_texels, p.cascades[0].required_texels / 2, 0.01 * p.cascades[0].required_texels);
+}
+
+TEST(FramePlan, RuleClampsAtTheExtremes) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = 1e-6f;  // a vanishing filter wants an infinite map
+  EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.max_texels);
+  s.pcf.radius = 0;
+  EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.max_texels);
+  s.pcf.radius = 1e5f;  // a filter wider than the scene needs the fewest texels
+  EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.min_texels);
+  ShadowSettings hard = with(Technique::hard);  // no filter: the rule has nothing to hide
+  hard.adaptive.enabled = true;
+  EXPECT_EQ(plan(hard).cascades[0].resolution_texels, hard.adaptive.max_texels);
+}
+
+TEST(FramePlan, HysteresisGrowsAtOnceAndShrinksAfterTheDelay) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.shrink_delay_frames = 3;
+  s.pcf.radius_unit = RadiusUnit::world;
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  AdaptiveState state;
+  s.pcf.radius = 0.2f;
+  const int coarse = plan_frame(s, scene, kWidth, kHeight, state).cascades[0].resolution_texels;
+  s.pcf.radius = 0.05f;
+  const int fine = plan_frame(s, scene, kWidth, kHeight, state).cascades[0].resolution_texels;
+  EXPECT_GT(fine, coarse);  // grows in the same frame
+  s.pcf.radius = 0.2f;
+  // Keeps the fine map while the smaller requirement holds, shrinks on the delay-th frame.
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(plan_frame(s, scene, kWidth, kHeight, state).cascades[0].resolution_texels, fine) << i;
+  EXPECT_LT(plan_frame(s, scene, kWidth, kHeight, state).cascades[0].resolution_texels, fine);
+  // A changed cascade count or technique restarts the controllers.
+  const std::string key = state.key;
+  s.map.cascades = 2;
+  plan_frame(s, scene, kWidth, kHeight, state);
+  EXPECT_NE(state.key, key);
+  EXPECT_EQ(state.controllers.size(), 2u);
+}
+
+TEST(FramePlan, SubrectStorageReservesMaxTexelsPerCascade) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.max_texels = 1024;
+  s.map.cascades = 3;
+  const FramePlan p = plan(s);
+  EXPECT_TRUE(p.subrect);
+  EXPECT_EQ(p.atlas.width, 2 * (1024 + 2 * kGuardTexels));
+  EXPECT_EQ(p.atlas.height, 2 * (1024 + 2 * kGuardTexels));
+  s.adaptive.storage = Storage::realloc;
+  const FramePlan r = plan(s);
+  EXPECT_FALSE(r.subrect);
+  int cell = 0;
+  for (const auto& c : r.cascades) cell = std::max(cell, c.resolution_texels + 2 * kGuardTexels);
+  EXPECT_EQ(r.atlas.width, 2 * cell);
+}
+
+TEST(FramePlan, AutomaticCascadeCountStaysInRange) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.map.cascades = 0;
+  s.pcf.radius_unit = RadiusUnit::world;
+  for (float r : {1e-4f, 0.01f, 0.1f, 10.0f}) {
+    s.pcf.radius = r;
+    const auto n = plan(s).cascades.size();
+    EXPECT_GE(n, 1u) << r;
+    EXPECT_LE(n, static_cast<std::size_t>(kMaxCascades)) << r;
+  }
+}
+
+TEST(FramePlan, PcssUsesTheMeasuredRequirementWhenLower) {
+  ShadowSettings s = with(Technique::pcss);
+  s.adaptive.enabled = true;
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  AdaptiveState state;
+  const FramePlan bound = plan_frame(s, scene, kWidth, kHeight, state);
+  EXPECT_EQ(bound.resolution_source, "pcss_min_penumbra");
+  state.last.valid = true;
+  state.last.required_texels = {100.0};
+  state.last_cascades = 1;
+  state.last_c = s.adaptive.c;
+  AdaptiveState fresh = state;
+  fresh.controllers.clear();
+  fresh.key.clear();
+  const FramePlan measured = plan_frame(s, scene, kWidth, kHeight, fresh);
+  EXPECT_EQ(measured.resolution_source, "pcss_per_pixel");
+  EXPECT_DOUBLE_EQ(measured.cascades[0].required_texels, std::min(100.0, bound.cascades[0].required_texels));
+  // Measured with another c: rescaled to this frame's.
+  fresh.last_c = s.adaptive.c / 2;
+  fresh.controllers.clear();
+  fresh.key.clear();
+  EXPECT_DOUBLE_EQ(plan_frame(s, scene, kWidth, kHeight, fresh).cascades[0].required_texels,
+                   std::min(200.0, bound.cascades[0].required_texels));
+}
+
+TEST(FramePlan, RefusesDegenerateRequests) {
+  ShadowSettings s = with(Technique::pcf);
+  AdaptiveState state;
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  EXPECT_THROW(plan_frame(s, scene, 0, 10, state), std::runtime_error);
+  EXPECT_THROW(plan_frame(s, scene, 10, -1, state), std::runtime_error);
+  s.map.resolution_texels = 0;
+  EXPECT_THROW(plan_frame(s, scene, 10, 10, state), std::runtime_error);
+  s.map.resolution_texels = 64;
+  s.adaptive.enabled = true;
+  s.adaptive.min_texels = 512;
+  s.adaptive.max_texels = 256;
+  EXPECT_THROW(plan_frame(s, scene, 10, 10, state), std::runtime_error);
+}
+
+TEST(FramePlan, AtlasLayoutOfOneToFourCells) {
+  EXPECT_EQ(layout_atlas({100}, 0).width, 100);
+  const AtlasLayout two = layout_atlas({100, 50}, 2);
+  EXPECT_EQ(two.width, 208);
+  EXPECT_EQ(two.height, 104);
+  EXPECT_EQ(two.origin[1], glm::ivec2(106, 2));
+  const AtlasLayout three = layout_atlas({64, 64, 64}, 2);
+  EXPECT_EQ(three.height, 136);
+  EXPECT_EQ(three.origin[2], glm::ivec2(2, 70));
+}
+
+}  // namespace
+}  // namespace penumbra::shadows
