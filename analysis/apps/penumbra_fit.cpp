@@ -1,5 +1,5 @@
 // penumbra-fit: thresholds and the constant c of r = c a from the study's logs (docs/fit.md).
-//   penumbra-fit SESSION_DIR... -o OUT [--reference reference.json] [--bootstrap 1000]
+//   penumbra-fit SESSION_DIR... -o OUT [--reference reference.json] [--bootstrap 1000] [--accept-inconsistent]
 //   penumbra-fit psychometric --input data.csv [--format counts|trials] [--family log-weibull]
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
@@ -121,6 +121,7 @@ struct StudyOptions {
   std::uint64_t seed = 1;
   int threads = 0;
   bool no_progress = false;
+  bool accept_inconsistent = false;
 };
 
 int run_study(const StudyOptions& so, const ModelOptions& mo) {
@@ -145,7 +146,16 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
     reference->file += ", " + table.file;
     reference->entries.insert(reference->entries.end(), table.entries.begin(), table.entries.end());
   }
-  const Dataset data = load_dataset(so.inputs);
+  options.accept_inconsistent = so.accept_inconsistent;
+  const Dataset data = [&] {
+    try {
+      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent});
+    } catch (const InconsistentLog& e) {
+      throw std::runtime_error(std::string(e.what()) +
+                               "; the log is inconsistent (rows duplicated, removed, reordered or edited?): not fitted "
+                               "(--accept-inconsistent fits it anyway, listed in report.json and summary.txt)");
+    }
+  }();
   const auto start = std::chrono::steady_clock::now();
   const StudyFit fit = [&] {
     ProgressBar bar("bootstrap", !so.no_progress && ::isatty(STDERR_FILENO));
@@ -197,6 +207,9 @@ int main(int argc, char** argv) {
   app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str()->check(cli::non_negative_integer());
   app.add_option("--threads", so.threads, "bootstrap threads (0: all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   app.add_flag("--no-progress", so.no_progress, "no progress bar on stderr");
+  app.add_flag("--accept-inconsistent", so.accept_inconsistent,
+               "fit logs that fail the integrity check (trial numbers, design, QUEST replay) and list them in "
+               "report.json and summary.txt; without it such a log is refused");
   add_model_options(app, study_model);
 
   auto* psychometric = app.add_subcommand("psychometric", "fit one data set and print JSON");

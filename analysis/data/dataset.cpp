@@ -3,9 +3,15 @@
 #include <nlohmann/json.hpp>
 
 #include "json/json_input.h"
+#include "procedure/session_record.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
+#include <tuple>
 #include <set>
 #include <stdexcept>
 
@@ -32,9 +38,9 @@ double number_field(const nlohmann::json& j, const std::string& file, const std:
 }
 
 // session.json's QUEST block and stopping rule; absent fields are an error only where present
-// blocks are malformed (a bare log is fine, it just has no QUEST to recompute).
-void read_session_json(const fs::path& path, SessionInfo& info) {
-  const nlohmann::json j = json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 8});
+// blocks are malformed (a bare log is fine, it just has no QUEST to recompute). Returns the file.
+nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
+  nlohmann::json j = json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 8});
   const std::string file = path.string();
   if (!j.is_object()) throw std::runtime_error(file + ": expected an object");
   for (const char* key : {"session_id", "participant"}) {
@@ -61,11 +67,82 @@ void read_session_json(const fs::path& path, SessionInfo& info) {
     const auto& s = j["config"]["stopping"];
     if (s.is_object() && s.contains("sd_below")) info.sd_below = number_field(s, file, "config.stopping", "sd_below");
   }
+  return j;
+}
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+// Without the study's config (a simulated or older session): what the design implies about any
+// log, and the posterior of each staircase replayed from session.json's QUEST block.
+void check_without_config(const SessionInfo& info, const std::vector<trial_log::TrialRow>& rows,
+                          const std::function<void(int line, const trial_log::TrialRow&, const std::string&)>& fail) {
+  std::map<int, std::pair<std::string, double>> round_condition;
+  std::map<std::pair<int, std::string>, quest::Quest> staircases;
+  int line = 1;
+  for (const trial_log::TrialRow& row : rows) {
+    ++line;
+    const std::string name = "a" + format_number(row.artifact_px);
+    if (row.staircase != name)
+      fail(line, row, "column 'staircase': '" + json_input::printable(row.staircase) + "' where the design names the staircase of artifact_px " +
+                          format_number(row.artifact_px) + " '" + name + "'");
+    const auto [it, first] = round_condition.try_emplace(row.round, row.pattern, row.contrast);
+    if (!first && (it->second.first != row.pattern || it->second.second != row.contrast))
+      fail(line, row, "column 'pattern': round " + std::to_string(row.round) + " is " +
+                          condition_name(it->second.first, it->second.second) + " in earlier rows, " +
+                          condition_name(row.pattern, row.contrast) + " here");
+    if (!info.quest) continue;
+    auto q = staircases.try_emplace({row.round, row.staircase}, *info.quest, info.quest_dim).first;
+    // As the procedure updates: not on practice trials, not on yes/no catch (straight) trials.
+    if (!row.practice && !(row.task == "yesno" && row.target == "straight"))
+      q->second.update(row.intensity, row.correct);
+    for (const auto& [column, logged, replayed] :
+         {std::tuple{"quest_mean", row.quest_mean, q->second.mean()}, std::tuple{"quest_sd", row.quest_sd, q->second.sd()}})
+      if (!(std::abs(logged - replayed) <= 1e-9 * std::max({1.0, std::abs(logged), std::abs(replayed)})))
+        fail(line, row, std::string("column '") + column + "': '" + fmt(logged) +
+                            "' where session.json's QUEST replayed over the log gives '" + fmt(replayed) + "'");
+  }
+}
+
+// The first inconsistency of one log, or nothing.
+std::optional<Inconsistency> check_log(const SessionInfo& info, const nlohmann::json& session_json,
+                                       const fs::path& json_path, const std::vector<trial_log::TrialRow>& rows) {
+  struct Found {
+    Inconsistency inconsistency;
+  };
+  auto fail = [&](int line, const trial_log::TrialRow& row, const std::string& what) {
+    throw Found{{info.log_file, line, row.trial, info.log_file + ":" + std::to_string(line) + ": " + what}};
+  };
+  try {
+    // The study numbers trials 0, 1, 2, ... across the session and appends one row per trial: any
+    // other sequence is a duplicated, reordered or lost row (e.g. two processes on one session).
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      if (rows[i].trial != static_cast<int>(i))
+        fail(static_cast<int>(i) + 2, rows[i],
+             "column 'trial': expected " + std::to_string(i) + ", found " + std::to_string(rows[i].trial) +
+                 " (rows duplicated, reordered or missing)");
+    if (session_json.is_object() && session_json.contains("config")) {
+      const procedure::SessionRecord record = procedure::check_session_json(session_json, json_path.string());
+      try {
+        procedure::replay_log(record, rows, info.log_file);
+      } catch (const procedure::LogMismatch& e) {
+        throw Found{{info.log_file, e.line, e.trial, e.what()}};
+      }
+    } else {
+      check_without_config(info, rows, fail);
+    }
+  } catch (const Found& found) {
+    return found.inconsistency;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
 
-Dataset load_dataset(const std::vector<fs::path>& inputs) {
+Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& options) {
   if (inputs.empty()) throw std::runtime_error("no input: give session directories or trial CSV files");
   Dataset data;
   std::set<std::string> seen_ids;
@@ -81,7 +158,8 @@ Dataset load_dataset(const std::vector<fs::path>& inputs) {
     } else if (fs::exists(input.parent_path() / "session.json")) {
       json = input.parent_path() / "session.json";
     }
-    if (!json.empty() && fs::exists(json)) read_session_json(json, info);
+    nlohmann::json session_json;
+    if (!json.empty() && fs::exists(json)) session_json = read_session_json(json, info);
     info.log_file = log.string();
     const trial_log::ReadResult read = trial_log::read(log);
     info.torn_tail = read.torn_tail;
@@ -90,11 +168,6 @@ Dataset load_dataset(const std::vector<fs::path>& inputs) {
     for (const trial_log::TrialRow& row : read.rows) {
       ++line;
       const std::string where = info.log_file + ":" + std::to_string(line) + ": ";
-      // The study numbers trials 0, 1, 2, ... across the session and appends one row per trial: any
-      // other sequence is a duplicated, reordered or lost row (e.g. two processes on one session).
-      if (row.trial != line - 2)
-        throw std::runtime_error(where + "column 'trial': expected " + std::to_string(line - 2) + ", found " +
-                                 std::to_string(row.trial) + " (rows duplicated, reordered or missing)");
       if (info.session_id.empty()) info.session_id = row.session_id;
       if (info.participant.empty()) info.participant = row.participant;
       if (row.session_id != info.session_id)
@@ -113,6 +186,10 @@ Dataset load_dataset(const std::vector<fs::path>& inputs) {
         continue;
       }
       data.trials.push_back({row, index, line});
+    }
+    if (std::optional<Inconsistency> bad = check_log(info, session_json, json, read.rows)) {
+      if (!options.accept_inconsistent) throw InconsistentLog(*bad);
+      data.inconsistencies.push_back(*bad);
     }
     if (info.session_id.empty()) continue;  // an empty log (header only) adds nothing
     if (!seen_ids.insert(info.session_id).second)

@@ -4,6 +4,7 @@
 // Practice rows and yes/no catch trials are counted and left out.
 #include <filesystem>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,8 +29,30 @@ struct Trial {
   int line = 0;             // line in the log (header = 1)
 };
 
+// A log the study could not have written as it stands: rows duplicated, removed, reordered or edited
+// (trial numbers, staircases the design does not have, a QUEST posterior the replay contradicts).
+struct Inconsistency {
+  std::string file;
+  int line = 0;   // the first row that is wrong (header = 1)
+  int trial = 0;  // as logged in that row
+  std::string problem;  // one line: "<file>:<line>: column '<name>': ..."
+};
+
+// Thrown by load_dataset for an inconsistent log unless LoadOptions::accept_inconsistent.
+class InconsistentLog : public std::runtime_error {
+ public:
+  explicit InconsistentLog(const Inconsistency& i) : std::runtime_error(i.problem), inconsistency(i) {}
+  Inconsistency inconsistency;
+};
+
+struct LoadOptions {
+  // Fit inconsistent logs anyway; their first problem each is kept in Dataset::inconsistencies.
+  bool accept_inconsistent = false;
+};
+
 struct Dataset {
   std::vector<SessionInfo> sessions;
+  std::vector<Inconsistency> inconsistencies;  // one per inconsistent log (accept_inconsistent only)
   std::vector<Trial> trials;  // practice excluded, in log order per session
   int practice_rows = 0;
   // yes/no: straight (catch) trials say nothing about the artifact's visibility; like QUEST
@@ -40,9 +63,15 @@ struct Dataset {
 
 // Throws std::runtime_error naming the file (and line and column for log rows) on bad input: a
 // missing path, a directory without trials.csv, invalid session.json fields, a session given
-// twice, rows whose session_id or participant disagree with session.json, trial numbers other than
-// 0, 1, 2, ... in row order, no trials at all.
-Dataset load_dataset(const std::vector<std::filesystem::path>& inputs);
+// twice, rows whose session_id or participant disagree with session.json, no trials at all.
+//
+// Every log is checked for integrity, and an inconsistent one throws InconsistentLog naming the
+// first wrong row (unless options.accept_inconsistent): trial numbers other than 0, 1, 2, ... in
+// row order; where session.json holds the study's config, every row against the procedure replayed
+// from it (procedure::replay_log, as --resume checks: staircase, stimulus, target, seed, QUEST
+// posterior); otherwise staircases named after their artifact size, one condition per round, and
+// each row's QUEST posterior against session.json's QUEST replayed over the log.
+Dataset load_dataset(const std::vector<std::filesystem::path>& inputs, const LoadOptions& options = {});
 
 // "stair/1", "step/0.5": pattern and contrast, as the study names a round's condition.
 std::string condition_name(const std::string& pattern, double contrast);

@@ -36,6 +36,7 @@ struct StudyFitOptions {
   int threads = 0;                    // 0: hardware concurrency
   double outlier_z = 3.0;             // participants farther than this (robust z of log10 c) are flagged
   std::function<void(int done, int total)> progress;  // bootstrap progress, called from worker threads (serialized)
+  bool accept_inconsistent = false;   // the logs were loaded with LoadOptions::accept_inconsistent
 };
 
 struct TrackPoint {
@@ -120,6 +121,7 @@ struct StudyFit {
   double guess = 0.5;
   int sessions = 0, trials = 0, practice_rows_excluded = 0;
   std::vector<std::string> notes;  // torn logs, missing session.json, ...
+  std::vector<Inconsistency> inconsistencies;  // logs fitted although inconsistent (--accept-inconsistent)
   std::vector<ConditionFit> conditions;
   std::vector<StaircaseFit> staircases;
 };

@@ -252,6 +252,9 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
   }
   Json reference_info = nullptr;
   if (reference) reference_info = {{"file", reference->file}, {"entries", reference->entries.size()}};
+  Json inconsistent = Json::array();
+  for (const Inconsistency& i : fit.inconsistencies)
+    inconsistent.push_back({{"file", i.file}, {"line", i.line}, {"trial", i.trial}, {"problem", i.problem}});
   return {{"tool", "penumbra-fit"},
           {"created_utc", created_utc},
           {"inputs", inputs},
@@ -262,7 +265,9 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                        {"lapse", fit.options.lapse.fixed ? Json{{"fixed", *fit.options.lapse.fixed}}
                                                          : Json{{"max", fit.options.lapse.max}}},
                        {"bootstrap", fit.options.bootstrap},
-                       {"seed", fit.options.seed}}},
+                       {"seed", fit.options.seed},
+                       {"accept_inconsistent", fit.options.accept_inconsistent}}},
+          {"inconsistent_logs", inconsistent},
           {"sessions", fit.sessions},
           {"trials", fit.trials},
           {"practice_rows_excluded", fit.practice_rows_excluded},
@@ -280,7 +285,13 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
     << fit.sessions << " sessions; " << psychometric::model_name(fit.options.family) << ", threshold at "
     << fit.p_threshold << " correct, guess " << fit.guess << ", lapse "
     << (fit.options.lapse.fixed ? "fixed " + fmt("%g", *fit.options.lapse.fixed) : "in [0, " + fmt("%g", fit.options.lapse.max) + "]")
-    << "\n\n";
+    << "\n";
+  if (!fit.inconsistencies.empty()) {
+    o << "INCONSISTENT LOGS FITTED (--accept-inconsistent): " << fit.inconsistencies.size()
+      << " logs the study could not have written as they stand; first problem of each:\n";
+    for (const Inconsistency& i : fit.inconsistencies) o << "  " << i.problem << "\n";
+  }
+  o << "\n";
   char line[512];
   std::snprintf(line, sizeof line, "%-10s %6s %5s %7s %17s %17s %6s %6s %9s %14s  %s\n", "condition", "trials",
                 "ppl", "c", "95% profile", "95% bootstrap", "beta", "lapse", "lin. p", "exponent p", "flags");

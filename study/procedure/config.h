@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "quest/quest.h"
-#include "stimuli/stimulus.h"
+#include "stimuli/stimulus_spec.h"
 
 namespace penumbra::procedure {
 

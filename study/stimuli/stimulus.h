@@ -17,34 +17,9 @@
 #include <nlohmann/json.hpp>
 
 #include "io/image_io.h"
+#include "stimuli/stimulus_spec.h"
 
 namespace penumbra::stimuli {
-
-enum class Pattern { stair, step };
-enum class Kernel { disk, grid, poisson };
-enum class Transfer { srgb, gamma22, linear };
-
-// Parse/print; parse throws std::invalid_argument naming the accepted values.
-Pattern parse_pattern(const std::string& s);
-Kernel parse_kernel(const std::string& s);
-Transfer parse_transfer(const std::string& s);
-std::string to_string(Pattern p);
-std::string to_string(Kernel k);
-std::string to_string(Transfer t);
-
-struct StimulusSpec {
-  Pattern pattern = Pattern::stair;
-  double artifact_px = 10;       // one shadow-map texel on screen
-  double filter_radius_px = 20;  // PCF radius (as shown: clamp first, see clamp_filter_radius)
-  double lit_linear = 1.0;       // lit level in linear light, (0, 1]
-  Kernel kernel = Kernel::disk;
-  int poisson_taps = 32;         // Poisson kernel only
-  int size_px = 320;             // square stimulus side
-  std::uint64_t seed = 1;        // edge phase, orientation, Poisson rotation
-  Transfer transfer = Transfer::srgb;
-};
-// Throws std::invalid_argument naming the field for a spec that cannot be drawn.
-void validate(const StimulusSpec& spec);
 
 // Everything random about one stimulus, derived from spec.seed. Canonical frame: stimulus px,
 // origin at the stimulus centre, y up; the edge is y = line_m x + line_b with the occluder below.
@@ -57,13 +32,6 @@ struct Geometry {
   double poisson_rotation = 0;  // radians
 };
 Geometry make_geometry(const StimulusSpec& spec);
-
-// The filter radius that can actually be shown: at least 1 px, at most half the stimulus.
-struct ShownRadius {
-  double filter_radius_px;
-  bool clamped;
-};
-ShownRadius clamp_filter_radius(double requested_px, int size_px);
 
 // Linear light in [0, 1] -> 8-bit display value through the transfer function.
 std::uint8_t encode(double linear, Transfer transfer);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 
 #include "adaptive/resolution_rule.h"
 #include "data/simulate.h"
+#include "log/trial_log.h"
 
 namespace {
 
@@ -207,6 +209,149 @@ TEST(FitCli, RefusesALogWithDuplicatedOrReorderedTrialNumbers) {
   fs::remove_all(dir);
 }
 
+// Issue 14.10: rows swapped, duplicated or deleted and then renumbered 0, 1, 2, ... (as someone
+// covering their tracks would), or a response flipped with its correct column, passed every check
+// and the fit went on with at most a "QUEST replay differing" flag. The fitter now replays each log
+// and refuses an inconsistent one naming the first wrong row, or fits it only with
+// --accept-inconsistent, listed in report.json and summary.txt.
+struct Edit {
+  std::string name;
+  std::function<int(std::vector<trial_log::TrialRow>&)> apply;  // edits the rows, returns the line expected to fail
+  std::string expected;                                         // in the error line
+};
+
+void write_renumbered(const fs::path& log, std::vector<trial_log::TrialRow> rows) {
+  for (std::size_t i = 0; i < rows.size(); ++i) rows[i].trial = static_cast<int>(i);
+  std::ofstream o(log, std::ios::trunc);
+  o << trial_log::header_line();
+  for (const auto& r : rows) o << trial_log::format_row(r);
+}
+
+// Index of the first row after `from` in the same round and staircase that updates QUEST.
+std::size_t next_of_staircase(const std::vector<trial_log::TrialRow>& rows, std::size_t from) {
+  for (std::size_t i = from + 1; i < rows.size(); ++i)
+    if (rows[i].staircase == rows[from].staircase && rows[i].round == rows[from].round && !rows[i].practice) return i;
+  return rows.size();
+}
+
+std::vector<Edit> edits(std::size_t first) {
+  return {
+      {"swapped",
+       [first](std::vector<trial_log::TrialRow>& rows) {
+         const std::size_t other = next_of_staircase(rows, first);
+         std::swap(rows[first], rows[other]);
+         return static_cast<int>(first) + 2;
+       },
+       "where session.json's QUEST replayed over the log gives"},
+      {"duplicated",
+       [first](std::vector<trial_log::TrialRow>& rows) {
+         rows.insert(rows.begin() + static_cast<std::ptrdiff_t>(first) + 1, rows[first]);
+         return static_cast<int>(first) + 3;
+       },
+       "where session.json's QUEST replayed over the log gives"},
+      {"deleted",
+       [first](std::vector<trial_log::TrialRow>& rows) {
+         const std::size_t next = next_of_staircase(rows, first);
+         rows.erase(rows.begin() + static_cast<std::ptrdiff_t>(first));
+         return static_cast<int>(next) + 1;  // the next row of the staircase, one line up
+       },
+       "where session.json's QUEST replayed over the log gives"},
+      {"flipped",
+       [first](std::vector<trial_log::TrialRow>& rows) {
+         auto& r = rows[first];
+         r.response = r.response == "left" ? "right" : "left";
+         r.correct = 1 - r.correct;
+         return static_cast<int>(first) + 2;
+       },
+       "column 'quest_mean': "},
+  };
+}
+
+// Writes the edited log, expects the refusal and then the fit with --accept-inconsistent; the log
+// is restored whatever happens.
+void expect_refused_and_accepted(const fs::path& dir, const std::vector<fs::path>& sessions, const Edit& edit) {
+  const fs::path log = sessions.back() / "trials.csv";
+  struct Restore {
+    fs::path log;
+    std::string text;
+    ~Restore() { std::ofstream(log, std::ios::trunc) << text; }
+  } restore{log, read(log)};
+  std::vector<trial_log::TrialRow> rows = trial_log::read(log).rows;
+  const int line = edit.apply(rows);
+  write_renumbered(log, rows);
+  std::string inputs;
+  for (const auto& s : sessions) inputs += s.string() + " ";
+  std::string out;
+  EXPECT_EQ(run(inputs + "-o " + (dir / "out").string() + " --bootstrap 0", &out), 1) << edit.name;
+  const std::string where = log.string() + ":" + std::to_string(line) + ": ";
+  EXPECT_NE(out.find("penumbra-fit: " + where + "column '"), std::string::npos) << edit.name << ": " << out;
+  EXPECT_NE(out.find(edit.expected), std::string::npos) << edit.name << ": " << out;
+  EXPECT_NE(out.find("--accept-inconsistent"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_FALSE(fs::exists(dir / "out")) << edit.name;
+
+  ASSERT_EQ(run(inputs + "-o " + (dir / "out").string() + " --bootstrap 0 --accept-inconsistent", &out), 0)
+      << edit.name << ": " << out;
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "out" / "report.json"));
+  EXPECT_TRUE(report["options"]["accept_inconsistent"].get<bool>());
+  ASSERT_EQ(report["inconsistent_logs"].size(), 1u) << edit.name;
+  EXPECT_EQ(report["inconsistent_logs"][0]["file"], log.string());
+  EXPECT_EQ(report["inconsistent_logs"][0]["line"], line) << edit.name;
+  EXPECT_EQ(report["inconsistent_logs"][0]["trial"], line - 2) << edit.name;
+  const std::string summary = read(dir / "out" / "summary.txt");
+  EXPECT_NE(summary.find("INCONSISTENT LOGS FITTED (--accept-inconsistent): 1 logs"), std::string::npos) << summary;
+  EXPECT_NE(summary.find(where + "column '"), std::string::npos) << summary;
+}
+
+std::string edit_test_name(const ::testing::TestParamInfo<std::tuple<std::string, std::size_t>>& info) {
+  return std::get<0>(info.param) + "_row" + std::to_string(std::get<1>(info.param));
+}
+
+class SimulatedLogEdit : public ::testing::TestWithParam<std::tuple<std::string, std::size_t>> {};
+
+TEST_P(SimulatedLogEdit, IsRefusedOrFittedOnlyWithAcceptInconsistent) {
+  const auto& [name, first] = GetParam();
+  const fs::path dir = fresh("integrity-" + name + std::to_string(first));
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  for (const Edit& edit : edits(first))
+    if (edit.name == name) expect_refused_and_accepted(dir, sessions, edit);
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(FitCli, SimulatedLogEdit,
+                         ::testing::Combine(::testing::Values("swapped", "duplicated", "deleted", "flipped"),
+                                            ::testing::Values(std::size_t{3}, std::size_t{40})),
+                         edit_test_name);
+
+TEST(FitCli, ConsistentLogsPassTheIntegrityCheck) {
+  const fs::path dir = fresh("consistent");
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  std::string out;
+  ASSERT_EQ(run(sessions[0].string() + " " + sessions[1].string() + " -o " + (dir / "out").string() + " --bootstrap 0",
+                &out), 0) << out;
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "out" / "report.json"));
+  EXPECT_EQ(report["options"].value("accept_inconsistent", true), false);
+  EXPECT_EQ(report.value("inconsistent_logs", nlohmann::json(nullptr)), nlohmann::json::array());
+  EXPECT_EQ(read(dir / "out" / "summary.txt").find("INCONSISTENT"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// A staircase the design does not have (named after another size than its rows show).
+TEST(FitCli, RefusesAStaircaseTheDesignDoesNotHave) {
+  const fs::path dir = fresh("design");
+  const auto sessions = simulated_sessions(dir / "sessions", 1);
+  const fs::path log = sessions[0] / "trials.csv";
+  auto rows = trial_log::read(log).rows;
+  rows[5].staircase = "a7";
+  write_renumbered(log, rows);
+  std::string out;
+  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "out").string(), &out), 1);
+  EXPECT_NE(out.find(log.string() + ":7: column 'staircase': 'a7' where the design names the staircase of artifact_px"),
+            std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
 // Issue 14.7: a write that failed after the first file (calibration.json on a full disk) left the
 // new report.json and summary.txt beside the old calibration. The three files are now one output:
 // staged together and swapped in as a unit. Here the old output's calibration.json is a directory,
@@ -304,6 +449,51 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     fs::remove_all(dir);
   }
 }
+
+// Issue 14.10 on logs penumbra-study wrote: session.json holds the config, so every row is checked
+// against the replayed procedure as --resume checks it. Swapping rows of different staircases
+// leaves each staircase's QUEST sequence intact; the procedure's staircase draw, target and
+// stimulus seed of each trial number still give it away.
+class StudyLogEdit : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(StudyLogEdit, IsRefusedOrFittedOnlyWithAcceptInconsistent) {
+  const std::string name = GetParam();
+  const fs::path dir = fresh("integrity-study-" + name);
+  nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/default.json"));
+  config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
+  config["artifact_px"] = {5, 20};
+  config["stopping"] = {{"min_trials", 20}, {"max_trials", 20}, {"sd_below", 0.1}};
+  std::ofstream(dir / "study.json") << config.dump();
+  const fs::path session = dir / "p1";
+  const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
+                              " --observer psychometric:c=4.0 --headless --participant p1 -o " + session.string() +
+                              " > /dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const auto rows = trial_log::read(session / "trials.csv").rows;
+  std::size_t first = 10;  // a main trial followed by one of the other staircase
+  while (rows[first + 1].staircase == rows[first].staircase) ++first;
+  using Rows = std::vector<trial_log::TrialRow>;
+  const int line = static_cast<int>(first) + 2;
+  const std::string replay = "where session.json and the replayed procedure give";
+  const std::vector<Edit> study_edits = {
+      {"swapped_across_staircases", [&](Rows& r) { std::swap(r[first], r[first + 1]); return line; }, "column 'staircase': "},
+      {"swapped", [&](Rows& r) { std::swap(r[first], r[next_of_staircase(r, first)]); return line; }, replay},
+      {"duplicated", [&](Rows& r) { r.insert(r.begin() + static_cast<std::ptrdiff_t>(first), r[first]); return line + 1; }, replay},
+      {"deleted", [&](Rows& r) { r.erase(r.begin() + static_cast<std::ptrdiff_t>(first)); return line; }, replay},
+      {"flipped", [&](Rows& r) {
+         r[first].response = r[first].response == "left" ? "right" : "left";
+         r[first].correct = 1 - r[first].correct;
+         return line;
+       }, "column 'quest_mean': "},
+  };
+  for (const Edit& edit : study_edits)
+    if (edit.name == name) expect_refused_and_accepted(dir, {session}, edit);
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(FitCli, StudyLogEdit,
+                         ::testing::Values("swapped_across_staircases", "swapped", "duplicated", "deleted", "flipped"),
+                         [](const ::testing::TestParamInfo<std::string>& param) { return param.param; });
 #endif
 
 }  // namespace

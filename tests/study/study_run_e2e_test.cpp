@@ -308,7 +308,7 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
          e["config"]["seed"] = 2;
          e["seed"] = 2;
        }),
-       "does not match the replayed procedure"},
+       "trials.csv:2: column 'stimulus_seed': '4010436946754998' where session.json and the replayed procedure give '2588320001175957'"},
       {edited([](nlohmann::json& e) {
          e["config"]["quest"]["beta"] = 2.5;
          e["quest"]["beta"] = 2.5;

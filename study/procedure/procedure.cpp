@@ -1,0 +1,124 @@
+#include "procedure/procedure.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "observers/random.h"
+
+namespace penumbra::procedure {
+
+namespace {
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+}  // namespace
+
+Procedure::Procedure(const StudyConfig& config) : config_(config) {
+  for (std::size_t r = 0; r < config_.rounds.size(); ++r) {
+    std::vector<Staircase> round;
+    for (double a : config_.artifact_px) round.push_back({"a" + fmt(a), a, quest::Quest(config_.quest), false, {}, {}});
+    rounds_.push_back(std::move(round));
+  }
+  ended_rounds_.assign(config_.rounds.size(), false);
+}
+
+std::string Procedure::condition(int round) const {
+  const auto& r = config_.rounds.at(static_cast<std::size_t>(round));
+  return stimuli::to_string(r.pattern) + "/" + fmt(r.contrast);
+}
+
+int Procedure::current_round() const {
+  for (std::size_t r = 0; r < rounds_.size(); ++r) {
+    if (ended_rounds_[r]) continue;
+    for (const auto& sc : rounds_[r])
+      if (!sc.done) return static_cast<int>(r);
+  }
+  return static_cast<int>(rounds_.size());
+}
+
+bool Procedure::break_due() const {
+  return config_.break_every_trials > 0 && trials_done_ > 0 && trials_done_ % config_.break_every_trials == 0;
+}
+
+void Procedure::end_round(int round) { ended_rounds_.at(static_cast<std::size_t>(round)) = true; }
+
+const Staircase& Procedure::staircase(const TrialPlan& plan) const {
+  return rounds_.at(static_cast<std::size_t>(plan.round)).at(static_cast<std::size_t>(plan.staircase));
+}
+
+std::optional<TrialPlan> Procedure::next() const {
+  TrialPlan p;
+  p.trial = trials_done_;
+  observers::Random random(observers::derive_seed(config_.seed, static_cast<std::uint64_t>(p.trial)));
+  double artifact = 0, x = 0;
+  if (practice_done_ < config_.practice_trials) {
+    p.practice = true;
+    p.round = 0;
+    p.staircase = practice_done_ % static_cast<int>(config_.artifact_px.size());
+    artifact = config_.artifact_px[static_cast<std::size_t>(p.staircase)];
+    x = config_.practice_intensity;
+    p.staircase_name = rounds_[0][static_cast<std::size_t>(p.staircase)].name;
+    random.bits();  // the staircase draw a main trial makes, so both use the stream alike
+  } else {
+    p.round = current_round();
+    if (p.round >= static_cast<int>(rounds_.size())) return std::nullopt;
+    const auto& round = rounds_[static_cast<std::size_t>(p.round)];
+    std::vector<int> open;
+    for (std::size_t i = 0; i < round.size(); ++i)
+      if (!round[i].done) open.push_back(static_cast<int>(i));
+    p.staircase = open[random.bits() % open.size()];
+    const Staircase& sc = round[static_cast<std::size_t>(p.staircase)];
+    p.staircase_name = sc.name;
+    artifact = sc.artifact_px;
+    x = std::clamp(sc.quest.quantile(), config_.intensity_min, config_.intensity_max);
+  }
+  const auto& rc = config_.rounds[static_cast<std::size_t>(p.round)];
+  p.requested_filter_radius_px = artifact / std::pow(10.0, x);
+  const auto shown = stimuli::clamp_filter_radius(p.requested_filter_radius_px, config_.stimulus_size_px);
+  p.clamped = shown.clamped;
+  p.stimulus.pattern = rc.pattern;
+  p.stimulus.artifact_px = artifact;
+  p.stimulus.filter_radius_px = shown.filter_radius_px;
+  p.stimulus.lit_linear = rc.contrast;
+  p.stimulus.kernel = config_.kernel;
+  p.stimulus.poisson_taps = config_.poisson_taps;
+  p.stimulus.size_px = config_.stimulus_size_px;
+  p.stimulus.transfer = config_.display.transfer;
+  p.intensity = std::log10(artifact / shown.filter_radius_px);
+  const bool first = random.uniform() < 0.5;
+  p.target = config_.task == "2afc" ? (first ? "left" : "right") : (first ? "jagged" : "straight");
+  p.stimulus.seed = random.bits() >> 12;  // fits a double and a JSON number exactly
+  return p;
+}
+
+bool Procedure::correct_response(const TrialPlan& plan, const std::string& response) const {
+  if (config_.task == "2afc") {
+    if (response != "left" && response != "right") throw std::invalid_argument("2afc response must be left or right");
+    return response == plan.target;
+  }
+  if (response != "yes" && response != "no") throw std::invalid_argument("yesno response must be yes or no");
+  return (response == "yes") == (plan.target == "straight");
+}
+
+void Procedure::apply(const TrialPlan& plan, bool correct) {
+  ++trials_done_;
+  if (plan.practice) {
+    ++practice_done_;
+    return;
+  }
+  // yesno: a straight stimulus (catch trial) says nothing about the artifact's visibility; only
+  // the jagged ones update QUEST, with "not straight" = detected.
+  if (config_.task == "yesno" && plan.target == "straight") return;
+  Staircase& sc = rounds_[static_cast<std::size_t>(plan.round)][static_cast<std::size_t>(plan.staircase)];
+  sc.quest.update(plan.intensity, correct ? 1 : 0);
+  sc.filter_radius_px.push_back(plan.stimulus.filter_radius_px);
+  sc.correct.push_back(correct ? 1 : 0);
+  const int n = static_cast<int>(sc.quest.trial_count());
+  sc.done = n >= config_.max_trials || (n >= config_.min_trials && sc.quest.sd() < config_.sd_below);
+}
+
+}  // namespace penumbra::procedure

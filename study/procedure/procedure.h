@@ -1,0 +1,69 @@
+#pragma once
+// The study's procedure without a display or a log: interleaved QUEST staircases (one per artifact
+// size) within rounds of (pattern, contrast), practice trials first, and the stopping rule. All
+// randomness of trial t comes from derive_seed(config.seed, t), so feeding the logged answers back
+// (replay_log in session_record.h) restores every staircase exactly. No GL: the fitter (analysis/)
+// replays logs through the same code as penumbra-study's --resume.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "procedure/config.h"
+#include "quest/quest.h"
+#include "stimuli/stimulus_spec.h"
+
+namespace penumbra::procedure {
+
+struct TrialPlan {
+  int round = 0;
+  int trial = 0;
+  int staircase = -1;  // index within the round
+  std::string staircase_name;
+  bool practice = false;
+  stimuli::StimulusSpec stimulus;  // filter_radius_px as shown
+  double requested_filter_radius_px = 0;
+  bool clamped = false;
+  double intensity = 0;  // log10(a / r) as shown
+  std::string target;    // 2afc: left|right (side of the jagged one); yesno: jagged|straight
+};
+
+struct Staircase {
+  std::string name;
+  double artifact_px = 0;
+  quest::Quest quest;
+  bool done = false;
+  std::vector<double> filter_radius_px;  // per trial, as shown (for the admin plot)
+  std::vector<int> correct;
+};
+
+class Procedure {
+ public:
+  explicit Procedure(const StudyConfig& config);
+
+  // The next trial, or nothing when every round is finished.
+  std::optional<TrialPlan> next() const;
+  // Counts the trial and updates its staircase (practice and yes/no catch trials update none).
+  void apply(const TrialPlan& plan, bool correct);
+  // Finishes `round` now (the experimenter's "end round").
+  void end_round(int round);
+
+  // Throws std::invalid_argument for a response the task does not have.
+  bool correct_response(const TrialPlan& plan, const std::string& response) const;
+  std::string condition(int round) const;  // "stair/1" etc.
+  const StudyConfig& config() const { return config_; }
+  const std::vector<std::vector<Staircase>>& rounds() const { return rounds_; }
+  // The staircase a plan belongs to (round 0's for practice trials).
+  const Staircase& staircase(const TrialPlan& plan) const;
+  int current_round() const;  // rounds().size() when finished
+  int trials_done() const { return trials_done_; }
+  bool break_due() const;     // a break screen belongs before the next trial
+
+ private:
+  StudyConfig config_;
+  std::vector<std::vector<Staircase>> rounds_;
+  std::vector<bool> ended_rounds_;
+  int trials_done_ = 0;
+  int practice_done_ = 0;
+};
+
+}  // namespace penumbra::procedure

@@ -1,0 +1,172 @@
+#include "procedure/session_record.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "json/json_input.h"
+
+namespace penumbra::procedure {
+
+namespace {
+
+bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+}  // namespace
+
+std::string name_problem(const std::string& name) {
+  if (name.empty() || name.size() > kMaxName ||
+      std::any_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == ',' || c == '"'; }))
+    return "expected a non-empty name of at most " + std::to_string(kMaxName) + " bytes without , \" or control characters";
+  return "";
+}
+
+nlohmann::json quest_block(const StudyConfig& config) {
+  quest::Quest q(config.quest);
+  return {{"t_guess", q.params().t_guess}, {"t_guess_sd", q.params().t_guess_sd},
+          {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta},
+          {"delta", q.params().delta}, {"gamma", q.params().gamma},
+          {"grain", q.params().grain}, {"dim", q.dim()},
+          {"intensity", "log10(artifact_px / filter_radius_px)"}};
+}
+
+
+// Every field checked for type, size and agreement with the config block, since each is carried
+// into the continued rows (or read by the fitter).
+SessionRecord check_session_json(const nlohmann::json& j, const std::string& file) {
+  auto fail = [&](const std::string& field, const std::string& what) -> void {
+    throw std::runtime_error(file + ": " + field + ": " + what);
+  };
+  if (!j.is_object()) fail("(top level)", "expected an object");
+  static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
+                                              "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
+                                              "observer_seed", "config_file"};
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
+  for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
+    if (!j.contains(key)) fail(key, "missing");
+  auto text = [&](const char* key, std::size_t max) {
+    if (!j.contains(key)) return std::string();
+    if (!j[key].is_string()) fail(key, "expected a string");
+    const std::string v = j[key].get<std::string>();
+    if (v.size() > max) fail(key, "longer than " + std::to_string(max) + " bytes");
+    return v;
+  };
+  SessionRecord r;
+  r.session_id = text("session_id", 2 * kMaxName);
+  if (const std::string bad = name_problem(r.session_id); !bad.empty()) fail("session_id", bad);
+  r.participant = text("participant", kMaxName);
+  if (const std::string bad = name_problem(r.participant); !bad.empty()) fail("participant", bad);
+  text("created_utc", 64);
+  text("observer", 1000);
+  text("config_file", 4096);
+  if (j.contains("log") && j["log"] != "trials.csv") fail("log", "expected \"trials.csv\"");
+  if (j.contains("observer_seed") && !j["observer_seed"].is_number_unsigned())
+    fail("observer_seed", "expected a non-negative integer");
+  if (j.contains("software") && !j["software"].is_object()) fail("software", "expected an object");
+  r.config = parse_config(j["config"], file + " (config)");
+  if (!j["seed"].is_number_unsigned() || j["seed"].get<std::uint64_t>() != r.config.seed)
+    fail("seed", "expected the config's seed (" + std::to_string(r.config.seed) + ")");
+  const nlohmann::json quest = quest_block(r.config);
+  if (!j["quest"].is_object()) fail("quest", "expected an object");
+  for (auto it = j["quest"].begin(); it != j["quest"].end(); ++it)
+    if (!quest.contains(it.key())) fail("quest." + json_input::printable(it.key()), "unknown field");
+  for (auto it = quest.begin(); it != quest.end(); ++it) {
+    const auto found = j["quest"].find(it.key());
+    const bool equal = found != j["quest"].end() &&
+                       (it->is_number() ? found->is_number() && same(found->get<double>(), it->get<double>())
+                                        : *found == *it);
+    if (!equal) fail("quest." + it.key(), "differs from the config's QUEST (expected " + it->dump() + ")");
+  }
+  if (j["display"] != to_json(r.config)["display"]) fail("display", "differs from config.display");
+  if (j.contains("ended_rounds")) {
+    const auto& e = j["ended_rounds"];
+    if (!e.is_array() || e.size() > r.config.rounds.size()) fail("ended_rounds", "expected an array of at most one entry per round");
+    for (std::size_t i = 0; i < e.size(); ++i) {
+      const std::string f = "ended_rounds[" + std::to_string(i) + "]";
+      if (!e[i].is_object() || e[i].size() != 2 || !e[i].contains("round") || !e[i].contains("after_trial") ||
+          !e[i]["round"].is_number_unsigned() || !e[i]["after_trial"].is_number_unsigned() ||
+          e[i]["round"].get<std::uint64_t>() >= r.config.rounds.size() || e[i]["after_trial"].get<std::uint64_t>() > 1000000)
+        fail(f, "expected {\"round\": 0.." + std::to_string(r.config.rounds.size() - 1) + ", \"after_trial\": n}");
+      r.ended.emplace_back(e[i]["round"].get<int>(), e[i]["after_trial"].get<int>());
+    }
+  }
+  if (j.contains("resumed_utc")) {
+    const auto& e = j["resumed_utc"];
+    if (!e.is_array()) fail("resumed_utc", "expected an array of times");
+    for (std::size_t i = 0; i < e.size(); ++i)
+      if (!e[i].is_string() || e[i].get<std::string>().size() > 64)
+        fail("resumed_utc[" + std::to_string(i) + "]", "expected a time (a string)");
+  }
+  return r;
+}
+
+Procedure replay_log(const SessionRecord& record, const std::vector<trial_log::TrialRow>& rows, const std::string& file) {
+  Procedure p(record.config);
+  auto apply_ended = [&](int trials_done) {
+    for (const auto& [round, after] : record.ended)
+      if (after == trials_done) p.end_round(round);
+  };
+  apply_ended(0);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const trial_log::TrialRow& row = rows[i];
+    const int line = static_cast<int>(i) + 2;
+    const std::string where = file + ":" + std::to_string(line) + ": ";
+    const auto plan = p.next();
+    if (!plan) throw LogMismatch(where + "a trial after the session had finished", line, row.trial);
+    // The first column that differs is named, in log order.
+    auto expect = [&](bool equal, const char* column, const std::string& found, const std::string& expected) {
+      if (equal) return;
+      throw LogMismatch(where + "column '" + column + "': '" + json_input::printable(found) +
+                            "' where session.json and the replayed procedure give '" +
+                            json_input::printable(expected) + "'",
+                        line, row.trial);
+    };
+    auto number = [&](double found, double expected, const char* column) {
+      expect(same(found, expected), column, fmt(found), fmt(expected));
+    };
+    auto integer = [&](long long found, long long expected, const char* column) {
+      expect(found == expected, column, std::to_string(found), std::to_string(expected));
+    };
+    const StudyConfig& c = record.config;
+    expect(row.session_id == record.session_id, "session_id", row.session_id, record.session_id);
+    expect(row.participant == record.participant, "participant", row.participant, record.participant);
+    integer(row.round, plan->round, "round");
+    integer(row.trial, plan->trial, "trial");
+    expect(row.staircase == plan->staircase_name, "staircase", row.staircase, plan->staircase_name);
+    const std::string pattern = stimuli::to_string(plan->stimulus.pattern);
+    expect(row.pattern == pattern, "pattern", row.pattern, pattern);
+    number(row.contrast, plan->stimulus.lit_linear, "contrast");
+    number(row.artifact_px, plan->stimulus.artifact_px, "artifact_px");
+    expect(row.task == c.task, "task", row.task, c.task);
+    number(row.filter_radius_px, plan->stimulus.filter_radius_px, "filter_radius_px");
+    const std::string kernel = stimuli::to_string(plan->stimulus.kernel);
+    expect(row.kernel == kernel, "kernel", row.kernel, kernel);
+    expect(row.target == plan->target, "target", row.target, plan->target);
+    integer(row.practice, plan->practice ? 1 : 0, "practice");
+    number(row.requested_filter_radius_px, plan->requested_filter_radius_px, "requested_filter_radius_px");
+    integer(row.clamped, plan->clamped ? 1 : 0, "clamped");
+    // The display as the rows recorded it: an edited size or distance changes every angle.
+    number(row.artifact_arcmin, c.display.arcmin(row.artifact_px), "artifact_arcmin");
+    number(row.filter_radius_arcmin, c.display.arcmin(row.filter_radius_px), "filter_radius_arcmin");
+    expect(row.stimulus_seed == plan->stimulus.seed, "stimulus_seed", std::to_string(row.stimulus_seed),
+           std::to_string(plan->stimulus.seed));
+    p.apply(*plan, row.correct == 1);
+    // Every posterior after the update: a changed response (or a row added, removed or moved
+    // within its staircase) shows here.
+    const quest::Quest& q = p.staircase(*plan).quest;
+    number(row.quest_mean, q.mean(), "quest_mean");
+    number(row.quest_sd, q.sd(), "quest_sd");
+    apply_ended(p.trials_done());
+  }
+  return p;
+}
+
+}  // namespace penumbra::procedure

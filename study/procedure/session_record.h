@@ -1,0 +1,51 @@
+#pragma once
+// A session directory as a record to be trusted only after checking: session.json (fields, sizes,
+// agreement with its config block) and every trial-log row against the replayed procedure. Used by
+// penumbra-study's --resume before it writes anything and by penumbra-fit before it fits. No GL.
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "log/trial_log.h"
+#include "procedure/config.h"
+#include "procedure/procedure.h"
+
+namespace penumbra::procedure {
+
+// Participant and session names go into every row of the log: no separators, no control bytes,
+// and short (a megabyte participant string made each row a megabyte).
+constexpr std::size_t kMaxName = 200;
+// Empty when `name` is fine, else what was expected.
+std::string name_problem(const std::string& name);
+
+// The QUEST block session.json records beside the config (read by the fitter).
+nlohmann::json quest_block(const StudyConfig& config);
+
+struct SessionRecord {
+  StudyConfig config;
+  std::string session_id, participant;
+  std::vector<std::pair<int, int>> ended;  // (round, after_trial): rounds the experimenter ended
+};
+
+// session.json as written by Session::create. Throws std::runtime_error "<file>: <field>: <what>".
+SessionRecord check_session_json(const nlohmann::json& j, const std::string& file);
+
+// A row that the replayed procedure contradicts (or that follows the end of the session).
+class LogMismatch : public std::runtime_error {
+ public:
+  LogMismatch(const std::string& what, int line_number, int logged_trial)
+      : std::runtime_error(what), line(line_number), trial(logged_trial) {}
+  int line;   // in the log (header = 1)
+  int trial;  // as logged
+};
+
+// Feeds `rows` (the log `file`, in order) through the procedure of `record`, checking each row's
+// identity, design, stimulus, target, display angles and QUEST posterior against the replay. Throws
+// LogMismatch "<file>:<line>: column '<name>': '<found>' where session.json and the replayed
+// procedure give '<expected>'" at the first row that differs; returns the replayed procedure.
+Procedure replay_log(const SessionRecord& record, const std::vector<trial_log::TrialRow>& rows, const std::string& file);
+
+}  // namespace penumbra::procedure

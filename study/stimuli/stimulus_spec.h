@@ -1,0 +1,43 @@
+#pragma once
+// What a stimulus is, without drawing it: the pattern, kernel and transfer names, the spec the
+// procedure plans and the log records, and the radius a stimulus can show. No GL: the procedure
+// and the fitter (analysis/) use it without the renderer; stimulus.h draws it.
+#include <cstdint>
+#include <string>
+
+namespace penumbra::stimuli {
+
+enum class Pattern { stair, step };
+enum class Kernel { disk, grid, poisson };
+enum class Transfer { srgb, gamma22, linear };
+
+// Parse/print; parse throws std::invalid_argument naming the accepted values.
+Pattern parse_pattern(const std::string& s);
+Kernel parse_kernel(const std::string& s);
+Transfer parse_transfer(const std::string& s);
+std::string to_string(Pattern p);
+std::string to_string(Kernel k);
+std::string to_string(Transfer t);
+
+struct StimulusSpec {
+  Pattern pattern = Pattern::stair;
+  double artifact_px = 10;       // one shadow-map texel on screen
+  double filter_radius_px = 20;  // PCF radius (as shown: clamp first, see clamp_filter_radius)
+  double lit_linear = 1.0;       // lit level in linear light, (0, 1]
+  Kernel kernel = Kernel::disk;
+  int poisson_taps = 32;         // Poisson kernel only
+  int size_px = 320;             // square stimulus side
+  std::uint64_t seed = 1;        // edge phase, orientation, Poisson rotation
+  Transfer transfer = Transfer::srgb;
+};
+// Throws std::invalid_argument naming the field for a spec that cannot be drawn.
+void validate(const StimulusSpec& spec);
+
+// The filter radius that can actually be shown: at least 1 px, at most half the stimulus.
+struct ShownRadius {
+  double filter_radius_px;
+  bool clamped;
+};
+ShownRadius clamp_filter_radius(double requested_px, int size_px);
+
+}  // namespace penumbra::stimuli
