@@ -9,12 +9,13 @@
 #include "data/dataset.h"
 #include "data/simulate.h"
 #include "fit/study_fit.h"
+#include "published.h"
 
 namespace {
 
 using namespace penumbra::analysis;
 
-// 25 participants x 5 sizes x 40 trials = 5,000 trials, planted c = 3.47.
+// 25 participants x 5 sizes x 40 trials = 5,000 trials, planted c = the published c.
 struct Study {
   ModelSpec spec;
   std::vector<std::vector<Group>> participants;
@@ -25,7 +26,7 @@ const Study& study() {
     SimulatedStudy sim;
     sim.participants = 25;
     sim.artifact_px = {2, 5, 10, 15, 20};
-    sim.conditions[0].planted.c_true = 3.47;
+    sim.conditions[0].planted.c_true = penumbra::kPublishedC;
     sim.conditions[0].planted.lapse = 0.02;
     sim.seed = 5000;
     Study out;

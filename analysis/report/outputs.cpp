@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "published.h"
+
 namespace penumbra::analysis {
 
 namespace fs = std::filesystem;
@@ -272,7 +274,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
           {"trials", fit.trials},
           {"practice_rows_excluded", fit.practice_rows_excluded},
           {"notes", fit.notes},
-          {"published_c", 3.47},
+          {"published_c", kPublishedC},
           {"reference", reference_info},
           {"conditions", conditions},
           {"staircases", staircases}};
@@ -360,7 +362,7 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
   const ConditionFit& chosen = calibration_condition(fit, wanted);
   o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.c_profile.lo) << ", "
     << fmt("%.3f", chosen.c_profile.hi) << "] from " << chosen.condition
-    << (wanted ? " (--condition)" : " (largest c)") << "; published c = 3.47\n";
+    << (wanted ? " (--condition)" : " (largest c)") << "; published c = " << fmt("%g", kPublishedC) << "\n";
   return o.str();
 }
 

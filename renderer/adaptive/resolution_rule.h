@@ -12,13 +12,15 @@
 #include <string>
 #include <vector>
 
+#include "published.h"
+
 namespace penumbra::adaptive {
 
 // c as the fitter writes it (calibration.json, see DESIGN.md).
 struct Calibration {
-  double c = 3.47;
-  double ci95_lo = 3.47;
-  double ci95_hi = 3.47;
+  double c = kPublishedC;
+  double ci95_lo = kPublishedC;
+  double ci95_hi = kPublishedC;
   std::string condition;
   std::string source;  // the file it came from, or "built-in"
 };

@@ -1,8 +1,9 @@
 #pragma once
 // Command-line helpers shared by the apps: options generated from a settings table,
-// comma-separated number lists, the light-size override, and parsing with one-line errors.
-// Errors are CLI::ValidationError naming the option.
+// comma-separated number lists, the light-size override, the calibration file, and parsing with
+// one-line errors. Errors are CLI::ValidationError naming the option.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/resolution_rule.h"
 #include "cli/checks.h"
 #include "shadows/settings.h"
 
@@ -82,6 +84,43 @@ inline void add_light_size_option(CLI::App& app, float& size) {
   app.add_option("--light-size", size,
                  "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
       ->check(cli::finite_range(0.0, 1e6));
+}
+
+// --calibration FILE: the constant c of the adaptive rule, from the fitter's calibration.json
+// (by default the published c). apply_calibration() reads it once the command line is parsed.
+struct CalibrationOption {
+  std::string file = PENUMBRA_SOURCE_DIR "/data/calibration/default.json";
+  adaptive::Calibration loaded;      // after apply_calibration
+  bool c_from_command_line = false;  // --adaptive.c was given and won over the file
+
+  // Where c came from, for a line of output: the file, or --adaptive.c.
+  std::string source_of_c() const { return c_from_command_line ? "--adaptive.c" : loaded.source; }
+};
+
+inline void add_calibration_option(CLI::App& app, CalibrationOption& calibration) {
+  app.add_option("--calibration", calibration.file,
+                 "calibration.json with the constant c of the adaptive rule (an explicit --adaptive.c wins over the file)")
+      ->capture_default_str();
+}
+
+// Reads the calibration file (throws adaptive::CalibrationError naming the file and the field) and
+// sets settings.adaptive.c to its c, or to its ci95 upper bound with `ci_upper`, unless
+// --adaptive.c was given on the command line. Call it before creating any output.
+inline void apply_calibration(const CLI::App& app, CalibrationOption& calibration, shadows::ShadowSettings& settings,
+                              bool ci_upper = false) {
+  calibration.loaded = adaptive::load_calibration(calibration.file);
+  const CLI::Option* explicit_c = app.get_option_no_throw("--adaptive.c");
+  calibration.c_from_command_line = explicit_c && explicit_c->count() > 0;
+  if (!calibration.c_from_command_line)
+    settings.adaptive.c = static_cast<float>(ci_upper ? calibration.loaded.ci95_hi : calibration.loaded.c);
+}
+
+// The record for report.json: {file, c (as used), ci95 (the file's), source_of_c}.
+inline nlohmann::json calibration_json(const CalibrationOption& calibration, const shadows::ShadowSettings& settings) {
+  return {{"file", calibration.loaded.source},
+          {"c", settings.adaptive.c},
+          {"ci95", {calibration.loaded.ci95_lo, calibration.loaded.ci95_hi}},
+          {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"}};
 }
 
 // Parses the command line. Returns the exit status to leave with — 0 after --help, 2 after a

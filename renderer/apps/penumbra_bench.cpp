@@ -47,6 +47,7 @@ struct Options {
   int width = 640, height = 360, frames = 5, warmup = 1;
   metrics::ReferenceOptions reference;
   shadows::ShadowSettings base;
+  apps::CalibrationOption calibration;
   bool adaptive = true;  // one adaptive row per variant the rule applies to
   bool plot = true;
   std::string python = "/usr/bin/python3";
@@ -297,6 +298,7 @@ int main(int argc, char** argv) {
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
   app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")->required();
+  apps::add_calibration_option(app, opt.calibration);
   apps::add_settings_options(app, opt.base);
 
   try {
@@ -340,7 +342,8 @@ int main(int argc, char** argv) {
   try {
     const auto started = std::chrono::steady_clock::now();
     auto elapsed_s = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); };
-    // Scenes first: a bad name or file is refused before any GL work.
+    // Calibration and scenes first: a bad file or name is refused before any GL work.
+    apps::apply_calibration(app, opt.calibration, opt.base);
     std::vector<scene::Scene> scenes;
     for (const auto& name : opt.scenes) scenes.push_back(scene::load_scene(name));
     if (opt.plot && !fs::exists(opt.plot_script))
@@ -460,6 +463,7 @@ int main(int argc, char** argv) {
         {"warmup", opt.warmup},
         {"resolutions", opt.resolutions},
         {"radii_ws", opt.radii_ws},
+        {"calibration", apps::calibration_json(opt.calibration, opt.base)},
         {"reference", {{"area_samples", opt.reference.area_samples},
                        {"area_resolution_texels", opt.reference.area_resolution_texels},
                        {"filter_resolution_texels", opt.reference.filter_resolution_texels}}},

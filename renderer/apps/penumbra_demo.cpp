@@ -140,7 +140,7 @@ struct Options {
   std::vector<std::string> techniques = {"pcf", "pcss"};
   int frames = 16;
   int width = 1280, height = 720;
-  std::string calibration = PENUMBRA_SOURCE_DIR "/data/calibration/default.json";
+  apps::CalibrationOption calibration;
   bool ci_upper = false;
   std::string output = "out/demo";
   std::string python = "/usr/bin/python3";
@@ -150,7 +150,7 @@ struct Options {
   int screenshot_frames = 10;
 };
 
-int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptive::Calibration& cal) {
+int run_headless(const Options& opt, shadows::ShadowSettings base) {
   gl::HeadlessContext ctx;
   scene::Scene scene = scene::load_scene(opt.scene);
   if (opt.light_size >= 0) scene.light.size = opt.light_size;
@@ -167,11 +167,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptiv
   report["path_frames"] = opt.frames;
   report["frame_time_method"] = "wall_finish";
   report["pass_time_method"] = gl::to_string(method);
-  report["calibration"] = {{"file", cal.source}, {"c", base.adaptive.c}, {"ci95", {cal.ci95_lo, cal.ci95_hi}}, {"bound", opt.ci_upper ? "ci95_hi" : "c"}};
+  report["calibration"] = apps::calibration_json(opt.calibration, base);
+  report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
   std::string csv = "technique,frame,fixed_ms,adaptive_ms,fixed_texels,adaptive_texels,cascades,ssim,max_abs,share_above_1_255\n";
 
   std::printf("penumbra-demo: %s at %dx%d on %s; %d path frames; c = %.3g (%s)\n", scene.name.c_str(), opt.width, opt.height,
-              ctx.info().renderer.c_str(), opt.frames, base.adaptive.c, cal.source.c_str());
+              ctx.info().renderer.c_str(), opt.frames, base.adaptive.c, opt.calibration.source_of_c().c_str());
   std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])\n");
   std::printf("%-6s %24s %24s %8s %14s %8s %9s %9s\n", "tech", "fixed", "adaptive", "speedup", "adaptive res", "min SSIM",
               "max diff", ">1/255");
@@ -261,7 +262,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base, const adaptiv
 }
 
 #if PENUMBRA_DEMO_GUI
-int run_windowed(const Options& opt, shadows::ShadowSettings settings, const adaptive::Calibration& cal) {
+int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   scene::Scene scene = scene::load_scene(opt.scene);
   if (opt.light_size >= 0) scene.light.size = opt.light_size;
   gl::WindowContext window(opt.width, opt.height, "Penumbra demo - " + scene.name);
@@ -292,7 +293,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings, const ada
     ImGui::Text("%s | %s | %.1f fps", scene.name.c_str(), window.info().renderer.c_str(), fps);
     ImGui::Checkbox("camera path", &animate);
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
-    ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, cal.source.c_str());
+    ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, opt.calibration.source_of_c().c_str());
     gui::shadow_settings_panel(settings);
     gui::light_size_control(renderer.scene().light);
     ImGui::Separator();
@@ -347,7 +348,7 @@ int main(int argc, char** argv) {
   app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(16, 16384));
   app.add_option("--fixed-resolution", base.map.resolution_texels, "resolution of the fixed comparison, texels per side")
       ->check(CLI::Range(1, 65536));
-  app.add_option("--calibration", opt.calibration, "calibration.json with the constant c");
+  apps::add_calibration_option(app, opt.calibration);
   app.add_flag("--ci-upper", opt.ci_upper, "use the upper bound of c's 95 % interval (more conservative)");
   app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the chart");
@@ -358,11 +359,10 @@ int main(int argc, char** argv) {
   if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-demo")) return *status;
   try {
     for (const auto& t : opt.techniques) shadows::technique_from_string(t);
-    const adaptive::Calibration cal = adaptive::load_calibration(opt.calibration);
-    base.adaptive.c = static_cast<float>(opt.ci_upper ? cal.ci95_hi : cal.c);
-    if (headless) return run_headless(opt, base, cal);
+    apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
+    if (headless) return run_headless(opt, base);
 #if PENUMBRA_DEMO_GUI
-    return run_windowed(opt, base, cal);
+    return run_windowed(opt, base);
 #else
     std::cerr << "penumbra-demo: built without GUI support; use --headless\n";
     return 2;

@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
   float light_size = -1;
   int path_frame = -1;
   shadows::ShadowSettings base;
+  apps::CalibrationOption calibration;
 
   app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
   std::vector<std::string> technique_choices(shadows::technique_names().begin(), shadows::technique_names().end());
@@ -67,11 +68,13 @@ int main(int argc, char** argv) {
   app.add_option("--path-frame", path_frame, "view from this frame of the scene's camera path instead of its camera")
       ->check(CLI::Range(0, 10'000'000));
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
+  apps::add_calibration_option(app, calibration);
   apps::add_settings_options(app, base);
 
   if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-render")) return *status;
 
   try {
+    apps::apply_calibration(app, calibration, base);
     const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);
     scene::Scene scene = scene::load_scene(scene_arg);
     if (light_size >= 0) scene.light.size = light_size;
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
     summary["scene"] = scene.name;
     summary["image_px"] = {width, height};
     summary["frames"] = frames;
+    summary["calibration"] = apps::calibration_json(calibration, base);
     summary["renders"] = nlohmann::json::array();
     std::vector<io::Image8> montage_images;
     std::vector<std::string> labels;
@@ -169,6 +173,7 @@ int main(int argc, char** argv) {
         nlohmann::json report = io::frame_report(info, v.settings, stats);
         report["scene"] = scene.name;
         report["device"] = io::to_json(ctx);
+        report["calibration"] = apps::calibration_json(calibration, v.settings);
         io::write_text(dir / "report.json", report.dump(2) + "\n");
 
         const gl::TimingMethod shown = ctx.software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;

@@ -46,18 +46,21 @@ int main(int argc, char** argv) {
   CLI::App app{"Interactive shadow viewer (GLFW + Dear ImGui)."};
   std::string scene_arg = "demo", screenshot;
   int width = 1280, height = 720, frames = 0;
+  apps::CalibrationOption calibration;
   app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
   app.add_option("--width", width, "window width")->check(CLI::Range(64, 8192));
   app.add_option("--height", height, "window height")->check(CLI::Range(64, 8192));
   app.add_option("--screenshot", screenshot, "write the window (with the panel) to this PNG after --frames frames, then exit");
   app.add_option("--frames", frames, "frames to run before --screenshot (0: run until closed)")->check(CLI::Range(0, 1000000));
+  apps::add_calibration_option(app, calibration);
   if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-view")) return *status;
   try {
+    shadows::ShadowSettings settings;
+    apps::apply_calibration(app, calibration, settings);
     scene::Scene scene = scene::load_scene(scene_arg);
     gl::WindowContext window(width, height, "Penumbra — " + scene.name);
     shadows::Renderer renderer;
     renderer.set_scene(scene);
-    shadows::ShadowSettings settings;
     Orbit orbit;
     orbit.from_camera(scene.camera);
     gl::PassTimer timer(!window.info().software);
@@ -90,6 +93,7 @@ int main(int argc, char** argv) {
       ImGui::Begin("Penumbra");
       ImGui::PushItemWidth(200);
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
+      ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, calibration.source_of_c().c_str());
       gui::shadow_settings_panel(settings);
       gui::light_size_control(renderer.scene().light);
       ImGui::Separator();

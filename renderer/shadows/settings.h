@@ -11,6 +11,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "published.h"
 #include "shadows/settings_table.h"
 #include "shadows/technique_list.h"
 
@@ -47,7 +48,7 @@ struct ShadowMapParams {
 // quantized and rate-limited (adaptive/resolution_rule.h). Off: map.resolution_texels is used.
 struct AdaptiveParams {
   bool enabled = false;
-  float c = 3.47f;                    // texels; from calibration.json
+  float c = static_cast<float>(kPublishedC);  // texels; from calibration.json
   int min_texels = 32;
   int max_texels = 4096;
   int quantum_texels = 32;

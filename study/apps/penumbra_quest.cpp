@@ -18,6 +18,7 @@
 #include "cli/checks.h"
 #include "common/progress_bar.h"
 #include "observers/staircase_simulation.h"
+#include "published.h"
 #include "quest/psychometric.h"
 #include "quest/quest.h"
 
@@ -264,7 +265,7 @@ int main(int argc, char** argv) {
 
   auto* simulate = app.add_subcommand("simulate", "run staircases against a planted observer; print the estimates' spread");
   QuestOptions simulate_options;
-  simulate_options.params.t_guess = -std::log10(3.47);
+  simulate_options.params.t_guess = -std::log10(penumbra::kPublishedC);
   simulate_options.params.t_guess_sd = 0.5;
   simulate_options.add_to(*simulate, false);
   penumbra::observers::SimulationConfig config;

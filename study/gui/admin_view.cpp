@@ -6,11 +6,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "published.h"
+
 namespace penumbra::study_gui {
 
 namespace {
-
-constexpr double kPublishedC = 3.47;  // TU Wien 2017, shared/DESIGN.md: a faint reference line
 
 std::string format(const char* f, auto... args) {
   char buf[256];
@@ -65,7 +65,7 @@ void staircase_plot(const procedure::Staircase& sc, double max_radius_px, int ma
     dl->AddText({px(t) - 0.5f * ImGui::CalcTextSize(s.c_str()).x, p1.y + 3}, label, s.c_str());
   }
   dl->AddRect(p0, p1, frame);
-  // Published rule r = 3.47 a, and the current estimate with its +-1 sd band.
+  // The published rule r = c a (a faint reference line), and the current estimate with its +-1 sd band.
   const float y_pub = py(kPublishedC * sc.artifact_px);
   for (float x = p0.x; x < p1.x; x += 10)  // dashed
     dl->AddLine({x, y_pub}, {std::min(x + 5, p1.x), y_pub}, IM_COL32(200, 185, 100, 220), 1.5f);
@@ -161,7 +161,7 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
     staircase_plot(sc, max_radius, config.max_trials, w, h);
     ImGui::EndGroup();
   }
-  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   dashed: published r = 3.47 a");
+  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   dashed: published r = %g a", kPublishedC);
 
   if (shown_round > 0 && ImGui::CollapsingHeader("Earlier rounds")) {
     for (int r = 0; r < shown_round; ++r)

@@ -10,12 +10,13 @@
 
 #include "observers/observer.h"
 #include "observers/random.h"
+#include "published.h"
 #include "quest/psychometric.h"
 
 namespace penumbra::observers {
 
 struct PlantedModel {
-  double c_true = 3.47;  // threshold filter radius in artifact sizes (texels)
+  double c_true = kPublishedC;  // threshold filter radius in artifact sizes (texels)
   psychometric::Model model = psychometric::Model::log_weibull;
   double slope = 3.5;          // beta in the model's units (per log10 unit for the log models)
   double guess = 0.5;          // gamma

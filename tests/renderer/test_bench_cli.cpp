@@ -265,6 +265,55 @@ TEST_F(BenchCli, BadInputIsRefusedInOneLineWithNothingWritten) {
   expect_refused({"--resolutions", "65536"}, {"GL_MAX_TEXTURE_SIZE"});
 }
 
+// --calibration is read and recorded in report.json; an explicit --adaptive.c wins over the file.
+TEST_F(BenchCli, CalibrationIsRecordedAndExplicitAdaptiveCWins) {
+  const fs::path cal_file = tmp_ / "scratch" / "calibration.json";
+  { std::ofstream(cal_file) << R"({"c": 4.25, "ci95": [3.5, 5.0]})" << "\n"; }
+  const fs::path out = work() / "out";
+  const std::vector<std::string> tiny = {"--techniques", "pcf", "--resolutions", "64", "--no-plot", "-o", out.string()};
+  struct Case {
+    std::vector<std::string> extra;
+    std::string file_ends;
+    double c;
+    std::string source;
+  };
+  std::vector<double> required_per_c;
+  for (const Case& c : {Case{{}, "data/calibration/default.json", 3.47, "file"},
+                        Case{{"--calibration", cal_file.string()}, "calibration.json", 4.25, "file"},
+                        Case{{"--calibration", cal_file.string(), "--adaptive.c", "6.5"}, "calibration.json", 6.5, "--adaptive.c"}}) {
+    SCOPED_TRACE(c.source + " " + c.file_ends);
+    std::vector<std::string> args = tiny;
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    const test::Result r = bench(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json report = nlohmann::json::parse(test::read_file(out / "report.json"));
+    const auto& cal = report.at("calibration");
+    EXPECT_THAT(cal.at("file").get<std::string>(), ::testing::EndsWith(c.file_ends));
+    EXPECT_NEAR(cal.at("c").get<double>(), c.c, 1e-6);
+    EXPECT_EQ(cal.at("source_of_c"), c.source);
+    EXPECT_EQ(cal.at("ci95").size(), 2u);
+    // The rule used that c: the adaptive row's requirement is c · L_ws / r_ws, the same scene and
+    // radius in every case.
+    int adaptive_rows = 0;
+    for (const auto& row : report.at("rows"))
+      if (row.at("adaptive").get<bool>()) {
+        ++adaptive_rows;
+        required_per_c.push_back(row.at("required_texels").get<double>() / c.c);
+      }
+    EXPECT_EQ(adaptive_rows, 1);
+  }
+  ASSERT_EQ(required_per_c.size(), 3u);
+  EXPECT_NEAR(required_per_c[1] / required_per_c[0], 1.0, 1e-4);
+  EXPECT_NEAR(required_per_c[2] / required_per_c[0], 1.0, 1e-4);
+}
+
+TEST_F(BenchCli, BadCalibrationFileIsRefusedWithNothingWritten) {
+  const fs::path bad = tmp_ / "scratch" / "bad-calibration.json";
+  { std::ofstream(bad) << R"({"c": -1})" << "\n"; }
+  expect_refused({"--calibration", bad.string()}, {bad.string(), ": c:"});
+  expect_refused({"--calibration", (tmp_ / "scratch" / "missing.json").string()}, {"missing.json"});
+}
+
 TEST_F(BenchCli, ForeignDirectoryIsLeftUntouched) {
   const fs::path out = work() / "out";
   fs::create_directories(out);

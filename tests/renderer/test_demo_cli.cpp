@@ -79,6 +79,27 @@ TEST_F(DemoCli, LightSizeOverridesTheScene) {
   EXPECT_LT(large, small - 0.1);
 }
 
+// The calibration file sets c unless --adaptive.c is given; report.json records which one was used.
+TEST_F(DemoCli, ExplicitAdaptiveCWinsOverTheCalibrationFile) {
+  for (const bool explicit_c : {false, true}) {
+    SCOPED_TRACE(explicit_c ? "--adaptive.c" : "file");
+    const fs::path out = dir_ / (explicit_c ? "explicit" : "file");
+    std::vector<std::string> args = {"--headless", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
+                                     "--fixed-resolution", "256", "--no-plot", "-o", out.string()};
+    if (explicit_c) args.insert(args.end(), {"--adaptive.c", "6.5"});
+    const auto r = demo(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+    const auto& cal = report.at("calibration");
+    const double c = explicit_c ? 6.5 : 3.47;
+    EXPECT_NEAR(cal.at("c").get<double>(), c, 1e-6);
+    EXPECT_EQ(cal.at("source_of_c"), explicit_c ? "--adaptive.c" : "file");
+    EXPECT_THAT(cal.at("file").get<std::string>(), ::testing::EndsWith("data/calibration/default.json"));
+    EXPECT_EQ(cal.at("bound"), "c");
+    EXPECT_NEAR(report.at("techniques")[0].at("settings_adaptive").at("adaptive").at("c").get<double>(), c, 1e-6);
+  }
+}
+
 TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
   const fs::path out = dir_ / "out";
   struct Case {

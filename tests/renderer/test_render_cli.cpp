@@ -305,3 +305,69 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown_option", {"--bogus"}, {"--bogus"}},
         BadCase{"missing_output", {"--technique", "hard"}, {"--output"}, false}),
     [](const ::testing::TestParamInfo<BadCase>& param_info) { return param_info.param.name; });
+
+// --- the calibration file (issue 12: the loop closed in every app) ---
+
+// The default file (the published c) is read and recorded in the summary and in every render's
+// report; its c is the one the renderer used.
+TEST_F(RenderCli, DefaultCalibrationIsRecorded) {
+  const fs::path out = work_ / "out";
+  const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const fs::path& report_path : {out / "report.json", only_render_dir(out) / "report.json"}) {
+    SCOPED_TRACE(report_path.string());
+    const auto cal = read_json(report_path).at("calibration");
+    EXPECT_THAT(cal.at("file").get<std::string>(), ::testing::EndsWith("data/calibration/default.json"));
+    EXPECT_NEAR(cal.at("c").get<double>(), 3.47, 1e-6);
+    EXPECT_NEAR(cal.at("ci95").at(0).get<double>(), 3.47, 1e-9);
+    EXPECT_NEAR(cal.at("ci95").at(1).get<double>(), 3.47, 1e-9);
+    EXPECT_EQ(cal.at("source_of_c"), "file");
+  }
+  EXPECT_NEAR(read_json(only_render_dir(out) / "report.json").at("settings").at("adaptive").at("c").get<double>(), 3.47, 1e-6);
+}
+
+// A fitted calibration sets adaptive.c; an explicit --adaptive.c wins over it, and the report says so.
+TEST_F(RenderCli, CalibrationFileSetsCAndExplicitAdaptiveCWins) {
+  const fs::path cal_file = scratch_ / "calibration.json";
+  std::ofstream(cal_file) << R"({"c": 4.25, "ci95": [3.5, 5.0], "condition": "step"})" << "\n";
+  struct Case {
+    std::vector<std::string> extra;
+    double c;
+    std::string source;
+  };
+  for (const Case& c : {Case{{}, 4.25, "file"}, Case{{"--adaptive.c", "6.5"}, 6.5, "--adaptive.c"}}) {
+    SCOPED_TRACE(c.source);
+    const fs::path out = work_ / "out";
+    std::vector<std::string> args = {"--technique", "pcf", "--calibration", cal_file.string(), "-o", out.string()};
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    const Result r = run_render(small_args(args), scratch_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto summary = read_json(out / "report.json");
+    const auto render = read_json(only_render_dir(out) / "report.json");
+    for (const auto& cal : {summary.at("calibration"), render.at("calibration")}) {
+      EXPECT_EQ(cal.at("file"), cal_file.string());
+      EXPECT_NEAR(cal.at("c").get<double>(), c.c, 1e-6);
+      EXPECT_EQ(cal.at("ci95"), nlohmann::json({3.5, 5.0}));
+      EXPECT_EQ(cal.at("source_of_c"), c.source);
+    }
+    EXPECT_NEAR(render.at("settings").at("adaptive").at("c").get<double>(), c.c, 1e-6);
+  }
+}
+
+// A bad calibration file is refused before anything is created: one line naming the file and field.
+TEST_F(RenderCli, BadCalibrationFileIsRefusedWithNoOutput) {
+  struct Case {
+    std::string name, content, field;
+  };
+  const Case cases[] = {{"c_not_a_number", R"({"c": "big"})", "c"},
+                        {"c_missing", R"({"ci95": [3, 4]})", "c"},
+                        {"ci95_excludes_c", R"({"c": 3.47, "ci95": [4, 5]})", "ci95"}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path file = scratch_ / (c.name + ".json");
+    std::ofstream(file) << c.content << "\n";
+    expect_refused(small_args({"--calibration", file.string(), "-o", (work_ / "out").string()}), {file.string(), ": " + c.field + ":"});
+  }
+  const fs::path missing = scratch_ / "missing.json";
+  expect_refused(small_args({"--calibration", missing.string(), "-o", (work_ / "out").string()}), {missing.string()});
+}
