@@ -3,9 +3,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
+#include "io/image_codec.h"
 
 namespace penumbra::io {
 namespace {
@@ -23,39 +21,25 @@ void commit(const std::filesystem::path& tmp, const std::filesystem::path& path)
   }
 }
 
-template <class T>
-void write_image(const std::filesystem::path& path, const Image<T>& image, const char* format, OIIO::TypeDesc type) {
+template <class T, class Encode>
+void write_image(const std::filesystem::path& path, const Image<T>& image, Encode encode) {
   if (image.width <= 0 || image.height <= 0 || image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * image.channels)
     throw std::runtime_error(path.string() + ": image has inconsistent size");
   const auto tmp = temp_path(path);
-  auto out = OIIO::ImageOutput::create(format);
-  if (!out) throw std::runtime_error(path.string() + ": no OpenImageIO writer for " + format);
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
-  if (std::string(format) == "openexr") spec.attribute("compression", "zip");
-  if (!out->open(tmp.string(), spec) || !out->write_image(type, image.pixels.data()) || !out->close()) {
+  try {
+    encode(tmp, image);
+  } catch (const std::exception& e) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(path.string() + ": cannot write: " + out->geterror());
+    throw std::runtime_error(path.string() + ": cannot write: " + e.what());
   }
   commit(tmp, path);
 }
 
-template <class T>
-Image<T> read_image(const std::filesystem::path& path, OIIO::TypeDesc type) {
-  auto in = OIIO::ImageInput::open(path.string());
-  if (!in) throw std::runtime_error(path.string() + ": cannot read image: " + OIIO::geterror());
-  const auto& spec = in->spec();
-  Image<T> img{spec.width, spec.height, spec.nchannels, {}};
-  img.pixels.resize(static_cast<std::size_t>(img.width) * img.height * img.channels);
-  if (!in->read_image(0, 0, 0, img.channels, type, img.pixels.data()))
-    throw std::runtime_error(path.string() + ": cannot read image: " + in->geterror());
-  return img;
-}
-
 }  // namespace
 
-void write_png(const std::filesystem::path& path, const Image8& image) { write_image(path, image, "png", OIIO::TypeDesc::UINT8); }
-void write_exr(const std::filesystem::path& path, const ImageF& image) { write_image(path, image, "openexr", OIIO::TypeDesc::FLOAT); }
+void write_png(const std::filesystem::path& path, const Image8& image) { write_image(path, image, codec::encode_png); }
+void write_exr(const std::filesystem::path& path, const ImageF& image) { write_image(path, image, codec::encode_exr); }
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
   const auto tmp = temp_path(path);
@@ -72,33 +56,12 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
   commit(tmp, path);
 }
 
-Image8 read_image8(const std::filesystem::path& path) { return read_image<std::uint8_t>(path, OIIO::TypeDesc::UINT8); }
-ImageF read_imagef(const std::filesystem::path& path) { return read_image<float>(path, OIIO::TypeDesc::FLOAT); }
+Image8 read_image8(const std::filesystem::path& path) { return codec::read_image8(path); }
+ImageF read_imagef(const std::filesystem::path& path) { return codec::read_imagef(path); }
 
 Image8 montage(const std::vector<Image8>& images, const std::vector<std::string>& labels, int columns, int tile_width) {
   if (images.empty()) return {};
-  const int rows = (static_cast<int>(images.size()) + columns - 1) / columns;
-  const int tile_height = tile_width * images[0].height / images[0].width;
-  OIIO::ImageBuf canvas(OIIO::ImageSpec(columns * tile_width, rows * tile_height, 3, OIIO::TypeDesc::UINT8));
-  const float grey[3] = {0.1f, 0.1f, 0.1f};
-  OIIO::ImageBufAlgo::fill(canvas, grey);
-  for (std::size_t i = 0; i < images.size(); ++i) {
-    const auto& img = images[i];
-    OIIO::ImageBuf src(OIIO::ImageSpec(img.width, img.height, img.channels, OIIO::TypeDesc::UINT8),
-                       const_cast<std::uint8_t*>(img.pixels.data()));
-    OIIO::ImageBuf rgb = OIIO::ImageBufAlgo::channels(src, 3, {});
-    OIIO::ImageBuf tile = OIIO::ImageBufAlgo::resize(rgb, "", 0, OIIO::ROI(0, tile_width, 0, tile_height, 0, 1, 0, 3));
-    if (i < labels.size()) {
-      const float white[3] = {1, 1, 1};
-      OIIO::ImageBufAlgo::render_text(tile, 12, 30, labels[i], 24, "DejaVuSans", white);  // no-op without the font
-    }
-    const int x = static_cast<int>(i) % columns * tile_width, y = static_cast<int>(i) / columns * tile_height;
-    OIIO::ImageBufAlgo::paste(canvas, x, y, 0, 0, tile);
-  }
-  Image8 out{canvas.spec().width, canvas.spec().height, 3, {}};
-  out.pixels.resize(static_cast<std::size_t>(out.width) * out.height * 3);
-  canvas.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, out.pixels.data());
-  return out;
+  return codec::montage(images, labels, columns, tile_width);
 }
 
 }  // namespace penumbra::io
