@@ -292,6 +292,11 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick,
                "a few-minute run: scenes demo,two-planes, resolutions 256,1024,4096, radius 0.05, 320x180, 3 frames, "
                "16 area samples (options given explicitly still win)");
+  std::string timing = "auto";
+  app.add_option("--timing", timing,
+                 "frame timing: auto (GL timer queries on a GPU, wall clock around glFinish on software GL) or "
+                 "wall_finish (the wall clock on every device, e.g. to set a GPU's wall time beside its gpu_timer run)")
+      ->check(CLI::IsMember({"auto", "wall_finish"}));
   bool no_adaptive = false;
   app.add_flag("--no-adaptive", no_adaptive, "skip the adaptive rows (one per fixed-filter radius and for PCSS; --adaptive.* sets the rule)");
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
@@ -356,7 +361,7 @@ int main(int argc, char** argv) {
         throw std::runtime_error("--resolutions " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
                                  std::to_string(ctx.max_texture_size));
     io::StagedDirectory out(opt.output, "report.json");
-    const bool gpu = !ctx.software;
+    const bool gpu = !ctx.software && timing == "auto";
 
     const std::vector<Variant> variants = make_variants(opt);
     int adaptive_variants = 0;

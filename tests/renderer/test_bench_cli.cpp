@@ -263,6 +263,16 @@ TEST_F(BenchCli, BadInputIsRefusedInOneLineWithNothingWritten) {
   expect_refused({"--pcf.kernel", "hexagon"}, {"--pcf.kernel", "hexagon"});
   expect_refused({"--plot-script", "/nonexistent/plot.py"}, {"--plot-script", "/nonexistent/plot.py"});
   expect_refused({"--resolutions", "65536"}, {"GL_MAX_TEXTURE_SIZE"});
+  expect_refused({"--timing", "gpu"}, {"--timing", "gpu"});
+}
+
+TEST_F(BenchCli, TimingWallFinishIsTheWallClockOnEveryDevice) {
+  const fs::path out = work() / "out";
+  const test::Result r = bench({"--techniques", "hard", "--no-plot", "--no-adaptive", "--timing", "wall_finish", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_EQ(report.at("timing_method"), "wall_finish");
+  for (const auto& row : report.at("rows")) EXPECT_EQ(row.at("timing_method"), "wall_finish");
 }
 
 // --calibration is read and recorded in report.json; an explicit --adaptive.c wins over the file.
