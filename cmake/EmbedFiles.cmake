@@ -1,12 +1,16 @@
 # penumbra_embed_files(<target> <symbol> <base_dir> FILES <f>...)
-# Compiles the named files into <target> as a table {relative name, contents}, rebuilt when a
+# Compiles the named files (relative to <base_dir>, or absolute: named by their file name) into <target> as a table {relative name, contents}, rebuilt when a
 # file changes. The table is reachable through `penumbra::embedded::<symbol>()`.
 function(penumbra_embed_files target symbol base_dir)
   cmake_parse_arguments(ARG "" "" "FILES" ${ARGN})
   set(out ${CMAKE_CURRENT_BINARY_DIR}/embedded_${symbol}.cpp)
   set(abs_files)
   foreach(f IN LISTS ARG_FILES)
-    list(APPEND abs_files ${base_dir}/${f})
+    if(IS_ABSOLUTE ${f})
+      list(APPEND abs_files ${f})
+    else()
+      list(APPEND abs_files ${base_dir}/${f})
+    endif()
   endforeach()
   add_custom_command(
     OUTPUT ${out}

@@ -277,7 +277,11 @@ int main(int argc, char** argv) {
   app.add_option("--scenes", scenes_arg, "built-in scene names or scene files (.json), comma-separated");
   app.add_option("--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all");
   app.add_option("--resolutions", resolutions_arg, "shadow-map texels per side, comma-separated");
-  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (pcf, vsm, rpcf, msm, evsm), world units, comma-separated");
+  std::vector<std::string> fixed_radius;  // the techniques --radii applies to, from the registry
+  for (const auto name : shadows::technique_names())
+    if (shadows::technique_entry(shadows::technique_from_string(name)).radius == shadows::RadiusReading::fixed_filter)
+      fixed_radius.emplace_back(name);
+  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (" + join(fixed_radius) + "), world units, comma-separated");
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--frames", opt.frames, "timed frames per configuration (median and min/max reported)")->check(CLI::Range(1, 1000));

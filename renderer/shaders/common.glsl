@@ -2,21 +2,23 @@
 // Spaces: `sc` = shadow-map coordinates (uv in [0,1]^2, depth in [0,1] window depth);
 // `*_ws` = world units; light-view depth = distance along the light's viewing axis.
 
+// The light frame, cascades, biases and the fixed filter radius of the frame come from the
+// ShadowFrame uniform block (shadow_contract.h, shared with the C++ side).
+#include "shadow_contract.h"
+
 const float PI = 3.14159265358979;
 
-layout(binding = 0) uniform sampler2DShadow u_shadow_cmp;          // linear: hardware 2x2 comparison
-layout(binding = 1) uniform sampler2DShadow u_shadow_cmp_nearest;  // nearest comparison / gather
-layout(binding = 2) uniform sampler2D u_shadow_depth;              // raw depth (blocker search)
-layout(binding = 3) uniform sampler2D u_moments;                   // VSM moments (linear depth)
+layout(binding = UNIT_SHADOW_CMP) uniform sampler2DShadow u_shadow_cmp;                  // linear: hardware 2x2 comparison
+layout(binding = UNIT_SHADOW_CMP_NEAREST) uniform sampler2DShadow u_shadow_cmp_nearest;  // nearest comparison / gather
+layout(binding = UNIT_SHADOW_DEPTH) uniform sampler2D u_shadow_depth;                    // raw depth (blocker search)
+layout(binding = UNIT_MOMENTS) uniform sampler2D u_moments;                              // filtered moments (linear depth)
 
-uniform bool u_light_perspective;
-uniform float u_light_near_ws;
-uniform float u_light_far_ws;
-uniform float u_light_s_xy;         // fitting scale
-uniform float u_light_tan_half_fov; // spot
-uniform float u_rpdb_max;           // largest |d depth / d uv| trusted by the receiver-plane bias
-uniform bool u_receiver_plane_bias;
 uniform vec2 u_poisson[64];         // unit-disk taps, the outermost at radius 1
+
+#if !defined(PENUMBRA_COMPUTE)
+// The screen-space techniques' per-pixel result, read by the shading pass.
+layout(binding = UNIT_SCREEN_VISIBILITY) uniform sampler2D u_screen_visibility;
+#endif
 
 // The map being sampled (one cascade, or the only map), set by the shading pass before a
 // technique runs. Maps live in an atlas: a region of g_shadow_res^2 texels surrounded by a guard
@@ -26,16 +28,10 @@ float g_shadow_res = 1.0;       // texels per side of the map
 float g_light_extent_ws = 1.0;  // directional: side of the map; spot: unfitted near-plane width
 vec4 g_region = vec4(0.0, 0.0, 1.0, 1.0);  // atlas uv of the map's corner (xy) and per map uv (zw)
 
-// The maps of this frame: one per cascade (a spot light or an uncascaded frame has one). All
-// cascades share the light view and its depth range; they differ in the xy window, the
-// resolution and the atlas region. use_cascade(i) points the globals above at cascade i.
-const int MAX_CASCADES = 4;
-uniform int u_cascade_count;
-uniform mat4 u_cascade_view_projection[MAX_CASCADES];
-uniform vec4 u_cascade_region[MAX_CASCADES];
-uniform float u_cascade_res[MAX_CASCADES];
-uniform float u_cascade_extent_ws[MAX_CASCADES];
-
+// The maps of this frame (u_cascade_* in ShadowFrame): one per cascade (a spot light or an
+// uncascaded frame has one). All cascades share the light view and its depth range; they differ in
+// the xy window, the resolution and the atlas region. use_cascade(i) points the globals above at
+// cascade i.
 void use_cascade(int i) {
   g_shadow_res = u_cascade_res[i];
   g_region = u_cascade_region[i];
@@ -77,16 +73,19 @@ vec2 receiver_plane_gradient(vec3 sc) {
 #endif
 
 // The technique's fixed filter radius (PCF, RPCF; TechniqueEntry::filter_radius), as the user
-// gave it: in texels of the map being sampled, or in world units at the receiver.
-uniform float u_filter_radius;
-uniform bool u_filter_radius_world;
-
+// gave it (u_filter_radius, u_filter_radius_world): in texels of the map being sampled, or in
+// world units at the receiver.
 // The filter radius in uv and in texels of the current map, at light-view depth `depth_ws`.
 float filter_radius_uv(float depth_ws) {
   return u_filter_radius_world ? u_filter_radius * uv_per_ws(depth_ws) : u_filter_radius / g_shadow_res;
 }
 float filter_radius_texels(float depth_ws) {
   return u_filter_radius_world ? u_filter_radius * uv_per_ws(depth_ws) * g_shadow_res : u_filter_radius;
+}
+
+// Normalized linear light depth in [0, 1] of light-view depth `depth_ws` (the moments' depth).
+float normalized_light_depth(float depth_ws) {
+  return clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
 }
 
 // Window-depth change per world unit of light-view depth at `depth_ws`.

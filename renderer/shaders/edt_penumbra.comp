@@ -7,8 +7,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "screen_space.glsl"
 
-layout(binding = 7) uniform isampler2D u_nearest;  // EDT: nearest site, (-1, -1) when none
-layout(binding = 8) uniform sampler2D u_site_width;
+layout(binding = UNIT_POST_INPUT) uniform isampler2D u_nearest;  // EDT: nearest site, (-1, -1) when none
+layout(binding = UNIT_POST_INPUT_2) uniform sampler2D u_site_width;
 layout(binding = 0, rg32f) uniform writeonly image2D u_penumbra;  // intensity, the G-buffer's signed depth
 
 uniform float u_penumbra_ws;  // EDTSM: P

@@ -7,8 +7,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "screen_space.glsl"
 
-layout(binding = 7) uniform usampler2D u_sites;
-layout(binding = 8) uniform sampler2D u_site_width;  // world units
+layout(binding = UNIT_POST_INPUT) uniform usampler2D u_sites;
+layout(binding = UNIT_POST_INPUT_2) uniform sampler2D u_site_width;  // world units
 layout(binding = 0, rg32f) uniform readonly image2D u_finer;
 layout(binding = 1, rg32f) uniform writeonly image2D u_coarser;
 

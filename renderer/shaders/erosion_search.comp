@@ -12,7 +12,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "shadow_pcss.glsl"
 #include "screen_space.glsl"
 
-layout(binding = 7) uniform sampler2D u_edges;  // min-max mip-map (erosion_minmax.comp)
+layout(binding = UNIT_POST_INPUT) uniform sampler2D u_edges;  // min-max mip-map (erosion_minmax.comp)
 layout(binding = 0, rg32f) uniform writeonly image2D u_eroded;
 
 uniform float u_max_search_px;

@@ -5,8 +5,10 @@
 // direction, positive where the input shadow test says lit, negative where shadowed, and 0 where
 // nothing was drawn. One fetch gives every post pass the position, the depth and the input.
 
-layout(binding = 4) uniform sampler2D u_gbuffer_position;  // world xyz, signed eye depth
-layout(binding = 5) uniform sampler2D u_gbuffer_light;     // shadow-map uv, biased reference depth, light-view depth (world)
+#include "shadow_contract.h"
+
+layout(binding = UNIT_GBUFFER_POSITION) uniform sampler2D u_gbuffer_position;  // world xyz, signed eye depth
+layout(binding = UNIT_GBUFFER_LIGHT) uniform sampler2D u_gbuffer_light;          // shadow-map uv, biased reference depth, light-view depth (world)
 
 uniform bool u_camera_perspective;
 uniform float u_px_scale;          // perspective: z_screen * height_px; orthographic: height_px / view height

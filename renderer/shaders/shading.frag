@@ -1,51 +1,26 @@
-// Camera pass: Lambert shading with the technique's visibility (TECHNIQUE_* and KERNEL_GRID
-// are defined by the renderer). Writes linear radiance (encoded to sRGB by the framebuffer), the
-// light visibility in [0, 1] (shadow test * spot cone) and, with PCSS_REQUIREMENT, the per-pixel
-// resolution requirement the adaptive rule reduces on the GPU (pcss_requirement.comp).
+// Camera pass: Lambert shading with the technique's visibility. The renderer defines the
+// technique's TECHNIQUE_* (and variant defines such as KERNEL_GRID); technique_visibility() comes
+// from that technique's shadow_<name>.glsl. Writes linear radiance (encoded to sRGB by the
+// framebuffer), the light visibility in [0, 1] (shadow test * spot cone) and, with
+// PCSS_REQUIREMENT, the per-pixel resolution requirement the adaptive rule reduces on the GPU
+// (pcss_requirement.comp).
 // Screen-space techniques run it twice: with SCREEN_SPACE_GBUFFER it writes the G-buffer (world
-// position and eye depth signed by the input test before the spot cone, shadow-map
-// coordinates); the second time
-// it takes the visibility the post passes left in u_screen_visibility (SCREEN_SPACE_VISIBILITY),
-// or, for erosion, PCF scaled by the eroded penumbra width found there (TECHNIQUE_EROSION).
+// position and eye depth signed by the input test before the spot cone, shadow-map coordinates);
+// the second time it takes the visibility the post passes left in u_screen_visibility
+// (SCREEN_SPACE_VISIBILITY), or, for erosion, PCF over the eroded penumbra width found there.
 // Screen-space techniques use one map (no cascades).
 #include "common.glsl"
-#include "shadow_hard.glsl"
-#include "shadow_pcf.glsl"
-#include "shadow_pcss.glsl"
-#include "shadow_vsm.glsl"
-#include "shadow_rbsm.glsl"
-#include "shadow_msm.glsl"
-#include "shadow_evsm.glsl"
+// Every technique's shadow_<name>.glsl (generated from renderer/shaders/ by CMake); the one whose
+// TECHNIQUE_* is defined provides technique_visibility().
+#include "techniques.glsl"
 
 in vec3 v_world;
 in vec3 v_normal;
 
-uniform float u_cascade_far_ws[MAX_CASCADES];  // camera view depth where cascade i ends
-uniform float u_cascade_blend;                 // blend band, fraction of a cascade's depth range
-uniform bool u_show_cascades;                  // tint by cascade (debug overlay)
-uniform mat4 u_camera_view;
+uniform vec3 u_albedo;  // per object; the frame's light, cameras and cascades are in ShadowFrame
 
-uniform mat4 u_light_view;
-uniform vec3 u_light_direction;   // direction light travels
-uniform vec3 u_light_position;    // spot
-uniform float u_spot_cos_outer;   // spot cone
-uniform float u_spot_cos_inner;
-uniform vec3 u_light_color;
-uniform float u_ambient;
-uniform vec3 u_albedo;
-uniform float u_normal_offset_texels;
-uniform float u_depth_bias_texels;
-
-uniform int u_taps;
-uniform bool u_rotate;
-uniform int u_max_grid_taps;
-uniform int u_blocker_taps;
-
-layout(binding = 4) uniform sampler2D u_screen_visibility;  // screen-space techniques, by pixel
 
 #if defined(SCREEN_SPACE_GBUFFER)
-uniform vec3 u_camera_position;
-uniform vec3 u_camera_forward;
 layout(location = 0) out vec4 o_position;  // world xyz, eye depth signed by the input test (+ lit, - shadowed)
 layout(location = 1) out vec4 o_light;     // shadow-map uv, biased reference depth, light-view depth (world)
 #else
@@ -73,44 +48,9 @@ float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gr
 
   float visibility;
 #if defined(SCREEN_SPACE_VISIBILITY)
-  visibility = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;
-#elif defined(TECHNIQUE_EROSION)
-  float eroded_ws = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;
-  visibility = eroded_ws > 0.0 ? pcf_poisson(sc, gradient, 0.5 * eroded_ws * uv_per_ws(depth_ws), u_taps, poisson_rotation(u_rotate))
-                               : shadow_hard(sc);
-#elif defined(TECHNIQUE_HARD)
-  visibility = shadow_hard(sc);
-#elif defined(TECHNIQUE_PCF)
-  float radius_uv = filter_radius_uv(depth_ws);
-#  if defined(KERNEL_GRID)
-  visibility = pcf_grid(sc, gradient, radius_uv * g_shadow_res, u_max_grid_taps);
-#  else
-  visibility = pcf_poisson(sc, gradient, radius_uv, u_taps, poisson_rotation(u_rotate));
-#  endif
-#elif defined(TECHNIQUE_PCSS)
-#  if defined(KERNEL_GRID)
-  const bool grid = true;
-#  else
-  const bool grid = false;
-#  endif
-  visibility = shadow_pcss(sc, gradient, depth_ws, u_blocker_taps, u_taps, grid, u_max_grid_taps,
-                           poisson_rotation(true), filter_uv);
-#elif defined(TECHNIQUE_VSM)
-  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
-  visibility = shadow_vsm(sc.xy, t);
-#elif defined(TECHNIQUE_RBSM)
-  visibility = shadow_rbsm(sc, gradient);
-#elif defined(TECHNIQUE_RPCF)
-  float rpcf_radius_texels = filter_radius_texels(depth_ws);
-  visibility = shadow_rpcf(sc, gradient, rpcf_radius_texels, u_rpcf_max_grid_taps);
-#elif defined(TECHNIQUE_MSM)
-  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
-  visibility = shadow_msm(sc.xy, t);
-#elif defined(TECHNIQUE_EVSM)
-  float t = clamp((depth_ws - u_light_near_ws) / (u_light_far_ws - u_light_near_ws), 0.0, 1.0);
-  visibility = shadow_evsm(sc.xy, t);
+  visibility = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;  // EDTSM, EDTSSM: the post passes' result
 #else
-#  error "no TECHNIQUE_* defined"
+  visibility = technique_visibility(sc, gradient, depth_ws, filter_uv);
 #endif
   return clamp(visibility, 0.0, 1.0);  // sums of weights may overshoot by an ulp
 }

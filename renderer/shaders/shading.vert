@@ -1,10 +1,11 @@
 // Camera pass: world position and normal for per-fragment shadow lookups.
+// u_view_projection comes from the ShadowFrame block.
+#include "shadow_contract.h"
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 
 uniform mat4 u_model;
 uniform mat3 u_normal_matrix;
-uniform mat4 u_view_projection;
 
 out vec3 v_world;
 // The screen-space techniques draw the scene twice and test depth for equality the second time.

@@ -1,6 +1,9 @@
 // Exponential variance shadow maps (Lauritzen & McCool 2008): Chebyshev's bound on the moments
 // of two warps of depth x = 2t - 1, exp(c+ x) and -exp(-c- x); the smaller bound wins.
-// Needs chebyshev_upper_bound (shadow_vsm.glsl) for the evaluation.
+#ifndef SHADOW_EVSM_GLSL
+#define SHADOW_EVSM_GLSL
+#include "shadow_vsm.glsl"
+
 uniform vec2 u_evsm_exponents;  // (c+, c-), already clamped to the storage format
 uniform float u_evsm_min_variance;
 uniform float u_evsm_bleed_reduction;
@@ -17,7 +20,6 @@ vec4 evsm_moments(float t) {
   return vec4(w.x, w.x * w.x, w.y, w.y * w.y);
 }
 
-#if !defined(EVSM_MOMENTS_PASS)
 // Visibility for a receiver at normalized linear depth t. The variance floor, given in depth^2,
 // is carried into each warp by its slope dw/dt = 2c|w| at the receiver.
 float shadow_evsm(vec2 uv, float t) {
@@ -30,4 +32,13 @@ float shadow_evsm(vec2 uv, float t) {
   float v = min(positive, negative);
   return clamp((v - u_evsm_bleed_reduction) / (1.0 - u_evsm_bleed_reduction), 0.0, 1.0);
 }
+
+#if defined(TECHNIQUE_EVSM) && !defined(PENUMBRA_COMPUTE)
+vec4 technique_moments(float t) { return evsm_moments(t); }
+
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  return shadow_evsm(sc.xy, normalized_light_depth(depth_ws));
+}
 #endif
+#endif  // SHADOW_EVSM_GLSL

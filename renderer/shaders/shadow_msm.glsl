@@ -1,5 +1,7 @@
 // Moment shadow mapping (Peters & Klein 2015): Hamburger 4MSM on the box-filtered moments of
 // depth z in [-1, 1]. u_moments holds (z, z^2, z^3, z^4) as plain float32.
+#ifndef SHADOW_MSM_GLSL
+#define SHADOW_MSM_GLSL
 uniform float u_msm_moment_bias;
 uniform float u_msm_depth_bias;
 uniform float u_msm_bleed_reduction;
@@ -49,3 +51,13 @@ float shadow_msm(vec2 uv, float t) {
   float v = 1.0 - msm_shadow_intensity(b, 2.0 * t - 1.0 - u_msm_depth_bias);
   return clamp((v - u_msm_bleed_reduction) / (1.0 - u_msm_bleed_reduction), 0.0, 1.0);
 }
+
+#if defined(TECHNIQUE_MSM) && !defined(PENUMBRA_COMPUTE)
+vec4 technique_moments(float t) { return msm_moments(2.0 * t - 1.0); }
+
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  return shadow_msm(sc.xy, normalized_light_depth(depth_ws));
+}
+#endif
+#endif  // SHADOW_MSM_GLSL

@@ -1,4 +1,11 @@
 // Percentage-closer filtering kernels. Both return visibility in [0, 1].
+#ifndef SHADOW_PCF_GLSL
+#define SHADOW_PCF_GLSL
+#include "shadow_hard.glsl"
+
+uniform int u_taps;          // Poisson taps of the filter (PCF, PCSS, erosion)
+uniform bool u_rotate;       // rotate the Poisson disk per pixel
+uniform int u_max_grid_taps; // grid kernels: taps per axis before striding
 
 // Length of [a0, a1] and [b0, b1].
 float overlap(float a0, float a1, float b0, float b1) {
@@ -54,3 +61,16 @@ float pcf_poisson(vec3 sc, vec2 gradient, float radius_uv, int taps, mat2 rotati
   }
   return sum / float(taps);
 }
+
+#if defined(TECHNIQUE_PCF) && !defined(PENUMBRA_COMPUTE)
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  float radius_uv = filter_radius_uv(depth_ws);
+#  if defined(KERNEL_GRID)
+  return pcf_grid(sc, gradient, radius_uv * g_shadow_res, u_max_grid_taps);
+#  else
+  return pcf_poisson(sc, gradient, radius_uv, u_taps, poisson_rotation(u_rotate));
+#  endif
+}
+#endif
+#endif  // SHADOW_PCF_GLSL

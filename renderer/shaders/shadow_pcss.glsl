@@ -1,10 +1,15 @@
 // Percentage-closer soft shadows (Fernando 2005; Kreuzer 2017 eq. 5.8-5.11).
 // Spot light: emitter of radius u_pcss_light_radius_uv (near-plane uv); directional light: angular
 // radius with tangent u_pcss_tan_half_angle.
+#ifndef SHADOW_PCSS_GLSL
+#define SHADOW_PCSS_GLSL
+#include "shadow_pcf.glsl"
+
 uniform float u_pcss_light_radius_uv;
 uniform float u_pcss_tan_half_angle;
 uniform float u_pcss_min_penumbra_ws;
 uniform float u_pcss_search_scale;
+uniform int u_blocker_taps;
 
 // Search radius (uv) of the blocker search for a receiver at light-view depth z_r.
 float pcss_search_uv(float z_r) {
@@ -52,3 +57,15 @@ float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filte
   if (grid) return pcf_grid(sc, gradient, filter_uv * g_shadow_res, max_grid_taps);
   return pcf_poisson(sc, gradient, filter_uv, filter_taps, rotation);
 }
+
+#if defined(TECHNIQUE_PCSS) && !defined(PENUMBRA_COMPUTE)
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+#  if defined(KERNEL_GRID)
+  const bool grid = true;
+#  else
+  const bool grid = false;
+#  endif
+  return shadow_pcss(sc, gradient, depth_ws, u_blocker_taps, u_taps, grid, u_max_grid_taps, poisson_rotation(true), filter_uv);
+}
+#endif
+#endif  // SHADOW_PCSS_GLSL

@@ -3,6 +3,10 @@
 // [t, t + 1). Every test is the nearest-texel comparison of a texel centre against the receiver
 // plane through the fragment, so all tests of one fragment agree on what "own side" means.
 // Procedure and the choices the paper leaves open: docs/alternatives.md.
+#ifndef SHADOW_RBSM_GLSL
+#define SHADOW_RBSM_GLSL
+#include "shadow_pcf.glsl"
+
 uniform int u_rbsm_max_search;       // texels walked along a silhouette step in each direction
 uniform int u_rpcf_max_grid_taps;
 
@@ -217,3 +221,18 @@ float shadow_rpcf(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
   }
   return sum * norm;
 }
+
+#if defined(TECHNIQUE_RBSM) && !defined(PENUMBRA_COMPUTE)
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  return shadow_rbsm(sc, gradient);
+}
+#endif
+
+#if defined(TECHNIQUE_RPCF) && !defined(PENUMBRA_COMPUTE)
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  return shadow_rpcf(sc, gradient, filter_radius_texels(depth_ws), u_rpcf_max_grid_taps);
+}
+#endif
+#endif  // SHADOW_RBSM_GLSL

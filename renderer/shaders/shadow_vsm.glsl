@@ -1,5 +1,7 @@
 // Variance shadow maps (Donnelly & Lauritzen 2006): Chebyshev's one-sided bound on the
 // pre-filtered moments of linear depth, with a variance floor and light-bleeding reduction.
+#ifndef SHADOW_VSM_GLSL
+#define SHADOW_VSM_GLSL
 uniform float u_vsm_min_variance;
 uniform float u_vsm_bleed_reduction;
 
@@ -17,3 +19,18 @@ float shadow_vsm(vec2 uv, float t) {
   float p = chebyshev_upper_bound(moments, t, max(u_vsm_min_variance, 1e-12));
   return clamp((p - u_vsm_bleed_reduction) / (1.0 - u_vsm_bleed_reduction), 0.0, 1.0);
 }
+
+#if defined(TECHNIQUE_VSM) && !defined(PENUMBRA_COMPUTE)
+// Moments of one depth (moments pass): t and t^2 plus the variance of t over the texel, estimated
+// from its screen derivatives as Donnelly & Lauritzen suggest.
+vec4 technique_moments(float t) {
+  float dx = dFdx(t), dy = dFdy(t);
+  return vec4(t, t * t + 0.25 * (dx * dx + dy * dy), 0.0, 0.0);
+}
+
+float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
+  filter_uv = 0.0;
+  return shadow_vsm(sc.xy, normalized_light_depth(depth_ws));
+}
+#endif
+#endif  // SHADOW_VSM_GLSL

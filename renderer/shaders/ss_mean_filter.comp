@@ -7,7 +7,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "screen_space.glsl"
 
-layout(binding = 7) uniform sampler2D u_source;  // value, signed eye depth
+layout(binding = UNIT_POST_INPUT) uniform sampler2D u_source;  // value, signed eye depth
 layout(binding = 0, rg32f) uniform writeonly image2D u_target;
 
 uniform float u_filter_ws;

@@ -16,8 +16,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, r8ui) uniform writeonly uimage2D u_sites;
 layout(binding = 1, r32f) uniform writeonly image2D u_site_width;  // w_p in world units, 0 off sites
 
-uniform int u_blocker_taps;
-
 void main() {
   ivec2 size = textureSize(u_gbuffer_position, 0);
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);

@@ -2,8 +2,8 @@
 // with the two edge texels weighted by coverage (the same box as the grid PCF). One invocation
 // slides the window along a whole line, so the cost does not depend on r; the running sum is
 // Kahan-compensated so that long lines keep the precision the variance needs.
-// The same blur serves every moments technique: the renderer defines MOMENTS_CHANNELS (2: VSM,
-// 4: MSM, EVSM) and MOMENTS_FORMAT (the image format, e.g. rgba16f); the default is VSM's.
+// The same blur serves every moments technique: the renderer defines MOMENTS_CHANNELS (1: ESM,
+// 2: VSM, 4: MSM, EVSM) and MOMENTS_FORMAT (the image format, e.g. rgba16f); the default is VSM's.
 // DIRECT_SUMS (EVSM) sums each window anew instead of sliding it, one texel per invocation (see
 // below); the sliding blur runs one invocation per line.
 layout(local_size_x = 64) in;
@@ -16,6 +16,10 @@ layout(local_size_x = 64) in;
 #  define moments_t vec4
 #  define MOMENTS_SWIZZLE rgba
 #  define AS_VEC4(v) (v)
+#elif MOMENTS_CHANNELS == 1
+#  define moments_t float
+#  define MOMENTS_SWIZZLE r
+#  define AS_VEC4(v) vec4((v), 0.0, 0.0, 0.0)
 #else
 #  define moments_t vec2
 #  define MOMENTS_SWIZZLE rg

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "adaptive/resolution_rule.h"
+#include "shaders/shadow_contract.h"
 #include "scene/scene.h"
 #include "shadows/fitting.h"
 #include "shadows/settings.h"
@@ -18,7 +19,7 @@
 
 namespace penumbra::shadows {
 
-inline constexpr int kMaxCascades = 4;  // MAX_CASCADES in the shaders
+inline constexpr int kMaxCascades = contract::MAX_CASCADES;
 inline constexpr int kGuardTexels = 2;  // far-depth band around each map in a shared atlas (atlas_uv in common.glsl)
 
 struct CascadeInfo {

@@ -6,6 +6,7 @@ namespace penumbra::shadows {
 
 int channel_count(GLenum format) {
   switch (format) {
+    case GL_R32F: return 1;
     case GL_RG32F: return 2;
     case GL_RGBA32F:
     case GL_RGBA16F: return 4;
@@ -15,6 +16,7 @@ int channel_count(GLenum format) {
 
 const char* image_format_qualifier(GLenum format) {
   switch (format) {
+    case GL_R32F: return "r32f";
     case GL_RG32F: return "rg32f";
     case GL_RGBA32F: return "rgba32f";
     case GL_RGBA16F: return "rgba16f";

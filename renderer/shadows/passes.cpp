@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "gl/context.h"
+#include "shadows/contract.h"
 #include "shadows/renderer.h"
 #include "shadows/scoped_pass.h"
 
@@ -14,7 +15,11 @@ namespace penumbra::shadows {
 const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std::string& key, const std::vector<gl::ShaderStage>& stages,
                                      const std::vector<gl::ShaderDefine>& defines) {
   auto it = programs_.find(key);
-  if (it == programs_.end()) it = programs_.emplace(key, shaders.program(stages, defines)).first;
+  if (it == programs_.end()) {
+    gl::Program program = shaders.program(stages, defines);
+    check_shadow_frame_block(program, key);
+    it = programs_.emplace(key, std::move(program)).first;
+  }
   return it->second;
 }
 
@@ -31,6 +36,7 @@ FrameResources::FrameResources(const gl::ShaderLibrary& library) : shaders(libra
   // Beyond the map the border reads as the far depth: lit, like the depth samplers' border and the
   // guard band of an atlas region. Each frame sets the border to its technique's far moments.
   moments_linear = gl::Sampler(gl::SamplerDesc{});
+  shadow_frame = gl::Buffer(sizeof(contract::ShadowFrame), nullptr, GL_DYNAMIC_STORAGE_BIT);
   gl::check_errors("renderer setup");
 }
 
@@ -118,69 +124,77 @@ const gl::Program& FrameContext::shading_program(bool gbuffer) const {
 }
 
 void FrameContext::bind_shadow_maps() const {
-  res.maps->depth.bind(0);
-  res.maps->depth.bind(1);
-  res.maps->depth.bind(2);
-  res.cmp_linear.bind(0);
-  res.cmp_nearest.bind(1);
-  res.raw_nearest.bind(2);
+  using namespace contract;
+  res.maps->depth.bind(UNIT_SHADOW_CMP);
+  res.maps->depth.bind(UNIT_SHADOW_CMP_NEAREST);
+  res.maps->depth.bind(UNIT_SHADOW_DEPTH);
+  res.cmp_linear.bind(UNIT_SHADOW_CMP);
+  res.cmp_nearest.bind(UNIT_SHADOW_CMP_NEAREST);
+  res.raw_nearest.bind(UNIT_SHADOW_DEPTH);
   if (plan.moments) {
     glSamplerParameterfv(res.moments_linear.id(), GL_TEXTURE_BORDER_COLOR, plan.moments->far_moments.data());
-    res.maps->moments_tex.bind(3);
-    res.moments_linear.bind(3);
+    res.maps->moments_tex.bind(UNIT_MOMENTS);
+    res.moments_linear.bind(UNIT_MOMENTS);
   }
 }
 
-void FrameContext::set_frame_uniforms(const gl::Program& prog) const {
+void FrameContext::upload_shadow_frame() const {
   const ShadowSettings& s = settings;
-  const TechniqueEntry& entry = *plan.technique;
   const scene::Camera& cam = scene.camera;
   const scene::Light& light = scene.light;
   const LightFrame& lf = plan.light();
   const int count = static_cast<int>(plan.cascades.size());
   const int res0 = plan.cascades.front().resolution_texels;
   const float texel_mid_ws = lf.texel_ws(0.5f * (lf.near_ws + lf.far_ws), res0);
-  prog.set("u_view_projection", cam.projection_matrix(plan.aspect) * cam.view());
-  prog.set("u_camera_view", cam.view());
-  prog.set("u_light_view", lf.view);
-  prog.set("u_light_perspective", lf.perspective);
-  prog.set("u_light_near_ws", lf.near_ws);
-  prog.set("u_light_far_ws", lf.far_ws);
-  prog.set("u_light_s_xy", lf.s_xy);
-  prog.set("u_light_tan_half_fov", std::tan(glm::radians(lf.fov_deg) / 2));
-  prog.set("u_cascade_count", count);
-  prog.set("u_cascade_blend", count > 1 ? s.map.cascade_blend : 0.0f);
-  prog.set("u_show_cascades", show_cascades);
+  contract::ShadowFrame b{};
+  b.u_view_projection = cam.projection_matrix(plan.aspect) * cam.view();
+  b.u_camera_view = cam.view();
+  b.u_light_view = lf.view;
+  const float w = static_cast<float>(plan.atlas.width), h = static_cast<float>(plan.atlas.height);
   for (int i = 0; i < count; ++i) {
     const CascadeInfo& c = plan.cascades[static_cast<std::size_t>(i)];
-    const std::string at = "[" + std::to_string(i) + "]";
-    const float w = static_cast<float>(plan.atlas.width), h = static_cast<float>(plan.atlas.height);
-    prog.set("u_cascade_view_projection" + at, c.light.view_projection());
-    prog.set("u_cascade_region" + at, glm::vec4(static_cast<float>(c.atlas_x) / w, static_cast<float>(c.atlas_y) / h,
-                                                static_cast<float>(c.resolution_texels) / w, static_cast<float>(c.resolution_texels) / h));
-    prog.set("u_cascade_res" + at, static_cast<float>(c.resolution_texels));
-    prog.set("u_cascade_extent_ws" + at, c.light.extent_ws);
-    prog.set("u_cascade_far_ws" + at, c.split_far_ws);
+    b.u_cascade_view_projection[i] = c.light.view_projection();
+    b.u_cascade_region[i] = glm::vec4(static_cast<float>(c.atlas_x) / w, static_cast<float>(c.atlas_y) / h,
+                                      static_cast<float>(c.resolution_texels) / w, static_cast<float>(c.resolution_texels) / h);
+    b.u_cascade_res[i] = static_cast<float>(c.resolution_texels);
+    b.u_cascade_extent_ws[i] = c.light.extent_ws;
+    b.u_cascade_far_ws[i] = c.split_far_ws;
   }
+  b.u_light_direction = glm::normalize(light.direction);
+  b.u_light_near_ws = lf.near_ws;
+  b.u_light_position = light.position;
+  b.u_light_far_ws = lf.far_ws;
+  b.u_light_color = light.color;
+  b.u_light_s_xy = lf.s_xy;
+  b.u_camera_position = cam.position;
+  b.u_light_tan_half_fov = std::tan(glm::radians(lf.fov_deg) / 2);
+  b.u_camera_forward = glm::normalize(cam.target - cam.position);
   // Trust receiver slopes up to 85° from the light: |d depth/d uv| ≤ tan 85° · extent / depth range.
-  prog.set("u_rpdb_max", std::tan(glm::radians(85.0f)) * texel_mid_ws * static_cast<float>(res0) / std::max(lf.far_ws - lf.near_ws, 1e-6f));
-  prog.set("u_receiver_plane_bias", s.map.receiver_plane_bias);
-  prog.set("u_light_direction", glm::normalize(light.direction));
-  prog.set("u_light_position", light.position);
+  b.u_rpdb_max = std::tan(glm::radians(85.0f)) * texel_mid_ws * static_cast<float>(res0) / std::max(lf.far_ws - lf.near_ws, 1e-6f);
   const float half_cone = glm::radians(light.spot_fov_deg) / 2;
-  prog.set("u_spot_cos_outer", std::cos(half_cone));
-  prog.set("u_spot_cos_inner", std::cos(half_cone * 0.9f));
-  prog.set("u_light_color", light.color);
-  prog.set("u_ambient", light.ambient);
-  prog.set("u_normal_offset_texels", s.map.normal_offset_texels);
-  prog.set("u_depth_bias_texels", s.map.depth_bias_texels);
-  prog.set("u_camera_position", cam.position);
-  prog.set("u_camera_forward", glm::normalize(cam.target - cam.position));
-
+  b.u_spot_cos_outer = std::cos(half_cone);
+  b.u_spot_cos_inner = std::cos(half_cone * 0.9f);
+  b.u_ambient = light.ambient;
+  b.u_normal_offset_texels = s.map.normal_offset_texels;
+  b.u_depth_bias_texels = s.map.depth_bias_texels;
+  b.u_cascade_blend = count > 1 ? s.map.cascade_blend : 0.0f;
+  b.u_cascade_count = count;
+  b.u_light_perspective = lf.perspective;
+  b.u_receiver_plane_bias = s.map.receiver_plane_bias;
+  b.u_show_cascades = show_cascades;
   if (plan.filter_radius) {
-    prog.set("u_filter_radius", plan.filter_radius->radius);
-    prog.set("u_filter_radius_world", plan.filter_radius->unit == RadiusUnit::world);
+    b.u_filter_radius = plan.filter_radius->radius;
+    b.u_filter_radius_world = plan.filter_radius->unit == RadiusUnit::world;
   }
+  glNamedBufferSubData(res.shadow_frame.id(), 0, sizeof b, &b);
+  glBindBufferBase(GL_UNIFORM_BUFFER, contract::BLOCK_SHADOW_FRAME, res.shadow_frame.id());
+}
+
+void FrameContext::set_technique_uniforms(const gl::Program& prog) const {
+  const ShadowSettings& s = settings;
+  const TechniqueEntry& entry = *plan.technique;
+  const scene::Light& light = scene.light;
+  const LightFrame& lf = plan.light();
   if (entry.set_uniforms) entry.set_uniforms(prog, s);
   if (entry.rbsm_input && entry.rbsm_input(s)) set_rbsm_uniforms(prog, s.rbsm);  // the G-buffer's revectorized input
   if (entry.uses_light_size()) {
@@ -207,8 +221,9 @@ class ShadowMapPass final : public Pass {
     const auto& moments = f.plan.moments;
     FrameResources& r = f.res;
     const gl::Program& prog =
-        moments ? r.programs.get(r.shaders, std::string("moments:") + moments->fragment_shader,
-                                 {{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, moments->fragment_shader}})
+        moments ? r.programs.get(r.shaders, "moments:" + std::string(f.plan.technique->define),
+                                 {{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_moments.frag"}},
+                                 {{std::string(f.plan.technique->define), "1"}})
                 : r.depth_program;
     (moments ? r.maps->moments_fbo : r.maps->depth_fbo).bind();
     glEnable(GL_DEPTH_CLAMP);  // casters in front of the fitted near plane still occlude
@@ -229,12 +244,8 @@ class ShadowMapPass final : public Pass {
         glPolygonOffset(f.settings.map.slope_bias, f.settings.map.offset_bias);
       }
       prog.set("u_light_view_projection", c.light.view_projection());
-      prog.set("u_light_view", c.light.view);
-      if (moments) {
-        prog.set("u_light_near_ws", c.light.near_ws);
-        prog.set("u_light_far_ws", c.light.far_ws);
-        if (f.plan.technique->set_uniforms) f.plan.technique->set_uniforms(prog, f.settings);
-      }
+      // The light view and the moments' depth range are the frame's (ShadowFrame): cascades share them.
+      if (moments && f.plan.technique->set_uniforms) f.plan.technique->set_uniforms(prog, f.settings);
       f.draw_scene(prog, false);
     }
     glDisable(GL_SCISSOR_TEST);
@@ -308,7 +319,7 @@ class GbufferPass final : public Pass {
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
     prog.use();
     f.bind_shadow_maps();
-    f.set_frame_uniforms(prog);
+    f.set_technique_uniforms(prog);
     f.draw_scene(prog, true);
     gl::check_errors("gbuffer pass");
   }
@@ -327,7 +338,7 @@ class PostPass final : public Pass {
     PostPassContext ctx;
     ctx.view.perspective = cam.projection == scene::Camera::Projection::perspective;
     ctx.view.px_scale = ctx.view.perspective ? height / (2 * std::tan(glm::radians(cam.fov_y_deg) / 2)) : height / cam.ortho_height_ws;
-    ctx.set_light_uniforms = [&f](const gl::Program& p) { f.set_frame_uniforms(p); };
+    ctx.set_technique_uniforms = [&f](const gl::Program& p) { f.set_technique_uniforms(p); };
     ctx.timer = f.timer;
     ctx.passes = &f.info.passes;
     f.bind_shadow_maps();
@@ -364,14 +375,14 @@ class ShadingPass final : public Pass {
       // The G-buffer pass left the depth: shade exactly the fragments it kept.
       glDepthFunc(GL_LEQUAL);
       glDepthMask(GL_FALSE);
-      glBindSampler(4, 0);
-      r.screen_result->bind(4);
+      glBindSampler(contract::UNIT_SCREEN_VISIBILITY, 0);
+      r.screen_result->bind(contract::UNIT_SCREEN_VISIBILITY);
     } else {
       glClearBufferfv(GL_DEPTH, 0, &far_depth);
     }
     prog.use();
     f.bind_shadow_maps();
-    f.set_frame_uniforms(prog);
+    f.set_technique_uniforms(prog);
     f.draw_scene(prog, true);
     glDisable(GL_FRAMEBUFFER_SRGB);
     glDepthFunc(GL_LESS);

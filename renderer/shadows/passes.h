@@ -87,6 +87,7 @@ struct FrameResources {
   gl::Program depth_program, requirement_program;
   ProgramCache programs;
   gl::Sampler cmp_linear, cmp_nearest, raw_nearest, moments_linear;
+  gl::Buffer shadow_frame;  // the ShadowFrame uniform block (shaders/shadow_contract.h)
   std::unique_ptr<Maps> maps;
   std::unique_ptr<Targets> targets;
   std::unique_ptr<ScreenSpace> screen_space;  // made on the first screen-space frame
@@ -108,10 +109,13 @@ struct FrameContext {
 
   // Draws every mesh with `program`; `shading` also sets normal matrix and albedo.
   void draw_scene(const gl::Program& program, bool shading) const;
-  // The light frame, cascades, biases and the technique's uniforms, shared by both camera passes
-  // and the screen-space compute passes (uniforms a program lacks are ignored).
-  void set_frame_uniforms(const gl::Program& program) const;
-  // Binds the depth atlas (units 0-2) and the moments (unit 3).
+  // Fills the ShadowFrame block (cameras, light frame, cascades, biases, the fixed filter radius)
+  // from the plan, uploads it and binds it for every program of the frame: once per frame.
+  void upload_shadow_frame() const;
+  // The technique's own uniforms (its settings, Poisson taps, light size), shared by both camera
+  // passes and the screen-space compute passes (uniforms a program lacks are ignored).
+  void set_technique_uniforms(const gl::Program& program) const;
+  // Binds the depth atlas and the moments to their units (contract::UNIT_*).
   void bind_shadow_maps() const;
   // The shading program of the frame's technique; `gbuffer`: the first camera pass of a
   // screen-space technique.

@@ -115,6 +115,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   FrameContext frame{s, plan, scene_, meshes_, *res_, info, timer, show_cascades_};
+  frame.upload_shadow_frame();
   for (const auto& pass : passes_) {
     if (!pass->needed(plan)) continue;
     if (pass->reports_subpasses()) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "gl/context.h"
+#include "shadows/contract.h"
 #include "shadows/scoped_pass.h"
 
 namespace penumbra::shadows {
@@ -53,16 +54,20 @@ const gl::Program& ScreenSpace::program(const std::string& file, const std::vect
   std::string key = file;
   for (const auto& d : defines) key += ";" + d.name + "=" + d.value;
   auto it = programs_.find(key);
-  if (it == programs_.end()) it = programs_.emplace(key, shaders_.program({{GL_COMPUTE_SHADER, file}}, defines)).first;
+  if (it == programs_.end()) {
+    gl::Program p = shaders_.program({{GL_COMPUTE_SHADER, file}}, defines);
+    check_shadow_frame_block(p, key);
+    it = programs_.emplace(key, std::move(p)).first;
+  }
   return it->second;
 }
 
 void ScreenSpace::bind_gbuffer(const gl::Program& p, const ScreenView& view, float depth_threshold) const {
   // Integer textures with the default (linear, mip-mapped) filter are incomplete even for
   // texelFetch: every post-pass input is read through a nearest sampler.
-  for (GLuint unit = 4; unit <= 8; ++unit) nearest_.bind(unit);
-  position_.bind(4);
-  light_.bind(5);
+  for (GLuint unit = contract::UNIT_GBUFFER_POSITION; unit <= contract::UNIT_POST_INPUT_2; ++unit) nearest_.bind(unit);
+  position_.bind(contract::UNIT_GBUFFER_POSITION);
+  light_.bind(contract::UNIT_GBUFFER_LIGHT);
   glProgramUniform1i(p.id(), p.location("u_camera_perspective"), view.perspective ? 1 : 0);
   glProgramUniform1f(p.id(), p.location("u_px_scale"), view.px_scale);
   glProgramUniform1f(p.id(), p.location("u_depth_threshold"), depth_threshold);
@@ -75,7 +80,7 @@ void ScreenSpace::detect_sites(const SiteSearch& search, float depth_threshold, 
   if (search.blocker_search) defines.push_back({"BLOCKER_SEARCH", "1"});
   const gl::Program& p = program("ss_sites.comp", defines);
   p.use();
-  ctx.set_light_uniforms(p);
+  ctx.set_technique_uniforms(p);
   bind_gbuffer(p, ctx.view, depth_threshold);
   glProgramUniform1i(p.id(), p.location("u_blocker_taps"), search.blocker_taps);
   glProgramUniform1f(p.id(), p.location("u_pcss_search_scale"), search.search_scale);
@@ -84,6 +89,30 @@ void ScreenSpace::detect_sites(const SiteSearch& search, float depth_threshold, 
   dispatch_pixels(width_, height_);
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   gl::check_errors("screen-space sites");
+}
+
+const gl::Texture& ScreenSpace::edt_penumbra(bool propagated_width, bool edge_between_pixels, float depth_threshold,
+                                             const std::function<void(const gl::Program&)>& set_uniforms,
+                                             const PostPassContext& ctx) {
+  {
+    ScopedPass pass(ctx.timer, "edt", *ctx.passes);
+    edt_.compute(sites_);
+  }
+  ScopedPass pass(ctx.timer, "edt_penumbra", *ctx.passes);
+  std::vector<gl::ShaderDefine> defines;
+  if (propagated_width) defines.push_back({"PROPAGATED_WIDTH", "1"});
+  const gl::Program& p = program("edt_penumbra.comp", defines);
+  p.use();
+  bind_gbuffer(p, ctx.view, depth_threshold);
+  edt_.nearest().bind(contract::UNIT_POST_INPUT);
+  if (propagated_width) site_width_.bind(contract::UNIT_POST_INPUT_2);
+  p.set("u_edge_between_pixels", edge_between_pixels);
+  set_uniforms(p);
+  glBindImageTexture(0, scratch_[0].id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+  dispatch_pixels(width_, height_);
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  gl::check_errors("edt_penumbra pass");
+  return scratch_[0];
 }
 
 const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float filter_ws, int max_width_px,
@@ -100,7 +129,7 @@ const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float fil
   const gl::Texture* out[2] = {&tmp, &filtered_};
   for (int axis = 0; axis < 2; ++axis) {
     glProgramUniform1i(p.id(), p.location("u_axis"), axis);
-    in[axis]->bind(7);
+    in[axis]->bind(contract::UNIT_POST_INPUT);
     glBindImageTexture(0, out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
     dispatch_pixels(width_, height_);
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);

@@ -33,7 +33,7 @@ struct ScreenView {
 struct PostPassContext {
   ScreenView view;
   // Sets the light-frame and shadow-map uniforms (common.glsl, shadow_pcss.glsl) on a program.
-  std::function<void(const gl::Program&)> set_light_uniforms;
+  std::function<void(const gl::Program&)> set_technique_uniforms;
   gl::PassTimer* timer = nullptr;
   std::vector<std::string>* passes = nullptr;  // the frame's pass list
 };
@@ -66,6 +66,11 @@ class ScreenSpace {
   };
   void detect_sites(const SiteSearch& search, float depth_threshold, const PostPassContext& ctx);
   Edt& edt() { return edt_; }
+  // The exact EDT of the sites, then edt_penumbra.comp into scratch(0) (EDTSM, EDTSSM; each reported
+  // as its own pass): `propagated_width` reads site_width() (EDTSSM's w_p), `set_uniforms` sets the
+  // technique's own uniforms (u_penumbra_ws, u_beta).
+  const gl::Texture& edt_penumbra(bool propagated_width, bool edge_between_pixels, float depth_threshold,
+                                  const std::function<void(const gl::Program&)>& set_uniforms, const PostPassContext& ctx);
   // Edge-aware separable mean filter of `source` (RG32F: value, the G-buffer's signed depth) into
   // the returned image (the same layout).
   const gl::Texture& mean_filter(const gl::Texture& source, float filter_ws, int max_width_px, float depth_threshold,

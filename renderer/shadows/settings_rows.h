@@ -59,6 +59,12 @@ inline constexpr std::string_view kDepthThresholdHelp =
         [](const P& p) { return static_cast<double>(p.field); },                                           \
         [](P& p, double v) { p.field = static_cast<Enum>(static_cast<int>(v)); }, names                    \
   }
+// The edge-aware mean filter after the EDT and the site geometry (EDTSM, EDTSSM).
+#define PENUMBRA_EDT_FILTER_ROWS(P)                                                                        \
+  PENUMBRA_REAL(P, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"), \
+      PENUMBRA_REAL(P, depth_threshold, "", 0, 10, ::penumbra::shadows::rows::kDepthThresholdHelp),       \
+      PENUMBRA_INT(P, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),                 \
+      PENUMBRA_BOOL(P, edge_between_pixels, ::penumbra::shadows::rows::kEdgeHelp)
 // A filter radius and its unit (the rows every fixed-radius filter shares).
 #define PENUMBRA_RADIUS_ROWS(P, help)                                                                      \
   PENUMBRA_REAL(P, radius, "radius_unit", 0, 1e6, help),                                                   \

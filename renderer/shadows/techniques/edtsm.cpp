@@ -1,7 +1,5 @@
 #include "shadows/techniques/edtsm.h"
 
-#include "gl/context.h"
-#include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
 #include "shadows/settings.h"
 #include "shadows/settings_rows.h"
@@ -12,10 +10,7 @@ namespace {
 const Setting<EdtsmParams> kTable[] = {
     PENUMBRA_CHOICE(EdtsmParams, input, ShadowInput, rows::kInputs, rows::kInputHelp),
     PENUMBRA_REAL(EdtsmParams, penumbra_ws, "world", 0, 1e6, "P: fake-penumbra width; I = 1/2 -+ D/P for D <= P/2"),
-    PENUMBRA_REAL(EdtsmParams, filter_ws, "world", 0, 1e6, "w_filter: edge-aware mean-filter width; on screen w z_screen / z_eye pixels"),
-    PENUMBRA_REAL(EdtsmParams, depth_threshold, "", 0, 10, rows::kDepthThresholdHelp),
-    PENUMBRA_INT(EdtsmParams, max_filter_px, "px", 1, 1024, "largest mean-filter width on screen"),
-    PENUMBRA_BOOL(EdtsmParams, edge_between_pixels, rows::kEdgeHelp),
+    PENUMBRA_EDT_FILTER_ROWS(EdtsmParams),
 };
 
 // The post passes after the G-buffer:
@@ -26,24 +21,9 @@ const Setting<EdtsmParams> kTable[] = {
 
 const gl::Texture& run_edtsm(ScreenSpace& ss, const EdtsmParams& p, const PostPassContext& ctx) {
   ss.detect_sites({}, p.depth_threshold, ctx);
-  {
-    ScopedPass pass(ctx.timer, "edt", *ctx.passes);
-    ss.edt().compute(ss.sites());
-  }
-  {
-    ScopedPass pass(ctx.timer, "edt_penumbra", *ctx.passes);
-    const gl::Program& prog = ss.program("edt_penumbra.comp");
-    prog.use();
-    ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
-    ss.edt().nearest().bind(7);
-    glProgramUniform1f(prog.id(), prog.location("u_penumbra_ws"), p.penumbra_ws);
-    glProgramUniform1i(prog.id(), prog.location("u_edge_between_pixels"), p.edge_between_pixels ? 1 : 0);
-    glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-    dispatch_pixels(ss.width(), ss.height());
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
-    gl::check_errors("edt_penumbra pass");
-  }
-  return ss.mean_filter(ss.scratch(0), p.filter_ws, p.max_filter_px, p.depth_threshold, ctx);
+  const gl::Texture& penumbra = ss.edt_penumbra(false, p.edge_between_pixels, p.depth_threshold,
+                                                [&](const gl::Program& prog) { prog.set("u_penumbra_ws", p.penumbra_ws); }, ctx);
+  return ss.mean_filter(penumbra, p.filter_ws, p.max_filter_px, p.depth_threshold, ctx);
 }
 
 }  // namespace

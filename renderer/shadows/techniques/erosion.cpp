@@ -1,6 +1,7 @@
 #include "shadows/techniques/erosion.h"
 
 #include "gl/context.h"
+#include "shadows/contract.h"
 #include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
 #include "shadows/settings.h"
@@ -34,8 +35,8 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     const gl::Program& prog = ss.program("erosion_minmax.comp");
     prog.use();
     ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
-    ss.sites().bind(7);
-    ss.site_width().bind(8);
+    ss.sites().bind(contract::UNIT_POST_INPUT);
+    ss.site_width().bind(contract::UNIT_POST_INPUT_2);
     int w = ss.width(), h = ss.height();
     for (int level = 0; level < edges.desc().levels; ++level) {
       glProgramUniform1i(prog.id(), prog.location("u_level"), level);
@@ -52,9 +53,9 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     ScopedPass pass(ctx.timer, "erosion", *ctx.passes);
     const gl::Program& prog = ss.program("erosion_search.comp");
     prog.use();
-    ctx.set_light_uniforms(prog);
+    ctx.set_technique_uniforms(prog);
     ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
-    edges.bind(7);
+    edges.bind(contract::UNIT_POST_INPUT);
     glProgramUniform1f(prog.id(), prog.location("u_pcss_search_scale"), p.search_scale);
     glProgramUniform1f(prog.id(), prog.location("u_max_search_px"), static_cast<float>(p.max_search_px));
     glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);

@@ -35,7 +35,6 @@ MomentsLayout evsm_layout(const EvsmParams& p) {
   const glm::vec2 c = evsm_exponents(p);
   const float pos = std::exp(c.x), neg = -std::exp(-c.y);
   return {p.format == MomentFormat::rgba16f ? static_cast<GLenum>(GL_RGBA16F) : static_cast<GLenum>(GL_RGBA32F),
-          "shadow_evsm_moments.frag",
           {pos, pos * pos, neg, neg * neg},
           /*direct_sums=*/true};
 }

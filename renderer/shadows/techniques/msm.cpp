@@ -26,7 +26,7 @@ const TechniqueEntry& msm_technique() {
       .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.msm.radius, s.msm.radius_unit}; },
       .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.msm.radius = r.radius, s.msm.radius_unit = r.unit; },
       // (z, z², z³, z⁴) of z in [-1, 1]; the far plane z = 1 has every moment 1.
-      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RGBA32F, "shadow_msm_moments.frag", {1, 1, 1, 1}}); },
+      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RGBA32F, {1, 1, 1, 1}}); },
       .set_uniforms =
           [](const gl::Program& p, const ShadowSettings& s) {
             p.set("u_msm_moment_bias", s.msm.moment_bias);

@@ -25,7 +25,7 @@ const TechniqueEntry& vsm_technique() {
       .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.vsm.radius, s.vsm.radius_unit}; },
       .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.vsm.radius = r.radius, s.vsm.radius_unit = r.unit; },
       // (t, t² + texel variance) of normalized linear depth t; the far plane t = 1.
-      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RG32F, "shadow_moments.frag", {1, 1, 0, 0}}); },
+      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RG32F, {1, 1, 0, 0}}); },
       .set_uniforms =
           [](const gl::Program& p, const ShadowSettings& s) {
             p.set("u_vsm_min_variance", s.vsm.min_variance);

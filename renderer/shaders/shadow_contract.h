@@ -1,0 +1,100 @@
+// The contract between the renderer's C++ and its GLSL, read by both compilers: C++ includes it as
+// "shaders/shadow_contract.h" (namespace penumbra::shadows::contract), GLSL through common.glsl
+// and shading.vert. It names the texture units, the uniform-block binding, MAX_CASCADES, and the
+// per-frame shadow data as one std140 uniform block that the renderer uploads once per frame
+// (FrameResources::upload_frame). Uniforms not listed here belong to one technique or pass and are
+// set per program, by locations resolved once at link (gl::Program).
+//
+// Layout rules kept by hand, checked by test_shader_contract against the driver's std140 offsets
+// and by the renderer against GL_UNIFORM_BLOCK_DATA_SIZE when it links a program with the block:
+// - mat4, vec4 and vec3 members start on 16 bytes (PENUMBRA_ALIGN16); a vec3 is followed by a
+//   scalar, which std140 packs into its fourth component;
+// - per-cascade scalars are one vec4 (component i = cascade i), not float[MAX_CASCADES], whose
+//   std140 stride would be 16 bytes; GLSL reads them as u_cascade_res[i] all the same;
+// - booleans are 4 bytes (bool32: bool in GLSL, std::uint32_t in C++).
+#ifndef PENUMBRA_SHADOW_CONTRACT_H
+#define PENUMBRA_SHADOW_CONTRACT_H
+
+#ifdef __cplusplus
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+namespace penumbra::shadows::contract {
+using vec3 = glm::vec3;
+using vec4 = glm::vec4;
+using mat4 = glm::mat4;
+using bool32 = std::uint32_t;
+#define PENUMBRA_CONSTANT(name, value) inline constexpr int name = value;
+#define PENUMBRA_ALIGN16 alignas(16)
+#define PENUMBRA_UNIFORM_BLOCK(name, binding_point) struct alignas(16) name
+#else
+#define PENUMBRA_CONSTANT(name, value) const int name = value;
+#define PENUMBRA_ALIGN16
+#define PENUMBRA_UNIFORM_BLOCK(name, binding_point) layout(std140, binding = binding_point) uniform name
+#define bool32 bool
+#endif
+
+// Cascades of one frame (one map per cascade in the shadow atlas).
+PENUMBRA_CONSTANT(MAX_CASCADES, 4)
+
+// Texture units.
+PENUMBRA_CONSTANT(UNIT_SHADOW_CMP, 0)          // depth atlas, linear comparison (hardware 2x2 PCF)
+PENUMBRA_CONSTANT(UNIT_SHADOW_CMP_NEAREST, 1)  // depth atlas, nearest comparison / gather
+PENUMBRA_CONSTANT(UNIT_SHADOW_DEPTH, 2)        // depth atlas, raw depth (blocker search)
+PENUMBRA_CONSTANT(UNIT_MOMENTS, 3)             // filtered moments (VSM, MSM, EVSM, ESM)
+PENUMBRA_CONSTANT(UNIT_SCREEN_VISIBILITY, 4)   // shading pass: the screen-space post passes' result
+PENUMBRA_CONSTANT(UNIT_GBUFFER_POSITION, 4)    // post passes: world xyz, signed eye depth
+PENUMBRA_CONSTANT(UNIT_GBUFFER_LIGHT, 5)       // post passes: map uv, reference depth, light depth
+PENUMBRA_CONSTANT(UNIT_POST_INPUT, 7)          // post passes: the previous post pass's output
+PENUMBRA_CONSTANT(UNIT_POST_INPUT_2, 8)        // post passes: a second input (site widths)
+
+// Uniform-block binding points.
+PENUMBRA_CONSTANT(BLOCK_SHADOW_FRAME, 0)
+
+// What every shadow lookup of a frame needs: cameras, the light frame, the cascades, biases and the
+// fixed filter radius. Members keep their uniform names, so GLSL reads them as before.
+PENUMBRA_UNIFORM_BLOCK(ShadowFrame, BLOCK_SHADOW_FRAME) {
+  PENUMBRA_ALIGN16 mat4 u_view_projection;   // camera
+  PENUMBRA_ALIGN16 mat4 u_camera_view;
+  PENUMBRA_ALIGN16 mat4 u_light_view;
+  PENUMBRA_ALIGN16 mat4 u_cascade_view_projection[MAX_CASCADES];
+  PENUMBRA_ALIGN16 vec4 u_cascade_region[MAX_CASCADES];  // atlas uv of the map's corner (xy), per-map uv (zw)
+  PENUMBRA_ALIGN16 vec4 u_cascade_res;        // texels per side, component i = cascade i
+  PENUMBRA_ALIGN16 vec4 u_cascade_extent_ws;  // directional: side of the map; spot: unfitted near-plane width
+  PENUMBRA_ALIGN16 vec4 u_cascade_far_ws;     // camera view depth where cascade i ends
+  PENUMBRA_ALIGN16 vec3 u_light_direction;    // direction light travels
+  float u_light_near_ws;
+  PENUMBRA_ALIGN16 vec3 u_light_position;     // spot
+  float u_light_far_ws;
+  PENUMBRA_ALIGN16 vec3 u_light_color;
+  float u_light_s_xy;                         // fitting scale
+  PENUMBRA_ALIGN16 vec3 u_camera_position;
+  float u_light_tan_half_fov;                 // spot
+  PENUMBRA_ALIGN16 vec3 u_camera_forward;
+  float u_rpdb_max;                           // largest |d depth / d uv| trusted by the receiver-plane bias
+  float u_spot_cos_outer;                     // spot cone
+  float u_spot_cos_inner;
+  float u_ambient;
+  float u_normal_offset_texels;
+  float u_depth_bias_texels;
+  float u_cascade_blend;                      // blend band, fraction of a cascade's depth range
+  float u_filter_radius;                      // the technique's fixed filter radius (filter_radius_uv)
+  int u_cascade_count;
+  bool32 u_light_perspective;
+  bool32 u_receiver_plane_bias;
+  bool32 u_filter_radius_world;               // u_filter_radius in world units (else texels)
+  bool32 u_show_cascades;                     // tint by cascade (debug overlay)
+};
+
+#ifdef __cplusplus
+static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_cascade_res, ...)");
+}  // namespace penumbra::shadows::contract
+#else
+#undef bool32
+#endif
+#undef PENUMBRA_CONSTANT
+#undef PENUMBRA_ALIGN16
+#undef PENUMBRA_UNIFORM_BLOCK
+
+#endif  // PENUMBRA_SHADOW_CONTRACT_H

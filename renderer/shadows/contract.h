@@ -1,0 +1,16 @@
+#pragma once
+// The C++ side of the C++/GLSL contract (shaders/shadow_contract.h): the texture units, binding
+// points and the std140 ShadowFrame block, plus the check that a linked program agrees with it.
+#include <string_view>
+
+#include "gl/objects.h"
+#include "shaders/shadow_contract.h"
+
+namespace penumbra::shadows {
+
+// Throws std::runtime_error naming `what` when `program` declares the ShadowFrame block with a size
+// other than sizeof(contract::ShadowFrame) or at another binding point; programs without the block
+// pass.
+void check_shadow_frame_block(const gl::Program& program, std::string_view what);
+
+}  // namespace penumbra::shadows
