@@ -6,6 +6,7 @@
 #include "shadows/techniques/edtsm.h"
 #include "shadows/techniques/edtssm.h"
 #include "shadows/techniques/erosion.h"
+#include "shadows/techniques/esm.h"
 #include "shadows/techniques/evsm.h"
 #include "shadows/techniques/hard.h"
 #include "shadows/techniques/msm.h"
@@ -26,4 +27,5 @@
   X(rbsm, RbsmParams)          \
   X(rpcf, RpcfParams)          \
   X(msm, MsmParams)            \
-  X(evsm, EvsmParams)
+  X(evsm, EvsmParams)          \
+  X(esm, EsmParams)

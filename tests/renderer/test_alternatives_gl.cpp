@@ -1,4 +1,4 @@
-// The shadow-map-side alternatives (RBSM, RPCF, MSM, EVSM) against their defining properties
+// The shadow-map-side alternatives (RBSM, RPCF, MSM, EVSM, ESM) against their defining properties
 // (label `gl`: needs an OpenGL 4.5 context; Mesa llvmpipe through EGL is enough).
 #include <gtest/gtest.h>
 
@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gl_test_env.h"
+#include "shadows/techniques/esm.h"
 #include "shadows/techniques/evsm.h"
 #include "shadows/renderer.h"
 
@@ -396,6 +397,100 @@ TEST(Evsm, ExponentsAreClampedToTheFormat) {
   const auto far = shadows::evsm_layout(p).far_moments;
   EXPECT_FLOAT_EQ(far[0], std::exp(5.54f));
   EXPECT_FLOAT_EQ(far[3], std::exp(-2 * 5.54f));
+}
+
+// ---- ESM ------------------------------------------------------------------------------------------
+
+ShadowSettings esm_settings(int res, bool fit, float radius, float exponent) {
+  ShadowSettings st = settings(Technique::esm, res, fit);
+  st.esm.radius = radius;
+  st.esm.exponent = exponent;
+  return st;
+}
+
+TEST(Esm, ExponentIsClampedToTheFloatRange) {
+  shadows::EsmParams p;
+  EXPECT_EQ(shadows::esm_exponent(p), shadows::kEsmMaxExponent) << "the default is the largest kept";
+  p.exponent = 1000;
+  EXPECT_EQ(shadows::esm_exponent(p), shadows::kEsmMaxExponent);
+  p.exponent = -5;
+  EXPECT_EQ(shadows::esm_exponent(p), 0.0f);
+  // The far plane's exp(c), summed over a blur window as wide as the largest texture, stays finite.
+  EXPECT_LT(std::exp(static_cast<double>(shadows::kEsmMaxExponent)) * 65536.0, 3.4e38);
+  ShadowSettings st;
+  st.esm.exponent = 1000;
+  const auto layout = shadows::technique_entry(Technique::esm).moments(st);
+  ASSERT_TRUE(layout.has_value());
+  EXPECT_EQ(layout->format, static_cast<GLenum>(GL_R32F));
+  EXPECT_FLOAT_EQ(layout->far_moments[0], std::exp(shadows::kEsmMaxExponent));
+  EXPECT_TRUE(layout->direct_sums);
+}
+
+TEST(Esm, UmbraLeaksAsExpMinusCTimesTheDepthGap) {
+  // The square plate one unit above the ground: in its umbra the receiver is Δt behind the
+  // occluder, and ESM reads exp(-c Δt) there (Annen et al.: the approximation's light leak).
+  // A larger c leaks less; outside the shadow every pixel is lit; nothing leaves [0, 1].
+  scene::Scene s = scene::make_square_scene(2, 1);
+  look_down(s, {0, 0}, 2);
+  const int n = 128, res = 256;
+  // Small exponents make the leak large enough to measure; the default leaves none to see.
+  float umbra[3] = {0, 0, 0};
+  const float exponents[3] = {2, 5, shadows::kEsmMaxExponent};
+  for (int i = 0; i < 3; ++i) {
+    const ShadowSettings st = esm_settings(res, false, 2, exponents[i]);
+    shadows::Renderer r;
+    r.set_scene(s);
+    const shadows::FrameInfo info = r.render(st, n, n);
+    const io::ImageF vis = r.read_visibility();
+    ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
+    // Normalized depth gap between plate and ground along the (straight-down) light.
+    const double gap = 1.0 / (info.light.far_ws - info.light.near_ws);
+    const float texel = 10.0f / res;
+    double sum = 0, lit_min = 1;
+    int count = 0;
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const float d = square_distance(pixel_to_world(x, n, 0, 2), pixel_to_world(y, n, 0, 2), 0);
+        if (d < -4 * texel) sum += vis.at(x, y), ++count;
+        if (d > 4 * texel) lit_min = std::min(lit_min, static_cast<double>(vis.at(x, y)));
+      }
+    ASSERT_GT(count, n * n / 8);
+    umbra[i] = static_cast<float>(sum / count);
+    const double expected = std::exp(-exponents[i] * gap);
+    std::printf("ESM c = %.0f: umbra visibility %.6f, exp(-c gap) %.6f (gap %.4f)\n", exponents[i], umbra[i], expected, gap);
+    EXPECT_NEAR(umbra[i], expected, 0.1 * expected + 1e-6) << "c = " << exponents[i];
+    EXPECT_GT(gap, 0.1) << "the plate must sit well apart from the ground in normalized depth";
+    EXPECT_GE(lit_min, 1.0 - 1e-4) << "c = " << exponents[i];
+  }
+  EXPECT_LT(umbra[1], 0.2 * umbra[0]);
+  EXPECT_LT(umbra[2], 1e-6f);
+}
+
+TEST(Esm, CloseToBoxPcfAcrossALargeGapAndDarkerOnlyBySelfShadowing) {
+  // exp(-c (d - z)) >= [d <= z] for every occluder sample, so the clamped mean is never below the
+  // box PCF of the same radius, but for the receiver's own depth: ESM has no depth bias, and where
+  // the receiver's depth d exceeds the map's rasterized depth of the same surface by e, it reads
+  // exp(-c e) instead of 1 (measured: 0.0057 at most here, c = 77). With a large depth gap (two
+  // planes) ESM and box PCF agree.
+  scene::Scene s = scene::make_two_planes_scene(3, 10, 1);
+  look_down(s, {0, 0}, 0.5f);
+  const int n = 200, res = 512;
+  const float radius = 4;
+  ShadowSettings pcf = settings(Technique::pcf, res, true);
+  pcf.pcf.kernel = Kernel::grid;
+  pcf.pcf.radius = radius;
+  const io::ImageF reference = render_visibility(s, pcf, n);
+  const io::ImageF vis = render_visibility(s, esm_settings(res, true, radius, 77), n);
+  ASSERT_TRUE(test::all_finite_in(vis, 0, 1));
+  float worst = 0, darker = 0;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      worst = std::max(worst, std::abs(vis.at(x, y) - reference.at(x, y)));
+      darker = std::max(darker, reference.at(x, y) - vis.at(x, y));
+    }
+  std::printf("ESM: largest |visibility - box PCF| %.4f, largest amount darker %.5f\n", worst, darker);
+  EXPECT_LT(worst, 0.05f);
+  EXPECT_LT(darker, 0.01f);
 }
 
 }  // namespace

@@ -158,7 +158,7 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm", "edtsm", "edtssm", "erosion",
-                                         "rbsm", "rpcf", "msm", "evsm"};
+                                         "rbsm", "rpcf", "msm", "evsm", "esm"};
   std::set<std::string> expected = renders;
   expected.insert({"montage.png", "report.json"});
   EXPECT_EQ(listing(out), expected);
@@ -166,6 +166,7 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
       {"vsm", {"shadow_map", "vsm_blur", "shading"}},
       {"msm", {"shadow_map", "vsm_blur", "shading"}},
       {"evsm", {"shadow_map", "vsm_blur", "shading"}},
+      {"esm", {"shadow_map", "vsm_blur", "shading"}},
       {"edtsm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"edtssm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"erosion", {"shadow_map", "gbuffer", "edges", "erosion_minmax", "erosion", "shading"}}};

@@ -45,6 +45,8 @@ template <>
 std::string section_of<MsmParams>() { return "msm"; }
 template <>
 std::string section_of<EvsmParams>() { return "evsm"; }
+template <>
+std::string section_of<EsmParams>() { return "esm"; }
 
 // Calls f(params) for the shared parameters (map, adaptive) and every technique's.
 template <class F>
@@ -313,10 +315,10 @@ TEST(Settings, DescribeListsTheActiveTechniquesParameters) {
 
 TEST(Settings, TechniqueFromString) {
   const auto names = technique_names();
-  ASSERT_EQ(names.size(), 11u);
+  ASSERT_EQ(names.size(), 12u);
   const Technique expected[] = {Technique::hard,  Technique::pcf,    Technique::pcss,    Technique::vsm,
                                 Technique::edtsm, Technique::edtssm, Technique::erosion, Technique::rbsm,
-                                Technique::rpcf,  Technique::msm,    Technique::evsm};
+                                Technique::rpcf,  Technique::msm,    Technique::evsm,    Technique::esm};
   for (std::size_t i = 0; i < names.size(); ++i) {
     EXPECT_EQ(technique_from_string(names[i]), expected[i]);
     EXPECT_EQ(to_string(expected[i]), names[i]);
