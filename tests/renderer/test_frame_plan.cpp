@@ -68,7 +68,9 @@ TEST(FramePlan, CascadesSplitTheViewAndTileTheAtlas) {
     for (int i = 0; i < n; ++i) {
       const CascadeInfo& c = p.cascades[static_cast<std::size_t>(i)];
       EXPECT_LT(c.split_near_ws, c.split_far_ws);
-      if (i > 0) EXPECT_FLOAT_EQ(c.split_near_ws, p.cascades[static_cast<std::size_t>(i - 1)].split_far_ws);
+      if (i > 0) {
+        EXPECT_FLOAT_EQ(c.split_near_ws, p.cascades[static_cast<std::size_t>(i - 1)].split_far_ws);
+      }
       // Each region with its guard band lies inside the atlas and apart from the others.
       EXPECT_GE(c.atlas_x, kGuardTexels);
       EXPECT_LE(c.atlas_x + 256 + kGuardTexels, p.atlas.width);
