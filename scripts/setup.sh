@@ -11,6 +11,7 @@ packages=(
   libopencv-dev libopencv-contrib-dev
   libceres-dev
   libopenimageio-dev openimageio-tools
+  libpng-dev libopenexr-dev  # the minimal image backend of the gpu-bundle preset (docs/gpu.md)
   libassimp-dev libcli11-dev nlohmann-json3-dev
   python3-matplotlib
   xvfb xauth fonts-dejavu-core
