@@ -19,7 +19,10 @@
 #include "report/outputs.h"
 #include "common/progress_bar.h"
 #include "cli/checks.h"
+#include "cli/main.h"
+#include "io/atomic_file.h"
 #include "io/staged_dir.h"
+#include "json/json_input.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -47,7 +50,8 @@ void add_model_options(CLI::App& app, ModelOptions& o) {
 
 psychometric::Model parse_family(const std::string& name) {
   const auto model = psychometric::parse_model(name);
-  if (!model) throw std::invalid_argument("--family '" + name + "': expected log-weibull, weibull, normal or logistic");
+  if (!model)
+    throw std::invalid_argument("--family '" + json_input::printable(name) + "': expected log-weibull, weibull, normal or logistic");
   return *model;
 }
 
@@ -56,6 +60,8 @@ LapseSpec lapse_of(const ModelOptions& o) {
   l.fixed = o.lapse;
   l.max = o.lapse_max;
   const double guess = o.guess.value_or(0.5);
+  // The guess rate first: the lapse bounds below are stated in terms of it.
+  if (o.guess && !(*o.guess >= 0 && *o.guess < 1)) throw std::invalid_argument("--guess: expected a rate in [0, 1)");
   if (o.lapse && !(*o.lapse >= 0 && *o.lapse < 1 - guess))
     throw std::invalid_argument("--lapse: expected a value in [0, 1 - guess)");
   if (!o.lapse && !(o.lapse_max > 0 && o.lapse_max < 1 - guess))
@@ -67,7 +73,7 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
   LevelFormat f;
   if (format == "counts") f = LevelFormat::counts;
   else if (format == "trials") f = LevelFormat::trials;
-  else throw std::invalid_argument("--format '" + format + "': expected counts or trials");
+  else throw std::invalid_argument("--format '" + json_input::printable(format) + "': expected counts or trials");
   ModelSpec spec;
   spec.family = parse_family(o.family);
   spec.guess = o.guess.value_or(0.5);
@@ -177,9 +183,9 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   // The three files are one output: staged together and swapped in as a unit, so a failure (a full
   // disk) never leaves a new report beside an old calibration.
   io::StagedDirectory out(so.output.string(), "calibration.json");
-  write_file_atomic(out.path() / "report.json", report.dump(1) + "\n");
-  write_file_atomic(out.path() / "summary.txt", summary);
-  write_file_atomic(out.path() / "calibration.json", calibration.dump(2) + "\n");
+  io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 1) + "\n");
+  io::write_file_atomic(out.path() / "summary.txt", summary);
+  io::write_file_atomic(out.path() / "calibration.json", json_input::dump(calibration, 2) + "\n");
   out.commit();
   std::cout << summary;
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
@@ -197,7 +203,8 @@ int main(int argc, char** argv) {
   StudyOptions so;
   ModelOptions study_model;
   app.add_option("inputs", so.inputs, "session directories (trials.csv + session.json) or trial CSV files");
-  app.add_option("-o,--output", so.output, "output directory: calibration.json, report.json, summary.txt");
+  app.add_option("-o,--output", so.output, "output directory: calibration.json, report.json, summary.txt")
+      ->check(cli::path_given());
   app.add_option("--reference", so.references,
                  "reference filter sizes from penumbra-study reference (repeatable; the first match wins)");
   app.add_option("--condition", so.condition, "calibration.json takes c from this condition (e.g. stair/1) instead of the largest");
@@ -216,16 +223,17 @@ int main(int argc, char** argv) {
   fs::path input;
   std::string format = "counts";
   ModelOptions single_model;
-  psychometric->add_option("--input", input, "CSV: level,n_correct,n_total (counts) or level,correct (trials)")->required();
+  psychometric->add_option("--input", input, "CSV: level,n_correct,n_total (counts) or level,correct (trials)")
+      ->required()
+      ->check(cli::path_given());
   psychometric->add_option("--format", format, "counts or trials")->capture_default_str();
   add_model_options(*psychometric, single_model);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-fit")) return *status;
   try {
     if (psychometric->parsed()) return run_psychometric(input, format, single_model);
     return run_study(so, study_model);
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-fit: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-fit", e.what());
   }
 }

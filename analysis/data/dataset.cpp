@@ -59,8 +59,15 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
     p.delta = number_field(q, file, "quest", "delta");
     p.gamma = number_field(q, file, "quest", "gamma");
     p.grain = number_field(q, file, "quest", "grain");
-    info.quest_dim = static_cast<int>(number_field(q, file, "quest", "dim"));
-    if (info.quest_dim < 2) throw std::runtime_error(file + ": quest.dim: expected an integer >= 2");
+    const double dim = number_field(q, file, "quest", "dim");
+    if (!(dim >= 2 && dim <= 1e7 && dim == std::floor(dim)))
+      throw std::runtime_error(file + ": quest.dim: expected an integer in [2, 1e7]");
+    info.quest_dim = static_cast<int>(dim);
+    try {
+      quest::Quest probe(p, info.quest_dim);  // the parameters QUEST itself refuses, named here
+    } catch (const std::exception& e) {
+      throw std::runtime_error(file + ": quest: " + e.what());
+    }
     info.quest = p;
   }
   if (j.contains("config") && j["config"].is_object() && j["config"].contains("stopping")) {

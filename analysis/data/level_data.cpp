@@ -5,6 +5,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "json/json_input.h"
+
 namespace penumbra::analysis {
 
 namespace {
@@ -31,6 +33,10 @@ std::vector<std::string> split(const std::string& line) {
 }  // namespace
 
 std::vector<BinomialRow> read_level_data(const std::filesystem::path& path, LevelFormat format) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw std::runtime_error(path.string() + ": cannot read: " +
+                             (std::filesystem::exists(path, error) ? "not a regular file" : "no such file"));
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path.string() + ": cannot open");
   const std::vector<std::string> names = format == LevelFormat::counts
@@ -53,11 +59,12 @@ std::vector<BinomialRow> read_level_data(const std::filesystem::path& path, Leve
       double v = 0;
       const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
       if (f[i].empty() || ec != std::errc() || p != f[i].data() + f[i].size() || !std::isfinite(v))
-        throw std::runtime_error(where + "column '" + names[i] + "': expected a finite number (found '" + f[i] + "')");
+        throw std::runtime_error(where + "column '" + names[i] + "': expected a finite number (found '" +
+                                 json_input::printable(f[i]) + "')");
       return v;
     };
     auto fail = [&](std::size_t i, const std::string& what) {
-      throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + f[i] + "')");
+      throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
     };
     BinomialRow r;
     r.x = value(0);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "published.h"
+#include "json/json_input.h"
 
 namespace penumbra::analysis {
 
@@ -28,20 +29,6 @@ std::string utc_now() {
   return buf;
 }
 
-void write_file_atomic(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw std::runtime_error(path.string() + ": cannot write");
-    }
-  }
-  fs::rename(tmp, path);
-}
 
 namespace {
 
@@ -104,7 +91,7 @@ const ConditionFit& calibration_condition(const StudyFit& fit, const std::option
       if (c.condition == *wanted) return c;
       names.push_back(c.condition);
     }
-    throw std::invalid_argument("--condition '" + *wanted + "': not in the data (" + join(names, ", ") + ")");
+    throw std::invalid_argument("--condition '" + json_input::printable(*wanted) + "': not in the data (" + join(names, ", ") + ")");
   }
   const ConditionFit* worst = &fit.conditions.front();
   for (const ConditionFit& c : fit.conditions)

@@ -30,10 +30,6 @@ nlohmann::json report_json(const StudyFit& fit, const ReferenceTable* reference,
 std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
                          const std::optional<std::string>& calibration_condition);
 
-// Writes `text` to `path` through a temporary file in the same folder and a rename, so a reader
-// never sees half a file.
-void write_file_atomic(const std::filesystem::path& path, const std::string& text);
-
 std::string utc_now();
 
 }  // namespace penumbra::analysis

@@ -1,6 +1,7 @@
 #pragma once
 // Command-line checks that CLI11's own let slip: CLI::Range compares with < and >, so NaN (every
-// comparison false) passes it; an unsigned option takes "-1" as 2^64 - 1. Header only (CLI11).
+// comparison false) passes it; an unsigned option takes "-1" as 2^64 - 1; a path may be "".
+// Header only (CLI11).
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -35,6 +36,13 @@ inline CLI::Validator non_negative_integer() {
         return {};
       },
       "UINT", "NON_NEGATIVE_INTEGER");
+}
+
+// A file or directory name: not empty (`-o ""` used to run the whole job and fail at the rename).
+inline CLI::Validator path_given() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string { return input.empty() ? "expected a path, got ''" : std::string(); },
+      "PATH", "PATH_GIVEN");
 }
 
 }  // namespace penumbra::cli

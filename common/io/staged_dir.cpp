@@ -38,14 +38,18 @@ void remove_abandoned_staging(const fs::path& target) {
 StagedDirectory::StagedDirectory(const std::string& target, const std::string& marker) {
   // "out/" and "out" name the same directory; without the trailing separator the staging
   // directory lands beside it, not inside it.
+  if (target.empty()) throw std::runtime_error("output directory: expected a path, got ''");
   target_ = fs::path(target).lexically_normal();
   if (!target_.has_filename() && target_.has_parent_path()) target_ = target_.parent_path();
-  if (fs::exists(target_) && (!fs::is_directory(target_) || (!fs::is_empty(target_) && !fs::exists(target_ / marker))))
+  std::error_code ec;
+  if (fs::exists(target_, ec) &&
+      (!fs::is_directory(target_, ec) || (!fs::is_empty(target_, ec) && !fs::exists(target_ / marker, ec))))
     throw std::runtime_error(target + ": exists and is not a previous output (no " + marker + "); choose another output directory");
   remove_abandoned_staging(target_);
   staging_ = target_.string() + ".partial-" + std::to_string(::getpid());
-  fs::remove_all(staging_);
-  fs::create_directories(staging_);
+  fs::remove_all(staging_, ec);
+  fs::create_directories(staging_, ec);
+  if (ec) throw std::runtime_error(target + ": cannot create the output directory: " + ec.message());
 }
 
 StagedDirectory::~StagedDirectory() {
@@ -54,10 +58,15 @@ StagedDirectory::~StagedDirectory() {
 }
 
 void StagedDirectory::commit() {
-  if (target_.has_parent_path()) fs::create_directories(target_.parent_path());
   std::error_code ec;
+  auto fail = [&](const std::error_code& error) {
+    throw std::runtime_error(target_.string() + ": cannot move the new output in place: " + error.message());
+  };
+  if (target_.has_parent_path()) fs::create_directories(target_.parent_path(), ec);
+  if (ec) fail(ec);
   if (!fs::exists(target_, ec)) {
-    fs::rename(staging_, target_);
+    fs::rename(staging_, target_, ec);
+    if (ec) fail(ec);
     committed_ = true;
     return;
   }
@@ -74,8 +83,14 @@ void StagedDirectory::commit() {
   // old (a kill in between leaves the old output whole at <target>.old-<pid>).
   const fs::path old = target_.string() + ".old-" + std::to_string(::getpid());
   fs::remove_all(old, ec);
-  fs::rename(target_, old);
-  fs::rename(staging_, target_);
+  fs::rename(target_, old, ec);
+  if (ec) fail(ec);
+  fs::rename(staging_, target_, ec);
+  if (ec) {
+    std::error_code back;
+    fs::rename(old, target_, back);
+    fail(ec);
+  }
   committed_ = true;
   fs::remove_all(old, ec);
 }

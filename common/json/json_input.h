@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "text/printable.h"
+
 namespace penumbra::json_input {
 
 class JsonError : public std::runtime_error {
@@ -33,7 +35,11 @@ nlohmann::json read_file(const std::filesystem::path& path, const Limits& limits
 
 // For error messages: control bytes and non-ASCII bytes escaped (\xNN), cut to about `max` bytes
 // with the total length named, so a megabyte of input never becomes a megabyte of stderr.
-std::string printable(std::string_view s, std::size_t max = 80);
+using text::printable;
+
+// The text of a file we write: invalid UTF-8 (a path or name from outside) becomes U+FFFD
+// instead of nlohmann's type_error.316 after the work is done.
+std::string dump(const nlohmann::json& j, int indent = -1);
 
 // "a.b", "a[3]": the field path notation of every error.
 std::string child(const std::string& path, std::string_view key);

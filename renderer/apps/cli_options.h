@@ -1,13 +1,11 @@
 #pragma once
-// Command-line helpers shared by the apps: options generated from a settings table,
-// comma-separated number lists, the light-size override, the calibration file, and parsing with
-// one-line errors. Errors are CLI::ValidationError naming the option.
+// Command-line helpers shared by the renderer's apps: options generated from a settings table,
+// comma-separated number lists, the light-size override and the calibration file (parsing and
+// error lines: cli/main.h). Errors are CLI::ValidationError naming the option.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <iostream>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -121,20 +119,6 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
           {"c", settings.adaptive.c},
           {"ci95", {calibration.loaded.ci95_lo, calibration.loaded.ci95_hi}},
           {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"}};
-}
-
-// Parses the command line. Returns the exit status to leave with — 0 after --help, 2 after a
-// parse error (one line "<tool>: <error>" on stderr) — or nullopt to go on.
-inline std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv, const char* tool) {
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << tool << ": " << e.what() << "\n";
-    return 2;
-  }
-  return std::nullopt;
 }
 
 }  // namespace penumbra::apps

@@ -20,6 +20,9 @@
 #include <vector>
 
 #include "cli_options.h"
+#include "cli/main.h"
+#include "io/atomic_file.h"
+#include "json/json_input.h"
 #include "run_python.h"
 #include "gl/context.h"
 #include "gl/objects.h"
@@ -306,7 +309,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
-  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")->required();
+  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")
+      ->required()
+      ->check(cli::path_given());
   apps::add_calibration_option(app, opt.calibration);
   apps::add_settings_options(app, opt.base);
 
@@ -328,7 +333,7 @@ int main(int argc, char** argv) {
     opt.adaptive = !no_adaptive;
     opt.scenes = split(scenes_arg);
     for (const auto& s : opt.scenes)
-      if (s.empty()) throw CLI::ValidationError("--scenes", "expected scene names or files separated by commas, got '" + scenes_arg + "'");
+      if (s.empty()) throw CLI::ValidationError("--scenes", "expected scene names or files separated by commas, got '" + json_input::printable(scenes_arg) + "'");
     if (techniques_arg != "all") {
       opt.techniques = split(techniques_arg);
       for (const auto& t : opt.techniques) {
@@ -341,11 +346,9 @@ int main(int argc, char** argv) {
     }
     opt.resolutions = apps::parse_list<int>("--resolutions", resolutions_arg, 1, 65536);
     opt.radii_ws = apps::parse_list<double>("--radii", radii_arg, 1e-6, 1e6);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "penumbra-bench: " << e.what() << "\n";
-    return 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    return cli::fail("penumbra-bench", e.what(), cli::kExitUsage);
   }
 
   try {
@@ -458,7 +461,7 @@ int main(int argc, char** argv) {
     const fs::path& dir = out.path();
     std::string csv = std::string(kCsvHeader) + "\n";
     for (const auto& r : rows) csv += csv_row(r, opt) + "\n";
-    io::write_text(dir / "bench.csv", csv);
+    io::write_file_atomic(dir / "bench.csv", csv);
 
     std::ostringstream command;
     for (int i = 0; i < argc; ++i) command << (i ? " " : "") << argv[i];
@@ -486,7 +489,7 @@ int main(int argc, char** argv) {
       apps::run_python_script(opt.python, opt.plot_script, {(dir / "bench.csv").string(), dir.string()}, "the plots");
     }
     report["elapsed_s"] = elapsed_s();
-    io::write_text(dir / "report.json", report.dump(2) + "\n");
+    io::write_file_atomic(dir / "report.json", json_input::dump(report, 2) + "\n");
     out.commit();
     std::fprintf(stderr, "[%6.1f s] done\n", elapsed_s());
     if (adaptive_rows > 0)
@@ -495,7 +498,6 @@ int main(int argc, char** argv) {
     std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
     return 0;
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-bench: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-bench", e.what());
   }
 }

@@ -28,6 +28,9 @@
 #include <glm/gtc/constants.hpp>
 
 #include "adaptive/resolution_rule.h"
+#include "cli/main.h"
+#include "io/atomic_file.h"
+#include "json/json_input.h"
 #include "apps/cli_options.h"
 #include "apps/run_python.h"
 #include "gl/context.h"
@@ -252,8 +255,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                 sf.p90, sa.median, sa.p10, sa.p90, speedup, range, min_ssim, worst_diff, worst_share);
     std::fflush(stdout);
   }
-  io::write_text(out.path() / "frames.csv", csv);
-  io::write_text(out.path() / "report.json", report.dump(2) + "\n");
+  io::write_file_atomic(out.path() / "frames.csv", csv);
+  io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 2) + "\n");
   if (opt.plot)
     apps::run_python_script(opt.python, opt.plot_script, {(out.path() / "report.json").string(), out.path().string()}, "the chart");
   out.commit();
@@ -350,13 +353,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 65536));
   apps::add_calibration_option(app, opt.calibration);
   app.add_flag("--ci-upper", opt.ci_upper, "use the upper bound of c's 95 % interval (more conservative)");
-  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)");
+  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")
+      ->check(cli::path_given());
   app.add_option("--python", opt.python, "Python with matplotlib that draws the chart");
   app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
   app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);
-  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-demo")) return *status;
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-demo")) return *status;
   try {
     for (const auto& t : opt.techniques) shadows::technique_from_string(t);
     apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
@@ -364,11 +368,9 @@ int main(int argc, char** argv) {
 #if PENUMBRA_DEMO_GUI
     return run_windowed(opt, base);
 #else
-    std::cerr << "penumbra-demo: built without GUI support; use --headless\n";
-    return 2;
+    return cli::fail("penumbra-demo", "built without GUI support; use --headless", cli::kExitUsage);
 #endif
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-demo: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-demo", e.what());
   }
 }

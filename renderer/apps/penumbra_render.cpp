@@ -11,6 +11,9 @@
 #include <vector>
 
 #include "gl/context.h"
+#include "cli/main.h"
+#include "io/atomic_file.h"
+#include "json/json_input.h"
 #include "gl/timer.h"
 #include "io/image_io.h"
 #include "io/report.h"
@@ -67,11 +70,13 @@ int main(int argc, char** argv) {
   apps::add_light_size_option(app, light_size);
   app.add_option("--path-frame", path_frame, "view from this frame of the scene's camera path instead of its camera")
       ->check(CLI::Range(0, 10'000'000));
-  app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")->required();
+  app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")
+      ->required()
+      ->check(cli::path_given());
   apps::add_calibration_option(app, calibration);
   apps::add_settings_options(app, base);
 
-  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-render")) return *status;
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-render")) return *status;
 
   try {
     apps::apply_calibration(app, calibration, base);
@@ -174,7 +179,7 @@ int main(int argc, char** argv) {
         report["scene"] = scene.name;
         report["device"] = io::to_json(ctx);
         report["calibration"] = apps::calibration_json(calibration, v.settings);
-        io::write_text(dir / "report.json", report.dump(2) + "\n");
+        io::write_file_atomic(dir / "report.json", json_input::dump(report, 2) + "\n");
 
         const gl::TimingMethod shown = ctx.software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
         double shadow_map = 0, vsm_blur = 0, screen = 0, shading = 0, total = 0;
@@ -210,12 +215,11 @@ int main(int argc, char** argv) {
     if (montage_images.size() > 1) {
       io::write_png(staging / "montage.png", io::montage(montage_images, labels, 3, 640));
     }
-    io::write_text(staging / "report.json", summary.dump(2) + "\n");
+    io::write_file_atomic(staging / "report.json", json_input::dump(summary, 2) + "\n");
     out.commit();
     std::cout << "wrote " << out.target().string() << "/\n";
     return 0;
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-render: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-render", e.what());
   }
 }

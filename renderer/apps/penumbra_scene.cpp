@@ -11,6 +11,7 @@
 #include <string>
 
 #include "apps/cli_options.h"
+#include "cli/main.h"
 #include "io/staged_dir.h"
 #include "scene/outdoor.h"
 #include "scene/scene.h"
@@ -24,8 +25,9 @@ int main(int argc, char** argv) {
   std::string output;
   app.add_option("--scene", scene_arg, "built-in scene name or scene file (.json)");
   app.add_option("--seed", seed, "seed of the procedural outdoor scenes (default 1)")->check(CLI::Range(0LL, 4294967295LL));
-  app.add_option("-o,--output", output, "write DIR/scene.json and DIR/scene/*.glb (DIR replaced as a whole on success)");
-  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-scene")) return *status;
+  app.add_option("-o,--output", output, "write DIR/scene.json and DIR/scene/*.glb (DIR replaced as a whole on success)")
+      ->check(cli::path_given());
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-scene")) return *status;
   try {
     const auto t0 = std::chrono::steady_clock::now();
     scene::Scene s;
@@ -68,7 +70,6 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-scene: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-scene", e.what());
   }
 }

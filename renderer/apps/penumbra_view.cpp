@@ -15,6 +15,7 @@
 #include <glm/gtc/constants.hpp>
 
 #include "apps/cli_options.h"
+#include "cli/main.h"
 #include "gl/timer.h"
 #include "gl/window.h"
 #include "gui/settings_panel.h"
@@ -53,7 +54,7 @@ int main(int argc, char** argv) {
   app.add_option("--screenshot", screenshot, "write the window (with the panel) to this PNG after --frames frames, then exit");
   app.add_option("--frames", frames, "frames to run before --screenshot (0: run until closed)")->check(CLI::Range(0, 1000000));
   apps::add_calibration_option(app, calibration);
-  if (const auto status = apps::parse_command_line(app, argc, argv, "penumbra-view")) return *status;
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-view")) return *status;
   try {
     shadows::ShadowSettings settings;
     apps::apply_calibration(app, calibration, settings);
@@ -117,7 +118,6 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-view: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-view", e.what());
   }
 }

@@ -10,10 +10,10 @@
 
 namespace penumbra::io::codec {
 
-// Encode into `path` (a temporary file: image_io.cpp renames it). Throw std::runtime_error with
-// the reason; the caller prefixes the final path.
-void encode_png(const std::filesystem::path& path, const Image8& image);
-void encode_exr(const std::filesystem::path& path, const ImageF& image);
+// The encoded file, in memory (image_io.cpp writes it with io::write_file_atomic). Throw
+// std::runtime_error with the reason; the caller prefixes the path.
+std::vector<unsigned char> encode_png(const Image8& image);
+std::vector<unsigned char> encode_exr(const ImageF& image);
 
 // Throw std::runtime_error naming `path`.
 Image8 read_image8(const std::filesystem::path& path);

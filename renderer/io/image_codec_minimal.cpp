@@ -7,6 +7,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfVersion.h>
@@ -148,28 +149,60 @@ Image8 scale_rgb(const Image8& src, int w, int h) {
 
 }  // namespace
 
-void encode_png(const std::filesystem::path& path, const Image8& image) {
+std::vector<unsigned char> encode_png(const Image8& image) {
   png_image png;
   std::memset(&png, 0, sizeof png);
   png.version = PNG_IMAGE_VERSION;
   png.width = static_cast<png_uint_32>(image.width);
   png.height = static_cast<png_uint_32>(image.height);
   png.format = png_format(image.channels);
-  if (!png_image_write_to_file(&png, path.c_str(), 0, image.pixels.data(), 0, nullptr)) throw std::runtime_error(png.message);
+  png_alloc_size_t size = 0;
+  if (!png_image_write_to_memory(&png, nullptr, &size, 0, image.pixels.data(), 0, nullptr))
+    throw std::runtime_error(png.message);
+  std::vector<unsigned char> bytes(size);
+  if (!png_image_write_to_memory(&png, bytes.data(), &size, 0, image.pixels.data(), 0, nullptr))
+    throw std::runtime_error(png.message);
+  bytes.resize(size);
+  return bytes;
 }
 
-void encode_exr(const std::filesystem::path& path, const ImageF& image) {
+namespace {
+// OpenEXR's output stream into a vector.
+class MemoryStream : public Imf::OStream {
+ public:
+  explicit MemoryStream(std::vector<unsigned char>& bytes) : Imf::OStream("image.exr"), bytes_(bytes) {}
+  void write(const char c[], int n) override {
+    const std::size_t end = position_ + static_cast<std::size_t>(n);
+    if (bytes_.size() < end) bytes_.resize(end);
+    std::memcpy(bytes_.data() + position_, c, static_cast<std::size_t>(n));
+    position_ = end;
+  }
+  std::uint64_t tellp() override { return position_; }
+  void seekp(std::uint64_t pos) override { position_ = static_cast<std::size_t>(pos); }
+
+ private:
+  std::vector<unsigned char>& bytes_;
+  std::size_t position_ = 0;
+};
+}  // namespace
+
+std::vector<unsigned char> encode_exr(const ImageF& image) {
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   const std::vector<std::string> names = channel_names(image.channels);
   for (const auto& n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
-  Imf::OutputFile file(path.c_str(), header);
-  Imf::FrameBuffer fb;
-  const std::size_t xs = sizeof(float) * image.channels, ys = xs * image.width;
-  char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
-  for (int c = 0; c < image.channels; ++c) fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
-  file.setFrameBuffer(fb);
-  file.writePixels(image.height);
+  std::vector<unsigned char> bytes;
+  {  // the file is complete when OutputFile is destroyed (it writes the offset table then)
+    MemoryStream stream(bytes);
+    Imf::OutputFile file(stream, header);
+    Imf::FrameBuffer fb;
+    const std::size_t xs = sizeof(float) * image.channels, ys = xs * image.width;
+    char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
+    for (int c = 0; c < image.channels; ++c) fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  }
+  return bytes;
 }
 
 Image8 read_image8(const std::filesystem::path& path) { return read_any<std::uint8_t>(path); }

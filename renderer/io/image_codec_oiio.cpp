@@ -3,6 +3,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include "io/image_codec.h"
@@ -11,13 +12,16 @@ namespace penumbra::io::codec {
 namespace {
 
 template <class T>
-void encode(const std::filesystem::path& path, const Image<T>& image, const char* format, OIIO::TypeDesc type) {
+std::vector<unsigned char> encode(const Image<T>& image, const char* format, const char* name, OIIO::TypeDesc type) {
   auto out = OIIO::ImageOutput::create(format);
-  if (!out) throw std::runtime_error(std::string("no OpenImageIO writer for ") + format);
+  if (!out || !out->supports("ioproxy")) throw std::runtime_error(std::string("no OpenImageIO writer to memory for ") + format);
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput proxy(bytes);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
   if (std::string(format) == "openexr") spec.attribute("compression", "zip");
-  if (!out->open(path.string(), spec) || !out->write_image(type, image.pixels.data()) || !out->close())
+  if (!out->set_ioproxy(&proxy) || !out->open(name, spec) || !out->write_image(type, image.pixels.data()) || !out->close())
     throw std::runtime_error(out->geterror());
+  return bytes;
 }
 
 template <class T>
@@ -34,8 +38,10 @@ Image<T> read_image(const std::filesystem::path& path, OIIO::TypeDesc type) {
 
 }  // namespace
 
-void encode_png(const std::filesystem::path& path, const Image8& image) { encode(path, image, "png", OIIO::TypeDesc::UINT8); }
-void encode_exr(const std::filesystem::path& path, const ImageF& image) { encode(path, image, "openexr", OIIO::TypeDesc::FLOAT); }
+std::vector<unsigned char> encode_png(const Image8& image) { return encode(image, "png", "image.png", OIIO::TypeDesc::UINT8); }
+std::vector<unsigned char> encode_exr(const ImageF& image) {
+  return encode(image, "openexr", "image.exr", OIIO::TypeDesc::FLOAT);
+}
 
 Image8 read_image8(const std::filesystem::path& path) { return read_image<std::uint8_t>(path, OIIO::TypeDesc::UINT8); }
 ImageF read_imagef(const std::filesystem::path& path) { return read_image<float>(path, OIIO::TypeDesc::FLOAT); }

@@ -36,7 +36,6 @@ void flip_vertical(Image<T>& img) {
 // file. Throw std::runtime_error naming the path on failure.
 void write_png(const std::filesystem::path& path, const Image8& image);
 void write_exr(const std::filesystem::path& path, const ImageF& image);
-void write_text(const std::filesystem::path& path, const std::string& text);
 
 Image8 read_image8(const std::filesystem::path& path);
 ImageF read_imagef(const std::filesystem::path& path);

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json/json_input.h"
 #include "shadows/settings_rows.h"
 
 namespace penumbra::shadows {
@@ -80,7 +81,7 @@ void set_from_string(const Setting<P>& s, P& params, std::string_view value) {
   const std::string key(s.key);
   const std::string text(value);
   auto fail = [&](const std::string& expected) {
-    throw std::invalid_argument(key + ": expected " + expected + ", got '" + text + "'");
+    throw std::invalid_argument(key + ": expected " + expected + ", got '" + json_input::printable(text) + "'");
   };
   auto range = [&] {
     return "a number in [" + nlohmann::json(s.min).dump() + ", " + nlohmann::json(s.max).dump() + "]";

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "cli/main.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
 #include "quest/psychometric.h"
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
   app.add_option("--ppd", params.pixels_per_degree, "display pixels per degree")->capture_default_str();
   app.add_option("--window", params.window_r, "local window, filter radii")->capture_default_str();
   app.add_option("--weber", params.weber, "decision noise sd (relative deviation)")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-observer-curve")) return *status;
   try {
     gl::HeadlessContext context;
     stimuli::StimulusRenderer renderer;
@@ -83,8 +84,7 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-observer-curve: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-observer-curve", e.what());
   }
   return 0;
 }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cli/checks.h"
+#include "cli/main.h"
 #include "common/progress_bar.h"
 #include "observers/staircase_simulation.h"
 #include "published.h"
@@ -44,7 +45,8 @@ std::vector<std::string> split_commas(const std::string& text, const std::string
     std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     item.erase(0, item.find_first_not_of(" \t"));
     item.erase(item.find_last_not_of(" \t") + 1);
-    if (item.empty()) throw UsageError(option + ": empty item " + std::to_string(items.size() + 1) + " in '" + text + "'");
+    if (item.empty())
+      throw UsageError(option + ": empty item " + std::to_string(items.size() + 1) + " in '" + penumbra::text::printable(text) + "'");
     items.push_back(item);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -56,7 +58,7 @@ std::vector<int> parse_responses(const std::string& text) {
   std::vector<int> responses;
   for (const std::string& item : split_commas(text, "--responses")) {
     if (item != "0" && item != "1")
-      throw UsageError("--responses: item " + std::to_string(responses.size() + 1) + " is '" + item +
+      throw UsageError("--responses: item " + std::to_string(responses.size() + 1) + " is '" + penumbra::text::printable(item) +
                        "', expected 0 (incorrect) or 1 (correct)");
     responses.push_back(item == "1" ? 1 : 0);
   }
@@ -70,7 +72,7 @@ std::vector<double> parse_intensities(const std::string& text) {
     const auto [end, error] = std::from_chars(item.data(), item.data() + item.size(), value);
     // +-inf is accepted (used at the table's edge, as Psychtoolbox does); NaN is not.
     if (error != std::errc() || end != item.data() + item.size() || std::isnan(value))
-      throw UsageError("--intensities: item " + std::to_string(values.size() + 1) + " is '" + item +
+      throw UsageError("--intensities: item " + std::to_string(values.size() + 1) + " is '" + penumbra::text::printable(item) +
                        "', expected a number");
     values.push_back(value);
   }
@@ -121,7 +123,7 @@ int run_replay(const CLI::App& command, const QuestOptions& options, const std::
                        std::to_string(responses.size()));
   }
   const auto placement = penumbra::observers::parse_placement(placement_name);
-  if (!placement) throw UsageError("--placement: '" + placement_name + "', expected quantile, mean or mode");
+  if (!placement) throw UsageError("--placement: '" + penumbra::text::printable(placement_name) + "', expected quantile, mean or mode");
   if (command.count("--first") > 0 && !std::isfinite(first)) throw UsageError("--first must be finite");
 
   Quest quest(options.resolved(command));
@@ -196,11 +198,12 @@ int run_simulate(const CLI::App& command, const QuestOptions& options, penumbra:
                  const std::string& method_name, const std::string& placement_name, const std::string& model_name,
                  bool no_progress) {
   const auto method = penumbra::observers::parse_method(method_name);
-  if (!method) throw UsageError("--method: '" + method_name + "', expected quest or questplus");
+  if (!method) throw UsageError("--method: '" + penumbra::text::printable(method_name) + "', expected quest or questplus");
   const auto placement = penumbra::observers::parse_placement(placement_name);
-  if (!placement) throw UsageError("--placement: '" + placement_name + "', expected quantile, mean or mode");
+  if (!placement) throw UsageError("--placement: '" + penumbra::text::printable(placement_name) + "', expected quantile, mean or mode");
   const auto model = penumbra::psychometric::parse_model(model_name);
-  if (!model) throw UsageError("--observer-model: '" + model_name + "', expected log-weibull, weibull, normal or logistic");
+  if (!model)
+    throw UsageError("--observer-model: '" + penumbra::text::printable(model_name) + "', expected log-weibull, weibull, normal or logistic");
   config.quest = options.resolved(command);
   config.method = *method;
   config.placement = *placement;
@@ -296,13 +299,10 @@ int main(int argc, char** argv) {
     return run_simulate(*simulate, simulate_options, config, method_name, simulate_placement, model_name, no_progress);
   } catch (const CLI::ParseError& error) {
     if (error.get_exit_code() == 0) return app.exit(error);
-    std::cerr << "penumbra-quest: error: " << error.what() << " (see --help)\n";
-    return 2;
+    return penumbra::cli::fail("penumbra-quest: error", std::string(error.what()) + " (see --help)", penumbra::cli::kExitUsage);
   } catch (const UsageError& error) {
-    std::cerr << "penumbra-quest: error: " << error.what() << "\n";
-    return 2;
+    return penumbra::cli::fail("penumbra-quest: error", error.what(), penumbra::cli::kExitUsage);
   } catch (const std::exception& error) {
-    std::cerr << "penumbra-quest: error: " << error.what() << "\n";
-    return 1;
+    return penumbra::cli::fail("penumbra-quest: error", error.what());
   }
 }

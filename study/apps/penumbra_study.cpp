@@ -13,7 +13,9 @@
 #include <thread>
 
 #include "apps/reference_command.h"
+#include "io/atomic_file.h"
 #include "cli/checks.h"
+#include "cli/main.h"
 #include "gl/context.h"
 #include "io/image_io.h"
 #include "json/json_input.h"
@@ -35,10 +37,11 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   spec.pattern = stimuli::parse_pattern(pattern);
   spec.kernel = stimuli::parse_kernel(kernel);
   spec.transfer = stimuli::parse_transfer(transfer);
+  // The spec as given first, so a bad size is blamed on the size and not on the radius it clamps.
+  stimuli::validate(spec);
   const auto shown = stimuli::clamp_filter_radius(spec.filter_radius_px, spec.size_px);
   const double requested = spec.filter_radius_px;
   spec.filter_radius_px = shown.filter_radius_px;
-  stimuli::validate(spec);
   gl::HeadlessContext context;
   stimuli::StimulusRenderer renderer;
   const stimuli::StimulusPair pair = renderer.render(spec);
@@ -51,7 +54,7 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   j["intensity"] = std::log10(spec.artifact_px / spec.filter_radius_px);
   j["images"] = {{"artifact", "artifact.png"}, {"line", "line.png"}};
   j["renderer"] = context.info().renderer;
-  io::write_text(out / "stimulus.json", j.dump(2) + "\n");
+  io::write_file_atomic(out / "stimulus.json", json_input::dump(j, 2) + "\n");
   std::cout << "wrote " << (out / "artifact.png").string() << ", line.png, stimulus.json\n";
   return 0;
 }
@@ -343,13 +346,14 @@ int main(int argc, char** argv) {
   stim->add_option("--size-px", spec.size_px, "stimulus side (px)")->capture_default_str();
   stim->add_option("--transfer", transfer, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str()->check(cli::non_negative_integer());
-  stim->add_option("-o,--output", stim_out, "output directory")->required();
+  stim->add_option("-o,--output", stim_out, "output directory")->required()->check(cli::path_given());
 
   auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
   RunOptions ro;
-  run->add_option("--config", ro.config, "study config JSON (data/studies/)");
-  run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)");
-  run->add_option("--resume", ro.resume, "continue the session in this directory");
+  run->add_option("--config", ro.config, "study config JSON (data/studies/)")->check(cli::path_given());
+  run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)")
+      ->check(cli::path_given());
+  run->add_option("--resume", ro.resume, "continue the session in this directory")->check(cli::path_given());
   run->add_option("--observer", ro.observer, "psychometric:c=..,beta=..,lapse=..")->capture_default_str();
   run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")
       ->capture_default_str()
@@ -366,7 +370,7 @@ int main(int argc, char** argv) {
 
   const study_app::ReferenceCommand reference(app);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = cli::parse(app, argc, argv, "penumbra-study")) return *status;
   try {
     if (reference.parsed()) return reference.run();
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
@@ -375,8 +379,7 @@ int main(int argc, char** argv) {
     ro.observer_seed_given = run->count("--observer-seed") > 0;
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
-    std::cerr << "penumbra-study: " << e.what() << "\n";
-    return 1;
+    return cli::fail("penumbra-study", e.what());
   }
   return 0;
 }

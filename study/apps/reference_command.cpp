@@ -1,4 +1,7 @@
 #include "apps/reference_command.h"
+#include "io/atomic_file.h"
+#include "json/json_input.h"
+#include "cli/checks.h"
 
 #include <chrono>
 #include <cstdio>
@@ -34,7 +37,7 @@ ReferenceCommand::ReferenceCommand(CLI::App& app) {
                        "identical = no pixel differs by more than this many 8-bit levels (0: exactly identical)")
       ->capture_default_str();
   command_->add_flag("--no-progress", no_progress_, "no progress line on stderr");
-  command_->add_option("-o,--output", output_, "output JSON file")->required();
+  command_->add_option("-o,--output", output_, "output JSON file")->required()->check(cli::path_given());
 }
 
 int ReferenceCommand::run() const {
@@ -84,7 +87,7 @@ int ReferenceCommand::run() const {
       {"renderer", context.info().renderer},
       {"entries", entries}};
   if (output_.has_parent_path()) fs::create_directories(output_.parent_path());
-  io::write_text(output_, out.dump(2) + "\n");
+  io::write_file_atomic(output_, json_input::dump(out, 2) + "\n");
   for (const auto& e : entries) {
     const auto& r = e["reference_filter_radius_px"];
     std::printf("%-5s contrast %-4g a %-4g %s partner: reference r = %s%s\n", e["pattern"].get<std::string>().c_str(),

@@ -21,6 +21,7 @@
 #include "gui/gui_window.h"
 #include "gui/participant_view.h"
 #include "stimuli/stimulus.h"
+#include "text/printable.h"
 
 namespace penumbra::study_gui {
 
@@ -55,7 +56,7 @@ void parse_size(const std::string& s, int& w, int& h) {
   char x = 0;
   char extra = 0;
   if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 64 || h < 64 || w > 16384 || h > 16384)
-    throw std::invalid_argument("--windowed '" + s + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
+    throw std::invalid_argument("--windowed '" + text::printable(s) + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
 }
 
 std::string instructions(const std::string& task) {

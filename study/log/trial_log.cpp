@@ -11,7 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "io/atomic_file.h"
 #include "json/json_input.h"
+#include "text/printable.h"
 
 namespace penumbra::trial_log {
 
@@ -41,36 +43,15 @@ std::string num(double v) {
 // Free-text fields may not hold separators; the writer refuses them instead of quoting.
 const std::string& text(const std::string& v, const char* name) {
   if (v.find_first_of(",\"\n\r") != std::string::npos)
-    throw std::invalid_argument(std::string("trial log: ") + name + " '" + v + "' contains , \" or a newline");
+    throw std::invalid_argument(std::string("trial log: ") + name + " '" + text::printable(v) + "' contains , \" or a newline");
   return v;
 }
 
-// UTF-8 (no overlong forms, surrogates or code points above U+10FFFF) without control characters.
+// UTF-8 without control characters.
 bool valid_text(const std::string& s) {
-  for (std::size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if (c < 0x20 || c == 0x7f) return false;
-    if (c < 0x80) {
-      ++i;
-      continue;
-    }
-    int n = 0;
-    unsigned cp = 0;
-    if (c >= 0xc2 && c <= 0xdf) n = 1, cp = c & 0x1f;
-    else if (c >= 0xe0 && c <= 0xef) n = 2, cp = c & 0x0f;
-    else if (c >= 0xf0 && c <= 0xf4) n = 3, cp = c & 0x07;
-    else return false;
-    if (i + static_cast<std::size_t>(n) >= s.size()) return false;
-    for (int k = 1; k <= n; ++k) {
-      const auto d = static_cast<unsigned char>(s[i + static_cast<std::size_t>(k)]);
-      if ((d & 0xc0) != 0x80) return false;
-      cp = (cp << 6) | (d & 0x3f);
-    }
-    if ((n == 2 && (cp < 0x800 || (cp >= 0xd800 && cp <= 0xdfff))) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)))
-      return false;
-    i += static_cast<std::size_t>(n) + 1;
-  }
-  return true;
+  for (char c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
+  return text::valid_utf8(s);
 }
 
 }  // namespace
@@ -188,9 +169,12 @@ Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
     throw std::runtime_error(path.string() + ": cannot " + (create ? "create" : "open") + " the trial log: " +
                              std::strerror(errno));
   if (create) {
-    const std::string h = header_line();
-    if (::write(fd_, h.data(), h.size()) != static_cast<ssize_t>(h.size()) || ::fsync(fd_) != 0)
-      throw std::runtime_error(path.string() + ": cannot write the header: " + std::strerror(errno));
+    int error = io::write_all(fd_, header_line());
+    if (error == 0 && ::fsync(fd_) != 0) error = errno;
+    if (error != 0) {
+      ::close(fd_);
+      throw std::runtime_error(path.string() + ": cannot write the header: " + std::strerror(error));
+    }
   }
 }
 
@@ -199,14 +183,22 @@ Writer::~Writer() {
 }
 
 void Writer::append(const TrialRow& row) {
-  const std::string line = format_row(row);
-  if (::write(fd_, line.data(), line.size()) != static_cast<ssize_t>(line.size()))
+  // A failure part-way leaves a torn last line, which readers ignore and --resume cuts off.
+  if (const int error = io::write_all(fd_, format_row(row)); error != 0)
     throw std::runtime_error(path_.string() + ": cannot append trial " + std::to_string(row.trial) + ": " +
-                             std::strerror(errno));
-  if (::fsync(fd_) != 0) throw std::runtime_error(path_.string() + ": fsync failed: " + std::strerror(errno));
+                             std::strerror(error));
+  if (::fsync(fd_) != 0) {
+    const int error = errno;
+    throw std::runtime_error(path_.string() + ": cannot append trial " + std::to_string(row.trial) + ": fsync: " +
+                             std::strerror(error));
+  }
 }
 
 ReadResult read(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error(path.string() + ": cannot read the trial log: " +
+                             (std::filesystem::exists(path, ec) ? "not a regular file" : "no such file"));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path.string() + ": cannot open the trial log");
   std::ostringstream ss;

@@ -6,7 +6,7 @@
 #include <ctime>
 #include <stdexcept>
 
-#include "io/image_io.h"
+#include "io/atomic_file.h"
 #include "json/json_input.h"
 #include "procedure/session_record.h"
 
@@ -30,10 +30,29 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
                         const nlohmann::json& extra) {
   if (const std::string bad = name_problem(participant); !bad.empty())
     throw std::runtime_error("participant '" + json_input::printable(participant) + "': " + bad);
-  fs::create_directories(dir);
+  std::error_code ec;
+  const bool made = !fs::exists(dir, ec);
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot create the session directory: " + ec.message());
   trial_log::DirectoryLock lock(dir);
   if (fs::exists(dir / "session.json") || fs::exists(dir / "trials.csv"))
     throw std::runtime_error(dir.string() + ": already holds a session; refusing to overwrite it (use --resume)");
+  // A session that cannot be started (a full disk) leaves nothing behind: not half a session, not
+  // a directory that the next try would refuse.
+  try {
+    return start(config, dir, participant, extra, std::move(lock));
+  } catch (...) {
+    if (made) {
+      fs::remove_all(dir, ec);
+    } else {
+      for (const char* name : {"trials.csv", "session.json", "session.lock"}) fs::remove(dir / name, ec);
+    }
+    throw;
+  }
+}
+
+Session Session::start(const StudyConfig& config, const fs::path& dir, const std::string& participant,
+                       const nlohmann::json& extra, trial_log::DirectoryLock lock) {
   Session s(config);
   s.lock_ = std::move(lock);
   s.dir_ = dir;
@@ -135,6 +154,8 @@ void Session::end_round() {
   write_session_json();
 }
 
-void Session::write_session_json() const { io::write_text(dir_ / "session.json", session_json_.dump(2) + "\n"); }
+void Session::write_session_json() const {
+  io::write_file_atomic(dir_ / "session.json", json_input::dump(session_json_, 2) + "\n");
+}
 
 }  // namespace penumbra::procedure

@@ -55,6 +55,8 @@ class Session {
 
  private:
   explicit Session(const StudyConfig& config) : procedure_(config) {}
+  static Session start(const StudyConfig& config, const std::filesystem::path& dir, const std::string& participant,
+                       const nlohmann::json& extra, trial_log::DirectoryLock lock);
   trial_log::TrialRow make_row(const TrialPlan& plan, const std::string& response, double rt_ms, bool correct) const;
   void write_session_json() const;
 

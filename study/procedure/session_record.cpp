@@ -6,6 +6,7 @@
 #include <set>
 
 #include "json/json_input.h"
+#include "text/printable.h"
 
 namespace penumbra::procedure {
 
@@ -22,9 +23,9 @@ std::string fmt(double v) {
 }  // namespace
 
 std::string name_problem(const std::string& name) {
-  if (name.empty() || name.size() > kMaxName ||
+  if (name.empty() || name.size() > kMaxName || !text::valid_utf8(name) ||
       std::any_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == ',' || c == '"'; }))
-    return "expected a non-empty name of at most " + std::to_string(kMaxName) + " bytes without , \" or control characters";
+    return "expected a non-empty UTF-8 name of at most " + std::to_string(kMaxName) + " bytes without , \" or control characters";
   return "";
 }
 

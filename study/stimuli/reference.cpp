@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "json/json_input.h"
+
 namespace penumbra::stimuli {
 
 ImageDifference compare(const io::Image8& a, const io::Image8& b) {
@@ -24,7 +26,7 @@ ImageDifference compare(const io::Image8& a, const io::Image8& b) {
 Partner parse_partner(const std::string& name) {
   if (name == "original") return Partner::original;
   if (name == "mean-line" || name == "mean_line") return Partner::mean_line;
-  throw std::invalid_argument("partner '" + name + "': expected original or mean-line");
+  throw std::invalid_argument("partner '" + json_input::printable(name) + "': expected original or mean-line");
 }
 
 std::string to_string(Partner partner) { return partner == Partner::original ? "original" : "mean-line"; }

@@ -3,24 +3,26 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "text/printable.h"
+
 namespace penumbra::stimuli {
 
 Pattern parse_pattern(const std::string& s) {
   if (s == "stair") return Pattern::stair;
   if (s == "step") return Pattern::step;
-  throw std::invalid_argument("pattern '" + s + "': expected stair or step");
+  throw std::invalid_argument("pattern '" + text::printable(s) + "': expected stair or step");
 }
 Kernel parse_kernel(const std::string& s) {
   if (s == "disk") return Kernel::disk;
   if (s == "grid") return Kernel::grid;
   if (s == "poisson") return Kernel::poisson;
-  throw std::invalid_argument("kernel '" + s + "': expected disk, grid or poisson");
+  throw std::invalid_argument("kernel '" + text::printable(s) + "': expected disk, grid or poisson");
 }
 Transfer parse_transfer(const std::string& s) {
   if (s == "srgb") return Transfer::srgb;
   if (s == "gamma2.2") return Transfer::gamma22;
   if (s == "linear") return Transfer::linear;
-  throw std::invalid_argument("transfer function '" + s + "': expected srgb, gamma2.2 or linear");
+  throw std::invalid_argument("transfer function '" + text::printable(s) + "': expected srgb, gamma2.2 or linear");
 }
 std::string to_string(Pattern p) { return p == Pattern::stair ? "stair" : "step"; }
 std::string to_string(Kernel k) { return k == Kernel::disk ? "disk" : k == Kernel::grid ? "grid" : "poisson"; }

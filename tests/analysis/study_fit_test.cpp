@@ -11,6 +11,7 @@
 #include "adaptive/resolution_rule.h"
 #include "data/simulate.h"
 #include "fit/study_fit.h"
+#include "io/atomic_file.h"
 #include "report/outputs.h"
 
 namespace {
@@ -176,7 +177,7 @@ TEST(StudyFit, CalibrationRoundTripsThroughTheRenderersReader) {
   const auto dir = std::filesystem::temp_directory_path() / ("penumbra-cal-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const nlohmann::json j = calibration_json(f, std::nullopt, "2024-01-01T00:00:00Z", {"sim"});
-  write_file_atomic(dir / "calibration.json", j.dump(2));
+  io::write_file_atomic(dir / "calibration.json", j.dump(2));
   const adaptive::Calibration cal = adaptive::load_calibration(dir / "calibration.json");
   const ConditionFit& worst = f.conditions[1];
   EXPECT_EQ(cal.condition, "step/1");
@@ -186,7 +187,7 @@ TEST(StudyFit, CalibrationRoundTripsThroughTheRenderersReader) {
   EXPECT_DOUBLE_EQ(cal.ci95_hi, worst.c_profile.hi);
   EXPECT_EQ(j["per_condition"].size(), 2u);
   const nlohmann::json stair = calibration_json(f, std::string("stair/1"), "2024-01-01T00:00:00Z", {"sim"});
-  write_file_atomic(dir / "stair.json", stair.dump(2));
+  io::write_file_atomic(dir / "stair.json", stair.dump(2));
   EXPECT_EQ(adaptive::load_calibration(dir / "stair.json").condition, "stair/1");
   EXPECT_THROW(calibration_json(f, std::string("stair/0.5"), "", {}), std::invalid_argument);
   std::filesystem::remove_all(dir);

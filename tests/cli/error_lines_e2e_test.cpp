@@ -1,0 +1,299 @@
+// Issue 14.9: every app's error is one line "<tool>: ..." naming the file or option and what was
+// expected, with exit 2 for a command line that cannot be parsed and 1 otherwise. Before: CLI11's
+// two lines and exit codes 104-114, library text (json type_error.316 for a path with a byte
+// that is not UTF-8, "filesystem error: cannot rename" after a whole render for -o ""), the wrong
+// field blamed (--size-px 0 blamed filter_radius_px, --guess 1 blamed --lapse-max), a directory
+// given as a file read as "no data rows" or "no header", megabyte values and control bytes echoed
+// whole, and a write that failed on a full disk (simulated here by a file-size limit) named
+// errno left over from elsewhere.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "data/simulate.h"
+#include "log/trial_log.h"
+#include "subprocess.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+const std::string kStudy = PENUMBRA_STUDY_EXE, kFit = PENUMBRA_FIT_EXE, kQuest = PENUMBRA_QUEST_EXE,
+                  kRender = PENUMBRA_RENDER_EXE, kScene = PENUMBRA_SCENE_EXE, kBench = PENUMBRA_BENCH_EXE,
+                  kCurve = PENUMBRA_OBSERVER_CURVE_EXE;
+const std::string kConfig = PENUMBRA_DATA_DIR "/studies/default.json";
+
+// A scratch directory per test, removed at the end.
+class Scratch {
+ public:
+  explicit Scratch(const std::string& name)
+      : dir_(fs::temp_directory_path() / ("penumbra-errors-" + name + "-" + std::to_string(::getpid()))) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  ~Scratch() { fs::remove_all(dir_); }
+  const fs::path& dir() const { return dir_; }
+  fs::path operator/(const std::string& name) const { return dir_ / name; }
+
+ private:
+  fs::path dir_;
+};
+
+// The contract of an error: the status, one line on stderr starting with "<tool>: ", holding
+// `expected`, short, with no control bytes and none of the libraries' own wording.
+void expect_one_line(const test::Result& r, int status, const std::string& tool, const std::string& expected) {
+  EXPECT_EQ(r.exit_code, status) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err.substr(0, 2000);
+  EXPECT_EQ(r.err.rfind(tool + ": ", 0), 0u) << r.err.substr(0, 2000);
+  EXPECT_NE(r.err.find(expected), std::string::npos) << "expected '" << expected << "' in: " << r.err.substr(0, 2000);
+  EXPECT_LT(r.err.size(), 1200u) << r.err.substr(0, 2000);
+  for (char c : r.err.substr(0, r.err.size() - 1))
+    EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f) << "control byte in: " << r.err.substr(0, 2000);
+  for (const char* leak : {"json.exception", "filesystem error", "basic_filebuf", "Run with --help", "(Success)",
+                           "std::", "what():"})
+    EXPECT_EQ(r.err.find(leak), std::string::npos) << leak << " in: " << r.err.substr(0, 2000);
+}
+
+test::Result run(const std::string& exe, const std::vector<std::string>& args, const Scratch& scratch) {
+  return test::run_exe(exe, args, scratch.dir());
+}
+
+// `exe args...` with writes limited to `kib` KiB per file (RLIMIT_FSIZE, SIGXFSZ ignored): a
+// full disk for every file the process writes, as far as write(2) can tell.
+test::Result run_with_file_limit(int kib, const std::string& exe, std::vector<std::string> args, const Scratch& scratch) {
+  args.insert(args.begin(), {"-c", "trap '' XFSZ; ulimit -f " + std::to_string(2 * kib) + "; exec \"$0\" \"$@\"", exe});
+  return test::run_exe("/bin/sh", args, scratch.dir());
+}
+
+std::vector<fs::path> simulated_sessions(const fs::path& dir, int participants) {
+  analysis::SimulatedStudy s;
+  s.participants = participants;
+  s.trials_per_staircase = 20;
+  s.seed = 5;
+  return analysis::write_sessions(s, analysis::simulate_study(s), dir);
+}
+
+std::string read(const fs::path& p) { return test::read_file(p); }
+
+// The longest single argument Linux passes (MAX_ARG_STRLEN is 128 KiB); files carry longer ones.
+const std::string kHuge(120000, 'x');
+
+TEST(ErrorLines, CommandLinesThatCannotBeParsedAreOneLineAndExit2) {
+  const Scratch s("usage");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {kStudy, {"run", "--bogus"}},
+      {kStudy, {}},
+      {kStudy, {"run", "--pace-ms", "-5"}},
+      {kStudy, {"run", "--headless", "--stop-after", kHuge}},
+      {kFit, {"--bogus"}},
+      {kFit, {"x", "-o"}},
+      {kFit, {"psychometric"}},
+      {kQuest, {"replay", "--bogus"}},
+      {kRender, {"--width", "0", "-o", (s / "r").string()}},
+      {kScene, {"--bogus"}},
+      {kBench, {"--bogus", "-o", (s / "b").string()}},
+      {kCurve, {"--bogus"}},
+  };
+  for (const auto& [exe, args] : cases) {
+    const std::string tool = fs::path(exe).filename().string();
+    SCOPED_TRACE(tool + (args.empty() ? "" : " " + args[0].substr(0, 40)));
+    const test::Result r = run(exe, args, s);
+    expect_one_line(r, 2, tool == "penumbra-quest" ? "penumbra-quest: error" : tool, "");
+  }
+  // --help is not an error.
+  EXPECT_EQ(run(kFit, {"--help"}, s).exit_code, 0);
+  EXPECT_EQ(run(kStudy, {"run", "--help"}, s).exit_code, 0);
+}
+
+// -o "" ran the whole job and failed at the rename ("filesystem error: cannot rename ... []").
+TEST(ErrorLines, AnEmptyOutputPathIsRefusedBeforeAnyWork) {
+  const Scratch s("empty-output");
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {kRender, {"--scene", "demo", "-o", ""}},
+      {kScene, {"--scene", "demo", "-o", ""}},
+      {kBench, {"--quick", "-o", ""}},
+      {kFit, {sessions[0].string(), "-o", ""}},
+      {kStudy, {"run", "--config", kConfig, "--headless", "-o", ""}},
+      {kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "-o", ""}},
+      {kStudy, {"reference", "-o", ""}},
+  };
+  for (const auto& [exe, args] : cases) {
+    const std::string tool = fs::path(exe).filename().string();
+    SCOPED_TRACE(tool);
+    expect_one_line(run(exe, args, s), 2, tool, "expected a path, got ''");
+  }
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(s.dir())) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"sessions"});
+}
+
+TEST(ErrorLines, TheFieldThatIsWrongIsTheOneBlamed) {
+  const Scratch s("blame");
+  std::ofstream(s / "counts.csv") << "level,n_correct,n_total\n-1,5,10\n0,9,10\n";
+  expect_one_line(run(kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--size-px", "0", "-o",
+                               (s / "st").string()},
+                      s),
+                  1, "penumbra-study", "size_px: expected 16..4096");
+  EXPECT_FALSE(fs::exists(s / "st"));
+  expect_one_line(run(kFit, {"psychometric", "--input", (s / "counts.csv").string(), "--guess", "1"}, s), 1,
+                  "penumbra-fit", "--guess: expected a rate in [0, 1)");
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string(), "--guess", "1"}, s), 1, "penumbra-fit",
+                  "--guess: expected a rate in [0, 1)");
+  // QUEST's own refusal of a session.json value, with the file and block named.
+  nlohmann::json session = nlohmann::json::parse(read(sessions[0] / "session.json"));
+  session["quest"]["grain"] = 0;
+  std::ofstream(sessions[0] / "session.json", std::ios::trunc) << session.dump();
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string()}, s), 1, "penumbra-fit",
+                  "session.json: quest: grain must be positive");
+  session["quest"]["dim"] = 1e12;
+  std::ofstream(sessions[0] / "session.json", std::ios::trunc) << session.dump();
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string()}, s), 1, "penumbra-fit",
+                  "session.json: quest.dim: expected an integer in [2, 1e7]");
+  EXPECT_FALSE(fs::exists(s / "out"));
+}
+
+TEST(ErrorLines, ADirectoryGivenAsAFileIsNamedAsOne) {
+  const Scratch s("directory");
+  fs::create_directories(s / "dir.json");
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  fs::remove(sessions[0] / "trials.csv");
+  fs::create_directories(sessions[0] / "trials.csv");
+  expect_one_line(run(kStudy, {"run", "--config", (s / "dir.json").string(), "--headless", "-o", (s / "p").string()}, s),
+                  1, "penumbra-study", "dir.json: cannot read: not a regular file");
+  EXPECT_FALSE(fs::exists(s / "p"));
+  expect_one_line(run(kFit, {"psychometric", "--input", (s / "dir.json").string()}, s), 1, "penumbra-fit",
+                  "dir.json: cannot read: not a regular file");
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string()}, s), 1, "penumbra-fit",
+                  "trials.csv: cannot read the trial log: not a regular file");
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string(), "--reference", (s / "dir.json").string()}, s),
+                  1, "penumbra-fit", "dir.json: cannot read: not a regular file");
+  expect_one_line(run(kRender, {"--scene", (s / "dir.json").string(), "-o", (s / "r").string()}, s), 1, "penumbra-render",
+                  "dir.json: cannot read scene file: not a regular file");
+  EXPECT_FALSE(fs::exists(s / "out"));
+  EXPECT_FALSE(fs::exists(s / "r"));
+}
+
+// Names and paths that are not UTF-8: a path is recorded with U+FFFD in its place (the JSON
+// library threw type_error.316 after the work was done); a participant name is refused.
+TEST(ErrorLines, BytesThatAreNotUtf8) {
+  const Scratch s("utf8");
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  const fs::path odd = s / "odd\xff-session";
+  fs::rename(sessions[0], odd);
+  test::Result r = run(kFit, {odd.string(), "-o", (s / "fit").string(), "--bootstrap", "0"}, s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(read(s / "fit" / "report.json"));
+  EXPECT_NE(report["inputs"][0].get<std::string>().find("odd\xef\xbf\xbd-session"), std::string::npos);
+
+  const fs::path config = s / "config\xff.json";
+  fs::copy_file(kConfig, config);
+  r = run(kStudy, {"run", "--config", config.string(), "--headless", "--stop-after", "3", "-o", (s / "p1").string()}, s);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NO_THROW(nlohmann::json::parse(read(s / "p1" / "session.json")));
+
+  expect_one_line(run(kStudy, {"run", "--config", kConfig, "--headless", "--participant", "p\xff", "-o",
+                               (s / "p2").string()},
+                      s),
+                  1, "penumbra-study", "participant 'p\\xff': expected a non-empty UTF-8 name");
+  EXPECT_FALSE(fs::exists(s / "p2"));
+
+  // A log field that is not UTF-8: refused naming line and column, nothing written.
+  const auto more = simulated_sessions(s / "more", 1);
+  std::string log = read(more[0] / "trials.csv");
+  log.replace(log.find("p01,"), 4, "p0\xff,");
+  log.replace(log.find("p01,"), 4, "p0\xff,");
+  std::ofstream(more[0] / "trials.csv", std::ios::trunc) << log;
+  fs::remove(more[0] / "session.json");
+  expect_one_line(run(kFit, {more[0].string(), "-o", (s / "fit2").string()}, s), 1, "penumbra-fit",
+                  "trials.csv:2: column 'participant': expected UTF-8 text");
+  EXPECT_FALSE(fs::exists(s / "fit2"));
+}
+
+// A huge value or control bytes in an option or a file come back shortened and escaped.
+TEST(ErrorLines, HugeValuesAndControlBytesAreNotEchoedWhole) {
+  const Scratch s("echo");
+  std::ofstream(s / "counts.csv") << "level,n_correct,n_total\n-1,5,10\n0,9,10\n";
+  const std::string input = (s / "counts.csv").string();
+  const std::string digits(100000, '1');
+  nlohmann::json config = nlohmann::json::parse(read(kConfig));
+  config["task"] = std::string(500000, 't');
+  std::ofstream(s / "config.json") << config.dump();
+  const std::vector<std::tuple<std::string, std::vector<std::string>, int, std::string>> cases = {
+      {kFit, {"psychometric", "--input", input, "--family", kHuge}, 1, "--family 'xxxxx"},
+      {kFit, {"psychometric", "--input", input, "--format", "a\x01\x1b[31mred"}, 1, "--format 'a\\x01\\x1b[31mred'"},
+      {kFit, {"psychometric", "--input", input, "--family", std::string(5000, 'a') + " " + std::string(5000, 'b')}, 1,
+       "--family"},
+      {kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--kernel", kHuge, "-o",
+                (s / "st").string()}, 1, "kernel 'xxxx"},
+      {kStudy, {"run", "--config", kConfig, "--headless", "--observer", "psychometric:c=" + kHuge, "-o",
+                (s / "p").string()}, 1, "--observer"},
+      {kStudy, {"run", "--config", kConfig, "--headless", "--pace-ms", digits, "-o", (s / "p").string()}, 2, "--pace-ms"},
+      {kStudy, {"run", "--config", (s / "config.json").string(), "--headless", "-o", (s / "p").string()}, 1,
+       "config.json: task"},
+      {kQuest, {"replay", "--tguess", "-1", "--tguess-sd", "2", "--pthreshold", "0.82", "--beta", "3.5", "--delta",
+                "0.01", "--gamma", "0.5", "--responses", "0,1," + digits}, 2, "--responses: item 3 is '1111"},
+      {kRender, {"--scene", kHuge, "-o", (s / "r").string()}, 1, "unknown built-in scene 'xxxx"},
+      {kRender, {"--pcf.radius", "\x07" + kHuge, "-o", (s / "r").string()}, 2, "--pcf.radius"},
+  };
+  for (const auto& [exe, args, status, expected] : cases) {
+    std::string tool = fs::path(exe).filename().string();
+    SCOPED_TRACE(tool + " " + expected);
+    if (tool == "penumbra-quest") tool += ": error";
+    expect_one_line(run(exe, args, s), status, tool, expected);
+  }
+  EXPECT_FALSE(fs::exists(s / "p"));
+  EXPECT_FALSE(fs::exists(s / "st"));
+}
+
+// A full disk, simulated by a file-size limit: one line naming the file and the system's reason,
+// exit 1, the previous output untouched, nothing half-written (no staging directory, no
+// temporary file). A session stops with a torn last line at most, and --resume finishes it.
+TEST(ErrorLines, AFullDiskIsOneLineAndLeavesThePreviousOutput) {
+  const Scratch s("full");
+  const auto sessions = simulated_sessions(s / "sessions", 2);
+  const std::vector<std::string> fit = {sessions[0].string(), sessions[1].string(), "-o", (s / "fit").string(),
+                                        "--bootstrap", "0"};
+  ASSERT_EQ(run(kFit, fit, s).exit_code, 0);
+  const std::string report = read(s / "fit" / "report.json"), calibration = read(s / "fit" / "calibration.json");
+  expect_one_line(run_with_file_limit(4, kFit, fit, s), 1, "penumbra-fit", "report.json: cannot write: File too large");
+  EXPECT_EQ(read(s / "fit" / "report.json"), report);
+  EXPECT_EQ(read(s / "fit" / "calibration.json"), calibration);
+
+  const std::vector<std::string> session = {"run", "--config", kConfig, "--headless", "-o", (s / "p").string()};
+  expect_one_line(run_with_file_limit(8, kStudy, session, s), 1, "penumbra-study", "trials.csv: cannot append trial");
+  const trial_log::ReadResult cut = trial_log::read(s / "p" / "trials.csv");
+  EXPECT_GT(cut.rows.size(), 10u);
+  const test::Result resumed = run(kStudy, {"run", "--resume", (s / "p").string(), "--headless"}, s);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_GT(trial_log::read(s / "p" / "trials.csv").rows.size(), cut.rows.size());
+
+  // No session at all when session.json cannot be written: the next try is not refused.
+  expect_one_line(run_with_file_limit(1, kStudy, {"run", "--config", kConfig, "--headless", "-o", (s / "q").string()}, s),
+                  1, "penumbra-study", "session.json: cannot write: File too large");
+  EXPECT_FALSE(fs::exists(s / "q"));
+
+  // The image writers ignored a failed write; the encoded image now goes through write(2).
+  expect_one_line(run_with_file_limit(1, kRender, {"--scene", "box", "--technique", "hard", "--resolution", "256",
+                                                    "--width", "320", "--height", "240", "--frames", "1", "-o",
+                                                    (s / "render").string()},
+                                      s),
+                  1, "penumbra-render", "lit.png: cannot write: File too large");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(s.dir())) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"fit", "p", "sessions"}));
+  for (const auto& e : fs::recursive_directory_iterator(s / "fit"))
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+}
+
+}  // namespace

@@ -1,0 +1,156 @@
+// common/: error-line text (text::one_line, printable), the shared CLI parse (one line, exit 2)
+// and write_file_atomic (whole or nothing, errno of the failing call, no device replaced).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "cli/checks.h"
+#include "cli/main.h"
+#include "io/atomic_file.h"
+#include "text/printable.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-common-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+TEST(Text, OneLineKeepsUtf8AndEscapesControlBytes) {
+  EXPECT_EQ(text::one_line("size_px: expected 16..4096 (r \xe2\x89\xa4 160 px)"),
+            "size_px: expected 16..4096 (r \xe2\x89\xa4 160 px)");
+  EXPECT_EQ(text::one_line("two\nlines\r\n  and\ttabs "), "two lines and tabs");
+  EXPECT_EQ(text::one_line("--format 'a\x01\x1b[31mred'"), "--format 'a\\x01\\x1b[31mred'");
+  EXPECT_EQ(text::one_line("bad \xff byte"), "bad \\xff byte");
+}
+
+TEST(Text, OneLineCutsLongWordsAndLongLines) {
+  const std::string word(1 << 20, 'x');
+  const std::string line = text::one_line("--family '" + word + "': expected log-weibull");
+  EXPECT_LT(line.size(), 200u);
+  EXPECT_NE(line.find("... (1048577 bytes)': expected log-weibull"), std::string::npos) << line;
+  std::string many;
+  for (int i = 0; i < 100000; ++i) many += "a ";
+  const std::string cut = text::one_line(many);
+  EXPECT_LT(cut.size(), 1100u);
+  EXPECT_NE(cut.find("... (200000 bytes)"), std::string::npos);
+}
+
+TEST(Text, ValidUtf8) {
+  EXPECT_TRUE(text::valid_utf8("plain \xe2\x89\xa4 \xf0\x9f\x99\x82"));
+  EXPECT_FALSE(text::valid_utf8("\xff"));
+  EXPECT_FALSE(text::valid_utf8("\xc0\xaf"));          // overlong '/'
+  EXPECT_FALSE(text::valid_utf8("\xed\xa0\x80"));      // surrogate
+  EXPECT_FALSE(text::valid_utf8("\xe2\x89"));          // cut short
+}
+
+TEST(Cli, ParseErrorsAreOneLineAndExit2) {
+  CLI::App app{"test"};
+  std::string out;
+  int n = 0;
+  app.add_option("-o", out)->check(cli::path_given());
+  app.add_option("-n", n)->check(CLI::Range(0, 10));
+  std::vector<std::string> args = {"tool", "-n", "11"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  std::stringstream captured;
+  auto* old = std::cerr.rdbuf(captured.rdbuf());
+  const auto status = cli::parse(app, static_cast<int>(argv.size()), argv.data(), "tool");
+  std::cerr.rdbuf(old);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(*status, 2);
+  EXPECT_EQ(captured.str(), "tool: -n: Value 11 not in range 0 to 10\n");
+
+  CLI::App again{"test"};
+  again.add_option("-o", out)->check(cli::path_given());
+  args = {"tool", "-o", ""};
+  argv.clear();
+  for (auto& a : args) argv.push_back(a.data());
+  captured.str("");
+  old = std::cerr.rdbuf(captured.rdbuf());
+  const auto empty = cli::parse(again, static_cast<int>(argv.size()), argv.data(), "tool");
+  std::cerr.rdbuf(old);
+  EXPECT_EQ(empty, 2);
+  EXPECT_NE(captured.str().find("expected a path, got ''"), std::string::npos) << captured.str();
+}
+
+TEST(AtomicFile, WritesWholeAndReplaces) {
+  const fs::path dir = scratch("atomic");
+  io::write_file_atomic(dir / "a.txt", "old");
+  io::write_file_atomic(dir / "a.txt", "new text");
+  EXPECT_EQ(read(dir / "a.txt"), "new text");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, RefusesToReplaceADirectoryOrADevice) {
+  const fs::path dir = scratch("atomic-refuse");
+  fs::create_directories(dir / "d");
+  EXPECT_THROW(
+      {
+        try {
+          io::write_file_atomic(dir / "d", "x");
+        } catch (const std::runtime_error& e) {
+          EXPECT_NE(std::string(e.what()).find("d: cannot write: exists and is not a regular file"), std::string::npos);
+          throw;
+        }
+      },
+      std::runtime_error);
+  EXPECT_THROW(io::write_file_atomic("/dev/null", "x"), std::runtime_error);
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  EXPECT_THROW(io::write_file_atomic(dir / "missing" / "a.txt", "x"), std::runtime_error);
+  fs::remove_all(dir);
+}
+
+// A full disk as write(2) sees it (a file-size limit): the errno of the write, not "Success" or a
+// value left over from elsewhere, and the previous file untouched, no temporary left.
+TEST(AtomicFile, AFailedWriteNamesItsReasonAndKeepsTheOldFile) {
+  const fs::path dir = scratch("atomic-full");
+  io::write_file_atomic(dir / "a.txt", "old");
+  int pipe_fd[2];
+  ASSERT_EQ(::pipe(pipe_fd), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    errno = ERANGE;  // a stale errno must not show
+    std::string message = "no error";
+    try {
+      io::write_file_atomic(dir / "a.txt", std::string(100000, 'x'));
+    } catch (const std::exception& e) {
+      message = e.what();
+    }
+    (void)!::write(pipe_fd[1], message.data(), message.size());
+    ::_exit(0);
+  }
+  ::close(pipe_fd[1]);
+  std::string message;
+  char buf[512];
+  for (ssize_t n; (n = ::read(pipe_fd[0], buf, sizeof buf)) > 0;) message.append(buf, static_cast<std::size_t>(n));
+  ::close(pipe_fd[0]);
+  ::waitpid(pid, nullptr, 0);
+  EXPECT_EQ(message, (dir / "a.txt").string() + ": cannot write: File too large");
+  EXPECT_EQ(read(dir / "a.txt"), "old");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  fs::remove_all(dir);
+}
+
+}  // namespace
