@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "data/dataset.h"
-#include "observers/random.h"
+#include "sampling/random.h"
 
 namespace penumbra::analysis {
 
@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // A standard normal draw (Box–Muller) from the platform-independent uniforms.
-double normal(observers::Random& random) {
+double normal(sampling::Random& random) {
   const double u1 = 1.0 - random.uniform(), u2 = random.uniform();
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * 3.141592653589793 * u2);
 }
@@ -37,7 +37,7 @@ std::vector<SimulatedSession> simulate_study(const SimulatedStudy& study) {
   quest::Quest validate(study.quest);
   std::vector<SimulatedSession> sessions;
   for (int p = 0; p < study.participants; ++p) {
-    observers::Random random(observers::derive_seed(study.seed, static_cast<std::uint64_t>(p)));
+    sampling::Random random(sampling::derive_seed(study.seed, static_cast<std::uint64_t>(p)));
     SimulatedSession session;
     char name[32];
     std::snprintf(name, sizeof name, "p%02d", p + 1);

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "fit/statistics.h"
-#include "observers/random.h"
+#include "sampling/random.h"
 
 namespace penumbra::analysis {
 
@@ -184,7 +184,7 @@ BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int i = next++; i < resamples; i = next++) {
-      observers::Random random(observers::derive_seed(seed, static_cast<std::uint64_t>(i)));
+      sampling::Random random(sampling::derive_seed(seed, static_cast<std::uint64_t>(i)));
       ModelSpec spec = base;
       spec.groups.clear();
       for (std::size_t j = 0; j < participants.size(); ++j) {
@@ -318,7 +318,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       std::vector<std::vector<Group>> groups;
       for (auto& [name_p, g] : by_participant) groups.push_back(g);
       cf.bootstrap = bootstrap_participants(cf.spec, groups, cf.linear.params, options.bootstrap,
-                                            observers::derive_seed(options.seed, out.conditions.size()), threads,
+                                            sampling::derive_seed(options.seed, out.conditions.size()), threads,
                                             options.level, one_done);
       const double profile_width = std::log10(cf.c_profile.hi / cf.c_profile.lo);
       const double boot_width = std::log10(cf.bootstrap.c.hi / cf.bootstrap.c.lo);

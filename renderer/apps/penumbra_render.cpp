@@ -19,6 +19,7 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "scene/scene.h"
+#include "shadows/frame_report.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
@@ -175,7 +176,7 @@ int main(int argc, char** argv) {
         io::Image8 color = renderer.read_color();
         io::write_png(dir / "lit.png", color);
         io::write_exr(dir / "visibility.exr", renderer.read_visibility());
-        nlohmann::json report = io::frame_report(info, v.settings, stats);
+        nlohmann::json report = shadows::frame_report(info, v.settings, stats);
         report["scene"] = scene.name;
         report["device"] = io::to_json(ctx);
         report["calibration"] = apps::calibration_json(calibration, v.settings);

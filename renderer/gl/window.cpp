@@ -80,19 +80,19 @@ void WindowContext::swap() { glfwSwapBuffers(window_); }
 
 void WindowContext::framebuffer_size(int& width, int& height) const { glfwGetFramebufferSize(window_, &width, &height); }
 
-io::Image8 WindowContext::read_back() const {
+image::Image8 WindowContext::read_back() const {
   int w = 0, h = 0;
   framebuffer_size(w, h);
   return read_back_buffer(w, h);
 }
 
-io::Image8 read_back_buffer(int w, int h) {
-  io::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
+image::Image8 read_back_buffer(int w, int h) {
+  image::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
   glReadBuffer(GL_BACK);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, shot.pixels.data());
-  io::flip_vertical(shot);
+  image::flip_vertical(shot);
   return shot;
 }
 

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "gl/context.h"
-#include "io/image_io.h"
+#include "image/image.h"
 
 struct GLFWwindow;
 
@@ -12,7 +12,7 @@ namespace penumbra::gl {
 
 // The current context's default framebuffer's back buffer (width × height) as RGBA, top row
 // first: between drawing the UI and swapping, the frame as shown.
-io::Image8 read_back_buffer(int width, int height);
+image::Image8 read_back_buffer(int width, int height);
 
 class WindowContext {
  public:
@@ -33,7 +33,7 @@ class WindowContext {
   void swap();
   void framebuffer_size(int& width, int& height) const;
   // The back buffer as RGBA, top row first: between render_ui and swap, the frame with its panel.
-  io::Image8 read_back() const;
+  image::Image8 read_back() const;
 
  private:
   GLFWwindow* window_ = nullptr;

@@ -1,22 +1,10 @@
 #include "io/report.h"
 
-#include <cmath>
-
 namespace penumbra::io {
 
 nlohmann::json to_json(const gl::ContextInfo& info) {
   return {{"vendor", info.vendor},   {"renderer", info.renderer}, {"version", info.version},
           {"platform", info.platform}, {"software", info.software}, {"max_texture_size", info.max_texture_size}};
-}
-
-nlohmann::json to_json(const shadows::LightFrame& l) {
-  return {{"projection", l.perspective ? "perspective" : "orthographic"},
-          {"fitted", l.fitted},
-          {"receivers_visible", l.receivers_visible},
-          {"s_xy", l.s_xy},
-          {"extent_ws", l.extent_ws},
-          {"near_ws", l.near_ws},
-          {"far_ws", l.far_ws}};
 }
 
 nlohmann::json to_json(const std::vector<gl::PassStats>& stats) {
@@ -25,41 +13,6 @@ nlohmann::json to_json(const std::vector<gl::PassStats>& stats) {
     passes.push_back({{"pass", s.pass}, {"method", gl::to_string(s.method)}, {"median_ms", s.median_ms},
                       {"min_ms", s.min_ms}, {"max_ms", s.max_ms}, {"samples", s.samples}});
   return passes;
-}
-
-nlohmann::json frame_report(const shadows::FrameInfo& frame, const shadows::ShadowSettings& settings,
-                            const std::vector<gl::PassStats>& stats) {
-  nlohmann::json j;
-  j["settings"] = shadows::to_json(settings);
-  j["resolution_texels"] = frame.resolution_texels;
-  j["image_px"] = {frame.width_px, frame.height_px};
-  j["light"] = to_json(frame.light);
-  if (frame.filter_radius_texels > 0) j["filter_radius_texels"] = frame.filter_radius_texels;
-  j["passes_run"] = frame.passes;
-  j["timings"] = to_json(stats);
-  j["adaptive"] = frame.adaptive;
-  j["resolution_source"] = frame.resolution_source;
-  j["storage"] = frame.storage;
-  j["atlas_texels"] = {frame.atlas_width, frame.atlas_height};
-  nlohmann::json cascades = nlohmann::json::array();
-  for (const auto& c : frame.cascades) {
-    nlohmann::json cj{{"resolution_texels", c.resolution_texels},
-                      {"split_view_depth_ws", {c.split_near_ws, c.split_far_ws}},
-                      {"extent_ws", c.light.extent_ws},
-                      {"s_xy", c.light.s_xy},
-                      {"atlas_origin_texels", {c.atlas_x, c.atlas_y}}};
-    if (frame.adaptive) cj["required_texels"] = std::isfinite(c.required_texels) ? nlohmann::json(c.required_texels) : nlohmann::json("inf");
-    cascades.push_back(cj);
-  }
-  j["cascades"] = cascades;
-  if (frame.pcss_requirement.valid) {
-    const auto& r = frame.pcss_requirement;
-    j["pcss_requirement"] = {{"required_texels", r.required_texels},
-                             {"evaluated_pixels", r.evaluated_pixels},
-                             {"clamped_fraction", r.clamped_fraction},
-                             {"above_max_fraction", r.above_max_fraction}};
-  }
-  return j;
 }
 
 }  // namespace penumbra::io

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "gl/context.h"
+#include "sampling/poisson_disk.h"
 #include "shadows/contract.h"
 #include "shadows/renderer.h"
 #include "shadows/scoped_pass.h"
@@ -204,7 +205,7 @@ void FrameContext::set_technique_uniforms(const gl::Program& prog) const {
   }
   if (const int taps = entry.poisson_taps ? entry.poisson_taps(s) : 0; taps > 0) {
     auto it = res.poisson.find(taps);
-    if (it == res.poisson.end()) it = res.poisson.emplace(taps, poisson_disk(taps)).first;
+    if (it == res.poisson.end()) it = res.poisson.emplace(taps, sampling::poisson_disk(taps)).first;
     prog.set("u_poisson", std::span<const glm::vec2>(it->second));
   }
 }

@@ -40,9 +40,6 @@ struct FrameInfo {
   PcssRequirementInfo pcss_requirement;  // as used for this frame's resolution (measured one frame earlier)
 };
 
-// Poisson-disk taps in the unit disk (deterministic best-candidate set, outermost tap at radius 1).
-std::vector<glm::vec2> poisson_disk(int taps);
-
 struct FrameResources;
 class Pass;
 

@@ -16,6 +16,7 @@
 #include "gl/context.h"
 #include "observers/image_observer.h"
 #include "quest/psychometric.h"
+#include "sampling/random.h"
 #include "stimuli/stimulus.h"
 
 using namespace penumbra;
@@ -64,7 +65,7 @@ int main(int argc, char** argv) {
         spec.filter_radius_px = shown.filter_radius_px;
         double jagged = 0, straight = 0;
         for (int s = 0; s < seeds; ++s) {
-          spec.seed = observers::derive_seed(11, static_cast<std::uint64_t>(s));
+          spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
           const stimuli::StimulusPair pair = renderer.render(spec);
           jagged += eye.local_deviation(pair.artifact, spec, pair.geometry, false) / seeds;
           straight += eye.local_deviation(pair.line, spec, pair.geometry, false) / seeds;

@@ -22,6 +22,7 @@
 #include "observers/image_observer.h"
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
+#include "sampling/random.h"
 #include "stimuli/stimulus.h"
 #ifdef PENUMBRA_STUDY_GUI
 #include "gui/study_gui.h"
@@ -285,7 +286,7 @@ int run_study(const RunOptions& o) {
   for (std::size_t r = 0; r < session.config().rounds.size(); ++r) conditions[session.condition(static_cast<int>(r))] = model;
   while (const auto plan = session.next()) {
     bool correct = false;
-    const std::uint64_t trial_seed = observers::derive_seed(observer_seed, static_cast<std::uint64_t>(plan->trial));
+    const std::uint64_t trial_seed = sampling::derive_seed(observer_seed, static_cast<std::uint64_t>(plan->trial));
     if (image_observer) {
       const stimuli::StimulusPair pair = renderer->render(plan->stimulus);
       observers::ImageObserver eye(image_params, trial_seed);
@@ -299,7 +300,7 @@ int run_study(const RunOptions& o) {
         correct = eye.first_is_jagged(left, right, plan->stimulus, pair.geometry) == left_jagged;
       }
     } else if (yesno && plan->target == "straight") {
-      correct = !(observers::Random(trial_seed).uniform() < false_alarm);
+      correct = !(sampling::Random(trial_seed).uniform() < false_alarm);
     } else {
       observers::PsychometricObserver observer(conditions, trial_seed);
       correct = observer.respond({session.condition(plan->round), plan->stimulus.artifact_px,

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "io/image_io.h"
-#include "observers/random.h"
+#include "sampling/random.h"
 #include "stimuli/stimulus.h"
 
 namespace penumbra::observers {
@@ -73,7 +73,7 @@ class ImageObserver {
   double decision(const io::Image8& image, const stimuli::StimulusSpec& spec, const stimuli::Geometry& geometry);
 
   ImageObserverParams params_;
-  Random random_;
+  sampling::Random random_;
 };
 
 }  // namespace penumbra::observers

@@ -9,9 +9,9 @@
 #include <string>
 
 #include "observers/observer.h"
-#include "observers/random.h"
 #include "published.h"
 #include "quest/psychometric.h"
+#include "sampling/random.h"
 
 namespace penumbra::observers {
 
@@ -44,7 +44,7 @@ class PsychometricObserver : public Observer {
   const Planted& planted(const std::string& condition) const;
 
   std::map<std::string, Planted> conditions_;
-  Random random_;
+  sampling::Random random_;
 };
 
 // The model's x for a stimulus: the intensity for the log-unit models, the ratio

@@ -8,6 +8,7 @@
 
 #include "quest/psychometric.h"
 #include "quest/quest_plus.h"
+#include "sampling/random.h"
 
 namespace penumbra::observers {
 namespace {
@@ -105,7 +106,7 @@ SimulationResult simulate_runs(const SimulationConfig& config, const std::functi
   result.runs.reserve(static_cast<std::size_t>(config.runs));
   for (int run = 0; run < config.runs; ++run) {
     PsychometricObserver observer({{kCondition, config.planted}},
-                                  derive_seed(config.seed, static_cast<std::uint64_t>(run)));
+                                  sampling::derive_seed(config.seed, static_cast<std::uint64_t>(run)));
     result.runs.push_back(config.method == Method::quest ? run_quest(config, observer)
                                                          : run_quest_plus(config, observer));
     if (progress) progress(run + 1, config.runs);

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "observers/random.h"
+#include "sampling/random.h"
 
 namespace penumbra::procedure {
 
@@ -53,7 +53,7 @@ const Staircase& Procedure::staircase(const TrialPlan& plan) const {
 std::optional<TrialPlan> Procedure::next() const {
   TrialPlan p;
   p.trial = trials_done_;
-  observers::Random random(observers::derive_seed(config_.seed, static_cast<std::uint64_t>(p.trial)));
+  sampling::Random random(sampling::derive_seed(config_.seed, static_cast<std::uint64_t>(p.trial)));
   double artifact = 0, x = 0;
   if (practice_done_ < config_.practice_trials) {
     p.practice = true;

@@ -11,8 +11,8 @@
 #include "gl/embedded_files.h"
 #include "gl/objects.h"
 #include "gl/shader_library.h"
-#include "observers/random.h"
-#include "shadows/renderer.h"
+#include "sampling/poisson_disk.h"
+#include "sampling/random.h"
 
 namespace penumbra::embedded {
 std::span<const EmbeddedFile> study_shaders();
@@ -21,7 +21,7 @@ std::span<const EmbeddedFile> study_shaders();
 namespace penumbra::stimuli {
 
 Geometry make_geometry(const StimulusSpec& spec) {
-  observers::Random random(observers::derive_seed(spec.seed, 0x5717));
+  sampling::Random random(sampling::derive_seed(spec.seed, 0x5717));
   Geometry g;
   const double a = spec.artifact_px;
   g.orientation = static_cast<int>(random.bits() % 8);
@@ -186,7 +186,7 @@ StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometr
   glProgramUniform1f(id, p.location("u_radius_px"), static_cast<float>(spec.filter_radius_px));
   glProgramUniform1i(id, p.location("u_kernel"), static_cast<int>(spec.kernel));
   glProgramUniform2f(id, p.location("u_line"), static_cast<float>(g.line_m), static_cast<float>(g.line_b));
-  std::vector<glm::vec2> taps = shadows::poisson_disk(spec.poisson_taps);
+  std::vector<glm::vec2> taps = sampling::poisson_disk(spec.poisson_taps);
   const float cr = static_cast<float>(std::cos(g.poisson_rotation)), sr = static_cast<float>(std::sin(g.poisson_rotation));
   for (auto& t : taps) t = glm::vec2(cr * t.x - sr * t.y, sr * t.x + cr * t.y);
   glProgramUniform2fv(id, p.location("u_taps"), static_cast<GLsizei>(taps.size()), &taps[0].x);

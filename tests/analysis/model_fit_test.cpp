@@ -7,7 +7,7 @@
 
 #include "fit/model_fit.h"
 #include "fit/statistics.h"
-#include "observers/random.h"
+#include "sampling/random.h"
 
 namespace {
 
@@ -22,7 +22,7 @@ std::vector<BinomialRow> simulate(psy::Model family, double u, double beta, doub
   spec.family = family;
   const double threshold_x = family == psy::Model::weibull ? std::pow(10.0, u) : u;
   const double alpha = psy::alpha_for_threshold(family, threshold_x, 0.82, beta, 0.5, lambda);
-  observers::Random random(seed);
+  sampling::Random random(seed);
   std::vector<BinomialRow> rows;
   for (double x : levels) {
     const double p = psy::probability(family, x, psy::Params<double>{alpha, beta, 0.5, lambda});

@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "observers/random.h"
 #include "quest/psychometric.h"
 #include "quest/quest_plus.h"
+#include "sampling/random.h"
 
 namespace {
 
@@ -55,7 +55,7 @@ TEST(QuestPlus, EstimatesTheSlope) {
   };
   const auto estimate = [&](double planted_slope) {
     QuestPlus staircase(steps(-1.5, 0.5, 0.025), penumbra::quest::quest_plus_grid(thresholds, slopes, {0.01}), model);
-    penumbra::observers::Random random(5);
+    penumbra::sampling::Random random(5);
     const QuestPlusParameter truth{-0.5, planted_slope, 0.01};
     for (int trial = 0; trial < 300; ++trial) {
       const double x = staircase.next();

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "observers/random.h"
 #include "quest/quest.h"
+#include "sampling/random.h"
 
 namespace {
 
@@ -212,7 +212,7 @@ TEST(Quest, IntensityQuantisationRoundsHalvesAwayFromZero) {
 TEST(Quest, TenThousandTrialsWithoutUnderflow) {
   const QuestParams params = default_params();
   Quest quest(params);
-  penumbra::observers::Random random(7);
+  penumbra::sampling::Random random(7);
   const double t_actual = -0.62;
   for (int trial = 0; trial < 10000; ++trial) {
     const double intensity = quest.quantile();
@@ -233,7 +233,7 @@ TEST(Quest, TenThousandTrialsWithoutUnderflow) {
 
 TEST(Quest, ReplayRestoresTheExactState) {
   Quest live(default_params());
-  penumbra::observers::Random random(3);
+  penumbra::sampling::Random random(3);
   for (int trial = 0; trial < 200; ++trial) {
     const double intensity = trial % 3 == 0 ? live.mean() : live.quantile();
     live.update(intensity, random.uniform() < 0.7 ? 1 : 0);
@@ -272,7 +272,7 @@ TEST(Quest, BetaAnalysisSeparatesShallowFromSteepObservers) {
     QuestParams truth = params;
     truth.beta = planted_beta;
     const Quest observer(truth);
-    penumbra::observers::Random random(11);
+    penumbra::sampling::Random random(11);
     for (int trial = 0; trial < 400; ++trial) {
       // Spread trials around threshold so the slope is visible.
       const double intensity = quest.quantile() + 0.15 * std::sin(trial * 0.7);

@@ -10,6 +10,7 @@
 
 #include "gl_test_env.h"
 #include "observers/image_observer.h"
+#include "sampling/poisson_disk.h"
 #include "shadows/renderer.h"
 #include "stimuli/stimulus.h"
 
@@ -45,7 +46,7 @@ double integrate(const std::function<double(double)>& f, double lo, double hi, s
 struct Reference {
   const StimulusSpec& spec;
   const Geometry& g;
-  std::vector<glm::vec2> taps = shadows::poisson_disk(spec.poisson_taps);
+  std::vector<glm::vec2> taps = sampling::poisson_disk(spec.poisson_taps);
   double a() const { return spec.artifact_px; }
   // Texel-centre rule: a texel is occluded when its centre lies below the edge.
   bool texel_lit(long i, long j) const {
@@ -129,7 +130,7 @@ TEST_P(StimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
   const auto pair = renderer.render(spec);
   const Geometry& g = pair.geometry;
   Reference ref{spec, g, {}};
-  ref.taps = shadows::poisson_disk(spec.poisson_taps);
+  ref.taps = sampling::poisson_disk(spec.poisson_taps);
 
   // The rasterized shadow map is the texel-centre rule exactly.
   const auto& map = renderer.last_shadow_map();

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <random>
 
-namespace penumbra::observers {
+namespace penumbra::sampling {
 
 class Random {
  public:
@@ -27,4 +27,4 @@ inline std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t index) {
   return z ^ (z >> 31);
 }
 
-}  // namespace penumbra::observers
+}  // namespace penumbra::sampling

@@ -1,0 +1,18 @@
+#pragma once
+// The JSON report of a rendered frame: settings, light frame, passes and their times with the
+// method that produced each time, the resolution used per cascade.
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gl/timer.h"
+#include "shadows/fitting.h"
+#include "shadows/renderer.h"
+#include "shadows/settings.h"
+
+namespace penumbra::shadows {
+
+nlohmann::json to_json(const LightFrame& light);
+nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settings, const std::vector<gl::PassStats>& stats);
+
+}  // namespace penumbra::shadows
