@@ -191,35 +191,30 @@ bool rbsm_uniform(vec3 sc, vec2 gradient, ivec2 first, ivec2 last, float value) 
 float shadow_rpcf(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
   vec2 p = sc.xy * g_shadow_res;
   if (radius_texels <= 0.0) return rbsm_visibility_at(sc, gradient, p);
-  vec2 lo = p - radius_texels;
-  vec2 hi = p + radius_texels;
-  ivec2 first = ivec2(floor(lo));
-  ivec2 last = ivec2(ceil(hi)) - 1;
-  int span = last.x - first.x + 1;
-  float norm = 1.0 / (4.0 * radius_texels * radius_texels);
+  BoxFootprint box = box_footprint(p, radius_texels);
   float sum = 0.0;
-  if (span <= max_taps) {
+  if (box.span <= max_taps) {
     // No silhouette under the box or next to it: every texel keeps its test.
     float centre = rbsm_test(sc, gradient, ivec2(floor(p)));
-    if (rbsm_uniform(sc, gradient, first - 1, last + 1, centre)) return centre;
-    for (int j = first.y; j <= last.y; ++j) {
-      for (int i = first.x; i <= last.x; ++i) {
+    if (rbsm_uniform(sc, gradient, box.first - 1, box.last + 1, centre)) return centre;
+    for (int j = box.first.y; j <= box.last.y; ++j) {
+      for (int i = box.first.x; i <= box.last.x; ++i) {
         vec2 t = vec2(i, j);
-        vec2 a = clamp(lo - t, 0.0, 1.0), b = clamp(hi - t, 0.0, 1.0);
+        vec2 a = clamp(box.lo - t, 0.0, 1.0), b = clamp(box.hi - t, 0.0, 1.0);
         if (b.x > a.x && b.y > a.y) sum += rbsm_texel_integral(sc, gradient, ivec2(i, j), a, b);
       }
     }
-    return sum * norm;
+    return sum * box.norm;
   }
-  int stride = (span + max_taps - 1) / max_taps;
-  for (int j = first.y; j <= last.y; j += stride) {
-    float wy = overlap(float(j), float(j + stride), lo.y, hi.y);
-    for (int i = first.x; i <= last.x; i += stride) {
-      float wx = overlap(float(i), float(i + stride), lo.x, hi.x);
+  int stride = (box.span + max_taps - 1) / max_taps;
+  for (int j = box.first.y; j <= box.last.y; j += stride) {
+    float wy = overlap(float(j), float(j + stride), box.lo.y, box.hi.y);
+    for (int i = box.first.x; i <= box.last.x; i += stride) {
+      float wx = overlap(float(i), float(i + stride), box.lo.x, box.hi.x);
       sum += wx * wy * rbsm_visibility_at(sc, gradient, vec2(i, j) + 0.5 * float(stride));
     }
   }
-  return sum * norm;
+  return sum * box.norm;
 }
 
 #if defined(TECHNIQUE_RBSM) && !defined(PENUMBRA_COMPUTE)

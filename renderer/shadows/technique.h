@@ -47,6 +47,18 @@ enum class RadiusReading {
   penumbra,      // a penumbra estimated per pixel, bounded below in world units: rule_radius_ws
 };
 
+// The filter-radius accessors of a technique whose settings section holds `radius` and
+// `radius_unit` (PENUMBRA_RADIUS_ROWS), e.g. `.filter_radius = section_radius<&ShadowSettings::vsm>`.
+template <auto Section>
+FilterRadius section_radius(const ShadowSettings& s) {
+  return {(s.*Section).radius, (s.*Section).radius_unit};
+}
+template <auto Section>
+void set_section_radius(ShadowSettings& s, FilterRadius r) {
+  (s.*Section).radius = r.radius;
+  (s.*Section).radius_unit = r.unit;
+}
+
 struct TechniqueEntry {
   std::string_view name;    // CLI/JSON name and the settings section of its parameters
   std::string_view define;  // what the shading pass defines for it (shading.frag)

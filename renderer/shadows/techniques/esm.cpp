@@ -26,8 +26,8 @@ const TechniqueEntry& esm_technique() {
       .name = "esm",
       .define = "TECHNIQUE_ESM",
       .radius = RadiusReading::fixed_filter,
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.esm.radius, s.esm.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.esm.radius = r.radius, s.esm.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::esm>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::esm>,
       // exp(c t) of normalized linear depth t, one float; the far plane t = 1 reads exp(c). Summed
       // anew per window: a sliding sum's rounding follows the largest value in a line, exp(c).
       .moments =

@@ -44,8 +44,8 @@ const TechniqueEntry& evsm_technique() {
       .name = "evsm",
       .define = "TECHNIQUE_EVSM",
       .radius = RadiusReading::fixed_filter,
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.evsm.radius, s.evsm.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.evsm.radius = r.radius, s.evsm.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::evsm>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::evsm>,
       .moments = [](const ShadowSettings& s) { return std::optional<MomentsLayout>(evsm_layout(s.evsm)); },
       // The exponents serve the moments pass and the shading pass alike.
       .set_uniforms =

@@ -23,8 +23,8 @@ const TechniqueEntry& msm_technique() {
       .name = "msm",
       .define = "TECHNIQUE_MSM",
       .radius = RadiusReading::fixed_filter,
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.msm.radius, s.msm.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.msm.radius = r.radius, s.msm.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::msm>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::msm>,
       // (z, z², z³, z⁴) of z in [-1, 1]; the far plane z = 1 has every moment 1.
       .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RGBA32F, {1, 1, 1, 1}}); },
       .set_uniforms =

@@ -26,8 +26,8 @@ const TechniqueEntry& pcf_technique() {
       .define = "TECHNIQUE_PCF",
       .radius = RadiusReading::fixed_filter,
       .variant_setting = "kernel",
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.pcf.radius, s.pcf.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.pcf.radius = r.radius, s.pcf.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::pcf>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::pcf>,
       .variant_defines =
           [](const ShadowSettings& s, std::vector<gl::ShaderDefine>& d) {
             if (s.pcf.kernel == Kernel::grid) d.push_back({"KERNEL_GRID", "1"});

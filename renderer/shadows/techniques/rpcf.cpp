@@ -22,8 +22,8 @@ const TechniqueEntry& rpcf_technique() {
       .name = "rpcf",
       .define = "TECHNIQUE_RPCF",
       .radius = RadiusReading::fixed_filter,
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.rpcf.radius, s.rpcf.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.rpcf.radius = r.radius, s.rpcf.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::rpcf>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::rpcf>,
       .set_uniforms =
           [](const gl::Program& p, const ShadowSettings& s) {
             p.set("u_rbsm_max_search", s.rpcf.max_search_texels);

@@ -22,8 +22,8 @@ const TechniqueEntry& vsm_technique() {
       .name = "vsm",
       .define = "TECHNIQUE_VSM",
       .radius = RadiusReading::fixed_filter,
-      .filter_radius = [](const ShadowSettings& s) { return FilterRadius{s.vsm.radius, s.vsm.radius_unit}; },
-      .set_filter_radius = [](ShadowSettings& s, FilterRadius r) { s.vsm.radius = r.radius, s.vsm.radius_unit = r.unit; },
+      .filter_radius = section_radius<&ShadowSettings::vsm>,
+      .set_filter_radius = set_section_radius<&ShadowSettings::vsm>,
       // (t, t² + texel variance) of normalized linear depth t; the far plane t = 1.
       .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RG32F, {1, 1, 0, 0}}); },
       .set_uniforms =
