@@ -7,6 +7,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "scene/outdoor.h"
 #include "scene/scene.h"
@@ -118,7 +119,8 @@ TEST(OutdoorScene, SunAndFloodlight) {
 }
 
 TEST(OutdoorScene, WrittenSceneLoadsBackQuickly) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "penumbra_outdoor_scene_write";
+  // Per process: another checkout running the same test at the same time must not share it.
+  const fs::path dir = fs::path(::testing::TempDir()) / ("penumbra_outdoor_scene_write-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const Scene s = make_outdoor_scene({});
   write_scene_file(s, dir / "outdoor.json");
