@@ -16,6 +16,7 @@ packages=(
   python3-matplotlib
   xvfb xauth fonts-dejavu-core
   xdotool  # the study GUI test types keys and clicks into the participant window under Xvfb
+  clang libclang-rt-14-dev  # the fuzz preset: clang's libFuzzer and sanitizer runtimes (Debian 12: clang 14)
 )
 
 missing=()

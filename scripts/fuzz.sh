@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (`fuzz` preset: clang, ASan + UBSan, build-fuzz/) and runs each for
+# SECONDS (default 20) on one core, one after another, starting from tests/fuzz/corpus/<target>/.
+# Fails on any finding: the crashing input is left in build-fuzz/findings/<target>/ (add it to the
+# corpus once fixed, so fuzz_corpus_replay checks it in every normal build). New coverage inputs go
+# to build-fuzz/corpus/<target>/, never into the tracked seeds.
+#   scripts/fuzz.sh [SECONDS] [TARGET...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-20}"
+shift || true
+targets=("$@")
+if [[ ${#targets[@]} -eq 0 ]]; then
+  targets=(scene_file model_obj model_gltf study_config session_json trials_csv calibration counts_csv)
+fi
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "${FUZZ_BUILD_JOBS:-$(nproc)}"
+status=0
+for target in "${targets[@]}"; do
+  exe="build-fuzz/tests/fuzz/fuzz_${target}"
+  work="build-fuzz/corpus/${target}" findings="build-fuzz/findings/${target}"
+  mkdir -p "$work" "$findings"
+  log="build-fuzz/fuzz-${target}.log"
+  # -rss_limit_mb / -timeout: an input that needs more than 2 GB or 10 s is a finding too.
+  if "$exe" "$work" "tests/fuzz/corpus/${target}" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
+       -rss_limit_mb=2048 -artifact_prefix="$findings/" -print_final_stats=1 >"$log" 2>&1; then
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+    echo "fuzz ${target}: ${execs:-?} execs in ${seconds} s (${rate:-?}/s), no findings"
+  else
+    echo "fuzz ${target}: FINDING (see $log and $findings/)" >&2
+    grep -m3 -E "ERROR|finding|SUMMARY" "$log" >&2 || true
+    status=1
+  fi
+done
+exit $status
