@@ -162,6 +162,8 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
                                "(--accept-inconsistent fits it anyway, listed in report.json and summary.txt)");
     }
   }();
+  // Before the fit: sessions of different kernels or observer kinds are refused at once.
+  const CalibrationProvenance provenance = calibration_provenance(data);
   const auto start = std::chrono::steady_clock::now();
   const StudyFit fit = [&] {
     ProgressBar bar("bootstrap", !so.no_progress && ::isatty(STDERR_FILENO));
@@ -175,7 +177,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   for (const fs::path& p : so.inputs) inputs.push_back(p.string());
   const std::string created = utc_now();
   const ReferenceTable* ref = reference ? &*reference : nullptr;
-  const nlohmann::json calibration = calibration_json(fit, so.condition, created, inputs);
+  const nlohmann::json calibration = calibration_json(fit, so.condition, created, inputs, provenance);
   nlohmann::json report = report_json(fit, ref, inputs, created);
   report["fit_seconds"] = seconds;
   report["threads"] = so.threads > 0 ? so.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -188,6 +190,8 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   io::write_file_atomic(out.path() / "calibration.json", json_input::dump(calibration, 2) + "\n");
   out.commit();
   std::cout << summary;
+  std::printf("calibration.json: entry %s %s (%s, %d participant%s)\n", provenance.technique.c_str(), provenance.kernel.c_str(),
+              provenance.obtained_by.c_str(), provenance.participants, provenance.participants == 1 ? "" : "s");
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
               so.output.string().c_str());
   std::printf("plots: /usr/bin/python3 scripts/plot_fit.py %s\n", so.output.string().c_str());

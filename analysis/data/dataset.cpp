@@ -48,6 +48,10 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
   }
   info.session_id = j["session_id"].get<std::string>();
   info.participant = j["participant"].get<std::string>();
+  if (j.contains("observer")) {
+    if (!j["observer"].is_string()) throw std::runtime_error(file + ": observer: expected a string");
+    info.observer = j["observer"].get<std::string>();
+  }
   if (j.contains("quest")) {
     const auto& q = j["quest"];
     if (!q.is_object()) throw std::runtime_error(file + ": quest: expected an object");

@@ -21,6 +21,9 @@ struct SessionInfo {
   int quest_dim = 0;
   double sd_below = 0.1;                   // the study's convergence criterion (session.json), else 0.1
   bool torn_tail = false;                  // the last line was cut (a trial unanswered when the app died)
+  // session.json's "observer": "" for a person, else the simulated observer's spec
+  // ("psychometric:c=..", "image:..").
+  std::string observer;
 };
 
 struct Trial {

@@ -113,6 +113,7 @@ Dataset as_dataset(const SimulatedStudy& study, const std::vector<SimulatedSessi
     info.log_file = s.participant + "/trials.csv";
     info.quest = q.params();
     info.quest_dim = q.dim();
+    info.observer = "psychometric:c=" + format_number(s.c_planted);
     const std::size_t index = data.sessions.size();
     data.sessions.push_back(info);
     int line = 1;
@@ -133,6 +134,7 @@ std::vector<fs::path> write_sessions(const SimulatedStudy& study, const std::vec
         {"participant", s.participant},
         {"software", {{"name", "penumbra-fit simulate"}, {"version", "0.1.0"}}},
         {"planted_c", s.c_planted},
+        {"observer", "psychometric:c=" + format_number(s.c_planted)},
         {"quest", {{"t_guess", q.params().t_guess}, {"t_guess_sd", q.params().t_guess_sd},
                    {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta}, {"delta", q.params().delta},
                    {"gamma", q.params().gamma}, {"grain", q.params().grain}, {"dim", q.dim()},

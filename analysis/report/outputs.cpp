@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -99,8 +100,38 @@ const ConditionFit& calibration_condition(const StudyFit& fit, const std::option
   return *worst;
 }
 
+CalibrationProvenance calibration_provenance(const Dataset& data) {
+  CalibrationProvenance p;
+  auto kind = [](const std::string& observer) -> std::string {
+    if (observer.empty()) return "study";
+    return observer.rfind("image", 0) == 0 ? "image-observer" : "simulated";
+  };
+  std::set<std::string> participants;
+  std::size_t first = data.sessions.size();  // the session p was taken from
+  for (const Trial& t : data.trials) {
+    const SessionInfo& s = data.sessions[t.session];
+    if (first == data.sessions.size()) {
+      first = t.session;
+      p.kernel = t.row.kernel;
+      p.obtained_by = kind(s.observer);
+    }
+    const SessionInfo& f = data.sessions[first];
+    if (t.row.kernel != p.kernel)
+      throw std::runtime_error(s.log_file + ": kernel '" + t.row.kernel + "' where " + f.log_file + " has '" + p.kernel +
+                               "': a c per kernel needs one fit per kernel (fit the sessions of each kernel separately)");
+    if (kind(s.observer) != p.obtained_by)
+      throw std::runtime_error(s.log_file + ": answered by " + (s.observer.empty() ? "a person" : "observer '" + s.observer + "'") +
+                               " where " + f.log_file + " was answered by " +
+                               (f.observer.empty() ? "a person" : "observer '" + f.observer + "'") +
+                               ": people and simulated observers are not pooled (fit them separately)");
+    participants.insert(s.participant);
+  }
+  p.participants = static_cast<int>(participants.size());
+  return p;
+}
+
 Json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition, const std::string& created_utc,
-                      const std::vector<std::string>& inputs) {
+                      const std::vector<std::string>& inputs, const CalibrationProvenance& provenance) {
   const ConditionFit& chosen = calibration_condition(fit, condition);
   Json per = Json::array();
   for (const ConditionFit& c : fit.conditions) {
@@ -120,13 +151,17 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
          << " trials from " << fit.sessions << " sessions; ci95 by profile likelihood; "
          << (condition ? "condition chosen by --condition" : "the condition with the largest c (worst case)")
          << "; inputs: " << join(inputs, " ");
-  return {{"c", number(chosen.c)},
-          {"ci95", {number(std::min(chosen.c_profile.lo, chosen.c)), number(std::max(chosen.c_profile.hi, chosen.c))}},
-          {"condition", chosen.condition},
-          {"source", source.str()},
-          {"per_condition", per},
-          {"flags", chosen.flags.list},
-          {"created_utc", created_utc}};
+  const Json entry = {{"technique", provenance.technique},
+                      {"kernel", provenance.kernel},
+                      {"c", number(chosen.c)},
+                      {"ci95", {number(std::min(chosen.c_profile.lo, chosen.c)), number(std::max(chosen.c_profile.hi, chosen.c))}},
+                      {"condition", chosen.condition},
+                      {"obtained_by", provenance.obtained_by},
+                      {"participants", provenance.participants},
+                      {"trials", fit.trials},
+                      {"per_condition", per},
+                      {"flags", chosen.flags.list}};
+  return {{"schema_version", 2}, {"created_utc", created_utc}, {"source", source.str()}, {"entries", Json::array({entry})}};
 }
 
 Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std::vector<std::string>& inputs,

@@ -12,25 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/calibration.h"
 #include "published.h"
 
 namespace penumbra::adaptive {
-
-// c as the fitter writes it (calibration.json, see DESIGN.md).
-struct Calibration {
-  double c = kPublishedC;
-  double ci95_lo = kPublishedC;
-  double ci95_hi = kPublishedC;
-  std::string condition;
-  std::string source;  // the file it came from, or "built-in"
-};
-
-// Reads calibration.json; throws CalibrationError naming the file and field on bad input.
-class CalibrationError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-Calibration load_calibration(const std::filesystem::path& path);
 
 struct ResolutionLimits {
   int min_texels = 16;

@@ -84,41 +84,96 @@ inline void add_light_size_option(CLI::App& app, float& size) {
       ->check(cli::finite_range(0.0, 1e6));
 }
 
-// --calibration FILE: the constant c of the adaptive rule, from the fitter's calibration.json
-// (by default the published c). apply_calibration() reads it once the command line is parsed.
+// --calibration FILE: the constant c of the adaptive rule per technique, from the fitter's
+// calibration.json (by default the published c). apply_calibration() reads it once the command
+// line is parsed; apply_calibration_for() sets c for each technique an app renders.
 struct CalibrationOption {
   std::string file = PENUMBRA_SOURCE_DIR "/data/calibration/default.json";
   adaptive::Calibration loaded;      // after apply_calibration
-  bool c_from_command_line = false;  // --adaptive.c was given and won over the file
+  bool c_from_command_line = false;  // --adaptive.c was given and wins over the file
+  bool ci_upper = false;             // use the entries' upper ci95 bound instead of c
+  float command_line_c = 0;          // --adaptive.c's value when given
 
-  // Where c came from, for a line of output: the file, or --adaptive.c.
-  std::string source_of_c() const { return c_from_command_line ? "--adaptive.c" : loaded.source; }
+  // The entry the file has for the settings' technique and kernel (or its fallback).
+  adaptive::CalibrationChoice choice(const shadows::ShadowSettings& s) const {
+    return loaded.choose(shadows::to_string(s.technique), shadows::variant_choice(s));
+  }
+  // Where the settings' c came from, for a line of output: --adaptive.c, or the file's entry.
+  std::string source_of_c(const shadows::ShadowSettings& s) const {
+    return c_from_command_line ? "--adaptive.c" : choice(s).from + " of " + loaded.source;
+  }
 };
 
 inline void add_calibration_option(CLI::App& app, CalibrationOption& calibration) {
   app.add_option("--calibration", calibration.file,
-                 "calibration.json with the constant c of the adaptive rule (an explicit --adaptive.c wins over the file)")
+                 "calibration.json with the constant c of the adaptive rule per technique (an explicit --adaptive.c wins over the file)")
       ->capture_default_str();
 }
 
-// Reads the calibration file (throws adaptive::CalibrationError naming the file and the field) and
-// sets settings.adaptive.c to its c, or to its ci95 upper bound with `ci_upper`, unless
-// --adaptive.c was given on the command line. Call it before creating any output.
+// Sets settings.adaptive.c to the c of the settings' technique (its ci95 upper bound with
+// ci_upper), unless --adaptive.c was given. Call it again whenever the technique changes.
+inline void apply_calibration_for(const CalibrationOption& calibration, shadows::ShadowSettings& settings) {
+  if (calibration.c_from_command_line) {
+    settings.adaptive.c = calibration.command_line_c;
+    return;
+  }
+  const adaptive::CalibrationChoice chosen = calibration.choice(settings);
+  settings.adaptive.c = static_cast<float>(calibration.ci_upper ? chosen.ci95_hi : chosen.c);
+}
+
+// For a window whose panel can switch the technique: re-applies the calibration when the technique
+// or its kernel changed since the last call, so a c edited in the panel stays until then.
+class CalibrationFollower {
+ public:
+  void update(const CalibrationOption& calibration, shadows::ShadowSettings& settings) {
+    const std::string key = std::string(shadows::to_string(settings.technique)) + " " + shadows::variant_choice(settings);
+    if (key == last_) return;
+    if (!last_.empty()) apply_calibration_for(calibration, settings);
+    last_ = key;
+  }
+
+ private:
+  std::string last_;
+};
+
+// Reads the calibration file (throws adaptive::CalibrationError naming the file and the field,
+// also for a technique the registry does not know) and applies it to `settings`. Call it before
+// creating any output.
 inline void apply_calibration(const CLI::App& app, CalibrationOption& calibration, shadows::ShadowSettings& settings,
                               bool ci_upper = false) {
   calibration.loaded = adaptive::load_calibration(calibration.file);
+  for (std::size_t i = 0; i < calibration.loaded.entries.size(); ++i) {
+    const std::string& name = calibration.loaded.entries[i].technique;
+    try {
+      (void)shadows::technique_from_string(name);
+    } catch (const std::invalid_argument& e) {
+      throw adaptive::CalibrationError(calibration.loaded.source + ": entries[" + std::to_string(i) + "].technique: " + e.what());
+    }
+  }
   const CLI::Option* explicit_c = app.get_option_no_throw("--adaptive.c");
   calibration.c_from_command_line = explicit_c && explicit_c->count() > 0;
-  if (!calibration.c_from_command_line)
-    settings.adaptive.c = static_cast<float>(ci_upper ? calibration.loaded.ci95_hi : calibration.loaded.c);
+  calibration.command_line_c = settings.adaptive.c;
+  calibration.ci_upper = ci_upper;
+  apply_calibration_for(calibration, settings);
 }
 
-// The record for report.json: {file, c (as used), ci95 (the file's), source_of_c}.
+// The record for report.json: {file, schema_version, technique, kernel, c (as used), ci95, entry,
+// obtained_by, fallback, from, source_of_c}.
 inline nlohmann::json calibration_json(const CalibrationOption& calibration, const shadows::ShadowSettings& settings) {
-  return {{"file", calibration.loaded.source},
-          {"c", settings.adaptive.c},
-          {"ci95", {calibration.loaded.ci95_lo, calibration.loaded.ci95_hi}},
-          {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"}};
+  const adaptive::CalibrationChoice chosen = calibration.choice(settings);
+  const std::string kernel = shadows::variant_choice(settings);
+  nlohmann::json j = {{"file", calibration.loaded.source},
+                      {"schema_version", calibration.loaded.schema_version},
+                      {"technique", std::string(shadows::to_string(settings.technique))},
+                      {"kernel", kernel.empty() ? nlohmann::json(nullptr) : nlohmann::json(kernel)},
+                      {"c", settings.adaptive.c},
+                      {"ci95", {chosen.ci95_lo, chosen.ci95_hi}},
+                      {"entry", chosen.entry ? nlohmann::json(chosen.entry->label()) : nlohmann::json(nullptr)},
+                      {"obtained_by", chosen.entry ? std::string(adaptive::method_name(chosen.entry->obtained_by)) : "published"},
+                      {"fallback", chosen.fallback},
+                      {"from", chosen.from},
+                      {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"}};
+  return j;
 }
 
 }  // namespace penumbra::apps

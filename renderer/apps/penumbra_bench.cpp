@@ -92,6 +92,8 @@ struct Row {
   double required_texels = NAN;             // adaptive: the rule's requirement before clamping
   int cascades = 1;
   std::string settings;
+  float c = 0;         // adaptive.c of the row's settings
+  std::string c_from;  // where it came from (calibration.json entry, fallback or --adaptive.c)
 };
 
 // Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
@@ -117,6 +119,7 @@ std::vector<Variant> make_variants(const Options& opt) {
     shadows::ShadowSettings s = opt.base;
     s.technique = shadows::technique_from_string(name);
     s.adaptive.enabled = false;  // fixed rows; the adaptive row of a variant switches it on
+    apps::apply_calibration_for(opt.calibration, s);  // the technique's own c (calibration.json entry)
     shadows::ShadowSettings probe = s;
     if (set_radius_ws(probe, 1)) {
       for (double r : opt.radii_ws) {
@@ -246,6 +249,8 @@ nlohmann::json row_json(const Row& r) {
                       {"resolution_source", r.resolution_source},
                       {"required_texels", std::isfinite(r.required_texels) ? nlohmann::json(r.required_texels) : nlohmann::json(nullptr)},
                       {"cascades", r.cascades},
+                      {"c", r.c},
+                      {"c_from", r.c_from},
                       {"settings", r.settings}};
   return j;
 }
@@ -430,6 +435,8 @@ int main(int argc, char** argv) {
           row.cascades = static_cast<int>(info.cascades.size());
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.settings = shadows::describe(s);
+          row.c = s.adaptive.c;
+          row.c_from = opt.calibration.source_of_c(s);
           ++done;
           std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %s%d^2: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
                        total_rows, scene.name.c_str(), v.label.c_str(), row.adaptive ? "adaptive " : "", row.resolution_texels,
@@ -463,6 +470,9 @@ int main(int argc, char** argv) {
     for (const auto& r : rows) csv += csv_row(r, opt) + "\n";
     io::write_file_atomic(dir / "bench.csv", csv);
 
+    // The c each technique's adaptive rows used and where it came from, keyed by technique.
+    nlohmann::json calibration_per_technique = nlohmann::json::object();
+    for (const Variant& v : variants) calibration_per_technique[v.technique] = apps::calibration_json(opt.calibration, v.settings);
     std::ostringstream command;
     for (int i = 0; i < argc; ++i) command << (i ? " " : "") << argv[i];
     nlohmann::json report = {
@@ -476,6 +486,7 @@ int main(int argc, char** argv) {
         {"resolutions", opt.resolutions},
         {"radii_ws", opt.radii_ws},
         {"calibration", apps::calibration_json(opt.calibration, opt.base)},
+        {"calibration_per_technique", calibration_per_technique},
         {"reference", {{"area_samples", opt.reference.area_samples},
                        {"area_resolution_texels", opt.reference.area_resolution_texels},
                        {"filter_resolution_texels", opt.reference.filter_resolution_texels}}},

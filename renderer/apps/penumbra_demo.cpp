@@ -174,8 +174,14 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
   std::string csv = "technique,frame,fixed_ms,adaptive_ms,fixed_texels,adaptive_texels,cascades,ssim,max_abs,share_above_1_255\n";
 
-  std::printf("penumbra-demo: %s at %dx%d on %s; %d path frames; c = %.3g (%s)\n", scene.name.c_str(), opt.width, opt.height,
-              ctx.info().renderer.c_str(), opt.frames, base.adaptive.c, opt.calibration.source_of_c().c_str());
+  std::printf("penumbra-demo: %s at %dx%d on %s; %d path frames; calibration %s\n", scene.name.c_str(), opt.width, opt.height,
+              ctx.info().renderer.c_str(), opt.frames, opt.calibration.loaded.source.c_str());
+  for (const std::string& name : opt.techniques) {
+    shadows::ShadowSettings s = base;
+    s.technique = shadows::technique_from_string(name);
+    apps::apply_calibration_for(opt.calibration, s);
+    std::printf("c for %s = %.3g texels: %s\n", name.c_str(), s.adaptive.c, opt.calibration.source_of_c(s).c_str());
+  }
   std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])\n");
   std::printf("%-6s %24s %24s %8s %14s %8s %9s %9s\n", "tech", "fixed", "adaptive", "speedup", "adaptive res", "min SSIM",
               "max diff", ">1/255");
@@ -184,6 +190,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   for (const std::string& name : opt.techniques) {
     shadows::ShadowSettings fixed = base;
     fixed.technique = shadows::technique_from_string(name);
+    apps::apply_calibration_for(opt.calibration, fixed);  // the technique's own c
     fixed.adaptive.enabled = false;
     shadows::ShadowSettings adapt = fixed;
     adapt.adaptive.enabled = true;
@@ -236,6 +243,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     t["technique"] = name;
     t["settings_fixed"] = shadows::to_json(fixed);
     t["settings_adaptive"] = shadows::to_json(adapt);
+    t["calibration"] = apps::calibration_json(opt.calibration, adapt);
+    t["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
     t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(timer_f.stats())}};
     t["adaptive"] = {{"resolution_texels", to_json(sr)},
                      {"storage", last_a.storage},
@@ -272,6 +281,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   shadows::Renderer renderer;
   renderer.set_scene(scene);
   settings.adaptive.enabled = true;
+  apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
   gl::PassTimer timer(!window.info().software);
   bool show_map = true, show_cascades = false, animate = true;
   int frame = 0, path_i = 0;
@@ -283,6 +293,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     window.framebuffer_size(fb_w, fb_h);
     if (frame % 30 == 0) timer.clear();
     renderer.set_show_cascades(show_cascades);
+    follower.update(opt.calibration, settings);
     const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
     renderer.present(0, fb_w, fb_h);
     const double t = now_ms();
@@ -296,7 +307,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     ImGui::Text("%s | %s | %.1f fps", scene.name.c_str(), window.info().renderer.c_str(), fps);
     ImGui::Checkbox("camera path", &animate);
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
-    ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, opt.calibration.source_of_c().c_str());
+    ImGui::Text("c = %.3f texels: %s", settings.adaptive.c, opt.calibration.source_of_c(settings).c_str());
     gui::shadow_settings_panel(settings);
     gui::light_size_control(renderer.scene().light);
     ImGui::Separator();

@@ -123,6 +123,7 @@ int main(int argc, char** argv) {
     } else {
       add_variants(shadows::technique_from_string(technique_arg), false);
     }
+    for (auto& v : variants) apps::apply_calibration_for(calibration, v.settings);  // each technique's own c
 
     gl::HeadlessContext context;
     const auto& ctx = context.info();

@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   try {
     shadows::ShadowSettings settings;
     apps::apply_calibration(app, calibration, settings);
+    apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
     scene::Scene scene = scene::load_scene(scene_arg);
     gl::WindowContext window(width, height, "Penumbra — " + scene.name);
     shadows::Renderer renderer;
@@ -86,6 +87,7 @@ int main(int argc, char** argv) {
       int fb_w = 0, fb_h = 0;
       window.framebuffer_size(fb_w, fb_h);
       if (frame % 30 == 0) timer.clear();
+      follower.update(calibration, settings);
       const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
       renderer.present(0, fb_w, fb_h);
 
@@ -94,7 +96,7 @@ int main(int argc, char** argv) {
       ImGui::Begin("Penumbra");
       ImGui::PushItemWidth(200);
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
-      ImGui::Text("c = %.3f texels from %s", settings.adaptive.c, calibration.source_of_c().c_str());
+      ImGui::Text("c = %.3f texels: %s", settings.adaptive.c, calibration.source_of_c(settings).c_str());
       gui::shadow_settings_panel(settings);
       gui::light_size_control(renderer.scene().light);
       ImGui::Separator();

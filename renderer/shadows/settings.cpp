@@ -9,6 +9,7 @@
 
 #include "json/json_input.h"
 #include "shadows/settings_rows.h"
+#include "shadows/technique.h"
 
 namespace penumbra::shadows {
 namespace {
@@ -161,6 +162,17 @@ std::string describe(const ShadowSettings& s) {
     for (const auto& row : settings_table(&params)) out += " " + std::string(row.key) + "=" + value_to_string(row, params);
   };
   visit_technique_section(s, [&](std::string_view, const auto& params) { add(params); });
+  return out;
+}
+
+std::string variant_choice(const ShadowSettings& s) {
+  const std::string_view key = technique_entry(s.technique).variant_setting;
+  std::string out;
+  if (key.empty()) return out;
+  visit_technique_section(s, [&](std::string_view, const auto& params) {
+    for (const auto& row : settings_table(&params))
+      if (row.key == key && row.type == SettingType::choice) out = value_to_string(row, params);
+  });
   return out;
 }
 

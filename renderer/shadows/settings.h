@@ -109,4 +109,8 @@ void visit_technique_section(S& s, F&& f) {
 // The parameters relevant to `s.technique`, as "section.key=value" pairs (for names and reports).
 std::string describe(const ShadowSettings& s);
 
+// The value of the technique's variant setting (PCF's kernel: "grid", "poisson"), or "" for a
+// technique without one: with the technique's name, what calibration.json entries are keyed by.
+std::string variant_choice(const ShadowSettings& s);
+
 }  // namespace penumbra::shadows

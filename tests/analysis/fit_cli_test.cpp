@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -63,9 +64,18 @@ TEST(FitCli, FitsSessionDirectoriesAndWritesTheContract) {
   std::string out;
   ASSERT_EQ(run(args + "-o " + (dir / "out").string() + " --bootstrap 30 --threads 2", &out), 0) << out;
   EXPECT_NE(out.find("calibration: c = "), std::string::npos) << out;
-  const adaptive::Calibration cal = adaptive::load_calibration(dir / "out" / "calibration.json");
+  const adaptive::Calibration file = adaptive::load_calibration(dir / "out" / "calibration.json");
+  ASSERT_EQ(file.entries.size(), 1u);
+  const adaptive::CalibrationEntry& cal = file.entries[0];
   EXPECT_NEAR(cal.c, 3.0, 0.3);
   EXPECT_EQ(cal.condition, "stair/1");
+  // Simulated sessions (a psychometric observer) of the study's disk kernel: an entry for PCF's
+  // disk, marked simulated, with the participants and trials it came from.
+  EXPECT_EQ(cal.technique, "pcf");
+  EXPECT_EQ(cal.kernel, "disk");
+  EXPECT_EQ(cal.obtained_by, adaptive::CalibrationMethod::simulated);
+  EXPECT_EQ(cal.participants, 4);
+  EXPECT_EQ(cal.trials, 4 * 3 * 25);
   const nlohmann::json report = nlohmann::json::parse(read(dir / "out" / "report.json"));
   EXPECT_EQ(report["trials"], 4 * 3 * 25);
   EXPECT_EQ(report["staircases"].size(), 12u);
@@ -96,6 +106,36 @@ TEST(FitCli, FitsSessionDirectoriesAndWritesTheContract) {
   EXPECT_NE(out.find("entries[0].contrast: expected a number"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "ref2"));
   fs::remove_all(dir);
+}
+
+// Issue 15: sessions that measure different things are not pooled into one c: a session answered by
+// a person beside simulated ones, or drawn with another kernel, is refused before the fit with one
+// line naming both logs, and nothing is written.
+TEST(FitCli, RefusesToPoolSessionsOfDifferentObserversOrKernels) {
+  for (const std::string what : {"observer", "kernel"}) {
+    SCOPED_TRACE(what);
+    const fs::path dir = fresh("pool-" + what);
+    const auto sessions = simulated_sessions(dir / "sessions", 3);
+    const fs::path edited = sessions[2];
+    if (what == "observer") {
+      nlohmann::json j = nlohmann::json::parse(read(edited / "session.json"));
+      j.erase("observer");  // as if a person had answered
+      std::ofstream(edited / "session.json") << j.dump(2) << "\n";
+    } else {
+      std::string log = read(edited / "trials.csv");
+      for (std::size_t at = log.find(",disk,"); at != std::string::npos; at = log.find(",disk,", at)) log.replace(at, 6, ",grid,");
+      std::ofstream(edited / "trials.csv") << log;
+    }
+    std::string args;
+    for (const auto& s : sessions) args += s.string() + " ";
+    std::string out;
+    EXPECT_EQ(run(args + "-o " + (dir / "out").string() + " --bootstrap 0", &out), 1) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_NE(out.find((edited / "trials.csv").string()), std::string::npos) << out;
+    EXPECT_NE(out.find((sessions[0] / "trials.csv").string()), std::string::npos) << out;
+    EXPECT_NE(out.find(what == "observer" ? "a person" : "kernel 'grid'"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+  }
 }
 
 TEST(FitCli, BadRowNamesFileLineAndColumnAndWritesNothing) {
@@ -445,7 +485,7 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     if (task == "yesno") {
       EXPECT_NE(report["notes"].dump().find("catch"), std::string::npos) << report["notes"];
     }
-    EXPECT_NEAR(adaptive::load_calibration(dir / "fit" / "calibration.json").c, 4.0, 0.6) << task;
+    EXPECT_NEAR(adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0).c, 4.0, 0.6) << task;
     fs::remove_all(dir);
   }
 }

@@ -172,24 +172,34 @@ TEST(StudyFit, CalibrationRoundTripsThroughTheRenderersReader) {
   SimulatedStudy s = study_with(3.47, 5);
   s.conditions.push_back({"step", 1.0, s.conditions[0].planted});
   s.conditions[1].planted.c_true = 4.5;
-  const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), quick());
+  const Dataset d = as_dataset(s, simulate_study(s));
+  const StudyFit f = fit_study(d, quick());
   ASSERT_EQ(f.conditions.size(), 2u);
+  const CalibrationProvenance provenance = calibration_provenance(d);
   const auto dir = std::filesystem::temp_directory_path() / ("penumbra-cal-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const nlohmann::json j = calibration_json(f, std::nullopt, "2024-01-01T00:00:00Z", {"sim"});
+  const nlohmann::json j = calibration_json(f, std::nullopt, "2024-01-01T00:00:00Z", {"sim"}, provenance);
   io::write_file_atomic(dir / "calibration.json", j.dump(2));
-  const adaptive::Calibration cal = adaptive::load_calibration(dir / "calibration.json");
+  const adaptive::Calibration file = adaptive::load_calibration(dir / "calibration.json");
+  EXPECT_EQ(file.schema_version, 2);
+  ASSERT_EQ(file.entries.size(), 1u);
+  const adaptive::CalibrationEntry& cal = file.entries[0];
   const ConditionFit& worst = f.conditions[1];
+  EXPECT_EQ(cal.technique, "pcf");
+  EXPECT_EQ(cal.kernel, "disk");
+  EXPECT_EQ(cal.obtained_by, adaptive::CalibrationMethod::simulated);  // a psychometric observer answered
+  EXPECT_EQ(cal.participants, static_cast<int>(d.sessions.size()));
+  EXPECT_EQ(cal.trials, f.trials);
   EXPECT_EQ(cal.condition, "step/1");
   EXPECT_DOUBLE_EQ(cal.c, worst.c);
   EXPECT_NEAR(cal.c, 4.5, 0.05 * 4.5);
   EXPECT_DOUBLE_EQ(cal.ci95_lo, worst.c_profile.lo);
   EXPECT_DOUBLE_EQ(cal.ci95_hi, worst.c_profile.hi);
-  EXPECT_EQ(j["per_condition"].size(), 2u);
-  const nlohmann::json stair = calibration_json(f, std::string("stair/1"), "2024-01-01T00:00:00Z", {"sim"});
+  EXPECT_EQ(j["entries"][0]["per_condition"].size(), 2u);
+  const nlohmann::json stair = calibration_json(f, std::string("stair/1"), "2024-01-01T00:00:00Z", {"sim"}, provenance);
   io::write_file_atomic(dir / "stair.json", stair.dump(2));
-  EXPECT_EQ(adaptive::load_calibration(dir / "stair.json").condition, "stair/1");
-  EXPECT_THROW(calibration_json(f, std::string("stair/0.5"), "", {}), std::invalid_argument);
+  EXPECT_EQ(adaptive::load_calibration(dir / "stair.json").entries.at(0).condition, "stair/1");
+  EXPECT_THROW(calibration_json(f, std::string("stair/0.5"), "", {}, provenance), std::invalid_argument);
   std::filesystem::remove_all(dir);
 }
 

@@ -117,9 +117,119 @@ class CalibrationFile : public ::testing::Test {
 
 TEST_F(CalibrationFile, ShippedDefaultIsThePublishedConstant) {
   const Calibration cal = load_calibration(PENUMBRA_SOURCE_DIR "/data/calibration/default.json");
-  EXPECT_DOUBLE_EQ(cal.c, 3.47);
-  EXPECT_LE(cal.ci95_lo, cal.c);
-  EXPECT_GE(cal.ci95_hi, cal.c);
+  EXPECT_EQ(cal.schema_version, 2);
+  ASSERT_EQ(cal.entries.size(), 1u);
+  const CalibrationEntry& e = cal.entries[0];
+  EXPECT_EQ(e.technique, "pcf");
+  EXPECT_EQ(e.kernel, "");
+  EXPECT_DOUBLE_EQ(e.c, kPublishedC);
+  EXPECT_EQ(e.obtained_by, CalibrationMethod::published);
+  EXPECT_EQ(e.participants, 10);
+  const CalibrationChoice grid = cal.choose("pcf", "grid");
+  EXPECT_DOUBLE_EQ(grid.c, kPublishedC);
+  EXPECT_FALSE(grid.fallback);
+  EXPECT_EQ(grid.from, "pcf entry (published, 10 participants)");
+  // Another technique gets PCF's entry, said to be a fallback.
+  const CalibrationChoice vsm = cal.choose("vsm", "");
+  EXPECT_DOUBLE_EQ(vsm.c, kPublishedC);
+  EXPECT_TRUE(vsm.fallback);
+  EXPECT_EQ(vsm.from, "pcf entry (published, 10 participants), not measured for vsm");
+}
+
+// A version-1 file (one top-level c, as penumbra-fit wrote before entries per technique) loads as
+// the PCF entry for any kernel; a fitted one counts as a study.
+TEST_F(CalibrationFile, VersionOneFilesLoadAsThePcfEntry) {
+  const Calibration fitted = load_calibration(write(R"({"c": 4.25, "ci95": [3.5, 5.0], "condition": "step/1",
+                                                        "source": "penumbra-fit: joint fit", "per_condition": []})"));
+  EXPECT_EQ(fitted.schema_version, 1);
+  ASSERT_EQ(fitted.entries.size(), 1u);
+  EXPECT_EQ(fitted.entries[0].technique, "pcf");
+  EXPECT_EQ(fitted.entries[0].kernel, "");
+  EXPECT_EQ(fitted.entries[0].obtained_by, CalibrationMethod::study);
+  EXPECT_EQ(fitted.entries[0].condition, "step/1");
+  const CalibrationChoice c = fitted.choose("pcf", "poisson");
+  EXPECT_DOUBLE_EQ(c.c, 4.25);
+  EXPECT_DOUBLE_EQ(c.ci95_lo, 3.5);
+  EXPECT_DOUBLE_EQ(c.ci95_hi, 5.0);
+  EXPECT_FALSE(c.fallback);
+  EXPECT_EQ(load_calibration(write(R"({"c": 3})")).entries[0].obtained_by, CalibrationMethod::published);
+}
+
+// The lookup order: technique and kernel, the technique for any kernel, another kernel of the
+// technique, the PCF entry, the published value; every fallback says what it stands in for.
+TEST_F(CalibrationFile, EachTechniqueGetsItsOwnEntryOrASaidFallback) {
+  const Calibration cal = load_calibration(write(R"({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "poisson", "c": 3.0, "ci95": [2.5, 3.5], "obtained_by": "study", "participants": 5, "trials": 900},
+      {"technique": "pcf", "kernel": "grid", "c": 2.0, "obtained_by": "image-observer"},
+      {"technique": "vsm", "kernel": "", "c": 4.0, "obtained_by": "simulated"},
+      {"technique": "rpcf", "kernel": "wide", "c": 0.8, "obtained_by": "study", "participants": 1}]})"));
+  EXPECT_EQ(cal.entries[0].trials, 900);
+  struct Case {
+    const char* technique;
+    const char* kernel;
+    double c;
+    bool fallback;
+    const char* from;
+  };
+  for (const Case& k : {Case{"pcf", "poisson", 3.0, false, "pcf poisson entry (study, 5 participants)"},
+                        Case{"pcf", "grid", 2.0, false, "pcf grid entry (image-observer)"},
+                        Case{"vsm", "", 4.0, false, "vsm entry (simulated)"},
+                        Case{"rpcf", "", 0.8, true, "rpcf wide entry (study, 1 participant), not measured for rpcf"},
+                        Case{"msm", "", 3.0, true, "pcf poisson entry (study, 5 participants), not measured for msm"}}) {
+    SCOPED_TRACE(std::string(k.technique) + " " + k.kernel);
+    const CalibrationChoice got = cal.choose(k.technique, k.kernel);
+    EXPECT_DOUBLE_EQ(got.c, k.c);
+    EXPECT_EQ(got.fallback, k.fallback);
+    EXPECT_EQ(got.from, k.from);
+    ASSERT_TRUE(got.entry.has_value());
+  }
+  // No PCF entry to stand in: the published value, said so.
+  const Calibration only_vsm = load_calibration(
+      write(R"({"schema_version": 2, "entries": [{"technique": "vsm", "c": 4.0, "obtained_by": "study"}]})"));
+  const CalibrationChoice esm = only_vsm.choose("esm", "");
+  EXPECT_DOUBLE_EQ(esm.c, kPublishedC);
+  EXPECT_TRUE(esm.fallback);
+  EXPECT_FALSE(esm.entry.has_value());
+  EXPECT_EQ(esm.from, "published PCF value, not measured for esm");
+}
+
+TEST_F(CalibrationFile, BadVersionTwoFilesNameTheField) {
+  struct Case {
+    std::string text, field;
+  };
+  const std::string ok_entry = R"({"technique": "pcf", "c": 3, "obtained_by": "study"})";
+  const Case cases[] = {
+      {R"({"schema_version": 3, "entries": [])" + ok_entry + "]}", ": schema_version: expected 2 (or no field: a version-1 file"},
+      {R"({"schema_version": "2", "entries": [])" + ok_entry + "]}", ": schema_version: expected 2"},
+      {R"({"schema_version": 2.5, "entries": [])" + ok_entry + "]}", ": schema_version: expected 2"},
+      {R"({"schema_version": 2})", ": entries: missing"},
+      {R"({"schema_version": 2, "entries": []})", ": entries: expected a non-empty array"},
+      {R"({"schema_version": 2, "entries": {}})", ": entries: expected a non-empty array"},
+      {R"({"schema_version": 2, "c": 3, "entries": [])" + ok_entry + "]}", ": c: a version-2 file has its c in entries[]"},
+      {R"({"schema_version": 2, "entries": [7]})", ": entries[0]: expected an object"},
+      {R"({"schema_version": 2, "entries": [{"c": 3, "obtained_by": "study"}]})", ": entries[0].technique: missing"},
+      {R"({"schema_version": 2, "entries": [{"technique": "", "c": 3, "obtained_by": "study"}]})", ": entries[0].technique: expected a technique name"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "obtained_by": "study"}]})", ": entries[0].c: missing"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 1e308, "obtained_by": "study"}]})", ": entries[0].c: expected a positive number"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "ci95": [4, 5], "obtained_by": "study"}]})", ": entries[0].ci95: expected 0 < lo"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3}]})", ": entries[0].obtained_by: missing"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "guess"}]})", ": entries[0].obtained_by: expected study, image-observer"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "study", "participants": -1}]})", ": entries[0].participants: expected a whole number"},
+      {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "study", "trials": 4294967296}]})", ": entries[0].trials: expected a whole number"},
+      {R"({"schema_version": 2, "entries": [)" + ok_entry + ", " + ok_entry + "]}", ": entries[1]: a second entry for pcf"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.text);
+    const auto p = write(c.text);
+    try {
+      load_calibration(p);
+      ADD_FAILURE() << "accepted " << c.text;
+    } catch (const CalibrationError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(p.string() + c.field), std::string::npos) << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos);
+    }
+  }
 }
 
 TEST_F(CalibrationFile, BadFilesNameTheField) {

@@ -355,6 +355,42 @@ TEST_F(RenderCli, CalibrationFileSetsCAndExplicitAdaptiveCWins) {
   }
 }
 
+// Issue 15: c per technique. Each render uses its technique's entry (pcf grid and pcf poisson
+// apart), a technique without one the PCF entry, said to be a fallback, in its report.
+TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
+  const fs::path cal_file = scratch_ / "per-technique.json";
+  std::ofstream(cal_file) << R"({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "grid", "c": 2.5, "ci95": [2.0, 3.0], "obtained_by": "study", "participants": 3},
+      {"technique": "pcf", "kernel": "poisson", "c": 3.25, "obtained_by": "image-observer"},
+      {"technique": "vsm", "c": 6.0, "obtained_by": "simulated"}]})"
+                          << "\n";
+  struct Case {
+    std::vector<std::string> args;
+    std::string dir;  // the render's directory
+    double c;
+    bool fallback;
+    std::string from;
+  };
+  for (const Case& c : {Case{{"--technique", "pcf", "--pcf.kernel", "grid"}, "pcf-grid", 2.5, false, "pcf grid entry (study, 3 participants)"},
+                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson"}, "pcf-poisson", 3.25, false, "pcf poisson entry (image-observer)"},
+                        Case{{"--technique", "vsm"}, "vsm", 6.0, false, "vsm entry (simulated)"},
+                        Case{{"--technique", "rpcf"}, "rpcf", 2.5, true, "pcf grid entry (study, 3 participants), not measured for rpcf"}}) {
+    SCOPED_TRACE(c.dir);
+    const fs::path out = work_ / ("out-" + c.dir);
+    std::vector<std::string> args = c.args;
+    args.insert(args.end(), {"--calibration", cal_file.string(), "-o", out.string()});
+    const Result r = run_render(small_args(args), scratch_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto render = read_json(out / c.dir / "report.json");
+    const auto& cal = render.at("calibration");
+    EXPECT_NEAR(cal.at("c").get<double>(), c.c, 1e-6);
+    EXPECT_NEAR(render.at("settings").at("adaptive").at("c").get<double>(), c.c, 1e-6);
+    EXPECT_EQ(cal.at("fallback").get<bool>(), c.fallback);
+    EXPECT_EQ(cal.at("from"), c.from);
+    EXPECT_EQ(cal.at("schema_version"), 2);
+  }
+}
+
 // A bad calibration file is refused before anything is created: one line naming the file and field.
 TEST_F(RenderCli, BadCalibrationFileIsRefusedWithNoOutput) {
   struct Case {
@@ -362,7 +398,10 @@ TEST_F(RenderCli, BadCalibrationFileIsRefusedWithNoOutput) {
   };
   const Case cases[] = {{"c_not_a_number", R"({"c": "big"})", "c"},
                         {"c_missing", R"({"ci95": [3, 4]})", "c"},
-                        {"ci95_excludes_c", R"({"c": 3.47, "ci95": [4, 5]})", "ci95"}};
+                        {"ci95_excludes_c", R"({"c": 3.47, "ci95": [4, 5]})", "ci95"},
+                        {"unknown_version", R"({"schema_version": 9, "entries": []})", "schema_version"},
+                        {"unknown_technique", R"({"schema_version": 2, "entries": [{"technique": "nope", "c": 3, "obtained_by": "study"}]})",
+                         "entries[0].technique"}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const fs::path file = scratch_ / (c.name + ".json");

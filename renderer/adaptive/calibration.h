@@ -1,0 +1,86 @@
+#pragma once
+// calibration.json: the constant c of the rule r = c·a, one entry per technique (and kernel), as
+// penumbra-fit writes it and data/calibration/calibration.schema.json describes it. c depends on
+// the filter (a box of half-side r blurs more than a disk of radius r), so the adaptive rule looks
+// up the entry of the technique it renders and says where its c came from.
+//
+//   {"schema_version": 2, "created_utc": "...", "source": "...",
+//    "entries": [{"technique": "pcf", "kernel": "grid", "c": 3.1, "ci95": [2.8, 3.5],
+//                 "condition": "step, full contrast", "obtained_by": "study",
+//                 "participants": 5, "trials": 900, "source": "...", "per_condition": [...]}]}
+//
+// A version-1 file (no schema_version, one top-level "c") still loads, as the entry of PCF with
+// any kernel: the only filter such files were measured with. Another schema_version is refused.
+//
+// No GL, study or Ceres: another engine can link `penumbra_adaptive` alone.
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "published.h"
+
+namespace penumbra::adaptive {
+
+inline constexpr int kCalibrationSchemaVersion = 2;
+
+// How an entry's c was obtained.
+enum class CalibrationMethod {
+  published,       // a value from the literature (data/calibration/default.json)
+  study,           // penumbra-fit on the logs of human participants
+  image_observer,  // penumbra-fit on logs answered by the image observer (a model prediction)
+  simulated,       // penumbra-fit on logs answered by a psychometric observer with a planted c
+};
+std::string_view method_name(CalibrationMethod m);
+std::optional<CalibrationMethod> method_from_name(std::string_view name);
+
+struct CalibrationEntry {
+  std::string technique;  // a registry name: pcf, vsm, rpcf, ...
+  std::string kernel;     // the technique's kernel (pcf: grid, poisson) or "" for any
+  double c = kPublishedC;
+  double ci95_lo = kPublishedC;
+  double ci95_hi = kPublishedC;
+  std::string condition;  // the condition c came from (e.g. "step, full contrast")
+  CalibrationMethod obtained_by = CalibrationMethod::published;
+  int participants = 0;  // 0: not stated
+  long trials = 0;       // 0: not stated
+
+  // "pcf grid", or "pcf" for any kernel.
+  std::string label() const { return kernel.empty() ? technique : technique + " " + kernel; }
+};
+
+// The c the rule uses for one technique, and where it came from, for output and reports.
+struct CalibrationChoice {
+  double c = kPublishedC;
+  double ci95_lo = kPublishedC;
+  double ci95_hi = kPublishedC;
+  // The entry used (nullopt: the published value, the file having nothing that applies).
+  std::optional<CalibrationEntry> entry;
+  // True when the entry was measured for another technique or kernel than the one rendered.
+  bool fallback = false;
+  // One phrase: "pcf grid entry (study, 5 participants)", "pcf entry (published), not measured for
+  // rpcf", "published PCF value, not measured for vsm".
+  std::string from;
+};
+
+struct Calibration {
+  int schema_version = kCalibrationSchemaVersion;  // as read: 1 for a single-c file
+  std::vector<CalibrationEntry> entries;
+  std::string source;  // the file it came from, or "built-in"
+
+  // The entry for `technique` and `kernel` (kernel "" when the technique has none): the exact
+  // entry, else the technique's entry for any kernel, else one for another kernel of the
+  // technique, else the PCF entry, else the published value, each fallback saying so.
+  CalibrationChoice choose(std::string_view technique, std::string_view kernel) const;
+};
+
+// Throws CalibrationError naming the file and field on bad input (one line).
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+Calibration load_calibration(const std::filesystem::path& path);
+
+}  // namespace penumbra::adaptive
