@@ -1,5 +1,5 @@
 // penumbra-fit: thresholds and the constant c of r = c a from the study's logs (docs/fit.md).
-//   penumbra-fit SESSION_DIR... -o OUT [--reference reference.json] [--bootstrap 1000] [--accept-inconsistent]
+//   penumbra-fit SESSION_DIR... -o OUT [--reference reference.json] [--bootstrap 1000] [--accept-inconsistent] [--pool]
 //   penumbra-fit psychometric --input data.csv [--format counts|trials] [--family log-weibull]
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
@@ -128,6 +128,7 @@ struct StudyOptions {
   int threads = 0;
   bool no_progress = false;
   bool accept_inconsistent = false;
+  bool pool = false;
 };
 
 int run_study(const StudyOptions& so, const ModelOptions& mo) {
@@ -153,9 +154,10 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
     reference->entries.insert(reference->entries.end(), table.entries.begin(), table.entries.end());
   }
   options.accept_inconsistent = so.accept_inconsistent;
+  options.pool = so.pool;
   const Dataset data = [&] {
     try {
-      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent});
+      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent, .pool = so.pool});
     } catch (const InconsistentLog& e) {
       throw std::runtime_error(std::string(e.what()) +
                                "; the log is inconsistent (rows duplicated, removed, reordered or edited?): not fitted "
@@ -221,6 +223,9 @@ int main(int argc, char** argv) {
   app.add_flag("--accept-inconsistent", so.accept_inconsistent,
                "fit logs that fail the integrity check (trial numbers, design, QUEST replay) and list them in "
                "report.json and summary.txt; without it such a log is refused");
+  app.add_flag("--pool", so.pool,
+               "fit sessions whose setup differs (stimulus size, display geometry, transfer, task, QUEST parameters) "
+               "together, listing the differences in report.json and summary.txt; without it such sessions are refused");
   add_model_options(app, study_model);
 
   auto* psychometric = app.add_subcommand("psychometric", "fit one data set and print JSON");

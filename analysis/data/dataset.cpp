@@ -74,6 +74,19 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
     }
     info.quest = p;
   }
+  // The setup, flattened: what must agree between sessions that are pooled.
+  auto flatten = [&info](const std::string& prefix, const nlohmann::json& block) {
+    if (!block.is_object()) return;
+    for (auto it = block.begin(); it != block.end(); ++it)
+      if (!it->is_structured()) info.setup[prefix + it.key()] = it->is_string() ? it->get<std::string>() : it->dump();
+  };
+  if (j.contains("display")) flatten("display.", j["display"]);
+  if (j.contains("quest")) flatten("quest.", j["quest"]);
+  if (j.contains("config") && j["config"].is_object()) {
+    const auto& config = j["config"];
+    if (config.contains("stimulus")) flatten("stimulus.", config["stimulus"]);
+    if (config.contains("task") && config["task"].is_string()) info.setup["task"] = config["task"].get<std::string>();
+  }
   if (j.contains("config") && j["config"].is_object() && j["config"].contains("stopping")) {
     const auto& s = j["config"]["stopping"];
     if (s.is_object() && s.contains("sd_below")) info.sd_below = number_field(s, file, "config.stopping", "sd_below");
@@ -151,6 +164,43 @@ std::optional<Inconsistency> check_log(const SessionInfo& info, const nlohmann::
   return std::nullopt;
 }
 
+// Where a session's setup was read: its session.json (beside the log).
+std::string setup_file(const SessionInfo& s) { return (fs::path(s.log_file).parent_path() / "session.json").string(); }
+
+// One participant per session, and sessions measured the same way (SessionInfo::setup); with
+// `pool` the differences are listed instead of refused.
+void check_poolable(Dataset& data, bool pool) {
+  std::map<std::string, const SessionInfo*> by_participant;
+  for (const SessionInfo& s : data.sessions) {
+    const auto [it, fresh] = by_participant.emplace(s.participant, &s);
+    if (!fresh)
+      throw std::runtime_error(s.log_file + ": participant '" + json_input::printable(s.participant) + "' also in " +
+                               it->second->log_file + ": one session per participant (give each session its own participant id)");
+  }
+  if (data.sessions.size() < 2) return;
+  std::set<std::string> keys;
+  for (const SessionInfo& s : data.sessions)
+    for (const auto& [k, v] : s.setup) keys.insert(k);
+  const SessionInfo& first = data.sessions.front();
+  auto value = [](const SessionInfo& s, const std::string& key) {
+    const auto it = s.setup.find(key);
+    return it == s.setup.end() ? std::string("(not recorded)") : it->second;
+  };
+  for (const std::string& key : keys) {
+    std::string listed;
+    for (const SessionInfo& s : data.sessions) {
+      if (value(s, key) == value(first, key)) continue;
+      if (!pool)
+        throw std::runtime_error(setup_file(s) + ": " + key + ": " + json_input::printable(value(s, key)) + " where " + setup_file(first) +
+                                 " has " + json_input::printable(value(first, key)) +
+                                 ": sessions measured differently are not pooled (fit them separately, or --pool)");
+      listed += (listed.empty() ? "" : ", ") + json_input::printable(value(s, key)) + " (" + setup_file(s) + ")";
+    }
+    if (!listed.empty())
+      data.pooled_differences.push_back(key + ": " + json_input::printable(value(first, key)) + " (" + setup_file(first) + "), " + listed);
+  }
+}
+
 }  // namespace
 
 Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& options) {
@@ -208,6 +258,7 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
     data.sessions.push_back(info);
   }
   if (data.trials.empty()) throw std::runtime_error("no trials to fit (only headers or practice rows in the input)");
+  check_poolable(data, options.pool);
   return data;
 }
 

@@ -3,6 +3,7 @@
 // or bare trial CSVs, read through the study's validating reader (penumbra_study_log, no GL).
 // Practice rows and yes/no catch trials are counted and left out.
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,10 @@ struct SessionInfo {
   // session.json's "observer": "" for a person, else the simulated observer's spec
   // ("psychometric:c=..", "image:..").
   std::string observer;
+  // How the session measured, flattened from session.json ("display.viewing_distance_mm" -> "600"):
+  // the task, the stimulus block, the display as recorded (geometry, transfer) and the QUEST
+  // parameters. Sessions that differ here are not pooled without LoadOptions::pool.
+  std::map<std::string, std::string> setup;
 };
 
 struct Trial {
@@ -51,11 +56,16 @@ class InconsistentLog : public std::runtime_error {
 struct LoadOptions {
   // Fit inconsistent logs anyway; their first problem each is kept in Dataset::inconsistencies.
   bool accept_inconsistent = false;
+  // Pool sessions whose setup differs (stimulus size, display geometry, transfer, task, QUEST
+  // parameters); each difference is kept in Dataset::pooled_differences. Without it such
+  // sessions are refused, naming both and the first field that differs.
+  bool pool = false;
 };
 
 struct Dataset {
   std::vector<SessionInfo> sessions;
   std::vector<Inconsistency> inconsistencies;  // one per inconsistent log (accept_inconsistent only)
+  std::vector<std::string> pooled_differences;  // "display.width_mm: 527 (A/session.json), 600 (B/...)" (pool only)
   std::vector<Trial> trials;  // practice excluded, in log order per session
   int practice_rows = 0;
   // yes/no: straight (catch) trials say nothing about the artifact's visibility; like QUEST

@@ -225,6 +225,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.trials = static_cast<int>(data.trials.size());
   out.practice_rows_excluded = data.practice_rows;
   out.inconsistencies = data.inconsistencies;
+  out.pooled_differences = data.pooled_differences;
   // pThreshold: the option, else the sessions' QUEST value when they agree, else QUEST's default.
   std::set<double> p_thresholds, gammas;
   for (const SessionInfo& s : data.sessions) {

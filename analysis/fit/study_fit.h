@@ -37,6 +37,7 @@ struct StudyFitOptions {
   double outlier_z = 3.0;             // participants farther than this (robust z of log10 c) are flagged
   std::function<void(int done, int total)> progress;  // bootstrap progress, called from worker threads (serialized)
   bool accept_inconsistent = false;   // the logs were loaded with LoadOptions::accept_inconsistent
+  bool pool = false;                  // the logs were loaded with LoadOptions::pool
 };
 
 struct TrackPoint {
@@ -122,6 +123,7 @@ struct StudyFit {
   int sessions = 0, trials = 0, practice_rows_excluded = 0;
   std::vector<std::string> notes;  // torn logs, missing session.json, ...
   std::vector<Inconsistency> inconsistencies;  // logs fitted although inconsistent (--accept-inconsistent)
+  std::vector<std::string> pooled_differences;  // setups pooled although they differ (--pool)
   std::vector<ConditionFit> conditions;
   std::vector<StaircaseFit> staircases;
 };

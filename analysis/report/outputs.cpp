@@ -290,8 +290,10 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                                                          : Json{{"max", fit.options.lapse.max}}},
                        {"bootstrap", fit.options.bootstrap},
                        {"seed", fit.options.seed},
-                       {"accept_inconsistent", fit.options.accept_inconsistent}}},
+                       {"accept_inconsistent", fit.options.accept_inconsistent},
+                       {"pool", fit.options.pool}}},
           {"inconsistent_logs", inconsistent},
+          {"pooled_differences", fit.pooled_differences},
           {"sessions", fit.sessions},
           {"trials", fit.trials},
           {"practice_rows_excluded", fit.practice_rows_excluded},
@@ -310,6 +312,10 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
     << fit.p_threshold << " correct, guess " << fit.guess << ", lapse "
     << (fit.options.lapse.fixed ? "fixed " + fmt("%g", *fit.options.lapse.fixed) : "in [0, " + fmt("%g", fit.options.lapse.max) + "]")
     << "\n";
+  if (!fit.pooled_differences.empty()) {
+    o << "SESSIONS POOLED ALTHOUGH MEASURED DIFFERENTLY (--pool): " << fit.pooled_differences.size() << " field(s)\n";
+    for (const std::string& d : fit.pooled_differences) o << "  " << d << "\n";
+  }
   if (!fit.inconsistencies.empty()) {
     o << "INCONSISTENT LOGS FITTED (--accept-inconsistent): " << fit.inconsistencies.size()
       << " logs the study could not have written as they stand; first problem of each:\n";

@@ -138,6 +138,50 @@ TEST(FitCli, RefusesToPoolSessionsOfDifferentObserversOrKernels) {
   }
 }
 
+// Sessions measured differently (here the viewing distance and the QUEST beta) are refused with one
+// line naming the field and both session.json files, or, with --pool, fitted together with the
+// differences listed; a participant id in two sessions is refused either way.
+TEST(FitCli, PoolsSessionsMeasuredDifferentlyOnlyWithPool) {
+  const fs::path dir = fresh("setup");
+  const auto sessions = simulated_sessions(dir / "sessions", 3);
+  {
+    nlohmann::json j = nlohmann::json::parse(read(sessions[1] / "session.json"));
+    j["display"] = {{"viewing_distance_mm", 500}};
+    std::ofstream(sessions[1] / "session.json") << j.dump(2) << "\n";
+  }
+  std::string args;
+  for (const auto& s : sessions) args += s.string() + " ";
+  std::string out;
+  EXPECT_EQ(run(args + "-o " + (dir / "out").string() + " --bootstrap 0", &out), 1) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find("display.viewing_distance_mm"), std::string::npos) << out;
+  EXPECT_NE(out.find("--pool"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+
+  ASSERT_EQ(run(args + "-o " + (dir / "out").string() + " --bootstrap 0 --pool", &out), 0) << out;
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "out" / "report.json"));
+  EXPECT_TRUE(report["options"]["pool"].get<bool>());
+  ASSERT_EQ(report["pooled_differences"].size(), 1u) << report["pooled_differences"];
+  EXPECT_NE(report["pooled_differences"][0].get<std::string>().find("display.viewing_distance_mm"), std::string::npos);
+  EXPECT_NE(read(dir / "out" / "summary.txt").find("--pool"), std::string::npos);
+
+  // The same participant in two sessions.
+  {
+    nlohmann::json j = nlohmann::json::parse(read(sessions[2] / "session.json"));
+    const std::string other = nlohmann::json::parse(read(sessions[0] / "session.json"))["participant"];
+    const std::string mine = j["participant"];
+    j["participant"] = other;
+    std::ofstream(sessions[2] / "session.json") << j.dump(2) << "\n";
+    std::string log = read(sessions[2] / "trials.csv");
+    for (std::size_t at = log.find("," + mine + ","); at != std::string::npos; at = log.find("," + mine + ",", at))
+      log.replace(at, mine.size() + 2, "," + other + ",");
+    std::ofstream(sessions[2] / "trials.csv") << log;
+  }
+  EXPECT_EQ(run(args + "-o " + (dir / "out2").string() + " --bootstrap 0 --pool", &out), 1) << out;
+  EXPECT_NE(out.find("also in"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "out2"));
+}
+
 TEST(FitCli, BadRowNamesFileLineAndColumnAndWritesNothing) {
   const fs::path dir = fresh("bad");
   const auto sessions = simulated_sessions(dir / "sessions", 2);

@@ -199,13 +199,13 @@ TEST_F(CalibrationFile, BadVersionTwoFilesNameTheField) {
   };
   const std::string ok_entry = R"({"technique": "pcf", "c": 3, "obtained_by": "study"})";
   const Case cases[] = {
-      {R"({"schema_version": 3, "entries": [])" + ok_entry + "]}", ": schema_version: expected 2 (or no field: a version-1 file"},
-      {R"({"schema_version": "2", "entries": [])" + ok_entry + "]}", ": schema_version: expected 2"},
-      {R"({"schema_version": 2.5, "entries": [])" + ok_entry + "]}", ": schema_version: expected 2"},
+      {R"({"schema_version": 3, "entries": [)" + ok_entry + "]}", ": schema_version: expected 2 (or no field: a version-1 file"},
+      {R"({"schema_version": "2", "entries": [)" + ok_entry + "]}", ": schema_version: expected 2"},
+      {R"({"schema_version": 2.5, "entries": [)" + ok_entry + "]}", ": schema_version: expected 2"},
       {R"({"schema_version": 2})", ": entries: missing"},
       {R"({"schema_version": 2, "entries": []})", ": entries: expected a non-empty array"},
       {R"({"schema_version": 2, "entries": {}})", ": entries: expected a non-empty array"},
-      {R"({"schema_version": 2, "c": 3, "entries": [])" + ok_entry + "]}", ": c: a version-2 file has its c in entries[]"},
+      {R"({"schema_version": 2, "c": 3, "entries": [)" + ok_entry + "]}", ": c: a version-2 file has its c in entries[]"},
       {R"({"schema_version": 2, "entries": [7]})", ": entries[0]: expected an object"},
       {R"({"schema_version": 2, "entries": [{"c": 3, "obtained_by": "study"}]})", ": entries[0].technique: missing"},
       {R"({"schema_version": 2, "entries": [{"technique": "", "c": 3, "obtained_by": "study"}]})", ": entries[0].technique: expected a technique name"},
