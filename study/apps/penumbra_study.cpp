@@ -198,8 +198,9 @@ struct RunOptions {
   int pace_ms = 0;
   int stop_after = 0;
   std::uint64_t observer_seed = 7;
+  std::uint64_t seed = 0;  // --seed: the session's seed instead of the one derived from the participant id
   // Which options the command line gave (a resumed session takes the rest from session.json).
-  bool participant_given = false, observer_given = false, observer_seed_given = false;
+  bool participant_given = false, observer_given = false, observer_seed_given = false, seed_given = false;
 #ifdef PENUMBRA_STUDY_GUI
   study_gui::GuiOptions gui;
 #endif
@@ -215,6 +216,13 @@ void check_resume_options(const RunOptions& o, const nlohmann::json& session) {
   if (o.participant_given && o.participant != participant)
     throw std::invalid_argument("--participant '" + json_input::printable(o.participant) + "': the session is '" +
                                 json_input::printable(participant) + "' (session.json)");
+  if (o.seed_given) {
+    const auto& z = session.contains("randomization") ? session["randomization"] : nlohmann::json();
+    const std::uint64_t recorded = z.is_object() ? z.at("seed").get<std::uint64_t>() : session.at("seed").get<std::uint64_t>();
+    if (o.seed != recorded)
+      throw std::invalid_argument("--seed " + std::to_string(o.seed) + ": the session was run with seed " + std::to_string(recorded) +
+                                  " (session.json)");
+  }
 }
 
 procedure::Session open_session(const RunOptions& o, const std::string& observer,
@@ -231,7 +239,8 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
     accept(extra, config);
     extra["observer_seed"] = o.observer_seed;
   }
-  return procedure::Session::create(config, o.output, o.participant, extra);
+  return procedure::Session::create(config, o.output, o.participant, extra,
+                                    o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt);
 }
 
 // A participant session in the windows (study/gui); the same Session, so the same log.
@@ -315,10 +324,15 @@ int run_study(const RunOptions& o) {
   }
   std::cout << "session " << session.session_id() << ": " << session.trials_done() << " trials in "
             << session.dir().string() << "\n";
-  for (std::size_t r = 0; r < session.rounds().size(); ++r) {
+  std::printf("  seed %llu (from %s), rounds in the order", static_cast<unsigned long long>(session.randomization().seed),
+              session.randomization().seed_from.c_str());
+  for (const int r : session.randomization().round_order) std::printf(" %s", session.condition(r).c_str());
+  std::printf("\n");
+  for (const int round : session.randomization().round_order) {
+    const auto r = static_cast<std::size_t>(round);
     for (const auto& sc : session.rounds()[r]) {
       const double t = sc.quest.mean();
-      std::printf("  round %zu %-10s %-4s trials %3zu  threshold log10(a/r) %+.3f sd %.3f  -> r/a = %.2f\n", r,
+      std::printf("  round %d %-10s %-4s trials %3zu  threshold log10(a/r) %+.3f sd %.3f  -> r/a = %.2f\n", session.round_position(round) + 1,
                   session.condition(static_cast<int>(r)).c_str(), sc.name.c_str(), sc.quest.trial_count(), t,
                   sc.quest.sd(), std::pow(10.0, -t));
     }
@@ -360,6 +374,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(cli::non_negative_integer());
   run->add_option("--participant", ro.participant, "participant id")->capture_default_str();
+  run->add_option("--seed", ro.seed,
+                  "the session's seed (target sides, staircase draws, edge phases, round order); default: derived from the "
+                  "config's seed and the participant id, so each participant gets another sequence and the same one again")
+      ->check(cli::non_negative_integer());
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
   run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)")
       ->check(CLI::Range(0, 60000));
@@ -378,6 +396,7 @@ int main(int argc, char** argv) {
     ro.participant_given = run->count("--participant") > 0;
     ro.observer_given = run->count("--observer") > 0;
     ro.observer_seed_given = run->count("--observer-seed") > 0;
+    ro.seed_given = run->count("--seed") > 0;
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
     return cli::fail("penumbra-study", e.what());

@@ -96,11 +96,11 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
 
   ImGui::Text("Session %s   participant %s", session.session_id().c_str(),
               session.session_json().value("participant", std::string()).c_str());
-  ImGui::TextDisabled("%s   task %s   seed %llu", session.dir().string().c_str(), config.task.c_str(),
-                      static_cast<unsigned long long>(config.seed));
+  ImGui::TextDisabled("%s   task %s   seed %llu (%s)", session.dir().string().c_str(), config.task.c_str(),
+                      static_cast<unsigned long long>(session.randomization().seed), session.randomization().seed_from.c_str());
   ImGui::Separator();
   if (round < n_rounds)
-    ImGui::Text("Round %d of %d: %s    trials answered %d", round + 1, n_rounds, session.condition(round).c_str(),
+    ImGui::Text("Round %d of %d: %s    trials answered %d", session.round_position(round) + 1, n_rounds, session.condition(round).c_str(),
                 session.trials_done());
   else
     ImGui::Text("All %d rounds finished    trials answered %d", n_rounds, session.trials_done());
@@ -118,7 +118,7 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
   actions.quit = confirm("Quit?", "Stop the session? Every answered trial is saved; --resume continues it.");
   ImGui::Separator();
 
-  const int shown_round = std::min(round, n_rounds - 1);
+  const int shown_round = round < n_rounds ? round : session.randomization().round_order.back();  // finished: the last run
   const auto& staircases = session.rounds()[static_cast<std::size_t>(shown_round)];
   const double max_radius = 0.5 * config.stimulus_size_px;
   if (ImGui::BeginTable("staircases", 6, ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerH)) {

@@ -177,7 +177,7 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
     const int round = session.current_round(), n = static_cast<int>(session.rounds().size());
     if (plan && plan->practice) return std::string("Practice");
     if (round >= n) return std::string();
-    return "Part " + std::to_string(round + 1) + " of " + std::to_string(n);
+    return "Part " + std::to_string(session.round_position(round) + 1) + " of " + std::to_string(n);
   };
   // Chooses what comes next: the end, a break, or the next trial after a blank interval.
   auto advance = [&] {
@@ -230,7 +230,8 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
       if (!paused && screen == Screen::pause) advance();  // the withdrawn trial comes again (same plan)
     }
     if (a.end_round) {
-      say("round " + std::to_string(session.current_round() + 1) + " ended by the experimenter");
+      say("round " + std::to_string(session.round_position(session.current_round()) + 1) + " (" +
+          session.condition(session.current_round()) + ") ended by the experimenter");
       session.end_round();
       if (screen == Screen::blank || screen == Screen::trial) advance();
     }

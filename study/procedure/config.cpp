@@ -79,7 +79,7 @@ class Reader {
 StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const Reader r(file);
   r.only(j, "", {"name", "task", "artifact_px", "rounds", "quest", "intensity_bounds", "stopping", "practice_trials",
-                 "practice_intensity", "break_every_trials", "seed", "stimulus", "display", "description"});
+                 "practice_intensity", "break_every_trials", "seed", "round_order", "stimulus", "display", "description"});
   StudyConfig c;
   c.name = r.text(j, "", "name", "study");
   c.task = r.text(j, "", "task", "2afc");
@@ -146,6 +146,9 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   c.practice_trials = static_cast<int>(r.integer(j, "", "practice_trials", 4, 0, 1000));
   c.practice_intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
   c.break_every_trials = static_cast<int>(r.integer(j, "", "break_every_trials", 40, 0, 100000));
+  c.round_order = r.text(j, "", "round_order", "shuffled");
+  if (c.round_order != "shuffled" && c.round_order != "fixed")
+    r.fail("round_order", "expected shuffled or fixed, got '" + json_input::printable(c.round_order) + "'");
   if (const auto* s = r.find(j, "seed")) {
     if (!s->is_number_unsigned()) r.fail("seed", "expected a non-negative integer");
     c.seed = s->get<std::uint64_t>();
@@ -198,6 +201,7 @@ nlohmann::json to_json(const StudyConfig& c) {
           {"practice_intensity", c.practice_intensity},
           {"break_every_trials", c.break_every_trials},
           {"seed", c.seed},
+          {"round_order", c.round_order},
           {"stimulus", {{"size_px", c.stimulus_size_px}, {"kernel", stimuli::to_string(c.kernel)},
                         {"poisson_taps", c.poisson_taps}}},
           {"display", {{"width_px", c.display.width_px}, {"height_px", c.display.height_px},

@@ -40,7 +40,10 @@ struct StudyConfig {
   int practice_trials = 4;
   double practice_intensity = 0.3;           // an easy trial: r = a / 2
   int break_every_trials = 40;               // 0: no breaks
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;                    // with the participant id, each session's seed (randomization.h)
+  // The order of the rounds per session: "shuffled" (per participant, from the session seed: order
+  // effects average out over participants) or "fixed" (the config's order for everyone).
+  std::string round_order = "shuffled";
   stimuli::Kernel kernel = stimuli::Kernel::disk;
   int poisson_taps = 32;
   int stimulus_size_px = 320;

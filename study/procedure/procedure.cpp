@@ -17,7 +17,58 @@ std::string fmt(double v) {
 }
 }  // namespace
 
-Procedure::Procedure(const StudyConfig& config) : config_(config) {
+namespace {
+// FNV-1a: a participant id to 64 bits, the same on every machine.
+std::uint64_t hash_name(const std::string& name) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+constexpr std::uint64_t kRoundOrderStream = 0x726f756e645f6f72ull;  // "round_or": apart from the trials' streams
+}  // namespace
+
+Randomization config_randomization(const StudyConfig& config) {
+  Randomization r;
+  r.seed = config.seed;
+  r.seed_from = "config";
+  for (std::size_t i = 0; i < config.rounds.size(); ++i) r.round_order.push_back(static_cast<int>(i));
+  return r;
+}
+
+Randomization randomize(const StudyConfig& config, const std::string& participant, std::optional<std::uint64_t> explicit_seed) {
+  Randomization r = config_randomization(config);
+  if (explicit_seed) {
+    r.seed = *explicit_seed;
+    r.seed_from = "--seed";
+  } else {
+    r.seed = sampling::derive_seed(config.seed, hash_name(participant)) >> 12;  // fits a double and a JSON number exactly
+    r.seed_from = "participant";
+  }
+  if (config.round_order == "shuffled") {
+    sampling::Random random(sampling::derive_seed(r.seed, kRoundOrderStream));
+    for (std::size_t i = r.round_order.size(); i > 1; --i) std::swap(r.round_order[i - 1], r.round_order[random.bits() % i]);
+  }
+  return r;
+}
+
+void check_round_order(const StudyConfig& config, const std::vector<int>& order) {
+  std::vector<int> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 0; i < sorted.size(); ++i)
+    if (sorted[i] != static_cast<int>(i)) sorted.clear();
+  if (sorted.size() != config.rounds.size())
+    throw std::invalid_argument("expected each of the config's " + std::to_string(config.rounds.size()) + " rounds (0.." +
+                                std::to_string(config.rounds.size() - 1) + ") once");
+}
+
+int Procedure::round_position(int round) const {
+  const auto& order = randomization_.round_order;
+  const auto it = std::find(order.begin(), order.end(), round);
+  return it == order.end() ? static_cast<int>(order.size()) : static_cast<int>(it - order.begin());
+}
+
+Procedure::Procedure(const StudyConfig& config, Randomization randomization) : config_(config), randomization_(std::move(randomization)) {
+  check_round_order(config_, randomization_.round_order);
   for (std::size_t r = 0; r < config_.rounds.size(); ++r) {
     std::vector<Staircase> round;
     for (double a : config_.artifact_px) round.push_back({"a" + fmt(a), a, quest::Quest(config_.quest), false, {}, {}});
@@ -32,10 +83,10 @@ std::string Procedure::condition(int round) const {
 }
 
 int Procedure::current_round() const {
-  for (std::size_t r = 0; r < rounds_.size(); ++r) {
-    if (ended_rounds_[r]) continue;
-    for (const auto& sc : rounds_[r])
-      if (!sc.done) return static_cast<int>(r);
+  for (const int r : randomization_.round_order) {
+    if (ended_rounds_[static_cast<std::size_t>(r)]) continue;
+    for (const auto& sc : rounds_[static_cast<std::size_t>(r)])
+      if (!sc.done) return r;
   }
   return static_cast<int>(rounds_.size());
 }
@@ -53,15 +104,15 @@ const Staircase& Procedure::staircase(const TrialPlan& plan) const {
 std::optional<TrialPlan> Procedure::next() const {
   TrialPlan p;
   p.trial = trials_done_;
-  sampling::Random random(sampling::derive_seed(config_.seed, static_cast<std::uint64_t>(p.trial)));
+  sampling::Random random(sampling::derive_seed(randomization_.seed, static_cast<std::uint64_t>(p.trial)));
   double artifact = 0, x = 0;
   if (practice_done_ < config_.practice_trials) {
     p.practice = true;
-    p.round = 0;
+    p.round = randomization_.round_order.front();  // practice shows the first round's condition
     p.staircase = practice_done_ % static_cast<int>(config_.artifact_px.size());
     artifact = config_.artifact_px[static_cast<std::size_t>(p.staircase)];
     x = config_.practice_intensity;
-    p.staircase_name = rounds_[0][static_cast<std::size_t>(p.staircase)].name;
+    p.staircase_name = rounds_[static_cast<std::size_t>(p.round)][static_cast<std::size_t>(p.staircase)].name;
     random.bits();  // the staircase draw a main trial makes, so both use the stream alike
   } else {
     p.round = current_round();

@@ -1,9 +1,11 @@
 #pragma once
 // The study's procedure without a display or a log: interleaved QUEST staircases (one per artifact
 // size) within rounds of (pattern, contrast), practice trials first, and the stopping rule. All
-// randomness of trial t comes from derive_seed(config.seed, t), so feeding the logged answers back
-// (replay_log in session_record.h) restores every staircase exactly. No GL: the fitter (analysis/)
-// replays logs through the same code as penumbra-study's --resume.
+// randomness of trial t comes from derive_seed(session seed, t), and the rounds run in the
+// session's order, so feeding the logged answers back (replay_log in session_record.h) restores
+// every staircase exactly. No GL: the fitter (analysis/) replays logs through the same code as
+// penumbra-study's --resume.
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,9 +38,27 @@ struct Staircase {
   std::vector<int> correct;
 };
 
+// What differs between the sessions of one config: the seed of every random draw (target side,
+// staircase, edge phase and orientation) and the order of the rounds. Recorded in session.json
+// ("randomization"); a session.json without it (written before) is the config's seed and order.
+struct Randomization {
+  std::uint64_t seed = 1;
+  std::string seed_from = "config";  // participant (config seed and participant id), --seed, or config
+  std::vector<int> round_order;      // config round indices in the order they run
+};
+// The randomization of a new session: the seed from `explicit_seed` (--seed), else derived from the
+// config's seed and the participant id; the rounds shuffled with that seed (config.round_order
+// "shuffled") or in the config's order ("fixed").
+Randomization randomize(const StudyConfig& config, const std::string& participant, std::optional<std::uint64_t> explicit_seed);
+// The config's own seed and round order (sessions recorded before randomization existed).
+Randomization config_randomization(const StudyConfig& config);
+// Throws std::invalid_argument unless `order` is a permutation of the config's rounds.
+void check_round_order(const StudyConfig& config, const std::vector<int>& order);
+
 class Procedure {
  public:
-  explicit Procedure(const StudyConfig& config);
+  explicit Procedure(const StudyConfig& config) : Procedure(config, config_randomization(config)) {}
+  Procedure(const StudyConfig& config, Randomization randomization);
 
   // The next trial, or nothing when every round is finished.
   std::optional<TrialPlan> next() const;
@@ -51,8 +71,11 @@ class Procedure {
   bool correct_response(const TrialPlan& plan, const std::string& response) const;
   std::string condition(int round) const;  // "stair/1" etc.
   const StudyConfig& config() const { return config_; }
+  const Randomization& randomization() const { return randomization_; }
+  // 0 for the round that runs first, ... (the participant's "round k of n" is position + 1).
+  int round_position(int round) const;
   const std::vector<std::vector<Staircase>>& rounds() const { return rounds_; }
-  // The staircase a plan belongs to (round 0's for practice trials).
+  // The staircase a plan belongs to (the first round's for practice trials).
   const Staircase& staircase(const TrialPlan& plan) const;
   int current_round() const;  // rounds().size() when finished
   int trials_done() const { return trials_done_; }
@@ -60,6 +83,7 @@ class Procedure {
 
  private:
   StudyConfig config_;
+  Randomization randomization_;
   std::vector<std::vector<Staircase>> rounds_;
   std::vector<bool> ended_rounds_;
   int trials_done_ = 0;

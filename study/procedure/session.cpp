@@ -27,7 +27,7 @@ std::string utc_now() {
 }
 
 Session Session::create(const StudyConfig& config, const fs::path& dir, const std::string& participant,
-                        const nlohmann::json& extra) {
+                        const nlohmann::json& extra, std::optional<std::uint64_t> seed) {
   if (const std::string bad = name_problem(participant); !bad.empty())
     throw std::runtime_error("participant '" + json_input::printable(participant) + "': " + bad);
   std::error_code ec;
@@ -40,7 +40,7 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
   // A session that cannot be started (a full disk) leaves nothing behind: not half a session, not
   // a directory that the next try would refuse.
   try {
-    return start(config, dir, participant, extra, std::move(lock));
+    return start(config, dir, participant, extra, std::move(lock), seed);
   } catch (...) {
     if (made) {
       fs::remove_all(dir, ec);
@@ -52,8 +52,9 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
 }
 
 Session Session::start(const StudyConfig& config, const fs::path& dir, const std::string& participant,
-                       const nlohmann::json& extra, trial_log::DirectoryLock lock) {
-  Session s(config);
+                       const nlohmann::json& extra, trial_log::DirectoryLock lock, std::optional<std::uint64_t> seed) {
+  const Randomization randomization = randomize(config, participant, seed);
+  Session s(config, randomization);
   s.lock_ = std::move(lock);
   s.dir_ = dir;
   s.participant_ = participant;
@@ -67,6 +68,9 @@ Session Session::start(const StudyConfig& config, const fs::path& dir, const std
                      {"created_utc", stamp},
                      {"software", {{"name", "penumbra-study"}, {"version", "0.1.0"}}},
                      {"seed", config.seed},
+                     {"randomization", {{"seed", randomization.seed},
+                                        {"seed_from", randomization.seed_from},
+                                        {"round_order", randomization.round_order}}},
                      {"config", to_json(config)},
                      {"quest", quest_block(config)},
                      {"display", to_json(config)["display"]},
@@ -89,7 +93,7 @@ Session Session::resume(const fs::path& dir, const std::function<void(const nloh
   nlohmann::json json = json_input::read_file(json_path, {.max_bytes = 1 << 20, .max_depth = 8});
   const SessionRecord record = check_session_json(json, json_path.string());
   const trial_log::ReadResult log = trial_log::read(log_path);
-  Session s(record.config);
+  Session s(record.config, record.randomization);
   s.lock_ = std::move(lock);
   s.session_json_ = std::move(json);
   s.dir_ = dir;

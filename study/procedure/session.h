@@ -22,8 +22,11 @@ class Session {
   // A new session in `dir` (created; refused when it already holds a session). Both create and
   // resume lock the directory first (trial_log::DirectoryLock) and hold it for the Session's life,
   // so a second process on the same directory is refused before it reads or writes anything.
+  // The session's seed is `seed` (--seed) or derived from the config's seed and the participant
+  // id; its round order follows config.round_order (procedure.h, randomize). Both are recorded in
+  // session.json ("randomization").
   static Session create(const StudyConfig& config, const std::filesystem::path& dir, const std::string& participant,
-                        const nlohmann::json& extra);
+                        const nlohmann::json& extra, std::optional<std::uint64_t> seed = std::nullopt);
   // Replays dir/trials.csv after checking session.json (types, sizes, nesting, agreement with its
   // config block) and every row against it (replay_log: participant, session id, seed, design,
   // display, QUEST posteriors). `accept`, when given, sees the checked session.json and its config and may throw to refuse (e.g.
@@ -45,6 +48,8 @@ class Session {
   }
   std::string condition(int round) const { return procedure_.condition(round); }
   const StudyConfig& config() const { return procedure_.config(); }
+  const Randomization& randomization() const { return procedure_.randomization(); }
+  int round_position(int round) const { return procedure_.round_position(round); }
   const std::vector<std::vector<Staircase>>& rounds() const { return procedure_.rounds(); }
   int current_round() const { return procedure_.current_round(); }  // rounds().size() when finished
   int trials_done() const { return procedure_.trials_done(); }
@@ -54,9 +59,9 @@ class Session {
   const nlohmann::json& session_json() const { return session_json_; }
 
  private:
-  explicit Session(const StudyConfig& config) : procedure_(config) {}
+  Session(const StudyConfig& config, const Randomization& randomization) : procedure_(config, randomization) {}
   static Session start(const StudyConfig& config, const std::filesystem::path& dir, const std::string& participant,
-                       const nlohmann::json& extra, trial_log::DirectoryLock lock);
+                       const nlohmann::json& extra, trial_log::DirectoryLock lock, std::optional<std::uint64_t> seed);
   trial_log::TrialRow make_row(const TrialPlan& plan, const std::string& response, double rt_ms, bool correct) const;
   void write_session_json() const;
 

@@ -48,7 +48,7 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   if (!j.is_object()) fail("(top level)", "expected an object");
   static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
                                               "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
-                                              "observer_seed", "config_file"};
+                                              "observer_seed", "config_file", "randomization"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
   for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
@@ -87,6 +87,38 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
     if (!equal) fail("quest." + it.key(), "differs from the config's QUEST (expected " + it->dump() + ")");
   }
   if (j["display"] != to_json(r.config)["display"]) fail("display", "differs from config.display");
+  r.randomization = config_randomization(r.config);
+  if (j.contains("randomization")) {
+    const auto& z = j["randomization"];
+    if (!z.is_object()) fail("randomization", "expected an object");
+    for (auto it = z.begin(); it != z.end(); ++it)
+      if (it.key() != "seed" && it.key() != "seed_from" && it.key() != "round_order")
+        fail("randomization." + json_input::printable(it.key()), "unknown field");
+    if (!z.contains("seed") || !z["seed"].is_number_unsigned()) fail("randomization.seed", "expected a non-negative integer");
+    r.randomization.seed = z["seed"].get<std::uint64_t>();
+    if (!z.contains("seed_from") || !z["seed_from"].is_string() ||
+        (z["seed_from"] != "participant" && z["seed_from"] != "--seed" && z["seed_from"] != "config"))
+      fail("randomization.seed_from", "expected participant, --seed or config");
+    r.randomization.seed_from = z["seed_from"].get<std::string>();
+    if (!z.contains("round_order") || !z["round_order"].is_array() || z["round_order"].size() != r.config.rounds.size())
+      fail("randomization.round_order", "expected an array of the " + std::to_string(r.config.rounds.size()) + " round indices");
+    r.randomization.round_order.clear();
+    for (const auto& v : z["round_order"]) {
+      if (!v.is_number_unsigned() || v.get<std::uint64_t>() >= r.config.rounds.size())
+        fail("randomization.round_order", "expected round indices 0.." + std::to_string(r.config.rounds.size() - 1));
+      r.randomization.round_order.push_back(v.get<int>());
+    }
+    try {
+      check_round_order(r.config, r.randomization.round_order);
+    } catch (const std::invalid_argument& e) {
+      fail("randomization.round_order", e.what());
+    }
+    // A seed derived from the participant must be that participant's: an edited participant or seed
+    // would otherwise carry a foreign trial sequence into the continued rows.
+    if (r.randomization.seed_from == "participant" && r.randomization.seed != randomize(r.config, r.participant, std::nullopt).seed)
+      fail("randomization.seed", "not the seed of participant '" + json_input::printable(r.participant) + "' with the config's seed " +
+                                     std::to_string(r.config.seed) + " (session.json edited?)");
+  }
   if (j.contains("ended_rounds")) {
     const auto& e = j["ended_rounds"];
     if (!e.is_array() || e.size() > r.config.rounds.size()) fail("ended_rounds", "expected an array of at most one entry per round");
@@ -110,7 +142,7 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
 }
 
 Procedure replay_log(const SessionRecord& record, const std::vector<trial_log::TrialRow>& rows, const std::string& file) {
-  Procedure p(record.config);
+  Procedure p(record.config, record.randomization);
   auto apply_ended = [&](int trials_done) {
     for (const auto& [round, after] : record.ended)
       if (after == trials_done) p.end_round(round);

@@ -28,6 +28,7 @@ struct SessionRecord {
   StudyConfig config;
   std::string session_id, participant;
   std::vector<std::pair<int, int>> ended;  // (round, after_trial): rounds the experimenter ended
+  Randomization randomization;             // session.json's, or the config's for older sessions
 };
 
 // session.json as written by Session::create. Throws std::runtime_error "<file>: <field>: <what>".

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -116,6 +117,85 @@ TEST(StudyRun, HeadlessSimulationLogsValidRowsAndConvergesToThePlantedThreshold)
   EXPECT_NE(json.find("\"transfer\": \"srgb\""), std::string::npos);
   EXPECT_NE(json.find("\"p_threshold\": 0.82"), std::string::npos);
   fs::remove_all(dir);
+}
+
+// Issue 16: every participant gets another trial sequence and round order from the same config
+// (the session seed comes from the config's seed and the participant id); the same participant, or
+// the same --seed, replays identically; a --seed that contradicts a resumed session is refused.
+TEST(StudyRun, EachParticipantGetsAnotherSequenceAndTheSameOneAgain) {
+  auto session = [](const std::string& name, const std::vector<std::string>& extra) {
+    const fs::path dir = fresh("rand-" + name);
+    std::vector<std::string> args = {"run", "--config", kConfig, "--observer", kObserver, "--headless", "--stop-after", "60",
+                                     "-o", dir.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::string out;
+    EXPECT_EQ(run(args, &out), 0) << out;
+    const nlohmann::json json = nlohmann::json::parse(std::ifstream(dir / "session.json"));
+    struct Session {
+      std::vector<trial_log::TrialRow> rows;
+      nlohmann::json randomization;
+      fs::path dir;
+    };
+    return Session{trial_log::read(dir / "trials.csv").rows, json.at("randomization"), dir};
+  };
+  auto sides = [](const auto& rows) {
+    std::string s;
+    for (const auto& r : rows) s += r.target.substr(0, 1);
+    return s;
+  };
+  auto seeds = [](const auto& rows) {
+    std::vector<std::uint64_t> s;
+    for (const auto& r : rows) s.push_back(r.stimulus_seed);
+    return s;
+  };
+  const auto ann = session("ann", {"--participant", "ann"});
+  const auto bob = session("bob", {"--participant", "bob"});
+  const auto ann_again = session("ann2", {"--participant", "ann"});
+  const auto seeded = session("seeded", {"--participant", "cid", "--seed", "12345"});
+  const auto seeded_again = session("seeded2", {"--participant", "dee", "--seed", "12345"});
+  ASSERT_EQ(ann.rows.size(), 60u);
+  ASSERT_EQ(bob.rows.size(), 60u);
+  EXPECT_EQ(ann.randomization.at("seed_from"), "participant");
+  EXPECT_NE(ann.randomization.at("seed"), bob.randomization.at("seed"));
+  EXPECT_NE(sides(ann.rows), sides(bob.rows));
+  EXPECT_NE(seeds(ann.rows), seeds(bob.rows));
+  // The same participant: the same seed, order, sides and edge phases (and so the same staircases).
+  EXPECT_EQ(ann.randomization, ann_again.randomization);
+  EXPECT_EQ(comparable(ann.rows), comparable(ann_again.rows));
+  EXPECT_EQ(sides(ann.rows), sides(ann_again.rows));
+  EXPECT_EQ(seeds(ann.rows), seeds(ann_again.rows));
+  // --seed wins over the participant id and is recorded as such.
+  EXPECT_EQ(seeded.randomization.at("seed"), 12345u);
+  EXPECT_EQ(seeded.randomization.at("seed_from"), "--seed");
+  EXPECT_EQ(seeds(seeded.rows), seeds(seeded_again.rows));
+  EXPECT_EQ(seeded.randomization.at("round_order"), seeded_again.randomization.at("round_order"));
+  // Round orders are shuffled per participant: across 12 participants the default config's four
+  // rounds do not all start with the same one (a fixed order would).
+  std::set<int> first_rounds;
+  for (int i = 0; i < 12; ++i) {
+    const fs::path dir = fresh("order-" + std::to_string(i));
+    ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "--stop-after", "1", "--participant",
+                   "p" + std::to_string(i), "-o", dir.string()}),
+              0);
+    const nlohmann::json json = nlohmann::json::parse(std::ifstream(dir / "session.json"));
+    const auto order = json.at("randomization").at("round_order").get<std::vector<int>>();
+    ASSERT_EQ(std::set<int>(order.begin(), order.end()), (std::set<int>{0, 1, 2, 3}));
+    first_rounds.insert(order.front());
+    // Practice shows the first round's condition.
+    const auto rows = trial_log::read(dir / "trials.csv").rows;
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0].round, order.front());
+    fs::remove_all(dir);
+  }
+  EXPECT_GE(first_rounds.size(), 3u);
+  // A resume keeps the recorded randomization and refuses a --seed that contradicts it.
+  std::string out;
+  EXPECT_EQ(run({"run", "--resume", seeded.dir.string(), "--headless", "--seed", "999"}, &out), 1) << out;
+  EXPECT_NE(out.find("--seed 999: the session was run with seed 12345"), std::string::npos) << out;
+  EXPECT_EQ(run({"run", "--resume", seeded.dir.string(), "--headless", "--seed", "12345", "--stop-after", "70"}, &out), 0) << out;
+  const auto resumed = trial_log::read(seeded.dir / "trials.csv").rows;
+  ASSERT_EQ(resumed.size(), 70u);
+  for (const auto* s : {&ann, &bob, &ann_again, &seeded, &seeded_again}) fs::remove_all(s->dir);
 }
 
 TEST(StudyRun, SigkillAtARandomTrialThenResumeEqualsAnUninterruptedRun) {
@@ -298,7 +378,10 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
     return t;
   }();
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {edited([](nlohmann::json& e) { e["participant"] = "other"; }), "trials.csv:2: column 'participant': 'sim' where session.json and the replayed procedure give 'other'"},
+      // Issue 16: the session's seed is derived from the participant id, so an edited participant
+      // (or config seed) no longer matches the recorded seed.
+      {edited([](nlohmann::json& e) { e["participant"] = "other"; }),
+       "session.json: randomization.seed: not the seed of participant 'other' with the config's seed 1"},
       {edited([](nlohmann::json& e) {
          e["config"]["display"]["width_mm"] = 52.7;
          e["display"]["width_mm"] = 52.7;
@@ -308,7 +391,14 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
          e["config"]["seed"] = 2;
          e["seed"] = 2;
        }),
-       "trials.csv:2: column 'stimulus_seed': '4010436946754998' where session.json and the replayed procedure give '2588320001175957'"},
+       "session.json: randomization.seed: not the seed of participant 'sim' with the config's seed 2"},
+      {edited([](nlohmann::json& e) {
+         e["randomization"]["seed_from"] = "--seed";
+         e["randomization"]["seed"] = 2;
+       }),
+       "trials.csv:2: column '"},
+      {edited([](nlohmann::json& e) { e["randomization"]["round_order"] = {0, 0, 1, 2}; }),
+       "session.json: randomization.round_order: expected each of the config's 4 rounds"},
       {edited([](nlohmann::json& e) {
          e["config"]["quest"]["beta"] = 2.5;
          e["quest"]["beta"] = 2.5;
