@@ -33,6 +33,27 @@ using namespace penumbra;
 
 namespace {
 
+// display-check: what the config's display geometry means for the stimuli, before any session. The
+// config is read (and so checked: non-square pixels, a viewing distance under 20 cm, a stimulus
+// larger than the screen are one error line each) and nothing is written.
+int run_display_check(const fs::path& config_file) {
+  const procedure::StudyConfig c = procedure::load_config(config_file);
+  const procedure::Display& d = c.display;
+  const double ppd = d.pixels_per_degree();
+  std::printf("display: %d x %d px, %g x %g mm, viewing distance %g mm, transfer %s\n", d.width_px, d.height_px, d.width_mm,
+              d.height_mm, d.viewing_distance_mm, stimuli::to_string(d.transfer).c_str());
+  std::printf("pixel: %.4f x %.4f mm (aspect %.3f); %.1f px per degree at the centre\n", d.width_mm / d.width_px,
+              d.height_mm / d.height_px, (d.height_mm / d.height_px) / (d.width_mm / d.width_px), ppd);
+  std::printf("screen: %.1f x %.1f deg\n", 2.0 * std::atan(0.5 * d.width_mm / d.viewing_distance_mm) * 180.0 / M_PI,
+              2.0 * std::atan(0.5 * d.height_mm / d.viewing_distance_mm) * 180.0 / M_PI);
+  std::printf("stimulus: %d px = %.2f deg%s\n", c.stimulus_size_px, d.arcmin(c.stimulus_size_px) / 60.0,
+              c.task == "2afc" ? " (two side by side)" : "");
+  std::printf("artifacts:");
+  for (double a : c.artifact_px) std::printf(" %g px = %.2f arcmin;", a, d.arcmin(a));
+  std::printf("\nlargest filter radius shown: %d px = %.1f arcmin\n", c.stimulus_size_px / 2, d.arcmin(c.stimulus_size_px / 2.0));
+  return 0;
+}
+
 int run_stimulus(const std::string& pattern, const std::string& kernel, const std::string& transfer,
                  stimuli::StimulusSpec spec, const fs::path& out) {
   spec.pattern = stimuli::parse_pattern(pattern);
@@ -363,6 +384,11 @@ int main(int argc, char** argv) {
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str()->check(cli::non_negative_integer());
   stim->add_option("-o,--output", stim_out, "output directory")->required()->check(cli::path_given());
 
+  auto* display_check = app.add_subcommand(
+      "display-check", "print pixels per degree, the stimulus in degrees and the artifacts in arcmin for a config's display; "
+                       "refuses implausible geometry (non-square pixels, viewing distance under 20 cm, stimulus larger than the screen)");
+  fs::path display_config;
+  display_check->add_option("--config", display_config, "study config (data/studies/*.json)")->required()->check(cli::path_given());
   auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
   RunOptions ro;
   run->add_option("--config", ro.config, "study config JSON (data/studies/)")->check(cli::path_given());
@@ -392,6 +418,7 @@ int main(int argc, char** argv) {
   if (const auto status = cli::parse(app, argc, argv, "penumbra-study")) return *status;
   try {
     if (reference.parsed()) return reference.run();
+    if (display_check->parsed()) return run_display_check(display_config);
     if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
     ro.participant_given = run->count("--participant") > 0;
     ro.observer_given = run->count("--observer") > 0;

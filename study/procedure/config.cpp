@@ -14,6 +14,11 @@ double Display::arcmin(double px) const {
   return 2.0 * std::atan(0.5 * mm / viewing_distance_mm) * 180.0 / M_PI * 60.0;
 }
 
+double Display::pixels_per_degree() const {
+  const double mm = 2.0 * viewing_distance_mm * std::tan(0.5 * M_PI / 180.0);
+  return mm * width_px / width_mm;
+}
+
 namespace {
 
 class Reader {
@@ -171,6 +176,20 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   }
   for (double a : c.artifact_px)
     if (2 * a > c.stimulus_size_px) r.fail("artifact_px", "an artifact larger than half the stimulus cannot be shown");
+  // Geometry a lab could not have (issue 16): every angle the log records would be wrong.
+  const Display& d = c.display;
+  const double pixel_aspect = (d.height_mm / d.height_px) / (d.width_mm / d.width_px);
+  if (std::abs(pixel_aspect - 1.0) > kPixelAspectTolerance)
+    r.fail("display.height_mm", "pixels " + Reader::fmt(pixel_aspect) + " times as tall as wide (" + Reader::fmt(d.width_mm) + " mm / " +
+                                    std::to_string(d.width_px) + " px across, " + Reader::fmt(d.height_mm) + " mm / " +
+                                    std::to_string(d.height_px) + " px down); expected square pixels within 5 %: check the sizes in mm");
+  if (d.viewing_distance_mm < kMinViewingDistanceMm)
+    r.fail("display.viewing_distance_mm", "expected at least " + Reader::fmt(kMinViewingDistanceMm) + " mm (the screen centre to the eyes), got " +
+                                              Reader::fmt(d.viewing_distance_mm));
+  const int across = c.task == "2afc" ? 2 * c.stimulus_size_px : c.stimulus_size_px;  // 2afc: side by side
+  if (across > d.width_px || c.stimulus_size_px > d.height_px)
+    r.fail("stimulus.size_px", std::to_string(c.stimulus_size_px) + " px" + (c.task == "2afc" ? " twice side by side" : "") +
+                                   " does not fit the display's " + std::to_string(d.width_px) + " x " + std::to_string(d.height_px) + " px");
   try {
     quest::Quest probe(c.quest);
   } catch (const std::exception& e) {

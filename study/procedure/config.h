@@ -18,6 +18,11 @@ struct RoundConfig {
   double contrast = 1.0;  // lit level in linear light
 };
 
+// Plausible display geometry, checked when a config is read: square pixels within 5 %, the eyes at
+// least 20 cm from the screen.
+inline constexpr double kPixelAspectTolerance = 0.05;
+inline constexpr double kMinViewingDistanceMm = 200;
+
 struct Display {
   int width_px = 1920, height_px = 1080;
   double width_mm = 527, height_mm = 296;
@@ -26,6 +31,8 @@ struct Display {
   int monitor = 0;  // participant view's monitor (GLFW index)
   // Visual angle of `px` pixels at the screen centre, in arcminutes.
   double arcmin(double px) const;
+  // Pixels per degree of visual angle at the screen centre (one degree around the centre).
+  double pixels_per_degree() const;
 };
 
 struct StudyConfig {

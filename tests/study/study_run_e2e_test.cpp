@@ -198,6 +198,42 @@ TEST(StudyRun, EachParticipantGetsAnotherSequenceAndTheSameOneAgain) {
   for (const auto* s : {&ann, &bob, &ann_again, &seeded, &seeded_again}) fs::remove_all(s->dir);
 }
 
+// Issue 16: display-check reports what the geometry means, and a config with geometry no lab has
+// (non-square pixels, the eyes 5 mm from the screen, stimuli wider than the screen) is refused in
+// one line by display-check and by run, before a session directory exists.
+TEST(StudyRun, DisplayCheckReportsTheGeometryAndRefusesImplausibleOnes) {
+  std::string out;
+  ASSERT_EQ(run({"display-check", "--config", kConfig}, &out), 0) << out;
+  // 1920 px over 527 mm at 600 mm: 2 * 600 * tan(0.5 deg) = 10.47 mm per degree = 38.15 px; 320 px
+  // = 87.8 mm = 8.37 deg; 10 px = 2.745 mm = 15.73 arcmin.
+  EXPECT_NE(out.find("38.2 px per degree"), std::string::npos) << out;
+  EXPECT_NE(out.find("stimulus: 320 px = 8.37 deg"), std::string::npos) << out;
+  EXPECT_NE(out.find("10 px = 15.73 arcmin"), std::string::npos) << out;
+  struct Case {
+    std::string display_or_stimulus, says;
+  };
+  const Case cases[] = {
+      {R"("display": {"height_mm": 100})", "display.height_mm: pixels 0.33"},
+      {R"("display": {"viewing_distance_mm": 5})", "display.viewing_distance_mm: expected at least 200 mm"},
+      {R"("display": {"width_px": 600, "height_px": 338, "width_mm": 527, "height_mm": 296})", "stimulus.size_px: 320 px twice side by side does not fit"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.display_or_stimulus);
+    const fs::path config = fresh("geometry.json");
+    std::ofstream(config) << R"({"rounds": [{"pattern": "stair"}], )" << c.display_or_stimulus << "}";
+    for (const bool as_run : {false, true}) {
+      const fs::path dir = fresh("geometry-session");
+      std::vector<std::string> args = as_run ? std::vector<std::string>{"run", "--config", config.string(), "--headless", "-o", dir.string()}
+                                             : std::vector<std::string>{"display-check", "--config", config.string()};
+      EXPECT_EQ(run(args, &out), 1) << out;
+      EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+      EXPECT_NE(out.find(config.string() + ": " + c.says), std::string::npos) << out;
+      EXPECT_FALSE(fs::exists(dir));
+    }
+    fs::remove(config);
+  }
+}
+
 TEST(StudyRun, SigkillAtARandomTrialThenResumeEqualsAnUninterruptedRun) {
   const fs::path whole = fresh("whole"), killed = fresh("killed");
   ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", whole.string()}), 0);
