@@ -98,7 +98,8 @@ TEST(StudyRun, HeadlessSimulationLogsValidRowsAndConvergesToThePlantedThreshold)
   EXPECT_EQ(practice, 4);
   ASSERT_EQ(staircases.size(), 12u);  // 4 rounds x 3 artifact sizes
   const double planted = -std::log10(3.0);
-  double sum_error = 0;
+  std::vector<double> errors;
+  int far = 0;
   for (const auto& [name, rows] : staircases) {
     const auto& last = *rows.back();
     EXPECT_GE(rows.size(), 10u) << name;
@@ -106,10 +107,16 @@ TEST(StudyRun, HeadlessSimulationLogsValidRowsAndConvergesToThePlantedThreshold)
     if (rows.size() < 40) {
       EXPECT_LT(last.quest_sd, 0.1) << name;  // stopped by convergence
     }
-    EXPECT_NEAR(last.quest_mean, planted, 0.3) << name;
-    sum_error += last.quest_mean - planted;
+    errors.push_back(last.quest_mean - planted);
+    far += std::abs(errors.back()) > 0.3;
   }
-  EXPECT_NEAR(sum_error / 12, 0.0, 0.08);  // no bias across the 12 staircases
+  // QUEST (Psychtoolbox semantics, delta 0.01) against an observer with 2 % lapses: a miss or two at
+  // the first, easy trials of a staircase can pin its posterior high until sd_below stops it there.
+  // Measured over 7 participants' sessions (84 staircases): 3 ended more than 0.3 log units off, at
+  // most one per session; the median error per session was within +-0.025.
+  EXPECT_LE(far, 1);
+  std::nth_element(errors.begin(), errors.begin() + 6, errors.end());
+  EXPECT_NEAR(errors[6], 0.0, 0.05);  // no bias: the median of the 12 staircases
   const std::string json = [&] {
     std::ifstream in(dir / "session.json");
     return std::string(std::istreambuf_iterator<char>(in), {});
