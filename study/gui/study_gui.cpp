@@ -164,6 +164,9 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
     glfwFocusWindow(participant.window());
   }
   bool panel_visible = !o.screenshot_dir.empty();
+  // The admin panel over the participant's view hides the stimuli (except for --screenshot, which
+  // captures the two together on purpose).
+  auto panel_covers = [&] { return o.admin_panel && panel_visible && o.screenshot_dir.empty(); };
 
   Screen screen = Screen::welcome;
   std::optional<procedure::TrialPlan> plan;
@@ -227,7 +230,7 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
       paused = !paused;
       say(paused ? "paused by the experimenter" : "resumed by the experimenter");
       if (paused && (screen == Screen::blank || screen == Screen::trial)) screen = Screen::pause;
-      if (!paused && screen == Screen::pause) advance();  // the withdrawn trial comes again (same plan)
+      if (!paused && screen == Screen::pause && !panel_covers()) advance();  // the withdrawn trial comes again (same plan)
     }
     if (a.end_round) {
       say("round " + std::to_string(session.round_position(session.current_round()) + 1) + " (" +
@@ -257,14 +260,26 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
         continue;
       }
       if (p.key == GLFW_KEY_ESCAPE) stop = true;
-      else if (p.key == GLFW_KEY_F12 && o.admin_panel) panel_visible = !panel_visible;
+      else if (p.key == GLFW_KEY_F12 && o.admin_panel) {
+        // The panel covers the stimuli: a trial on screen is withdrawn while it is open (no answer
+        // is taken, its reaction time does not run) and comes again, the same plan, once it closes.
+        panel_visible = !panel_visible;
+        if (panel_covers() && (screen == Screen::blank || screen == Screen::trial)) {
+          screen = Screen::pause;
+          say("trial " + std::to_string(plan->trial) + " withdrawn: the admin panel is open");
+        } else if (!panel_visible && !paused && screen == Screen::pause) {
+          advance();
+        }
+      }
       else if (p.key == GLFW_KEY_SPACE && !paused) start();
       else if (screen == Screen::trial && onset_s >= 0 && p.time_s >= onset_s && answer_for_key(p.key) != Answer::none)
         answer(answer_for_key(p.key), p.time_s);
     }
     if (stop) break;
     if (screen == Screen::blank && glfw.now_s() >= blank_until) {
-      screen = Screen::trial;
+      // Never under the admin panel: started from the welcome or break screen while it is open,
+      // the trial waits until it closes.
+      screen = panel_covers() ? Screen::pause : Screen::trial;
       onset_s = -1;
     }
 

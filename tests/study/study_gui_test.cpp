@@ -200,6 +200,41 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
 }
 
 // Refusals are one line, exit 1, and leave no session directory behind.
+// Issue 16: the F12 admin panel covered the live trial, which could still be answered while its
+// reaction time ran. Opening it now withdraws the trial (no answer is taken) and closing it shows
+// the same trial again.
+TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
+  const fs::path config = tiny_config("2afc"), dir = fresh("session-panel");
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-panel", "--admin-panel"}));
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(app.wait_for("trial 0 on screen")) << app.output();
+    ASSERT_TRUE(xdo("key F12"));
+    ASSERT_TRUE(app.wait_for("trial 0 withdrawn: the admin panel is open")) << app.output();
+    ASSERT_TRUE(xdo("key f"));  // an answer while the panel is open
+    std::this_thread::sleep_for(400ms);
+    EXPECT_EQ(app.output().find("trial 0: "), std::string::npos) << app.output();
+    EXPECT_EQ(trial_log::read(dir / "trials.csv").rows.size(), 0u);
+    ASSERT_TRUE(xdo("key F12"));  // closed: the same trial comes again and takes the answer
+    const std::string before = app.output();
+    for (auto end = std::chrono::steady_clock::now() + 20s;
+         std::chrono::steady_clock::now() < end && app.output().rfind("trial 0 on screen") <= before.rfind("trial 0 on screen");)
+      std::this_thread::sleep_for(15ms);
+    ASSERT_GT(app.output().rfind("trial 0 on screen"), before.rfind("trial 0 on screen")) << app.output();
+    ASSERT_TRUE(xdo("key f"));
+    ASSERT_TRUE(app.wait_for("trial 0: left")) << app.output();
+    xdo("key Escape");
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  const auto rows = trial_log::read(dir / "trials.csv").rows;
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].response, "left");
+  EXPECT_LT(rows[0].rt_ms, 20000.0);
+  fs::remove_all(dir);
+  fs::remove(config);
+}
+
 TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
   const fs::path config = tiny_config("2afc"), dir = fresh("refused");
   struct Case {
