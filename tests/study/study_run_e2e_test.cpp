@@ -426,10 +426,16 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
       {edited([](nlohmann::json& e) { e["participant"] = "other"; }),
        "session.json: randomization.seed: not the seed of participant 'other' with the config's seed 1"},
       {edited([](nlohmann::json& e) {
+         e["config"]["display"]["viewing_distance_mm"] = 650;
+         e["display"]["viewing_distance_mm"] = 650;
+       }),
+       "column 'artifact_arcmin'"},
+      // Issue 16: a display no lab has is refused as the config is read.
+      {edited([](nlohmann::json& e) {
          e["config"]["display"]["width_mm"] = 52.7;
          e["display"]["width_mm"] = 52.7;
        }),
-       "column 'artifact_arcmin'"},
+       "session.json (config): display.height_mm: pixels 9.98"},
       {edited([](nlohmann::json& e) {
          e["config"]["seed"] = 2;
          e["seed"] = 2;
