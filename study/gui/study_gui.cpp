@@ -129,6 +129,27 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
   std::unique_ptr<GuiWindow> admin;  // destroyed last: the objects below need the participant's context
   GuiWindow participant(ps);
   participant.make_current();
+  {
+    // What the participant really sees, beside the config's assumptions (display-check).
+    GLFWmonitor* shown_on = fullscreen ? monitors[static_cast<std::size_t>(monitor)] : glfwGetPrimaryMonitor();
+    const GLFWvidmode* mode = glfwGetVideoMode(shown_on);
+    int fb_w = 0, fb_h = 0, mm_w = 0, mm_h = 0;
+    participant.framebuffer_size(fb_w, fb_h);
+    glfwGetMonitorPhysicalSize(shown_on, &mm_w, &mm_h);
+    const char* renderer_name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const nlohmann::json presentation = {
+        {"fullscreen", fullscreen},
+        {"monitor", fullscreen ? monitor : -1},
+        {"monitor_name", glfwGetMonitorName(shown_on) ? glfwGetMonitorName(shown_on) : ""},
+        {"video_mode", {{"width_px", mode->width}, {"height_px", mode->height}, {"refresh_hz", mode->refreshRate}}},
+        {"monitor_size_mm", {mm_w, mm_h}},
+        {"framebuffer_px", {fb_w, fb_h}},
+        {"matches_config", mode->width == config.display.width_px && mode->height == config.display.height_px},
+        {"gl_renderer", renderer_name ? renderer_name : ""},
+        {"admin", o.admin_panel ? "panel (F12)" : "window"}};
+    session.record_presentation(presentation);
+    say("presentation: " + presentation.dump());
+  }
   ParticipantView view(config.task);   // styles the participant's ImGui context
   stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
   struct CurrentOnExit {

@@ -158,6 +158,15 @@ void Session::end_round() {
   write_session_json();
 }
 
+void Session::record_presentation(const nlohmann::json& presentation) {
+  nlohmann::json entry = presentation;
+  entry["utc"] = utc_now();
+  if (!session_json_.contains("presentation") || !session_json_["presentation"].is_array())
+    session_json_["presentation"] = nlohmann::json::array();
+  session_json_["presentation"].push_back(entry);
+  write_session_json();
+}
+
 void Session::write_session_json() const {
   io::write_file_atomic(dir_ / "session.json", json_input::dump(session_json_, 2) + "\n");
 }

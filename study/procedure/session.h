@@ -42,6 +42,9 @@ class Session {
   trial_log::TrialRow record(const TrialPlan& plan, const std::string& response, double rt_ms);
   // Admin: finish the current round now (persisted in session.json, honoured by resume).
   void end_round();
+  // The participant view as it really is (video mode, refresh rate, window, full screen, GL
+  // renderer), appended to session.json's "presentation" once per start or resume.
+  void record_presentation(const nlohmann::json& presentation);
 
   bool correct_response(const TrialPlan& plan, const std::string& response) const {
     return procedure_.correct_response(plan, response);

@@ -48,7 +48,7 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   if (!j.is_object()) fail("(top level)", "expected an object");
   static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
                                               "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
-                                              "observer_seed", "config_file", "randomization"};
+                                              "observer_seed", "config_file", "randomization", "presentation"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
   for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
@@ -130,6 +130,13 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
         fail(f, "expected {\"round\": 0.." + std::to_string(r.config.rounds.size() - 1) + ", \"after_trial\": n}");
       r.ended.emplace_back(e[i]["round"].get<int>(), e[i]["after_trial"].get<int>());
     }
+  }
+  if (j.contains("presentation")) {  // what the participant view really was; recorded, not replayed
+    const auto& e = j["presentation"];
+    if (!e.is_array() || e.size() > 10000) fail("presentation", "expected an array of at most 10000 entries");
+    for (std::size_t i = 0; i < e.size(); ++i)
+      if (!e[i].is_object() || e[i].dump().size() > 4096)
+        fail("presentation[" + std::to_string(i) + "]", "expected an object (at most 4096 bytes)");
   }
   if (j.contains("resumed_utc")) {
     const auto& e = j["resumed_utc"];

@@ -231,6 +231,17 @@ TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].response, "left");
   EXPECT_LT(rows[0].rt_ms, 20000.0);
+  // session.json records the participant view as it was (issue 16), beside the config's display.
+  const nlohmann::json session = nlohmann::json::parse(slurp(dir / "session.json"));
+  ASSERT_EQ(session.at("presentation").size(), 1u);
+  const auto& shown = session["presentation"][0];
+  EXPECT_FALSE(shown.at("fullscreen").get<bool>());
+  EXPECT_EQ(shown.at("framebuffer_px"), nlohmann::json({800, 520}));
+  EXPECT_GT(shown.at("video_mode").at("width_px").get<int>(), 0);
+  EXPECT_GE(shown.at("video_mode").at("refresh_hz").get<int>(), 0);
+  EXPECT_FALSE(shown.at("gl_renderer").get<std::string>().empty());
+  EXPECT_EQ(shown.at("admin"), "panel (F12)");
+  EXPECT_TRUE(shown.contains("utc"));
   fs::remove_all(dir);
   fs::remove(config);
 }
