@@ -268,7 +268,15 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
 int run_participant(const RunOptions& o) {
 #ifdef PENUMBRA_STUDY_GUI
   if (o.resume.empty() && !o.participant_given) throw std::invalid_argument("run: --participant is required for a participant session");
-  return study_gui::run_session([&] { return open_session(o, "participant"); }, o.gui);
+  return study_gui::run_session(
+      [&](const std::function<void(const procedure::StudyConfig&)>& check) {
+        if (o.resume.empty()) {
+          if (!o.config.empty()) check(procedure::load_config(o.config));  // before the directory exists
+          return open_session(o, "participant");
+        }
+        return open_session(o, "participant", [&](const nlohmann::json&, const procedure::StudyConfig& c) { check(c); });
+      },
+      o.gui);
 #else
   (void)o;
   throw std::runtime_error("run: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); only --headless runs");

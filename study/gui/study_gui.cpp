@@ -82,7 +82,8 @@ void say(const std::string& line) { std::cout << line << std::endl; }  // operat
 
 }  // namespace
 
-int run_session(const std::function<procedure::Session()>& open_session, const GuiOptions& o) {
+int run_session(const std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>&)>& open_session,
+                const GuiOptions& o) {
   // Everything that can refuse comes before the session is opened, so a refusal leaves no
   // new session directory behind.
   int win_w = 0, win_h = 0;
@@ -102,11 +103,23 @@ int run_session(const std::function<procedure::Session()>& open_session, const G
     throw std::invalid_argument("one monitor only: the admin window would cover or sit under the participant's screen; "
                                 "use --admin-panel (F12 toggles it) or --windowed WxH");
 
-  procedure::Session session = open_session();
+  // The config's monitor and stimuli against the screen, before the session is created or resumed
+  // (a stimulus too large was refused only once the participant had pressed Space).
+  auto check_config = [&](const procedure::StudyConfig& c) {
+    const int m = o.monitor >= 0 ? o.monitor : c.display.monitor;
+    check_monitor(m, "display.monitor");
+    int w = win_w, h = win_h;
+    if (fullscreen) {
+      const GLFWvidmode* mode = glfwGetVideoMode(monitors[static_cast<std::size_t>(m)]);
+      w = mode->width;
+      h = mode->height;
+    }
+    (void)stimulus_layout(w, h, c.stimulus_size_px, c.task == "2afc" ? 2 : 1);  // throws naming the sizes
+  };
+  procedure::Session session = open_session(check_config);
   const procedure::StudyConfig& config = session.config();
   const bool two = config.task == "2afc";
   const int monitor = o.monitor >= 0 ? o.monitor : config.display.monitor;
-  check_monitor(monitor, "display.monitor");
   if (fullscreen) {
     const GLFWvidmode* mode = glfwGetVideoMode(monitors[static_cast<std::size_t>(monitor)]);
     if (mode->width != config.display.width_px || mode->height != config.display.height_px)

@@ -30,6 +30,9 @@ void add_options(CLI::App& run, GuiOptions& options);
 // Opens the windows, then the session (`open_session` creates or resumes it: after every check
 // that can refuse, so a refusal leaves no new session behind), and runs it until it is finished
 // or stopped. Returns the process exit code (0).
-int run_session(const std::function<procedure::Session()>& open_session, const GuiOptions& options);
+// `open_session(check)` opens or resumes the session and must call `check(config)` before it
+// creates or writes anything: it refuses a config whose stimuli do not fit the participant screen.
+int run_session(const std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>&)>& open_session,
+                const GuiOptions& options);
 
 }  // namespace penumbra::study_gui

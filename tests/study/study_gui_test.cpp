@@ -256,7 +256,10 @@ TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
       {{"--windowed", "big"}, "penumbra-study: --windowed 'big': expected WIDTHxHEIGHT in pixels, e.g. 1280x800\n"},
       {{"--monitor", "5", "--admin-panel"}, "penumbra-study: --monitor 5: only 1 monitor(s) connected (0..0)\n"},
       {{}, "penumbra-study: one monitor only: the admin window would cover or sit under the participant's screen; use "
-           "--admin-panel (F12 toggles it) or --windowed WxH\n"}};
+           "--admin-panel (F12 toggles it) or --windowed WxH\n"},
+      // Issue 16: refused before the session exists, not after the participant pressed Space.
+      {{"--windowed", "400x300"}, "penumbra-study: the participant screen (400x300 px) is too small for 2 stimuli of 160 px "
+                                  "with the question and buttons\n"}};
   for (const Case& c : cases) {
     std::vector<std::string> args{"run", "--config", config.string(), "-o", dir.string(), "--participant", "x"};
     args.insert(args.end(), c.extra.begin(), c.extra.end());
