@@ -196,7 +196,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
               provenance.obtained_by.c_str(), provenance.participants, provenance.participants == 1 ? "" : "s");
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
               so.output.string().c_str());
-  std::printf("plots: /usr/bin/python3 scripts/plot_fit.py %s\n", so.output.string().c_str());
+  std::printf("plots: /usr/bin/python3 %s/scripts/plot_fit.py %s\n", PENUMBRA_SOURCE_DIR, fs::absolute(so.output).string().c_str());
   return 0;
 }
 

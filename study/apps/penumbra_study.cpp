@@ -407,7 +407,8 @@ int main(int argc, char** argv) {
   run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")
       ->capture_default_str()
       ->check(cli::non_negative_integer());
-  run->add_option("--participant", ro.participant, "participant id")->capture_default_str();
+  run->add_option("--participant", ro.participant,
+                  "participant id: required for a participant session (the windows); headless runs default to 'sim'");
   run->add_option("--seed", ro.seed,
                   "the session's seed (target sides, staircase draws, edge phases, round order); default: derived from the "
                   "config's seed and the participant id, so each participant gets another sequence and the same one again")
