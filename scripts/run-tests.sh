@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # README command 2: set up, build, and run every test (CTest). Under CI=true the `slow` label
-# is skipped to keep the suite within CI's budget; pass extra ctest arguments after the script.
+# is skipped to keep the suite within CI's budget, and the hardening checks of issue 14 follow
+# (docs/data-safety.md): every libFuzzer target for FUZZ_SECONDS (default 20) and the suite built
+# with ASan + UBSan (scripts/sanitize-tests.sh). HARDENING=1 adds them outside CI, HARDENING=0
+# leaves them out in CI. Extra arguments go to the first ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -10,3 +13,7 @@ if [[ "${CI:-}" == "true" ]]; then
   args+=(-LE slow)
 fi
 ctest "${args[@]}" "$@"
+if [[ "${HARDENING:-$([[ "${CI:-}" == "true" ]] && echo 1 || echo 0)}" == "1" ]]; then
+  scripts/fuzz.sh "${FUZZ_SECONDS:-20}"
+  scripts/sanitize-tests.sh
+fi
