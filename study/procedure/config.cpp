@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "json/json_input.h"
+#include "text/printable.h"
 
 namespace penumbra::procedure {
 
@@ -59,7 +60,7 @@ class Reader {
   void only(const nlohmann::json& obj, const std::string& path, const std::set<std::string>& keys) const {
     if (!obj.is_object()) fail(path.empty() ? "(top level)" : path.substr(0, path.size() - 1), "expected an object");
     for (auto it = obj.begin(); it != obj.end(); ++it)
-      if (!keys.count(it.key())) fail(path + it.key(), "unknown field");
+      if (!keys.count(it.key())) fail(path + text::printable(it.key()), "unknown field");  // a key may hold a newline
   }
   template <class F>
   auto parse_enum(const std::string& field, const std::string& value, F parse) const {
