@@ -17,14 +17,15 @@ constexpr std::size_t kMaxText = 4096;
   throw CalibrationError(path.string() + ": " + field + ": " + what);
 }
 
-std::string text(const std::filesystem::path& path, const nlohmann::json& j, const std::string& field, bool required) {
+// A string field of `j`, at most kMaxText bytes; `at` prefixes its name in errors ("entries[2].").
+std::string text(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at, const char* field, bool required) {
   if (!j.contains(field)) {
-    if (required) fail(path, field, "missing");
+    if (required) fail(path, at + field, "missing");
     return {};
   }
-  if (!j[field].is_string()) fail(path, field, "expected a string");
+  if (!j[field].is_string()) fail(path, at + field, "expected a string");
   std::string s = j[field].get<std::string>();
-  if (s.size() > kMaxText) fail(path, field, "longer than " + std::to_string(kMaxText) + " bytes");
+  if (s.size() > kMaxText) fail(path, at + field, "longer than " + std::to_string(kMaxText) + " bytes");
   return s;
 }
 
@@ -58,16 +59,7 @@ CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::j
   const std::string at = "entries[" + std::to_string(index) + "].";
   if (!j.is_object()) fail(path, "entries[" + std::to_string(index) + "]", "expected an object");
   CalibrationEntry e;
-  auto field = [&](const char* name, bool required) {
-    if (!j.contains(name)) {
-      if (required) fail(path, at + name, "missing");
-      return std::string();
-    }
-    if (!j[name].is_string()) fail(path, at + name, "expected a string");
-    std::string s = j[name].get<std::string>();
-    if (s.size() > kMaxText) fail(path, at + name, "longer than " + std::to_string(kMaxText) + " bytes");
-    return s;
-  };
+  auto field = [&](const char* name, bool required) { return text(path, j, at, name, required); };
   e.technique = field("technique", true);
   if (e.technique.empty()) fail(path, at + "technique", "expected a technique name, got an empty string");
   e.kernel = field("kernel", false);
@@ -140,8 +132,8 @@ Calibration load_calibration(const std::filesystem::path& path) {
     CalibrationEntry e;
     e.technique = "pcf";
     read_c(path, j, "", e);
-    e.condition = text(path, j, "condition", false);
-    const std::string source = text(path, j, "source", false);
+    e.condition = text(path, j, "", "condition", false);
+    const std::string source = text(path, j, "", "source", false);
     e.obtained_by = source.rfind("penumbra-fit", 0) == 0 ? CalibrationMethod::study : CalibrationMethod::published;
     cal.entries.push_back(std::move(e));
     return cal;

@@ -111,6 +111,19 @@ class CalibrationFile : public ::testing::Test {
   void TearDown() override {
     for (const auto& f : files_) std::filesystem::remove(f);
   }
+  // `text` as a calibration file is refused in one line naming the file and then `field`.
+  void expect_refused(const std::string& text, const std::string& field) {
+    SCOPED_TRACE(text);
+    const auto p = write(text);
+    try {
+      load_calibration(p);
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const CalibrationError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(p.string() + field), std::string::npos) << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos);
+    }
+  }
   std::vector<std::filesystem::path> files_;
   int n_ = 0;
 };
@@ -218,18 +231,7 @@ TEST_F(CalibrationFile, BadVersionTwoFilesNameTheField) {
       {R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "study", "trials": 4294967296}]})", ": entries[0].trials: expected a whole number"},
       {R"({"schema_version": 2, "entries": [)" + ok_entry + ", " + ok_entry + "]}", ": entries[1]: a second entry for pcf"},
   };
-  for (const auto& c : cases) {
-    SCOPED_TRACE(c.text);
-    const auto p = write(c.text);
-    try {
-      load_calibration(p);
-      ADD_FAILURE() << "accepted " << c.text;
-    } catch (const CalibrationError& e) {
-      const std::string msg = e.what();
-      EXPECT_NE(msg.find(p.string() + c.field), std::string::npos) << msg;
-      EXPECT_EQ(msg.find('\n'), std::string::npos);
-    }
-  }
+  for (const auto& c : cases) expect_refused(c.text, c.field);
 }
 
 TEST_F(CalibrationFile, BadFilesNameTheField) {
@@ -254,17 +256,7 @@ TEST_F(CalibrationFile, BadFilesNameTheField) {
       {R"({"c": 3, "c": 4})", ": c: duplicate key"},
       {R"({"c": 1e400})", ":1:7: malformed JSON: number overflow"},
   };
-  for (const auto& c : cases) {
-    const auto p = write(c.text);
-    try {
-      load_calibration(p);
-      ADD_FAILURE() << "accepted " << c.text;
-    } catch (const CalibrationError& e) {
-      const std::string msg = e.what();
-      EXPECT_NE(msg.find(p.string() + c.field), std::string::npos) << msg;
-      EXPECT_EQ(msg.find('\n'), std::string::npos);
-    }
-  }
+  for (const auto& c : cases) expect_refused(c.text, c.field);
   EXPECT_THROW(load_calibration("/nonexistent/calibration.json"), CalibrationError);
 }
 
