@@ -75,10 +75,13 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
     info.quest = p;
   }
   // The setup, flattened: what must agree between sessions that are pooled.
-  auto flatten = [&info](const std::string& prefix, const nlohmann::json& block) {
+  // Objects nest ("stimulus.settings.pcf.kernel"); arrays stay whole.
+  std::function<void(const std::string&, const nlohmann::json&)> flatten = [&](const std::string& prefix, const nlohmann::json& block) {
     if (!block.is_object()) return;
-    for (auto it = block.begin(); it != block.end(); ++it)
-      if (!it->is_structured()) info.setup[prefix + it.key()] = it->is_string() ? it->get<std::string>() : it->dump();
+    for (auto it = block.begin(); it != block.end(); ++it) {
+      if (it->is_object()) flatten(prefix + it.key() + ".", *it);
+      else info.setup[prefix + it.key()] = it->is_string() ? it->get<std::string>() : it->dump();
+    }
   };
   if (j.contains("display")) flatten("display.", j["display"]);
   if (j.contains("quest")) flatten("quest.", j["quest"]);

@@ -101,6 +101,12 @@ const ConditionFit& calibration_condition(const StudyFit& fit, const std::option
 }
 
 CalibrationProvenance calibration_provenance(const Dataset& data) {
+  // The technique that drew a session's stimuli (session.json's config.stimulus.technique); the
+  // study's own filter shader (earlier logs) measured PCF's kernels.
+  const auto technique_of = [](const SessionInfo& s) -> std::string {
+    const auto it = s.setup.find("stimulus.technique");
+    return it == s.setup.end() ? "pcf" : it->second;
+  };
   CalibrationProvenance p;
   auto kind = [](const std::string& observer) -> std::string {
     if (observer.empty()) return "study";
@@ -114,8 +120,12 @@ CalibrationProvenance calibration_provenance(const Dataset& data) {
       first = t.session;
       p.kernel = t.row.kernel;
       p.obtained_by = kind(s.observer);
+      p.technique = technique_of(s);
     }
     const SessionInfo& f = data.sessions[first];
+    if (technique_of(s) != p.technique)
+      throw std::runtime_error(s.log_file + ": stimuli drawn by '" + technique_of(s) + "' where " + f.log_file + " has '" +
+                               p.technique + "': a c per technique needs one fit per technique (fit them separately)");
     if (t.row.kernel != p.kernel)
       throw std::runtime_error(s.log_file + ": kernel '" + t.row.kernel + "' where " + f.log_file + " has '" + p.kernel +
                                "': a c per kernel needs one fit per kernel (fit the sessions of each kernel separately)");

@@ -71,6 +71,10 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   io::write_png(out / "artifact.png", pair.artifact);
   io::write_png(out / "line.png", pair.line);
   nlohmann::json j = stimuli::to_json(spec, pair.geometry);
+  if (!spec.technique.empty()) {
+    j["technique"] = spec.technique;
+    j["settings"] = shadows::to_json(stimuli::stimulus_settings(spec, pair.geometry.map_texels));
+  }
   j["requested_filter_radius_px"] = requested;
   j["filter_radius_clamped"] = shown.clamped;
   j["intensity"] = std::log10(spec.artifact_px / spec.filter_radius_px);
@@ -246,6 +250,23 @@ void check_resume_options(const RunOptions& o, const nlohmann::json& session) {
   }
 }
 
+// A config's stimulus technique against the renderer's tables, before any directory exists: the
+// settings parse and the technique has an artifact-free partner.
+void check_stimulus_technique(const procedure::StudyConfig& config, const fs::path& file) {
+  if (config.technique.empty()) return;
+  stimuli::StimulusSpec spec;
+  spec.technique = config.technique;
+  spec.technique_settings = config.technique_settings;
+  std::string problem;  // "technique: ..." or "<section.key>: ..."
+  try {
+    problem = stimuli::partner_unavailable(stimuli::stimulus_settings(spec, 15));
+  } catch (const std::invalid_argument& e) {
+    problem = e.what();
+  }
+  if (problem.empty()) return;
+  throw std::runtime_error(file.string() + ": stimulus." + (problem.rfind("technique: ", 0) == 0 ? "" : "settings.") + problem);
+}
+
 procedure::Session open_session(const RunOptions& o, const std::string& observer,
                                 const std::function<void(const nlohmann::json&, const procedure::StudyConfig&)>& accept = {}) {
   if (!o.resume.empty())
@@ -255,6 +276,7 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
     });
   if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
   const procedure::StudyConfig config = procedure::load_config(o.config);
+  check_stimulus_technique(config, o.config);
   nlohmann::json extra = {{"observer", observer}, {"config_file", o.config.string()}};
   if (accept) {
     accept(extra, config);
@@ -387,6 +409,9 @@ int main(int argc, char** argv) {
   stim->add_option("--contrast", spec.lit_linear, "lit level in linear light (1 = full, 0.5 = half)")->capture_default_str();
   stim->add_option("--kernel", kernel, "disk (exact dense disk), grid (box) or poisson")->capture_default_str();
   stim->add_option("--taps", spec.poisson_taps, "Poisson taps")->capture_default_str();
+  stim->add_option("--technique", spec.technique, "draw with the renderer's technique (penumbra-render's names; pcf) instead of the study's filter shader");
+  std::vector<std::string> stim_settings;
+  stim->add_option("--set", stim_settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   stim->add_option("--size-px", spec.size_px, "stimulus side (px)")->capture_default_str();
   stim->add_option("--transfer", transfer, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str()->check(cli::non_negative_integer());
@@ -428,7 +453,15 @@ int main(int argc, char** argv) {
   try {
     if (reference.parsed()) return reference.run();
     if (display_check->parsed()) return run_display_check(display_config);
-    if (stim->parsed()) return run_stimulus(pattern, kernel, transfer, spec, stim_out);
+    if (stim->parsed()) {
+      for (const std::string& kv : stim_settings) {
+        const std::size_t eq = kv.find('=');
+        if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + json_input::printable(kv) + "': expected KEY=VALUE");
+        spec.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+      }
+      if (!spec.technique_settings.empty() && spec.technique.empty()) throw std::invalid_argument("--set: needs --technique");
+      return run_stimulus(pattern, kernel, transfer, spec, stim_out);
+    }
     ro.participant_given = run->count("--participant") > 0;
     ro.observer_given = run->count("--observer") > 0;
     ro.observer_seed_given = run->count("--observer-seed") > 0;

@@ -1,5 +1,6 @@
 #include "procedure/config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -160,10 +161,44 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     c.seed = s->get<std::uint64_t>();
   }
   if (const auto* s = r.find(j, "stimulus")) {
-    r.only(*s, "stimulus.", {"size_px", "kernel", "poisson_taps"});
+    r.only(*s, "stimulus.", {"size_px", "kernel", "poisson_taps", "technique", "settings"});
     c.stimulus_size_px = static_cast<int>(r.integer(*s, "stimulus.", "size_px", 320, 16, 4096));
-    c.kernel = r.parse_enum("stimulus.kernel", r.text(*s, "stimulus.", "kernel", "disk"), stimuli::parse_kernel);
-    c.poisson_taps = static_cast<int>(r.integer(*s, "stimulus.", "poisson_taps", 32, 1, 64));
+    if (r.find(*s, "technique")) {
+      // The renderer draws the stimuli; its settings (checked against the renderer's tables by
+      // penumbra-study before a session starts) replace the filter shader's kernel and taps.
+      for (const char* own : {"kernel", "poisson_taps"})
+        if (r.find(*s, own))
+          r.fail(std::string("stimulus.") + own, "a setting of the study's own filter shader; with stimulus.technique the "
+                                                 "technique's settings say it (\"settings\": {\"pcf.kernel\": \"grid\"})");
+      c.technique = r.text(*s, "stimulus.", "technique", "");
+      if (c.technique.empty() || c.technique.size() > 32) r.fail("stimulus.technique", "expected a technique name (penumbra-render --technique)");
+      if (const auto* settings = r.find(*s, "settings")) {
+        if (!settings->is_object()) r.fail("stimulus.settings", "expected an object of \"section.key\": value");
+        for (auto it = settings->begin(); it != settings->end(); ++it) {
+          const std::string field = "stimulus.settings." + text::printable(it.key());
+          if (it.key().empty() || it.key().size() > 64) r.fail(field, "expected a setting's name (e.g. pcf.kernel)");
+          std::string value;
+          if (it->is_string()) value = it->get<std::string>();
+          else if (it->is_boolean()) value = it->get<bool>() ? "true" : "false";
+          else if (it->is_number()) value = it->dump();
+          else r.fail(field, "expected a string, a number or true/false");
+          if (value.size() > 64) r.fail(field, "value longer than 64 characters");
+          c.technique_settings.emplace_back(it.key(), value);
+        }
+      }
+      if (c.technique == "pcf") {
+        const auto kernel = std::find_if(c.technique_settings.begin(), c.technique_settings.end(),
+                                         [](const auto& kv) { return kv.first == "pcf.kernel"; });
+        if (kernel == c.technique_settings.end())
+          r.fail("stimulus.settings", "pcf.kernel is required with technique pcf (grid or poisson: the log's kernel column)");
+        c.kernel = r.parse_enum("stimulus.settings.pcf.kernel", kernel->second, stimuli::parse_kernel);
+        if (c.kernel == stimuli::Kernel::disk) r.fail("stimulus.settings.pcf.kernel", "expected grid or poisson (the renderer's PCF kernels)");
+      }
+    } else {
+      if (r.find(*s, "settings")) r.fail("stimulus.settings", "needs stimulus.technique (the technique the settings are for)");
+      c.kernel = r.parse_enum("stimulus.kernel", r.text(*s, "stimulus.", "kernel", "disk"), stimuli::parse_kernel);
+      c.poisson_taps = static_cast<int>(r.integer(*s, "stimulus.", "poisson_taps", 32, 1, 64));
+    }
   }
   if (const auto* d = r.find(j, "display")) {
     r.only(*d, "display.", {"width_px", "height_px", "width_mm", "height_mm", "viewing_distance_mm", "transfer", "monitor"});
@@ -210,6 +245,15 @@ nlohmann::json to_json(const StudyConfig& c) {
                           {"p_threshold", c.quest.p_threshold}, {"beta", c.quest.beta}, {"delta", c.quest.delta},
                           {"gamma", c.quest.gamma}, {"grain", c.quest.grain}};
   if (c.quest.range) quest["range"] = *c.quest.range;
+  nlohmann::json stimulus = {{"size_px", c.stimulus_size_px}};
+  if (c.technique.empty()) {
+    stimulus["kernel"] = stimuli::to_string(c.kernel);
+    stimulus["poisson_taps"] = c.poisson_taps;
+  } else {
+    stimulus["technique"] = c.technique;
+    stimulus["settings"] = nlohmann::json::object();
+    for (const auto& [key, value] : c.technique_settings) stimulus["settings"][key] = value;
+  }
   return {{"name", c.name},
           {"task", c.task},
           {"artifact_px", c.artifact_px},
@@ -222,8 +266,7 @@ nlohmann::json to_json(const StudyConfig& c) {
           {"break_every_trials", c.break_every_trials},
           {"seed", c.seed},
           {"round_order", c.round_order},
-          {"stimulus", {{"size_px", c.stimulus_size_px}, {"kernel", stimuli::to_string(c.kernel)},
-                        {"poisson_taps", c.poisson_taps}}},
+          {"stimulus", stimulus},
           {"display", {{"width_px", c.display.width_px}, {"height_px", c.display.height_px},
                        {"width_mm", c.display.width_mm}, {"height_mm", c.display.height_mm},
                        {"viewing_distance_mm", c.display.viewing_distance_mm},

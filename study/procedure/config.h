@@ -54,6 +54,11 @@ struct StudyConfig {
   stimuli::Kernel kernel = stimuli::Kernel::disk;
   int poisson_taps = 32;
   int stimulus_size_px = 320;
+  // stimulus.technique / stimulus.settings: the renderer's technique that draws the stimuli and
+  // its settings by penumbra-render's keys ({"pcf.kernel": "grid"}); empty: the study's own filter
+  // shader with `kernel`. For pcf, `kernel` is its pcf.kernel (the log's kernel column).
+  std::string technique;
+  std::vector<std::pair<std::string, std::string>> technique_settings;
   Display display;
 };
 

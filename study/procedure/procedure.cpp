@@ -137,6 +137,8 @@ std::optional<TrialPlan> Procedure::next() const {
   p.stimulus.lit_linear = rc.contrast;
   p.stimulus.kernel = config_.kernel;
   p.stimulus.poisson_taps = config_.poisson_taps;
+  p.stimulus.technique = config_.technique;
+  p.stimulus.technique_settings = config_.technique_settings;
   p.stimulus.size_px = config_.stimulus_size_px;
   p.stimulus.transfer = config_.display.transfer;
   p.intensity = std::log10(artifact / shown.filter_radius_px);

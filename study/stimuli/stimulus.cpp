@@ -5,6 +5,7 @@
 #include <numbers>
 #include <span>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "gl/context.h"
@@ -13,6 +14,8 @@
 #include "gl/shader_library.h"
 #include "sampling/poisson_disk.h"
 #include "sampling/random.h"
+#include "shadows/renderer.h"
+#include "shadows/technique.h"
 
 namespace penumbra::embedded {
 std::span<const EmbeddedFile> study_shaders();
@@ -94,11 +97,11 @@ std::vector<std::pair<std::string, std::string>> study_shader_files() {
   return files;
 }
 
-// The part of the square [lo, hi]^2 below the line y = m x + b (Sutherland–Hodgman, one plane).
-std::vector<glm::vec2> occluder_polygon(double lo, double hi, double m, double b) {
-  const std::vector<glm::dvec2> square = {{lo, lo}, {hi, lo}, {hi, hi}, {lo, hi}};
+// The part of the rectangle [lo, hi] below the line y = m x + b (Sutherland–Hodgman, one plane).
+std::vector<glm::dvec2> occluder_polygon(glm::dvec2 lo, glm::dvec2 hi, double m, double b) {
+  const std::vector<glm::dvec2> square = {{lo.x, lo.y}, {hi.x, lo.y}, {hi.x, hi.y}, {lo.x, hi.y}};
   auto inside = [&](glm::dvec2 p) { return p.y - m * p.x - b; };  // < 0: occluded side
-  std::vector<glm::vec2> out;
+  std::vector<glm::dvec2> out;
   for (std::size_t i = 0; i < square.size(); ++i) {
     const glm::dvec2 p = square[i], q = square[(i + 1) % square.size()];
     const double fp = inside(p), fq = inside(q);
@@ -108,7 +111,127 @@ std::vector<glm::vec2> occluder_polygon(double lo, double hi, double m, double b
   return out;
 }
 
+// Canonical offset -> screen offset (y up): to_canonical is a dihedral map, its inverse its transpose.
+glm::dvec2 to_screen(const Geometry& g, glm::dvec2 q) { return glm::transpose(g.to_canonical) * q; }
+// Screen offset at `height` -> world (the camera looks down -y with screen up = world -z).
+glm::vec3 to_world(glm::dvec2 screen, double height) {
+  return {static_cast<float>(screen.x), static_cast<float>(height), static_cast<float>(-screen.y)};
+}
+
+// Height of the occluder over the receiver: clear of the receiver's depth and normal-offset
+// biases (0.5 + 0.75 texels toward the light by default) by far.
+double occluder_height(const StimulusSpec& spec) { return 4 * spec.artifact_px + 4; }
+
+// Antiderivative of clamp(u, 0, L).
+double clamp_antiderivative(double u, double L) {
+  if (u <= 0) return 0;
+  if (u <= L) return 0.5 * u * u;
+  return 0.5 * L * L + L * (u - L);
+}
+
+// The lit fraction of the square q +- r against the edge y = m x + b (lit above): the lit height
+// of the column at x is clamp(q.y + r - (m x + b), 0, 2r), linear in x.
+double box_over_edge(glm::dvec2 q, double r, double m, double b) {
+  const double u_left = q.y + r - m * (q.x - r) - b, u_right = q.y + r - m * (q.x + r) - b, L = 2 * r;
+  const double lit = std::abs(m) < 1e-12 ? L * std::clamp(u_left, 0.0, L)
+                                         : (clamp_antiderivative(u_left, L) - clamp_antiderivative(u_right, L)) / m;
+  return std::clamp(lit / (L * L), 0.0, 1.0);
+}
+
+[[noreturn]] void refuse_setting(const std::string& key, const std::string& what) {
+  throw std::invalid_argument(key + ": " + what);
+}
+
 }  // namespace
+
+scene::Scene stimulus_scene(const StimulusSpec& spec, const Geometry& g) {
+  const double a = spec.artifact_px, h = occluder_height(spec);
+  const glm::dvec2 lo = g.map_origin_px, hi = g.map_origin_px + glm::dvec2(a * g.map_texels);
+  auto polygon = [&](const std::vector<glm::dvec2>& corners, double height) {
+    scene::MeshData m;
+    for (const glm::dvec2& c : corners) m.vertices.push_back({to_world(to_screen(g, c), height), {0, 1, 0}});
+    for (std::uint32_t i = 1; i + 1 < corners.size(); ++i) m.indices.insert(m.indices.end(), {0, i, i + 1});
+    return std::make_shared<const scene::MeshData>(std::move(m));
+  };
+  scene::Scene s;
+  s.name = "stimulus";
+  // The receiver is the map's footprint exactly: the unfitted map spans the scene's bounds.
+  s.objects.push_back({"receiver", polygon({{lo.x, lo.y}, {hi.x, lo.y}, {hi.x, hi.y}, {lo.x, hi.y}}, 0), glm::mat4(1), glm::vec3(1)});
+  if (const auto occluder = occluder_polygon(lo, hi, g.line_m, g.line_b); occluder.size() >= 3)
+    s.objects.push_back({"occluder", polygon(occluder, h), glm::mat4(1), glm::vec3(1)});
+  s.light.type = scene::Light::Type::directional;
+  s.light.direction = {0, -1, 0};
+  s.light.size = 0.5f;
+  s.light.ambient = 0;
+  s.camera.projection = scene::Camera::Projection::orthographic;
+  s.camera.position = {0, static_cast<float>(h / 2), 0};  // under the occluder: it sees only the receiver
+  s.camera.target = {0, 0, 0};
+  s.camera.up = {0, 0, -1};
+  s.camera.ortho_height_ws = static_cast<float>(spec.size_px);
+  s.camera.near_ws = static_cast<float>(h / 8);
+  s.camera.far_ws = static_cast<float>(h);
+  return s;
+}
+
+shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels) {
+  using namespace shadows;
+  ShadowSettings s;
+  try {
+    s.technique = technique_from_string(spec.technique);
+  } catch (const std::invalid_argument& e) {
+    refuse_setting("technique", e.what());
+  }
+  const TechniqueEntry& entry = technique_entry(s.technique);
+  if (!entry.set_filter_radius)
+    refuse_setting("technique", "'" + spec.technique + "' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)");
+  s.pcf.rotate = false;          // one tap pattern for every pixel (a rotated one is noise)
+  s.pcf.max_grid_taps = 256;     // exact box up to a radius of 127 texels
+  for (const auto& [key, value] : spec.technique_settings) {
+    const std::size_t dot = key.find('.');
+    if (dot == std::string::npos) refuse_setting(key, "expected section.key, e.g. pcf.kernel");
+    const std::string section = key.substr(0, dot), row_key = key.substr(dot + 1);
+    bool found = false;
+    auto apply = [&](auto& params) {
+      for (const auto& row : settings_table(&params)) {
+        if (row.key != row_key) continue;
+        try {
+          set_from_string(row, params, value);
+        } catch (const std::invalid_argument& e) {
+          refuse_setting(key, e.what());
+        }
+        found = true;
+      }
+    };
+    if (section == "map") {
+      for (std::string_view own : {"resolution_texels", "fit", "cascades", "cascade_lambda", "cascade_blend", "cascade_stabilize"})
+        if (row_key == own) refuse_setting(key, "set by the study (one unfitted map whose texel is the artifact)");
+      apply(s.map);
+    } else if (section == spec.technique) {
+      if (row_key == "radius" || row_key == "radius_unit") refuse_setting(key, "set by the study from the trial's filter radius");
+      for_each_technique_section(s, [&](std::string_view name, auto& params) {
+        if (name == section) apply(params);
+      });
+    } else {
+      refuse_setting(key, "not a setting of technique '" + spec.technique + "' (expected " + spec.technique + ".* or map.*)");
+    }
+    if (!found) refuse_setting(key, "no such setting");
+  }
+  s.map.resolution_texels = map_texels;
+  s.map.fit = false;
+  s.map.cascades = 1;
+  s.adaptive.enabled = false;
+  const double radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
+  entry.set_filter_radius(s, {static_cast<float>(radius_px / spec.artifact_px), RadiusUnit::texels});
+  return s;
+}
+
+std::string partner_unavailable(const shadows::ShadowSettings& s) {
+  if (s.technique != shadows::Technique::pcf)
+    return "technique: '" + std::string(shadows::to_string(s.technique)) + "' has no closed-form artifact-free partner yet (pcf has)";
+  if (s.pcf.kernel == shadows::Kernel::poisson && s.pcf.rotate)
+    return "pcf.rotate: a disk rotated per pixel has no closed-form partner (set it false)";
+  return "";
+}
 
 struct StimulusRenderer::Impl {
   gl::ShaderLibrary library{study_shader_files()};
@@ -116,6 +239,7 @@ struct StimulusRenderer::Impl {
   gl::Program filter = library.program({{GL_VERTEX_SHADER, "fullscreen.vert"}, {GL_FRAGMENT_SHADER, "filter.frag"}});
   gl::Sampler nearest{gl::SamplerDesc{GL_NEAREST, GL_NEAREST, GL_CLAMP_TO_EDGE}};
   gl::VertexArray empty_vao;
+  std::unique_ptr<shadows::Renderer> renderer;  // made on the first technique-drawn stimulus
 };
 
 StimulusRenderer::StimulusRenderer() : impl_(std::make_unique<Impl>()) {}
@@ -125,6 +249,7 @@ StimulusPair StimulusRenderer::render(const StimulusSpec& spec) { return render(
 
 StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometry& geometry) {
   validate(spec_in);
+  if (!spec_in.technique.empty()) return render_with_technique(spec_in, geometry);
   StimulusSpec spec = spec_in;
   spec.filter_radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
   StimulusPair pair;
@@ -137,8 +262,9 @@ StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometr
   gl::Texture depth({GL_DEPTH_COMPONENT32F, g.map_texels, g.map_texels, 1}, "stimulus shadow map");
   const gl::Framebuffer::Attachment depth_att[] = {{&depth, GL_DEPTH_ATTACHMENT}};
   gl::Framebuffer map_fbo(depth_att, "stimulus shadow map");
-  const std::vector<glm::vec2> poly =
-      occluder_polygon(g.map_origin_px.x - a, g.map_origin_px.x + extent + a, g.line_m, g.line_b);
+  std::vector<glm::vec2> poly;
+  for (const glm::dvec2& v : occluder_polygon(g.map_origin_px - glm::dvec2(a), g.map_origin_px + glm::dvec2(extent + a), g.line_m, g.line_b))
+    poly.emplace_back(v);
   gl::Buffer vertices(poly.size() * sizeof(glm::vec2), poly.data());
   gl::VertexArray vao;
   glVertexArrayVertexBuffer(vao.id(), 0, vertices.id(), 0, sizeof(glm::vec2));
@@ -218,6 +344,69 @@ StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometr
   glBindSampler(0, 0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   gl::check_errors("stimulus render");
+  return pair;
+}
+
+}  // namespace penumbra::stimuli
+
+namespace penumbra::stimuli {
+
+StimulusPair StimulusRenderer::render_with_technique(const StimulusSpec& spec_in, const Geometry& g) {
+  StimulusSpec spec = spec_in;
+  spec.filter_radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
+  const shadows::ShadowSettings settings = stimulus_settings(spec, g.map_texels);
+  if (const std::string why = partner_unavailable(settings); !why.empty()) throw std::invalid_argument(why);
+  if (!impl_->renderer) impl_->renderer = std::make_unique<shadows::Renderer>();
+  shadows::Renderer& renderer = *impl_->renderer;
+  renderer.set_scene(stimulus_scene(spec, g));
+  renderer.reset_adaptive();
+  const int n = spec.size_px, texels = g.map_texels;
+  renderer.render(settings, n, n);
+
+  // The map as the light sees it (u = screen x, v = screen y, top row first), indexed canonically.
+  const io::ImageF depth = renderer.read_shadow_depth(0);
+  const double a = spec.artifact_px;
+  glm::dvec2 lo_screen(1e300);
+  for (const glm::dvec2 corner : {glm::dvec2(0, 0), glm::dvec2(1, 0), glm::dvec2(0, 1), glm::dvec2(1, 1)})
+    lo_screen = glm::min(lo_screen, to_screen(g, g.map_origin_px + corner * (a * texels)));
+  last_map_.assign(static_cast<std::size_t>(texels) * texels, 1);
+  for (int j = 0; j < texels; ++j) {
+    for (int i = 0; i < texels; ++i) {
+      const glm::dvec2 centre = to_screen(g, g.map_origin_px + (glm::dvec2(i, j) + 0.5) * a);
+      const int u = static_cast<int>(std::floor((centre.x - lo_screen.x) / a));
+      const int v = static_cast<int>(std::floor((centre.y - lo_screen.y) / a));
+      if (u >= 0 && v >= 0 && u < depth.width && v < depth.height)
+        last_map_[static_cast<std::size_t>(j) * texels + i] = depth.at(u, depth.height - 1 - v) < 0.5f ? 0 : 1;
+    }
+  }
+
+  StimulusPair pair;
+  pair.geometry = g;
+  pair.artifact_visibility = renderer.read_visibility();
+  pair.line_visibility = {n, n, 1, std::vector<float>(static_cast<std::size_t>(n) * n)};
+  pair.artifact = {n, n, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(n) * n)};
+  pair.line = pair.artifact;
+  // The partner: the same filter over the original edge (partner_unavailable says which have one).
+  const double r = spec.filter_radius_px;
+  std::vector<glm::dvec2> taps;  // canonical offsets of the Poisson taps (the renderer's disk, unrotated)
+  if (settings.pcf.kernel == shadows::Kernel::poisson)
+    for (const glm::vec2 t : sampling::poisson_disk(settings.pcf.poisson_taps)) taps.push_back(g.to_canonical * (r * glm::dvec2(t)));
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
+      double v = 0;
+      if (taps.empty()) {
+        v = box_over_edge(q, r, g.line_m, g.line_b);
+      } else {
+        for (const glm::dvec2 t : taps) v += (q + t).y >= g.line_m * (q + t).x + g.line_b ? 1 : 0;
+        v /= static_cast<double>(taps.size());
+      }
+      pair.line_visibility.at(x, y) = static_cast<float>(v);
+      pair.line.at(x, y) = encode(spec.lit_linear * v, spec.transfer);
+      pair.artifact.at(x, y) = encode(spec.lit_linear * pair.artifact_visibility.at(x, y), spec.transfer);
+    }
+  }
+  gl::check_errors("stimulus render (renderer)");
   return pair;
 }
 

@@ -17,6 +17,8 @@
 #include <nlohmann/json.hpp>
 
 #include "io/image_io.h"
+#include "scene/scene.h"
+#include "shadows/settings.h"
 #include "stimuli/stimulus_spec.h"
 
 namespace penumbra::stimuli {
@@ -47,6 +49,26 @@ struct StimulusPair {
 
 nlohmann::json to_json(const StimulusSpec& spec, const Geometry& geometry);
 
+// Stimuli drawn by the renderer's own technique (spec.technique set). The scene: a white receiver
+// square in y = 0 that is exactly the shadow map's footprint (so the unfitted map's texel is
+// `artifact_px` wide, at the trial's grid phase), the occluder's polygon (the part of that square
+// below the edge, in the canonical frame turned to the screen by the trial's orientation) above
+// it, a directional light straight down, and an orthographic camera between the two looking down
+// with 1 world unit = 1 stimulus pixel (world x = screen x, world -z = screen y, origin at the
+// stimulus centre).
+scene::Scene stimulus_scene(const StimulusSpec& spec, const Geometry& geometry);
+// The renderer settings that draw it: the technique and its settings (spec.technique_settings,
+// penumbra-render's keys), one unfitted map of geometry.map_texels, no adaptive rule, and the
+// technique's filter radius set to filter_radius_px / artifact_px texels. Throws
+// std::invalid_argument naming "technique" or the setting ("pcf.kernel: ...") for a technique
+// that cannot be studied or a setting the study controls itself (the radius, the map's size, fit,
+// cascades, the adaptive rule).
+shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels);
+// Whether the technique's artifact-free partner (its filter applied to the original edge) has a
+// closed form here; "" when it has, else why not ("technique: ..." or "pcf.rotate: ..."). PCF: the grid kernel's box integral of the
+// edge; Poisson taps (rotate off) each tested against the edge, the limit of an ever finer map.
+std::string partner_unavailable(const shadows::ShadowSettings& settings);
+
 // Needs a current OpenGL 4.5 context (headless or windowed).
 class StimulusRenderer {
  public:
@@ -59,10 +81,12 @@ class StimulusRenderer {
   // The same with a given geometry (e.g. make_geometry(spec) with the straight partner's line
   // moved); the shadow map must cover the stimulus plus the radius, as make_geometry's does.
   StimulusPair render(const StimulusSpec& spec, const Geometry& geometry);
-  // The shadow map of the last render: 1 = lit texel, 0 = occluded, row 0 = canonical bottom.
+  // The shadow map of the last render: 1 = lit texel, 0 = occluded, row 0 = canonical bottom,
+  // indexed in the canonical frame whichever path drew it.
   const std::vector<std::uint8_t>& last_shadow_map() const { return last_map_; }
 
  private:
+  StimulusPair render_with_technique(const StimulusSpec& spec, const Geometry& geometry);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<std::uint8_t> last_map_;

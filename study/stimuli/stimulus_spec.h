@@ -4,6 +4,8 @@
 // and the fitter (analysis/) use it without the renderer; stimulus.h draws it.
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace penumbra::stimuli {
 
@@ -29,6 +31,12 @@ struct StimulusSpec {
   int size_px = 320;             // square stimulus side
   std::uint64_t seed = 1;        // edge phase, orientation, Poisson rotation
   Transfer transfer = Transfer::srgb;
+  // The shadow technique of the renderer that draws the stimulus, by penumbra-render's names
+  // ("pcf"), with its settings as "section.key" and value ("pcf.kernel", "grid"); its filter
+  // radius is set from filter_radius_px / artifact_px texels. Empty: the study's own filter
+  // shader with `kernel` and `poisson_taps` (the exact disk and the earlier logs).
+  std::string technique;
+  std::vector<std::pair<std::string, std::string>> technique_settings;
 };
 // Throws std::invalid_argument naming the field for a spec that cannot be drawn.
 void validate(const StimulusSpec& spec);

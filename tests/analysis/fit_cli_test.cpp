@@ -499,10 +499,12 @@ TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
 // The real pipeline: penumbra-study run --headless writes sessions, penumbra-fit reads them. yes/no:
 // the straight (catch) trials are left out as QUEST leaves them out, and QUEST's gamma and
 // pThreshold come from session.json, so every recomputed posterior equals the logged one.
+// The pcf-* configs draw the stimuli with the renderer's PCF: the entry is pcf's, for its kernel.
 TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
-  for (const std::string task : {"2afc", "yesno"}) {
-    const fs::path dir = fresh("pipeline-" + task);
-    const std::string config_file = task == "2afc" ? "/studies/default.json" : "/studies/default-yesno.json";
+  for (const std::string name : {"default", "default-yesno", "pcf-grid", "pcf-poisson"}) {
+    const fs::path dir = fresh("pipeline-" + name);
+    const std::string config_file = "/studies/" + name + ".json";
+    const std::string task = name == "default-yesno" ? "yesno" : "2afc";
     nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR + config_file));
     config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
     config["artifact_px"] = {5, 20};
@@ -529,7 +531,10 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     if (task == "yesno") {
       EXPECT_NE(report["notes"].dump().find("catch"), std::string::npos) << report["notes"];
     }
-    EXPECT_NEAR(adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0).c, 4.0, 0.6) << task;
+    const adaptive::CalibrationEntry entry = adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0);
+    EXPECT_NEAR(entry.c, 4.0, 0.6) << name;
+    EXPECT_EQ(entry.technique, "pcf") << name;
+    EXPECT_EQ(entry.kernel, name == "pcf-grid" ? "grid" : name == "pcf-poisson" ? "poisson" : "disk") << name;
     fs::remove_all(dir);
   }
 }

@@ -48,11 +48,18 @@ struct Reference {
   const Geometry& g;
   std::vector<glm::vec2> taps = sampling::poisson_disk(spec.poisson_taps);
   double a() const { return spec.artifact_px; }
+  // When set, the rasterized map (canonical rows) stands in for the texel-centre rule.
+  const std::vector<std::uint8_t>* rasterized = nullptr;
   // Texel-centre rule: a texel is occluded when its centre lies below the edge.
   bool texel_lit(long i, long j) const {
     if (i < 0 || j < 0 || i >= g.map_texels || j >= g.map_texels) return true;
+    if (rasterized) return (*rasterized)[static_cast<std::size_t>(j) * g.map_texels + i] != 0;
+    return centre_above_edge_texels(i, j) >= 0;
+  }
+  // Vertical distance of texel (i, j)'s centre above the edge, in texels.
+  double centre_above_edge_texels(long i, long j) const {
     const double cx = g.map_origin_px.x + (i + 0.5) * a(), cy = g.map_origin_px.y + (j + 0.5) * a();
-    return cy >= g.line_m * cx + g.line_b;
+    return (cy - (g.line_m * cx + g.line_b)) / a();
   }
   // Lit length of the segment [x0, x1] (canonical) at height y, from the shadow map or the edge.
   double lit_length(double x0, double x1, double y, bool from_map) const {
@@ -172,6 +179,157 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{stimuli::Pattern::step, 20, 17, 0.5, stimuli::Kernel::disk, 4},
                       Case{stimuli::Pattern::stair, 5, 6, 0.5, stimuli::Kernel::grid, 5},
                       Case{stimuli::Pattern::step, 10, 5, 1.0, stimuli::Kernel::poisson, 6}));
+
+// Stimuli drawn by the renderer's own PCF (renderer/shaders/shadow_pcf.glsl) through the stimulus
+// scene: the same independent computation as above. Grid: the box kernel's area integral over
+// the map and over the edge. Poisson (the renderer's disk, unrotated): each tap is the hardware's
+// 2x2 comparison, computed here as the bilinear weights of the four texel centres around it; the
+// partner tests each tap against the edge.
+struct TechniqueCase {
+  stimuli::Pattern pattern;
+  double artifact_px, radius_px, lit;
+  std::string kernel;
+  std::uint64_t seed;
+  int size_px = 96;
+};
+
+void PrintTo(const TechniqueCase& c, std::ostream* os) { *os << c.kernel << " a=" << c.artifact_px << " r=" << c.radius_px; }
+
+class RendererStimulusPixels : public ::testing::TestWithParam<TechniqueCase> {};
+
+TEST_P(RendererStimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
+  const TechniqueCase c = GetParam();
+  StimulusSpec spec;
+  spec.pattern = c.pattern;
+  spec.artifact_px = c.artifact_px;
+  spec.filter_radius_px = c.radius_px;
+  spec.lit_linear = c.lit;
+  spec.kernel = stimuli::Kernel::grid;  // the reference's kernel for the grid case
+  spec.size_px = c.size_px;
+  spec.seed = c.seed;
+  spec.technique = "pcf";
+  spec.technique_settings = {{"pcf.kernel", c.kernel}, {"pcf.poisson_taps", "24"}};
+  stimuli::StimulusRenderer renderer;
+  const auto pair = renderer.render(spec);
+  const Geometry& g = pair.geometry;
+  Reference ref{spec, g, {}};
+
+  // The rasterized map is the texel-centre rule, except where a centre lies closer to the edge
+  // than the rasterizer's sub-pixel precision resolves (GL snaps vertices to 1/256 of a texel or
+  // finer; the step's crossing texel can be that close). The filters are then checked on the
+  // map as rasterized.
+  const auto& map = renderer.last_shadow_map();
+  int map_mismatch = 0;
+  for (int j = 0; j < g.map_texels; ++j)
+    for (int i = 0; i < g.map_texels; ++i)
+      map_mismatch += map[j * g.map_texels + i] != (ref.texel_lit(i, j) ? 1 : 0) && std::abs(ref.centre_above_edge_texels(i, j)) > 1.0 / 256;
+  EXPECT_EQ(map_mismatch, 0);
+  ref.rasterized = &map;
+
+  const bool poisson = c.kernel == "poisson";
+  std::vector<glm::dvec2> taps;  // canonical offsets
+  for (const glm::vec2 t : sampling::poisson_disk(24)) taps.push_back(g.to_canonical * (c.radius_px * glm::dvec2(t)));
+  // Hardware PCF of one tap at canonical q: bilinear weights of the texel centres around it.
+  const auto bilinear = [&](glm::dvec2 q) {
+    const glm::dvec2 t = (q - g.map_origin_px) / spec.artifact_px - 0.5;
+    const glm::dvec2 f = t - glm::floor(t);
+    const long i = static_cast<long>(std::floor(t.x)), j = static_cast<long>(std::floor(t.y));
+    return (1 - f.x) * (1 - f.y) * ref.texel_lit(i, j) + f.x * (1 - f.y) * ref.texel_lit(i + 1, j) +
+           (1 - f.x) * f.y * ref.texel_lit(i, j + 1) + f.x * f.y * ref.texel_lit(i + 1, j + 1);
+  };
+  const int n = spec.size_px;
+  int worst = 0, artifact_differs = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
+      for (int from_map = 0; from_map < 2; ++from_map) {
+        double v = 0;
+        if (!poisson) {
+          v = ref.visibility(q, from_map == 1);
+        } else {
+          for (const glm::dvec2 t : taps)
+            v += from_map ? bilinear(q + t) : ((q + t).y >= g.line_m * (q + t).x + g.line_b ? 1.0 : 0.0);
+          v /= static_cast<double>(taps.size());
+        }
+        const int expected = stimuli::encode(c.lit * v, spec.transfer);
+        const int got = from_map ? pair.artifact.at(x, y) : pair.line.at(x, y);
+        const int diff = std::abs(expected - got);
+        worst = std::max(worst, diff);
+        if (diff > 1) ADD_FAILURE() << (from_map ? "artifact" : "line") << " pixel (" << x << ", " << y << "): got "
+                                    << got << ", expected " << expected << " (visibility " << v << ")";
+      }
+      artifact_differs += pair.artifact.at(x, y) != pair.line.at(x, y);
+    }
+  }
+  EXPECT_LE(worst, 1);
+  EXPECT_GT(artifact_differs, 20);
+  const auto [lo, hi] = std::minmax_element(pair.line.pixels.begin(), pair.line.pixels.end());
+  EXPECT_EQ(*lo, 0);
+  EXPECT_EQ(*hi, stimuli::encode(c.lit, spec.transfer));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Pcf, RendererStimulusPixels,
+    ::testing::Values(TechniqueCase{stimuli::Pattern::stair, 10, 4, 1.0, "grid", 11},
+                      TechniqueCase{stimuli::Pattern::stair, 5, 6, 0.5, "grid", 12},
+                      TechniqueCase{stimuli::Pattern::step, 10, 17, 1.0, "grid", 13},
+                      TechniqueCase{stimuli::Pattern::step, 20, 7.5, 0.5, "grid", 14, 160},
+                      TechniqueCase{stimuli::Pattern::stair, 10, 6, 1.0, "poisson", 15},
+                      TechniqueCase{stimuli::Pattern::step, 10, 12, 0.5, "poisson", 16}),
+    [](const ::testing::TestParamInfo<TechniqueCase>& p) { return std::to_string(p.index) + "_" + p.param.kernel; });
+
+// What the study sets itself and what a config may set, by penumbra-render's keys.
+TEST(StimulusSettings, TrialRadiusBecomesTexelsAndTheStudyOwnsTheMap) {
+  StimulusSpec spec;
+  spec.artifact_px = 8;
+  spec.filter_radius_px = 20;
+  spec.technique = "pcf";
+  spec.technique_settings = {{"pcf.kernel", "poisson"}, {"pcf.poisson_taps", "40"}, {"map.depth_bias_texels", "0.25"}};
+  const shadows::ShadowSettings s = stimuli::stimulus_settings(spec, 61);
+  EXPECT_EQ(s.technique, shadows::Technique::pcf);
+  EXPECT_FLOAT_EQ(s.pcf.radius, 2.5f);
+  EXPECT_EQ(s.pcf.radius_unit, shadows::RadiusUnit::texels);
+  EXPECT_EQ(s.pcf.kernel, shadows::Kernel::poisson);
+  EXPECT_EQ(s.pcf.poisson_taps, 40);
+  EXPECT_FALSE(s.pcf.rotate);
+  EXPECT_FLOAT_EQ(s.map.depth_bias_texels, 0.25f);
+  EXPECT_EQ(s.map.resolution_texels, 61);
+  EXPECT_FALSE(s.map.fit);
+  EXPECT_EQ(s.map.cascades, 1);
+  EXPECT_FALSE(s.adaptive.enabled);
+  EXPECT_EQ(stimuli::partner_unavailable(s), "");
+
+  // Every filter-radius technique can be set up; the partner is refused with the reason.
+  spec.technique_settings.clear();
+  for (const char* t : {"rpcf", "vsm", "msm", "evsm", "esm"}) {
+    spec.technique = t;
+    EXPECT_NE(stimuli::partner_unavailable(stimuli::stimulus_settings(spec, 61)).find("no closed-form"), std::string::npos) << t;
+  }
+
+  const auto refused = [&](const std::string& technique, std::vector<std::pair<std::string, std::string>> settings,
+                           const std::string& expected) {
+    spec.technique = technique;
+    spec.technique_settings = std::move(settings);
+    try {
+      stimuli::stimulus_settings(spec, 61);
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+  };
+  refused("pfc", {}, "technique: ");
+  refused("pcss", {}, "technique: 'pcss' has no fixed filter radius");
+  refused("pcf", {{"pcf.radius", "3"}}, "pcf.radius: set by the study");
+  refused("pcf", {{"map.resolution_texels", "512"}}, "map.resolution_texels: set by the study");
+  refused("pcf", {{"adaptive.enabled", "true"}}, "adaptive.enabled: not a setting of technique 'pcf'");
+  refused("pcf", {{"vsm.radius", "1"}}, "vsm.radius: not a setting of technique 'pcf'");
+  refused("pcf", {{"pcf.kernal", "grid"}}, "pcf.kernal: no such setting");
+  refused("pcf", {{"pcf.kernel", "disk"}}, "pcf.kernel: ");
+  refused("pcf", {{"kernel", "grid"}}, "kernel: expected section.key");
+  spec.technique = "pcf";
+  spec.technique_settings = {{"pcf.kernel", "poisson"}, {"pcf.rotate", "true"}};
+  EXPECT_EQ(stimuli::partner_unavailable(stimuli::stimulus_settings(spec, 61)).rfind("pcf.rotate: ", 0), 0u);
+}
 
 TEST(StimulusGeometry, StepCrossesExactlyOneTexelRowAndOrientationsVary) {
   std::set<int> orientations;

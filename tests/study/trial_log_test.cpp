@@ -162,4 +162,33 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
             "study.json: rounds: expected a non-empty array of {pattern, contrast}");
 }
 
+// stimulus.technique: the renderer's technique and its settings by penumbra-render's keys; the
+// filter shader's kernel and taps do not mix with it, and pcf names its kernel (the log's column).
+TEST(StudyConfig, StimulusTechniqueAndItsSettings) {
+  const auto c = procedure::load_config(PENUMBRA_DATA_DIR "/studies/pcf-poisson.json");
+  EXPECT_EQ(c.technique, "pcf");
+  EXPECT_EQ(c.technique_settings, (std::vector<std::pair<std::string, std::string>>{{"pcf.kernel", "poisson"}}));
+  EXPECT_EQ(c.kernel, stimuli::Kernel::poisson);
+  EXPECT_EQ(procedure::to_json(c)["stimulus"],
+            (nlohmann::json{{"size_px", 320}, {"technique", "pcf"}, {"settings", {{"pcf.kernel", "poisson"}}}}));
+
+  const nlohmann::json base = {{"rounds", {{{"pattern", "stair"}, {"contrast", 1.0}}}}};
+  auto with = [&](const nlohmann::json& stimulus) {
+    nlohmann::json j = base;
+    j["stimulus"] = stimulus;
+    return config_error(j);
+  };
+  const nlohmann::json grid = {{"pcf.kernel", "grid"}};
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "grid"}, {"pcf.poisson_taps", 16}, {"pcf.rotate", false}}}}), "no error");
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", grid}, {"kernel", "disk"}}).rfind("study.json: stimulus.kernel: a setting of the study's own filter shader", 0), 0u);
+  EXPECT_EQ(with({{"settings", grid}}), "study.json: stimulus.settings: needs stimulus.technique (the technique the settings are for)");
+  EXPECT_EQ(with({{"technique", "pcf"}}).rfind("study.json: stimulus.settings: pcf.kernel is required with technique pcf", 0), 0u);
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "disk"}}}}),
+            "study.json: stimulus.settings.pcf.kernel: expected grid or poisson (the renderer's PCF kernels)");
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", {1, 2}}}}}),
+            "study.json: stimulus.settings.pcf.kernel: expected a string, a number or true/false");
+  EXPECT_EQ(with({{"technique", ""}}), "study.json: stimulus.technique: expected a technique name (penumbra-render --technique)");
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", "grid"}}), "study.json: stimulus.settings: expected an object of \"section.key\": value");
+}
+
 }  // namespace
