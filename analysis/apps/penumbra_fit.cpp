@@ -196,7 +196,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
               provenance.obtained_by.c_str(), provenance.participants, provenance.participants == 1 ? "" : "s");
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
               so.output.string().c_str());
-  std::printf("plots: /usr/bin/python3 %s/scripts/plot_fit.py %s\n", PENUMBRA_SOURCE_DIR, fs::absolute(so.output).string().c_str());
+  std::printf("plots: /usr/bin/python3 %s %s\n", tool::script_file("plot_fit.py").c_str(), fs::absolute(so.output).string().c_str());
   return 0;
 }
 
@@ -206,6 +206,7 @@ int main(int argc, char** argv) {
   // Ceres logs a rank-deficient covariance as an error; the fit reports it as a flag instead.
   FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"penumbra-fit: thresholds and the constant c of r = c a from penumbra-study logs (docs/fit.md)"};
+  cli::describe_tool(app, "penumbra-fit", "fit.md");
   StudyOptions so;
   ModelOptions study_model;
   app.add_option("inputs", so.inputs, "session directories (trials.csv + session.json) or trial CSV files");

@@ -1,8 +1,9 @@
 #pragma once
 // What every app does with an error: one line "<tool>: <message>" on stderr (text::one_line: no
-// control bytes, no megabyte words) and a documented exit status, 2 for a command line that
-// cannot be parsed (CLI11's ParseError, whose own exit codes are 100-plus and whose own message
-// adds a second line), 1 for everything else (a bad file, a refused session, a failed write).
+// control bytes, no megabyte words) and a documented exit status (docs/tools.md), 2 for a command
+// line that cannot be parsed (CLI11's ParseError, whose own exit codes are 100-plus and whose own
+// message adds a second line), 1 for everything else (a bad file, a refused session, a failed
+// write). And what every app says about itself: --version, and --help ending with its docs page.
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -10,11 +11,22 @@
 #include <string_view>
 
 #include "text/printable.h"
+#include "tool/tool.h"
 
 namespace penumbra::cli {
 
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
+
+// --version ("penumbra-render 0.1.0 (git abc1234)") and a --help footer naming the tool's page of
+// docs/ and the exit codes (docs/tools.md), with paths where this copy of the tool finds them
+// (installed or in the source tree). Call it before adding subcommands: they copy the footer.
+inline void describe_tool(CLI::App& app, std::string_view tool, std::string_view docs_page) {
+  app.set_version_flag("--version", tool::version_line(tool), "print the version and git revision, and exit");
+  app.footer("Documentation: " + tool::docs_page(docs_page).string() +
+             "\nExit codes: 0 done, 1 bad input or data (one line on stderr), 2 unusable command line; " +
+             tool::docs_page("tools.md").string());
+}
 
 // Prints "<tool>: <message>" as one line and returns `status`.
 inline int fail(std::string_view tool, std::string_view message, int status = kExitError) {
@@ -22,8 +34,8 @@ inline int fail(std::string_view tool, std::string_view message, int status = kE
   return status;
 }
 
-// app.parse: nullopt to go on, or the status to leave with: 0 after --help (printed), 2 after a
-// parse error (one line).
+// app.parse: nullopt to go on, or the status to leave with: 0 after --help or --version (printed),
+// 2 after a parse error (one line).
 inline std::optional<int> parse(CLI::App& app, int argc, char** argv, std::string_view tool) {
   try {
     app.parse(argc, argv);

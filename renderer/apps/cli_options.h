@@ -14,6 +14,7 @@
 #include "adaptive/resolution_rule.h"
 #include "cli/checks.h"
 #include "shadows/settings.h"
+#include "tool/tool.h"
 
 namespace penumbra::apps {
 
@@ -85,10 +86,11 @@ inline void add_light_size_option(CLI::App& app, float& size) {
 }
 
 // --calibration FILE: the constant c of the adaptive rule per technique, from the fitter's
-// calibration.json (by default the published c). apply_calibration() reads it once the command
-// line is parsed; apply_calibration_for() sets c for each technique an app renders.
+// calibration.json (by default the published c: calibration/default.json of the installed data or
+// the source tree's data/, tool::data_file). apply_calibration() reads it once the command line is
+// parsed; apply_calibration_for() sets c for each technique an app renders.
 struct CalibrationOption {
-  std::string file = PENUMBRA_SOURCE_DIR "/data/calibration/default.json";
+  std::string file = tool::data_file("calibration/default.json").string();
   adaptive::Calibration loaded;      // after apply_calibration
   bool c_from_command_line = false;  // --adaptive.c was given and wins over the file
   bool ci_upper = false;             // use the entries' upper ci95 bound instead of c

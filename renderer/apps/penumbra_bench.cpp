@@ -54,7 +54,7 @@ struct Options {
   bool adaptive = true;  // one adaptive row per variant the rule applies to
   bool plot = true;
   std::string python = "/usr/bin/python3";
-  std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_bench.py";
+  std::string plot_script = tool::script_file("plot_bench.py").string();
   std::string output;
 };
 
@@ -277,6 +277,7 @@ std::vector<std::string> split(const std::string& text) {
 int main(int argc, char** argv) {
   CLI::App app{"Shadow error against frame time: every technique x resolution (x filter radius) against a ground truth; "
                "writes bench.csv, report.json and a Pareto plot per scene."};
+  cli::describe_tool(app, "penumbra-bench", "bench.md");
   app.option_defaults()->always_capture_default();
   Options opt;
   std::string scenes_arg = join(opt.scenes), techniques_arg = "all", resolutions_arg = "128,256,512,1024,2048,4096",
@@ -352,7 +353,7 @@ int main(int argc, char** argv) {
     opt.resolutions = apps::parse_list<int>("--resolutions", resolutions_arg, 1, 65536);
     opt.radii_ws = apps::parse_list<double>("--radii", radii_arg, 1e-6, 1e6);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     return cli::fail("penumbra-bench", e.what(), cli::kExitUsage);
   }
 

@@ -147,7 +147,7 @@ struct Options {
   bool ci_upper = false;
   std::string output = "out/demo";
   std::string python = "/usr/bin/python3";
-  std::string plot_script = PENUMBRA_SOURCE_DIR "/scripts/plot_demo.py";
+  std::string plot_script = tool::script_file("plot_demo.py").string();
   bool plot = true;
   std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
   int screenshot_frames = 10;
@@ -350,6 +350,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Adaptive shadow-map resolution against a fixed resolution: frame time and image difference."};
+  cli::describe_tool(app, "penumbra-demo", "adaptive.md");
   Options opt;
   bool headless = false;
   shadows::ShadowSettings base = demo_defaults();

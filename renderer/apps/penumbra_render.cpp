@@ -45,6 +45,7 @@ std::string fmt_ms(double ms) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Render a scene with a shadow technique; writes lit.png, visibility.exr and report.json."};
+  cli::describe_tool(app, "penumbra-render", "renderer.md");
   app.option_defaults()->always_capture_default();
   std::string scene_arg = "demo";
   std::string technique_arg = "pcf";

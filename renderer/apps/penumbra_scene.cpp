@@ -20,6 +20,7 @@ using namespace penumbra;
 
 int main(int argc, char** argv) {
   CLI::App app{"Describe a scene, and write it as a scene file with glTF models (-o)."};
+  cli::describe_tool(app, "penumbra-scene", "scene-format.md");
   std::string scene_arg = "outdoor";
   std::int64_t seed = -1;
   std::string output;

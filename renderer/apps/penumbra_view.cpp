@@ -45,6 +45,7 @@ struct Orbit {
 
 int main(int argc, char** argv) {
   CLI::App app{"Interactive shadow viewer (GLFW + Dear ImGui)."};
+  cli::describe_tool(app, "penumbra-view", "renderer.md");
   std::string scene_arg = "demo", screenshot;
   int width = 1280, height = 720, frames = 0;
   apps::CalibrationOption calibration;

@@ -23,6 +23,7 @@ using namespace penumbra;
 
 int main(int argc, char** argv) {
   CLI::App app{"The image observer's 2afc psychometric curve and implied c (docs/study.md)"};
+  cli::describe_tool(app, "penumbra-observer-curve", "study.md");
   std::string pattern = "stair";
   std::vector<double> artifacts{5, 10, 20};
   double contrast = 1.0, ratio_min = 0.5, ratio_max = 8, step = 1.06, p_threshold = 0.82;

@@ -251,6 +251,7 @@ int run_simulate(const CLI::App& command, const QuestOptions& options, penumbra:
 
 int main(int argc, char** argv) {
   CLI::App app{"penumbra-quest: Psychtoolbox-identical QUEST staircases, replayed or simulated"};
+  penumbra::cli::describe_tool(app, "penumbra-quest", "quest.md");
   app.require_subcommand(1);
 
   auto* replay = app.add_subcommand("replay", "rebuild a staircase from its trials and print its estimates as JSON");

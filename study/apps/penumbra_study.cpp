@@ -2,6 +2,7 @@
 //   penumbra-study stimulus --pattern stair --artifact-px 10 --filter-radius-px 20 -o DIR
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -10,7 +11,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "apps/reference_command.h"
 #include "io/atomic_file.h"
@@ -32,6 +35,23 @@ namespace fs = std::filesystem;
 using namespace penumbra;
 
 namespace {
+
+// --config FILE, or the name of a config shipped with the tools ("default", "default-yesno.json"):
+// a name that is no existing file and has no directory part is looked up in the data directory's
+// studies/ (tool::data_file: <prefix>/share/penumbra/studies installed, data/studies in the source
+// tree). Anything else is left as given, so a missing file is refused by its own name.
+CLI::Validator shipped_config() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        std::error_code ec;  // a name too long for a file is no file, here and in studies/
+        if (input.empty() || fs::path(input).has_parent_path() || fs::exists(input, ec)) return {};
+        fs::path shipped = tool::data_file("studies/" + input);
+        if (shipped.extension() != ".json") shipped += ".json";
+        if (fs::is_regular_file(shipped, ec)) input = shipped.string();
+        return {};
+      },
+      "", "SHIPPED_CONFIG");
+}
 
 // display-check: what the config's display geometry means for the stimuli, before any session. The
 // config is read (and so checked: non-square pixels, a viewing distance under 20 cm, a stimulus
@@ -395,6 +415,7 @@ int run_study(const RunOptions& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{"penumbra-study: 2AFC shadow-artifact study (docs/study.md)"};
+  cli::describe_tool(app, "penumbra-study", "study.md");
   app.require_subcommand(1);
 
   auto* stim = app.add_subcommand("stimulus", "render one stimulus pair (artifact and line) to PNG + JSON");
@@ -421,10 +442,17 @@ int main(int argc, char** argv) {
       "display-check", "print pixels per degree, the stimulus in degrees and the artifacts in arcmin for a config's display; "
                        "refuses implausible geometry (non-square pixels, viewing distance under 20 cm, stimulus larger than the screen)");
   fs::path display_config;
-  display_check->add_option("--config", display_config, "study config (data/studies/*.json)")->required()->check(cli::path_given());
+  std::vector<std::string> shipped;
+  std::error_code no_dir;  // none listed
+  for (const auto& entry : fs::directory_iterator(tool::data_file("studies"), no_dir))
+    if (entry.path().extension() == ".json") shipped.push_back(entry.path().stem().string());
+  std::sort(shipped.begin(), shipped.end());
+  std::string shipped_configs = "a study config file, or the name of one shipped in " + tool::data_file("studies").string() + ":";
+  for (const std::string& name : shipped) shipped_configs += " " + name;
+  display_check->add_option("--config", display_config, shipped_configs)->required()->check(cli::path_given())->transform(shipped_config());
   auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
   RunOptions ro;
-  run->add_option("--config", ro.config, "study config JSON (data/studies/)")->check(cli::path_given());
+  run->add_option("--config", ro.config, shipped_configs)->check(cli::path_given())->transform(shipped_config());
   run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)")
       ->check(cli::path_given());
   run->add_option("--resume", ro.resume, "continue the session in this directory")->check(cli::path_given());
