@@ -1,0 +1,166 @@
+# What `cmake --install` puts where (docs/install.md).
+#
+#   bin/                          the tools (component Runtime)
+#   share/penumbra/               the data they ship with: calibration/, studies/, scenes/, and the
+#                                 plot scripts in scripts/ (component Data); found by the tools
+#                                 relative to their own directory (common/tool/tool.h)
+#   share/doc/penumbra/           docs/, README.md and examples/ (component Documentation)
+#   include/penumbra/             the public headers of the exported libraries  \
+#   lib/libpenumbra_*.a           the exported static libraries                  } component Development
+#   lib/cmake/Penumbra/           PenumbraConfig.cmake, its version file, the    |
+#                                 exported targets per component                 |
+#   lib/pkgconfig/                penumbra-adaptive.pc                           /
+#
+# Exported targets (namespace Penumbra::), one export set, and so one file of targets, per component,
+# each linking only what it needs; PenumbraConfig.cmake (cmake/PenumbraConfig.cmake.in) loads the
+# components asked for and looks for their dependencies only:
+#   adaptive       penumbra_adaptive: the rule, hysteresis, cascade sizing, calibration.json reader;
+#                  no GL, GLM, study or Ceres, and nothing outside Penumbra
+#   psychometrics  penumbra_psychometrics: models, QUEST, QUEST+, simulated observers
+#   study_log      penumbra_study_log: the trial-log writer and validating reader
+#   renderer       penumbra_renderer with gl, scene, io, image, sampling (epoxy, EGL, GLM,
+#                  nlohmann_json, Assimp, and OpenImageIO or libpng + OpenEXR)
+# and the internal set `core` the others link (published, random, text, json_input, staged_dir):
+# installed as libraries, with headers only where a public header includes them.
+#
+# Headers are installed under include/penumbra with the paths the sources include them by
+# ("adaptive/resolution_rule.h"); the targets put include/penumbra and include on the include
+# path, so an engine may write <penumbra/adaptive/resolution_rule.h>.
+
+include(CMakePackageConfigHelpers)
+
+set(PENUMBRA_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/Penumbra)
+set(PENUMBRA_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/penumbra)
+
+# --- the tools, their data and the documentation ----------------------------------------------
+
+set(penumbra_tools penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-view
+                   penumbra-quest penumbra-observer-curve penumbra-study penumbra-fit)
+foreach(tool IN LISTS penumbra_tools)
+  if(TARGET ${tool})
+    install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT Runtime)
+  endif()
+endforeach()
+
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/ DESTINATION ${PENUMBRA_INSTALL_DATADIR} COMPONENT Data)
+install(FILES ${PROJECT_SOURCE_DIR}/scripts/plot_bench.py ${PROJECT_SOURCE_DIR}/scripts/plot_demo.py
+              ${PROJECT_SOURCE_DIR}/scripts/plot_fit.py
+        DESTINATION ${PENUMBRA_INSTALL_DATADIR}/scripts COMPONENT Data)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT Documentation)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT Documentation)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples COMPONENT Documentation)
+
+# --- libraries, headers, CMake package, pkg-config -----------------------------------------------
+
+# component -> targets (export name = the target's name without "penumbra_")
+set(penumbra_export_core penumbra_published penumbra_random penumbra_text penumbra_json_input penumbra_staged_dir)
+set(penumbra_export_adaptive penumbra_adaptive)
+set(penumbra_export_psychometrics penumbra_psychometrics)
+set(penumbra_export_study_log penumbra_study_log)
+set(penumbra_export_renderer penumbra_image penumbra_sampling penumbra_gl penumbra_scene penumbra_io penumbra_renderer)
+set(penumbra_components adaptive psychometrics study_log renderer)
+set(penumbra_export_file_core Core)  # Penumbra<...>Targets.cmake
+set(penumbra_export_file_adaptive Adaptive)
+set(penumbra_export_file_psychometrics Psychometrics)
+set(penumbra_export_file_study_log StudyLog)
+set(penumbra_export_file_renderer Renderer)
+
+# The GL-free libraries are position independent, so that an engine can link them into a shared
+# library (a plugin) too.
+set_target_properties(${penumbra_export_core} ${penumbra_export_adaptive} ${penumbra_export_psychometrics}
+                      ${penumbra_export_study_log} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+foreach(set IN ITEMS core ${penumbra_components})
+  foreach(target IN LISTS penumbra_export_${set})
+    string(REGEX REPLACE "^penumbra_" "" export_name ${target})
+    set_target_properties(${target} PROPERTIES EXPORT_NAME ${export_name})
+    # The standard the installed headers need: C++17 for the rule and the trial log, C++20 for
+    # the psychometrics (std::numbers) and the renderer (concepts, std::span); the build itself
+    # uses C++20 throughout.
+    if(set STREQUAL "renderer" OR set STREQUAL "psychometrics")
+      set(standard cxx_std_20)
+    else()
+      set(standard cxx_std_17)
+    endif()
+    get_target_property(type ${target} TYPE)
+    if(type STREQUAL "INTERFACE_LIBRARY")
+      target_compile_features(${target} INTERFACE ${standard})
+    else()
+      target_compile_features(${target} PUBLIC ${standard})
+    endif()
+  endforeach()
+  set(file_stem ${penumbra_export_file_${set}})
+  install(TARGETS ${penumbra_export_${set}} EXPORT Penumbra${file_stem}
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT Development
+          INCLUDES DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR} ${CMAKE_INSTALL_INCLUDEDIR})
+  install(EXPORT Penumbra${file_stem} NAMESPACE Penumbra:: FILE Penumbra${file_stem}Targets.cmake
+          DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR} COMPONENT Development)
+endforeach()
+
+# Public headers, by the path the sources include them with. A public header may include only
+# headers installed here (tests/install checks it with the installed include directory alone).
+function(penumbra_install_headers subdir)
+  install(FILES ${ARGN} DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR}/${subdir} COMPONENT Development)
+endfunction()
+penumbra_install_headers("" ${PROJECT_SOURCE_DIR}/common/published.h)
+penumbra_install_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/random.h)
+file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/adaptive/*.h)
+penumbra_install_headers(adaptive ${headers})
+file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/study/quest/*.h)
+penumbra_install_headers(quest ${headers})
+# observers/image_observer.h belongs to penumbra_study (GL), which is not installed.
+penumbra_install_headers(observers ${PROJECT_SOURCE_DIR}/study/observers/observer.h
+                         ${PROJECT_SOURCE_DIR}/study/observers/psychometric_observer.h
+                         ${PROJECT_SOURCE_DIR}/study/observers/staircase_simulation.h)
+file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/study/log/*.h)
+penumbra_install_headers(log ${headers})
+# The renderer: everything its headers reach (gl/window.h is the GUI's, io/image_codec.h the
+# image backend's, neither installed).
+penumbra_install_headers(image ${PROJECT_SOURCE_DIR}/common/image/image.h)
+penumbra_install_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/poisson_disk.h)
+foreach(h context embedded_files objects shader_library timer)
+  penumbra_install_headers(gl ${PROJECT_SOURCE_DIR}/renderer/gl/${h}.h)
+endforeach()
+penumbra_install_headers(io ${PROJECT_SOURCE_DIR}/renderer/io/image_io.h ${PROJECT_SOURCE_DIR}/renderer/io/report.h)
+penumbra_install_headers(shaders ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h)
+foreach(dir scene shadows shadows/techniques)
+  file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/${dir}/*.h)
+  penumbra_install_headers(${dir} ${headers})
+endforeach()
+
+# Static archives keep their debug information in `cmake --install`; `--strip` and the Debian
+# package (CPACK_STRIP_FILES) strip it, as CMake does for executables.
+install(CODE "
+  if(CMAKE_INSTALL_DO_STRIP)
+    file(GLOB archives \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/libpenumbra_*.a\")
+    foreach(a IN LISTS archives)
+      execute_process(COMMAND \"${CMAKE_STRIP}\" --strip-debug \"\${a}\" COMMAND_ERROR_IS_FATAL ANY)
+    endforeach()
+  endif()" COMPONENT Development)
+
+if(PENUMBRA_IMAGE_IO STREQUAL "OpenImageIO")
+  set(PENUMBRA_IMAGE_IO_PACKAGES OpenImageIO)
+  set(PENUMBRA_IMAGE_IO_TEXT OpenImageIO)
+else()
+  set(PENUMBRA_IMAGE_IO_PACKAGES PNG OpenEXR)
+  set(PENUMBRA_IMAGE_IO_TEXT "PNG and OpenEXR")
+endif()
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/PenumbraConfig.cmake.in
+                              ${PROJECT_BINARY_DIR}/install/PenumbraConfig.cmake
+                              INSTALL_DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/install/PenumbraConfigVersion.cmake
+                                 COMPATIBILITY SameMinorVersion)  # 0.x: a new minor version may break
+install(FILES ${PROJECT_BINARY_DIR}/install/PenumbraConfig.cmake ${PROJECT_BINARY_DIR}/install/PenumbraConfigVersion.cmake
+        DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR} COMPONENT Development)
+
+# penumbra-adaptive.pc: everything is filled in now but the prefix, which is the one of the
+# install (`cmake --install --prefix`, /usr in the Debian package), written when installing into a
+# directory of its own (two installs may run at once).
+set(PENUMBRA_PC_PREFIX "@PENUMBRA_PC_PREFIX@")
+configure_file(${PROJECT_SOURCE_DIR}/cmake/penumbra-adaptive.pc.in ${PROJECT_BINARY_DIR}/install/penumbra-adaptive.pc.in @ONLY)
+install(CODE "
+  set(PENUMBRA_PC_PREFIX \"\${CMAKE_INSTALL_PREFIX}\")
+  string(MD5 pc_dir \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}\")
+  set(pc_dir \"${PROJECT_BINARY_DIR}/install/pc-\${pc_dir}\")
+  configure_file(\"${PROJECT_BINARY_DIR}/install/penumbra-adaptive.pc.in\" \"\${pc_dir}/penumbra-adaptive.pc\" @ONLY)
+  file(INSTALL \"\${pc_dir}/penumbra-adaptive.pc\" DESTINATION \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/pkgconfig\")
+  file(REMOVE_RECURSE \"\${pc_dir}\")" COMPONENT Development)

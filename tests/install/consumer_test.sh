@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# ctest -L install: install.consumer (tests/install/CMakeLists.txt). What an engine developer does
+# with Penumbra, checked from outside the build tree:
+#   1. cmake --install of the build tree into a fresh prefix;
+#   2. every public header of the GL-free components (adaptive, psychometrics, study_log), with only
+#      the installed include directory, includes nothing but other installed headers and the C and
+#      C++ standard libraries, and compiles at the C++ standard its target asks for (17;
+#      psychometrics 20);
+#   3. tests/install/consumer (and examples/engine_integration through it) configures with
+#      find_package(Penumbra CONFIG REQUIRED), checks what each target links, builds and runs;
+#   4. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
+#   5. every installed tool prints its version, and its --help names the installed docs page; the
+#      installed tools find the installed calibration and study configs.
+# usage: consumer_test.sh BUILD_DIR SOURCE_DIR WORK_DIR CXX_COMPILER VERSION
+set -euo pipefail
+build=$1 source=$2 work=$3 cxx=$4 version=$5
+rm -rf "$work"
+mkdir -p "$work"
+prefix=$work/prefix
+start=$SECONDS
+step() { echo "== [$((SECONDS - start)) s] $*"; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+step "cmake --install $build --prefix $prefix"
+cmake --install "$build" --prefix "$prefix" >"$work/install.log"
+include=$prefix/include
+[[ -f $include/penumbra/adaptive/resolution_rule.h ]] || fail "no adaptive/resolution_rule.h under $include/penumbra"
+
+step "GL-free public headers: what they include, and that they compile (installed include directory only)"
+# What a header may reach: installed headers, libstdc++, GCC's own headers, libc.
+allowed="^($include/penumbra/|/usr/include/c\+\+/|/usr/include/[^/]*-linux-gnu/c\+\+/|/usr/lib/gcc/|/usr/include/[^/]+\.h$|/usr/include/[^/]*-linux-gnu/(bits|sys|gnu|asm)/|/usr/include/(linux|asm-generic)/)"
+headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h penumbra/adaptive/*.h penumbra/quest/*.h \
+  penumbra/log/*.h penumbra/observers/observer.h penumbra/observers/psychometric_observer.h penumbra/observers/staircase_simulation.h)
+for h in $headers; do
+  echo "#include <$h>" >"$work/header.cpp"
+  # The files it includes, one per line (-M: preprocessing only, so a header not installed fails here).
+  "$cxx" -std=c++20 -M -I"$include/penumbra" -I"$include" "$work/header.cpp" >"$work/header.d" ||
+    fail "$h includes a header that is not installed"
+  # shellcheck disable=SC2046  # one word per file
+  outside=$(realpath -m -- $(sed -e 's/^[^:]*://' -e 's/\\$//' "$work/header.d") | grep -v -e 'header.cpp$' | grep -Ev "$allowed" || true)
+  [[ -z $outside ]] || fail "$h includes $outside (neither Penumbra's installed headers nor the standard library)"
+  standard=c++17
+  [[ $h == penumbra/quest/* || $h == penumbra/observers/* ]] && standard=c++20
+  echo "#include <$h>" >>"$work/headers-$standard.cpp"
+done
+for standard in c++17 c++20; do
+  "$cxx" -std=$standard -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I"$include/penumbra" -I"$include" "$work/headers-$standard.cpp" ||
+    fail "the headers of $work/headers-$standard.cpp do not compile as $standard"
+done
+echo "$(wc -w <<<"$headers") headers"
+
+step "find_package(Penumbra CONFIG REQUIRED): tests/install/consumer and examples/engine_integration"
+cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$prefix" -DEXPECTED_PREFIX="$prefix" -DEXAMPLE_DIR="$source/examples/engine_integration" \
+  -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF >"$work/consumer-configure.log" || { cat "$work/consumer-configure.log"; fail "configure"; }
+grep -- "-- Penumbra::" "$work/consumer-configure.log"
+cmake --build "$work/consumer" -j 1 >"$work/consumer-build.log" || { cat "$work/consumer-build.log"; fail "build"; }
+"$work/consumer/size_shadow_map" "$prefix/share/penumbra/calibration/default.json"
+"$work/consumer/quest_and_log" "$work"
+"$work/consumer/renderer_link"
+"$work/consumer/example/engine_integration" "$prefix/share/penumbra/calibration/default.json" >"$work/example.txt"
+head -2 "$work/example.txt"
+grep -q "^frame 63 " "$work/example.txt" || fail "engine_integration stopped before frame 63"
+
+step "pkg-config penumbra-adaptive"
+pc=$(find "$prefix" -name penumbra-adaptive.pc)
+[[ -n $pc ]] || fail "no penumbra-adaptive.pc under $prefix"
+export PKG_CONFIG_LIBDIR=${pc%/*} PKG_CONFIG_PATH=
+flags=$(pkg-config --cflags --libs penumbra-adaptive)
+echo "pkg-config --cflags --libs penumbra-adaptive: $flags"
+for f in $(pkg-config --libs --static penumbra-adaptive); do
+  [[ $f == -L* || $f == -lpenumbra_* ]] || fail "penumbra-adaptive.pc links $f"
+done
+# shellcheck disable=SC2086  # the flags are words
+"$cxx" -std=c++17 -Wall -Wextra -Wpedantic -Werror "$source/tests/install/consumer/size_shadow_map.cpp" $flags -o "$work/pc_size_shadow_map"
+"$work/pc_size_shadow_map" "$prefix/share/penumbra/calibration/default.json"
+# shellcheck disable=SC2086
+"$cxx" -std=c++17 -Wall -Wextra -Wpedantic -Werror "$source/examples/engine_integration/main.cpp" $flags -o "$work/pc_engine_integration"
+"$work/pc_engine_integration" "$prefix/share/penumbra/calibration/default.json" | cmp - "$work/example.txt" || fail "the example built with pkg-config printed something else"
+
+step "installed tools: --version, --help, the installed data"
+tools=(penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-quest penumbra-observer-curve penumbra-study penumbra-fit)
+[[ -x $prefix/bin/penumbra-view || ! -e $build/renderer/penumbra-view ]] || fail "penumbra-view built but not installed"
+[[ -x $prefix/bin/penumbra-view ]] && tools+=(penumbra-view)
+for tool in "${tools[@]}"; do
+  line=$("$prefix/bin/$tool" --version)
+  [[ $line =~ ^$tool\ ${version//./\\.}\ \(git\ ([0-9a-f]{7}(-dirty)?|unknown)\)$ ]] || fail "$tool --version: '$line'"
+  help=$("$prefix/bin/$tool" --help)  # (not piped into grep -q, which would leave the tool writing into a closed pipe)
+  page=$(sed -n 's/^Documentation: //p' <<<"$help")
+  [[ $page == "$prefix/share/doc/penumbra/"*.md && -f $page ]] || fail "$tool --help names the docs page '$page'"
+  grep -q "^Exit codes: .*$prefix/share/doc/penumbra/tools.md$" <<<"$help" || fail "$tool --help: no exit codes"
+done
+echo "${#tools[@]} tools: $("$prefix/bin/penumbra-render" --version)"
+help=$("$prefix/bin/penumbra-demo" --help)
+grep -q -- "--calibration TEXT=$prefix/share/penumbra/calibration/default.json$" <<<"$help" ||
+  fail "penumbra-demo's default calibration is not the installed one"
+"$prefix/bin/penumbra-study" display-check --config default >"$work/display-check.txt" || fail "penumbra-study display-check --config default"
+help=$("$prefix/bin/penumbra-study" run --help)
+grep -q "shipped in $prefix/share/penumbra/studies: .*default" <<<"$help" ||
+  fail "penumbra-study run --help does not list the installed study configs"
+step "done"
