@@ -1,4 +1,4 @@
-# What `cmake --install` puts where (docs/install.md).
+# What `cmake --install` puts where (docs/install.md), and the Debian package (cpack -G DEB).
 #
 #   bin/                          the tools (component Runtime)
 #   share/penumbra/               the data they ship with: calibration/, studies/, scenes/, and the
@@ -164,3 +164,32 @@ install(CODE "
   configure_file(\"${PROJECT_BINARY_DIR}/install/penumbra-adaptive.pc.in\" \"\${pc_dir}/penumbra-adaptive.pc\" @ONLY)
   file(INSTALL \"\${pc_dir}/penumbra-adaptive.pc\" DESTINATION \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/pkgconfig\")
   file(REMOVE_RECURSE \"\${pc_dir}\")" COMPONENT Development)
+
+# --- the Debian package: cpack -G DEB (tests/install/deb_test.sh) ------------------------------
+
+set(CPACK_PACKAGE_NAME penumbra)
+set(CPACK_PACKAGE_VENDOR "Penumbra")
+set(CPACK_PACKAGE_CONTACT "Penumbra maintainers <penumbra@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "perceptually chosen shadow-map resolution: renderer, study, fitter, library")
+set(CPACK_PACKAGE_DESCRIPTION "An OpenGL 4.5 shadow-mapping renderer, a 2AFC study with QUEST staircases, a Ceres fitter for\n\
+the constant c of the resolution rule r = c a, and the rule itself as a library (CMake package\n\
+Penumbra, pkg-config penumbra-adaptive).")
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_STRIP_FILES ON)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
+# dpkg-shlibdeps names the shared libraries the tools link (dpkg-dev, scripts/setup.sh).
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# Loaded at run time, not linked: a GL driver for EGL (Mesa's, or a GPU vendor's) and Python for the plots.
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libegl-mesa0, libgl1-mesa-dri, python3-matplotlib")
+# What the installed CMake package's renderer component needs to build against (the GL-free
+# components need nothing).
+if(PENUMBRA_IMAGE_IO STREQUAL "OpenImageIO")
+  set(penumbra_image_dev libopenimageio-dev)
+else()
+  set(penumbra_image_dev "libpng-dev, libopenexr-dev")
+endif()
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libepoxy-dev, libegl-dev, libglm-dev, nlohmann-json3-dev, libassimp-dev, ${penumbra_image_dev}, pkg-config")
+set(CPACK_GENERATOR DEB)
+include(CPack)

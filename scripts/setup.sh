@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config
+  dpkg-dev  # cpack -G DEB: dpkg-shlibdeps writes the package's Depends (tests/install/deb_test.sh)
   libgtest-dev libgmock-dev libbenchmark-dev
   libepoxy-dev libegl-dev libegl1-mesa-dev libgl1-mesa-dri libglm-dev
   libglfw3-dev libimgui-dev libstb-dev
