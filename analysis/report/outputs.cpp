@@ -119,6 +119,12 @@ CalibrationProvenance calibration_provenance(const Dataset& data) {
     if (first == data.sessions.size()) {
       first = t.session;
       p.kernel = t.row.kernel;
+      // Drawn by the renderer: the technique's own kernel setting, "" for a technique without one
+      // (the entry then serves it whatever it runs; calibration.h).
+      if (const auto it = s.setup.find("stimulus.technique"); it != s.setup.end()) {
+        const auto kernel = s.setup.find("stimulus.settings." + it->second + ".kernel");
+        p.kernel = kernel == s.setup.end() ? "" : kernel->second;
+      }
       p.obtained_by = kind(s.observer);
       p.technique = technique_of(s);
     }
@@ -126,8 +132,8 @@ CalibrationProvenance calibration_provenance(const Dataset& data) {
     if (technique_of(s) != p.technique)
       throw std::runtime_error(s.log_file + ": stimuli drawn by '" + technique_of(s) + "' where " + f.log_file + " has '" +
                                p.technique + "': a c per technique needs one fit per technique (fit them separately)");
-    if (t.row.kernel != p.kernel)
-      throw std::runtime_error(s.log_file + ": kernel '" + t.row.kernel + "' where " + f.log_file + " has '" + p.kernel +
+    if (t.row.kernel != data.trials[0].row.kernel)
+      throw std::runtime_error(s.log_file + ": kernel '" + t.row.kernel + "' where " + f.log_file + " has '" + data.trials[0].row.kernel +
                                "': a c per kernel needs one fit per kernel (fit the sessions of each kernel separately)");
     if (kind(s.observer) != p.obtained_by)
       throw std::runtime_error(s.log_file + ": answered by " + (s.observer.empty() ? "a person" : "observer '" + s.observer + "'") +

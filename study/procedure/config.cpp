@@ -193,6 +193,8 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
           r.fail("stimulus.settings", "pcf.kernel is required with technique pcf (grid or poisson: the log's kernel column)");
         c.kernel = r.parse_enum("stimulus.settings.pcf.kernel", kernel->second, stimuli::parse_kernel);
         if (c.kernel == stimuli::Kernel::disk) r.fail("stimulus.settings.pcf.kernel", "expected grid or poisson (the renderer's PCF kernels)");
+      } else {
+        c.kernel = stimuli::Kernel::grid;  // RPCF's box and the moments techniques' box blur
       }
     } else {
       if (r.find(*s, "settings")) r.fail("stimulus.settings", "needs stimulus.technique (the technique the settings are for)");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string_view>
@@ -173,7 +174,7 @@ scene::Scene stimulus_scene(const StimulusSpec& spec, const Geometry& g) {
   return s;
 }
 
-shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels) {
+shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels, double texel_px) {
   using namespace shadows;
   ShadowSettings s;
   try {
@@ -186,6 +187,7 @@ shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texe
     refuse_setting("technique", "'" + spec.technique + "' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)");
   s.pcf.rotate = false;          // one tap pattern for every pixel (a rotated one is noise)
   s.pcf.max_grid_taps = 256;     // exact box up to a radius of 127 texels
+  s.rpcf.max_grid_taps = 256;
   for (const auto& [key, value] : spec.technique_settings) {
     const std::size_t dot = key.find('.');
     if (dot == std::string::npos) refuse_setting(key, "expected section.key, e.g. pcf.kernel");
@@ -221,16 +223,37 @@ shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texe
   s.map.cascades = 1;
   s.adaptive.enabled = false;
   const double radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
-  entry.set_filter_radius(s, {static_cast<float>(radius_px / spec.artifact_px), RadiusUnit::texels});
+  entry.set_filter_radius(s, {static_cast<float>(radius_px / (texel_px > 0 ? texel_px : spec.artifact_px)), RadiusUnit::texels});
   return s;
 }
 
+PartnerMethod partner_for(const shadows::ShadowSettings& s) {
+  using shadows::Technique;
+  const shadows::TechniqueEntry& entry = shadows::technique_entry(s.technique);
+  if (s.technique == Technique::pcf && s.pcf.kernel == shadows::Kernel::poisson) {
+    if (s.pcf.rotate) throw std::invalid_argument("pcf.rotate: a disk rotated per pixel has no partner here (set it false)");
+    return PartnerMethod::edge_taps;
+  }
+  if (s.technique == Technique::pcf || s.technique == Technique::rpcf) return PartnerMethod::box_integral;
+  if (entry.moments && entry.moments(s)) return PartnerMethod::fine_map;
+  throw std::invalid_argument("technique: '" + std::string(shadows::to_string(s.technique)) +
+                              "' has no artifact-free partner here (pcf, rpcf and the filtered-moments techniques have)");
+}
+
 std::string partner_unavailable(const shadows::ShadowSettings& s) {
-  if (s.technique != shadows::Technique::pcf)
-    return "technique: '" + std::string(shadows::to_string(s.technique)) + "' has no closed-form artifact-free partner yet (pcf has)";
-  if (s.pcf.kernel == shadows::Kernel::poisson && s.pcf.rotate)
-    return "pcf.rotate: a disk rotated per pixel has no closed-form partner (set it false)";
-  return "";
+  try {
+    partner_for(s);
+    return "";
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+}
+
+int fine_map_texels(const StimulusSpec& spec, const Geometry& g) {
+  const double radius = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
+  const double extent = spec.artifact_px * g.map_texels, wanted_texel = std::min(spec.artifact_px, radius) / 64;
+  const double texels = std::ceil(extent / wanted_texel);
+  return static_cast<int>(std::clamp(texels, static_cast<double>(g.map_texels), static_cast<double>(kMaxFineMapTexels)));
 }
 
 struct StimulusRenderer::Impl {
@@ -355,7 +378,7 @@ StimulusPair StimulusRenderer::render_with_technique(const StimulusSpec& spec_in
   StimulusSpec spec = spec_in;
   spec.filter_radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
   const shadows::ShadowSettings settings = stimulus_settings(spec, g.map_texels);
-  if (const std::string why = partner_unavailable(settings); !why.empty()) throw std::invalid_argument(why);
+  const PartnerMethod partner = partner_for(settings);
   if (!impl_->renderer) impl_->renderer = std::make_unique<shadows::Renderer>();
   shadows::Renderer& renderer = *impl_->renderer;
   renderer.set_scene(stimulus_scene(spec, g));
@@ -384,18 +407,26 @@ StimulusPair StimulusRenderer::render_with_technique(const StimulusSpec& spec_in
   pair.geometry = g;
   pair.artifact_visibility = renderer.read_visibility();
   pair.line_visibility = {n, n, 1, std::vector<float>(static_cast<std::size_t>(n) * n)};
+  std::optional<io::ImageF> fine;  // the fine_map partner's visibility
+  if (partner == PartnerMethod::fine_map) {
+    const int fine_texels = fine_map_texels(spec, g);
+    renderer.render(stimulus_settings(spec, fine_texels, a * texels / fine_texels), n, n);
+    fine = renderer.read_visibility();
+  }
   pair.artifact = {n, n, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(n) * n)};
   pair.line = pair.artifact;
   // The partner: the same filter over the original edge (partner_unavailable says which have one).
   const double r = spec.filter_radius_px;
   std::vector<glm::dvec2> taps;  // canonical offsets of the Poisson taps (the renderer's disk, unrotated)
-  if (settings.pcf.kernel == shadows::Kernel::poisson)
+  if (partner == PartnerMethod::edge_taps)
     for (const glm::vec2 t : sampling::poisson_disk(settings.pcf.poisson_taps)) taps.push_back(g.to_canonical * (r * glm::dvec2(t)));
   for (int y = 0; y < n; ++y) {
     for (int x = 0; x < n; ++x) {
       const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
       double v = 0;
-      if (taps.empty()) {
+      if (fine) {
+        v = fine->at(x, y);
+      } else if (partner == PartnerMethod::box_integral) {
         v = box_over_edge(q, r, g.line_m, g.line_b);
       } else {
         for (const glm::dvec2 t : taps) v += (q + t).y >= g.line_m * (q + t).x + g.line_b ? 1 : 0;

@@ -63,11 +63,27 @@ scene::Scene stimulus_scene(const StimulusSpec& spec, const Geometry& geometry);
 // std::invalid_argument naming "technique" or the setting ("pcf.kernel: ...") for a technique
 // that cannot be studied or a setting the study controls itself (the radius, the map's size, fit,
 // cascades, the adaptive rule).
-shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels);
-// Whether the technique's artifact-free partner (its filter applied to the original edge) has a
-// closed form here; "" when it has, else why not ("technique: ..." or "pcf.rotate: ..."). PCF: the grid kernel's box integral of the
-// edge; Poisson taps (rotate off) each tested against the edge, the limit of an ever finer map.
+// `texel_px` (0: artifact_px) is the map's texel when the map is not the trial's (the partner's
+// finer one over the same square).
+shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texels, double texel_px = 0);
+
+// The artifact-free partner: the same technique with the same radius in px over the original edge.
+enum class PartnerMethod {
+  box_integral,  // box kernels (PCF grid, RPCF: revectorizing a straight edge gives it back): closed form
+  edge_taps,     // PCF Poisson, unrotated: each of the renderer's taps tested against the edge
+  fine_map,      // filtered moments (VSM, MSM, EVSM, ESM): the technique itself on a map of
+                 // fine_map_texels over the same square (its blur costs the same at any radius)
+};
+// Throws std::invalid_argument ("technique: ..." or "pcf.rotate: ...") when there is none.
+PartnerMethod partner_for(const shadows::ShadowSettings& settings);
+// "" when partner_for has one, else its reason.
 std::string partner_unavailable(const shadows::ShadowSettings& settings);
+// The fine map's texels: its texel min(a, r) / 64, at most kMaxFineMapTexels per side. The
+// moments techniques' edge sits a quarter texel off the line (it moves with the texel), so the
+// partner's map must be finer than its staircase alone needs: at min(a, r) / 16 the partner
+// moved by 2 linear 8-bit levels when the map was halved again, at / 64 by under one.
+inline constexpr int kMaxFineMapTexels = 4096;
+int fine_map_texels(const StimulusSpec& spec, const Geometry& geometry);
 
 // Needs a current OpenGL 4.5 context (headless or windowed).
 class StimulusRenderer {

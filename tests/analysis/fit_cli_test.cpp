@@ -499,9 +499,10 @@ TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
 // The real pipeline: penumbra-study run --headless writes sessions, penumbra-fit reads them. yes/no:
 // the straight (catch) trials are left out as QUEST leaves them out, and QUEST's gamma and
 // pThreshold come from session.json, so every recomputed posterior equals the logged one.
-// The pcf-* configs draw the stimuli with the renderer's PCF: the entry is pcf's, for its kernel.
+// The pcf-*, vsm and rpcf configs draw the stimuli with the renderer's technique: the entry is
+// that technique's, for its kernel (none for vsm and rpcf).
 TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
-  for (const std::string name : {"default", "default-yesno", "pcf-grid", "pcf-poisson"}) {
+  for (const std::string name : {"default", "default-yesno", "pcf-grid", "pcf-poisson", "vsm", "rpcf"}) {
     const fs::path dir = fresh("pipeline-" + name);
     const std::string config_file = "/studies/" + name + ".json";
     const std::string task = name == "default-yesno" ? "yesno" : "2afc";
@@ -533,11 +534,64 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     }
     const adaptive::CalibrationEntry entry = adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0);
     EXPECT_NEAR(entry.c, 4.0, 0.6) << name;
-    EXPECT_EQ(entry.technique, "pcf") << name;
-    EXPECT_EQ(entry.kernel, name == "pcf-grid" ? "grid" : name == "pcf-poisson" ? "poisson" : "disk") << name;
+    const bool other = name == "vsm" || name == "rpcf";  // a technique without a kernel setting
+    EXPECT_EQ(entry.technique, other ? name : "pcf") << name;
+    EXPECT_EQ(entry.kernel, name == "pcf-grid" ? "grid" : name == "pcf-poisson" ? "poisson" : other ? "" : "disk") << name;
     fs::remove_all(dir);
   }
 }
+
+#ifdef PENUMBRA_RENDER_EXE
+// The loop per technique (issue 15): a simulated study of stimuli drawn by the technique
+// (psychometric observer with a planted c, 6 participants x 3 artifact sizes x 60 trials) gives
+// back c within 5 % through penumbra-fit, and penumbra-render then sizes that technique's maps
+// with that entry (its report.json says which c and where from). Measured: pcf grid 3.027 for
+// 3.0, vsm 2.549 for 2.5, rpcf 0.997 for 1.0.
+TEST(FitCli, SimulatedStudyPerTechniqueRecoversCAndTheRendererUsesIt) {
+  struct Case {
+    std::string config, technique, kernel;
+    double c;
+  };
+  for (const Case& k : {Case{"pcf-grid", "pcf", "grid", 3.0}, Case{"vsm", "vsm", "", 2.5}, Case{"rpcf", "rpcf", "", 1.0}}) {
+    SCOPED_TRACE(k.config);
+    const fs::path dir = fresh("per-technique-" + k.config);
+    nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/" + k.config + ".json"));
+    config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
+    config["stopping"] = {{"min_trials", 60}, {"max_trials", 60}, {"sd_below", 0.1}};
+    std::ofstream(dir / "study.json") << config.dump();
+    std::string sessions;
+    for (int p = 1; p <= 6; ++p) {
+      const fs::path session = dir / ("p" + std::to_string(p));
+      const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
+                                  " --observer psychometric:c=" + std::to_string(k.c) + ",beta=3.5,lapse=0.01 --headless --participant p" +
+                                  std::to_string(p) + " --observer-seed " + std::to_string(p) + " -o " + session.string() + " > /dev/null";
+      ASSERT_EQ(std::system(command.c_str()), 0);
+      sessions += session.string() + " ";
+    }
+    std::string out;
+    ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 10", &out), 0) << out;
+    const adaptive::Calibration calibration = adaptive::load_calibration(dir / "fit" / "calibration.json");
+    ASSERT_EQ(calibration.entries.size(), 1u);
+    const adaptive::CalibrationEntry& entry = calibration.entries[0];
+    EXPECT_EQ(entry.technique, k.technique);
+    EXPECT_EQ(entry.kernel, k.kernel);
+    EXPECT_NEAR(entry.c / k.c, 1.0, 0.05) << entry.c;
+
+    std::string render = std::string(PENUMBRA_RENDER_EXE) + " --scene square --width 64 --height 64 --frames 1 --warmup 0" +
+                         " --technique " + k.technique + (k.kernel.empty() ? "" : " --pcf.kernel " + k.kernel) +
+                         " --adaptive.enabled true --calibration " + (dir / "fit" / "calibration.json").string() + " -o " +
+                         (dir / "render").string() + " > /dev/null";
+    ASSERT_EQ(std::system(render.c_str()), 0);
+    const std::string variant = k.kernel.empty() ? k.technique : k.technique + "-" + k.kernel;
+    const nlohmann::json used = nlohmann::json::parse(read(dir / "render" / variant / "report.json"))["calibration"];
+    EXPECT_NEAR(used["c"].get<double>(), entry.c, 1e-5) << used;
+    EXPECT_FALSE(used["fallback"].get<bool>()) << used;
+    EXPECT_EQ(used["obtained_by"], "simulated") << used;
+    EXPECT_EQ(used["technique"], k.technique) << used;
+    fs::remove_all(dir);
+  }
+}
+#endif
 
 // Issue 14.10 on logs penumbra-study wrote: session.json holds the config, so every row is checked
 // against the replayed procedure as --resume checks it. Swapping rows of different staircases

@@ -344,7 +344,9 @@ TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   EXPECT_FALSE(fs::exists(fresh("never")));
   // The stimulus technique is checked against the renderer's tables before the directory exists.
   for (const auto& [stimulus, says] : std::vector<std::pair<std::string, std::string>>{
-           {R"({"technique": "vsm"})", "stimulus.technique: 'vsm' has no closed-form artifact-free partner yet (pcf has)"},
+           {R"({"technique": "pcss"})", "stimulus.technique: 'pcss' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)"},
+           {R"({"technique": "pcf", "settings": {"pcf.kernel": "poisson", "pcf.rotate": true}})",
+            "stimulus.settings.pcf.rotate: a disk rotated per pixel has no partner here (set it false)"},
            {R"({"technique": "pcf", "settings": {"pcf.kernel": "grid", "pcf.kernal": "grid"}})", "stimulus.settings.pcf.kernal: no such setting"},
            {R"({"technique": "pcf", "settings": {"pcf.kernel": "grid", "pcf.radius": 2}})",
             "stimulus.settings.pcf.radius: set by the study from the trial's filter radius"}}) {
@@ -362,29 +364,41 @@ std::string bytes_of(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// A session whose stimuli the renderer's PCF draws, answered by the image observer (which looks
-// at every pair): session.json records the technique, the log the kernel.
-TEST(StudyRun, RendererDrawnStimuliRunASession) {
-  const fs::path dir = fresh("pcf-grid");
-  nlohmann::json config = nlohmann::json::parse(bytes_of(PENUMBRA_DATA_DIR "/studies/pcf-grid.json"));
+// Sessions whose stimuli the renderer's techniques draw, answered by the image observer (which
+// looks at every pair): session.json records the technique, the log the kernel.
+class RendererDrawnStimuli : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RendererDrawnStimuli, RunASession) {
+  const std::string name = GetParam();
+  const fs::path dir = fresh(name);
+  nlohmann::json config = nlohmann::json::parse(bytes_of(PENUMBRA_DATA_DIR "/studies/" + name + ".json"));
   config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
   config["artifact_px"] = {10};
   config["practice_trials"] = 0;
   config["stopping"] = {{"min_trials", 6}, {"max_trials", 6}, {"sd_below", 0.1}};
   config["stimulus"]["size_px"] = 96;
-  const fs::path file = fresh("pcf-grid.json");
+  const fs::path file = fresh(name + ".json");
   std::ofstream(file) << config.dump();
   std::string out;
   ASSERT_EQ(run({"run", "--config", file.string(), "--observer", "image", "--headless", "-o", dir.string()}, &out), 0) << out;
   const nlohmann::json session = nlohmann::json::parse(bytes_of(dir / "session.json"));
-  EXPECT_EQ(session["config"]["stimulus"]["technique"], "pcf");
-  EXPECT_EQ(session["config"]["stimulus"]["settings"]["pcf.kernel"], "grid");
+  EXPECT_EQ(session["config"]["stimulus"]["technique"], name == "pcf-grid" ? "pcf" : name);
+  if (name == "pcf-grid") {
+    EXPECT_EQ(session["config"]["stimulus"]["settings"]["pcf.kernel"], "grid");
+  }
   const auto rows = trial_log::read(dir / "trials.csv").rows;
   ASSERT_EQ(rows.size(), 6u);
-  for (const auto& r : rows) EXPECT_EQ(r.kernel, "grid");
+  for (const auto& r : rows) EXPECT_EQ(r.kernel, "grid");  // PCF's grid; RPCF's box and VSM's box blur
   fs::remove_all(dir);
   fs::remove(file);
 }
+
+INSTANTIATE_TEST_SUITE_P(Techniques, RendererDrawnStimuli, ::testing::Values("pcf-grid", "vsm", "rpcf"),
+                         [](const ::testing::TestParamInfo<std::string>& p) {
+                           std::string n = p.param;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
 
 std::string bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
