@@ -98,4 +98,6 @@ grep -q -- "--calibration TEXT=$prefix/share/penumbra/calibration/default.json$"
 help=$("$prefix/bin/penumbra-study" run --help)
 grep -q "shipped in $prefix/share/penumbra/studies: .*default" <<<"$help" ||
   fail "penumbra-study run --help does not list the installed study configs"
+# The prefix holds the tools with their debug information (~300 MB); kept only when a check failed.
+rm -rf "$prefix"
 step "done"

@@ -62,5 +62,8 @@ step "examples/engine_integration against the unpacked root"
 cmake -S "$source/examples/engine_integration" -B "$work/example" -DCMAKE_PREFIX_PATH="$usr" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF \
   >"$work/example-configure.log" || { cat "$work/example-configure.log"; fail "configure"; }
 cmake --build "$work/example" -j 1 >"$work/example-build.log" || { cat "$work/example-build.log"; fail "build"; }
-"$work/example/engine_integration" "$usr/share/penumbra/calibration/default.json" | head -2
+"$work/example/engine_integration" "$usr/share/penumbra/calibration/default.json" >"$work/example.txt"
+head -n 2 "$work/example.txt"
+# The package stays; the staging tree and the unpacked root are kept only when a check failed.
+rm -rf "$work/cpack/_CPack_Packages" "$work/root"
 step "done"
