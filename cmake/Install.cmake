@@ -179,8 +179,10 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
-# dpkg-shlibdeps names the shared libraries the tools link (dpkg-dev, scripts/setup.sh).
+# dpkg-shlibdeps names the shared libraries the tools link (dpkg-dev, scripts/setup.sh); libEGL is
+# not linked but opened by libepoxy at run time, and no GL context is made without it.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libegl1")
 # Loaded at run time, not linked: a GL driver for EGL (Mesa's, or a GPU vendor's) and Python for the plots.
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libegl-mesa0, libgl1-mesa-dri, python3-matplotlib")
 # What the installed CMake package's renderer component needs to build against (the GL-free

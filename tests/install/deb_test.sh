@@ -26,7 +26,7 @@ echo "$(basename "$deb"): $(du -k "$deb" | cut -f1) KiB"
 step "dpkg-deb -I, -c"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
-for lib in libc6 libstdc++6 libepoxy0 libassimp; do
+for lib in libc6 libstdc++6 libepoxy0 libegl1 libassimp; do
   [[ $depends == *"$lib"* ]] || fail "Depends does not name $lib"
 done
 dpkg-deb -c "$deb" | awk '{print $6}' >"$work/contents.txt"
