@@ -5,14 +5,21 @@
 // decisions carry independent N(0, weber) noise). The implied c is the r / a beyond which P stays
 // below p_threshold (interpolated in log r / a at the last crossing): the filter that hides the
 // artifact for every larger radius.
-//   penumbra-observer-curve --pattern step --artifact-px 5,10,20
+// With --technique the renderer's technique draws the stimuli (docs/study.md); --json writes the
+// implied c per condition as a calibration.json image-observer entry (data/calibration/predicted.json).
+//   penumbra-observer-curve --pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20
+//       --technique pcf --set pcf.kernel=grid --json pcf-grid.json
 #include <CLI/CLI.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 
+#include <nlohmann/json.hpp>
+
 #include "cli/main.h"
+#include "io/atomic_file.h"
+#include "json/json_input.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
 #include "quest/psychometric.h"
@@ -21,19 +28,34 @@
 
 using namespace penumbra;
 
+namespace {
+
+struct Curve {
+  double implied = NAN;   // c: r / a beyond which P stays below p_threshold
+  bool at_most = false;   // P was below p_threshold from the first ratio on: c <= implied
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"The image observer's 2afc psychometric curve and implied c (docs/study.md)"};
   cli::describe_tool(app, "penumbra-observer-curve", "study.md");
-  std::string pattern = "stair";
-  std::vector<double> artifacts{5, 10, 20};
-  double contrast = 1.0, ratio_min = 0.5, ratio_max = 8, step = 1.06, p_threshold = 0.82;
+  std::vector<std::string> patterns{"stair"};
+  std::vector<double> artifacts{5, 10, 20}, contrasts{1.0};
+  double ratio_min = 0.5, ratio_max = 8, step = 1.06, p_threshold = 0.82;
   int seeds = 3, size_px = 320;
+  std::string technique;
+  std::vector<std::string> settings;
+  std::string json_out;
   observers::ImageObserverParams params;
   params.blur_sigma_arcmin = 1.0;
   params.pixels_per_degree = 38.2;  // data/studies/default.json's display: 1.57 arcmin per pixel
-  app.add_option("--pattern", pattern, "stair or step")->capture_default_str();
+  app.add_option("--pattern", patterns, "stair and/or step")->delimiter(',')->capture_default_str();
   app.add_option("--artifact-px", artifacts, "artifact sizes")->delimiter(',')->capture_default_str();
-  app.add_option("--contrast", contrast, "lit level, linear light")->capture_default_str();
+  app.add_option("--contrast", contrasts, "lit levels, linear light")->delimiter(',')->capture_default_str();
+  app.add_option("--technique", technique, "draw with the renderer's technique (pcf, rpcf, vsm, ...) instead of the study's filter shader");
+  app.add_option("--set", settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
+  app.add_option("--json", json_out, "write the implied c per condition as a calibration.json (schema 2) image-observer entry");
   app.add_option("--ratio-min", ratio_min, "smallest r / a")->capture_default_str()->check(CLI::Range(0.05, 100.0));
   app.add_option("--ratio-max", ratio_max, "largest r / a (clamped radii are skipped)")->capture_default_str()->check(CLI::Range(0.05, 100.0));
   app.add_option("--ratio-step", step, "grid factor between radii")->capture_default_str()->check(CLI::Range(1.001, 4.0));
@@ -46,44 +68,124 @@ int main(int argc, char** argv) {
   app.add_option("--weber", params.weber, "decision noise sd (relative deviation)")->capture_default_str();
   if (const auto status = cli::parse(app, argc, argv, "penumbra-observer-curve")) return *status;
   try {
+    stimuli::StimulusSpec base;
+    base.size_px = size_px;
+    base.technique = technique;
+    for (const std::string& kv : settings) {
+      const std::size_t eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + kv + "': expected KEY=VALUE");
+      base.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+    }
+    if (!base.technique_settings.empty() && technique.empty()) throw std::invalid_argument("--set: needs --technique");
+    std::string kernel = "disk";  // the study's own filter shader's default
+    if (!technique.empty()) {
+      const auto s = stimuli::stimulus_settings(base, 15);  // the settings' errors before any rendering
+      if (const std::string why = stimuli::partner_unavailable(s); !why.empty()) throw std::invalid_argument(why);
+      kernel = shadows::variant_choice(s);
+    }
+    std::vector<stimuli::Pattern> parsed_patterns;
+    for (const std::string& p : patterns) parsed_patterns.push_back(stimuli::parse_pattern(p));
+
     gl::HeadlessContext context;
     stimuli::StimulusRenderer renderer;
     observers::ImageObserver eye(params, 1);
-    std::printf("pattern %s, contrast %g, window %g r, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
-                pattern.c_str(), contrast, params.window_r, params.weber, params.blur_sigma_arcmin,
-                params.pixels_per_degree, seeds);
-    for (double a : artifacts) {
-      double implied = NAN, last_ratio = NAN, last_p = NAN;
-      std::printf("a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", a);
-      for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
-        stimuli::StimulusSpec spec;
-        spec.pattern = stimuli::parse_pattern(pattern);
-        spec.artifact_px = a;
-        spec.lit_linear = contrast;
-        spec.size_px = size_px;
-        const auto shown = stimuli::clamp_filter_radius(ratio * a, size_px);
-        if (shown.clamped) break;
-        spec.filter_radius_px = shown.filter_radius_px;
-        double jagged = 0, straight = 0;
-        for (int s = 0; s < seeds; ++s) {
-          spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
-          const stimuli::StimulusPair pair = renderer.render(spec);
-          jagged += eye.local_deviation(pair.artifact, spec, pair.geometry, false) / seeds;
-          straight += eye.local_deviation(pair.line, spec, pair.geometry, false) / seeds;
+    std::printf("%s%s, window %g r, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
+                technique.empty() ? "study filter shader (disk)" : ("technique " + technique).c_str(),
+                kernel.empty() || technique.empty() ? "" : (" " + kernel).c_str(), params.window_r, params.weber,
+                params.blur_sigma_arcmin, params.pixels_per_degree, seeds);
+    nlohmann::json per_condition = nlohmann::json::array();
+    double largest = NAN;
+    std::string largest_condition;
+    for (const stimuli::Pattern pattern : parsed_patterns) {
+      for (const double contrast : contrasts) {
+        char contrast_text[32];
+        std::snprintf(contrast_text, sizeof contrast_text, "%g", contrast);  // "stair/1", "step/0.5": penumbra-fit's names
+        const std::string condition = stimuli::to_string(pattern) + "/" + contrast_text;
+        nlohmann::json per_artifact = nlohmann::json::array();
+        double log_sum = 0;
+        int count = 0;
+        for (const double a : artifacts) {
+          Curve curve;
+          double last_ratio = NAN, last_p = NAN;
+          std::printf("%s, a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", condition.c_str(), a);
+          for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
+            stimuli::StimulusSpec spec = base;
+            spec.pattern = pattern;
+            spec.artifact_px = a;
+            spec.lit_linear = contrast;
+            const auto shown = stimuli::clamp_filter_radius(ratio * a, size_px);
+            if (shown.clamped) break;
+            spec.filter_radius_px = shown.filter_radius_px;
+            double jagged = 0, straight = 0;
+            for (int s = 0; s < seeds; ++s) {
+              spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
+              const stimuli::StimulusPair pair = renderer.render(spec);
+              jagged += eye.local_deviation(pair.artifact, spec, pair.geometry, false) / seeds;
+              straight += eye.local_deviation(pair.line, spec, pair.geometry, false) / seeds;
+            }
+            const double p = 0.5 * std::erfc(-(jagged - straight) / (2 * params.weber));  // Phi(d / (sqrt2 w))
+            if (p >= p_threshold) {
+              curve.implied = NAN;
+              curve.at_most = false;
+            } else if (std::isnan(curve.implied)) {  // crossed down: interpolate in log r/a
+              curve.at_most = std::isnan(last_p);
+              curve.implied = curve.at_most ? ratio
+                                            : last_ratio * std::pow(ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
+            }
+            last_ratio = ratio;
+            last_p = p;
+            std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p);
+          }
+          std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %s%.2f\n", curve.at_most ? "at most " : "",
+                      curve.implied);
+          std::fflush(stdout);
+          nlohmann::json per = {{"artifact_px", a}, {"c", std::isnan(curve.implied) ? nlohmann::json(nullptr) : nlohmann::json(curve.implied)}};
+          if (curve.at_most) per["at_most"] = true;  // hidden at the smallest ratio tried already
+          per_artifact.push_back(per);
+          if (!std::isnan(curve.implied)) {
+            log_sum += std::log(curve.implied);
+            ++count;
+          }
         }
-        const double p = 0.5 * std::erfc(-(jagged - straight) / (2 * params.weber));  // Phi(d / (sqrt2 w))
-        if (p >= p_threshold) {
-          implied = NAN;
-        } else if (std::isnan(implied)) {  // crossed down: interpolate in log r/a
-          implied = std::isnan(last_p) ? ratio
-                                       : last_ratio * std::pow(ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
+        // The condition's c as penumbra-fit's one c per condition would see it: the geometric mean
+        // over artifact sizes; their range beside it.
+        const double c = count ? std::exp(log_sum / count) : NAN;
+        nlohmann::json entry = {{"condition", condition}, {"c", std::isnan(c) ? nlohmann::json(nullptr) : nlohmann::json(c)},
+                                {"per_artifact", per_artifact}};
+        per_condition.push_back(entry);
+        if (!std::isnan(c) && !(c <= largest)) {
+          largest = c;
+          largest_condition = condition;
         }
-        last_ratio = ratio;
-        last_p = p;
-        std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p);
       }
-      std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %.2f\n", implied);
-      std::fflush(stdout);
+    }
+    if (!json_out.empty()) {
+      if (std::isnan(largest)) throw std::runtime_error("--json: no condition crossed p_threshold within the ratio range; nothing to write");
+      std::string command = "penumbra-observer-curve";
+      for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
+      const nlohmann::json entry = {{"technique", technique.empty() ? "pcf" : technique},
+                                    {"kernel", kernel},
+                                    {"c", largest},
+                                    {"ci95", {largest, largest}},
+                                    {"condition", largest_condition},
+                                    {"obtained_by", "image-observer"},
+                                    {"participants", nullptr},
+                                    {"trials", nullptr},
+                                    {"per_condition", per_condition},
+                                    {"observer", {{"window_r", params.window_r}, {"weber", params.weber},
+                                                  {"blur_sigma_arcmin", params.blur_sigma_arcmin},
+                                                  {"pixels_per_degree", params.pixels_per_degree},
+                                                  {"p_threshold", p_threshold}, {"seeds", seeds}, {"size_px", size_px}}},
+                                    {"command", command}};
+      const nlohmann::json file = {
+          {"schema_version", 2},
+          {"source", "image-observer prediction (a model of the observer, not human data): the largest condition's c; "
+                     "a condition's c is the geometric mean over artifact sizes of the r / a beyond which the model's "
+                     "2afc P(correct) stays below p_threshold; ci95 is [c, c]: a deterministic model has no sampling interval"},
+          {"entries", {entry}}};
+      io::write_file_atomic(json_out, json_input::dump(file, 2) + "\n");
+      std::printf("wrote %s: %s%s c = %.3f (%s), image-observer prediction\n", json_out.c_str(), entry["technique"].get<std::string>().c_str(),
+                  kernel.empty() ? "" : (" " + kernel).c_str(), largest, largest_condition.c_str());
     }
   } catch (const std::exception& e) {
     return cli::fail("penumbra-observer-curve", e.what());
