@@ -42,12 +42,12 @@ std::string slurp(const fs::path& p) {
 }
 
 // A short session: 1 practice trial, two staircases of 2..3 trials, a break after 4 trials.
-fs::path tiny_config(const std::string& task) {
-  const fs::path p = fresh("config-" + task + ".json");
+fs::path tiny_config(const std::string& task, const std::string& stimulus = R"({"size_px": 160})") {
+  const fs::path p = fresh("config-" + task + std::to_string(stimulus.size()) + ".json");
   std::ofstream(p) << R"({"name": "gui-test", "task": ")" << task << R"(", "artifact_px": [10, 20],
     "rounds": [{"pattern": "stair", "contrast": 1.0}],
     "stopping": {"min_trials": 2, "max_trials": 3, "sd_below": 0.01},
-    "practice_trials": 1, "break_every_trials": 4, "seed": 5, "stimulus": {"size_px": 160}})";
+    "practice_trials": 1, "break_every_trials": 4, "seed": 5, "stimulus": )" << stimulus << "}";
   return p;
 }
 
@@ -277,13 +277,18 @@ TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
 
 // The participant screenshot at the first trial: the stimuli copied 1:1 (every pixel equal to the
 // rendered image), the jagged one on the target side (2afc) or shown when the target is jagged
-// (yesno), the neutral background around them; and an admin window was drawn.
+// (yesno), the neutral background around them; and an admin window was drawn. "2afc-pcf": the
+// renderer's PCF grid draws the stimuli in the participant window's context.
 TEST_F(StudyGui, StimuliAreShownPixelForPixelWhereTheLogSays) {
   gl::HeadlessContext context;
   stimuli::StimulusRenderer renderer;
-  for (const std::string task : {"2afc", "yesno"}) {
-    SCOPED_TRACE(task);
-    const fs::path config = tiny_config(task), dir = fresh("shot-" + task), shots = fresh("shots-" + task);
+  for (const std::string variant : {"2afc", "yesno", "2afc-pcf"}) {
+    SCOPED_TRACE(variant);
+    const std::string task = variant == "yesno" ? "yesno" : "2afc";
+    const fs::path config = variant == "2afc-pcf"
+                                ? tiny_config(task, R"({"size_px": 160, "technique": "pcf", "settings": {"pcf.kernel": "grid"}})")
+                                : tiny_config(task);
+    const fs::path dir = fresh("shot-" + variant), shots = fresh("shots-" + variant);
     {
       App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "shot",
                         "--screenshot", shots.string()}));
