@@ -154,8 +154,8 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   c.practice_intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
   c.break_every_trials = static_cast<int>(r.integer(j, "", "break_every_trials", 40, 0, 100000));
   c.round_order = r.text(j, "", "round_order", "shuffled");
-  if (c.round_order != "shuffled" && c.round_order != "fixed")
-    r.fail("round_order", "expected shuffled or fixed, got '" + json_input::printable(c.round_order) + "'");
+  if (c.round_order != "shuffled" && c.round_order != "fixed" && c.round_order != "latin-square")
+    r.fail("round_order", "expected shuffled, fixed or latin-square, got '" + json_input::printable(c.round_order) + "'");
   if (const auto* s = r.find(j, "seed")) {
     if (!s->is_number_unsigned()) r.fail("seed", "expected a non-negative integer");
     c.seed = s->get<std::uint64_t>();

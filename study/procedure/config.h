@@ -49,7 +49,8 @@ struct StudyConfig {
   int break_every_trials = 40;               // 0: no breaks
   std::uint64_t seed = 1;                    // with the participant id, each session's seed (randomization.h)
   // The order of the rounds per session: "shuffled" (per participant, from the session seed: order
-  // effects average out over participants) or "fixed" (the config's order for everyone).
+  // effects average out over participants), "fixed" (the config's order for everyone) or
+  // "latin-square" (counterbalanced: participant k runs row k of a balanced Latin square).
   std::string round_order = "shuffled";
   stimuli::Kernel kernel = stimuli::Kernel::disk;
   int poisson_taps = 32;

@@ -1,11 +1,13 @@
 #include "procedure/procedure.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 #include "sampling/random.h"
+#include "text/printable.h"
 
 namespace penumbra::procedure {
 
@@ -48,7 +50,31 @@ Randomization randomize(const StudyConfig& config, const std::string& participan
     sampling::Random random(sampling::derive_seed(r.seed, kRoundOrderStream));
     for (std::size_t i = r.round_order.size(); i > 1; --i) std::swap(r.round_order[i - 1], r.round_order[random.bits() % i]);
   }
+  if (config.round_order == "latin-square") r.round_order = latin_square_row(static_cast<int>(config.rounds.size()), participant_number(participant));
   return r;
+}
+
+int participant_number(const std::string& participant) {
+  std::size_t digits = 0;
+  while (digits < participant.size() && digits < 9 && std::isdigit(static_cast<unsigned char>(participant[participant.size() - 1 - digits])))
+    ++digits;
+  if (digits == 0)
+    throw std::invalid_argument("round_order latin-square: participant '" + text::printable(participant) +
+                                "' ends in no number to choose its row of the square (use ids like p1, p2, ...)");
+  return std::stoi(participant.substr(participant.size() - digits));
+}
+
+std::vector<int> latin_square_row(int n, int participant) {
+  // Williams: the first row 0, 1, n-1, 2, n-2, ...; row k adds k (mod n). For even n every round
+  // follows every other exactly once across the n rows; odd n needs the n rows reversed as well.
+  std::vector<int> first;
+  for (int j = 0, lo = 1, hi = n - 1; j < n; ++j) first.push_back(j == 0 ? 0 : (j % 2 == 1 ? lo++ : hi--));
+  const int rows = n % 2 == 0 ? n : 2 * n;
+  const int k = ((participant - 1) % rows + rows) % rows;
+  std::vector<int> row;
+  for (int j = 0; j < n; ++j) row.push_back((first[static_cast<std::size_t>(j)] + k) % n);
+  if (k >= n) std::reverse(row.begin(), row.end());
+  return row;
 }
 
 void check_round_order(const StudyConfig& config, const std::vector<int>& order) {

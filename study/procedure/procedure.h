@@ -48,10 +48,17 @@ struct Randomization {
 };
 // The randomization of a new session: the seed from `explicit_seed` (--seed), else derived from the
 // config's seed and the participant id; the rounds shuffled with that seed (config.round_order
-// "shuffled") or in the config's order ("fixed").
+// "shuffled"), in the config's order ("fixed") or the participant's Latin-square row ("latin-square").
 Randomization randomize(const StudyConfig& config, const std::string& participant, std::optional<std::uint64_t> explicit_seed);
 // The config's own seed and round order (sessions recorded before randomization existed).
 Randomization config_randomization(const StudyConfig& config);
+// round_order "latin-square": the participant's row of a Williams balanced Latin square over the
+// config's n rounds, participant k (the number the id ends in: p1, p2, ...) taking row (k - 1) mod
+// n (mod 2n for odd n, whose second n rows are the first reversed), so across n (2n) participants
+// every round runs in every position equally often and follows every other equally often.
+// Throws std::invalid_argument naming the participant when the id ends in no number.
+int participant_number(const std::string& participant);
+std::vector<int> latin_square_row(int rounds, int participant_number);
 // Throws std::invalid_argument unless `order` is a permutation of the config's rounds.
 void check_round_order(const StudyConfig& config, const std::vector<int>& order);
 

@@ -342,6 +342,12 @@ TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   EXPECT_EQ(run({"run", "--config", bad.string(), "--headless", "-o", fresh("never").string()}, &out), 1);
   EXPECT_EQ(out, "penumbra-study: " + bad.string() + ": stopping.sd_below: expected a number\n");
   EXPECT_FALSE(fs::exists(fresh("never")));
+  // round_order latin-square takes the row from the number the participant id ends in.
+  std::ofstream(bad) << R"({"rounds": [{"pattern": "stair"}, {"pattern": "step"}], "round_order": "latin-square"})";
+  EXPECT_EQ(run({"run", "--config", bad.string(), "--headless", "--participant", "alice", "-o", fresh("never").string()}, &out), 1);
+  EXPECT_EQ(out, "penumbra-study: round_order latin-square: participant 'alice' ends in no number to choose its row of the "
+                 "square (use ids like p1, p2, ...)\n");
+  EXPECT_FALSE(fs::exists(fresh("never")));
   // The stimulus technique is checked against the renderer's tables before the directory exists.
   for (const auto& [stimulus, says] : std::vector<std::pair<std::string, std::string>>{
            {R"({"technique": "pcss"})", "stimulus.technique: 'pcss' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)"},

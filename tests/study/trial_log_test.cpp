@@ -2,11 +2,15 @@
 // file and the field).
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
 #include <filesystem>
 #include <fstream>
 
 #include "log/trial_log.h"
 #include "procedure/config.h"
+#include "procedure/procedure.h"
 
 namespace {
 
@@ -189,6 +193,41 @@ TEST(StudyConfig, StimulusTechniqueAndItsSettings) {
             "study.json: stimulus.settings.pcf.kernel: expected a string, a number or true/false");
   EXPECT_EQ(with({{"technique", ""}}), "study.json: stimulus.technique: expected a technique name (penumbra-render --technique)");
   EXPECT_EQ(with({{"technique", "pcf"}, {"settings", "grid"}}), "study.json: stimulus.settings: expected an object of \"section.key\": value");
+}
+
+// round_order "latin-square" (issue 16): balanced counterbalancing. Over a full set of rows every
+// round runs once in every position, and every ordered pair of rounds is adjacent equally often
+// (even n: once; odd n over 2n rows: twice); the row comes from the number the id ends in.
+TEST(StudyConfig, LatinSquareRoundOrderIsBalanced) {
+  for (int n : {1, 2, 3, 4, 5, 6}) {
+    SCOPED_TRACE(n);
+    const int rows = n % 2 == 0 ? n : 2 * n;
+    std::map<std::pair<int, int>, int> position, follows;
+    for (int p = 1; p <= rows; ++p) {
+      const std::vector<int> row = procedure::latin_square_row(n, p);
+      ASSERT_EQ(std::set<int>(row.begin(), row.end()).size(), static_cast<std::size_t>(n)) << p;
+      for (int j = 0; j < n; ++j) ++position[{row[static_cast<std::size_t>(j)], j}];
+      for (int j = 0; j + 1 < n; ++j) ++follows[{row[static_cast<std::size_t>(j)], row[static_cast<std::size_t>(j) + 1]}];
+      EXPECT_EQ(procedure::latin_square_row(n, p + rows), row) << "rows repeat after " << rows;
+    }
+    for (const auto& [key, count] : position) EXPECT_EQ(count, rows / n) << key.first << " at " << key.second;
+    if (n > 1) {
+      EXPECT_EQ(follows.size(), static_cast<std::size_t>(n * (n - 1)));
+      for (const auto& [key, count] : follows) EXPECT_EQ(count, rows / n) << key.first << " then " << key.second;
+    }
+  }
+  EXPECT_EQ(procedure::participant_number("p07"), 7);
+  EXPECT_EQ(procedure::participant_number("12"), 12);
+  try {
+    procedure::participant_number("alice");
+    ADD_FAILURE() << "an id without a number got a row";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("round_order latin-square: participant 'alice' ends in no number", 0), 0u) << e.what();
+  }
+  procedure::StudyConfig c = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default.json");
+  c.round_order = "latin-square";
+  EXPECT_EQ(procedure::randomize(c, "p2", std::nullopt).round_order, procedure::latin_square_row(4, 2));
+  EXPECT_EQ(procedure::randomize(c, "p2", std::nullopt).round_order, (std::vector<int>{1, 2, 0, 3}));
 }
 
 }  // namespace
