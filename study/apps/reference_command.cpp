@@ -21,7 +21,7 @@ ReferenceCommand::ReferenceCommand(CLI::App& app) {
   command_->add_option("--contrast", contrasts_, "lit levels in linear light")->delimiter(',')->capture_default_str();
   command_->add_option("--artifact-px", artifact_px_, "artifact sizes (px)")->delimiter(',')->capture_default_str();
   command_->add_option("--partner", partner_,
-                       "straight partner: original (the study's) or mean-line (through the staircase's mean; stair only)")
+                       "straight partner: original (the study's), mean-line (through the staircase's mean; stair only) or bresenham (the edge drawn at 1 px and filtered the same way: sec. 4.4)")
       ->capture_default_str();
   command_->add_option("--kernel", kernel_, "disk, grid or poisson")->capture_default_str();
   command_->add_option("--taps", poisson_taps_, "Poisson taps")->capture_default_str();

@@ -26,10 +26,13 @@ ImageDifference compare(const io::Image8& a, const io::Image8& b) {
 Partner parse_partner(const std::string& name) {
   if (name == "original") return Partner::original;
   if (name == "mean-line" || name == "mean_line") return Partner::mean_line;
-  throw std::invalid_argument("partner '" + json_input::printable(name) + "': expected original or mean-line");
+  if (name == "bresenham") return Partner::bresenham;
+  throw std::invalid_argument("partner '" + json_input::printable(name) + "': expected original, mean-line or bresenham");
 }
 
-std::string to_string(Partner partner) { return partner == Partner::original ? "original" : "mean-line"; }
+std::string to_string(Partner partner) {
+  return partner == Partner::original ? "original" : partner == Partner::mean_line ? "mean-line" : "bresenham";
+}
 
 double stair_mean_line_b(const Geometry& g, double a) {
   // Texel (i, j) is occluded when its centre is below y = x + b, i.e. j - i < t with
@@ -51,6 +54,23 @@ SeedReference search_seed(StimulusRenderer& renderer, StimulusSpec spec, const R
     if (search.partner == Partner::mean_line) g.line_b = stair_mean_line_b(g, spec.artifact_px);
     const StimulusPair pair = renderer.render(spec, g);
     ++out.renders;
+    if (search.partner == Partner::bresenham) {
+      // The same edge rasterized at the display's resolution (texel centres on pixel centres: the
+      // midpoint rule Bresenham's algorithm implements) and filtered the same way.
+      StimulusSpec fine = spec;
+      fine.artifact_px = 1;
+      Geometry line = make_geometry(fine);
+      line.map_origin_px = glm::floor(line.map_origin_px);
+      line.orientation = g.orientation;
+      line.to_canonical = g.to_canonical;
+      line.line_m = g.line_m;
+      // Through the staircase's mean for the stair (texel-centre rasterization displaces a 45-degree
+      // edge by up to half a texel, which no blur hides), the original edge for the step.
+      line.line_b = spec.pattern == Pattern::stair ? stair_mean_line_b(g, spec.artifact_px) : g.line_b;
+      const StimulusPair straight = renderer.render(fine, line);
+      ++out.renders;
+      return compare(pair.artifact, straight.artifact);
+    }
     return compare(pair.artifact, pair.line);
   };
   std::vector<double> scan;

@@ -20,7 +20,11 @@
 // y = x + b_mean, not the original y = x + b), and a blur never hides a displaced edge, so for most
 // phases no showable radius makes these pairs identical. `mean_line` (stair only) compares with the
 // straight edge through the staircase's mean, which isolates the staircase itself: the bound the
-// thesis meant by drawing the artifact-free line through the same staircase.
+// thesis meant by drawing the artifact-free line through the same staircase. `bresenham` is the
+// thesis's own definition (sec. 4.4): the straight edge drawn at high resolution (here the display's:
+// a map of 1 px texels whose centres sit on the pixel centres, the midpoint rule of Bresenham's
+// algorithm) and filtered by the same path; any pattern. Run with `transfer` linear for the linear
+// 8-bit intensities and with the display's transfer for what is shown.
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -33,8 +37,9 @@
 
 namespace penumbra::stimuli {
 
-enum class Partner { original, mean_line };
-Partner parse_partner(const std::string& name);  // "original" | "mean-line"; throws std::invalid_argument
+enum class Partner { original, mean_line, bresenham };
+// "original" | "mean-line" | "bresenham"; throws std::invalid_argument
+Partner parse_partner(const std::string& name);
 std::string to_string(Partner partner);
 
 struct ReferenceSearch {

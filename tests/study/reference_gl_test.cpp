@@ -85,6 +85,40 @@ TEST(Reference, ResultIsIdenticalThereAndDiffersJustBelow) {
   EXPECT_LE(r - ref.seeds[0].bracket_below_px, 0.25 + 1e-12);
 }
 
+// The thesis's partner (sec. 4.4): the edge drawn at 1 px (through the stair's mean) and filtered
+// the same way, on linear 8-bit intensities and after the sRGB transfer. By the definition
+// (identical images) no showable radius hides a 2 px stair at half contrast: the published "far
+// above the perceptual threshold" holds in the extreme. Forgiving single-level flips (the 1 px
+// line is a staircase too) it is hidden at r = 7.26 px linear and 11.20 px sRGB: above the
+// perceptual 3.47 a = 6.94 px, but not far above.
+TEST(Reference, BresenhamPartnerIsAboveThePerceptualRadius) {
+  stimuli::StimulusRenderer renderer;
+  stimuli::StimulusSpec spec;
+  spec.pattern = stimuli::Pattern::stair;
+  spec.artifact_px = 2;
+  spec.lit_linear = 0.5;
+  spec.size_px = 64;
+  stimuli::ReferenceSearch search;
+  search.partner = stimuli::Partner::bresenham;
+  search.resolution_px = 0.25;
+  search.seeds = {3};
+  for (const stimuli::Transfer transfer : {stimuli::Transfer::linear, stimuli::Transfer::srgb}) {
+    SCOPED_TRACE(stimuli::to_string(transfer));
+    spec.transfer = transfer;
+    search.tolerance_levels = 0;
+    const stimuli::Reference exact = stimuli::find_reference(renderer, spec, search);
+    EXPECT_FALSE(exact.reference_px.has_value());
+    EXPECT_GT(exact.seeds.at(0).at_r_max.max_abs_levels, 0);
+    search.tolerance_levels = 1;
+    const stimuli::Reference forgiving = stimuli::find_reference(renderer, spec, search);
+    ASSERT_TRUE(forgiving.reference_px.has_value());
+    EXPECT_GT(*forgiving.reference_px, 3.47 * spec.artifact_px);
+    EXPECT_EQ(stimuli::to_json(forgiving)["partner"], "bresenham");
+    std::printf("bresenham reference, a = 2 px stair, half contrast, %s, 1 level forgiven: r = %.2f px\n",
+                stimuli::to_string(transfer).c_str(), *forgiving.reference_px);
+  }
+}
+
 TEST(Reference, RejectsBadSearches) {
   stimuli::StimulusRenderer renderer;
   stimuli::StimulusSpec spec;
