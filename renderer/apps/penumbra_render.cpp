@@ -143,7 +143,8 @@ int main(int argc, char** argv) {
     summary["scene"] = scene.name;
     summary["image_px"] = {width, height};
     summary["frames"] = frames;
-    summary["calibration"] = apps::calibration_json(calibration, base);
+    // The c of the technique rendered (with several, each render's report holds its own).
+    summary["calibration"] = apps::calibration_json(calibration, variants.size() == 1 ? variants.front().settings : base);
     summary["renders"] = nlohmann::json::array();
     std::vector<io::Image8> montage_images;
     std::vector<std::string> labels;

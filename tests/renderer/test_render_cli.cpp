@@ -356,7 +356,8 @@ TEST_F(RenderCli, CalibrationFileSetsCAndExplicitAdaptiveCWins) {
 }
 
 // Issue 15: c per technique. Each render uses its technique's entry (pcf grid and pcf poisson
-// apart), a technique without one the PCF entry, said to be a fallback, in its report.
+// apart), a technique without one the PCF entry, said to be a fallback, in its report; the
+// summary report.json of a one-technique run says the same (it described the default technique).
 TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
   const fs::path cal_file = scratch_ / "per-technique.json";
   std::ofstream(cal_file) << R"({"schema_version": 2, "entries": [
@@ -388,6 +389,7 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
     EXPECT_EQ(cal.at("fallback").get<bool>(), c.fallback);
     EXPECT_EQ(cal.at("from"), c.from);
     EXPECT_EQ(cal.at("schema_version"), 2);
+    EXPECT_EQ(read_json(out / "report.json").at("calibration"), cal) << "the summary names the rendered technique's c";
   }
 }
 
