@@ -71,12 +71,7 @@ int main(int argc, char** argv) {
     stimuli::StimulusSpec base;
     base.size_px = size_px;
     base.technique = technique;
-    for (const std::string& kv : settings) {
-      const std::size_t eq = kv.find('=');
-      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + kv + "': expected KEY=VALUE");
-      base.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
-    }
-    if (!base.technique_settings.empty() && technique.empty()) throw std::invalid_argument("--set: needs --technique");
+    stimuli::set_technique_settings(base, settings);
     std::string kernel = "disk";  // the study's own filter shader's default
     if (!technique.empty()) {
       const auto s = stimuli::stimulus_settings(base, 15);  // the settings' errors before any rendering

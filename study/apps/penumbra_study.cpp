@@ -482,12 +482,7 @@ int main(int argc, char** argv) {
     if (reference.parsed()) return reference.run();
     if (display_check->parsed()) return run_display_check(display_config);
     if (stim->parsed()) {
-      for (const std::string& kv : stim_settings) {
-        const std::size_t eq = kv.find('=');
-        if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + json_input::printable(kv) + "': expected KEY=VALUE");
-        spec.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
-      }
-      if (!spec.technique_settings.empty() && spec.technique.empty()) throw std::invalid_argument("--set: needs --technique");
+      stimuli::set_technique_settings(spec, stim_settings);
       return run_stimulus(pattern, kernel, transfer, spec, stim_out);
     }
     ro.participant_given = run->count("--participant") > 0;

@@ -41,6 +41,15 @@ void validate(const StimulusSpec& s) {
   if (s.poisson_taps < 1 || s.poisson_taps > 64) fail("poisson_taps", "expected 1..64");
 }
 
+void set_technique_settings(StimulusSpec& spec, const std::vector<std::string>& key_values) {
+  for (const std::string& kv : key_values) {
+    const std::size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + text::printable(kv) + "': expected KEY=VALUE");
+    spec.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  if (!spec.technique_settings.empty() && spec.technique.empty()) throw std::invalid_argument("--set: needs --technique");
+}
+
 ShownRadius clamp_filter_radius(double requested_px, int size_px) {
   const double lo = 1.0, hi = 0.5 * size_px;
   if (!(requested_px >= lo)) return {lo, true};  // also catches NaN

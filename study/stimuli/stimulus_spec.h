@@ -38,6 +38,9 @@ struct StimulusSpec {
   std::string technique;
   std::vector<std::pair<std::string, std::string>> technique_settings;
 };
+// The command line's technique settings (--set KEY=VALUE, repeatable) into spec.technique_settings;
+// throws std::invalid_argument naming the bad one, or when settings come without spec.technique.
+void set_technique_settings(StimulusSpec& spec, const std::vector<std::string>& key_values);
 // Throws std::invalid_argument naming the field for a spec that cannot be drawn.
 void validate(const StimulusSpec& spec);
 
