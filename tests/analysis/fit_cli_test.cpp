@@ -497,6 +497,25 @@ TEST(FitCli, PsychometricLevelsSpanningMoreThanADoubleGiveOneErrorLine) {
 }
 
 #ifdef PENUMBRA_STUDY_EXE
+// `participants` headless sessions p1..pN of `config` (written to dir/study.json) answered by
+// `observer`, participant N with observer seed N; their directories, space-separated, for penumbra-fit.
+std::string run_sessions(const fs::path& dir, const nlohmann::json& config, const std::string& observer, int participants) {
+  std::ofstream(dir / "study.json") << config.dump();
+  std::string sessions;
+  for (int p = 1; p <= participants; ++p) {
+    const fs::path session = dir / ("p" + std::to_string(p));
+    const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
+                                " --observer " + observer + " --headless --participant p" + std::to_string(p) +
+                                " --observer-seed " + std::to_string(p) + " -o " + session.string() + " > /dev/null";
+    if (std::system(command.c_str()) != 0) {
+      ADD_FAILURE() << "failed: " << command;
+      return "";
+    }
+    sessions += session.string() + " ";
+  }
+  return sessions;
+}
+
 // The real pipeline: penumbra-study run --headless writes sessions, penumbra-fit reads them. yes/no:
 // the straight (catch) trials are left out as QUEST leaves them out, and QUEST's gamma and
 // pThreshold come from session.json, so every recomputed posterior equals the logged one.
@@ -511,17 +530,8 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
     config["artifact_px"] = {5, 20};
     config["stopping"] = {{"min_trials", 30}, {"max_trials", 30}, {"sd_below", 0.1}};
-    std::ofstream(dir / "study.json") << config.dump();
-    std::string sessions;
-    for (int p = 1; p <= 3; ++p) {
-      const fs::path session = dir / ("p" + std::to_string(p));
-      const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
-                                  " --observer psychometric:c=4.0,beta=3.5,lapse=0.01 --headless --participant p" +
-                                  std::to_string(p) + " --observer-seed " + std::to_string(p) + " -o " +
-                                  session.string() + " > /dev/null";
-      ASSERT_EQ(std::system(command.c_str()), 0) << task;
-      sessions += session.string() + " ";
-    }
+    const std::string sessions = run_sessions(dir, config, "psychometric:c=4.0,beta=3.5,lapse=0.01", 3);
+    ASSERT_FALSE(sessions.empty()) << name;
     std::string out;
     ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 20", &out), 0) << out;
     const nlohmann::json report = nlohmann::json::parse(read(dir / "fit" / "report.json"));
@@ -559,16 +569,8 @@ TEST(FitCli, SimulatedStudyPerTechniqueRecoversCAndTheRendererUsesIt) {
     nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/" + k.config + ".json"));
     config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
     config["stopping"] = {{"min_trials", 60}, {"max_trials", 60}, {"sd_below", 0.1}};
-    std::ofstream(dir / "study.json") << config.dump();
-    std::string sessions;
-    for (int p = 1; p <= 6; ++p) {
-      const fs::path session = dir / ("p" + std::to_string(p));
-      const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
-                                  " --observer psychometric:c=" + std::to_string(k.c) + ",beta=3.5,lapse=0.01 --headless --participant p" +
-                                  std::to_string(p) + " --observer-seed " + std::to_string(p) + " -o " + session.string() + " > /dev/null";
-      ASSERT_EQ(std::system(command.c_str()), 0);
-      sessions += session.string() + " ";
-    }
+    const std::string sessions = run_sessions(dir, config, "psychometric:c=" + std::to_string(k.c) + ",beta=3.5,lapse=0.01", 6);
+    ASSERT_FALSE(sessions.empty());
     std::string out;
     ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 10", &out), 0) << out;
     const adaptive::Calibration calibration = adaptive::load_calibration(dir / "fit" / "calibration.json");
@@ -609,16 +611,8 @@ TEST(FitCli, ImageObserverSessionsAgreeWithThePrediction) {
   const fs::path dir = fresh("image-observer");
   nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/pcf-grid.json"));
   config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}, {{"pattern", "step"}, {"contrast", 1.0}}};
-  std::ofstream(dir / "study.json") << config.dump();
-  std::string sessions;
-  for (int p = 1; p <= 3; ++p) {
-    const fs::path session = dir / ("p" + std::to_string(p));
-    const std::string command = std::string(PENUMBRA_STUDY_EXE) + " run --config " + (dir / "study.json").string() +
-                                " --observer image --headless --participant p" + std::to_string(p) + " --observer-seed " +
-                                std::to_string(p) + " -o " + session.string() + " > /dev/null";
-    ASSERT_EQ(std::system(command.c_str()), 0);
-    sessions += session.string() + " ";
-  }
+  const std::string sessions = run_sessions(dir, config, "image", 3);
+  ASSERT_FALSE(sessions.empty());
   std::string out;
   ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 10", &out), 0) << out;
   const adaptive::CalibrationEntry entry = adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0);
