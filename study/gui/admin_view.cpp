@@ -106,6 +106,14 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
     ImGui::Text("All %d rounds finished    trials answered %d", n_rounds, session.trials_done());
   ImGui::Text("Participant sees: %s", status.screen.c_str());
   if (!status.last_answer.empty()) ImGui::TextDisabled("Last: %s", status.last_answer.c_str());
+  if (status.trials_with_drops > 0)
+    ImGui::TextColored({1.0f, 0.62f, 0.25f, 1.0f}, "Dropped frames: %d in %d of %d trials (intervals over %.1f ms)",
+                       status.dropped_frames, status.trials_with_drops, status.timed_trials, status.dropped_frame_ms);
+  else if (status.dropped_frame_ms <= 0)
+    ImGui::TextColored({1.0f, 0.62f, 0.25f, 1.0f}, "Frame timing: refresh rate unknown, dropped frames not judged (--refresh-hz)");
+  else if (status.timed_trials > 0)
+    ImGui::TextDisabled("Frame timing: no dropped frames in %d trials", status.timed_trials);
+  if (!status.last_timing.empty()) ImGui::TextDisabled("Last stimulus: %s", status.last_timing.c_str());
 
   if (ImGui::Button(status.paused ? "Resume" : "Pause")) actions.toggle_pause = true;
   ImGui::SameLine();

@@ -34,6 +34,10 @@ void add_options(CLI::App& run, GuiOptions& o) {
   run.add_flag("--admin-panel", o.admin_panel, "single monitor: the admin view is a panel in the participant window, F12 shows/hides it");
   run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(cli::finite_range(0.0, 10000.0));
   run.add_option("--screenshot", o.screenshot_dir, "write participant.png and admin.png into DIR at the first stimulus, then stop");
+  run.add_option("--refresh-hz", o.refresh_hz,
+                 "refresh rate of a participant display whose video mode reports none (Xvfb, some virtual displays): "
+                 "dropped frames are judged against it")
+      ->check(cli::finite_range(1.0, 1000.0));
 }
 
 namespace {
@@ -142,6 +146,10 @@ int run_session(const std::function<procedure::Session(const std::function<void(
   std::unique_ptr<GuiWindow> admin;  // destroyed last: the objects below need the participant's context
   GuiWindow participant(ps);
   participant.make_current();
+  // Stimulus onsets count from here on the steady clock: this run of the session (a resumed one
+  // starts again at 0).
+  const double clock_start_s = glfw.now_s();
+  double refresh_hz = 0;
   {
     // What the participant really sees, beside the config's assumptions (display-check).
     GLFWmonitor* shown_on = fullscreen ? monitors[static_cast<std::size_t>(monitor)] : glfwGetPrimaryMonitor();
@@ -150,6 +158,13 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     participant.framebuffer_size(fb_w, fb_h);
     glfwGetMonitorPhysicalSize(shown_on, &mm_w, &mm_h);
     const char* renderer_name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    // Dropped frames are judged against the video mode's refresh rate, or --refresh-hz where the
+    // mode reports none (GLFW gives 0).
+    refresh_hz = mode->refreshRate > 0 ? mode->refreshRate : o.refresh_hz;
+    const char* refresh_from = mode->refreshRate > 0 ? "video mode" : o.refresh_hz > 0 ? "--refresh-hz" : "unknown";
+    if (mode->refreshRate > 0 && o.refresh_hz > 0 && o.refresh_hz != mode->refreshRate)
+      std::cerr << "penumbra-study: warning: --refresh-hz " << o.refresh_hz << " ignored: the video mode reports "
+                << mode->refreshRate << " Hz\n";
     const nlohmann::json presentation = {
         {"fullscreen", fullscreen},
         {"monitor", fullscreen ? monitor : -1},
@@ -159,7 +174,11 @@ int run_session(const std::function<procedure::Session(const std::function<void(
         {"framebuffer_px", {fb_w, fb_h}},
         {"matches_config", mode->width == config.display.width_px && mode->height == config.display.height_px},
         {"gl_renderer", renderer_name ? renderer_name : ""},
-        {"admin", o.admin_panel ? "panel (F12)" : "window"}};
+        {"admin", o.admin_panel ? "panel (F12)" : "window"},
+        {"frame_timing",
+         {{"refresh_hz", refresh_hz > 0 ? nlohmann::json(refresh_hz) : nlohmann::json()},
+          {"from", refresh_from},
+          {"dropped_over_ms", refresh_hz > 0 ? nlohmann::json(trial_log::kDroppedFramePeriods * 1000.0 / refresh_hz) : nlohmann::json()}}}};
     session.record_presentation(presentation);
     say("presentation: " + presentation.dump());
   }
@@ -208,6 +227,9 @@ int run_session(const std::function<procedure::Session(const std::function<void(
   int break_done_at = session.trials_done();  // a resumed session starts with the welcome screen instead
   bool paused = false, stop = false, screenshot_due = false;
   AdminStatus status;
+  status.dropped_frame_ms = refresh_hz > 0 ? trial_log::kDroppedFramePeriods * 1000.0 / refresh_hz : 0;
+  // The intervals of the frames that showed the current stimulus, each from the swap before it.
+  std::vector<double> stimulus_frames_ms;
   const bool resumed = session.trials_done() > 0;
 
   auto progress = [&] {
@@ -243,12 +265,24 @@ int run_session(const std::function<procedure::Session(const std::function<void(
   auto answer = [&](Answer a, double when_s) {
     const std::string response = response_for(a, config.task);
     const double rt_ms = std::max(0.0, (when_s - onset_s) * 1000.0);
-    const trial_log::TrialRow row = session.record(*plan, response, rt_ms);
-    char buf[160];
+    const trial_log::FrameTiming timing = trial_log::frame_timing(onset_s - clock_start_s, stimulus_frames_ms, refresh_hz);
+    const trial_log::TrialRow row = session.record(*plan, response, rt_ms, timing);
+    char buf[200];
     std::snprintf(buf, sizeof buf, "trial %d: %s (%s), %.0f ms", row.trial, response.c_str(),
                   row.correct ? "correct" : "wrong", rt_ms);
     status.last_answer = buf;
     say(buf);
+    std::snprintf(buf, sizeof buf, "trial %d: %d frames, mean %.1f ms, max %.1f ms", row.trial, timing.frames,
+                  timing.frame_ms_mean, timing.frame_ms_max);
+    status.last_timing = buf;
+    ++status.timed_trials;
+    if (timing.dropped_frames.value_or(0) > 0) {
+      ++status.trials_with_drops;
+      status.dropped_frames += *timing.dropped_frames;
+      std::snprintf(buf, sizeof buf, "warning: trial %d: %d dropped frame(s) while the stimulus was up (max %.1f ms, over %.1f ms)",
+                    row.trial, *timing.dropped_frames, timing.frame_ms_max, status.dropped_frame_ms);
+      say(buf);
+    }
     advance();
   };
   auto start = [&] {
@@ -277,6 +311,7 @@ int run_session(const std::function<procedure::Session(const std::function<void(
 
   if (!o.screenshot_dir.empty()) advance();  // straight to the first trial
   else say("welcome screen: waiting for Space");
+  double last_swap_s = glfw.now_s();
 
   while (!stop) {
     const double frame_start = glfw.now_s();
@@ -369,9 +404,16 @@ int run_session(const std::function<procedure::Session(const std::function<void(
       screenshot_due = true;
     }
     participant.swap();
+    glFinish();  // the swap has been executed: the frame is on its way to the screen
+    const double swap_s = glfw.now_s();
     if (first_trial_frame) {
-      glFinish();  // the swap has been executed: the stimulus is on its way to the screen
-      onset_s = glfw.now_s();
+      onset_s = swap_s;
+      stimulus_frames_ms.clear();
+    }
+    if (drawn == Screen::trial && screen == Screen::trial && onset_s >= 0)
+      stimulus_frames_ms.push_back((swap_s - last_swap_s) * 1000.0);
+    last_swap_s = swap_s;
+    if (first_trial_frame) {
       participant.take_presses();  // anything pressed before the onset is not an answer
       char buf[160];
       std::snprintf(buf, sizeof buf, "trial %d on screen (round %d, %s, r %.2f px, %s)", plan->trial, plan->round + 1,

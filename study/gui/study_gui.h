@@ -22,9 +22,10 @@ struct GuiOptions {
   bool admin_panel = false;    // single-monitor setups: the admin view is a panel (F12) in the participant window
   double iti_ms = 400;         // blank screen between trials
   std::filesystem::path screenshot_dir;  // write participant.png (+ admin.png) at the first stimulus onset, then stop
+  double refresh_hz = 0;       // the participant display's refresh rate where its video mode reports none (0: not given)
 };
 
-// Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot to `run`.
+// Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --refresh-hz to `run`.
 void add_options(CLI::App& run, GuiOptions& options);
 
 // Opens the windows, then the session (`open_session` creates or resumes it: after every check

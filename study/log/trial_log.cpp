@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -17,18 +18,23 @@
 
 namespace penumbra::trial_log {
 
-const std::vector<std::string>& columns() {
-  static const std::vector<std::string> c = {
+const std::vector<std::string>& columns(Layout layout) {
+  static const std::vector<std::string> without_timing = {
       "session_id", "participant", "utc_time", "round", "trial", "staircase", "pattern", "contrast",
       "artifact_px", "task", "intensity", "filter_radius_px", "kernel", "target", "response", "correct",
       "rt_ms", "quest_mean", "quest_sd", "practice", "requested_filter_radius_px", "clamped",
       "artifact_arcmin", "filter_radius_arcmin", "stimulus_seed"};
-  return c;
+  static const std::vector<std::string> current = [] {
+    std::vector<std::string> c = without_timing;
+    c.insert(c.end(), {"onset_s", "frames", "frame_ms_mean", "frame_ms_max", "dropped_frames"});
+    return c;
+  }();
+  return layout == Layout::current ? current : without_timing;
 }
 
-std::string header_line() {
+std::string header_line(Layout layout) {
   std::string s;
-  for (std::size_t i = 0; i < columns().size(); ++i) s += (i ? "," : "") + columns()[i];
+  for (std::size_t i = 0; i < columns(layout).size(); ++i) s += (i ? "," : "") + columns(layout)[i];
   return s + "\n";
 }
 
@@ -56,7 +62,7 @@ bool valid_text(const std::string& s) {
 
 }  // namespace
 
-std::string format_row(const TrialRow& r) {
+std::string format_row(const TrialRow& r, Layout layout) {
   std::ostringstream o;
   o << text(r.session_id, "session_id") << ',' << text(r.participant, "participant") << ',' << r.utc_time << ','
     << r.round << ',' << r.trial << ',' << text(r.staircase, "staircase") << ',' << r.pattern << ',' << num(r.contrast)
@@ -64,11 +70,20 @@ std::string format_row(const TrialRow& r) {
     << r.kernel << ',' << r.target << ',' << r.response << ',' << r.correct << ',' << num(r.rt_ms) << ','
     << num(r.quest_mean) << ',' << num(r.quest_sd) << ',' << r.practice << ',' << num(r.requested_filter_radius_px)
     << ',' << r.clamped << ',' << num(r.artifact_arcmin) << ',' << num(r.filter_radius_arcmin) << ','
-    << r.stimulus_seed << '\n';
+    << r.stimulus_seed;
+  if (layout == Layout::current) {
+    if (r.timing)
+      o << ',' << num(r.timing->onset_s) << ',' << r.timing->frames << ',' << num(r.timing->frame_ms_mean) << ','
+        << num(r.timing->frame_ms_max) << ',' << (r.timing->dropped_frames ? std::to_string(*r.timing->dropped_frames) : "");
+    else
+      o << ",,,,,";  // not measured
+  }
+  o << '\n';
   return o.str();
 }
 
-TrialRow parse_row(const std::string& line, const std::string& file, int line_number) {
+TrialRow parse_row(const std::string& line, const std::string& file, int line_number, Layout layout) {
+  const std::vector<std::string>& names = columns(layout);
   std::vector<std::string> f;
   std::size_t start = 0;
   while (true) {
@@ -78,11 +93,11 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
     start = comma + 1;
   }
   const std::string where = file + ":" + std::to_string(line_number) + ": ";
-  if (f.size() != columns().size())
-    throw std::runtime_error(where + "expected " + std::to_string(columns().size()) + " columns, found " +
+  if (f.size() != names.size())
+    throw std::runtime_error(where + "expected " + std::to_string(names.size()) + " columns, found " +
                              std::to_string(f.size()));
   auto fail = [&](std::size_t i, const std::string& what) -> void {
-    throw std::runtime_error(where + "column '" + columns()[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
+    throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
   };
   auto real = [&](std::size_t i) {
     double v = 0;
@@ -159,10 +174,57 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
     if (ec != std::errc() || p != f[24].data() + f[24].size()) fail(24, "expected an unsigned integer");
     r.stimulus_seed = v;
   }
+  if (layout == Layout::current) {
+    // Either all five timing columns are empty (not measured) or all hold values, but for
+    // dropped_frames, empty when the refresh rate was unknown.
+    constexpr std::size_t first = 25, n = 5;
+    std::size_t empty = 0;
+    for (std::size_t i = first; i < first + n; ++i) empty += f[i].empty();
+    if (empty == n) return r;
+    for (std::size_t i = first; i < first + n - 1; ++i)
+      if (f[i].empty()) fail(i, "expected a value (the timing columns are all empty or all filled)");
+    FrameTiming t;
+    t.onset_s = real(25);
+    if (t.onset_s < 0) fail(25, "expected >= 0");
+    t.frames = integer(26, 1, 1000000000);
+    t.frame_ms_mean = real(27);
+    if (t.frame_ms_mean < 0) fail(27, "expected >= 0");
+    t.frame_ms_max = real(28);
+    if (t.frame_ms_max < t.frame_ms_mean) fail(28, "expected >= frame_ms_mean");
+    if (!f[29].empty()) t.dropped_frames = integer(29, 0, t.frames);
+    r.timing = t;
+  }
   return r;
 }
 
+FrameTiming frame_timing(double onset_s, const std::vector<double>& intervals_ms, double refresh_hz) {
+  if (intervals_ms.empty()) throw std::logic_error("frame_timing: no frame");
+  FrameTiming t;
+  t.onset_s = onset_s;
+  t.frames = static_cast<int>(intervals_ms.size());
+  double sum = 0;
+  for (double ms : intervals_ms) {
+    sum += ms;
+    t.frame_ms_max = std::max(t.frame_ms_max, ms);
+  }
+  if (refresh_hz > 0) {
+    t.dropped_frames = 0;
+    for (double ms : intervals_ms) *t.dropped_frames += ms > kDroppedFramePeriods * 1000.0 / refresh_hz;
+  }
+  t.frame_ms_mean = std::min(sum / t.frames, t.frame_ms_max);  // never above the max by rounding
+  return t;
+}
+
 Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
+  if (!create) {
+    std::ifstream in(path, std::ios::binary);
+    std::string first;
+    std::getline(in, first);
+    first += '\n';
+    if (first == header_line(Layout::without_timing)) layout_ = Layout::without_timing;
+    else if (in && first != header_line(Layout::current))
+      throw std::runtime_error(path.string() + ":1: the header does not match the trial-log columns");
+  }
   const int flags = O_WRONLY | O_APPEND | O_CLOEXEC | (create ? (O_CREAT | O_EXCL) : 0);
   fd_ = ::open(path.c_str(), flags, 0644);
   if (fd_ < 0)
@@ -184,7 +246,7 @@ Writer::~Writer() {
 
 void Writer::append(const TrialRow& row) {
   // A failure part-way leaves a torn last line, which readers ignore and --resume cuts off.
-  if (const int error = io::write_all(fd_, format_row(row)); error != 0)
+  if (const int error = io::write_all(fd_, format_row(row, layout_)); error != 0)
     throw std::runtime_error(path_.string() + ": cannot append trial " + std::to_string(row.trial) + ": " +
                              std::strerror(error));
   if (::fsync(fd_) != 0) {
@@ -217,11 +279,13 @@ ReadResult read(const std::filesystem::path& path) {
     }
     const std::string line = all.substr(pos, nl - pos);
     if (line_number == 1) {
-      if (line + "\n" != header_line())
+      if (line + "\n" == header_line(Layout::without_timing))
+        result.layout = Layout::without_timing;
+      else if (line + "\n" != header_line())
         throw std::runtime_error(file + ":1: the header does not match the trial-log columns (" +
                                  header_line().substr(0, header_line().size() - 1) + ")");
     } else {
-      result.rows.push_back(parse_row(line, file, line_number));
+      result.rows.push_back(parse_row(line, file, line_number, result.layout));
     }
     pos = nl + 1;
     result.complete_bytes = pos;

@@ -5,10 +5,31 @@
 // QUEST staircase bit for bit.
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace penumbra::trial_log {
+
+// How a trial's stimulus was presented, measured in the participant window (docs/study.md,
+// "Frame timing"). Every swap of that window is timestamped on the steady clock after the swap and
+// a glFinish; a stimulus frame's interval runs from the swap before it to its own swap, so frame 0's
+// interval tells whether the onset itself came late.
+struct FrameTiming {
+  double onset_s = 0;        // the first stimulus frame's timestamp, seconds since this run of the session opened its window
+  int frames = 0;            // frames that showed the stimulus before the answer (>= 1)
+  double frame_ms_mean = 0;  // their intervals
+  double frame_ms_max = 0;
+  // Intervals over kDroppedFramePeriods refresh periods; none (written empty) when the refresh
+  // rate was unknown.
+  std::optional<int> dropped_frames;
+};
+// An interval longer than this many refresh periods (session.json presentation.video_mode.refresh_hz)
+// means at least one refresh passed without a new frame.
+inline constexpr double kDroppedFramePeriods = 1.5;
+// The timing of one stimulus from its onset and its frames' intervals (ms; at least one);
+// refresh_hz <= 0: unknown, dropped frames not judged.
+FrameTiming frame_timing(double onset_s, const std::vector<double>& intervals_ms, double refresh_hz);
 
 struct TrialRow {
   std::string session_id;
@@ -36,15 +57,24 @@ struct TrialRow {
   double artifact_arcmin = 0;
   double filter_radius_arcmin = 0;
   std::uint64_t stimulus_seed = 0;  // penumbra-study stimulus --seed reproduces the images
+  // Written as empty fields when absent: headless and simulated sessions, and logs begun before the
+  // timing columns existed.
+  std::optional<FrameTiming> timing;
 };
 
-const std::vector<std::string>& columns();
-std::string header_line();             // with '\n'
-std::string format_row(const TrialRow& row);  // with '\n'
-// Throws std::runtime_error "<file>:<line>: column '<name>': <what>".
-TrialRow parse_row(const std::string& line, const std::string& file, int line_number);
+// The log's layouts: `current` ends with the timing columns; `without_timing` (logs written before
+// them) is read and, when such a session is resumed, appended to in its own layout.
+enum class Layout { without_timing, current };
 
-// Appends to a log. `create` makes a new file (refusing an existing one) and writes the header.
+const std::vector<std::string>& columns(Layout layout = Layout::current);
+std::string header_line(Layout layout = Layout::current);  // with '\n'
+std::string format_row(const TrialRow& row, Layout layout = Layout::current);  // with '\n'
+// Throws std::runtime_error "<file>:<line>: column '<name>': <what>".
+TrialRow parse_row(const std::string& line, const std::string& file, int line_number,
+                   Layout layout = Layout::current);
+
+// Appends to a log. `create` makes a new file (refusing an existing one) and writes the current
+// header; an existing log keeps the layout of its header.
 class Writer {
  public:
   Writer(const std::filesystem::path& path, bool create);
@@ -57,12 +87,14 @@ class Writer {
  private:
   std::filesystem::path path_;
   int fd_ = -1;
+  Layout layout_ = Layout::current;
 };
 
 struct ReadResult {
   std::vector<TrialRow> rows;
   bool torn_tail = false;  // the last line had no newline: a trial being written when the process died
   std::uintmax_t complete_bytes = 0;  // bytes up to the end of the last complete line
+  Layout layout = Layout::current;    // from the header
 };
 // Reads and validates a log (header and every row). Throws std::runtime_error naming file and line.
 ReadResult read(const std::filesystem::path& path);

@@ -141,11 +141,13 @@ trial_log::TrialRow Session::make_row(const TrialPlan& plan, const std::string& 
   return r;
 }
 
-trial_log::TrialRow Session::record(const TrialPlan& plan, const std::string& response, double rt_ms) {
+trial_log::TrialRow Session::record(const TrialPlan& plan, const std::string& response, double rt_ms,
+                                    const std::optional<trial_log::FrameTiming>& timing) {
   if (plan.trial != trials_done()) throw std::logic_error("Session::record: plan is not for the next trial");
   const bool correct = correct_response(plan, response);
   procedure_.apply(plan, correct);
-  const trial_log::TrialRow row = make_row(plan, response, rt_ms, correct);
+  trial_log::TrialRow row = make_row(plan, response, rt_ms, correct);
+  row.timing = timing;
   writer_->append(row);
   return row;
 }

@@ -38,8 +38,10 @@ class Session {
 
   // The next trial, or nothing when every round is finished.
   std::optional<TrialPlan> next() const { return procedure_.next(); }
-  // Records the answer: updates the staircase and appends the row (flushed and fsynced).
-  trial_log::TrialRow record(const TrialPlan& plan, const std::string& response, double rt_ms);
+  // Records the answer: updates the staircase and appends the row (flushed and fsynced). `timing`:
+  // how the stimulus was presented, from the windows (headless sessions have none).
+  trial_log::TrialRow record(const TrialPlan& plan, const std::string& response, double rt_ms,
+                             const std::optional<trial_log::FrameTiming>& timing = std::nullopt);
   // Admin: finish the current round now (persisted in session.json, honoured by resume).
   void end_round();
   // The participant view as it really is (video mode, refresh rate, window, full screen, GL

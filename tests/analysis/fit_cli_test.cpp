@@ -552,6 +552,38 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
   }
 }
 
+// Issue 16: headless sessions leave the timing columns empty, and logs written before those columns
+// existed (the same rows in the old layout) still load and fit to the same result.
+TEST(FitCli, LogsWithoutTimingColumnsFitAsBefore) {
+  const fs::path dir = fresh("without-timing");
+  nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/default.json"));
+  config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
+  config["artifact_px"] = {5, 20};
+  config["stopping"] = {{"min_trials", 25}, {"max_trials", 25}, {"sd_below", 0.1}};
+  const std::string sessions = run_sessions(dir, config, "psychometric:c=4.0,beta=3.5,lapse=0.01", 2);
+  ASSERT_FALSE(sessions.empty());
+  std::string out;
+  ASSERT_EQ(run(sessions + "-o " + (dir / "fit-new").string() + " --bootstrap 0", &out), 0) << out;
+  for (const std::string p : {"p1", "p2"}) {
+    const fs::path log = dir / p / "trials.csv";
+    const auto rows = trial_log::read(log).rows;
+    ASSERT_FALSE(rows.empty());
+    for (const auto& r : rows) EXPECT_FALSE(r.timing.has_value()) << "headless: not measured";
+    EXPECT_EQ(read(log).substr(read(log).size() - 6), ",,,,,\n");
+    std::ofstream o(log, std::ios::trunc);
+    o << trial_log::header_line(trial_log::Layout::without_timing);
+    for (const auto& r : rows) o << trial_log::format_row(r, trial_log::Layout::without_timing);
+  }
+  EXPECT_EQ(read(dir / "p1" / "trials.csv").find("onset_s"), std::string::npos);
+  ASSERT_EQ(run(sessions + "-o " + (dir / "fit-old").string() + " --bootstrap 0", &out), 0) << out;
+  const nlohmann::json a = nlohmann::json::parse(read(dir / "fit-new" / "report.json"));
+  const nlohmann::json b = nlohmann::json::parse(read(dir / "fit-old" / "report.json"));
+  EXPECT_EQ(a["trials"], b["trials"]);
+  ASSERT_EQ(a["conditions"].size(), 1u);
+  EXPECT_EQ(a["conditions"][0]["c"], b["conditions"][0]["c"]);
+  fs::remove_all(dir);
+}
+
 #ifdef PENUMBRA_RENDER_EXE
 // The loop per technique (issue 15): a simulated study of stimuli drawn by the technique
 // (psychometric observer with a planted c, 6 participants x 3 artifact sizes x 60 trials) gives

@@ -140,7 +140,7 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
   };
   std::vector<Input> inputs{{"key f", "left"}, {"key Right", "right"}, {click(1), "right"}, {click(0), "left"}};
   {
-    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-test"}));
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-test", "--refresh-hz", "60"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
     ASSERT_TRUE(xdo("key space"));
     for (std::size_t t = 0; t < inputs.size(); ++t) {
@@ -161,7 +161,7 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
   EXPECT_FALSE(first.torn_tail);
   EXPECT_EQ(first.rows[0].practice, 1);
   {
-    App app(windowed({"run", "--resume", dir.string()}));
+    App app(windowed({"run", "--resume", dir.string(), "--refresh-hz", "30"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
     ASSERT_TRUE(xdo("key space"));
     for (int t = 4;; ++t) {
@@ -191,6 +191,35 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
     EXPECT_EQ(r.correct, r.response == r.target ? 1 : 0) << "trial " << i;
     EXPECT_GT(r.rt_ms, 0.0) << "trial " << i;
     EXPECT_LT(r.rt_ms, 20000.0) << "trial " << i;
+  }
+  // Frame timing (issue 16): every trial shown in the window has it. The onsets increase within a
+  // run (the resume starts its clock again), each after the previous answer and the 50 ms blank.
+  const nlohmann::json shown = nlohmann::json::parse(slurp(dir / "session.json")).at("presentation");
+  ASSERT_EQ(shown.size(), 2u);
+  // Xvfb's video mode reports no refresh rate (0): the first run judges dropped frames against
+  // --refresh-hz 60, the resumed one against 30.
+  EXPECT_EQ(shown[0].at("video_mode").at("refresh_hz"), 0);
+  EXPECT_EQ(shown[0].at("frame_timing"), nlohmann::json({{"refresh_hz", 60.0}, {"from", "--refresh-hz"}, {"dropped_over_ms", 25.0}}));
+  EXPECT_EQ(shown[1].at("frame_timing").at("dropped_over_ms"), 50.0);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    SCOPED_TRACE("trial " + std::to_string(i));
+    const double refresh_hz = i < first.rows.size() ? 60 : 30;
+    ASSERT_TRUE(log[i].timing.has_value());
+    const trial_log::FrameTiming& t = *log[i].timing;
+    EXPECT_GE(t.frames, 1);
+    EXPECT_GE(t.frame_ms_mean, 1.0);
+    EXPECT_LE(t.frame_ms_max, 1000.0);
+    EXPECT_GE(t.frame_ms_max, t.frame_ms_mean);
+    ASSERT_TRUE(t.dropped_frames.has_value());
+    EXPECT_GE(*t.dropped_frames, 0);
+    EXPECT_LE(*t.dropped_frames, t.frames);
+    EXPECT_EQ(*t.dropped_frames > 0, t.frame_ms_max > 1500.0 / refresh_hz);
+    EXPECT_GT(t.onset_s, 0.0);
+    EXPECT_LT(t.onset_s, 60.0);
+    if (i > 0 && i != first.rows.size()) {
+      const trial_log::TrialRow& before = log[i - 1];
+      EXPECT_GT(t.onset_s, before.timing->onset_s + before.rt_ms / 1000.0 + 0.05);
+    }
   }
   // The log replays through the procedure (every row what it would have asked) to a finished session.
   procedure::Session replay = procedure::Session::resume(dir);

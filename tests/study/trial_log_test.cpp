@@ -94,7 +94,7 @@ TEST(TrialLog, ReaderNamesFileLineAndColumn) {
   std::string wrong_intensity = good;
   wrong_intensity.replace(wrong_intensity.find(",2afc,") + 6, 4, "0.25");
   EXPECT_NE(message(write(wrong_intensity)).find("column 'intensity'"), std::string::npos);
-  EXPECT_NE(message(write("a,b\n")).find(":2: expected 25 columns, found 2"), std::string::npos);
+  EXPECT_NE(message(write("a,b\n")).find(":2: expected 30 columns, found 2"), std::string::npos);
   // Free text the writer would refuse (a quote, a CR of a CRLF file, bytes that are not UTF-8) is
   // refused by the reader too, and the value is echoed short and escaped.
   for (const auto& [participant, shown] : std::vector<std::pair<std::string, std::string>>{
@@ -116,6 +116,121 @@ TEST(TrialLog, ReaderNamesFileLineAndColumn) {
   EXPECT_TRUE(torn.torn_tail);
   EXPECT_EQ(torn.rows.size(), 1u);
   EXPECT_EQ(torn.complete_bytes, trial_log::header_line().size() + good.size());
+}
+
+trial_log::TrialRow timed_row(int trial) {
+  trial_log::TrialRow r = sample_row(trial);
+  r.timing = trial_log::frame_timing(12.5 + trial, {16.9, 16.6, 40.1, 16.7}, 60);
+  return r;
+}
+
+std::string read_error(const fs::path& p) {
+  try {
+    trial_log::read(p);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Issue 16: the timing columns. A frame interval over 1.5 refresh periods is a dropped frame.
+TEST(TrialLog, FrameTimingCountsIntervalsOverOneAndAHalfPeriods) {
+  const trial_log::FrameTiming t = trial_log::frame_timing(3.25, {16.9, 16.6, 40.1, 16.7, 25.1}, 60);
+  EXPECT_EQ(t.onset_s, 3.25);
+  EXPECT_EQ(t.frames, 5);
+  EXPECT_NEAR(t.frame_ms_mean, 23.08, 1e-9);
+  EXPECT_EQ(t.frame_ms_max, 40.1);
+  EXPECT_EQ(t.dropped_frames, 2);  // 40.1 and 25.1 > 25 ms
+  EXPECT_EQ(trial_log::frame_timing(0, {25.1}, 120).dropped_frames, 1);  // 12.5 ms at 120 Hz
+  EXPECT_EQ(trial_log::frame_timing(0, {8.3, 12.4}, 120).dropped_frames, 0);
+  EXPECT_FALSE(trial_log::frame_timing(0, {8.3, 100}, 0).dropped_frames.has_value());  // refresh rate unknown
+  const trial_log::FrameTiming same = trial_log::frame_timing(0, std::vector<double>(7, 0.1), 60);
+  EXPECT_LE(same.frame_ms_mean, same.frame_ms_max);  // the reader refuses mean > max
+}
+
+// New logs carry the timing (empty when not measured: headless); logs written before the timing
+// columns still read, and a resumed one goes on in its own layout.
+TEST(TrialLog, TimingColumnsRoundTripAndLogsWithoutThemStillRead) {
+  const fs::path dir = fresh_dir("log-timing");
+  {
+    trial_log::Writer w(dir / "trials.csv", true);
+    w.append(timed_row(0));
+    w.append(sample_row(1));  // headless: not measured
+    trial_log::TrialRow unknown_refresh = timed_row(2);
+    unknown_refresh.timing->dropped_frames.reset();
+    w.append(unknown_refresh);
+  }
+  const std::string text = [&] {
+    std::ifstream in(dir / "trials.csv");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_NE(text.find(",stimulus_seed,onset_s,frames,frame_ms_mean,frame_ms_max,dropped_frames\n"), std::string::npos);
+  EXPECT_NE(text.find(",4010436946754998,12.5,4,22.574999999999999,40.100000000000001,1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find(",4010436946754998,,,,,\n"), std::string::npos) << text;
+  EXPECT_NE(text.find(",4010436946754998,14.5,4,22.574999999999999,40.100000000000001,\n"), std::string::npos) << text;
+  const auto log = trial_log::read(dir / "trials.csv");
+  EXPECT_EQ(log.layout, trial_log::Layout::current);
+  ASSERT_EQ(log.rows.size(), 3u);
+  ASSERT_TRUE(log.rows[0].timing.has_value());
+  EXPECT_EQ(log.rows[0].timing->frames, 4);
+  EXPECT_EQ(log.rows[0].timing->dropped_frames, 1);
+  EXPECT_EQ(log.rows[0].timing->frame_ms_max, 40.1);
+  EXPECT_EQ(trial_log::format_row(log.rows[0]), trial_log::format_row(timed_row(0)));
+  EXPECT_FALSE(log.rows[1].timing.has_value());
+  ASSERT_TRUE(log.rows[2].timing.has_value());
+  EXPECT_FALSE(log.rows[2].timing->dropped_frames.has_value());
+
+  // A log from before the timing columns: read as it is, appended to in its own layout.
+  {
+    std::ofstream old(dir / "old.csv");
+    old << trial_log::header_line(trial_log::Layout::without_timing);
+    for (int t = 0; t < 2; ++t) old << trial_log::format_row(sample_row(t), trial_log::Layout::without_timing);
+  }
+  EXPECT_EQ(trial_log::header_line(trial_log::Layout::without_timing).find("onset_s"), std::string::npos);
+  {
+    trial_log::Writer w(dir / "old.csv", false);
+    w.append(timed_row(2));  // its timing has no column there
+  }
+  const auto old = trial_log::read(dir / "old.csv");
+  EXPECT_EQ(old.layout, trial_log::Layout::without_timing);
+  ASSERT_EQ(old.rows.size(), 3u);
+  for (const auto& r : old.rows) EXPECT_FALSE(r.timing.has_value());
+  EXPECT_EQ(trial_log::format_row(old.rows[2]), trial_log::format_row(sample_row(2)));
+  // Rows of one layout under the other's header are refused by their column count.
+  {
+    std::ofstream mixed(dir / "mixed.csv");
+    mixed << trial_log::header_line(trial_log::Layout::without_timing) << trial_log::format_row(timed_row(0));
+  }
+  EXPECT_EQ(read_error(dir / "mixed.csv"), (dir / "mixed.csv").string() + ":2: expected 25 columns, found 30");
+  fs::remove_all(dir);
+}
+
+TEST(TrialLog, BadTimingValuesNameFileLineAndColumn) {
+  const fs::path dir = fresh_dir("log-timing-errors");
+  const std::string good = trial_log::format_row(timed_row(0));
+  const std::string prefix = good.substr(0, good.find(",12.5,"));
+  struct Case {
+    std::string timing, message;
+  };
+  const std::vector<Case> cases{
+      {"-0.5,4,22.5,40.1,1", "column 'onset_s': expected >= 0 (found '-0.5')"},
+      {"nan,4,22.5,40.1,1", "column 'onset_s': expected a finite number (found 'nan')"},
+      {"NA,4,22.5,40.1,1", "column 'onset_s': expected a finite number (found 'NA')"},
+      {"12.5,0,22.5,40.1,0", "column 'frames': expected an integer in [1, 1000000000] (found '0')"},
+      {"12.5,4.5,22.5,40.1,1", "column 'frames': expected an integer in [1, 1000000000] (found '4.5')"},
+      {"12.5,4,inf,40.1,1", "column 'frame_ms_mean': expected a finite number (found 'inf')"},
+      {"12.5,4,-1,40.1,1", "column 'frame_ms_mean': expected >= 0 (found '-1')"},
+      {"12.5,4,22.5,20,1", "column 'frame_ms_max': expected >= frame_ms_mean (found '20')"},
+      {"12.5,4,22.5,40.1,5", "column 'dropped_frames': expected an integer in [0, 4] (found '5')"},
+      {"12.5,4,22.5,40.1,-1", "column 'dropped_frames': expected an integer in [0, 4] (found '-1')"},
+      {"12.5,4,22.5,,1", "column 'frame_ms_max': expected a value (the timing columns are all empty or all filled) (found '')"},
+      {",4,22.5,40.1,1", "column 'onset_s': expected a value (the timing columns are all empty or all filled) (found '')"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir / "t.csv") << trial_log::header_line() << good << prefix << "," << c.timing << "\n";
+    EXPECT_EQ(read_error(dir / "t.csv"), (dir / "t.csv").string() + ":3: " + c.message) << c.timing;
+  }
+  fs::remove_all(dir);
 }
 
 std::string config_error(const nlohmann::json& j) {
