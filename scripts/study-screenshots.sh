@@ -12,7 +12,7 @@ trap 'rm -rf "$work"' EXIT
 "$exe" run --config data/studies/default.json --observer psychometric:c=3.0,beta=3.5,lapse=0.02 --headless \
   --stop-after 45 --participant demo -o "$work/session" >/dev/null
 xvfb-run -a -s "-screen 0 2560x900x24" "$exe" run --resume "$work/session" --windowed 1280x720 \
-  --screenshot "$work/shots"
+  --refresh-hz 60 --screenshot "$work/shots"
 cp "$work/shots/participant.png" docs/images/study-participant.png
 cp "$work/shots/admin.png" docs/images/study-admin.png
 ls -l docs/images/study-participant.png docs/images/study-admin.png

@@ -38,51 +38,103 @@ bool confirm(const char* id, const char* question) {
 
 }  // namespace
 
+// A step of 1, 2 or 5 times a power of ten giving at most `max_ticks` ticks over `span`.
+int tick_step(int span, int max_ticks) {
+  for (int decade = 1;; decade *= 10)
+    for (int m : {1, 2, 5})
+      if (span / (m * decade) < max_ticks) return m * decade;
+}
+
 void staircase_plot(const procedure::Staircase& sc, double max_radius_px, int max_trials, float width, float height) {
   ImDrawList* dl = ImGui::GetWindowDrawList();
   const ImVec2 origin = ImGui::GetCursorScreenPos();
-  const float left = 44, bottom = 22, right = 8, top = 6;
+  const float line = ImGui::GetTextLineHeight();
+  // Outside the frame: tick labels and the axis names; inside it a margin, so that points on the
+  // range's ends (trial 1, the largest radius) are drawn whole.
+  const float left = 44, bottom = 2 * line + 8, right = 10, top = line + 6, margin = 7;
   const ImVec2 p0{origin.x + left, origin.y + top}, p1{origin.x + width - right, origin.y + height - bottom};
+  const ImVec2 d0{p0.x + margin, p0.y + margin}, d1{p1.x - margin, p1.y - margin};
   const double y_lo = 0.0, y_hi = std::log10(std::max(max_radius_px, 2.0));
   const int n_max = std::max({max_trials, static_cast<int>(sc.filter_radius_px.size()), 2});
-  auto px = [&](double trial) { return p0.x + static_cast<float>(trial / (n_max - 1)) * (p1.x - p0.x); };
+  auto px = [&](int trial) { return d0.x + static_cast<float>(trial - 1) / static_cast<float>(n_max - 1) * (d1.x - d0.x); };
   auto py = [&](double radius) {
     const double t = (std::log10(std::clamp(radius, 1.0, max_radius_px)) - y_lo) / (y_hi - y_lo);
-    return p1.y - static_cast<float>(t) * (p1.y - p0.y);
+    return d1.y - static_cast<float>(t) * (d1.y - d0.y);
   };
-  const ImU32 frame = IM_COL32(70, 74, 80, 255), grid = IM_COL32(58, 62, 68, 255), label = IM_COL32(170, 175, 182, 255);
+  const ImU32 frame = IM_COL32(70, 74, 80, 255), grid = IM_COL32(52, 56, 62, 255), label = IM_COL32(170, 175, 182, 255);
   dl->AddRectFilled(p0, p1, IM_COL32(28, 30, 34, 255));
-  for (double r : {1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0}) {
+  for (double r : {1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0}) {
     if (r > max_radius_px * 1.001) break;
     const float y = py(r);
     dl->AddLine({p0.x, y}, {p1.x, y}, grid);
     const std::string t = format("%g", r);
-    dl->AddText({p0.x - 6 - ImGui::CalcTextSize(t.c_str()).x, y - 0.5f * ImGui::GetTextLineHeight()}, label, t.c_str());
+    dl->AddText({p0.x - 6 - ImGui::CalcTextSize(t.c_str()).x, y - 0.5f * line}, label, t.c_str());
   }
-  const int step = n_max > 30 ? 10 : 5;
-  for (int t = 0; t < n_max; t += step) {
-    const std::string s = format("%d", t + 1);
-    dl->AddText({px(t) - 0.5f * ImGui::CalcTextSize(s.c_str()).x, p1.y + 3}, label, s.c_str());
+  // Trial ticks: 1, then multiples of a 1-2-5 step, each label clear of the one before.
+  const int step = tick_step(n_max - 1, 7);
+  float last_label_end = -1e9f;
+  for (int t = 1; t <= n_max; t = (t == 1 && step > 1) ? step : t + step) {
+    const float x = px(t);
+    const std::string s = format("%d", t);
+    const float w = ImGui::CalcTextSize(s.c_str()).x;
+    if (x - 0.5f * w < last_label_end + 6) continue;
+    last_label_end = x + 0.5f * w;
+    dl->AddLine({x, p0.y}, {x, p1.y}, grid);
+    dl->AddLine({x, p1.y}, {x, p1.y + 4}, frame);
+    dl->AddText({x - 0.5f * w, p1.y + 5}, label, s.c_str());
   }
+  const char* x_name = "trial";
+  dl->AddText({0.5f * (p0.x + p1.x) - 0.5f * ImGui::CalcTextSize(x_name).x, p1.y + 6 + line}, label, x_name);
+  const char* y_name = "filter radius (px)";
+  dl->AddText({origin.x, origin.y}, label, y_name);
   dl->AddRect(p0, p1, frame);
-  // The published rule r = c a (a faint reference line), and the current estimate with its +-1 sd band.
-  const float y_pub = py(kPublishedC * sc.artifact_px);
-  for (float x = p0.x; x < p1.x; x += 10)  // dashed
-    dl->AddLine({x, y_pub}, {std::min(x + 5, p1.x), y_pub}, IM_COL32(200, 185, 100, 220), 1.5f);
+
+  // A value outside the plotted range: its value and a triangle pointing the way it lies, right-
+  // aligned beside the edge it lies beyond (the line above the plot, or the axis-name line below
+  // it), never over the data.
+  float right_above = p1.x, right_below = p1.x;
+  const float x_name_end = 0.5f * (p0.x + p1.x) + 0.5f * ImGui::CalcTextSize(x_name).x;
+  auto beyond = [&](const char* what, double radius_px, ImU32 colour) {
+    const bool above = radius_px > max_radius_px;
+    float& free_end = above ? right_above : right_below;
+    const float y = above ? origin.y : p1.y + 6 + line;
+    const std::string t = format(radius_px < 10 ? "%s %.2g px" : "%s %.0f px", what, radius_px);
+    const float tw = ImGui::CalcTextSize(t.c_str()).x;
+    const float room_from = above ? origin.x + ImGui::CalcTextSize(y_name).x : x_name_end;
+    if (free_end - tw - 14 < room_from + 8) return;  // a plot too narrow for it: the table has the value
+    dl->AddText({free_end - tw, y}, colour, t.c_str());
+    const float x = free_end - tw - 9, mid = y + 0.5f * line;
+    if (above) dl->AddTriangleFilled({x - 5, mid + 4}, {x + 5, mid + 4}, {x, mid - 5}, colour);
+    else dl->AddTriangleFilled({x - 5, mid - 4}, {x + 5, mid - 4}, {x, mid + 5}, colour);
+    free_end -= tw + 26;
+  };
+  auto in_range = [&](double radius_px) { return radius_px >= 1.0 && radius_px <= max_radius_px; };
+  // The current estimate with its +-1 sd band (clipped to the plot).
   if (!sc.filter_radius_px.empty()) {
     const double m = sc.quest.mean(), sd = sc.quest.sd();
-    const float y_est = py(radius_at(sc.artifact_px, m));
+    const ImU32 estimate = IM_COL32(90, 150, 230, 230);
     dl->AddRectFilled({p0.x, py(radius_at(sc.artifact_px, m - sd))}, {p1.x, py(radius_at(sc.artifact_px, m + sd))},
                       IM_COL32(90, 150, 230, 40));
-    dl->AddLine({p0.x, y_est}, {p1.x, y_est}, IM_COL32(90, 150, 230, 220), 1.5f);
+    const double r_est = radius_at(sc.artifact_px, m);
+    if (in_range(r_est)) dl->AddLine({p0.x, py(r_est)}, {p1.x, py(r_est)}, estimate, 1.5f);
+    else beyond("estimate", r_est, estimate);
   }
-  const std::size_t n = sc.filter_radius_px.size();
-  for (std::size_t i = 1; i < n; ++i)
-    dl->AddLine({px(static_cast<double>(i - 1)), py(sc.filter_radius_px[i - 1])},
-                {px(static_cast<double>(i)), py(sc.filter_radius_px[i])}, IM_COL32(200, 200, 200, 140), 1.0f);
-  for (std::size_t i = 0; i < n; ++i) {
-    const ImVec2 c{px(static_cast<double>(i)), py(sc.filter_radius_px[i])};
-    if (sc.correct[i]) dl->AddCircleFilled(c, 3.5f, IM_COL32(120, 210, 130, 255));
+  // The published rule r = c a (a faint dashed reference line).
+  const ImU32 published = IM_COL32(200, 185, 100, 230);
+  const double r_pub = kPublishedC * sc.artifact_px;
+  if (in_range(r_pub)) {
+    const float y_pub = py(r_pub);
+    for (float x = p0.x; x < p1.x; x += 10) dl->AddLine({x, y_pub}, {std::min(x + 5, p1.x), y_pub}, published, 1.5f);
+  } else {
+    beyond("published", r_pub, published);
+  }
+  const int n = static_cast<int>(sc.filter_radius_px.size());
+  for (int i = 1; i < n; ++i)
+    dl->AddLine({px(i), py(sc.filter_radius_px[static_cast<std::size_t>(i - 1)])},
+                {px(i + 1), py(sc.filter_radius_px[static_cast<std::size_t>(i)])}, IM_COL32(200, 200, 200, 140), 1.0f);
+  for (int i = 0; i < n; ++i) {
+    const ImVec2 c{px(i + 1), py(sc.filter_radius_px[static_cast<std::size_t>(i)])};
+    if (sc.correct[static_cast<std::size_t>(i)]) dl->AddCircleFilled(c, 3.5f, IM_COL32(120, 210, 130, 255));
     else dl->AddCircle(c, 3.5f, IM_COL32(235, 110, 100, 255), 0, 1.5f);
   }
   ImGui::Dummy({width, height});
@@ -126,7 +178,12 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
   actions.quit = confirm("Quit?", "Stop the session? Every answered trial is saved; --resume continues it.");
   ImGui::Separator();
 
-  const int shown_round = round < n_rounds ? round : session.randomization().round_order.back();  // finished: the last run
+  const std::vector<int>& order = session.randomization().round_order;
+  const int shown_round = round < n_rounds ? round : order.back();  // finished: the last one run
+  const int shown_position = session.round_position(shown_round);
+  if (round >= n_rounds)
+    ImGui::TextColored({0.55f, 0.75f, 1.0f, 1.0f}, "Session finished: the plots show the last round run, round %d of %d (%s)",
+                       shown_position + 1, n_rounds, session.condition(shown_round).c_str());
   const auto& staircases = session.rounds()[static_cast<std::size_t>(shown_round)];
   const double max_radius = 0.5 * config.stimulus_size_px;
   if (ImGui::BeginTable("staircases", 6, ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerH)) {
@@ -165,18 +222,22 @@ AdminActions draw_admin(const procedure::Session& session, const AdminStatus& st
     const auto& sc = staircases[i];
     if (i % static_cast<std::size_t>(per_row) != 0) ImGui::SameLine();
     ImGui::BeginGroup();
-    ImGui::Text("%s: filter radius (px) per trial", sc.name.c_str());
+    ImGui::Text("%s, round %d of %d (%s)", sc.name.c_str(), shown_position + 1, n_rounds, session.condition(shown_round).c_str());
     staircase_plot(sc, max_radius, config.max_trials, w, h);
     ImGui::EndGroup();
   }
-  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   dashed: published r = %g a", kPublishedC);
+  ImGui::TextDisabled("filled: correct   open: wrong   blue: QUEST estimate +- sd   dashed: published r = %g a   "
+                      "triangle: beyond the plotted range", kPublishedC);
 
-  if (shown_round > 0 && ImGui::CollapsingHeader("Earlier rounds")) {
-    for (int r = 0; r < shown_round; ++r)
+  // The rounds run before the one shown, in the order they ran (numbered as the header numbers them).
+  if (shown_position > 0 && ImGui::CollapsingHeader("Earlier rounds")) {
+    for (int position = 0; position < shown_position; ++position) {
+      const int r = order[static_cast<std::size_t>(position)];
       for (const auto& sc : session.rounds()[static_cast<std::size_t>(r)])
-        ImGui::Text("round %d %-10s %-4s %3zu trials  %+.3f +- %.3f  r/a %.2f", r + 1, session.condition(r).c_str(),
+        ImGui::Text("round %d %-10s %-4s %3zu trials  %+.3f +- %.3f  r/a %.2f", position + 1, session.condition(r).c_str(),
                     sc.name.c_str(), sc.quest.trial_count(), sc.quest.mean(), sc.quest.sd(),
                     std::pow(10.0, -sc.quest.mean()));
+    }
   }
   return actions;
 }

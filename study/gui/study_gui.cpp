@@ -33,7 +33,8 @@ void add_options(CLI::App& run, GuiOptions& o) {
   run.add_option("--windowed", o.windowed, "participant view in a WxH window instead of full screen (testing)");
   run.add_flag("--admin-panel", o.admin_panel, "single monitor: the admin view is a panel in the participant window, F12 shows/hides it");
   run.add_option("--iti-ms", o.iti_ms, "blank screen between trials (ms)")->capture_default_str()->check(cli::finite_range(0.0, 10000.0));
-  run.add_option("--screenshot", o.screenshot_dir, "write participant.png and admin.png into DIR at the first stimulus, then stop");
+  run.add_option("--screenshot", o.screenshot_dir,
+                 "write participant.png and admin.png into DIR at the first stimulus (a finished session: the end screen), then stop");
   run.add_option("--refresh-hz", o.refresh_hz,
                  "refresh rate of a participant display whose video mode reports none (Xvfb, some virtual displays): "
                  "dropped frames are judged against it")
@@ -398,7 +399,7 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     }
     participant.end_frame();
     const bool first_trial_frame = drawn == Screen::trial && screen == Screen::trial && onset_s < 0;
-    if (first_trial_frame && !o.screenshot_dir.empty()) {
+    if ((first_trial_frame || drawn == Screen::finished) && !o.screenshot_dir.empty()) {
       fs::create_directories(o.screenshot_dir);
       write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
       screenshot_due = true;

@@ -21,7 +21,7 @@ struct GuiOptions {
   std::string windowed;        // "WxH": a window instead of full screen (testing, demos)
   bool admin_panel = false;    // single-monitor setups: the admin view is a panel (F12) in the participant window
   double iti_ms = 400;         // blank screen between trials
-  std::filesystem::path screenshot_dir;  // write participant.png (+ admin.png) at the first stimulus onset, then stop
+  std::filesystem::path screenshot_dir;  // write participant.png (+ admin.png) at the first stimulus onset (or the end screen), then stop
   double refresh_hz = 0;       // the participant display's refresh rate where its video mode reports none (0: not given)
 };
 

@@ -275,6 +275,29 @@ TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
   fs::remove(config);
 }
 
+// Issue 16: --screenshot of a finished session captures the end screen, and the admin view says
+// which round its plots show (a line in its own light blue: 140, 191, 255).
+TEST_F(StudyGui, AFinishedSessionsAdminViewSaysWhichRoundItShows) {
+  const fs::path config = tiny_config("2afc"), dir = fresh("finished"), shots = fresh("finished-shots");
+  const std::string headless = kExe + " run --config " + config.string() + " -o " + dir.string() +
+                               " --headless --observer psychometric:c=3,beta=3.5,lapse=0.02 > /dev/null";
+  ASSERT_EQ(std::system(headless.c_str()), 0);
+  {
+    App app(windowed({"run", "--resume", dir.string(), "--screenshot", shots.string()}));
+    ASSERT_EQ(app.wait_exit(), 0) << app.output();
+    EXPECT_NE(app.output().find("session complete"), std::string::npos) << app.output();
+  }
+  const io::Image8 admin = io::read_image8(shots / "admin.png");
+  int finished_line = 0;
+  for (int y = 0; y < admin.height; ++y)
+    for (int x = 0; x < admin.width; ++x)
+      finished_line += admin.at(x, y, 0) == 140 && admin.at(x, y, 1) == 191 && admin.at(x, y, 2) == 255;
+  EXPECT_GT(finished_line, 10);  // measured 26; 0 in a session still running
+  fs::remove_all(dir);
+  fs::remove_all(shots);
+  fs::remove(config);
+}
+
 TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
   const fs::path config = tiny_config("2afc"), dir = fresh("refused");
   struct Case {
