@@ -44,7 +44,8 @@ bool pcss_blocker_depth(vec3 sc, vec2 gradient, float z_r, int blocker_taps, mat
 bool g_pcss_clamped = false;
 
 // Returns visibility; `filter_uv` receives the filter radius used (0 when no blocker was found).
-float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, bool grid,
+// kernel: 0 Poisson, 1 grid (box), 2 disk.
+float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filter_taps, int kernel,
                   int max_grid_taps, mat2 rotation, out float filter_uv) {
   filter_uv = 0.0;
   g_pcss_clamped = false;
@@ -54,18 +55,21 @@ float shadow_pcss(vec3 sc, vec2 gradient, float z_r, int blocker_taps, int filte
   filter_uv = pcss_filter_uv(z_r, z_b);
   g_pcss_clamped = filter_uv < min_uv;
   filter_uv = max(filter_uv, min_uv);
-  if (grid) return pcf_grid(sc, gradient, filter_uv * g_shadow_res, max_grid_taps);
+  if (kernel == 1) return pcf_grid(sc, gradient, filter_uv * g_shadow_res, max_grid_taps);
+  if (kernel == 2) return pcf_disk(sc, gradient, filter_uv * g_shadow_res, max_grid_taps);
   return pcf_poisson(sc, gradient, filter_uv, filter_taps, rotation);
 }
 
 #if defined(TECHNIQUE_PCSS) && !defined(PENUMBRA_COMPUTE)
 float technique_visibility(vec3 sc, vec2 gradient, float depth_ws, out float filter_uv) {
 #  if defined(KERNEL_GRID)
-  const bool grid = true;
+  const int kernel = 1;
+#  elif defined(KERNEL_DISK)
+  const int kernel = 2;
 #  else
-  const bool grid = false;
+  const int kernel = 0;
 #  endif
-  return shadow_pcss(sc, gradient, depth_ws, u_blocker_taps, u_taps, grid, u_max_grid_taps, poisson_rotation(true), filter_uv);
+  return shadow_pcss(sc, gradient, depth_ws, u_blocker_taps, u_taps, kernel, u_max_grid_taps, poisson_rotation(true), filter_uv);
 }
 #endif
 #endif  // SHADOW_PCSS_GLSL

@@ -20,7 +20,7 @@ inline double decimal(float v) {
   return d;
 }
 
-inline constexpr std::array<std::string_view, 2> kKernels = {"grid", "poisson"};
+inline constexpr std::array<std::string_view, 3> kKernels = {"grid", "poisson", "disk"};
 inline constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
 inline constexpr std::array<std::string_view, 2> kMomentFormats = {"rgba32f", "rgba16f"};
 inline constexpr std::array<std::string_view, 2> kInputs = {"hard", "rbsm"};

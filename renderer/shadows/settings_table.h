@@ -8,7 +8,7 @@
 namespace penumbra::shadows {
 
 // Choices shared by several techniques' parameters.
-enum class Kernel { grid, poisson };
+enum class Kernel { grid, poisson, disk };
 enum class RadiusUnit { texels, world };
 enum class ShadowInput { hard, rbsm };  // the input shadows of EDTSM / EDTSSM
 enum class MomentFormat { rgba32f, rgba16f };

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   app.add_option("--pattern", patterns, "stair and/or step")->delimiter(',')->capture_default_str();
   app.add_option("--artifact-px", artifacts, "artifact sizes")->delimiter(',')->capture_default_str();
   app.add_option("--contrast", contrasts, "lit levels, linear light")->delimiter(',')->capture_default_str();
-  app.add_option("--technique", technique, "draw with the renderer's technique (pcf, rpcf, vsm, ...) instead of the study's filter shader");
+  app.add_option("--technique", technique, "the renderer's technique that draws the stimuli (pcf, rpcf, vsm, ...; default pcf with pcf.kernel=disk)");
   app.add_option("--set", settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   app.add_option("--json", json_out, "write the implied c per condition as a calibration.json (schema 2) image-observer entry");
   app.add_option("--ratio-min", ratio_min, "smallest r / a")->capture_default_str()->check(CLI::Range(0.05, 100.0));
@@ -72,12 +72,10 @@ int main(int argc, char** argv) {
     base.size_px = size_px;
     base.technique = technique;
     stimuli::set_technique_settings(base, settings);
-    std::string kernel = "disk";  // the study's own filter shader's default
-    if (!technique.empty()) {
-      const auto s = stimuli::stimulus_settings(base, 15);  // the settings' errors before any rendering
-      if (const std::string why = stimuli::partner_unavailable(s); !why.empty()) throw std::invalid_argument(why);
-      kernel = shadows::variant_choice(s);
-    }
+    base = stimuli::as_renderer_pcf(base);  // no --technique: the exact disk
+    const auto checked = stimuli::stimulus_settings(base, 15);  // the settings' errors before any rendering
+    if (const std::string why = stimuli::partner_unavailable(checked); !why.empty()) throw std::invalid_argument(why);
+    const std::string kernel = shadows::variant_choice(checked);
     std::vector<stimuli::Pattern> parsed_patterns;
     for (const std::string& p : patterns) parsed_patterns.push_back(stimuli::parse_pattern(p));
 
@@ -85,8 +83,7 @@ int main(int argc, char** argv) {
     stimuli::StimulusRenderer renderer;
     observers::ImageObserver eye(params, 1);
     std::printf("%s%s, window %g r, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
-                technique.empty() ? "study filter shader (disk)" : ("technique " + technique).c_str(),
-                kernel.empty() || technique.empty() ? "" : (" " + kernel).c_str(), params.window_r, params.weber,
+                ("technique " + base.technique).c_str(), kernel.empty() ? "" : (" " + kernel).c_str(), params.window_r, params.weber,
                 params.blur_sigma_arcmin, params.pixels_per_degree, seeds);
     nlohmann::json per_condition = nlohmann::json::array();
     double largest = NAN;

@@ -424,13 +424,13 @@ int main(int argc, char** argv) {
   fs::path stim_out;
   stim->add_option("--pattern", pattern, "stair or step")->capture_default_str();
   stim->add_option("--artifact-px", spec.artifact_px, "shadow-map texel size on screen (px)")->required();
-  stim->add_option("--filter-radius-px", spec.filter_radius_px, "PCF radius (px); clamped to [1, size/2]")
+  stim->add_option("--filter-radius-px", spec.filter_radius_px, "filter radius (px); clamped to [1, size/2]")
       ->required()
       ->check(cli::finite_range(0, 1e6));
   stim->add_option("--contrast", spec.lit_linear, "lit level in linear light (1 = full, 0.5 = half)")->capture_default_str();
-  stim->add_option("--kernel", kernel, "disk (exact dense disk), grid (box) or poisson")->capture_default_str();
+  stim->add_option("--kernel", kernel, "without --technique: the renderer's PCF kernel, disk (exact disk), grid (box) or poisson")->capture_default_str();
   stim->add_option("--taps", spec.poisson_taps, "Poisson taps")->capture_default_str();
-  stim->add_option("--technique", spec.technique, "draw with the renderer's technique (penumbra-render's names; pcf) instead of the study's filter shader");
+  stim->add_option("--technique", spec.technique, "the renderer's technique that draws it (penumbra-render's names: pcf, rpcf, vsm, ...; without it, pcf with --kernel)");
   std::vector<std::string> stim_settings;
   stim->add_option("--set", stim_settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   stim->add_option("--size-px", spec.size_px, "stimulus side (px)")->capture_default_str();

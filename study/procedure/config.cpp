@@ -164,11 +164,11 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     r.only(*s, "stimulus.", {"size_px", "kernel", "poisson_taps", "technique", "settings"});
     c.stimulus_size_px = static_cast<int>(r.integer(*s, "stimulus.", "size_px", 320, 16, 4096));
     if (r.find(*s, "technique")) {
-      // The renderer draws the stimuli; its settings (checked against the renderer's tables by
-      // penumbra-study before a session starts) replace the filter shader's kernel and taps.
+      // The technique's settings (checked against the renderer's tables by penumbra-study before
+      // a session starts) say the kernel and taps; without a technique, the kernel field does.
       for (const char* own : {"kernel", "poisson_taps"})
         if (r.find(*s, own))
-          r.fail(std::string("stimulus.") + own, "a setting of the study's own filter shader; with stimulus.technique the "
+          r.fail(std::string("stimulus.") + own, "the kernel without a technique (the renderer's PCF); with stimulus.technique the "
                                                  "technique's settings say it (\"settings\": {\"pcf.kernel\": \"grid\"})");
       c.technique = r.text(*s, "stimulus.", "technique", "");
       if (c.technique.empty() || c.technique.size() > 32) r.fail("stimulus.technique", "expected a technique name (penumbra-render --technique)");
@@ -190,9 +190,8 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
         const auto kernel = std::find_if(c.technique_settings.begin(), c.technique_settings.end(),
                                          [](const auto& kv) { return kv.first == "pcf.kernel"; });
         if (kernel == c.technique_settings.end())
-          r.fail("stimulus.settings", "pcf.kernel is required with technique pcf (grid or poisson: the log's kernel column)");
+          r.fail("stimulus.settings", "pcf.kernel is required with technique pcf (disk, grid or poisson: the log's kernel column)");
         c.kernel = r.parse_enum("stimulus.settings.pcf.kernel", kernel->second, stimuli::parse_kernel);
-        if (c.kernel == stimuli::Kernel::disk) r.fail("stimulus.settings.pcf.kernel", "expected grid or poisson (the renderer's PCF kernels)");
       } else {
         c.kernel = stimuli::Kernel::grid;  // RPCF's box and the moments techniques' box blur
       }

@@ -56,8 +56,8 @@ struct StudyConfig {
   int poisson_taps = 32;
   int stimulus_size_px = 320;
   // stimulus.technique / stimulus.settings: the renderer's technique that draws the stimuli and
-  // its settings by penumbra-render's keys ({"pcf.kernel": "grid"}); empty: the study's own filter
-  // shader with `kernel`. The log's kernel column: pcf.kernel for pcf, else grid (RPCF's box and
+  // its settings by penumbra-render's keys ({"pcf.kernel": "grid"}); empty: the renderer's PCF
+  // with `kernel` (stimuli::as_renderer_pcf). The log's kernel column: pcf.kernel for pcf, else grid (RPCF's box and
   // the box blur of the filtered-moments techniques).
   std::string technique;
   std::vector<std::pair<std::string, std::string>> technique_settings;

@@ -10,17 +10,11 @@
 #include <vector>
 
 #include "gl/context.h"
-#include "gl/embedded_files.h"
 #include "gl/objects.h"
-#include "gl/shader_library.h"
 #include "sampling/poisson_disk.h"
 #include "sampling/random.h"
 #include "shadows/renderer.h"
 #include "shadows/technique.h"
-
-namespace penumbra::embedded {
-std::span<const EmbeddedFile> study_shaders();
-}
 
 namespace penumbra::stimuli {
 
@@ -92,12 +86,6 @@ nlohmann::json to_json(const StimulusSpec& spec, const Geometry& g) {
 
 namespace {
 
-std::vector<std::pair<std::string, std::string>> study_shader_files() {
-  std::vector<std::pair<std::string, std::string>> files;
-  for (const auto& f : embedded::study_shaders()) files.emplace_back(std::string(f.name), std::string(f.text));
-  return files;
-}
-
 // The part of the rectangle [lo, hi] below the line y = m x + b (Sutherland–Hodgman, one plane).
 std::vector<glm::dvec2> occluder_polygon(glm::dvec2 lo, glm::dvec2 hi, double m, double b) {
   const std::vector<glm::dvec2> square = {{lo.x, lo.y}, {hi.x, lo.y}, {hi.x, hi.y}, {lo.x, hi.y}};
@@ -137,6 +125,16 @@ double box_over_edge(glm::dvec2 q, double r, double m, double b) {
   const double lit = std::abs(m) < 1e-12 ? L * std::clamp(u_left, 0.0, L)
                                          : (clamp_antiderivative(u_left, L) - clamp_antiderivative(u_right, L)) / m;
   return std::clamp(lit / (L * L), 0.0, 1.0);
+}
+
+// The lit fraction of the disk of radius r around q against the edge y = m x + b (lit above):
+// one minus the circular segment beyond the chord at the centre's signed distance s from the edge.
+double disk_over_edge(glm::dvec2 q, double r, double m, double b) {
+  const double s = (q.y - m * q.x - b) / std::sqrt(1 + m * m);
+  if (s >= r) return 1;
+  if (s <= -r) return 0;
+  const double segment = r * r * std::acos(s / r) - s * std::sqrt(r * r - s * s);
+  return std::clamp(1 - segment / (std::numbers::pi * r * r), 0.0, 1.0);
 }
 
 [[noreturn]] void refuse_setting(const std::string& key, const std::string& what) {
@@ -234,6 +232,7 @@ PartnerMethod partner_for(const shadows::ShadowSettings& s) {
     if (s.pcf.rotate) throw std::invalid_argument("pcf.rotate: a disk rotated per pixel has no partner here (set it false)");
     return PartnerMethod::edge_taps;
   }
+  if (s.technique == Technique::pcf && s.pcf.kernel == shadows::Kernel::disk) return PartnerMethod::disk_integral;
   if (s.technique == Technique::pcf || s.technique == Technique::rpcf) return PartnerMethod::box_integral;
   if (entry.moments && entry.moments(s)) return PartnerMethod::fine_map;
   throw std::invalid_argument("technique: '" + std::string(shadows::to_string(s.technique)) +
@@ -249,6 +248,15 @@ std::string partner_unavailable(const shadows::ShadowSettings& s) {
   }
 }
 
+StimulusSpec as_renderer_pcf(const StimulusSpec& spec) {
+  if (!spec.technique.empty()) return spec;
+  StimulusSpec out = spec;
+  out.technique = "pcf";
+  out.technique_settings = {{"pcf.kernel", to_string(spec.kernel)}};
+  if (spec.kernel == Kernel::poisson) out.technique_settings.emplace_back("pcf.poisson_taps", std::to_string(spec.poisson_taps));
+  return out;
+}
+
 int fine_map_texels(const StimulusSpec& spec, const Geometry& g) {
   const double radius = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
   const double extent = spec.artifact_px * g.map_texels, wanted_texel = std::min(spec.artifact_px, radius) / 64;
@@ -257,12 +265,7 @@ int fine_map_texels(const StimulusSpec& spec, const Geometry& g) {
 }
 
 struct StimulusRenderer::Impl {
-  gl::ShaderLibrary library{study_shader_files()};
-  gl::Program occluder = library.program({{GL_VERTEX_SHADER, "occluder.vert"}, {GL_FRAGMENT_SHADER, "occluder.frag"}});
-  gl::Program filter = library.program({{GL_VERTEX_SHADER, "fullscreen.vert"}, {GL_FRAGMENT_SHADER, "filter.frag"}});
-  gl::Sampler nearest{gl::SamplerDesc{GL_NEAREST, GL_NEAREST, GL_CLAMP_TO_EDGE}};
-  gl::VertexArray empty_vao;
-  std::unique_ptr<shadows::Renderer> renderer;  // made on the first technique-drawn stimulus
+  std::unique_ptr<shadows::Renderer> renderer;  // made on the first stimulus
 };
 
 StimulusRenderer::StimulusRenderer() : impl_(std::make_unique<Impl>()) {}
@@ -270,109 +273,10 @@ StimulusRenderer::~StimulusRenderer() = default;
 
 StimulusPair StimulusRenderer::render(const StimulusSpec& spec) { return render(spec, make_geometry(spec)); }
 
-StimulusPair StimulusRenderer::render(const StimulusSpec& spec_in, const Geometry& geometry) {
-  validate(spec_in);
-  if (!spec_in.technique.empty()) return render_with_technique(spec_in, geometry);
-  StimulusSpec spec = spec_in;
-  spec.filter_radius_px = clamp_filter_radius(spec.filter_radius_px, spec.size_px).filter_radius_px;
-  StimulusPair pair;
-  pair.geometry = geometry;
-  const Geometry& g = pair.geometry;
-  const float a = static_cast<float>(spec.artifact_px);
-  const float extent = a * static_cast<float>(g.map_texels);
-
-  // Shadow-map pass: the occluder's depth (0) over the cleared receiver-free depth (1).
-  gl::Texture depth({GL_DEPTH_COMPONENT32F, g.map_texels, g.map_texels, 1}, "stimulus shadow map");
-  const gl::Framebuffer::Attachment depth_att[] = {{&depth, GL_DEPTH_ATTACHMENT}};
-  gl::Framebuffer map_fbo(depth_att, "stimulus shadow map");
-  std::vector<glm::vec2> poly;
-  for (const glm::dvec2& v : occluder_polygon(g.map_origin_px - glm::dvec2(a), g.map_origin_px + glm::dvec2(extent + a), g.line_m, g.line_b))
-    poly.emplace_back(v);
-  gl::Buffer vertices(poly.size() * sizeof(glm::vec2), poly.data());
-  gl::VertexArray vao;
-  glVertexArrayVertexBuffer(vao.id(), 0, vertices.id(), 0, sizeof(glm::vec2));
-  glEnableVertexArrayAttrib(vao.id(), 0);
-  glVertexArrayAttribFormat(vao.id(), 0, 2, GL_FLOAT, GL_FALSE, 0);
-  glVertexArrayAttribBinding(vao.id(), 0, 0);
-  map_fbo.bind();
-  glViewport(0, 0, g.map_texels, g.map_texels);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-  glDisable(GL_CULL_FACE);
-  glDisable(GL_BLEND);
-  glClearDepth(1.0);
-  glClear(GL_DEPTH_BUFFER_BIT);
-  impl_->occluder.use();
-  glProgramUniform2f(impl_->occluder.id(), impl_->occluder.location("u_map_origin_px"),
-                     static_cast<float>(g.map_origin_px.x), static_cast<float>(g.map_origin_px.y));
-  glProgramUniform1f(impl_->occluder.id(), impl_->occluder.location("u_map_extent_px"), extent);
-  vao.bind();
-  if (poly.size() >= 3) glDrawArrays(GL_TRIANGLE_FAN, 0, static_cast<GLsizei>(poly.size()));
-  glDisable(GL_DEPTH_TEST);
-
-  std::vector<float> depth_values(static_cast<std::size_t>(g.map_texels) * g.map_texels);
-  glGetTextureImage(depth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth_values.size() * 4),
-                    depth_values.data());
-  last_map_.resize(depth_values.size());
-  for (std::size_t i = 0; i < depth_values.size(); ++i) last_map_[i] = depth_values[i] < 0.5f ? 0 : 1;
-
-  // Receiver pass, twice: from the shadow map, and from the original edge.
-  const int n = spec.size_px;
-  gl::Texture color({GL_R32F, n, n, 1}, "stimulus visibility");
-  const gl::Framebuffer::Attachment color_att[] = {{&color, GL_COLOR_ATTACHMENT0}};
-  gl::Framebuffer fbo(color_att, "stimulus visibility");
-  const gl::Program& p = impl_->filter;
-  const GLuint id = p.id();
-  glProgramUniform1i(id, p.location("u_depth"), 0);
-  glProgramUniform2f(id, p.location("u_map_origin_px"), static_cast<float>(g.map_origin_px.x),
-                     static_cast<float>(g.map_origin_px.y));
-  glProgramUniform1f(id, p.location("u_texel_px"), a);
-  glProgramUniform1i(id, p.location("u_map_texels"), g.map_texels);
-  glProgramUniform2f(id, p.location("u_size_px"), static_cast<float>(n), static_cast<float>(n));
-  const glm::mat2 to_canonical(g.to_canonical);
-  glProgramUniformMatrix2fv(id, p.location("u_to_canonical"), 1, GL_FALSE, &to_canonical[0][0]);
-  glProgramUniform1f(id, p.location("u_radius_px"), static_cast<float>(spec.filter_radius_px));
-  glProgramUniform1i(id, p.location("u_kernel"), static_cast<int>(spec.kernel));
-  glProgramUniform2f(id, p.location("u_line"), static_cast<float>(g.line_m), static_cast<float>(g.line_b));
-  std::vector<glm::vec2> taps = sampling::poisson_disk(spec.poisson_taps);
-  const float cr = static_cast<float>(std::cos(g.poisson_rotation)), sr = static_cast<float>(std::sin(g.poisson_rotation));
-  for (auto& t : taps) t = glm::vec2(cr * t.x - sr * t.y, sr * t.x + cr * t.y);
-  glProgramUniform2fv(id, p.location("u_taps"), static_cast<GLsizei>(taps.size()), &taps[0].x);
-  glProgramUniform1i(id, p.location("u_tap_count"), static_cast<int>(taps.size()));
-  depth.bind(0);
-  impl_->nearest.bind(0);
-  fbo.bind();
-  glViewport(0, 0, n, n);
-  p.use();
-  impl_->empty_vao.bind();
-
-  auto draw = [&](int source, io::ImageF& vis, io::Image8& img) {
-    glProgramUniform1i(id, p.location("u_source"), source);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    std::vector<float> rows(static_cast<std::size_t>(n) * n);
-    glGetTextureImage(color.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(rows.size() * 4), rows.data());
-    vis = {n, n, 1, std::vector<float>(rows.size())};
-    img = {n, n, 1, std::vector<std::uint8_t>(rows.size())};
-    for (int y = 0; y < n; ++y) {
-      for (int x = 0; x < n; ++x) {
-        const float v = rows[static_cast<std::size_t>(n - 1 - y) * n + x];  // GL rows are bottom first
-        vis.at(x, y) = v;
-        img.at(x, y) = encode(spec.lit_linear * v, spec.transfer);
-      }
-    }
-  };
-  draw(0, pair.artifact_visibility, pair.artifact);
-  draw(1, pair.line_visibility, pair.line);
-  glBindSampler(0, 0);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  gl::check_errors("stimulus render");
-  return pair;
+StimulusPair StimulusRenderer::render(const StimulusSpec& spec, const Geometry& geometry) {
+  validate(spec);
+  return render_with_technique(spec.technique.empty() ? as_renderer_pcf(spec) : spec, geometry);
 }
-
-}  // namespace penumbra::stimuli
-
-namespace penumbra::stimuli {
 
 StimulusPair StimulusRenderer::render_with_technique(const StimulusSpec& spec_in, const Geometry& g) {
   StimulusSpec spec = spec_in;
@@ -428,6 +332,8 @@ StimulusPair StimulusRenderer::render_with_technique(const StimulusSpec& spec_in
         v = fine->at(x, y);
       } else if (partner == PartnerMethod::box_integral) {
         v = box_over_edge(q, r, g.line_m, g.line_b);
+      } else if (partner == PartnerMethod::disk_integral) {
+        v = disk_over_edge(q, r, g.line_m, g.line_b);
       } else {
         for (const glm::dvec2 t : taps) v += (q + t).y >= g.line_m * (q + t).x + g.line_b ? 1 : 0;
         v /= static_cast<double>(taps.size());

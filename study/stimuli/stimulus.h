@@ -1,9 +1,11 @@
 #pragma once
-// 2AFC stimuli drawn the renderer's way: an occluder whose straight edge is the original line is
-// rasterized into a shadow map whose texels are `artifact_px` stimulus pixels wide, and the
-// receiver (a white plane seen orthographically, 1 world unit = 1 screen pixel, light straight
-// down) is shaded with PCF of radius `filter_radius_px`. The artifact-free partner filters the
-// original edge itself (analytically) with the same kernel and radius.
+// 2AFC stimuli drawn by the shadow renderer's own techniques (stimulus_scene, stimulus_settings):
+// an occluder whose straight edge is the original line casts into an unfitted shadow map whose
+// texels are `artifact_px` stimulus pixels wide, and the receiver (a white plane seen
+// orthographically, 1 world unit = 1 screen pixel, light straight down) is shaded by the
+// technique with its filter radius set to `filter_radius_px`. The artifact-free partner is the
+// same filter over the original edge (partner_for). A spec without a technique (the study's
+// earlier kernel field) is drawn by the renderer's PCF with that kernel (as_renderer_pcf).
 //
 // Light levels: `lit_linear` is the lit receiver's level in *linear light* as a fraction of the
 // display's white luminance (1.0 = full contrast, 0.5 = half the luminance). The GL pass computes
@@ -70,6 +72,7 @@ shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texe
 // The artifact-free partner: the same technique with the same radius in px over the original edge.
 enum class PartnerMethod {
   box_integral,  // box kernels (PCF grid, RPCF: revectorizing a straight edge gives it back): closed form
+  disk_integral, // PCF disk: the circular segment beyond the edge, closed form
   edge_taps,     // PCF Poisson, unrotated: each of the renderer's taps tested against the edge
   fine_map,      // filtered moments (VSM, MSM, EVSM, ESM): the technique itself on a map of
                  // fine_map_texels over the same square (its blur costs the same at any radius)
@@ -78,6 +81,9 @@ enum class PartnerMethod {
 PartnerMethod partner_for(const shadows::ShadowSettings& settings);
 // "" when partner_for has one, else its reason.
 std::string partner_unavailable(const shadows::ShadowSettings& settings);
+// The technique a spec without one is drawn with: the renderer's PCF with the spec's kernel (disk,
+// grid, or poisson with poisson_taps taps, unrotated); a spec with a technique as it is.
+StimulusSpec as_renderer_pcf(const StimulusSpec& spec);
 // The fine map's texels: its texel min(a, r) / 64, at most kMaxFineMapTexels per side. The
 // moments techniques' edge sits a quarter texel off the line (it moves with the texel), so the
 // partner's map must be finer than its staircase alone needs: at min(a, r) / 16 the partner
@@ -98,7 +104,7 @@ class StimulusRenderer {
   // moved); the shadow map must cover the stimulus plus the radius, as make_geometry's does.
   StimulusPair render(const StimulusSpec& spec, const Geometry& geometry);
   // The shadow map of the last render: 1 = lit texel, 0 = occluded, row 0 = canonical bottom,
-  // indexed in the canonical frame whichever path drew it.
+  // indexed in the canonical frame.
   const std::vector<std::uint8_t>& last_shadow_map() const { return last_map_; }
 
  private:

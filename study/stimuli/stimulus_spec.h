@@ -24,7 +24,7 @@ std::string to_string(Transfer t);
 struct StimulusSpec {
   Pattern pattern = Pattern::stair;
   double artifact_px = 10;       // one shadow-map texel on screen
-  double filter_radius_px = 20;  // PCF radius (as shown: clamp first, see clamp_filter_radius)
+  double filter_radius_px = 20;  // filter radius (as shown: clamp first, see clamp_filter_radius)
   double lit_linear = 1.0;       // lit level in linear light, (0, 1]
   Kernel kernel = Kernel::disk;
   int poisson_taps = 32;         // Poisson kernel only
@@ -33,8 +33,8 @@ struct StimulusSpec {
   Transfer transfer = Transfer::srgb;
   // The shadow technique of the renderer that draws the stimulus, by penumbra-render's names
   // ("pcf"), with its settings as "section.key" and value ("pcf.kernel", "grid"); its filter
-  // radius is set from filter_radius_px / artifact_px texels. Empty: the study's own filter
-  // shader with `kernel` and `poisson_taps` (the exact disk and the earlier logs).
+  // radius is set from filter_radius_px / artifact_px texels. Empty: the renderer's PCF with
+  // `kernel` and `poisson_taps` (as_renderer_pcf; the form of the earlier configs and logs).
   std::string technique;
   std::vector<std::pair<std::string, std::string>> technique_settings;
 };

@@ -157,7 +157,7 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const fs::path out = work_ / "out";
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcss", "vsm", "edtsm", "edtssm", "erosion",
+  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcf-disk", "pcss", "vsm", "edtsm", "edtssm", "erosion",
                                          "rbsm", "rpcf", "msm", "evsm", "esm"};
   std::set<std::string> expected = renders;
   expected.insert({"montage.png", "report.json"});

@@ -105,9 +105,10 @@ TEST_P(PcfEdge, HalfAtTheEdgeMonotoneAndTwoRadiiWide) {
 INSTANTIATE_TEST_SUITE_P(Kernels, PcfEdge,
                          ::testing::Values(EdgeCase{Kernel::grid, 1.0f}, EdgeCase{Kernel::grid, 2.5f},
                                            EdgeCase{Kernel::grid, 4.0f}, EdgeCase{Kernel::poisson, 2.5f},
-                                           EdgeCase{Kernel::poisson, 4.0f}),
+                                           EdgeCase{Kernel::poisson, 4.0f}, EdgeCase{Kernel::disk, 2.5f},
+                                           EdgeCase{Kernel::disk, 4.0f}),
                          [](const auto& p) {
-                           return std::string(p.param.kernel == Kernel::grid ? "grid" : "poisson") + "_r" +
+                           return std::string(p.param.kernel == Kernel::grid ? "grid" : p.param.kernel == Kernel::disk ? "disk" : "poisson") + "_r" +
                                   std::to_string(static_cast<int>(p.param.radius_texels * 10));
                          });
 
@@ -226,8 +227,8 @@ std::vector<ShadowSettings> every_technique(int resolution) {
   std::vector<ShadowSettings> out;
   for (auto name : shadows::technique_names()) {
     const Technique t = shadows::technique_from_string(name);
-    for (Kernel k : {Kernel::grid, Kernel::poisson}) {
-      if (k == Kernel::grid && t != Technique::pcf && t != Technique::pcss) continue;
+    for (Kernel k : {Kernel::grid, Kernel::poisson, Kernel::disk}) {
+      if (k != Kernel::poisson && t != Technique::pcf && t != Technique::pcss) continue;
       ShadowSettings st = settings(t, resolution, true);
       st.pcf.kernel = k;
       st.pcss.kernel = k;

@@ -114,75 +114,9 @@ struct Reference {
   }
 };
 
-struct Case {
-  stimuli::Pattern pattern;
-  double artifact_px, radius_px, lit;
-  stimuli::Kernel kernel;
-  std::uint64_t seed;
-};
-
-class StimulusPixels : public ::testing::TestWithParam<Case> {};
-
-TEST_P(StimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
-  const Case c = GetParam();
-  StimulusSpec spec;
-  spec.pattern = c.pattern;
-  spec.artifact_px = c.artifact_px;
-  spec.filter_radius_px = c.radius_px;
-  spec.lit_linear = c.lit;
-  spec.kernel = c.kernel;
-  spec.size_px = 96;
-  spec.seed = c.seed;
-  stimuli::StimulusRenderer renderer;
-  const auto pair = renderer.render(spec);
-  const Geometry& g = pair.geometry;
-  Reference ref{spec, g, {}};
-  ref.taps = sampling::poisson_disk(spec.poisson_taps);
-
-  // The rasterized shadow map is the texel-centre rule exactly.
-  const auto& map = renderer.last_shadow_map();
-  int map_mismatch = 0;
-  for (int j = 0; j < g.map_texels; ++j)
-    for (int i = 0; i < g.map_texels; ++i) map_mismatch += map[j * g.map_texels + i] != (ref.texel_lit(i, j) ? 1 : 0);
-  EXPECT_EQ(map_mismatch, 0);
-
-  const int n = spec.size_px;
-  int worst = 0, artifact_differs = 0;
-  for (int y = 0; y < n; ++y) {
-    for (int x = 0; x < n; ++x) {
-      const glm::dvec2 q = g.to_canonical * glm::dvec2(x + 0.5 - 0.5 * n, (n - 1 - y) + 0.5 - 0.5 * n);
-      for (int from_map = 0; from_map < 2; ++from_map) {
-        const double v = ref.visibility(q, from_map == 1);
-        const int expected = stimuli::encode(c.lit * v, spec.transfer);
-        const int got = from_map ? pair.artifact.at(x, y) : pair.line.at(x, y);
-        const int diff = std::abs(expected - got);
-        worst = std::max(worst, diff);
-        if (diff > 1) ADD_FAILURE() << (from_map ? "artifact" : "line") << " pixel (" << x << ", " << y << "): got "
-                                    << got << ", expected " << expected << " (visibility " << v << ")";
-      }
-      artifact_differs += pair.artifact.at(x, y) != pair.line.at(x, y);
-    }
-  }
-  EXPECT_LE(worst, 1);
-  // The pair really differs (the staircase is there) and both have a dark and a lit side.
-  EXPECT_GT(artifact_differs, 20);
-  const auto [lo, hi] = std::minmax_element(pair.line.pixels.begin(), pair.line.pixels.end());
-  EXPECT_EQ(*lo, 0);
-  EXPECT_EQ(*hi, stimuli::encode(c.lit, spec.transfer));
-}
-
-INSTANTIATE_TEST_SUITE_P(
-    Stimuli, StimulusPixels,
-    ::testing::Values(Case{stimuli::Pattern::stair, 10, 4, 1.0, stimuli::Kernel::disk, 1},
-                      Case{stimuli::Pattern::stair, 10, 17, 1.0, stimuli::Kernel::disk, 2},
-                      Case{stimuli::Pattern::step, 10, 4, 1.0, stimuli::Kernel::disk, 3},
-                      Case{stimuli::Pattern::step, 20, 17, 0.5, stimuli::Kernel::disk, 4},
-                      Case{stimuli::Pattern::stair, 5, 6, 0.5, stimuli::Kernel::grid, 5},
-                      Case{stimuli::Pattern::step, 10, 5, 1.0, stimuli::Kernel::poisson, 6}));
-
 // Stimuli drawn by the renderer's own PCF (renderer/shaders/shadow_pcf.glsl) through the stimulus
-// scene: the same independent computation as above. Grid: the box kernel's area integral over
-// the map and over the edge. Poisson (the renderer's disk, unrotated): each tap is the hardware's
+// scene, against the independent computation above. Disk and grid: the kernel's area integral
+// over the map and over the edge. Poisson (the renderer's disk, unrotated): each tap is the hardware's
 // 2x2 comparison, computed here as the bilinear weights of the four texel centres around it; the
 // partner tests each tap against the edge.
 struct TechniqueCase {
@@ -204,7 +138,7 @@ TEST_P(RendererStimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
   spec.artifact_px = c.artifact_px;
   spec.filter_radius_px = c.radius_px;
   spec.lit_linear = c.lit;
-  spec.kernel = stimuli::Kernel::grid;  // the reference's kernel for the grid case
+  spec.kernel = stimuli::parse_kernel(c.kernel);  // the reference's kernel (disk, grid)
   spec.size_px = c.size_px;
   spec.seed = c.seed;
   spec.technique = "pcf";
@@ -270,7 +204,12 @@ TEST_P(RendererStimulusPixels, MatchIndependentFilteredEdgeWithinOneLevel) {
 
 INSTANTIATE_TEST_SUITE_P(
     Pcf, RendererStimulusPixels,
-    ::testing::Values(TechniqueCase{stimuli::Pattern::stair, 10, 4, 1.0, "grid", 11},
+    ::testing::Values(TechniqueCase{stimuli::Pattern::stair, 10, 4, 1.0, "disk", 1},
+                      TechniqueCase{stimuli::Pattern::stair, 10, 17, 1.0, "disk", 2},
+                      TechniqueCase{stimuli::Pattern::step, 10, 4, 1.0, "disk", 3},
+                      TechniqueCase{stimuli::Pattern::step, 20, 17, 0.5, "disk", 4},
+                      TechniqueCase{stimuli::Pattern::stair, 5, 30, 1.0, "disk", 5, 128},
+                      TechniqueCase{stimuli::Pattern::stair, 10, 4, 1.0, "grid", 11},
                       TechniqueCase{stimuli::Pattern::stair, 5, 6, 0.5, "grid", 12},
                       TechniqueCase{stimuli::Pattern::step, 10, 17, 1.0, "grid", 13},
                       TechniqueCase{stimuli::Pattern::step, 20, 7.5, 0.5, "grid", 14, 160},
@@ -279,6 +218,31 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<TechniqueCase>& p) { return std::to_string(p.index) + "_" + p.param.kernel; });
 
 // What the study sets itself and what a config may set, by penumbra-render's keys.
+// A spec without a technique (the earlier configs' stimulus.kernel) is drawn by the renderer's
+// PCF with that kernel: the same bytes as the spec that names it.
+TEST(StimulusSpec, WithoutATechniqueIsTheRenderersPcfWithItsKernel) {
+  stimuli::StimulusRenderer renderer;
+  for (const stimuli::Kernel kernel : {stimuli::Kernel::disk, stimuli::Kernel::grid, stimuli::Kernel::poisson}) {
+    StimulusSpec legacy;
+    legacy.pattern = stimuli::Pattern::stair;
+    legacy.artifact_px = 8;
+    legacy.filter_radius_px = 11;
+    legacy.size_px = 64;
+    legacy.seed = 21;
+    legacy.kernel = kernel;
+    legacy.poisson_taps = 20;
+    StimulusSpec named = legacy;
+    named.technique = "pcf";
+    named.technique_settings = {{"pcf.kernel", stimuli::to_string(kernel)}};
+    if (kernel == stimuli::Kernel::poisson) named.technique_settings.emplace_back("pcf.poisson_taps", "20");
+    EXPECT_EQ(stimuli::as_renderer_pcf(legacy).technique_settings, named.technique_settings);
+    const auto a = renderer.render(legacy), b = renderer.render(named);
+    EXPECT_EQ(a.artifact.pixels, b.artifact.pixels) << stimuli::to_string(kernel);
+    EXPECT_EQ(a.line.pixels, b.line.pixels) << stimuli::to_string(kernel);
+    EXPECT_NE(a.artifact.pixels, a.line.pixels) << stimuli::to_string(kernel);
+  }
+}
+
 TEST(StimulusSettings, TrialRadiusBecomesTexelsAndTheStudyOwnsTheMap) {
   StimulusSpec spec;
   spec.artifact_px = 8;
@@ -341,7 +305,7 @@ TEST(StimulusSettings, TrialRadiusBecomesTexelsAndTheStudyOwnsTheMap) {
   refused("pcf", {{"adaptive.enabled", "true"}}, "adaptive.enabled: not a setting of technique 'pcf'");
   refused("pcf", {{"vsm.radius", "1"}}, "vsm.radius: not a setting of technique 'pcf'");
   refused("pcf", {{"pcf.kernal", "grid"}}, "pcf.kernal: no such setting");
-  refused("pcf", {{"pcf.kernel", "disk"}}, "pcf.kernel: ");
+  refused("pcf", {{"pcf.kernel", "cone"}}, "pcf.kernel: ");
   refused("pcf", {{"kernel", "grid"}}, "kernel: expected section.key");
   spec.technique = "pcf";
   spec.technique_settings = {{"pcf.kernel", "poisson"}, {"pcf.rotate", "true"}};

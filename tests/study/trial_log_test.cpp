@@ -282,7 +282,7 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
 }
 
 // stimulus.technique: the renderer's technique and its settings by penumbra-render's keys; the
-// filter shader's kernel and taps do not mix with it, and pcf names its kernel (the log's column).
+// earlier kernel and taps fields do not mix with it, and pcf names its kernel (the log's column).
 TEST(StudyConfig, StimulusTechniqueAndItsSettings) {
   const auto c = procedure::load_config(PENUMBRA_DATA_DIR "/studies/pcf-poisson.json");
   EXPECT_EQ(c.technique, "pcf");
@@ -299,11 +299,12 @@ TEST(StudyConfig, StimulusTechniqueAndItsSettings) {
   };
   const nlohmann::json grid = {{"pcf.kernel", "grid"}};
   EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "grid"}, {"pcf.poisson_taps", 16}, {"pcf.rotate", false}}}}), "no error");
-  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", grid}, {"kernel", "disk"}}).rfind("study.json: stimulus.kernel: a setting of the study's own filter shader", 0), 0u);
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", grid}, {"kernel", "disk"}}).rfind("study.json: stimulus.kernel: the kernel without a technique", 0), 0u);
   EXPECT_EQ(with({{"settings", grid}}), "study.json: stimulus.settings: needs stimulus.technique (the technique the settings are for)");
   EXPECT_EQ(with({{"technique", "pcf"}}).rfind("study.json: stimulus.settings: pcf.kernel is required with technique pcf", 0), 0u);
-  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "disk"}}}}),
-            "study.json: stimulus.settings.pcf.kernel: expected grid or poisson (the renderer's PCF kernels)");
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "disk"}}}}), "no error");  // the exact disk
+  EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", "cone"}}}}),
+            "study.json: stimulus.settings.pcf.kernel: kernel 'cone': expected disk, grid or poisson");
   EXPECT_EQ(with({{"technique", "pcf"}, {"settings", {{"pcf.kernel", {1, 2}}}}}),
             "study.json: stimulus.settings.pcf.kernel: expected a string, a number or true/false");
   EXPECT_EQ(with({{"technique", ""}}), "study.json: stimulus.technique: expected a technique name (penumbra-render --technique)");

@@ -10,10 +10,10 @@ namespace {
 
 const Setting<PcfParams> kTable[] = {
     PENUMBRA_RADIUS_ROWS(PcfParams, "filter radius"),
-    PENUMBRA_CHOICE(PcfParams, kernel, Kernel, rows::kKernels, "grid: box over whole texels, coverage-weighted; poisson: rotated disk"),
+    PENUMBRA_CHOICE(PcfParams, kernel, Kernel, rows::kKernels, "grid: box over whole texels, coverage-weighted; poisson: rotated Poisson disk; disk: exact disk over whole texels, coverage-weighted (the ideal filter)"),
     PENUMBRA_INT(PcfParams, poisson_taps, "taps", 1, 64, "Poisson-disk taps (each a hardware 2x2 comparison)"),
     PENUMBRA_BOOL(PcfParams, rotate, "rotate the Poisson disk per pixel"),
-    PENUMBRA_INT(PcfParams, max_grid_taps, "taps", 2, 256, "grid taps per axis before the grid is strided"),
+    PENUMBRA_INT(PcfParams, max_grid_taps, "taps", 2, 256, "grid and disk taps per axis before the kernel is strided"),
 };
 
 }  // namespace
@@ -31,6 +31,7 @@ const TechniqueEntry& pcf_technique() {
       .variant_defines =
           [](const ShadowSettings& s, std::vector<gl::ShaderDefine>& d) {
             if (s.pcf.kernel == Kernel::grid) d.push_back({"KERNEL_GRID", "1"});
+            if (s.pcf.kernel == Kernel::disk) d.push_back({"KERNEL_DISK", "1"});
           },
       .poisson_taps = [](const ShadowSettings& s) { return s.pcf.poisson_taps; },
       .set_uniforms =

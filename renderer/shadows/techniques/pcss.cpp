@@ -17,7 +17,7 @@ const Setting<PcssParams> kTable[] = {
     PENUMBRA_REAL(PcssParams, min_penumbra_ws, "world", 0, 1e6, "minimum filter radius at the receiver"),
     PENUMBRA_REAL(PcssParams, search_scale, "", 1, 8,
                   "blocker-search radius over its geometric bound; > 1 lets sparse taps find blockers near the penumbra's outer rim"),
-    PENUMBRA_INT(PcssParams, max_grid_taps, "taps", 2, 256, "grid taps per axis before the grid is strided"),
+    PENUMBRA_INT(PcssParams, max_grid_taps, "taps", 2, 256, "grid and disk taps per axis before the kernel is strided"),
 };
 
 }  // namespace
@@ -39,6 +39,7 @@ const TechniqueEntry& pcss_technique() {
       .variant_defines =
           [](const ShadowSettings& s, std::vector<gl::ShaderDefine>& d) {
             if (s.pcss.kernel == Kernel::grid) d.push_back({"KERNEL_GRID", "1"});
+            if (s.pcss.kernel == Kernel::disk) d.push_back({"KERNEL_DISK", "1"});
           },
       // One disk for both steps, sized for the larger tap count; the filter step takes its own
       // count from the front (the best-candidate order spreads any prefix).
