@@ -522,10 +522,11 @@ std::string run_sessions(const fs::path& dir, const nlohmann::json& config, cons
 // The pcf-*, vsm and rpcf configs draw the stimuli with the renderer's technique: the entry is
 // that technique's, for its kernel (none for vsm and rpcf).
 TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
-  for (const std::string name : {"default", "default-yesno", "pcf-grid", "pcf-poisson", "vsm", "rpcf"}) {
+  for (const std::string name : {"default", "default-yesno", "kreuzer2017", "pcf-grid", "pcf-poisson", "vsm", "rpcf"}) {
     const fs::path dir = fresh("pipeline-" + name);
     const std::string config_file = "/studies/" + name + ".json";
-    const std::string task = name == "default-yesno" ? "yesno" : "2afc";
+    const bool published = name == "kreuzer2017";  // yes/no with the 2AFC gamma 0.5 and pThreshold .82
+    const std::string task = name == "default-yesno" || published ? "yesno" : "2afc";
     nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR + config_file));
     config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
     config["artifact_px"] = {5, 20};
@@ -538,13 +539,23 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     EXPECT_EQ(report["trials"], 3 * 2 * 30) << task;
     EXPECT_EQ(report["practice_rows_excluded"], 3 * 4) << task;
     for (const auto& s : report["staircases"]) EXPECT_TRUE(s["quest"]["matches_log"].get<bool>()) << task;
-    EXPECT_EQ(report["options"]["guess"], task == "2afc" ? 0.5 : 0.05);
-    EXPECT_EQ(report["options"]["p_threshold"], task == "2afc" ? 0.82 : 0.658);
+    EXPECT_EQ(report["options"]["guess"], task == "2afc" || published ? 0.5 : 0.05);
+    EXPECT_EQ(report["options"]["p_threshold"], task == "2afc" || published ? 0.82 : 0.658);
     if (task == "yesno") {
       EXPECT_NE(report["notes"].dump().find("catch"), std::string::npos) << report["notes"];
     }
     const adaptive::CalibrationEntry entry = adaptive::load_calibration(dir / "fit" / "calibration.json").entries.at(0);
-    EXPECT_NEAR(entry.c, 4.0, 0.6) << name;
+    std::printf("%s: c = %.3f for a planted 4.0\n", name.c_str(), entry.c);
+    if (published) {
+      // QUEST's 2AFC gamma 0.5 on a yes/no task (the observer says "not a line" to ~5 % of what
+      // it cannot see, the model expects 50 %) pulls the threshold toward smaller filters: the
+      // published design's bias, measured 3.41 (-15 %); with QUEST's 0.82 point at F = 0.82
+      // instead of 0.65 a Weibull of beta 3.5 predicts -13 %.
+      EXPECT_GT(entry.c, 3.0) << name;
+      EXPECT_LT(entry.c, 3.8) << name;
+    } else {
+      EXPECT_NEAR(entry.c, 4.0, 0.6) << name;
+    }
     const bool other = name == "vsm" || name == "rpcf";  // a technique without a kernel setting
     EXPECT_EQ(entry.technique, other ? name : "pcf") << name;
     EXPECT_EQ(entry.kernel, name == "pcf-grid" ? "grid" : name == "pcf-poisson" ? "poisson" : other ? "" : "disk") << name;
