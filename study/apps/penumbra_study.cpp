@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "apps/calibrate_display_command.h"
 #include "apps/reference_command.h"
 #include "io/atomic_file.h"
 #include "cli/checks.h"
@@ -476,10 +477,12 @@ int main(int argc, char** argv) {
 #endif
 
   const study_app::ReferenceCommand reference(app);
+  const study_app::CalibrateDisplayCommand calibrate_display(app);
 
   if (const auto status = cli::parse(app, argc, argv, "penumbra-study")) return *status;
   try {
     if (reference.parsed()) return reference.run();
+    if (calibrate_display.parsed()) return calibrate_display.run();
     if (display_check->parsed()) return run_display_check(display_config);
     if (stim->parsed()) {
       stimuli::set_technique_settings(spec, stim_settings);

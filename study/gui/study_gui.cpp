@@ -57,13 +57,6 @@ const char* describe(Screen s) {
   return "";
 }
 
-void parse_size(const std::string& s, int& w, int& h) {
-  char x = 0;
-  char extra = 0;
-  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 64 || h < 64 || w > 16384 || h > 16384)
-    throw std::invalid_argument("--windowed '" + text::printable(s) + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
-}
-
 std::string instructions(const std::string& task) {
   const std::string left = "\xe2\x86\x90", right = "\xe2\x86\x92";
   if (task == "2afc")
@@ -87,12 +80,19 @@ void say(const std::string& line) { std::cout << line << std::endl; }  // operat
 
 }  // namespace
 
+void parse_window_size(const std::string& s, int& w, int& h) {
+  char x = 0;
+  char extra = 0;
+  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 64 || h < 64 || w > 16384 || h > 16384)
+    throw std::invalid_argument("--windowed '" + text::printable(s) + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
+}
+
 int run_session(const std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>&)>& open_session,
                 const GuiOptions& o) {
   // Everything that can refuse comes before the session is opened, so a refusal leaves no
   // new session directory behind.
   int win_w = 0, win_h = 0;
-  if (!o.windowed.empty()) parse_size(o.windowed, win_w, win_h);
+  if (!o.windowed.empty()) parse_window_size(o.windowed, win_w, win_h);
   Glfw glfw;
   const auto monitors = glfw.monitors();
   if (monitors.empty()) throw std::runtime_error("no monitor connected");

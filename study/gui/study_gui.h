@@ -28,6 +28,9 @@ struct GuiOptions {
 // Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --refresh-hz to `run`.
 void add_options(CLI::App& run, GuiOptions& options);
 
+// "--windowed WxH": the size in pixels; throws std::invalid_argument naming the option otherwise.
+void parse_window_size(const std::string& windowed, int& width, int& height);
+
 // Opens the windows, then the session (`open_session` creates or resumes it: after every check
 // that can refuse, so a refusal leaves no new session behind), and runs it until it is finished
 // or stopped. Returns the process exit code (0).

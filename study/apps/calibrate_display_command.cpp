@@ -1,0 +1,85 @@
+#include "apps/calibrate_display_command.h"
+
+#include <cstdio>
+#include <iostream>
+
+#include "cli/checks.h"
+#include "display/display_fit.h"
+#include "json/json_input.h"
+#include "procedure/session.h"
+#ifdef PENUMBRA_STUDY_GUI
+#include "gui/calibration_window.h"
+#endif
+
+namespace penumbra::study_app {
+
+namespace fs = std::filesystem;
+
+CalibrateDisplayCommand::CalibrateDisplayCommand(CLI::App& app) {
+  command_ = app.add_subcommand(
+      "calibrate-display",
+      "measure the monitor's transfer (8-bit level -> luminance) for display.calibration: photometer readings from "
+      "--luminances CSV or typed in while the window shows each grey level, or --checkerboard without a photometer");
+  command_->add_option("--luminances", luminances_, "CSV of photometer readings: header level,luminance_cd_m2, one row per level (0 and 255 among them)")
+      ->check(CLI::ExistingFile);
+  command_->add_option("--model", model_, "gamma (L_black + (L_white - L_black) (v/255)^gamma) or table (the readings, monotone interpolation)")
+      ->capture_default_str();
+  command_->add_option("--levels", levels_, "window: how many grey levels to show, 0 and 255 among them (9: 0, 32, 64, ..., 255; 17: steps of 16)")
+      ->capture_default_str()
+      ->check(CLI::Range(display::kMinReadings, 256));
+  command_->add_flag("--checkerboard", checkerboard_,
+                     "no photometer: match a grey patch to a 1-px black/white checkerboard with the arrow keys (gives a gamma)");
+  command_->add_option("--monitor", monitor_, "window: the monitor to measure (GLFW index)")->capture_default_str()->check(CLI::Range(0, 16));
+  command_->add_option("--windowed", windowed_, "window: WxH instead of full screen (testing)");
+  command_->add_option("-o,--output", output_, "the calibration file written (atomically)")->capture_default_str()->check(cli::path_given());
+}
+
+int CalibrateDisplayCommand::run() const {
+  const display::Model model = [&] {
+    try {
+      return display::parse_model(model_);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--model: ") + e.what());
+    }
+  }();
+  if (checkerboard_ && !luminances_.empty()) throw std::invalid_argument("--checkerboard: not with --luminances (readings need no match)");
+  if (checkerboard_ && model != display::Model::gamma) throw std::invalid_argument("--model table: a checkerboard match gives a gamma, not a table");
+  if (!luminances_.empty() && (command_->count("--levels") || command_->count("--windowed") || command_->count("--monitor")))
+    throw std::invalid_argument("--luminances: the readings are in the file; --levels, --monitor and --windowed are for the window");
+  display::DisplayCalibration calibration;
+  if (!luminances_.empty()) {
+    calibration = display::fit_readings(display::read_readings_csv(luminances_), model);
+    calibration.source = "photometer readings from " + fs::absolute(luminances_).lexically_normal().string();
+  } else {
+#ifdef PENUMBRA_STUDY_GUI
+    const study_gui::CalibrationScreen screen{monitor_, windowed_};
+    if (checkerboard_) {
+      const auto match = study_gui::match_checkerboard(screen);
+      if (!match) throw std::runtime_error("calibrate-display: stopped before a match was accepted; nothing written");
+      calibration = display::checkerboard_calibration(match->level);
+      calibration.source = "checkerboard match in the window";
+      calibration.monitor = match->monitor;
+    } else {
+      const auto measured = study_gui::measure_levels(display::calibration_levels(levels_), screen);
+      if (!measured) throw std::runtime_error("calibrate-display: stopped before every level was read; nothing written");
+      calibration = display::fit_readings(measured->readings, model);
+      calibration.source = "photometer readings typed in the window";
+      calibration.monitor = measured->monitor;
+    }
+#else
+    throw std::runtime_error("calibrate-display: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); give --luminances FILE.csv");
+#endif
+  }
+  calibration.created_utc = procedure::utc_now();
+  display::write_calibration(output_, calibration);
+  if (calibration.method == "photometer")
+    std::printf("gamma %.4f (black %.4g cd/m2, white %.4g cd/m2), RMS residual %.4g cd/m2 over %zu readings; model %s\n",
+                calibration.gamma, *calibration.black_cd_m2, *calibration.white_cd_m2, *calibration.residual_rms_cd_m2,
+                calibration.points.size(), display::to_string(calibration.model).c_str());
+  else
+    std::printf("gamma %.4f (the grey of level %d matched the checkerboard); model gamma\n", calibration.gamma, *calibration.matched_level);
+  std::printf("wrote %s\n", output_.string().c_str());
+  return 0;
+}
+
+}  // namespace penumbra::study_app

@@ -1,0 +1,177 @@
+#include "display/display_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+
+#include "text/printable.h"
+
+namespace penumbra::display {
+
+std::vector<int> calibration_levels(int count) {
+  if (count < kMinReadings || count > 256)
+    throw std::invalid_argument("--levels " + std::to_string(count) + ": expected " + std::to_string(kMinReadings) + "..256");
+  std::vector<int> levels;
+  for (int i = 0; i < count; ++i) levels.push_back(static_cast<int>(std::lround(255.0 * i / (count - 1))));
+  return levels;
+}
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+}  // namespace
+
+std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(file + ": no such file");
+  if (std::filesystem::file_size(path, ec) > (1u << 20)) throw std::runtime_error(file + ": larger than 1 MiB; expected at most 256 readings");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(file + ": cannot read");
+  std::string line;
+  int number = 0;
+  std::map<int, std::pair<double, int>> by_level;  // level -> (luminance, line)
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::string where = file + ":" + std::to_string(number) + ": ";
+    if (line.find('\0') != std::string::npos || !text::valid_utf8(line)) throw std::runtime_error(where + "not text");
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    for (std::string f; std::getline(ss, f, ',');) fields.push_back(trim(f));
+    if (!line.empty() && line.back() == ',') fields.emplace_back();
+    if (!header) {
+      if (fields != std::vector<std::string>{"level", "luminance_cd_m2"})
+        throw std::runtime_error(where + "expected the header 'level,luminance_cd_m2', found '" + text::printable(line) + "'");
+      header = true;
+      continue;
+    }
+    if (line.empty()) throw std::runtime_error(where + "empty line; expected 'level,luminance_cd_m2' values");
+    if (fields.size() != 2)
+      throw std::runtime_error(where + "expected 2 columns (level,luminance_cd_m2), found " + std::to_string(fields.size()));
+    const std::string& lv = fields[0];
+    if (lv.empty() || lv.size() > 3 || lv.find_first_not_of("0123456789") != std::string::npos || std::stoi(lv) > 255)
+      throw std::runtime_error(where + "column 'level': '" + text::printable(lv) + "' is not an 8-bit level (an integer 0..255)");
+    const int level = std::stoi(lv);
+    const std::string& lum = fields[1];
+    char* end = nullptr;
+    const double luminance = lum.empty() ? NAN : std::strtod(lum.c_str(), &end);
+    if (lum.empty() || end != lum.c_str() + lum.size() || !std::isfinite(luminance))
+      throw std::runtime_error(where + "column 'luminance_cd_m2': '" + text::printable(lum) + "' is not a number");
+    if (!(luminance >= 0 && luminance <= 1e5))
+      throw std::runtime_error(where + "column 'luminance_cd_m2': " + lum + " is not a luminance in [0, 100000] cd/m2");
+    const auto [it, fresh] = by_level.try_emplace(level, luminance, number);
+    if (!fresh)
+      throw std::runtime_error(where + "column 'level': " + lv + " was read already on line " + std::to_string(it->second.second));
+    if (by_level.size() > 256) throw std::runtime_error(where + "more than 256 readings");
+  }
+  if (!header) throw std::runtime_error(file + ": empty; expected the header 'level,luminance_cd_m2' and one row per level");
+  // Luminance must rise with the level; the row that breaks it is named (by line, in level order).
+  for (auto it = std::next(by_level.begin(), by_level.empty() ? 0 : 1); it != by_level.end(); ++it) {
+    const auto& [level, reading] = *it;
+    const auto& [prev_level, prev] = *std::prev(it);
+    if (!(reading.first > prev.first)) {
+      char b[256];
+      std::snprintf(b, sizeof b, "%s:%d: column 'luminance_cd_m2': %g cd/m2 at level %d is not above %g at level %d (line %d); "
+                    "luminance must rise with the level",
+                    file.c_str(), reading.second, reading.first, level, prev.first, prev_level, prev.second);
+      throw std::runtime_error(b);
+    }
+  }
+  std::vector<Reading> readings;
+  for (const auto& [level, reading] : by_level) readings.push_back({level, reading.first});
+  try {
+    check_readings(readings);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(file + ": " + e.what());
+  }
+  return readings;
+}
+
+namespace {
+
+// One reading against the gamma model: predicted minus measured luminance, cd/m².
+struct GammaResidual {
+  double x;  // level / 255
+  double luminance_cd_m2;
+  template <class T>
+  bool operator()(const T* black, const T* white, const T* gamma, T* residual) const {
+    using std::pow;
+    const T shape = x > 0 ? pow(T(x), gamma[0]) : T(0);  // x^gamma's derivative in gamma is 0 at x = 0, not 0 * -inf
+    residual[0] = black[0] + (white[0] - black[0]) * shape - T(luminance_cd_m2);
+    return true;
+  }
+};
+
+}  // namespace
+
+DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
+  std::sort(readings.begin(), readings.end(), [](const Reading& a, const Reading& b) { return a.level < b.level; });
+  check_readings(readings);
+  double black = readings.front().luminance_cd_m2, white = readings.back().luminance_cd_m2, gamma = 2.2;
+  ceres::Problem problem;
+  for (const Reading& r : readings)
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GammaResidual, 1, 1, 1, 1>(new GammaResidual{r.level / 255.0, r.luminance_cd_m2}),
+                             nullptr, &black, &white, &gamma);
+  problem.SetParameterLowerBound(&gamma, 0, 0.5);
+  problem.SetParameterUpperBound(&gamma, 0, 5.0);
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 200;
+  options.function_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-12;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable() || !(white > black))
+    throw std::invalid_argument("the gamma model does not fit these readings (" + summary.message + ")");
+  double sum = 0;
+  for (const Reading& r : readings) {
+    double residual = 0;
+    GammaResidual{r.level / 255.0, r.luminance_cd_m2}(&black, &white, &gamma, &residual);
+    sum += residual * residual;
+  }
+  DisplayCalibration c;
+  c.model = model;
+  c.method = "photometer";
+  c.gamma = gamma;
+  c.black_cd_m2 = black;
+  c.white_cd_m2 = white;
+  c.points = std::move(readings);
+  c.residual_rms_cd_m2 = std::sqrt(sum / static_cast<double>(c.points.size()));
+  return c;
+}
+
+double checkerboard_gamma(int matched_level) {
+  if (matched_level < 1 || matched_level > 254)
+    throw std::invalid_argument("matched level " + std::to_string(matched_level) + ": expected 1..254 (a grey between black and white)");
+  const double gamma = std::log(0.5) / std::log(matched_level / 255.0);
+  if (!(gamma >= 0.5 && gamma <= 5))
+    throw std::invalid_argument("matched level " + std::to_string(matched_level) + " means gamma " + std::to_string(gamma) +
+                                ", outside [0.5, 5]: check that the checkerboard is shown 1:1 (no scaling)");
+  return gamma;
+}
+
+DisplayCalibration checkerboard_calibration(int matched_level) {
+  DisplayCalibration c;
+  c.model = Model::gamma;
+  c.method = "checkerboard-match";
+  c.gamma = checkerboard_gamma(matched_level);
+  c.matched_level = matched_level;
+  return c;
+}
+
+}  // namespace penumbra::display

@@ -1,0 +1,36 @@
+#pragma once
+// Making a display calibration: photometer readings (a CSV or typed in the window) fitted with the
+// gamma model by Ceres, or a checkerboard match without a photometer. display_calibration.h
+// holds the result.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "display/display_calibration.h"
+
+namespace penumbra::display {
+
+// The levels shown for `count` readings: 0 and 255 and the ones evenly between (rounded), e.g.
+// 9 -> 0, 32, 64, ..., 223, 255. Throws std::invalid_argument outside [kMinReadings, 256].
+std::vector<int> calibration_levels(int count);
+
+// A CSV of photometer readings: the header `level,luminance_cd_m2`, then one row per level
+// (an integer 0..255, a luminance >= 0 in cd/m²), in any order. Throws std::runtime_error, one
+// line naming the file, the line and the column ("r.csv:4: column 'luminance_cd_m2': 'n/a' is not
+// a number"), or the file alone for what concerns all rows (too few, no black or white). Sorted by level.
+std::vector<Reading> read_readings_csv(const std::filesystem::path& path);
+
+// Readings (any order) -> a calibration of `model`: the gamma model L(v) = L_black + (L_white -
+// L_black) (v/255)^gamma fitted by least squares in cd/m² (Ceres; gamma in [0.5, 5]), its RMS
+// residual, and the readings themselves (the table model interpolates them). Throws
+// std::invalid_argument as check_readings does.
+DisplayCalibration fit_readings(std::vector<Reading> readings, Model model);
+
+// Without a photometer: a 1-px checkerboard of levels 0 and 255 averages to half way between
+// black and white, so the grey level m that matches it has relative luminance 0.5:
+// (m / 255)^gamma = 0.5, gamma = ln 0.5 / ln(m / 255). Throws std::invalid_argument outside 1..254
+// or where the gamma would leave [0.5, 5].
+double checkerboard_gamma(int matched_level);
+DisplayCalibration checkerboard_calibration(int matched_level);
+
+}  // namespace penumbra::display

@@ -1,0 +1,205 @@
+#include "gui/calibration_window.h"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "gl/objects.h"
+#include "gui/gui_window.h"
+#include "gui/study_gui.h"
+
+namespace penumbra::study_gui {
+
+namespace {
+
+void say(const std::string& line) { std::cout << line << std::endl; }
+
+// The window on the monitor measured, and what is known about that monitor.
+struct Screen {
+  std::unique_ptr<GuiWindow> window;
+  nlohmann::json monitor;
+};
+
+Screen open_screen(const Glfw& glfw, const CalibrationScreen& s, const std::string& title) {
+  int win_w = 0, win_h = 0;
+  if (!s.windowed.empty()) parse_window_size(s.windowed, win_w, win_h);
+  const auto monitors = glfw.monitors();
+  if (monitors.empty()) throw std::runtime_error("no monitor connected");
+  if (s.monitor >= static_cast<int>(monitors.size()))
+    throw std::invalid_argument("--monitor " + std::to_string(s.monitor) + ": only " + std::to_string(monitors.size()) +
+                                " monitor(s) connected (0.." + std::to_string(monitors.size() - 1) + ")");
+  GLFWmonitor* monitor = monitors[static_cast<std::size_t>(s.monitor)];
+  const bool fullscreen = s.windowed.empty();
+  WindowSpec spec;
+  spec.title = title;
+  spec.width = win_w;
+  spec.height = win_h;
+  spec.fullscreen_on = fullscreen ? monitor : nullptr;
+  spec.x = fullscreen ? -1 : 0;
+  spec.y = 0;
+  spec.vsync = true;
+  spec.font_px = 16;
+  Screen screen;
+  screen.window = std::make_unique<GuiWindow>(spec);
+  const GLFWvidmode* mode = glfwGetVideoMode(monitor);
+  int fb_w = 0, fb_h = 0, mm_w = 0, mm_h = 0;
+  screen.window->framebuffer_size(fb_w, fb_h);
+  glfwGetMonitorPhysicalSize(monitor, &mm_w, &mm_h);
+  const char* name = glfwGetMonitorName(monitor);
+  screen.monitor = {{"monitor", s.monitor},
+                    {"monitor_name", name ? name : ""},
+                    {"fullscreen", fullscreen},
+                    {"video_mode", {{"width_px", mode->width}, {"height_px", mode->height}, {"refresh_hz", mode->refreshRate}}},
+                    {"monitor_size_mm", {mm_w, mm_h}},
+                    {"framebuffer_px", {fb_w, fb_h}}};
+  return screen;
+}
+
+bool escape_pressed(GuiWindow& window) {
+  bool escape = false;
+  for (const Press& p : window.take_presses()) escape = escape || p.key == GLFW_KEY_ESCAPE;
+  return escape;
+}
+
+// A small opaque box of text in a corner of the window, over whatever is drawn.
+void begin_corner_box(const char* id, ImVec2 pivot) {
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos({pivot.x * size.x + (pivot.x < 0.5f ? 8.0f : -8.0f), size.y - 8.0f}, ImGuiCond_Always, {pivot.x, 1.0f});
+  ImGui::SetNextWindowBgAlpha(1.0f);
+  ImGui::Begin(id, nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+}
+
+}  // namespace
+
+std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, const CalibrationScreen& s) {
+  Glfw glfw;
+  Screen screen = open_screen(glfw, s, "Penumbra display calibration");
+  GuiWindow& window = *screen.window;
+  MeasuredLevels out;
+  out.monitor = screen.monitor;
+  char typed[32] = "";
+  std::string problem;
+  std::size_t shown = levels.size();
+  for (std::size_t i = 0; i < levels.size();) {
+    glfw.wait_events(0.05);
+    if (window.close_requested() || escape_pressed(window)) return std::nullopt;
+    window.begin_frame();
+    int w = 0, h = 0;
+    window.framebuffer_size(w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    glDisable(GL_SCISSOR_TEST);
+    glViewport(0, 0, w, h);
+    const float v = static_cast<float>(levels[i]) / 255.0f;  // stored as exactly levels[i]
+    glClearColor(v, v, v, 1);
+    glClear(GL_COLOR_BUFFER_BIT);
+    begin_corner_box("##reading", {0.0f, 1.0f});
+    ImGui::Text("Level %d (%zu of %zu): point the photometer at the centre,", levels[i], i + 1, levels.size());
+    ImGui::Text("type its reading in cd/m\xc2\xb2 and press Enter. Escape: stop, nothing written.");
+    if (!problem.empty()) ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "%s", problem.c_str());
+    if (!ImGui::IsAnyItemActive()) ImGui::SetKeyboardFocusHere();
+    ImGui::SetNextItemWidth(160);
+    const bool entered = ImGui::InputText("cd/m\xc2\xb2", typed, sizeof typed,
+                                          ImGuiInputTextFlags_CharsScientific | ImGuiInputTextFlags_EnterReturnsTrue);
+    const bool typing = ImGui::IsItemActive();
+    ImGui::End();
+    window.end_frame();
+    window.swap();
+    // Announced once the level is on screen and the entry box takes keys.
+    if (shown != i && typing) {
+      shown = i;
+      say("showing level " + std::to_string(levels[i]) + " (" + std::to_string(i + 1) + " of " + std::to_string(levels.size()) + ")");
+    }
+    if (!entered) continue;
+    char* end = nullptr;
+    const double luminance = std::strtod(typed, &end);
+    if (end == typed || *end != '\0' || !std::isfinite(luminance) || !(luminance >= 0 && luminance <= 1e5)) {
+      problem = "'" + std::string(typed) + "' is not a luminance in cd/m\xc2\xb2 (a number >= 0)";
+      continue;
+    }
+    if (!out.readings.empty() && !(luminance > out.readings.back().luminance_cd_m2)) {
+      char b[160];
+      std::snprintf(b, sizeof b, "%g is not above level %d's %g: luminance must rise with the level (measure again)", luminance,
+                    out.readings.back().level, out.readings.back().luminance_cd_m2);
+      problem = b;
+      continue;
+    }
+    say("level " + std::to_string(levels[i]) + ": " + typed + " cd/m2");
+    out.readings.push_back({levels[i], luminance});
+    typed[0] = '\0';
+    problem.clear();
+    ++i;
+  }
+  return out;
+}
+
+std::optional<CheckerboardMatch> match_checkerboard(const CalibrationScreen& s, int start_level) {
+  Glfw glfw;
+  Screen screen = open_screen(glfw, s, "Penumbra display calibration");
+  GuiWindow& window = *screen.window;
+  int w = 0, h = 0;
+  window.framebuffer_size(w, h);
+  // The whole frame as one texture copied 1:1 (a blit of equal sizes): left half the checkerboard,
+  // right half the grey; rewritten when the grey changes.
+  gl::Texture texture({GL_RGBA8, w, h, 1}, "checkerboard match");
+  const gl::Framebuffer::Attachment attachment{&texture, GL_COLOR_ATTACHMENT0};
+  gl::Framebuffer framebuffer({&attachment, 1}, "checkerboard match");
+  struct CurrentOnExit {
+    GuiWindow& window;
+    ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
+  } current_on_exit{window};
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(w) * h * 4);
+  int level = std::clamp(start_level, 1, 254), uploaded = -1;
+  for (;;) {
+    glfw.wait_events(0.05);
+    if (window.close_requested()) return std::nullopt;
+    for (const Press& p : window.take_presses()) {
+      if (p.key == GLFW_KEY_ESCAPE) return std::nullopt;
+      if (p.key == GLFW_KEY_ENTER || p.key == GLFW_KEY_KP_ENTER) {
+        say("matched grey level " + std::to_string(level));
+        return CheckerboardMatch{level, screen.monitor};
+      }
+      if (p.key == GLFW_KEY_UP || p.key == GLFW_KEY_RIGHT) level = std::min(254, level + 1);
+      if (p.key == GLFW_KEY_DOWN || p.key == GLFW_KEY_LEFT) level = std::max(1, level - 1);
+      if (p.key == GLFW_KEY_PAGE_UP) level = std::min(254, level + 10);
+      if (p.key == GLFW_KEY_PAGE_DOWN) level = std::max(1, level - 10);
+    }
+    window.begin_frame();
+    if (level != uploaded) {
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * w + x) * 4];
+          const std::uint8_t v = x < w / 2 ? ((x + y) % 2 ? 255 : 0) : static_cast<std::uint8_t>(level);
+          p[0] = p[1] = p[2] = v;
+          p[3] = 255;
+        }
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTextureSubImage2D(texture.id(), 0, 0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    glBlitNamedFramebuffer(framebuffer.id(), 0, 0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    begin_corner_box("##match", {0.5f, 1.0f});
+    ImGui::Text("Step back until the checkerboard (left) looks uniform. Grey level %d (gamma %.3f).", level,
+                std::log(0.5) / std::log(level / 255.0));
+    ImGui::Text("Up/Down: change the grey until both halves look equally bright (Page Up/Down: by 10). Enter: accept. Escape: stop.");
+    ImGui::End();
+    window.end_frame();
+    window.swap();
+    if (level != uploaded) say("grey level " + std::to_string(level));  // on screen now
+    uploaded = level;
+  }
+}
+
+}  // namespace penumbra::study_gui

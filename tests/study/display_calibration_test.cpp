@@ -1,0 +1,183 @@
+// Display calibration (study/display): the gamma fit recovers a synthetic monitor's gamma, the
+// table model gives the readings back, encode inverts the measured transfer to within half a
+// level's luminance step, the checkerboard arithmetic, and the strict CSV and JSON readers.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "display/display_calibration.h"
+#include "display/display_fit.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace penumbra;
+
+// The synthetic monitor of every display test: black 0.5 cd/m², white 120.5, gamma 2.4.
+double monitor_cd_m2(double level) { return 0.5 + 120.0 * std::pow(level / 255.0, 2.4); }
+
+std::vector<display::Reading> synthetic_readings(int count, double relative_noise = 0, unsigned seed = 1) {
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, relative_noise);
+  std::vector<display::Reading> r;
+  for (int level : display::calibration_levels(count)) r.push_back({level, monitor_cd_m2(level) * (1 + noise(random))});
+  return r;
+}
+
+fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("penumbra-dispcal-" + name + "-" + std::to_string(::getpid())); }
+
+TEST(DisplayCalibration, LevelsSpanTheRangeEvenly) {
+  EXPECT_EQ(display::calibration_levels(9), (std::vector<int>{0, 32, 64, 96, 128, 159, 191, 223, 255}));
+  EXPECT_EQ(display::calibration_levels(17)[1], 16);
+  EXPECT_EQ(display::calibration_levels(256)[200], 200);
+  EXPECT_THROW(display::calibration_levels(4), std::invalid_argument);
+  EXPECT_THROW(display::calibration_levels(257), std::invalid_argument);
+}
+
+TEST(DisplayCalibration, GammaFitRecoversTheSyntheticMonitor) {
+  const auto exact = display::fit_readings(synthetic_readings(9), display::Model::gamma);
+  EXPECT_NEAR(exact.gamma, 2.4, 1e-6);
+  EXPECT_NEAR(*exact.black_cd_m2, 0.5, 1e-6);
+  EXPECT_NEAR(*exact.white_cd_m2, 120.5, 1e-6);
+  EXPECT_LT(*exact.residual_rms_cd_m2, 1e-6);
+  // 0.5 % photometer noise per reading, 17 levels, ten noise draws: within 0.02 every time.
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    const auto noisy = display::fit_readings(synthetic_readings(17, 0.005, seed), display::Model::gamma);
+    EXPECT_NEAR(noisy.gamma, 2.4, 0.02) << "seed " << seed;
+    EXPECT_GT(*noisy.residual_rms_cd_m2, 0.0);
+  }
+}
+
+TEST(DisplayCalibration, TableModelGivesTheReadingsBack) {
+  const auto readings = synthetic_readings(9, 0.01, 3);
+  const auto c = display::fit_readings(readings, display::Model::table);
+  ASSERT_EQ(c.model, display::Model::table);
+  const double black = readings.front().luminance_cd_m2, white = readings.back().luminance_cd_m2;
+  for (const auto& r : readings)
+    EXPECT_NEAR(c.relative_luminance(r.level), (r.luminance_cd_m2 - black) / (white - black), 1e-12) << "level " << r.level;
+  // Monotone between the readings, and close to the monitor there (17 readings of a smooth curve).
+  const auto fine = display::fit_readings(synthetic_readings(17), display::Model::table);
+  double previous = -1, worst = 0;
+  for (int v = 0; v <= 255; ++v) {
+    const double rel = fine.relative_luminance(v);
+    EXPECT_GE(rel, previous) << "level " << v;
+    previous = rel;
+    worst = std::max(worst, std::abs(rel - (monitor_cd_m2(v) - 0.5) / 120.0));
+  }
+  EXPECT_LT(worst, 0.002);
+}
+
+// encode() picks the level whose luminance is nearest: the error is at most half the luminance
+// step between the neighbouring levels, for both models.
+TEST(DisplayCalibration, EncodeInvertsTheMeasuredTransferToHalfAStep) {
+  for (const auto model : {display::Model::gamma, display::Model::table}) {
+    const auto c = display::fit_readings(synthetic_readings(17), model);
+    for (int i = 0; i <= 1000; ++i) {
+      const double linear = i / 1000.0;
+      const int v = c.encode(linear);
+      const double step = std::max(c.relative_luminance(std::min(v + 1, 255)) - c.relative_luminance(v),
+                                   c.relative_luminance(v) - c.relative_luminance(std::max(v - 1, 0)));
+      EXPECT_LE(std::abs(c.relative_luminance(v) - linear), step / 2 + 1e-12) << display::to_string(model) << " linear " << linear;
+    }
+    EXPECT_EQ(c.encode(0.0), 0);
+    EXPECT_EQ(c.encode(1.0), 255);
+  }
+}
+
+TEST(DisplayCalibration, CheckerboardMatchArithmetic) {
+  // (m / 255)^gamma = 0.5: an sRGB-like monitor (2.2) matches at 186, a gamma 2.4 one at 191.
+  EXPECT_NEAR(display::checkerboard_gamma(186), std::log(0.5) / std::log(186.0 / 255.0), 1e-12);
+  EXPECT_NEAR(display::checkerboard_gamma(186), 2.197, 0.001);
+  EXPECT_NEAR(display::checkerboard_gamma(191), 2.3985, 0.0001);
+  EXPECT_NEAR(display::checkerboard_gamma(128), 1.0, 0.01);
+  for (int m : {186, 191}) EXPECT_NEAR(std::pow(m / 255.0, display::checkerboard_gamma(m)), 0.5, 1e-12);
+  const auto c = display::checkerboard_calibration(191);
+  EXPECT_EQ(c.method, "checkerboard-match");
+  EXPECT_EQ(c.encode(0.5), 191);  // the matched grey is half way, by construction
+  EXPECT_THROW(display::checkerboard_gamma(0), std::invalid_argument);
+  EXPECT_THROW(display::checkerboard_gamma(255), std::invalid_argument);
+  EXPECT_THROW(display::checkerboard_gamma(20), std::invalid_argument);  // gamma 0.27: not a monitor
+}
+
+TEST(DisplayCalibration, JsonRoundTripAndRefusals) {
+  auto c = display::fit_readings(synthetic_readings(9), display::Model::gamma);
+  c.created_utc = "2026-12-02T09:00:00.000Z";
+  const nlohmann::json j = display::to_json(c);
+  const auto back = display::parse_calibration(j, "x.json");
+  EXPECT_EQ(display::to_json(back), j);
+  EXPECT_EQ(display::fingerprint(display::to_json(back)), display::fingerprint(j));
+  const auto board = display::checkerboard_calibration(186);
+  EXPECT_EQ(display::to_json(display::parse_calibration(display::to_json(board), "b.json")), display::to_json(board));
+
+  struct Case {
+    std::function<void(nlohmann::json&)> edit;
+    std::string message;
+  };
+  const std::vector<Case> cases{
+      {[](nlohmann::json& x) { x["schema_version"] = 2; }, "x.json: schema_version: expected 1 (a display-calibration.json of this version)"},
+      {[](nlohmann::json& x) { x["gama"] = 2; }, "x.json: gama: unknown field"},
+      {[](nlohmann::json& x) { x["model"] = "spline"; }, "x.json: model: model 'spline': expected gamma or table"},
+      {[](nlohmann::json& x) { x["gamma"] = 9; }, "x.json: gamma: expected a number in [0.5, 5]"},
+      {[](nlohmann::json& x) { x["points"][3]["luminance_cd_m2"] = 1.0; },
+       "x.json: points: level 96: 1 cd/m2, not above level 64's 4.84827 (luminance must rise with the level: remeasure)"},
+      {[](nlohmann::json& x) { x["points"][0]["level"] = 300; }, "x.json: points[0].level: expected 0..255"},
+      {[](nlohmann::json& x) { x["white_cd_m2"] = nullptr; }, "x.json: white_cd_m2: expected black_cd_m2 and white_cd_m2 with white above black"},
+  };
+  for (const Case& k : cases) {
+    nlohmann::json bad = j;
+    k.edit(bad);
+    try {
+      display::parse_calibration(bad, "x.json");
+      ADD_FAILURE() << "accepted: " << k.message;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), k.message);
+    }
+  }
+  nlohmann::json edited = display::to_json(board);
+  edited["gamma"] = 2.4;  // not what level 186 means
+  EXPECT_THROW(display::parse_calibration(edited, "b.json"), std::runtime_error);
+}
+
+TEST(DisplayCalibration, CsvReadingsAreReadStrictly) {
+  const fs::path p = scratch("readings.csv");
+  auto write = [&](const std::string& text) { std::ofstream(p, std::ios::binary) << text; };
+  write("level,luminance_cd_m2\r\n255, 120.5\n0,0.5\n64,8.44\n128,26.6\n192,61.0\n");
+  const auto r = display::read_readings_csv(p);
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_EQ(r.front().level, 0);
+  EXPECT_EQ(r.back().level, 255);
+  EXPECT_DOUBLE_EQ(r.back().luminance_cd_m2, 120.5);
+  const std::string f = p.string();
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"", f + ": empty; expected the header 'level,luminance_cd_m2' and one row per level"},
+      {"level,luminance\n0,1\n", f + ":1: expected the header 'level,luminance_cd_m2', found 'level,luminance'"},
+      {"level,luminance_cd_m2\n0,0.5\n64,n/a\n", f + ":3: column 'luminance_cd_m2': 'n/a' is not a number"},
+      {"level,luminance_cd_m2\n0,0.5\n256,3\n", f + ":3: column 'level': '256' is not an 8-bit level (an integer 0..255)"},
+      {"level,luminance_cd_m2\n0,0.5\n12.5,3\n", f + ":3: column 'level': '12.5' is not an 8-bit level (an integer 0..255)"},
+      {"level,luminance_cd_m2\n0,0.5\n64,8,1\n", f + ":3: expected 2 columns (level,luminance_cd_m2), found 3"},
+      {"level,luminance_cd_m2\n0,0.5\n\n", f + ":3: empty line; expected 'level,luminance_cd_m2' values"},
+      {"level,luminance_cd_m2\n0,0.5\n64,-1\n", f + ":3: column 'luminance_cd_m2': -1 is not a luminance in [0, 100000] cd/m2"},
+      {"level,luminance_cd_m2\n0,0.5\n64,8\n64,9\n", f + ":4: column 'level': 64 was read already on line 3"},
+      {"level,luminance_cd_m2\n0,0.5\n64,8\n128,7\n192,61\n255,120\n",
+       f + ":4: column 'luminance_cd_m2': 7 cd/m2 at level 128 is not above 8 at level 64 (line 3); luminance must rise with the level"},
+      {"level,luminance_cd_m2\n0,0.5\n128,26\n255,120\n", f + ": 3 reading(s): expected at least 5 levels, including 0 and 255"},
+      {"level,luminance_cd_m2\n16,0.5\n64,8\n128,26\n192,61\n255,120\n",
+       f + ": expected readings of level 0 (black) and 255 (white); the lowest is 16, the highest 255"},
+  };
+  for (const auto& [text, message] : bad) {
+    write(text);
+    try {
+      display::read_readings_csv(p);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+  }
+  fs::remove(p);
+}
+
+}  // namespace
