@@ -84,6 +84,11 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
     }
   };
   if (j.contains("display")) flatten("display.", j["display"]);
+  // A measured transfer is compared by what was measured, not by where the file was: sessions on
+  // one monitor pool whatever the path, sessions of a recalibrated monitor do not.
+  if (j.contains("display_calibration") && j["display_calibration"].is_object() &&
+      j["display_calibration"].contains("fingerprint") && j["display_calibration"]["fingerprint"].is_string())
+    info.setup["display.calibration"] = "fingerprint " + j["display_calibration"]["fingerprint"].get<std::string>();
   if (j.contains("quest")) flatten("quest.", j["quest"]);
   if (j.contains("config") && j["config"].is_object()) {
     const auto& config = j["config"];

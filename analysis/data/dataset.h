@@ -26,8 +26,9 @@ struct SessionInfo {
   // ("psychometric:c=..", "image:..").
   std::string observer;
   // How the session measured, flattened from session.json ("display.viewing_distance_mm" -> "600"):
-  // the task, the stimulus block, the display as recorded (geometry, transfer) and the QUEST
-  // parameters. Sessions that differ here are not pooled without LoadOptions::pool.
+  // the task, the stimulus block, the display as recorded (geometry, transfer; a measured
+  // transfer by its calibration's fingerprint, "display.calibration") and the QUEST parameters.
+  // Sessions that differ here are not pooled without LoadOptions::pool.
   std::map<std::string, std::string> setup;
 };
 

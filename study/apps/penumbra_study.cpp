@@ -63,6 +63,10 @@ int run_display_check(const fs::path& config_file) {
   const double ppd = d.pixels_per_degree();
   std::printf("display: %d x %d px, %g x %g mm, viewing distance %g mm, transfer %s\n", d.width_px, d.height_px, d.width_mm,
               d.height_mm, d.viewing_distance_mm, stimuli::to_string(d.transfer).c_str());
+  if (d.transfer.calibration)
+    std::printf("calibration: %s (%s, model %s, gamma %.3f; 0.5 linear = level %d)\n", d.calibration_file.c_str(),
+                d.transfer.calibration->method.c_str(), display::to_string(d.transfer.calibration->model).c_str(),
+                d.transfer.calibration->gamma, stimuli::encode(0.5, d.transfer));
   std::printf("pixel: %.4f x %.4f mm (aspect %.3f); %.1f px per degree at the centre\n", d.width_mm / d.width_px,
               d.height_mm / d.height_px, (d.height_mm / d.height_px) / (d.width_mm / d.width_px), ppd);
   std::printf("screen: %.1f x %.1f deg\n", 2.0 * std::atan(0.5 * d.width_mm / d.viewing_distance_mm) * 180.0 / M_PI,
@@ -76,10 +80,11 @@ int run_display_check(const fs::path& config_file) {
 }
 
 int run_stimulus(const std::string& pattern, const std::string& kernel, const std::string& transfer,
-                 stimuli::StimulusSpec spec, const fs::path& out) {
+                 const fs::path& display_calibration, stimuli::StimulusSpec spec, const fs::path& out) {
   spec.pattern = stimuli::parse_pattern(pattern);
   spec.kernel = stimuli::parse_kernel(kernel);
   spec.transfer = stimuli::parse_transfer(transfer);
+  if (!display_calibration.empty()) spec.transfer = stimuli::Transfer::measured(display::load_calibration(display_calibration));
   // The spec as given first, so a bad size is blamed on the size and not on the radius it clamps.
   stimuli::validate(spec);
   const auto shown = stimuli::clamp_filter_radius(spec.filter_radius_px, spec.size_px);
@@ -95,6 +100,11 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   if (!spec.technique.empty()) {
     j["technique"] = spec.technique;
     j["settings"] = shadows::to_json(stimuli::stimulus_settings(spec, pair.geometry.map_texels));
+  }
+  if (spec.transfer.calibration) {
+    const nlohmann::json content = display::to_json(*spec.transfer.calibration);
+    j["display_calibration"] = {{"file", fs::absolute(display_calibration).lexically_normal().string()},
+                                {"fingerprint", display::fingerprint(content)}};
   }
   j["requested_filter_radius_px"] = requested;
   j["filter_radius_clamped"] = shown.clamped;
@@ -238,6 +248,7 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
 
 struct RunOptions {
   fs::path config, output, resume;
+  fs::path display_calibration;  // replaces the config's display transfer (new sessions)
   std::string observer = "psychometric:c=3.0,beta=3.5,lapse=0.02";
   std::string participant = "sim";
   bool headless = false;
@@ -258,6 +269,8 @@ void check_resume_options(const RunOptions& o, const nlohmann::json& session) {
   if (!o.config.empty())
     throw std::invalid_argument("--config: not with --resume (the session's config is in its session.json)");
   if (!o.output.empty()) throw std::invalid_argument("-o: not with --resume (the session stays in its directory)");
+  if (!o.display_calibration.empty())
+    throw std::invalid_argument("--display-calibration: not with --resume (the session's calibration is in its session.json)");
   const std::string participant = session.at("participant").get<std::string>();
   if (o.participant_given && o.participant != participant)
     throw std::invalid_argument("--participant '" + json_input::printable(o.participant) + "': the session is '" +
@@ -296,7 +309,8 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
       if (accept) accept(session, config);
     });
   if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
-  const procedure::StudyConfig config = procedure::load_config(o.config);
+  procedure::StudyConfig config = procedure::load_config(o.config);
+  if (!o.display_calibration.empty()) procedure::load_display_calibration(config, o.display_calibration);
   check_stimulus_technique(config, o.config);
   nlohmann::json extra = {{"observer", observer}, {"config_file", o.config.string()}};
   if (accept) {
@@ -436,6 +450,11 @@ int main(int argc, char** argv) {
   stim->add_option("--set", stim_settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   stim->add_option("--size-px", spec.size_px, "stimulus side (px)")->capture_default_str();
   stim->add_option("--transfer", transfer, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
+  fs::path stim_calibration;
+  stim->add_option("--display-calibration", stim_calibration,
+                   "the monitor's measured transfer (display-calibration.json from calibrate-display) instead of --transfer")
+      ->check(cli::path_given())
+      ->excludes("--transfer");
   stim->add_option("--seed", spec.seed, "edge phase and orientation")->capture_default_str()->check(cli::non_negative_integer());
   stim->add_option("-o,--output", stim_out, "output directory")->required()->check(cli::path_given());
 
@@ -467,6 +486,10 @@ int main(int argc, char** argv) {
                   "the session's seed (target sides, staircase draws, edge phases, round order); default: derived from the "
                   "config's seed and the participant id, so each participant gets another sequence and the same one again")
       ->check(cli::non_negative_integer());
+  run->add_option("--display-calibration", ro.display_calibration,
+                  "the monitor's measured transfer (display-calibration.json from calibrate-display): replaces the config's "
+                  "display.transfer / display.calibration for a new session")
+      ->check(cli::path_given());
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
   run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)")
       ->check(CLI::Range(0, 60000));
@@ -486,7 +509,7 @@ int main(int argc, char** argv) {
     if (display_check->parsed()) return run_display_check(display_config);
     if (stim->parsed()) {
       stimuli::set_technique_settings(spec, stim_settings);
-      return run_stimulus(pattern, kernel, transfer, spec, stim_out);
+      return run_stimulus(pattern, kernel, transfer, stim_calibration, spec, stim_out);
     }
     ro.participant_given = run->count("--participant") > 0;
     ro.observer_given = run->count("--observer") > 0;

@@ -202,13 +202,24 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     }
   }
   if (const auto* d = r.find(j, "display")) {
-    r.only(*d, "display.", {"width_px", "height_px", "width_mm", "height_mm", "viewing_distance_mm", "transfer", "monitor"});
+    r.only(*d, "display.", {"width_px", "height_px", "width_mm", "height_mm", "viewing_distance_mm", "transfer", "calibration", "monitor"});
     c.display.width_px = static_cast<int>(r.integer(*d, "display.", "width_px", 1920, 1, 100000));
     c.display.height_px = static_cast<int>(r.integer(*d, "display.", "height_px", 1080, 1, 100000));
     c.display.width_mm = r.number(*d, "display.", "width_mm", 527, 1, 100000);
     c.display.height_mm = r.number(*d, "display.", "height_mm", 296, 1, 100000);
     c.display.viewing_distance_mm = r.number(*d, "display.", "viewing_distance_mm", 600, 1, 100000);
-    c.display.transfer = r.parse_enum("display.transfer", r.text(*d, "display.", "transfer", "srgb"), stimuli::parse_transfer);
+    c.display.calibration_file = r.text(*d, "display.", "calibration", "");
+    if (r.find(*d, "calibration") && (c.display.calibration_file.empty() || c.display.calibration_file.size() > 4096))
+      r.fail("display.calibration", "expected the path of a display-calibration.json (penumbra-study calibrate-display)");
+    const std::string transfer = r.text(*d, "display.", "transfer", c.display.calibration_file.empty() ? "srgb" : "measured");
+    if (transfer == "measured") {
+      if (c.display.calibration_file.empty()) r.fail("display.transfer", "measured needs display.calibration (the measurement's file)");
+      c.display.transfer = {stimuli::Transfer::Kind::measured, nullptr};
+    } else {
+      c.display.transfer = r.parse_enum("display.transfer", transfer, stimuli::parse_transfer);
+      if (!c.display.calibration_file.empty())
+        r.fail("display.transfer", "'" + transfer + "' with display.calibration: the calibration measures the transfer; leave display.transfer out");
+    }
     c.display.monitor = static_cast<int>(r.integer(*d, "display.", "monitor", 0, 0, 16));
   }
   for (double a : c.artifact_px)
@@ -236,7 +247,22 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
 }
 
 StudyConfig load_config(const std::filesystem::path& path) {
-  return parse_config(json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 16}), path.string());
+  StudyConfig c = parse_config(json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 16}), path.string());
+  if (!c.display.calibration_file.empty()) {
+    const std::filesystem::path named = c.display.calibration_file;
+    try {
+      load_display_calibration(c, named.is_absolute() ? named : path.parent_path() / named);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(path.string() + ": display.calibration: " + e.what());
+    }
+  }
+  return c;
+}
+
+void load_display_calibration(StudyConfig& c, const std::filesystem::path& calibration_file) {
+  const std::filesystem::path file = std::filesystem::absolute(calibration_file).lexically_normal();
+  c.display.transfer = stimuli::Transfer::measured(display::load_calibration(file));
+  c.display.calibration_file = file.string();
 }
 
 nlohmann::json to_json(const StudyConfig& c) {
@@ -255,6 +281,11 @@ nlohmann::json to_json(const StudyConfig& c) {
     stimulus["settings"] = nlohmann::json::object();
     for (const auto& [key, value] : c.technique_settings) stimulus["settings"][key] = value;
   }
+  nlohmann::json display = {{"width_px", c.display.width_px}, {"height_px", c.display.height_px},
+                             {"width_mm", c.display.width_mm}, {"height_mm", c.display.height_mm},
+                             {"viewing_distance_mm", c.display.viewing_distance_mm},
+                             {"transfer", stimuli::to_string(c.display.transfer)}, {"monitor", c.display.monitor}};
+  if (!c.display.calibration_file.empty()) display["calibration"] = c.display.calibration_file;
   return {{"name", c.name},
           {"task", c.task},
           {"artifact_px", c.artifact_px},
@@ -268,10 +299,7 @@ nlohmann::json to_json(const StudyConfig& c) {
           {"seed", c.seed},
           {"round_order", c.round_order},
           {"stimulus", stimulus},
-          {"display", {{"width_px", c.display.width_px}, {"height_px", c.display.height_px},
-                       {"width_mm", c.display.width_mm}, {"height_mm", c.display.height_mm},
-                       {"viewing_distance_mm", c.display.viewing_distance_mm},
-                       {"transfer", stimuli::to_string(c.display.transfer)}, {"monitor", c.display.monitor}}}};
+          {"display", display}};
 }
 
 }  // namespace penumbra::procedure

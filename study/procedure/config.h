@@ -27,7 +27,11 @@ struct Display {
   int width_px = 1920, height_px = 1080;
   double width_mm = 527, height_mm = 296;
   double viewing_distance_mm = 600;
+  // The transfer the stimuli are encoded through: an assumed one, or "measured" with
+  // `calibration_file` (display.calibration: a display-calibration.json, absolute once loaded by
+  // load_config) whose content load_display_calibration puts into transfer.calibration.
   stimuli::Transfer transfer = stimuli::Transfer::srgb;
+  std::string calibration_file;
   int monitor = 0;  // participant view's monitor (GLFW index)
   // Visual angle of `px` pixels at the screen centre, in arcminutes.
   double arcmin(double px) const;
@@ -64,9 +68,14 @@ struct StudyConfig {
   Display display;
 };
 
-// Throws std::runtime_error "<file>: <field>: <what>".
+// Throws std::runtime_error "<file>: <field>: <what>". parse_config reads display.calibration as
+// a path and loads nothing; load_config resolves it against the config file's folder and loads it.
 StudyConfig parse_config(const nlohmann::json& j, const std::string& file);
 StudyConfig load_config(const std::filesystem::path& path);
+// Makes `calibration_file` (resolved against the working directory) the config's display
+// transfer, loaded: display.calibration of a config, or `run --display-calibration FILE`.
+// Throws std::runtime_error "<calibration file>: <field>: <what>".
+void load_display_calibration(StudyConfig& c, const std::filesystem::path& calibration_file);
 nlohmann::json to_json(const StudyConfig& c);
 
 }  // namespace penumbra::procedure

@@ -77,6 +77,7 @@ Session Session::start(const StudyConfig& config, const fs::path& dir, const std
                      {"log", "trials.csv"},
                      {"ended_rounds", nlohmann::json::array()},
                      {"resumed_utc", nlohmann::json::array()}};
+  if (const auto block = display_calibration_block(config)) s.session_json_["display_calibration"] = *block;
   for (auto it = extra.begin(); it != extra.end(); ++it) s.session_json_[it.key()] = it.value();
   s.write_session_json();
   s.writer_ = std::make_unique<trial_log::Writer>(dir / "trials.csv", true);
@@ -101,6 +102,7 @@ Session Session::resume(const fs::path& dir, const std::function<void(const nloh
   s.participant_ = record.participant;
   s.procedure_ = replay_log(record, log.rows, log_path.string());
   if (accept) accept(s.session_json_, s.config());
+  check_display_calibration_file(record.config, json_path.string());
   // Only now may the torn last line (the trial on screen when the process died) be cut.
   if (log.torn_tail) fs::resize_file(log_path, log.complete_bytes);
   s.session_json_["resumed_utc"].push_back(utc_now());

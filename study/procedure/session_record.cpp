@@ -39,6 +39,32 @@ nlohmann::json quest_block(const StudyConfig& config) {
 }
 
 
+std::optional<nlohmann::json> display_calibration_block(const StudyConfig& config) {
+  const stimuli::Transfer& t = config.display.transfer;
+  if (t.kind != stimuli::Transfer::Kind::measured) return std::nullopt;
+  if (!t.calibration) throw std::logic_error("display_calibration_block: the calibration of a measured transfer is not loaded");
+  const nlohmann::json content = display::to_json(*t.calibration);
+  return nlohmann::json{{"file", config.display.calibration_file}, {"fingerprint", display::fingerprint(content)}, {"content", content}};
+}
+
+void check_display_calibration_file(const StudyConfig& recorded, const std::string& session_file) {
+  const auto block = display_calibration_block(recorded);
+  if (!block) return;
+  const std::string& file = recorded.display.calibration_file;
+  std::string now;
+  try {
+    now = display::fingerprint(display::to_json(display::load_calibration(file)));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(session_file + ": display_calibration: the session's calibration cannot be read now (" + e.what() +
+                             "); restore " + file + " as it was (fingerprint " + (*block)["fingerprint"].get<std::string>() +
+                             ") to resume");
+  }
+  if (now != (*block)["fingerprint"])
+    throw std::runtime_error(session_file + ": display_calibration: " + file + " changed since the session started (fingerprint " + now +
+                             ", the session's " + (*block)["fingerprint"].get<std::string>() +
+                             "): the monitor was recalibrated? Start a new session, or restore the file to resume");
+}
+
 // Every field checked for type, size and agreement with the config block, since each is carried
 // into the continued rows (or read by the fitter).
 SessionRecord check_session_json(const nlohmann::json& j, const std::string& file) {
@@ -48,7 +74,8 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   if (!j.is_object()) fail("(top level)", "expected an object");
   static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
                                               "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
-                                              "observer_seed", "config_file", "randomization", "presentation"};
+                                              "observer_seed", "config_file", "randomization", "presentation",
+                                              "display_calibration"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
   for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
@@ -87,6 +114,20 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
     if (!equal) fail("quest." + it.key(), "differs from the config's QUEST (expected " + it->dump() + ")");
   }
   if (j["display"] != to_json(r.config)["display"]) fail("display", "differs from config.display");
+  // A measured transfer: the calibration the stimuli were encoded with, recorded whole.
+  if (r.config.display.transfer.kind == stimuli::Transfer::Kind::measured) {
+    if (!j.contains("display_calibration")) fail("display_calibration", "missing (config.display.calibration names one)");
+    const auto& d = j["display_calibration"];
+    if (!d.is_object() || d.size() != 3 || !d.contains("file") || !d.contains("fingerprint") || !d.contains("content"))
+      fail("display_calibration", "expected {\"file\", \"fingerprint\", \"content\"}");
+    if (d["file"] != r.config.display.calibration_file) fail("display_calibration.file", "differs from config.display.calibration");
+    const display::DisplayCalibration calibration = display::parse_calibration(d["content"], file + " (display_calibration.content)");
+    if (!d["fingerprint"].is_string() || d["fingerprint"] != display::fingerprint(display::to_json(calibration)))
+      fail("display_calibration.fingerprint", "not the fingerprint of display_calibration.content (session.json edited?)");
+    r.config.display.transfer = stimuli::Transfer::measured(calibration);
+  } else if (j.contains("display_calibration")) {
+    fail("display_calibration", "only with a measured display transfer (config.display.calibration)");
+  }
   r.randomization = config_randomization(r.config);
   if (j.contains("randomization")) {
     const auto& z = j["randomization"];

@@ -2,6 +2,7 @@
 // A session directory as a record to be trusted only after checking: session.json (fields, sizes,
 // agreement with its config block) and every trial-log row against the replayed procedure. Used by
 // penumbra-study's --resume before it writes anything and by penumbra-fit before it fits. No GL.
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -23,6 +24,15 @@ std::string name_problem(const std::string& name);
 
 // The QUEST block session.json records beside the config (read by the fitter).
 nlohmann::json quest_block(const StudyConfig& config);
+
+// session.json's "display_calibration" for a config whose display transfer is measured: the
+// file, its fingerprint and its content (so the session says exactly how it encoded its stimuli);
+// nothing for an assumed transfer. Throws std::logic_error for a measured transfer not loaded.
+std::optional<nlohmann::json> display_calibration_block(const StudyConfig& config);
+// Resume: the calibration file the session names must still hold what the session recorded (a
+// monitor recalibrated since would make the continued trials differ from the first ones).
+// Throws std::runtime_error "<session.json>: display_calibration: ..." otherwise.
+void check_display_calibration_file(const StudyConfig& recorded, const std::string& session_file);
 
 struct SessionRecord {
   StudyConfig config;

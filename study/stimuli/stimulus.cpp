@@ -51,18 +51,27 @@ Geometry make_geometry(const StimulusSpec& spec) {
   return g;
 }
 
-std::uint8_t encode(double linear, Transfer transfer) {
+namespace {
+const display::DisplayCalibration& measured(const Transfer& transfer) {
+  if (!transfer.calibration) throw std::logic_error("a measured display transfer without its calibration");
+  return *transfer.calibration;
+}
+}  // namespace
+
+std::uint8_t encode(double linear, const Transfer& transfer) {
   const double v = std::clamp(linear, 0.0, 1.0);
+  if (transfer.kind == Transfer::Kind::measured) return measured(transfer).encode(v);
   double e = v;
-  if (transfer == Transfer::srgb) e = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
-  if (transfer == Transfer::gamma22) e = std::pow(v, 1 / 2.2);
+  if (transfer.kind == Transfer::Kind::srgb) e = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+  if (transfer.kind == Transfer::Kind::gamma22) e = std::pow(v, 1 / 2.2);
   return static_cast<std::uint8_t>(std::lround(std::clamp(e, 0.0, 1.0) * 255.0));
 }
 
-double decode(std::uint8_t value, Transfer transfer) {
+double decode(std::uint8_t value, const Transfer& transfer) {
+  if (transfer.kind == Transfer::Kind::measured) return measured(transfer).relative_luminance(value);
   const double e = value / 255.0;
-  if (transfer == Transfer::srgb) return e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
-  if (transfer == Transfer::gamma22) return std::pow(e, 2.2);
+  if (transfer.kind == Transfer::Kind::srgb) return e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
+  if (transfer.kind == Transfer::Kind::gamma22) return std::pow(e, 2.2);
   return e;
 }
 

@@ -37,9 +37,13 @@ struct Geometry {
 };
 Geometry make_geometry(const StimulusSpec& spec);
 
-// Linear light in [0, 1] -> 8-bit display value through the transfer function.
-std::uint8_t encode(double linear, Transfer transfer);
-double decode(std::uint8_t value, Transfer transfer);
+// Linear light in [0, 1] -> 8-bit display value through the transfer function: the one place the
+// display's transfer is applied. For a measured transfer, linear light is the fraction of the way
+// from the monitor's black to its white luminance, and the level is the one whose measured
+// luminance is nearest (display::DisplayCalibration::encode). decode is the inverse (for a
+// measured transfer: the level's relative luminance under the calibration's model).
+std::uint8_t encode(double linear, const Transfer& transfer);
+double decode(std::uint8_t value, const Transfer& transfer);
 
 struct StimulusPair {
   Geometry geometry;

@@ -26,8 +26,24 @@ Transfer parse_transfer(const std::string& s) {
 }
 std::string to_string(Pattern p) { return p == Pattern::stair ? "stair" : "step"; }
 std::string to_string(Kernel k) { return k == Kernel::disk ? "disk" : k == Kernel::grid ? "grid" : "poisson"; }
-std::string to_string(Transfer t) {
-  return t == Transfer::srgb ? "srgb" : t == Transfer::gamma22 ? "gamma2.2" : "linear";
+std::string to_string(const Transfer& t) {
+  switch (t.kind) {
+    case Transfer::Kind::srgb: return "srgb";
+    case Transfer::Kind::gamma22: return "gamma2.2";
+    case Transfer::Kind::linear: return "linear";
+    case Transfer::Kind::measured: return "measured";
+  }
+  return "";
+}
+
+Transfer Transfer::measured(display::DisplayCalibration calibration) {
+  return {Kind::measured, std::make_shared<const display::DisplayCalibration>(std::move(calibration))};
+}
+
+bool operator==(const Transfer& a, const Transfer& b) {
+  if (a.kind != b.kind) return false;
+  if (a.kind != Transfer::Kind::measured || a.calibration == b.calibration) return true;
+  return a.calibration && b.calibration && display::to_json(*a.calibration) == display::to_json(*b.calibration);
 }
 
 void validate(const StimulusSpec& s) {

@@ -3,23 +3,42 @@
 // procedure plans and the log records, and the radius a stimulus can show. No GL: the procedure
 // and the fitter (analysis/) use it without the renderer; stimulus.h draws it.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "display/display_calibration.h"
 
 namespace penumbra::stimuli {
 
 enum class Pattern { stair, step };
 enum class Kernel { disk, grid, poisson };
-enum class Transfer { srgb, gamma22, linear };
 
-// Parse/print; parse throws std::invalid_argument naming the accepted values.
+// The display's transfer function: an assumed standard one (srgb, gamma2.2, linear) or the
+// monitor's own, measured (display-calibration.json). stimulus.h's encode/decode apply it.
+struct Transfer {
+  enum class Kind { srgb, gamma22, linear, measured };
+  Kind kind = Kind::srgb;
+  std::shared_ptr<const display::DisplayCalibration> calibration;  // Kind::measured: the measurement
+
+  static const Transfer srgb, gamma22, linear;
+  static Transfer measured(display::DisplayCalibration calibration);
+  // Equal kinds, and for measured ones equal calibrations (by content).
+  friend bool operator==(const Transfer& a, const Transfer& b);
+};
+inline const Transfer Transfer::srgb{Transfer::Kind::srgb, nullptr};
+inline const Transfer Transfer::gamma22{Transfer::Kind::gamma22, nullptr};
+inline const Transfer Transfer::linear{Transfer::Kind::linear, nullptr};
+
+// Parse/print; parse throws std::invalid_argument naming the accepted values. parse_transfer takes
+// the assumed transfers only (a measured one comes from its file); to_string gives "measured" for it.
 Pattern parse_pattern(const std::string& s);
 Kernel parse_kernel(const std::string& s);
 Transfer parse_transfer(const std::string& s);
 std::string to_string(Pattern p);
 std::string to_string(Kernel k);
-std::string to_string(Transfer t);
+std::string to_string(const Transfer& t);
 
 struct StimulusSpec {
   Pattern pattern = Pattern::stair;

@@ -102,7 +102,7 @@ TEST(Reference, BresenhamPartnerIsAboveThePerceptualRadius) {
   search.partner = stimuli::Partner::bresenham;
   search.resolution_px = 0.25;
   search.seeds = {3};
-  for (const stimuli::Transfer transfer : {stimuli::Transfer::linear, stimuli::Transfer::srgb}) {
+  for (const stimuli::Transfer& transfer : {stimuli::Transfer::linear, stimuli::Transfer::srgb}) {
     SCOPED_TRACE(stimuli::to_string(transfer));
     spec.transfer = transfer;
     search.tolerance_levels = 0;
