@@ -1,17 +1,31 @@
 #!/usr/bin/python3
-"""Plots of a penumbra-fit run (docs/fit.md), as PNG and SVG.
+"""Figures and a tidy table of a penumbra-fit run (docs/fit.md), as PNG and SVG.
 
-    /usr/bin/python3 scripts/plot_fit.py OUT [--participants p01,p02]
+    /usr/bin/python3 scripts/plot_fit.py OUT [--units px|arcmin|deg] [--participants p01,p02]
 
-reads OUT/report.json and writes into OUT/plots/:
+reads OUT/report.json (and, for the visual angles, each input session's session.json) and writes
+into OUT/plots/:
   thresholds.{png,svg}           threshold filter radius vs artifact size per condition: the
                                  per-size thresholds (Wald 95 %), every staircase's threshold, the
                                  fitted r = c a with its 95 % band, the published c = 3.47 and the
-                                 reference filter size when the fit was given one
+                                 reference filter size when the fit was given one; panels share
+                                 their axes
   psychometric_<participant>.*   per staircase: binned proportion correct and the fitted curve
-  quest_<participant>.*          per staircase: the QUEST track (trial -> radius shown)
+                                 against r / a (shared axes)
+  quest_<participant>.*          per condition: the QUEST tracks (trial -> radius shown)
+  thresholds.csv                 one row per participant x condition x artifact size (one
+                                 staircase): participant, technique, pattern, contrast, artifact_px,
+                                 threshold_px, threshold_arcmin, ci_low, ci_high (px, the
+                                 staircase's Wald 95 %), trials
+  summary.txt                    what the figures leave out: each condition's c, intervals, tests
+                                 and flags, staircases flagged, the unit conversion used
+
+--units converts radii and artifact sizes with the session's display (session.json "display"):
+pixels per degree at the screen centre, ppd = 2 d tan(0.5 deg) * width_px / width_mm, exactly as
+penumbra-study display-check computes it (Display::pixels_per_degree); arcmin = px / ppd * 60.
 """
 import argparse
+import csv
 import json
 import math
 import os
@@ -21,8 +35,16 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter  # noqa: E402
 
 PUBLISHED_C = 3.47
+UNIT_LABEL = {"px": "px", "arcmin": "arcmin", "deg": "deg"}
+SIZE_COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown"]
+
+
+def fail(message):
+    sys.exit("plot_fit.py: " + message)
 
 
 def core(family, x, alpha, beta):
@@ -44,9 +66,75 @@ def psi(family, u, alpha, beta, gamma, lam):
     return gamma + (1.0 - gamma - lam) * core(family, x, alpha, beta)
 
 
+def pixels_per_degree(display):
+    """Pixels per degree at the screen centre: Display::pixels_per_degree (study/procedure/config.cpp)."""
+    mm = 2.0 * display["viewing_distance_mm"] * math.tan(0.5 * math.pi / 180.0)
+    return mm * display["width_px"] / display["width_mm"]
+
+
+def session_geometry(report):
+    """{participant: (pixels per degree, session.json path)} for the inputs that have a session.json."""
+    out = {}
+    for given in report.get("inputs", []):
+        folder = given if os.path.isdir(given) else os.path.dirname(given)
+        path = os.path.join(folder, "session.json")
+        if not os.path.isfile(path):
+            continue
+        try:
+            with open(path) as f:
+                session = json.load(f)
+            out[session["participant"]] = (pixels_per_degree(session["display"]), path)
+        except (OSError, ValueError, KeyError, TypeError, ZeroDivisionError) as e:
+            fail("%s: cannot read the display geometry: %s" % (path, e))
+    return out
+
+
+class Units:
+    """Radii and sizes in px, arcmin or deg, each participant with the display of its session."""
+
+    def __init__(self, unit, geometry, participants):
+        self.unit = unit
+        self.geometry = geometry
+        if unit != "px":
+            missing = [p for p in participants if p not in geometry]
+            if missing:
+                fail("--units %s: no session.json with the display for participant(s) %s (the fit's inputs "
+                     "are looked up relative to the current directory)" % (unit, ", ".join(missing)))
+
+    def factor(self, participant):
+        if self.unit == "px":
+            return 1.0
+        ppd = self.geometry[participant][0]
+        return 60.0 / ppd if self.unit == "arcmin" else 1.0 / ppd
+
+    def common_factor(self, participants):
+        """One factor for figures that pool participants; refused when their displays differ."""
+        factors = {p: self.factor(p) for p in participants}
+        if len(set(round(f, 12) for f in factors.values())) > 1:
+            fail("--units %s: the sessions' displays differ (%s); pooled figures need one geometry: use --units px"
+                 % (self.unit, ", ".join("%s %.3f px/deg" % (p, self.geometry[p][0]) for p in sorted(factors))))
+        return next(iter(factors.values())) if factors else 1.0
+
+    def label(self):
+        return UNIT_LABEL[self.unit]
+
+
+def number_label(v, _pos=None):
+    """Tick label of a log axis: 0.5, 2, 10, 200."""
+    return "%g" % float("%.3g" % v)
+
+
+def readable_log_axis(axis):
+    """Log axis labelled at 1, 2 and 5 of every decade (plain numbers, no 10^k)."""
+    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(number_label))
+    axis.set_minor_locator(LogLocator(base=10, subs=(3.0, 4.0, 6.0, 7.0, 8.0, 9.0)))
+    axis.set_minor_formatter(NullFormatter())
+
+
 def save(fig, out_dir, name):
     for ext in ("png", "svg"):
-        fig.savefig(os.path.join(out_dir, name + "." + ext), dpi=110)
+        fig.savefig(os.path.join(out_dir, name + "." + ext), dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -56,78 +144,90 @@ def grid(n):
     return rows, cols
 
 
-def plot_thresholds(report, out_dir):
-    conditions = report["conditions"]
+def condition_summary(cond):
+    lines = ["%s: c = %.3f, 95 %% profile [%.3f, %.3f]" % (cond["condition"], cond["c"], cond["ci95_profile"]["lo"],
+                                                           cond["ci95_profile"]["hi"])]
+    p = cond.get("power_law")
+    if p and p.get("exponent") is not None and p.get("exponent_se") is not None:
+        lines.append("  power law r = k a^p: p = %.2f +- %.2f" % (p["exponent"], p["exponent_se"]))
+    if cond.get("linearity") and cond["linearity"].get("p_value") is not None:
+        lines.append("  linearity LR test p = %.3g" % cond["linearity"]["p_value"])
+    beyond = ["%g" % size["artifact_px"] for size in cond["sizes"]
+              if size.get("reference_filter_radius_px") is None and "reference_note" in size]
+    if beyond:
+        lines.append("  no reference r within the showable radii at a = " + ", ".join(beyond) + " px")
+    lines.append("  flags: " + (", ".join(cond["flags"]) if cond["flags"] else "none"))
+    return lines
+
+
+def ordered_conditions(report):
+    """Conditions by contrast (high first), then pattern: panels in the same place in every figure."""
+    return sorted(report["conditions"], key=lambda c: (-c.get("contrast", 0), c.get("pattern", ""), c["condition"]))
+
+
+def plot_thresholds(report, units, out_dir):
+    conditions = ordered_conditions(report)
+    participants = sorted({s["participant"] for s in report["staircases"]})
+    k = units.common_factor(participants)
+    unit = units.label()
     rows, cols = grid(len(conditions))
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.2 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 4.0 * rows), squeeze=False, sharex=True, sharey=True)
+    a_max = max(max(cond["artifact_px"]) for cond in conditions) * 1.12 * k
+    tops = []
     for ax, cond in zip(axes.flat, conditions):
         sizes = cond["artifact_px"]
-        a_max = max(sizes) * 1.15
         line_a = [0.0, a_max]
         c = cond["c"]
         ci = cond["ci95_profile"]
         ax.fill_between(line_a, [ci["lo"] * a for a in line_a], [ci["hi"] * a for a in line_a],
-                        color="tab:blue", alpha=0.18, lw=0, label="95 % interval (profile)")
-        ax.plot(line_a, [c * a for a in line_a], color="tab:blue", lw=1.8, label="fit r = %.2f a" % c)
+                        color="tab:blue", alpha=0.18, lw=0, label="95 % interval of c (profile)")
+        ax.plot(line_a, [c * a for a in line_a], color="tab:blue", lw=1.8, label="fitted r = c a")
         ax.plot(line_a, [PUBLISHED_C * a for a in line_a], color="0.35", ls="--", lw=1.2,
-                label="published r = 3.47 a")
+                label="published r = %.2f a" % PUBLISHED_C)
         stairs = [s for s in report["staircases"] if s["condition"] == cond["condition"]]
-        people = sorted({s["participant"] for s in stairs})
-        labelled = False
         for s in stairs:
-            jitter = ((people.index(s["participant"]) % 7) - 3) * 0.06 * min(sizes)
+            jitter = ((participants.index(s["participant"]) % 7) - 3) * 0.05 * min(sizes)
             if s["r_threshold_px"] is not None:
-                ax.plot(s["artifact_px"] + jitter, s["r_threshold_px"], "o", ms=3, color="0.6", alpha=0.7,
-                        mec="none", label="_staircase" if labelled else "staircase thresholds")
-                labelled = True
-        for i, size in enumerate(cond["sizes"]):
-            if "r_threshold_px" in size and size["r_threshold_px"] is not None:
+                ax.plot((s["artifact_px"] + jitter) * k, s["r_threshold_px"] * k, "o", ms=3.5, color="0.55",
+                        alpha=0.8, mec="none", label="staircase thresholds")
+                tops.append(s["r_threshold_px"] * k)
+        for size in cond["sizes"]:
+            if size.get("r_threshold_px") is not None:
                 lo, hi = size["r_threshold_wald_px"]
                 r = size["r_threshold_px"]
                 err = [[r - lo if lo is not None else 0], [hi - r if hi is not None else 0]]
-                ax.errorbar(size["artifact_px"], r, yerr=err, fmt="s", color="k", ms=5, capsize=3,
-                            label="per-size threshold (Wald 95 %)" if i == 0 else "_size")
+                ax.errorbar(size["artifact_px"] * k, r * k, yerr=[[e * k for e in err[0]], [e * k for e in err[1]]],
+                            fmt="s", color="k", ms=5, capsize=3, label="per-size threshold (Wald 95 %)")
+                tops.append((hi if hi is not None else r) * k)
             ref = size.get("reference_filter_radius_px")
             if ref is not None:
-                ax.plot(size["artifact_px"], ref, "x", color="tab:red", ms=9, mew=2,
-                        label="reference filter size" if i == 0 else "_ref")
-        text = "c = %.3f [%.3f, %.3f]" % (c, ci["lo"], ci["hi"])
-        beyond = ["%g" % size["artifact_px"] for size in cond["sizes"]
-                  if size.get("reference_filter_radius_px") is None and "reference_note" in size]
-        if beyond:
-            text += "\nno reference r within the showable radii at a = " + ", ".join(beyond)
-        if cond.get("power_law"):
-            p = cond["power_law"]
-            if p["exponent"] is not None and p["exponent_se"] is not None:
-                text += "\nexponent p = %.2f ± %.2f" % (p["exponent"], p["exponent_se"])
-        if cond.get("linearity") and cond["linearity"]["p_value"] is not None:
-            text += "\nlinearity LR p = %.3g" % cond["linearity"]["p_value"]
-        if cond["flags"]:
-            text += "\nflags: " + ", ".join(cond["flags"])
-        ax.text(0.03, 0.97, text, transform=ax.transAxes, va="top", fontsize=8,
-                bbox=dict(fc="white", ec="0.8", alpha=0.9))
-        # Head room above the data for the text box; the legend is shared below the panels.
-        tops = [c * a_max, PUBLISHED_C * a_max, ci["hi"] * a_max]
-        tops += [s["r_threshold_px"] for s in stairs if s["r_threshold_px"] is not None]
-        tops += [size.get("reference_filter_radius_px") or 0 for size in cond["sizes"]]
-        ax.set_xlim(0, a_max)
-        ax.set_ylim(0, 1.4 * max(tops))
-        ax.set_title("%s  (%d trials, %d participants)" % (cond["condition"], cond["trials"], cond["participants"]),
-                     fontsize=10)
-        ax.set_xlabel("artifact size a (px)")
-        ax.set_ylabel("threshold filter radius r (px)")
+                ax.plot(size["artifact_px"] * k, ref * k, "x", color="tab:red", ms=9, mew=2,
+                        label="reference filter size")
+                tops.append(ref * k)
+        tops += [c * a_max, PUBLISHED_C * a_max]
+        ax.set_title("%s: c = %.2f [%.2f, %.2f]\n%d trials, %d participant%s"
+                     % (cond["condition"], c, ci["lo"], ci["hi"], cond["trials"], cond["participants"],
+                        "" if cond["participants"] == 1 else "s"), fontsize=10)
         ax.grid(alpha=0.3)
+        ax.set_xticks([a * k for a in sizes])
+        ax.xaxis.set_major_formatter(FuncFormatter(number_label))
     for ax in list(axes.flat)[len(conditions):]:
         ax.axis("off")
-    handles, labels = {}, []
+    axes[0][0].set_xlim(0, a_max)
+    axes[0][0].set_ylim(0, 1.05 * max(tops))
+    for ax in axes[-1]:
+        ax.set_xlabel("artifact size a (%s)" % unit)
+        ax.xaxis.set_tick_params(labelbottom=True)
+    for row in axes:
+        row[0].set_ylabel("threshold filter radius r (%s)" % unit)
+    # One legend for every panel, below them (never over the data).
+    handles = {}
     for ax in axes.flat:
         for h, label in zip(*ax.get_legend_handles_labels()):
-            key = label if not label.startswith("fit r") else "fit"
-            if key not in handles:
-                handles[key] = h
-                labels.append(label if key != "fit" else "fitted r = c a")
-    fig.legend(list(handles.values()), labels, loc="lower center", ncol=3, fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
+            handles.setdefault(label, h)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="upper center", bbox_to_anchor=(0.5, 0.0),
+               ncol=3, fontsize=8, frameon=False)
+    fig.tight_layout()
     save(fig, out_dir, "thresholds")
 
 
@@ -145,76 +245,174 @@ def binned(track, bins=6):
 
 def staircase_grid(report, participant):
     stairs = [s for s in report["staircases"] if s["participant"] == participant]
-    conditions = []
-    for s in stairs:
-        if s["condition"] not in conditions:
-            conditions.append(s["condition"])
+    # The report's condition order for every participant (not each one's run order), so figures compare.
+    order = [c["condition"] for c in ordered_conditions(report)]
+    conditions = sorted({s["condition"] for s in stairs}, key=lambda c: order.index(c) if c in order else len(order))
     sizes = sorted({s["artifact_px"] for s in stairs})
     return stairs, conditions, sizes
 
 
-def plot_psychometric(report, participant, out_dir):
+def plot_psychometric(report, participant, units, out_dir):
     stairs, conditions, sizes = staircase_grid(report, participant)
-    fig, axes = plt.subplots(len(conditions), len(sizes), figsize=(3.2 * len(sizes), 2.6 * len(conditions)),
-                             squeeze=False, sharey=True)
+    k = units.factor(participant)
+    fig, axes = plt.subplots(len(conditions), len(sizes), figsize=(3.0 * len(sizes), 2.4 * len(conditions)),
+                             squeeze=False, sharex=True, sharey=True)
+    ratios = [10.0 ** -t[1] for s in stairs for t in s["track"]]
+    lo_ratio, hi_ratio = min(ratios) / 1.4, max(ratios) * 1.4
     for s in stairs:
         ax = axes[conditions.index(s["condition"])][sizes.index(s["artifact_px"])]
         f = s["fit"]
         family = f["family"]
-        lo = min(t[1] for t in s["track"]) - 0.3
-        hi = max(t[1] for t in s["track"]) + 0.3
-        us = [lo + (hi - lo) * i / 200.0 for i in range(201)]
-        ax.plot([10.0 ** -u for u in us],
-                [psi(family, u, s["alpha"], f["beta"], f["guess"], f["lambda"]) for u in us], color="tab:blue")
+        us = [-math.log10(lo_ratio) + (math.log10(lo_ratio) - math.log10(hi_ratio)) * i / 200.0 for i in range(201)]
+        ax.plot([10.0 ** -u for u in us], [psi(family, u, s["alpha"], f["beta"], f["guess"], f["lambda"]) for u in us],
+                color="tab:blue", label="fitted psychometric function")
         for ratio, p, n in binned(s["track"]):
-            ax.plot(ratio, p, "o", color="k", ms=3 + 1.2 * n, alpha=0.6, mec="none")
+            ax.plot(ratio, p, "o", color="k", ms=3 + 1.0 * n, alpha=0.55, mec="none",
+                    label="proportion correct (bins of equal count; size: trials)")
         if s["c"] is not None:
-            ax.axvline(s["c"], color="tab:blue", ls=":", lw=1)
-        ax.set_xscale("log")
-        ax.set_ylim(0.35, 1.03)
-        ax.axhline(f["guess"], color="0.7", lw=0.8)
-        title = "%s a=%g: c=%.2f" % (s["condition"], s["artifact_px"], s["c"])
+            ax.axvline(s["c"], color="tab:blue", ls=":", lw=1, label="threshold c = r / a")
+        ax.axhline(f["guess"], color="0.7", lw=0.8, label="guess rate")
+        title = "%s, a = %s %s: c = %.2f" % (s["condition"], number_label(s["artifact_px"] * k), units.label(), s["c"])
         if not s["converged"]:
-            title += " (not converged)"
+            title += "*"
         ax.set_title(title, fontsize=8)
-        ax.set_xlabel("filter radius / artifact size", fontsize=8)
         ax.tick_params(labelsize=7)
+    for ax in axes.flat:
+        ax.set_xscale("log")
+        readable_log_axis(ax.xaxis)
+        ax.grid(alpha=0.25, which="major")
+    axes[0][0].set_xlim(lo_ratio, hi_ratio)
+    axes[0][0].set_ylim(0.35, 1.03)
+    for ax in axes[-1]:
+        ax.set_xlabel("filter radius / artifact size (r / a)", fontsize=8)
     for row in axes:
         row[0].set_ylabel("proportion correct", fontsize=8)
-    fig.suptitle("participant %s: psychometric fits (%s), binned data" % (participant, stairs[0]["fit"]["family"]),
-                 fontsize=10)
+    handles = {}
+    for ax in axes.flat:
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, h)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="upper center", bbox_to_anchor=(0.5, 0.0),
+               ncol=2, fontsize=7, frameon=False)
+    fig.suptitle("participant %s: psychometric fits (%s)%s" % (
+        participant, stairs[0]["fit"]["family"], "; * not converged" if not all(s["converged"] for s in stairs) else ""),
+        fontsize=10)
     fig.tight_layout()
     save(fig, out_dir, "psychometric_" + participant)
 
 
-def plot_quest(report, participant, out_dir):
+def plot_quest(report, participant, units, out_dir):
     stairs, conditions, sizes = staircase_grid(report, participant)
-    fig, axes = plt.subplots(len(conditions), 1, figsize=(7.5, 2.4 * len(conditions)), squeeze=False)
-    colors = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple"]
-    for s in stairs:
+    k = units.factor(participant)
+    fig, axes = plt.subplots(len(conditions), 1, figsize=(7.0, 2.2 * len(conditions)), squeeze=False, sharex=True,
+                             sharey=True)
+    longest = max(len(s["track"]) for s in stairs)
+    for s in sorted(stairs, key=lambda s: s["artifact_px"]):
         ax = axes[conditions.index(s["condition"])][0]
-        color = colors[sizes.index(s["artifact_px"]) % len(colors)]
+        color = SIZE_COLORS[sizes.index(s["artifact_px"]) % len(SIZE_COLORS)]
         n = list(range(1, len(s["track"]) + 1))
-        radii = [t[2] for t in s["track"]]
-        ax.plot(n, radii, "-", color=color, lw=1, label="a = %g px" % s["artifact_px"])
-        for i, t in zip(n, s["track"]):
-            ax.plot(i, t[2], "o", ms=3.5, color=color, mfc=color if t[3] else "white")
+        radii = [t[2] * k for t in s["track"]]
+        ax.plot(n, radii, "-", color=color, lw=1, label="a = %s %s" % (number_label(s["artifact_px"] * k), units.label()))
+        ax.plot([i for i, t in zip(n, s["track"]) if t[3]], [t[2] * k for t in s["track"] if t[3]], "o", ms=3.5,
+                color=color, label="correct")
+        ax.plot([i for i, t in zip(n, s["track"]) if not t[3]], [t[2] * k for t in s["track"] if not t[3]], "o",
+                ms=3.5, color=color, mfc="white", label="wrong")
         if s["r_threshold_px"] is not None:
-            ax.axhline(s["r_threshold_px"], color=color, ls=":", lw=1)
+            ax.axhline(s["r_threshold_px"] * k, color=color, ls=":", lw=1, label="fitted threshold")
+        ax.set_title(s["condition"], fontsize=9, loc="left")
+    for ax in axes.flat:
         ax.set_yscale("log")
-        ax.set_title(s["condition"], fontsize=9)
-        ax.set_ylabel("radius shown (px)", fontsize=8)
-        ax.legend(fontsize=7, loc="upper right")
-    axes[-1][0].set_xlabel("trial of the staircase (filled: correct, open: wrong; dotted: fitted threshold)",
-                           fontsize=8)
+        readable_log_axis(ax.yaxis)
+        ax.set_ylabel("radius shown (%s)" % units.label(), fontsize=8)
+        ax.grid(alpha=0.25, which="major")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True, steps=[1, 2, 5, 10]))
+        ax.tick_params(labelsize=7)
+    axes[0][0].set_xlim(0.5, longest + 0.5)
+    axes[-1][0].set_xlabel("trial of the staircase", fontsize=8)
+    # The legend beside the panels: one entry per size, then what the marks mean (in grey).
+    size_handles = []
+    for ax in axes.flat:
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            if label.startswith("a = ") and label not in [x[1] for x in size_handles]:
+                size_handles.append((h, label))
+    marks = [(Line2D([], [], marker="o", ls="", color="0.3", ms=4), "correct"),
+             (Line2D([], [], marker="o", ls="", color="0.3", mfc="white", ms=4), "wrong"),
+             (Line2D([], [], ls=":", color="0.3"), "fitted threshold")]
+    entries = size_handles + marks
+    fig.legend([e[0] for e in entries], [e[1] for e in entries], loc="upper left", bbox_to_anchor=(1.0, 0.95),
+               fontsize=8, frameon=False)
     fig.suptitle("participant %s: QUEST tracks" % participant, fontsize=10)
     fig.tight_layout()
     save(fig, out_dir, "quest_" + participant)
 
 
+def technique(out_dir):
+    """The technique of the calibration entry penumbra-fit wrote beside report.json."""
+    try:
+        with open(os.path.join(out_dir, "calibration.json")) as f:
+            return json.load(f)["entries"][0]["technique"]
+    except (OSError, ValueError, KeyError, IndexError, TypeError):
+        return ""
+
+
+def write_table(report, units, fit_dir, out_dir):
+    """thresholds.csv: one row per staircase (participant x condition x artifact size)."""
+    conditions = {c["condition"]: c for c in report["conditions"]}
+    tech = technique(fit_dir)
+
+    def fmt(v):
+        return "" if v is None else "%.6g" % v
+
+    rows = []
+    for s in report["staircases"]:
+        cond = conditions.get(s["condition"], {})
+        r = s["r_threshold_px"]
+        lo, hi = (s.get("c_wald") or [None, None])[:2]
+        ppd = units.geometry.get(s["participant"], (None, None))[0]
+        rows.append([s["participant"], tech, cond.get("pattern", ""), fmt(cond.get("contrast")), fmt(s["artifact_px"]),
+                     fmt(r), fmt(r * 60.0 / ppd if r is not None and ppd else None),
+                     fmt(lo * s["artifact_px"] if lo is not None else None),
+                     fmt(hi * s["artifact_px"] if hi is not None else None), str(len(s["track"]))])
+    rows.sort(key=lambda row: (row[0], row[2], -float(row[3] or 0), float(row[4])))
+    path = os.path.join(out_dir, "thresholds.csv")
+    with open(path + ".tmp", "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["participant", "technique", "pattern", "contrast", "artifact_px", "threshold_px", "threshold_arcmin",
+                    "ci_low", "ci_high", "trials"])
+        w.writerows(rows)
+    os.replace(path + ".tmp", path)
+    return len(rows)
+
+
+def write_summary(report, units, out_dir):
+    lines = ["plot_fit.py: figures in %s; units %s" % (out_dir, units.label())]
+    if units.geometry:
+        lines.append("display geometry (pixels per degree at the centre, as penumbra-study display-check):")
+        for p in sorted(units.geometry):
+            lines.append("  %-12s %.4f px/deg  (%s)" % (p, units.geometry[p][0], units.geometry[p][1]))
+    else:
+        lines.append("no session.json found for the fit's inputs: threshold_arcmin is empty")
+    lines.append("")
+    lines.append("conditions (thresholds.png; the titles give c and its profile interval):")
+    for cond in ordered_conditions(report):
+        lines += condition_summary(cond)
+    flagged = [s for s in report["staircases"] if s["flags"] or not s["converged"]]
+    lines.append("")
+    lines.append("staircases with flags (psychometric_*.png marks the not converged with *): %d of %d"
+                 % (len(flagged), len(report["staircases"])))
+    for s in flagged:
+        lines.append("  %-12s %-10s a%-4g %s" % (s["participant"], s["condition"], s["artifact_px"],
+                                                ", ".join(s["flags"]) or "not converged"))
+    path = os.path.join(out_dir, "summary.txt")
+    with open(path + ".tmp", "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(path + ".tmp", path)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("out", help="penumbra-fit output directory (holds report.json)")
+    parser.add_argument("--units", choices=["px", "arcmin", "deg"], default="px",
+                        help="radii and artifact sizes in pixels (default) or visual angle at the participant's display")
     parser.add_argument("--participants", default="",
                         help="comma-separated participants for the per-staircase plots (default: all)")
     args = parser.parse_args()
@@ -223,24 +421,28 @@ def main():
         with open(path) as f:
             report = json.load(f)
     except (OSError, ValueError) as e:
-        sys.exit("plot_fit.py: %s: %s" % (path, e))
-    out_dir = os.path.join(args.out, "plots")
-    os.makedirs(out_dir, exist_ok=True)
-    plot_thresholds(report, out_dir)
+        fail("%s: %s" % (path, e))
     participants = []
     for s in report["staircases"]:
         if s["participant"] not in participants:
             participants.append(s["participant"])
+    units = Units(args.units, session_geometry(report), participants)
     if args.participants:
         wanted = args.participants.split(",")
         unknown = [p for p in wanted if p not in participants]
         if unknown:
-            sys.exit("plot_fit.py: --participants: not in the report: " + ", ".join(unknown))
+            fail("--participants: not in the report: " + ", ".join(unknown))
         participants = wanted
+    out_dir = os.path.join(args.out, "plots")
+    os.makedirs(out_dir, exist_ok=True)
+    plot_thresholds(report, units, out_dir)
     for p in participants:
-        plot_psychometric(report, p, out_dir)
-        plot_quest(report, p, out_dir)
-    print("wrote %s/{thresholds, psychometric_*, quest_*}.{png,svg} (%d participants)" % (out_dir, len(participants)))
+        plot_psychometric(report, p, units, out_dir)
+        plot_quest(report, p, units, out_dir)
+    rows = write_table(report, units, args.out, out_dir)
+    write_summary(report, units, out_dir)
+    print("wrote %s/{thresholds, psychometric_*, quest_*}.{png,svg} (%d participant%s, %s), thresholds.csv (%d rows), "
+          "summary.txt" % (out_dir, len(participants), "" if len(participants) == 1 else "s", args.units, rows))
 
 
 if __name__ == "__main__":

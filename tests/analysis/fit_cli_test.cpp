@@ -18,6 +18,7 @@
 #include "adaptive/resolution_rule.h"
 #include "data/simulate.h"
 #include "log/trial_log.h"
+#include "procedure/config.h"
 
 namespace {
 
@@ -592,6 +593,78 @@ TEST(FitCli, LogsWithoutTimingColumnsFitAsBefore) {
   EXPECT_EQ(a["trials"], b["trials"]);
   ASSERT_EQ(a["conditions"].size(), 1u);
   EXPECT_EQ(a["conditions"][0]["c"], b["conditions"][0]["c"]);
+  fs::remove_all(dir);
+}
+
+// Issue 16: scripts/plot_fit.py on a fitted study writes the figures and a tidy CSV, one row per
+// staircase (participant x condition x artifact size), its thresholds as report.json has them and
+// in arcmin with the pixels per degree of penumbra-study display-check (Display::pixels_per_degree).
+TEST(FitCli, PlotFitWritesFiguresAndATidyThresholdTable) {
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "no matplotlib for /usr/bin/python3 (scripts/setup.sh installs python3-matplotlib)";
+  const fs::path dir = fresh("plot-fit");
+  nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/studies/default.json"));
+  config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}, {{"pattern", "step"}, {"contrast", 0.5}}};
+  config["artifact_px"] = {5, 20};
+  config["stopping"] = {{"min_trials", 20}, {"max_trials", 20}, {"sd_below", 0.1}};
+  config["display"] = {{"width_px", 2560}, {"height_px", 1440}, {"width_mm", 597}, {"height_mm", 336},
+                       {"viewing_distance_mm", 700}, {"transfer", "srgb"}, {"monitor", 0}};
+  const std::string sessions = run_sessions(dir, config, "psychometric:c=3.0,beta=3.5,lapse=0.01", 2);
+  ASSERT_FALSE(sessions.empty());
+  std::string out;
+  ASSERT_EQ(run(sessions + "-o " + (dir / "fit").string() + " --bootstrap 0", &out), 0) << out;
+  const std::string script = std::string(PENUMBRA_DATA_DIR) + "/../scripts/plot_fit.py";
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "fit").string() + " --units arcmin > " +
+                         (dir / "plot.txt").string() + " 2>&1").c_str()), 0)
+      << read(dir / "plot.txt");
+  const fs::path plots = dir / "fit" / "plots";
+  for (const char* f : {"thresholds.png", "thresholds.svg", "psychometric_p1.png", "quest_p2.png", "summary.txt"})
+    EXPECT_TRUE(fs::exists(plots / f)) << f;
+
+  procedure::Display display;
+  display.width_px = 2560;
+  display.width_mm = 597;
+  display.viewing_distance_mm = 700;
+  const double ppd = display.pixels_per_degree();  // 52.39 px per degree
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "fit" / "report.json"));
+  std::map<std::string, const nlohmann::json*> staircases;  // "p1 stair 1 5"
+  for (const auto& s : report["staircases"]) {
+    const std::string cond = s["condition"];
+    const std::string key = s["participant"].get<std::string>() + " " + cond.substr(0, cond.find('/')) + " " +
+                            cond.substr(cond.find('/') + 1) + " " + std::to_string(s["artifact_px"].get<int>());
+    staircases[key] = &s;
+  }
+  ASSERT_EQ(staircases.size(), 8u);  // 2 participants x 2 conditions x 2 sizes
+  std::istringstream csv(read(plots / "thresholds.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "participant,technique,pattern,contrast,artifact_px,threshold_px,threshold_arcmin,ci_low,ci_high,trials");
+  std::set<std::string> seen;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string v; std::getline(fields, v, ',');) f.push_back(v);
+    ASSERT_EQ(f.size(), 10u) << line;
+    const std::string key = f[0] + " " + f[2] + " " + f[3] + " " + f[4];
+    ASSERT_TRUE(staircases.count(key)) << line;
+    EXPECT_TRUE(seen.insert(key).second) << "one row per staircase: " << line;
+    const nlohmann::json& s = *staircases[key];
+    EXPECT_EQ(f[1], "pcf");
+    const double r = std::stod(f[5]);
+    EXPECT_NEAR(r, s["r_threshold_px"].get<double>(), 1e-5 * r) << line;
+    EXPECT_NEAR(std::stod(f[6]), r * 60.0 / ppd, 1e-5 * r) << line;
+    EXPECT_LE(std::stod(f[7]), r) << line;
+    EXPECT_GE(std::stod(f[8]), r) << line;
+    EXPECT_EQ(std::stoi(f[9]), static_cast<int>(s["track"].size())) << line;
+  }
+  EXPECT_EQ(seen.size(), 8u);
+  EXPECT_NE(read(plots / "summary.txt").find("52.3904 px/deg"), std::string::npos) << read(plots / "summary.txt");
+  // Geometry that cannot be found refuses the visual-angle units in one line.
+  fs::remove(dir / "p1" / "session.json");
+  EXPECT_NE(std::system(("/usr/bin/python3 " + script + " " + (dir / "fit").string() + " --units deg > " +
+                         (dir / "plot.txt").string() + " 2>&1").c_str()), 0);
+  EXPECT_EQ(read(dir / "plot.txt"), "plot_fit.py: --units deg: no session.json with the display for participant(s) p1 "
+                                    "(the fit's inputs are looked up relative to the current directory)\n");
   fs::remove_all(dir);
 }
 
