@@ -26,6 +26,7 @@
 #include "observers/image_observer.h"
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
+#include "procedure/session_record.h"
 #include "sampling/random.h"
 #include "stimuli/stimulus.h"
 #ifdef PENUMBRA_STUDY_GUI
@@ -321,12 +322,64 @@ procedure::Session open_session(const RunOptions& o, const std::string& observer
                                     o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt);
 }
 
-// A participant session in the windows (study/gui); the same Session, so the same log.
+// The intake screen's check of a typed id, before anything is written: the command line's rules
+// for an id, a name that can be a directory (the session goes to <-o>/<id>), a row of the Latin
+// square when the config counterbalances, and no session of that participant in the output folder
+// yet (its directory, or another directory whose session.json names the id).
+std::string intake_problem(const fs::path& root, const procedure::StudyConfig& config, const std::string& id,
+                           std::optional<std::uint64_t> seed) {
+  const std::string quoted = "participant '" + json_input::printable(id) + "'";
+  if (const std::string bad = procedure::name_problem(id); !bad.empty()) return quoted + ": " + bad;
+  if (id.front() == '.' || id.find('/') != std::string::npos || id.find('\\') != std::string::npos)
+    return quoted + ": the id names the session directory: expected no / or \\ and no leading dot";
+  try {
+    procedure::randomize(config, id, seed);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  std::error_code ec;
+  const fs::path dir = root / id;
+  if (fs::exists(dir, ec)) return quoted + " already has a session directory: " + dir.string() + " (choose another id, or --resume it)";
+  for (const auto& entry : fs::directory_iterator(root, ec)) {
+    const fs::path json = entry.path() / "session.json";
+    if (!fs::is_regular_file(json, ec)) continue;
+    try {
+      const nlohmann::json j = json_input::read_file(json, {.max_bytes = 1 << 20, .max_depth = 8});
+      if (j.is_object() && j.value("participant", std::string()) == id)
+        return quoted + " already has a session: " + entry.path().string() + " (choose another id, or --resume it)";
+    } catch (const std::exception&) {
+      // Not a session.json this check can read; the directory is not this id's, and Session::create refuses any clash.
+    }
+  }
+  return "";
+}
+
+// A participant session in the windows (study/gui); the same Session, so the same log. Without
+// --participant (a new session), the intake screen asks for the id and -o is the folder of sessions.
 int run_participant(const RunOptions& o) {
 #ifdef PENUMBRA_STUDY_GUI
-  if (o.resume.empty() && !o.participant_given) throw std::invalid_argument("run: --participant is required for a participant session");
+  const std::optional<std::uint64_t> seed = o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt;
+  if (o.resume.empty() && !o.participant_given) {
+    if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
+    study_gui::Intake intake;
+    intake.config = procedure::load_config(o.config);
+    check_stimulus_technique(intake.config, o.config);
+    intake.problem = [root = o.output, config = intake.config, seed](const std::string& id) {
+      return intake_problem(root, config, id, seed);
+    };
+    return study_gui::run_session(
+        [&](const std::function<void(const procedure::StudyConfig&)>& check, const std::string& participant) {
+          RunOptions typed = o;
+          typed.participant = participant;
+          typed.output = o.output / participant;
+          const procedure::StudyConfig config = procedure::load_config(o.config);
+          check(config);
+          return open_session(typed, "participant");
+        },
+        o.gui, intake);
+  }
   return study_gui::run_session(
-      [&](const std::function<void(const procedure::StudyConfig&)>& check) {
+      [&](const std::function<void(const procedure::StudyConfig&)>& check, const std::string&) {
         if (o.resume.empty()) {
           if (!o.config.empty()) check(procedure::load_config(o.config));  // before the directory exists
           return open_session(o, "participant");
@@ -473,7 +526,9 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "run a study session: a participant in the windows, or --headless with a simulated observer");
   RunOptions ro;
   run->add_option("--config", ro.config, shipped_configs)->check(cli::path_given())->transform(shipped_config());
-  run->add_option("-o,--output", ro.output, "new session directory (refused if it holds a session)")
+  run->add_option("-o,--output", ro.output,
+                  "new session directory (refused if it holds a session); in the windows without --participant, the folder "
+                  "the session goes into as <folder>/<participant id>")
       ->check(cli::path_given());
   run->add_option("--resume", ro.resume, "continue the session in this directory")->check(cli::path_given());
   run->add_option("--observer", ro.observer, "psychometric:c=..,beta=..,lapse=..")->capture_default_str();
@@ -481,7 +536,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(cli::non_negative_integer());
   run->add_option("--participant", ro.participant,
-                  "participant id: required for a participant session (the windows); headless runs default to 'sim'");
+                  "participant id; in the windows without it the experimenter types it at the start screen; headless runs "
+                  "default to 'sim'");
   run->add_option("--seed", ro.seed,
                   "the session's seed (target sides, staircase draws, edge phases, round order); default: derived from the "
                   "config's seed and the participant id, so each participant gets another sequence and the same one again")

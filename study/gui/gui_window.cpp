@@ -24,8 +24,10 @@ namespace {
 std::string g_glfw_error;
 void on_glfw_error(int, const char* message) { g_glfw_error = message; }
 
-// Latin-1 plus arrows and dashes: the instructions name the arrow keys.
-const ImWchar kGlyphs[] = {0x0020, 0x00FF, 0x2013, 0x2014, 0x2022, 0x2022, 0x2190, 0x2193, 0x2212, 0x2212, 0};
+// Latin (with Extended-A/B), Greek and Cyrillic for translated texts (config "texts"), quotes,
+// dashes, the bullet, the arrows and the minus sign.
+const ImWchar kGlyphs[] = {0x0020, 0x024F, 0x0370, 0x03FF, 0x0400, 0x04FF, 0x2013, 0x2014, 0x2018, 0x201E,
+                           0x2022, 0x2022, 0x2026, 0x2026, 0x2190, 0x2193, 0x2212, 0x2212, 0};
 const char* kFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";  // fonts-dejavu-core
 
 ImFont* add_font(float px) {

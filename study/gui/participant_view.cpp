@@ -6,6 +6,9 @@
 
 #include <imgui.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 
@@ -21,17 +24,76 @@ constexpr int kQuestionGapPx = 48, kButtonGapPx = 36, kButtonHeightPx = 54, kMar
 
 float gray(int v) { return static_cast<float>(v) / 255.0f; }
 
-// Text centred horizontally at ImGui y `y`.
-void centred_text(const std::string& text, float y) {
-  const float width = ImGui::GetIO().DisplaySize.x;
+// The lines of `text` in the current font, each broken at spaces to fit `max_width` (a texts entry
+// from a config, in any language, must not run off the screen).
+std::vector<std::string> wrapped(const std::string& text, float max_width) {
+  std::vector<std::string> out;
   std::istringstream lines(text);
   std::string line;
   while (std::getline(lines, line)) {
+    std::string current;
+    std::size_t pos = 0;
+    while (pos <= line.size()) {
+      std::size_t end = line.find(' ', pos);
+      if (end == std::string::npos) end = line.size();
+      const std::string word = line.substr(pos, end - pos);
+      const std::string candidate = current.empty() ? word : current + " " + word;
+      if (!current.empty() && ImGui::CalcTextSize(candidate.c_str()).x > max_width) {
+        out.push_back(current);
+        current = word;
+      } else {
+        current = candidate;
+      }
+      pos = end + 1;
+    }
+    out.push_back(current);
+  }
+  return out;
+}
+
+float text_width_limit() { return 0.9f * ImGui::GetIO().DisplaySize.x; }
+
+// Lines centred horizontally from ImGui y `y`; returns the y below them.
+float centred_lines(const std::vector<std::string>& lines, float y) {
+  const float width = ImGui::GetIO().DisplaySize.x;
+  for (const std::string& line : lines) {
     const ImVec2 size = ImGui::CalcTextSize(line.c_str());
-    ImGui::SetCursorPos({0.5f * (width - size.x), y});
+    ImGui::SetCursorPos({std::floor(0.5f * (width - size.x)), y});
     ImGui::TextUnformatted(line.c_str());
     y += ImGui::GetTextLineHeightWithSpacing();
   }
+  return y;
+}
+
+// Text centred horizontally at ImGui y `y`, wrapped to the screen.
+float centred_text(const std::string& text, float y) { return centred_lines(wrapped(text, text_width_limit()), y); }
+
+// A grey image into an RGBA8 texture, rows flipped (GL rows go bottom-up), so a blit or a quad
+// with flipped v copies it without any other transform.
+void upload_grey(const gl::Texture& texture, const io::Image8& img) {
+  const int size = img.width;
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(size) * size * 4);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const std::uint8_t v = img.at(x, size - 1 - y);
+      std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * size + x) * 4];
+      p[0] = p[1] = p[2] = v;
+      p[3] = 255;
+    }
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage2D(texture.id(), 0, 0, 0, size, size, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+}
+
+void check_square(const io::Image8& img, int size) {
+  if (img.width != size || img.height != size || img.channels != 1)
+    throw std::invalid_argument("ParticipantView: stimuli must be square one-channel images of the same size");
+}
+
+// A button of at least `min_width` centred on x, at y; true when clicked.
+bool button_at(const std::string& label, float centre_x, float y, float min_width, float height) {
+  const ImVec2 size{std::max(min_width, ImGui::CalcTextSize(label.c_str()).x + 64), height};
+  ImGui::SetCursorPos({std::floor(centre_x - 0.5f * size.x), y});
+  return ImGui::Button(label.c_str(), size);
 }
 
 }  // namespace
@@ -92,23 +154,28 @@ void ParticipantView::set_stimuli(const std::vector<const io::Image8*>& images) 
     }
     size_px_ = size;
   }
-  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(size) * size * 4);
   for (std::size_t i = 0; i < images.size(); ++i) {
-    const io::Image8& img = *images[i];
-    if (img.width != size || img.height != size || img.channels != 1)
-      throw std::invalid_argument("ParticipantView: stimuli must be square one-channel images of the same size");
-    // GL rows go bottom-up: flip here so the blit below copies without any transform.
-    for (int y = 0; y < size; ++y)
-      for (int x = 0; x < size; ++x) {
-        const std::uint8_t v = img.at(x, size - 1 - y);
-        std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * size + x) * 4];
-        p[0] = p[1] = p[2] = v;
-        p[3] = 255;
-      }
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTextureSubImage2D(textures_[i].id(), 0, 0, 0, size, size, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    check_square(*images[i], size);
+    upload_grey(textures_[i], *images[i]);
   }
   count_ = static_cast<int>(images.size());
+}
+
+void ParticipantView::set_examples(const io::Image8& jagged, const io::Image8& straight) {
+  const int size = jagged.width;
+  check_square(jagged, size);
+  check_square(straight, size);
+  if (size != example_px_) {
+    for (auto& t : examples_) {
+      t = gl::Texture({GL_RGBA8, size, size, 1}, "instruction example");
+      // Drawn by ImGui, shrunk when the screen is small: nearest keeps the steps sharp.
+      glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    example_px_ = size;
+  }
+  upload_grey(examples_[0], jagged);
+  upload_grey(examples_[1], straight);
 }
 
 void ParticipantView::clear(GuiWindow& window) {
@@ -139,7 +206,7 @@ void ParticipantView::progress_line(GuiWindow& window, const std::string& progre
   ImGui::PopStyleColor();
 }
 
-Answer ParticipantView::draw_trial(GuiWindow& window, const std::string& progress) {
+Answer ParticipantView::draw_trial(GuiWindow& window, const TrialText& text, const std::string& progress) {
   clear(window);
   int w = 0, h = 0;
   window.framebuffer_size(w, h);
@@ -153,13 +220,22 @@ Answer ParticipantView::draw_trial(GuiWindow& window, const std::string& progres
   const float s = window.framebuffer_scale();
   begin_overlay(window);
   ImGui::PushFont(window.large_font() ? window.large_font() : window.body_font());
-  const std::string question =
-      task_ == "2afc" ? "Which shadow edge comes from a jagged original?" : "Was the original a straight line?";
-  centred_text(question, (layout_.y_px - kQuestionGapPx) / s - ImGui::GetTextLineHeight());
+  const bool feedback = !text.feedback.empty();
+  if (feedback)
+    ImGui::PushStyleColor(ImGuiCol_Text, text.feedback_correct ? ImVec4{0.55f, 0.90f, 0.55f, 1} : ImVec4{1.0f, 0.62f, 0.55f, 1});
+  const auto question = wrapped(feedback ? text.feedback : text.question, text_width_limit());
+  centred_lines(question, (layout_.y_px - kQuestionGapPx) / s - ImGui::GetTextLineHeight() -
+                              static_cast<float>(question.size() - 1) * ImGui::GetTextLineHeightWithSpacing());
+  if (feedback) ImGui::PopStyleColor();
   ImGui::PopFont();
+  if (feedback) {  // no answer to give: the stimuli stay for a look, the buttons go
+    progress_line(window, progress);
+    ImGui::End();
+    return Answer::none;
+  }
 
-  const std::string first = task_ == "2afc" ? std::string("Left   ") + kLeftArrow + " or F" : std::string("Yes   ") + kLeftArrow + " or F";
-  const std::string second = task_ == "2afc" ? std::string("Right   ") + kRightArrow + " or J" : std::string("No   ") + kRightArrow + " or J";
+  const std::string first = text.first + "   " + kLeftArrow + " or F";
+  const std::string second = text.second + "   " + kRightArrow + " or J";
   const float button_y = (layout_.y_px + size_px_ + kButtonGapPx) / s;
   const ImVec2 button_size{std::min(static_cast<float>(size_px_), 280.0f) / s, kButtonHeightPx / s};
   float x_first = 0, x_second = 0;
@@ -188,13 +264,9 @@ bool ParticipantView::draw_message(GuiWindow& window, const std::string& title, 
   const float height = ImGui::GetIO().DisplaySize.y;
   float y = 0.36f * height;
   ImGui::PushFont(window.large_font() ? window.large_font() : window.body_font());
-  centred_text(title, y);
-  y += 2.2f * ImGui::GetTextLineHeightWithSpacing();
+  y = centred_text(title, y) + 1.2f * ImGui::GetTextLineHeightWithSpacing();
   ImGui::PopFont();
-  centred_text(body, y);
-  std::size_t lines = 1;
-  for (char ch : body) lines += ch == '\n';
-  y += (static_cast<float>(lines) + 1.5f) * ImGui::GetTextLineHeightWithSpacing();
+  y = centred_text(body, y) + 1.5f * ImGui::GetTextLineHeightWithSpacing();
   bool clicked = false;
   if (!button.empty()) {
     const ImVec2 size{ImGui::CalcTextSize(button.c_str()).x + 64, kButtonHeightPx / window.framebuffer_scale()};
@@ -204,6 +276,116 @@ bool ParticipantView::draw_message(GuiWindow& window, const std::string& title, 
   progress_line(window, progress);
   ImGui::End();
   return clicked;
+}
+
+bool ParticipantView::draw_instructions(GuiWindow& window, const Instructions& in, const std::string& progress) {
+  clear(window);
+  begin_overlay(window);
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const float s = window.framebuffer_scale();
+  ImFont* large = window.large_font() ? window.large_font() : window.body_font();
+  ImGui::PushFont(large);
+  const float large_line = ImGui::GetTextLineHeightWithSpacing();
+  const auto title = wrapped(in.title, text_width_limit()), round_line = wrapped(in.round_line, text_width_limit());
+  ImGui::PopFont();
+  const float line = ImGui::GetTextLineHeightWithSpacing(), gap = 0.8f * line;
+  const auto body = wrapped(in.body, text_width_limit());
+  const float button_h = in.button.empty() ? 0 : kButtonHeightPx / s;
+  const float bottom = 2 * line + kMarginPx / s;  // the progress line
+  const float fixed = static_cast<float>(title.size() + round_line.size()) * large_line + static_cast<float>(body.size()) * line +
+                      3 * gap + button_h;
+  float image = 0;
+  if (in.examples && example_px_ > 0) {
+    // 1:1 where the screen has room, else shrunk (a label and a gap go with it).
+    const float room = display.y - bottom - 2 * gap - fixed - (line + gap);
+    image = std::floor(std::min({example_px_ / s, room, 0.9f * display.x / 2.5f}));
+    if (image < 24) image = 0;
+  }
+  const float total = fixed + (image > 0 ? image + line + gap : 0);
+  float y = std::floor(std::max(gap, 0.5f * (display.y - bottom - total)));
+  ImGui::PushFont(large);
+  y = centred_lines(title, y) + gap;
+  ImGui::PopFont();
+  y = centred_lines(body, y) + gap;
+  if (image > 0) {  // the jagged one left, the straight one right, labelled
+    const float between = std::floor(image / 2), x0 = std::floor(0.5f * (display.x - 2 * image - between));
+    const std::string* labels[2] = {&in.jagged_label, &in.straight_label};
+    for (int i = 0; i < 2; ++i) {
+      const float x = x0 + static_cast<float>(i) * (image + between);
+      ImGui::SetCursorPos({x, y});
+      // The textures hold the rows bottom-up: v runs from 1 at the top to 0.
+      ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(examples_[i].id())), {image, image}, {0, 1}, {1, 0});
+      const float w = ImGui::CalcTextSize(labels[i]->c_str()).x;
+      ImGui::SetCursorPos({std::floor(x + 0.5f * (image - w)), y + image + 0.3f * line});
+      ImGui::TextUnformatted(labels[i]->c_str());
+    }
+    y += image + line + gap;
+  }
+  ImGui::PushFont(large);
+  y = centred_lines(round_line, y) + gap;
+  ImGui::PopFont();
+  bool clicked = false;
+  if (!in.button.empty()) clicked = button_at(in.button, 0.5f * display.x, y, 0, button_h);
+  progress_line(window, progress);
+  ImGui::End();
+  return clicked;
+}
+
+bool ParticipantView::draw_intake(GuiWindow& window, std::string& id, const std::string& study, const std::string& problem) {
+  clear(window);
+  begin_overlay(window);
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const float s = window.framebuffer_scale();
+  float y = std::floor(0.28f * display.y);
+  ImGui::PushFont(window.large_font() ? window.large_font() : window.body_font());
+  y = centred_text("New session", y) + ImGui::GetTextLineHeight();
+  ImGui::PopFont();
+  y = centred_text("Study: " + study + "\nType the participant id, then press Enter.", y) + 0.5f * ImGui::GetTextLineHeight();
+  const float width = std::min(420 / s, 0.8f * display.x);
+  ImGui::SetCursorPos({std::floor(0.5f * (display.x - width)), y});
+  ImGui::SetNextItemWidth(width);
+  char buffer[256] = {};
+  id.copy(buffer, sizeof buffer - 1);
+  if (!ImGui::IsAnyItemActive()) ImGui::SetKeyboardFocusHere();  // typing goes into the field at once
+  bool confirmed = ImGui::InputText("##participant", buffer, sizeof buffer, ImGuiInputTextFlags_EnterReturnsTrue);
+  id = buffer;
+  y += ImGui::GetFrameHeightWithSpacing() + 0.5f * ImGui::GetTextLineHeight();
+  confirmed |= button_at("Continue   (Enter)", 0.5f * display.x, y, 0, kButtonHeightPx / s);
+  y += kButtonHeightPx / s + ImGui::GetTextLineHeight();
+  if (!problem.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4{1.0f, 0.62f, 0.55f, 1});
+    centred_text(problem, y);
+    ImGui::PopStyleColor();
+  }
+  progress_line(window, "Escape: quit without writing anything");
+  ImGui::End();
+  return confirmed;
+}
+
+ConsentChoice ParticipantView::draw_consent(GuiWindow& window, const std::string& title, const std::string& text,
+                                            const std::string& agree, const std::string& decline) {
+  clear(window);
+  begin_overlay(window);
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const float s = window.framebuffer_scale();
+  ImGui::PushFont(window.large_font() ? window.large_font() : window.body_font());
+  const auto title_lines = wrapped(title, text_width_limit());
+  const float large_line = ImGui::GetTextLineHeightWithSpacing();
+  ImGui::PopFont();
+  const auto lines = wrapped(text, text_width_limit());
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  const float total = static_cast<float>(title_lines.size()) * large_line + static_cast<float>(lines.size() + 2) * line + kButtonHeightPx / s;
+  float y = std::floor(std::max(line, 0.5f * (display.y - total)));
+  ImGui::PushFont(window.large_font() ? window.large_font() : window.body_font());
+  y = centred_lines(title_lines, y) + line;
+  ImGui::PopFont();
+  y = centred_lines(lines, y) + line;
+  ConsentChoice choice = ConsentChoice::none;
+  const float width = std::max(ImGui::CalcTextSize(agree.c_str()).x, ImGui::CalcTextSize(decline.c_str()).x) + 64;
+  if (button_at(agree, 0.5f * display.x - 0.5f * width - 12 / s, y, width, kButtonHeightPx / s)) choice = ConsentChoice::agree;
+  if (button_at(decline, 0.5f * display.x + 0.5f * width + 12 / s, y, width, kButtonHeightPx / s)) choice = ConsentChoice::decline;
+  ImGui::End();
+  return choice;
 }
 
 void ParticipantView::draw_blank(GuiWindow& window, const std::string& progress) {

@@ -34,6 +34,23 @@ std::string response_for(Answer answer, const std::string& task);
 // Display value of the background (8-bit, the same on all channels).
 inline constexpr int kBackgroundValue = 128;
 
+// What a trial screen says: the question above the stimuli and the two answer buttons (the keys
+// are added), or, after a practice answer, the feedback in their place.
+struct TrialText {
+  std::string question, first, second;
+  std::string feedback;   // non-empty: shown instead of the question, no buttons
+  bool feedback_correct = false;
+};
+
+// An instruction screen: title, body, the examples (a jagged and a straight edge, labelled), the
+// round line ("Round 2 of 4") and the button.
+struct Instructions {
+  std::string title, body, jagged_label, straight_label, round_line, button;
+  bool examples = true;
+};
+
+enum class ConsentChoice { none, agree, decline };
+
 class ParticipantView {
  public:
   // Needs the participant window's contexts current (sets that ImGui context's style).
@@ -41,13 +58,24 @@ class ParticipantView {
 
   // The trial's images (8-bit grey, top row first, all the same square size), left to right.
   void set_stimuli(const std::vector<const io::Image8*>& images);
+  // The instruction screens' examples (8-bit grey, square, the same size).
+  void set_examples(const io::Image8& jagged, const io::Image8& straight);
 
   // One frame's content (between GuiWindow::begin_frame and end_frame). The background is
   // cleared by each. Returns the answer clicked with a button, if any.
-  Answer draw_trial(GuiWindow& window, const std::string& progress);
+  Answer draw_trial(GuiWindow& window, const TrialText& text, const std::string& progress);
   // Title, body and one button (or none when `button` is empty); true when the button is clicked.
   bool draw_message(GuiWindow& window, const std::string& title, const std::string& body, const std::string& button,
                     const std::string& progress);
+  // True when the button is clicked (an empty button: none). The examples shrink to fit the screen
+  // (they are not measured; the trial's stimuli always show 1:1).
+  bool draw_instructions(GuiWindow& window, const Instructions& in, const std::string& progress);
+  // The experimenter's start screen: the participant id typed into `id`; true when Enter or the
+  // button confirms it. `problem` (red) says why the last id was refused.
+  bool draw_intake(GuiWindow& window, std::string& id, const std::string& study, const std::string& problem);
+  // The consent text with its agree and decline buttons.
+  ConsentChoice draw_consent(GuiWindow& window, const std::string& title, const std::string& text, const std::string& agree,
+                             const std::string& decline);
   // Only the background and the progress line (between trials).
   void draw_blank(GuiWindow& window, const std::string& progress);
 
@@ -61,7 +89,8 @@ class ParticipantView {
   std::string task_;
   gl::Texture textures_[2];
   gl::Framebuffer framebuffers_[2];
-  int count_ = 0, size_px_ = 0;
+  gl::Texture examples_[2];  // jagged, straight
+  int count_ = 0, size_px_ = 0, example_px_ = 0;
   StimulusLayout layout_;
 };
 

@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 #include "cli/checks.h"
 #include "gui/admin_view.h"
@@ -39,15 +40,22 @@ void add_options(CLI::App& run, GuiOptions& o) {
                  "refresh rate of a participant display whose video mode reports none (Xvfb, some virtual displays): "
                  "dropped frames are judged against it")
       ->check(cli::finite_range(1.0, 1000.0));
+  run.add_option("--screenshot-at", o.screenshot_at,
+                 "with --screenshot: capture this screen instead (participant.png only): intake, consent, welcome, round, "
+                 "feedback, trial")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trial", "intake", "consent", "welcome", "round", "feedback"}));
 }
 
 namespace {
 
-enum class Screen { welcome, blank, trial, pause, rest, finished };
+enum class Screen { welcome, round, blank, trial, feedback, pause, rest, finished };
 
 const char* describe(Screen s) {
   switch (s) {
     case Screen::welcome: return "welcome screen";
+    case Screen::round: return "round instructions";
+    case Screen::feedback: return "practice feedback";
     case Screen::blank: return "blank (between trials)";
     case Screen::trial: return "trial on screen";
     case Screen::pause: return "paused";
@@ -55,18 +63,6 @@ const char* describe(Screen s) {
     case Screen::finished: return "end screen";
   }
   return "";
-}
-
-std::string instructions(const std::string& task) {
-  const std::string left = "\xe2\x86\x90", right = "\xe2\x86\x92";
-  if (task == "2afc")
-    return "Each trial shows two shadow edges. One was drawn from a jagged original,\n"
-           "the other from a straight line. Choose the one from the jagged original:\n" +
-           left + " or F for the left one, " + right + " or J for the right one, or click a button.\n"
-           "Take your time. If you are unsure, guess.";
-  return "Each trial shows one shadow edge. Was it drawn from a straight original line?\n" + left +
-         " or F: yes, straight.   " + right + " or J: no, jagged.   Or click a button.\n"
-         "Take your time. If you are unsure, guess.";
 }
 
 void write_rgb_png(const fs::path& path, const io::Image8& rgba) {
@@ -87,8 +83,7 @@ void parse_window_size(const std::string& s, int& w, int& h) {
     throw std::invalid_argument("--windowed '" + text::printable(s) + "': expected WIDTHxHEIGHT in pixels, e.g. 1280x800");
 }
 
-int run_session(const std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>&)>& open_session,
-                const GuiOptions& o) {
+int run_session(const OpenSession& open_session, const GuiOptions& o, const std::optional<Intake>& intake) {
   // Everything that can refuse comes before the session is opened, so a refusal leaves no
   // new session directory behind.
   int win_w = 0, win_h = 0;
@@ -121,8 +116,10 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     }
     (void)stimulus_layout(w, h, c.stimulus_size_px, c.task == "2afc" ? 2 : 1);  // throws naming the sizes
   };
-  procedure::Session session = open_session(check_config);
-  const procedure::StudyConfig& config = session.config();
+  std::optional<procedure::Session> opened;
+  if (intake) check_config(intake->config);  // the session is created once the participant id is typed
+  else opened.emplace(open_session(check_config, ""));
+  const procedure::StudyConfig config = intake ? intake->config : opened->config();
   const bool two = config.task == "2afc";
   const int monitor = o.monitor >= 0 ? o.monitor : config.display.monitor;
   if (fullscreen) {
@@ -151,6 +148,72 @@ int run_session(const std::function<procedure::Session(const std::function<void(
   // starts again at 0).
   const double clock_start_s = glfw.now_s();
   double refresh_hz = 0;
+  ParticipantView view(config.task);   // styles the participant's ImGui context
+  stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
+  struct CurrentOnExit {
+    GuiWindow& window;
+    ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
+  } current_on_exit{participant};
+  // --screenshot-at: participant.png of that screen (between end_frame and swap), then the app stops.
+  auto screenshot_of = [&](const char* name) {
+    if (o.screenshot_dir.empty() || o.screenshot_at != name) return false;
+    fs::create_directories(o.screenshot_dir);
+    write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
+    say("wrote " + (o.screenshot_dir / "participant.png").string() + " (" + name + ")");
+    return true;
+  };
+
+  if (intake) {
+    // The experimenter types the participant id; nothing exists on disk until it is accepted and
+    // the participant has agreed to the consent text (when the config has one).
+    const std::string consent = config.text("consent");
+    std::string id, problem;
+    bool consenting = false, accepted = false;
+    for (int frame = 0; !accepted; ++frame) {
+      // Said once the field has the keyboard (ImGui focuses it in the frame after it asks).
+      if (frame == 2) say("intake screen: waiting for the participant id");
+      const double frame_start = glfw.now_s();
+      bool agree = false, quit = participant.close_requested();
+      for (const Press& p : participant.take_presses()) {
+        if (p.key == GLFW_KEY_ESCAPE) quit = true;
+        else if (consenting && (p.key == GLFW_KEY_ENTER || p.key == GLFW_KEY_KP_ENTER)) agree = true;
+      }
+      participant.begin_frame();
+      const bool on_consent = consenting;
+      if (consenting) {
+        const ConsentChoice choice = view.draw_consent(participant, config.text("consent_title"), consent,
+                                                       config.text("consent_agree"), config.text("consent_decline"));
+        agree |= choice == ConsentChoice::agree;
+        quit |= choice == ConsentChoice::decline;
+      } else if (view.draw_intake(participant, id, config.name, problem)) {
+        problem = intake->problem(id);
+        if (!problem.empty()) {
+          say("intake: refused: " + problem);
+        } else if (consent.empty()) {
+          accepted = true;
+        } else {
+          consenting = true;
+          say("consent screen: waiting for agree (Enter) or decline (Escape)");
+        }
+      }
+      participant.end_frame();
+      const bool shot = screenshot_of(on_consent ? "consent" : "intake");
+      participant.swap();
+      if (shot) return 0;
+      if (quit && !accepted) {
+        say(on_consent ? "consent declined: nothing written" : "intake cancelled: nothing written");
+        return 0;
+      }
+      if (agree) {
+        say("consent given");
+        accepted = true;
+      }
+      glfw.wait_events(std::max(0.0, frame_start + 1.0 / 60 - glfw.now_s()));
+    }
+    say("participant '" + text::printable(id) + "' accepted");
+    opened.emplace(open_session(check_config, id));
+  }
+  procedure::Session& session = *opened;
   {
     // What the participant really sees, beside the config's assumptions (display-check).
     GLFWmonitor* shown_on = fullscreen ? monitors[static_cast<std::size_t>(monitor)] : glfwGetPrimaryMonitor();
@@ -183,12 +246,6 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     session.record_presentation(presentation);
     say("presentation: " + presentation.dump());
   }
-  ParticipantView view(config.task);   // styles the participant's ImGui context
-  stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
-  struct CurrentOnExit {
-    GuiWindow& window;
-    ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
-  } current_on_exit{participant};
 
   if (!o.admin_panel) {
     WindowSpec as;
@@ -224,7 +281,7 @@ int run_session(const std::function<procedure::Session(const std::function<void(
 
   Screen screen = Screen::welcome;
   std::optional<procedure::TrialPlan> plan;
-  double blank_until = 0, onset_s = -1, last_mouse_s = 0, admin_drawn_s = -1;
+  double blank_until = 0, onset_s = -1, last_mouse_s = 0, admin_drawn_s = -1, feedback_until = 0;
   int break_done_at = session.trials_done();  // a resumed session starts with the welcome screen instead
   bool paused = false, stop = false, screenshot_due = false;
   AdminStatus status;
@@ -232,26 +289,49 @@ int run_session(const std::function<procedure::Session(const std::function<void(
   // The intervals of the frames that showed the current stimulus, each from the swap before it.
   std::vector<double> stimulus_frames_ms;
   const bool resumed = session.trials_done() > 0;
+  const int n_rounds = static_cast<int>(session.rounds().size());
+  TrialText trial_text{config.text("question"), config.text("answer_first"), config.text("answer_second"), "", false};
 
+  auto round_line = [&](int round) { return config.text("round", session.round_position(round) + 1, n_rounds); };
   auto progress = [&] {
-    const int round = session.current_round(), n = static_cast<int>(session.rounds().size());
-    if (plan && plan->practice) return std::string("Practice");
-    if (round >= n) return std::string();
-    return "Part " + std::to_string(session.round_position(round) + 1) + " of " + std::to_string(n);
+    const int round = session.current_round();
+    if (plan && plan->practice) return config.text("practice");
+    if (round >= n_rounds) return std::string();
+    return round_line(round);
   };
-  // Chooses what comes next: the end, a break, or the next trial after a blank interval.
-  auto advance = [&] {
-    plan = session.next();
-    if (!plan) {
-      screen = Screen::finished;
-      say("session complete: " + std::to_string(session.trials_done()) + " trials in " + session.dir().string());
-      return;
-    }
-    if (session.break_due() && break_done_at != session.trials_done()) {
-      screen = Screen::rest;
-      say("break after " + std::to_string(session.trials_done()) + " trials");
-      return;
-    }
+  // The instruction screens: the task in the config's words, the practice to come, and examples of
+  // the round's pattern and contrast with the config's largest artifact and no filter to speak of
+  // (the smallest radius shown, 1 px): a plainly jagged edge beside the straight one.
+  int introduced_round = -1, examples_round = -1;
+  auto show_examples = [&](int round) {
+    if (round == examples_round) return;
+    participant.make_current();
+    const double artifact_px = *std::max_element(config.artifact_px.begin(), config.artifact_px.end());
+    const stimuli::StimulusPair pair = renderer.render(session.stimulus(round, artifact_px, 1.0, 1));
+    view.set_examples(pair.artifact, pair.line);
+    examples_round = round;
+  };
+  // The first screen names the round below the examples; a round's own screen has it as the title.
+  auto instructions = [&](const std::string& title, const std::string& intro, bool practice_next, bool round_below) {
+    Instructions in;
+    in.title = title;
+    in.body = intro + "\n\n" + config.text("task");
+    if (practice_next) in.body += "\n\n" + config.text(config.practice.feedback ? "practice_feedback_note" : "practice_note");
+    in.jagged_label = config.text("example_jagged");
+    in.straight_label = config.text("example_straight");
+    in.examples = examples_round >= 0;
+    in.round_line = round_below && examples_round >= 0 ? round_line(examples_round) : "";
+    in.button = paused ? "" : config.text(screen == Screen::welcome ? "start" : "continue");
+    return in;
+  };
+  if (const auto upcoming = session.next()) {  // the first screen introduces the first round to come
+    introduced_round = upcoming->round;
+    show_examples(upcoming->round);
+  }
+  const bool practice_first = session.next() && session.next()->practice;
+
+  // The next trial's stimuli, after a blank interval.
+  auto present = [&] {
     participant.make_current();  // the renderer's GL context (advance may run in the admin's frame)
     const stimuli::StimulusPair pair = renderer.render(plan->stimulus);
     if (two) {
@@ -262,6 +342,30 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     }
     screen = Screen::blank;
     blank_until = glfw.now_s() + o.iti_ms / 1000.0;
+  };
+  // Chooses what comes next: the end, a new round's instructions, a break, or the next trial.
+  auto advance = [&] {
+    plan = session.next();
+    if (!plan) {
+      screen = Screen::finished;
+      say("session complete: " + std::to_string(session.trials_done()) + " trials in " + session.dir().string());
+      return;
+    }
+    if (plan->round != introduced_round) {
+      introduced_round = plan->round;
+      break_done_at = session.trials_done();  // the round's screen is a rest as well
+      show_examples(plan->round);
+      screen = Screen::round;
+      say("round screen: " + round_line(plan->round) + " (" + session.condition(plan->round) + (plan->practice ? ", practice first" : "") +
+          "), waiting for Space");
+      return;
+    }
+    if (session.break_due() && break_done_at != session.trials_done()) {
+      screen = Screen::rest;
+      say("break after " + std::to_string(session.trials_done()) + " trials");
+      return;
+    }
+    present();
   };
   auto answer = [&](Answer a, double when_s) {
     const std::string response = response_for(a, config.task);
@@ -284,6 +388,14 @@ int run_session(const std::function<procedure::Session(const std::function<void(
                     row.trial, *timing.dropped_frames, timing.frame_ms_max, status.dropped_frame_ms);
       say(buf);
     }
+    if (plan->practice && config.practice.feedback) {  // practice only: test trials never say
+      trial_text.feedback = config.text(row.correct ? "practice_feedback_correct" : "practice_feedback_wrong");
+      trial_text.feedback_correct = row.correct == 1;
+      screen = Screen::feedback;
+      feedback_until = glfw.now_s() + config.practice.feedback_ms / 1000.0;
+      say("trial " + std::to_string(row.trial) + " feedback: " + (row.correct ? "correct" : "wrong"));
+      return;
+    }
     advance();
   };
   auto start = [&] {
@@ -292,6 +404,8 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     } else if (screen == Screen::rest) {
       break_done_at = session.trials_done();
       advance();
+    } else if (screen == Screen::round) {
+      present();
     }
   };
   auto apply_admin = [&](const AdminActions& a) {
@@ -305,12 +419,12 @@ int run_session(const std::function<procedure::Session(const std::function<void(
       say("round " + std::to_string(session.round_position(session.current_round()) + 1) + " (" +
           session.condition(session.current_round()) + ") ended by the experimenter");
       session.end_round();
-      if (screen == Screen::blank || screen == Screen::trial) advance();
+      if (screen == Screen::blank || screen == Screen::trial || screen == Screen::round) advance();
     }
     if (a.quit) stop = true;
   };
 
-  if (!o.screenshot_dir.empty()) advance();  // straight to the first trial
+  if (!o.screenshot_dir.empty() && o.screenshot_at == "trial") advance();  // straight to the first trial
   else say("welcome screen: waiting for Space");
   double last_swap_s = glfw.now_s();
 
@@ -346,6 +460,11 @@ int run_session(const std::function<procedure::Session(const std::function<void(
         answer(answer_for_key(p.key), p.time_s);
     }
     if (stop) break;
+    if (screen == Screen::feedback && glfw.now_s() >= feedback_until) {
+      trial_text.feedback.clear();
+      if (paused || panel_covers()) screen = Screen::pause;  // the next trial waits
+      else advance();
+    }
     if (screen == Screen::blank && glfw.now_s() >= blank_until) {
       // Never under the admin panel: started from the welcome or break screen while it is open,
       // the trial waits until it closes.
@@ -358,26 +477,35 @@ int run_session(const std::function<procedure::Session(const std::function<void(
     const Screen drawn = screen;
     switch (screen) {
       case Screen::welcome:
-        if (view.draw_message(participant, resumed ? "Welcome back" : "Shadow edges", instructions(config.task),
-                              paused ? "" : "Start   (Space)", progress()))
+        if (view.draw_instructions(participant,
+                                   instructions(config.text(resumed ? "welcome_back_title" : "welcome_title"), config.text("welcome"),
+                                                practice_first, true),
+                                   ""))
+          start();
+        break;
+      case Screen::round:
+        if (view.draw_instructions(participant, instructions(round_line(plan->round), config.text("round_body"), plan->practice, false), ""))
           start();
         break;
       case Screen::rest:
-        if (view.draw_message(participant, "Break", "Rest your eyes for a moment.\nContinue when you are ready.",
-                              paused ? "" : "Continue   (Space)", progress()))
+        if (view.draw_message(participant, config.text("break_title"), config.text("break"), paused ? "" : config.text("continue"),
+                              progress()))
           start();
         break;
       case Screen::pause:
-        view.draw_message(participant, "Please wait", "The experimenter has paused the session.", "", progress());
+        view.draw_message(participant, config.text("pause_title"), config.text("pause"), "", progress());
         break;
       case Screen::finished:
-        view.draw_message(participant, "Thank you!", "The session is complete.\nPlease tell the experimenter.", "", "");
+        view.draw_message(participant, config.text("end_title"), config.text("end"), "", "");
         break;
       case Screen::blank:
         view.draw_blank(participant, progress());
         break;
+      case Screen::feedback:
+        view.draw_trial(participant, trial_text, progress());
+        break;
       case Screen::trial: {
-        const Answer clicked = view.draw_trial(participant, progress());
+        const Answer clicked = view.draw_trial(participant, trial_text, progress());
         if (clicked != Answer::none && onset_s >= 0) answer(clicked, std::max(last_mouse_s, onset_s));
         break;
       }
@@ -398,6 +526,10 @@ int run_session(const std::function<procedure::Session(const std::function<void(
       apply_admin(actions);
     }
     participant.end_frame();
+    if (screenshot_of(drawn == Screen::welcome ? "welcome" : drawn == Screen::round ? "round" : drawn == Screen::feedback ? "feedback" : "")) {
+      participant.swap();
+      break;
+    }
     const bool first_trial_frame = drawn == Screen::trial && screen == Screen::trial && onset_s < 0;
     if ((first_trial_frame || drawn == Screen::finished) && !o.screenshot_dir.empty()) {
       fs::create_directories(o.screenshot_dir);

@@ -6,6 +6,7 @@
 // between trials; the directory stays resumable (`--resume DIR`).
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "procedure/session.h"
@@ -23,9 +24,25 @@ struct GuiOptions {
   double iti_ms = 400;         // blank screen between trials
   std::filesystem::path screenshot_dir;  // write participant.png (+ admin.png) at the first stimulus onset (or the end screen), then stop
   double refresh_hz = 0;       // the participant display's refresh rate where its video mode reports none (0: not given)
+  // With screenshot_dir: the screen to capture (participant.png only) instead of the first stimulus:
+  // intake, consent, welcome, round (the next round's instructions), feedback (after a practice answer).
+  std::string screenshot_at = "trial";
 };
 
-// Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --refresh-hz to `run`.
+// A new session whose participant id the experimenter types at the start screen (no --participant):
+// the config is known before the session exists (its texts, its consent, the screen check).
+struct Intake {
+  procedure::StudyConfig config;
+  // Why `id` cannot start a session (bad id, an existing session of that participant), "" if it can.
+  std::function<std::string(const std::string& id)> problem;
+};
+
+// Opens or creates the session; must call `check(config)` before it creates or writes anything.
+// `participant`: the id typed at the intake screen ("" without one).
+using OpenSession = std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>& check,
+                                                     const std::string& participant)>;
+
+// Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --screenshot-at, --refresh-hz to `run`.
 void add_options(CLI::App& run, GuiOptions& options);
 
 // "--windowed WxH": the size in pixels; throws std::invalid_argument naming the option otherwise.
@@ -33,10 +50,9 @@ void parse_window_size(const std::string& windowed, int& width, int& height);
 
 // Opens the windows, then the session (`open_session` creates or resumes it: after every check
 // that can refuse, so a refusal leaves no new session behind), and runs it until it is finished
-// or stopped. Returns the process exit code (0).
-// `open_session(check)` opens or resumes the session and must call `check(config)` before it
-// creates or writes anything: it refuses a config whose stimuli do not fit the participant screen.
-int run_session(const std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>&)>& open_session,
-                const GuiOptions& options);
+// or stopped. With `intake`, the participant window first asks for the participant id (refused
+// ids are named on screen) and shows the config's consent text; Escape or declining ends the app
+// with nothing written. Returns the process exit code (0).
+int run_session(const OpenSession& open_session, const GuiOptions& options, const std::optional<Intake>& intake = std::nullopt);
 
 }  // namespace penumbra::study_gui

@@ -21,6 +21,72 @@ double Display::pixels_per_degree() const {
   return mm * width_px / width_mm;
 }
 
+// U+2190 / U+2192: the arrow keys.
+#define PENUMBRA_LEFT "\xe2\x86\x90"
+#define PENUMBRA_RIGHT "\xe2\x86\x92"
+
+const std::vector<TextEntry>& text_table() {
+  static const std::vector<TextEntry> table = {
+      {"welcome_title", "Shadow edges", nullptr, "title of the first screen"},
+      {"welcome_back_title", "Welcome back", nullptr, "its title when a session is resumed"},
+      {"welcome", "Thank you for taking part.", nullptr, "first screen, above the task"},
+      {"task",
+       "You will see two shadow edges: one jagged (stair-stepped), one straight.\n"
+       "Which side shows the jagged edge? " PENUMBRA_LEFT " or F: left, " PENUMBRA_RIGHT " or J: right.\n"
+       "If you are unsure, guess.",
+       "You will see one shadow edge: straight or jagged (stair-stepped).\n"
+       "Is it straight? " PENUMBRA_LEFT " or F: yes, " PENUMBRA_RIGHT " or J: no, it is jagged.\n"
+       "If you are unsure, guess.",
+       "how to answer: first screen and every round's screen"},
+      {"question", "Which side shows the jagged (stair-stepped) edge?", "Is this edge straight?", "above the stimuli in every trial"},
+      {"answer_first", "Left", "Yes", "first answer button (" PENUMBRA_LEFT " or F is added)"},
+      {"answer_second", "Right", "No", "second answer button (" PENUMBRA_RIGHT " or J is added)"},
+      {"example_jagged", "Jagged (stair-stepped)", nullptr, "label under the jagged example"},
+      {"example_straight", "Straight", nullptr, "label under the straight example"},
+      {"round", "Round {round} of {rounds}", nullptr, "round line of the instruction screens and the progress line"},
+      {"round_body", "New shadow edges. The task stays the same.", nullptr, "screen between rounds, above the task"},
+      {"practice_note", "The first few trials are practice.", nullptr, "added when practice trials come next"},
+      {"practice_feedback_note", "The first few trials are practice; you will see if you were right.", nullptr,
+       "instead, when practice has feedback"},
+      {"practice", "Practice", nullptr, "progress line during practice"},
+      {"practice_feedback_correct", "Correct", nullptr, "feedback after a right practice answer"},
+      {"practice_feedback_wrong", "Wrong", nullptr, "feedback after a wrong practice answer"},
+      {"start", "Start   (Space)", nullptr, "button of the first screen"},
+      {"continue", "Continue   (Space)", nullptr, "button of the round and break screens"},
+      {"break_title", "Break", nullptr, "title of the break screen"},
+      {"break", "Rest your eyes for a moment.\nContinue when you are ready.", nullptr, "break screen"},
+      {"pause_title", "Please wait", nullptr, "title while the experimenter pauses"},
+      {"pause", "The experimenter has paused the session.", nullptr, "text while the experimenter pauses"},
+      {"end_title", "Thank you!", nullptr, "title of the end screen"},
+      {"end", "The session is complete.\nPlease tell the experimenter.", nullptr, "end screen"},
+      {"consent", "", nullptr, "consent text shown before the session is created (empty: no consent screen)"},
+      {"consent_title", "Consent", nullptr, "title of the consent screen"},
+      {"consent_agree", "I agree   (Enter)", nullptr, "agree button (Enter)"},
+      {"consent_decline", "I do not agree   (Esc)", nullptr, "decline button (Escape): the app exits, nothing written"},
+  };
+  return table;
+}
+
+#undef PENUMBRA_LEFT
+#undef PENUMBRA_RIGHT
+
+std::string StudyConfig::text(const std::string& key, int round, int round_count) const {
+  std::string out;
+  const auto given = std::find_if(texts.begin(), texts.end(), [&](const auto& kv) { return kv.first == key; });
+  if (given != texts.end()) {
+    out = given->second;
+  } else {
+    const auto& table = text_table();
+    const auto entry = std::find_if(table.begin(), table.end(), [&](const TextEntry& e) { return key == e.key; });
+    if (entry == table.end()) throw std::logic_error("StudyConfig::text: no text '" + key + "'");
+    out = task == "yesno" && entry->default_yesno ? entry->default_yesno : entry->default_2afc;
+  }
+  if (round > 0)
+    for (const auto& [placeholder, value] : {std::pair<std::string, int>{"{round}", round}, {"{rounds}", round_count}})
+      for (std::size_t at; (at = out.find(placeholder)) != std::string::npos;) out.replace(at, placeholder.size(), std::to_string(value));
+  return out;
+}
+
 namespace {
 
 class Reader {
@@ -50,6 +116,12 @@ class Reader {
     const long d = v->get<long>();
     if (d < lo || d > hi) fail(path + key, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     return d;
+  }
+  bool boolean(const nlohmann::json& obj, const std::string& path, const std::string& key, bool fallback) const {
+    const auto* v = find(obj, key);
+    if (!v) return fallback;
+    if (!v->is_boolean()) fail(path + key, "expected true or false");
+    return v->get<bool>();
   }
   std::string text(const nlohmann::json& obj, const std::string& path, const std::string& key,
                    const std::string& fallback) const {
@@ -86,7 +158,7 @@ class Reader {
 StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const Reader r(file);
   r.only(j, "", {"name", "task", "artifact_px", "rounds", "quest", "intensity_bounds", "stopping", "practice_trials",
-                 "practice_intensity", "break_every_trials", "seed", "round_order", "stimulus", "display", "description"});
+                 "practice_intensity", "practice", "texts", "break_every_trials", "seed", "round_order", "stimulus", "display", "description"});
   StudyConfig c;
   c.name = r.text(j, "", "name", "study");
   c.task = r.text(j, "", "task", "2afc");
@@ -150,8 +222,39 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     if (c.max_trials < c.min_trials) r.fail("stopping.max_trials", "expected >= stopping.min_trials");
     c.sd_below = r.number(*s, "stopping.", "sd_below", 0.1, 0, 10);
   }
-  c.practice_trials = static_cast<int>(r.integer(j, "", "practice_trials", 4, 0, 1000));
-  c.practice_intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
+  if (const auto* p = r.find(j, "practice")) {
+    for (const char* flat : {"practice_trials", "practice_intensity"})
+      if (r.find(j, flat)) r.fail(flat, "not with practice (practice.trials and practice.intensity say it)");
+    r.only(*p, "practice.", {"trials", "intensity", "every_round", "feedback", "feedback_ms"});
+    c.practice.trials = static_cast<int>(r.integer(*p, "practice.", "trials", 4, 0, 1000));
+    c.practice.intensity = r.number(*p, "practice.", "intensity", 0.3, -3, 3);
+    c.practice.every_round = r.boolean(*p, "practice.", "every_round", true);
+    c.practice.feedback = r.boolean(*p, "practice.", "feedback", true);
+    c.practice.feedback_ms = r.number(*p, "practice.", "feedback_ms", 800, 0, 10000);
+  } else {  // configs and sessions from before the practice block: the first round's practice, no feedback
+    c.practice.trials = static_cast<int>(r.integer(j, "", "practice_trials", 4, 0, 1000));
+    c.practice.intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
+  }
+  if (const auto* t = r.find(j, "texts")) {
+    if (!t->is_object()) r.fail("texts", "expected an object of \"name\": \"text\"");
+    const auto& table = text_table();
+    for (auto it = t->begin(); it != t->end(); ++it) {
+      const std::string field = "texts." + text::printable(it.key());
+      if (std::none_of(table.begin(), table.end(), [&](const TextEntry& e) { return it.key() == e.key; })) {
+        std::string known;
+        for (const TextEntry& e : table) known += (known.empty() ? "" : ", ") + std::string(e.key);
+        r.fail(field, "unknown text (known: " + known + ")");
+      }
+      if (!it->is_string()) r.fail(field, "expected a string");
+      const std::string value = it->get<std::string>();
+      if (!text::valid_utf8(value)) r.fail(field, "not valid UTF-8 (save the file as UTF-8)");
+      if (value.size() > kMaxTextBytes) r.fail(field, "longer than " + std::to_string(kMaxTextBytes) + " bytes");
+      if (std::any_of(value.begin(), value.end(), [](char ch) { return (static_cast<unsigned char>(ch) < 0x20 && ch != '\n') || ch == 0x7f; }))
+        r.fail(field, "control characters other than a newline (\\n)");
+      if (value.empty() && it.key() != "consent") r.fail(field, "expected a non-empty text");
+      c.texts.emplace_back(it.key(), value);
+    }
+  }
   c.break_every_trials = static_cast<int>(r.integer(j, "", "break_every_trials", 40, 0, 100000));
   c.round_order = r.text(j, "", "round_order", "shuffled");
   if (c.round_order != "shuffled" && c.round_order != "fixed" && c.round_order != "latin-square")
@@ -286,20 +389,31 @@ nlohmann::json to_json(const StudyConfig& c) {
                              {"viewing_distance_mm", c.display.viewing_distance_mm},
                              {"transfer", stimuli::to_string(c.display.transfer)}, {"monitor", c.display.monitor}};
   if (!c.display.calibration_file.empty()) display["calibration"] = c.display.calibration_file;
-  return {{"name", c.name},
+  nlohmann::json j = {{"name", c.name},
           {"task", c.task},
           {"artifact_px", c.artifact_px},
           {"rounds", rounds},
           {"quest", quest},
           {"intensity_bounds", {c.intensity_min, c.intensity_max}},
           {"stopping", {{"min_trials", c.min_trials}, {"max_trials", c.max_trials}, {"sd_below", c.sd_below}}},
-          {"practice_trials", c.practice_trials},
-          {"practice_intensity", c.practice_intensity},
           {"break_every_trials", c.break_every_trials},
           {"seed", c.seed},
           {"round_order", c.round_order},
           {"stimulus", stimulus},
           {"display", display}};
+  const Practice legacy;
+  if (!c.practice.every_round && !c.practice.feedback && c.practice.feedback_ms == legacy.feedback_ms) {
+    j["practice_trials"] = c.practice.trials;  // as configs before the practice block said it
+    j["practice_intensity"] = c.practice.intensity;
+  } else {
+    j["practice"] = {{"trials", c.practice.trials}, {"intensity", c.practice.intensity}, {"every_round", c.practice.every_round},
+                     {"feedback", c.practice.feedback}, {"feedback_ms", c.practice.feedback_ms}};
+  }
+  if (!c.texts.empty()) {
+    j["texts"] = nlohmann::json::object();
+    for (const auto& [key, value] : c.texts) j["texts"][key] = value;
+  }
+  return j;
 }
 
 }  // namespace penumbra::procedure

@@ -39,6 +39,30 @@ struct Display {
   double pixels_per_degree() const;
 };
 
+// Practice trials (docs/study.md): `trials` easy trials at `intensity` (log10(a / r)) before the
+// first round only (every_round false: configs written before issue 16, whose flat
+// practice_trials / practice_intensity fields still load so) or before every round, showing that
+// round's pattern and contrast. `feedback` shows "Correct" / "Wrong" for `feedback_ms` after a
+// practice answer, never after a test trial. Practice never updates a staircase.
+struct Practice {
+  int trials = 4;
+  double intensity = 0.3;  // an easy trial: r = a / 2
+  bool every_round = false;
+  bool feedback = false;
+  double feedback_ms = 800;
+};
+
+// The participant's texts (config "texts"), so a lab can translate them. One table: key, default
+// for 2afc, default for yesno (null: as 2afc), what it is. Keys not in the config take the default.
+struct TextEntry {
+  const char* key;
+  const char* default_2afc;
+  const char* default_yesno;
+  const char* help;
+};
+const std::vector<TextEntry>& text_table();
+inline constexpr std::size_t kMaxTextBytes = 4000;
+
 struct StudyConfig {
   std::string name;
   std::string task = "2afc";                 // 2afc | yesno
@@ -48,8 +72,7 @@ struct StudyConfig {
   double intensity_min = -2.0, intensity_max = 1.0;  // QUEST's suggestion is clamped to these
   int min_trials = 10, max_trials = 40;
   double sd_below = 0.1;                     // converged when the posterior sd drops below this
-  int practice_trials = 4;
-  double practice_intensity = 0.3;           // an easy trial: r = a / 2
+  Practice practice;
   int break_every_trials = 40;               // 0: no breaks
   std::uint64_t seed = 1;                    // with the participant id, each session's seed (randomization.h)
   // The order of the rounds per session: "shuffled" (per participant, from the session seed: order
@@ -66,6 +89,10 @@ struct StudyConfig {
   std::string technique;
   std::vector<std::pair<std::string, std::string>> technique_settings;
   Display display;
+  std::vector<std::pair<std::string, std::string>> texts;  // as given (text_table keys); the rest default
+  // The text for `key` (a text_table key): the config's, else the task's default. "round" has
+  // {round} and {rounds} replaced when `round` > 0.
+  std::string text(const std::string& key, int round = 0, int round_count = 0) const;
 };
 
 // Throws std::runtime_error "<file>: <field>: <what>". parse_config reads display.calibration as

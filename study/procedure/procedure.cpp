@@ -101,6 +101,7 @@ Procedure::Procedure(const StudyConfig& config, Randomization randomization) : c
     rounds_.push_back(std::move(round));
   }
   ended_rounds_.assign(config_.rounds.size(), false);
+  practice_done_in_round_.assign(config_.rounds.size(), 0);
 }
 
 std::string Procedure::condition(int round) const {
@@ -132,12 +133,22 @@ std::optional<TrialPlan> Procedure::next() const {
   p.trial = trials_done_;
   sampling::Random random(sampling::derive_seed(randomization_.seed, static_cast<std::uint64_t>(p.trial)));
   double artifact = 0, x = 0;
-  if (practice_done_ < config_.practice_trials) {
-    p.practice = true;
-    p.round = randomization_.round_order.front();  // practice shows the first round's condition
-    p.staircase = practice_done_ % static_cast<int>(config_.artifact_px.size());
+  const Practice& practice = config_.practice;
+  // Before the first round only (configs before the practice block: the first round in the
+  // session's order, even one the experimenter ended at the start), or before every round.
+  int practice_done = practice_done_;
+  if (practice.every_round) {
+    p.round = current_round();
+    if (p.round >= static_cast<int>(rounds_.size())) return std::nullopt;
+    practice_done = practice_done_in_round_[static_cast<std::size_t>(p.round)];
+  } else {
+    p.round = randomization_.round_order.front();
+  }
+  if (practice_done < practice.trials) {
+    p.practice = true;  // shows the round's pattern and contrast
+    p.staircase = practice_done % static_cast<int>(config_.artifact_px.size());
     artifact = config_.artifact_px[static_cast<std::size_t>(p.staircase)];
-    x = config_.practice_intensity;
+    x = practice.intensity;
     p.staircase_name = rounds_[static_cast<std::size_t>(p.round)][static_cast<std::size_t>(p.staircase)].name;
     random.bits();  // the staircase draw a main trial makes, so both use the stream alike
   } else {
@@ -153,25 +164,31 @@ std::optional<TrialPlan> Procedure::next() const {
     artifact = sc.artifact_px;
     x = std::clamp(sc.quest.quantile(), config_.intensity_min, config_.intensity_max);
   }
-  const auto& rc = config_.rounds[static_cast<std::size_t>(p.round)];
   p.requested_filter_radius_px = artifact / std::pow(10.0, x);
   const auto shown = stimuli::clamp_filter_radius(p.requested_filter_radius_px, config_.stimulus_size_px);
   p.clamped = shown.clamped;
-  p.stimulus.pattern = rc.pattern;
-  p.stimulus.artifact_px = artifact;
-  p.stimulus.filter_radius_px = shown.filter_radius_px;
-  p.stimulus.lit_linear = rc.contrast;
-  p.stimulus.kernel = config_.kernel;
-  p.stimulus.poisson_taps = config_.poisson_taps;
-  p.stimulus.technique = config_.technique;
-  p.stimulus.technique_settings = config_.technique_settings;
-  p.stimulus.size_px = config_.stimulus_size_px;
-  p.stimulus.transfer = config_.display.transfer;
   p.intensity = std::log10(artifact / shown.filter_radius_px);
   const bool first = random.uniform() < 0.5;
   p.target = config_.task == "2afc" ? (first ? "left" : "right") : (first ? "jagged" : "straight");
-  p.stimulus.seed = random.bits() >> 12;  // fits a double and a JSON number exactly
+  p.stimulus = stimulus(p.round, artifact, shown.filter_radius_px, random.bits() >> 12);  // the seed fits a double and a JSON number exactly
   return p;
+}
+
+stimuli::StimulusSpec Procedure::stimulus(int round, double artifact_px, double filter_radius_px, std::uint64_t seed) const {
+  const auto& rc = config_.rounds.at(static_cast<std::size_t>(round));
+  stimuli::StimulusSpec s;
+  s.pattern = rc.pattern;
+  s.artifact_px = artifact_px;
+  s.filter_radius_px = filter_radius_px;
+  s.lit_linear = rc.contrast;
+  s.kernel = config_.kernel;
+  s.poisson_taps = config_.poisson_taps;
+  s.technique = config_.technique;
+  s.technique_settings = config_.technique_settings;
+  s.size_px = config_.stimulus_size_px;
+  s.transfer = config_.display.transfer;
+  s.seed = seed;
+  return s;
 }
 
 bool Procedure::correct_response(const TrialPlan& plan, const std::string& response) const {
@@ -187,6 +204,7 @@ void Procedure::apply(const TrialPlan& plan, bool correct) {
   ++trials_done_;
   if (plan.practice) {
     ++practice_done_;
+    ++practice_done_in_round_.at(static_cast<std::size_t>(plan.round));
     return;
   }
   // yesno: a straight stimulus (catch trial) says nothing about the artifact's visibility; only

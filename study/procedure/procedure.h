@@ -1,6 +1,7 @@
 #pragma once
 // The study's procedure without a display or a log: interleaved QUEST staircases (one per artifact
-// size) within rounds of (pattern, contrast), practice trials first, and the stopping rule. All
+// size) within rounds of (pattern, contrast), practice trials first (before the first round, or
+// before every round with that round's condition: config.practice), and the stopping rule. All
 // randomness of trial t comes from derive_seed(session seed, t), and the rounds run in the
 // session's order, so feeding the logged answers back (replay_log in session_record.h) restores
 // every staircase exactly. No GL: the fitter (analysis/) replays logs through the same code as
@@ -74,6 +75,10 @@ class Procedure {
   // Finishes `round` now (the experimenter's "end round").
   void end_round(int round);
 
+  // A stimulus of `round` (its pattern and contrast, the config's kernel, size and transfer): what
+  // next() shows, and the instruction screens' examples.
+  stimuli::StimulusSpec stimulus(int round, double artifact_px, double filter_radius_px, std::uint64_t seed) const;
+
   // Throws std::invalid_argument for a response the task does not have.
   bool correct_response(const TrialPlan& plan, const std::string& response) const;
   std::string condition(int round) const;  // "stair/1" etc.
@@ -82,7 +87,7 @@ class Procedure {
   // 0 for the round that runs first, ... (the participant's "round k of n" is position + 1).
   int round_position(int round) const;
   const std::vector<std::vector<Staircase>>& rounds() const { return rounds_; }
-  // The staircase a plan belongs to (the first round's for practice trials).
+  // The staircase a plan belongs to (for practice trials, one of its round's; it is not updated).
   const Staircase& staircase(const TrialPlan& plan) const;
   int current_round() const;  // rounds().size() when finished
   int trials_done() const { return trials_done_; }
@@ -95,6 +100,7 @@ class Procedure {
   std::vector<bool> ended_rounds_;
   int trials_done_ = 0;
   int practice_done_ = 0;
+  std::vector<int> practice_done_in_round_;  // per config round (practice.every_round)
 };
 
 }  // namespace penumbra::procedure

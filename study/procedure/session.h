@@ -52,6 +52,9 @@ class Session {
     return procedure_.correct_response(plan, response);
   }
   std::string condition(int round) const { return procedure_.condition(round); }
+  stimuli::StimulusSpec stimulus(int round, double artifact_px, double filter_radius_px, std::uint64_t seed) const {
+    return procedure_.stimulus(round, artifact_px, filter_radius_px, seed);
+  }
   const StudyConfig& config() const { return procedure_.config(); }
   const Randomization& randomization() const { return procedure_.randomization(); }
   int round_position(int round) const { return procedure_.round_position(round); }

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -320,10 +321,171 @@ TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
     EXPECT_EQ(app.output(), c.message);
     EXPECT_FALSE(fs::exists(dir));
   }
-  App no_participant({"run", "--config", config.string(), "-o", dir.string(), "--windowed", "800x520"});
-  EXPECT_EQ(no_participant.wait_exit(), 1);
-  EXPECT_EQ(no_participant.output(), "penumbra-study: run: --participant is required for a participant session\n");
-  EXPECT_FALSE(fs::exists(dir));
+  // Without --participant the intake screen asks for the id (below); it still needs -o.
+  App no_output({"run", "--config", config.string(), "--windowed", "800x520"});
+  EXPECT_EQ(no_output.wait_exit(), 1);
+  EXPECT_EQ(no_output.output(), "penumbra-study: run: --config and -o are required (or --resume DIR)\n");
+  fs::remove(config);
+}
+
+// Issue 16, the participant's flow: practice before every round with that round's pattern and
+// contrast, "Correct"/"Wrong" after practice answers only, and the next round's instruction screen
+// ("Round 2 of 2", Space to go on) between the rounds.
+fs::path flow_config(const std::string& extra) {
+  const fs::path p = fresh("config-flow" + std::to_string(extra.size()) + ".json");
+  std::ofstream(p) << R"({"name": "flow-test", "artifact_px": [10],
+    "rounds": [{"pattern": "stair", "contrast": 1.0}, {"pattern": "step", "contrast": 0.5}], "round_order": "fixed",
+    "stopping": {"min_trials": 2, "max_trials": 2, "sd_below": 0.01}, "break_every_trials": 0, "seed": 5,
+    "practice": {"trials": 1, "every_round": true, "feedback": true, "feedback_ms": 150},
+    "stimulus": {"size_px": 160})" << extra << "}";
+  return p;
+}
+
+TEST_F(StudyGui, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) {
+  const fs::path config = flow_config(""), dir = fresh("session-flow");
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "flow"}));
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    ASSERT_TRUE(xdo("key space"));
+    for (int t = 0; t < 6; ++t) {
+      if (t == 3) {
+        ASSERT_TRUE(app.wait_for("round screen: Round 2 of 2 (step/0.5, practice first), waiting for Space")) << app.output();
+        EXPECT_EQ(app.output().find("trial 3 on screen"), std::string::npos) << "the round screen waits for Space";
+        ASSERT_TRUE(xdo("key space"));
+      }
+      ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + " on screen")) << app.output();
+      ASSERT_TRUE(xdo(t % 2 ? "key j" : "key f"));
+      ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
+    }
+    ASSERT_TRUE(app.wait_for("session complete")) << app.output();
+    const std::string out = app.output();
+    for (int t = 0; t < 6; ++t) {
+      const bool practice = t == 0 || t == 3;
+      EXPECT_EQ(out.find("trial " + std::to_string(t) + " feedback: ") != std::string::npos, practice) << "trial " << t << "\n" << out;
+      const std::string shown = "trial " + std::to_string(t) + " on screen (round " + std::to_string(t < 3 ? 1 : 2);
+      EXPECT_NE(out.find(shown), std::string::npos) << shown;
+    }
+    EXPECT_EQ(out.find("round screen: Round 1"), std::string::npos) << "the welcome screen introduces the first round";
+    xdo("key Escape");
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  const auto rows = trial_log::read(dir / "trials.csv").rows;
+  ASSERT_EQ(rows.size(), 6u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].practice, i == 0 || i == 3 ? 1 : 0) << i;
+    EXPECT_EQ(rows[i].round, i < 3 ? 0 : 1) << i;
+    EXPECT_EQ(rows[i].pattern, i < 3 ? "stair" : "step") << i;
+    EXPECT_EQ(rows[i].contrast, i < 3 ? 1.0 : 0.5) << i;
+  }
+  procedure::Session replay = procedure::Session::resume(dir);  // the log replays to a finished session
+  EXPECT_FALSE(replay.next().has_value());
+  fs::remove_all(dir);
+  fs::remove(config);
+}
+
+// The instruction screen shows the examples: a jagged edge at full contrast has black and white
+// pixels, which no text or button on the grey screen has.
+TEST_F(StudyGui, TheFirstScreenShowsTheExamples) {
+  const fs::path config = flow_config(""), dir = fresh("session-examples"), shots = fresh("shots-examples");
+  {
+    App app({"run", "--config", config.string(), "-o", dir.string(), "--participant", "ex", "--screenshot", shots.string(),
+             "--screenshot-at", "welcome", "--windowed", "900x760"});
+    ASSERT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  const io::Image8 shot = io::read_image8(shots / "participant.png");
+  int black = 0, white = 0;
+  for (int y = 0; y < shot.height; ++y)
+    for (int x = 0; x < shot.width; ++x) {
+      black += shot.at(x, y, 0) < 8;
+      white += shot.at(x, y, 0) > 250;
+    }
+  EXPECT_GT(black, 2000);
+  EXPECT_GT(white, 2000);
+  EXPECT_EQ(trial_log::read(dir / "trials.csv").rows.size(), 0u);
+  fs::remove_all(dir);
+  fs::remove_all(shots);
+  fs::remove(config);
+}
+
+// Without --participant the experimenter types the id. An id with a session in the output folder
+// (its directory, or another directory whose session.json names it) is refused on screen, nothing
+// is written, and Escape leaves the folder as it was; a new id starts its session in <-o>/<id>.
+TEST_F(StudyGui, IntakeRefusesADuplicateIdAndWritesNothing) {
+  const fs::path config = flow_config(""), root = fresh("intake-root");
+  fs::create_directories(root / "P08");
+  fs::create_directories(root / "earlier");
+  std::ofstream(root / "earlier" / "session.json") << R"({"participant": "P07"})";
+  auto listing = [&] {
+    std::vector<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(root)) names.push_back(e.path().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const auto before = listing();
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
+    ASSERT_TRUE(app.wait_for("intake screen: waiting for the participant id")) << app.output();
+    ASSERT_TRUE(xdo("type P07"));
+    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(app.wait_for("intake: refused: participant 'P07' already has a session: " + (root / "earlier").string())) << app.output();
+    std::this_thread::sleep_for(300ms);  // the field has the keyboard again (a few frames)
+    ASSERT_TRUE(xdo("key ctrl+a BackSpace"));
+    ASSERT_TRUE(xdo("type P08"));
+    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(app.wait_for("intake: refused: participant 'P08' already has a session directory: " + (root / "P08").string()))
+        << app.output();
+    std::this_thread::sleep_for(300ms);
+    ASSERT_TRUE(xdo("key ctrl+a BackSpace"));
+    ASSERT_TRUE(xdo("type a,b"));
+    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(app.wait_for("intake: refused: participant 'a,b': expected a non-empty UTF-8 name")) << app.output();
+    ASSERT_TRUE(xdo("key Escape"));
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    EXPECT_NE(app.output().find("intake cancelled: nothing written"), std::string::npos) << app.output();
+  }
+  EXPECT_EQ(listing(), before);
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
+    ASSERT_TRUE(app.wait_for("intake screen")) << app.output();
+    ASSERT_TRUE(xdo("type P09"));
+    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    xdo("key Escape");
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  const nlohmann::json session = nlohmann::json::parse(slurp(root / "P09" / "session.json"));
+  EXPECT_EQ(session["participant"], "P09");
+  fs::remove_all(root);
+  fs::remove(config);
+}
+
+// The config's consent text comes after the id: declining (Escape) ends the app with nothing
+// written; agreeing (Enter) starts the session.
+TEST_F(StudyGui, DecliningConsentWritesNothing) {
+  const fs::path config = flow_config(R"(, "texts": {"consent": "I agree to take part in this study.\nMy answers are stored without my name."})");
+  const fs::path root = fresh("consent-root");
+  for (const bool agree : {false, true}) {
+    SCOPED_TRACE(agree);
+    App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
+    ASSERT_TRUE(app.wait_for("intake screen")) << app.output();
+    ASSERT_TRUE(xdo("type P10"));
+    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(app.wait_for("consent screen: waiting")) << app.output();
+    EXPECT_FALSE(fs::exists(root / "P10"));
+    ASSERT_TRUE(xdo(agree ? "key Return" : "key Escape"));
+    if (agree) {
+      ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+      xdo("key Escape");
+    }
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    if (!agree) {
+      EXPECT_NE(app.output().find("consent declined: nothing written"), std::string::npos) << app.output();
+      EXPECT_FALSE(fs::exists(root)) << "nothing written, not even the output folder";
+    } else {
+      EXPECT_TRUE(fs::exists(root / "P10" / "session.json"));
+    }
+  }
+  fs::remove_all(root);
   fs::remove(config);
 }
 
