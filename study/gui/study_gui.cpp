@@ -531,7 +531,7 @@ int run_session(const OpenSession& open_session, const GuiOptions& o, const std:
       break;
     }
     const bool first_trial_frame = drawn == Screen::trial && screen == Screen::trial && onset_s < 0;
-    if ((first_trial_frame || drawn == Screen::finished) && !o.screenshot_dir.empty()) {
+    if ((first_trial_frame || drawn == Screen::finished) && !o.screenshot_dir.empty() && o.screenshot_at == "trial") {
       fs::create_directories(o.screenshot_dir);
       write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
       screenshot_due = true;
