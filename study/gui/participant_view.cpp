@@ -18,8 +18,6 @@ namespace penumbra::study_gui {
 
 namespace {
 
-constexpr const char* kLeftArrow = "\xe2\x86\x90";   // U+2190
-constexpr const char* kRightArrow = "\xe2\x86\x92";  // U+2192
 constexpr int kQuestionGapPx = 48, kButtonGapPx = 36, kButtonHeightPx = 54, kMarginPx = 24;
 
 float gray(int v) { return static_cast<float>(v) / 255.0f; }
@@ -234,8 +232,8 @@ Answer ParticipantView::draw_trial(GuiWindow& window, const TrialText& text, con
     return Answer::none;
   }
 
-  const std::string first = text.first + "   " + kLeftArrow + " or F";
-  const std::string second = text.second + "   " + kRightArrow + " or J";
+  const std::string& first = text.first;  // the keys are named in the config's texts (translated with the words)
+  const std::string& second = text.second;
   const float button_y = (layout_.y_px + size_px_ + kButtonGapPx) / s;
   const ImVec2 button_size{std::min(static_cast<float>(size_px_), 280.0f) / s, kButtonHeightPx / s};
   float x_first = 0, x_second = 0;

@@ -34,8 +34,8 @@ std::string response_for(Answer answer, const std::string& task);
 // Display value of the background (8-bit, the same on all channels).
 inline constexpr int kBackgroundValue = 128;
 
-// What a trial screen says: the question above the stimuli and the two answer buttons (the keys
-// are added), or, after a practice answer, the feedback in their place.
+// What a trial screen says: the question above the stimuli and the two answer buttons, or, after a
+// practice answer, the feedback in their place.
 struct TrialText {
   std::string question, first, second;
   std::string feedback;   // non-empty: shown instead of the question, no buttons

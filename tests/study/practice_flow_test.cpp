@@ -132,7 +132,7 @@ TEST(PracticeFlow, PracticeBlockAndTextsRoundTripAndErrorsNameTheField) {
   nlohmann::json yesno = four_rounds(nullptr);
   yesno["task"] = "yesno";
   EXPECT_EQ(procedure::parse_config(yesno, "s").text("question"), "Is this edge straight?");
-  EXPECT_EQ(procedure::parse_config(yesno, "s").text("answer_first"), "Yes");
+  EXPECT_EQ(procedure::parse_config(yesno, "s").text("answer_first"), "Yes   \xe2\x86\x90 or F");
   for (const auto& e : procedure::text_table()) {
     EXPECT_NO_THROW(plain.text(e.key)) << e.key;
     EXPECT_STRNE(e.help, "") << e.key;
