@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Screenshots of the participant's flow for docs/study.md, taken under Xvfb with
-# data/studies/default.json and the practice block (before every round, with feedback):
+# data/studies/default-lab.json (practice before every round, with feedback):
 #   the first instruction screen with its examples (1920x1080, the config's display: examples 1:1),
 #   a practice trial's feedback (xdotool answers it), the next round's screen (a simulated
 #   participant runs round 1 headless, the session is resumed and its last trial answered), and
@@ -15,10 +15,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 /usr/bin/python3 - "$work/demo.json" <<'PY'
 import json, sys
-c = json.load(open("data/studies/default.json"))
-c.pop("practice_trials", None)
-c.pop("practice_intensity", None)
-c["practice"] = {"trials": 4, "intensity": 0.3, "every_round": True, "feedback": True, "feedback_ms": 3000}
+c = json.load(open("data/studies/default-lab.json"))
 c["stopping"] = {"min_trials": 10, "max_trials": 10, "sd_below": 0.1}  # round 1 ends after a known trial, whatever is answered
 json.dump(c, open(sys.argv[1], "w"), indent=1)
 PY

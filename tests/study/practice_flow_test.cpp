@@ -199,6 +199,20 @@ TEST(PracticeFlow, LogsWithPracticeBeforeEveryRoundReplayExactly) {
   fs::remove_all(dir);
 }
 
+// The shipped lab config: the default design with practice before every round, with feedback.
+TEST(PracticeFlow, TheLabConfigPractisesEveryRoundWithFeedback) {
+  const auto lab = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default-lab.json");
+  const auto published = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default.json");
+  EXPECT_TRUE(lab.practice.every_round);
+  EXPECT_TRUE(lab.practice.feedback);
+  EXPECT_EQ(lab.practice.trials, 4);
+  EXPECT_FALSE(published.practice.every_round);  // unchanged: its simulated sessions stay as measured
+  nlohmann::json a = procedure::to_json(lab), b = procedure::to_json(published);
+  for (auto* j : {&a, &b})
+    for (const char* key : {"name", "practice", "practice_trials", "practice_intensity"}) j->erase(key);
+  EXPECT_EQ(a, b) << "the same design otherwise";
+}
+
 // A session written before the practice block (tests/fuzz/fixtures: flat practice_trials 2) still
 // replays row for row, its practice before the first round only.
 TEST(PracticeFlow, OlderSessionsReplayAsBefore) {
