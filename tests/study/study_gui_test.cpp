@@ -328,6 +328,10 @@ TEST_F(StudyGui, RefusalsComeBeforeTheSessionIsCreated) {
   fs::remove(config);
 }
 
+// The participant's flow (issue 16): its own CTest entry, study.gui_flow_under_xvfb, so that each
+// Xvfb run stays well inside its timeout on a loaded machine.
+class StudyGuiFlow : public StudyGui {};
+
 // Issue 16, the participant's flow: practice before every round with that round's pattern and
 // contrast, "Correct"/"Wrong" after practice answers only, and the next round's instruction screen
 // ("Round 2 of 2", Space to go on) between the rounds.
@@ -341,7 +345,7 @@ fs::path flow_config(const std::string& extra) {
   return p;
 }
 
-TEST_F(StudyGui, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) {
+TEST_F(StudyGuiFlow, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) {
   const fs::path config = flow_config(""), dir = fresh("session-flow");
   {
     App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "flow"}));
@@ -385,7 +389,7 @@ TEST_F(StudyGui, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) {
 
 // The instruction screen shows the examples: a jagged edge at full contrast has black and white
 // pixels, which no text or button on the grey screen has.
-TEST_F(StudyGui, TheFirstScreenShowsTheExamples) {
+TEST_F(StudyGuiFlow, TheFirstScreenShowsTheExamples) {
   const fs::path config = flow_config(""), dir = fresh("session-examples"), shots = fresh("shots-examples");
   {
     App app({"run", "--config", config.string(), "-o", dir.string(), "--participant", "ex", "--screenshot", shots.string(),
@@ -410,7 +414,7 @@ TEST_F(StudyGui, TheFirstScreenShowsTheExamples) {
 // Without --participant the experimenter types the id. An id with a session in the output folder
 // (its directory, or another directory whose session.json names it) is refused on screen, nothing
 // is written, and Escape leaves the folder as it was; a new id starts its session in <-o>/<id>.
-TEST_F(StudyGui, IntakeRefusesADuplicateIdAndWritesNothing) {
+TEST_F(StudyGuiFlow, IntakeRefusesADuplicateIdAndWritesNothing) {
   const fs::path config = flow_config(""), root = fresh("intake-root");
   fs::create_directories(root / "P08");
   fs::create_directories(root / "earlier");
@@ -461,7 +465,7 @@ TEST_F(StudyGui, IntakeRefusesADuplicateIdAndWritesNothing) {
 
 // The config's consent text comes after the id: declining (Escape) ends the app with nothing
 // written; agreeing (Enter) starts the session.
-TEST_F(StudyGui, DecliningConsentWritesNothing) {
+TEST_F(StudyGuiFlow, DecliningConsentWritesNothing) {
   const fs::path config = flow_config(R"(, "texts": {"consent": "I agree to take part in this study.\nMy answers are stored without my name."})");
   const fs::path root = fresh("consent-root");
   for (const bool agree : {false, true}) {
