@@ -3,9 +3,6 @@
 // holds those readings and their gamma; a non-number is not taken; the checkerboard match turns
 // arrow-key presses into the matched level and its gamma; Escape writes nothing.
 #include <gtest/gtest.h>
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -17,10 +14,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app_process.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using namespace penumbra;
 
 const std::string kExe = PENUMBRA_STUDY_EXE;
 
@@ -30,67 +30,15 @@ fs::path fresh(const std::string& name) {
   return d;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::slurp;
 
-// penumbra-study in the background, its stdout and stderr in a file.
-class App {
+// penumbra-study in the background (app_process.h), and xdotool into its window.
+class App : public test::App {
  public:
-  explicit App(const std::vector<std::string>& args) : capture_(fresh("capture")) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      const int fd = ::open(capture_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(fd, 1);
-      dup2(fd, 2);
-      std::vector<char*> argv{const_cast<char*>(kExe.c_str())};
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(kExe.c_str(), argv.data());
-      _exit(127);
-    }
-  }
-  ~App() {
-    if (running()) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    fs::remove(capture_);
-  }
-  std::string output() const { return slurp(capture_); }
-  bool running() {
-    if (pid_ > 0 && waitpid(pid_, &status_, WNOHANG) == pid_) pid_ = -1;
-    return pid_ > 0;
-  }
-  bool wait_for(const std::string& text) {
-    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
-      const bool alive = running();
-      if (output().find(text) != std::string::npos) return true;
-      if (!alive) return false;
-      std::this_thread::sleep_for(15ms);
-    }
-    return false;
-  }
-  int wait_exit() {
-    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
-      if (!running()) return WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
-      std::this_thread::sleep_for(15ms);
-    }
-    return -1;
-  }
-
- private:
-  fs::path capture_;
-  pid_t pid_ = -1;
-  int status_ = 0;
+  explicit App(const std::vector<std::string>& args) : test::App(kExe, args) {}
 };
 
-bool xdo(const std::string& args) {
-  const std::string cmd =
-      "xdotool search --sync --name '^Penumbra display calibration$' windowfocus --sync " + args + " >/dev/null 2>&1";
-  return std::system(cmd.c_str()) == 0;
-}
+bool xdo(App& app, const std::string& args) { return test::xdo(app, "Penumbra display calibration", args); }
 
 double monitor_cd_m2(double level) { return 0.5 + 120.0 * std::pow(level / 255.0, 2.4); }
 
@@ -109,15 +57,15 @@ TEST_F(CalibrationGui, TypedReadingsOfEachLevelBecomeTheCalibration) {
     const std::string shown = "showing level " + std::to_string(levels[i]) + " (" + std::to_string(i + 1) + " of 5)";
     ASSERT_TRUE(app.wait_for(shown)) << app.output();
     if (i == 1) {  // not a number: refused in the window, the level stays
-      ASSERT_TRUE(xdo("type --delay 30 'abc'"));
-      ASSERT_TRUE(xdo("key Return"));
+      ASSERT_TRUE(xdo(app, "type --delay 30 'abc'"));
+      ASSERT_TRUE(xdo(app, "key Return"));
       std::this_thread::sleep_for(200ms);
-      ASSERT_TRUE(xdo("key ctrl+a BackSpace"));
+      ASSERT_TRUE(xdo(app, "key ctrl+a BackSpace"));
     }
     char typed[32];
     std::snprintf(typed, sizeof typed, "%.3f", monitor_cd_m2(levels[i]));
-    ASSERT_TRUE(xdo(std::string("type --delay 30 '") + typed + "'"));
-    xdo("key Return");  // the last one closes the window (xdotool may fail as it does)
+    ASSERT_TRUE(xdo(app, std::string("type --delay 30 '") + typed + "'"));
+    xdo(app, "key Return");  // the last one closes the window (xdotool may fail as it does)
     ASSERT_TRUE(app.wait_for("level " + std::to_string(levels[i]) + ": " + typed + " cd/m2")) << app.output();
   }
   ASSERT_EQ(app.wait_exit(), 0) << app.output();
@@ -139,11 +87,11 @@ TEST_F(CalibrationGui, CheckerboardMatchGivesTheGammaOfTheMatchedLevel) {
   {
     App app({"calibrate-display", "--checkerboard", "--windowed", "480x320", "-o", out.string()});
     ASSERT_TRUE(app.wait_for("grey level 128")) << app.output();
-    ASSERT_TRUE(xdo("key Prior Prior Prior Prior Prior Prior"));  // Page Up x 6: 188
+    ASSERT_TRUE(xdo(app, "key Prior Prior Prior Prior Prior Prior"));  // Page Up x 6: 188
     ASSERT_TRUE(app.wait_for("grey level 188")) << app.output();
-    ASSERT_TRUE(xdo("key Down Down"));
+    ASSERT_TRUE(xdo(app, "key Down Down"));
     ASSERT_TRUE(app.wait_for("grey level 186")) << app.output();
-    xdo("key Return");  // accepted: the window closes (xdotool may fail as it does)
+    xdo(app, "key Return");  // accepted: the window closes (xdotool may fail as it does)
     ASSERT_EQ(app.wait_exit(), 0) << app.output();
     EXPECT_NE(app.output().find("matched grey level 186\n"), std::string::npos) << app.output();
   }
@@ -157,9 +105,9 @@ TEST_F(CalibrationGui, CheckerboardMatchGivesTheGammaOfTheMatchedLevel) {
   // Escape: nothing written, one line, exit 1.
   App app({"calibrate-display", "--checkerboard", "--windowed", "480x320", "-o", out.string()});
   ASSERT_TRUE(app.wait_for("grey level 128")) << app.output();
-  ASSERT_TRUE(xdo("key Up"));
+  ASSERT_TRUE(xdo(app, "key Up"));
   ASSERT_TRUE(app.wait_for("grey level 129")) << app.output();
-  xdo("key Escape");
+  xdo(app, "key Escape");
   EXPECT_EQ(app.wait_exit(), 1);
   EXPECT_NE(app.output().find("penumbra-study: calibrate-display: stopped before a match was accepted; nothing written\n"), std::string::npos)
       << app.output();

@@ -3,9 +3,6 @@
 // button and the target side; Escape stops between trials and --resume finishes the session; the
 // screenshot holds the trial's stimuli pixel for pixel, the jagged one where the log says.
 #include <gtest/gtest.h>
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -15,6 +12,7 @@
 #include <fstream>
 #include <thread>
 
+#include "app_process.h"
 #include "gl/context.h"
 #include "gui/participant_view.h"
 #include "io/image_io.h"
@@ -37,10 +35,7 @@ fs::path fresh(const std::string& name) {
   return d;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::slurp;
 
 // A short session: 1 practice trial, two staircases of 2..3 trials, a break after 4 trials.
 fs::path tiny_config(const std::string& task, const std::string& stimulus = R"({"size_px": 160})") {
@@ -57,69 +52,13 @@ std::vector<std::string> windowed(std::vector<std::string> args) {
   return args;
 }
 
-// penumbra-study in the background, its stdout and stderr in a file.
-class App {
+// penumbra-study in the background (app_process.h), and xdotool into its window.
+class App : public test::App {
  public:
-  explicit App(const std::vector<std::string>& args) : capture_(fresh("capture-" + std::to_string(++count_))) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      const int fd = ::open(capture_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(fd, 1);
-      dup2(fd, 2);
-      std::vector<char*> argv{const_cast<char*>(kExe.c_str())};
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(kExe.c_str(), argv.data());
-      _exit(127);
-    }
-  }
-  ~App() {
-    if (running()) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    fs::remove(capture_);
-  }
-  std::string output() const { return slurp(capture_); }
-  bool running() {
-    if (pid_ > 0 && waitpid(pid_, &status_, WNOHANG) == pid_) pid_ = -1;
-    return pid_ > 0;
-  }
-  // Until the app printed one of `texts`: its index, or -1 when it exited first or after 20 s.
-  int wait_for_any(const std::vector<std::string>& texts) {
-    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
-      const bool alive = running();
-      const std::string out = output();
-      for (std::size_t i = 0; i < texts.size(); ++i)
-        if (out.find(texts[i]) != std::string::npos) return static_cast<int>(i);
-      if (!alive) return -1;
-      std::this_thread::sleep_for(15ms);
-    }
-    return -1;
-  }
-  bool wait_for(const std::string& text) { return wait_for_any({text}) == 0; }
-  // The exit code, or -1 when it did not exit normally within 20 s.
-  int wait_exit() {
-    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
-      if (!running()) return WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
-      std::this_thread::sleep_for(15ms);
-    }
-    return -1;
-  }
-
- private:
-  fs::path capture_;
-  pid_t pid_ = -1;
-  int status_ = 0;
-  static inline int count_ = 0;
+  explicit App(const std::vector<std::string>& args) : test::App(kExe, args) {}
 };
 
-// xdotool on the participant window (found by its exact title) with real XTEST input.
-bool xdo(const std::string& args) {
-  const std::string cmd =
-      "xdotool search --sync --name '^Penumbra study$' windowfocus --sync " + args + " >/dev/null 2>&1";
-  return std::system(cmd.c_str()) == 0;
-}
+bool xdo(App& app, const std::string& args) { return test::xdo(app, "Penumbra study", args); }
 
 class StudyGui : public ::testing::Test {
  protected:
@@ -143,16 +82,16 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
   {
     App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-test", "--refresh-hz", "60"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(xdo(app, "key space"));
     for (std::size_t t = 0; t < inputs.size(); ++t) {
       ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + " on screen")) << app.output();
-      ASSERT_TRUE(xdo(inputs[t].xdo));
+      ASSERT_TRUE(xdo(app, inputs[t].xdo));
       ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
     }
     ASSERT_TRUE(app.wait_for("break after 4 trials")) << app.output();
-    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(xdo(app, "key space"));
     ASSERT_TRUE(app.wait_for("trial 4 on screen")) << app.output();
-    xdo("key Escape");  // mid-trial: that trial is not logged (xdotool may fail as the window closes)
+    xdo(app, "key Escape");  // mid-trial: that trial is not logged (xdotool may fail as the window closes)
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
     EXPECT_NE(app.output().find("stopped after 4 trials; continue with: penumbra-study run --resume"), std::string::npos)
         << app.output();
@@ -164,7 +103,7 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
   {
     App app(windowed({"run", "--resume", dir.string(), "--refresh-hz", "30"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(xdo(app, "key space"));
     for (int t = 4;; ++t) {
       ASSERT_LT(t, 20) << "the session should end after at most 7 trials";
       const int next = app.wait_for_any({"trial " + std::to_string(t) + " on screen", "session complete"});
@@ -172,11 +111,11 @@ TEST_F(StudyGui, KeysAndClicksBecomeLogRowsEscapeStopsAndResumeFinishes) {
       if (next == 1) break;
       const bool left = t % 2 == 0;
       inputs.push_back({left ? "key Left" : "key j", left ? "left" : "right"});
-      ASSERT_TRUE(xdo(inputs.back().xdo));
+      ASSERT_TRUE(xdo(app, inputs.back().xdo));
       ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
     }
     ASSERT_TRUE(app.wait_for("session complete")) << app.output();
-    xdo("key Escape");
+    xdo(app, "key Escape");
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
     EXPECT_EQ(app.output().find("stopped after"), std::string::npos) << app.output();
   }
@@ -238,23 +177,23 @@ TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
   {
     App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "gui-panel", "--admin-panel"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(xdo(app, "key space"));
     ASSERT_TRUE(app.wait_for("trial 0 on screen")) << app.output();
-    ASSERT_TRUE(xdo("key F12"));
+    ASSERT_TRUE(xdo(app, "key F12"));
     ASSERT_TRUE(app.wait_for("trial 0 withdrawn: the admin panel is open")) << app.output();
-    ASSERT_TRUE(xdo("key f"));  // an answer while the panel is open
+    ASSERT_TRUE(xdo(app, "key f"));  // an answer while the panel is open
     std::this_thread::sleep_for(400ms);
     EXPECT_EQ(app.output().find("trial 0: "), std::string::npos) << app.output();
     EXPECT_EQ(trial_log::read(dir / "trials.csv").rows.size(), 0u);
-    ASSERT_TRUE(xdo("key F12"));  // closed: the same trial comes again and takes the answer
+    ASSERT_TRUE(xdo(app, "key F12"));  // closed: the same trial comes again and takes the answer
     const std::string before = app.output();
     for (auto end = std::chrono::steady_clock::now() + 20s;
          std::chrono::steady_clock::now() < end && app.output().rfind("trial 0 on screen") <= before.rfind("trial 0 on screen");)
       std::this_thread::sleep_for(15ms);
     ASSERT_GT(app.output().rfind("trial 0 on screen"), before.rfind("trial 0 on screen")) << app.output();
-    ASSERT_TRUE(xdo("key f"));
+    ASSERT_TRUE(xdo(app, "key f"));
     ASSERT_TRUE(app.wait_for("trial 0: left")) << app.output();
-    xdo("key Escape");
+    xdo(app, "key Escape");
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
   }
   const auto rows = trial_log::read(dir / "trials.csv").rows;
@@ -350,15 +289,15 @@ TEST_F(StudyGuiFlow, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) 
   {
     App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "flow"}));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-    ASSERT_TRUE(xdo("key space"));
+    ASSERT_TRUE(xdo(app, "key space"));
     for (int t = 0; t < 6; ++t) {
       if (t == 3) {
         ASSERT_TRUE(app.wait_for("round screen: Round 2 of 2 (step/0.5, practice first), waiting for Space")) << app.output();
         EXPECT_EQ(app.output().find("trial 3 on screen"), std::string::npos) << "the round screen waits for Space";
-        ASSERT_TRUE(xdo("key space"));
+        ASSERT_TRUE(xdo(app, "key space"));
       }
       ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + " on screen")) << app.output();
-      ASSERT_TRUE(xdo(t % 2 ? "key j" : "key f"));
+      ASSERT_TRUE(xdo(app, t % 2 ? "key j" : "key f"));
       ASSERT_TRUE(app.wait_for("trial " + std::to_string(t) + ": ")) << app.output();
     }
     ASSERT_TRUE(app.wait_for("session complete")) << app.output();
@@ -370,7 +309,7 @@ TEST_F(StudyGuiFlow, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) 
       EXPECT_NE(out.find(shown), std::string::npos) << shown;
     }
     EXPECT_EQ(out.find("round screen: Round 1"), std::string::npos) << "the welcome screen introduces the first round";
-    xdo("key Escape");
+    xdo(app, "key Escape");
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
   }
   const auto rows = trial_log::read(dir / "trials.csv").rows;
@@ -429,21 +368,21 @@ TEST_F(StudyGuiFlow, IntakeRefusesADuplicateIdAndWritesNothing) {
   {
     App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
     ASSERT_TRUE(app.wait_for("intake screen: waiting for the participant id")) << app.output();
-    ASSERT_TRUE(xdo("type P07"));
-    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(xdo(app, "type P07"));
+    ASSERT_TRUE(xdo(app, "key Return"));
     ASSERT_TRUE(app.wait_for("intake: refused: participant 'P07' already has a session: " + (root / "earlier").string())) << app.output();
     std::this_thread::sleep_for(300ms);  // the field has the keyboard again (a few frames)
-    ASSERT_TRUE(xdo("key ctrl+a BackSpace"));
-    ASSERT_TRUE(xdo("type P08"));
-    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(xdo(app, "key ctrl+a BackSpace"));
+    ASSERT_TRUE(xdo(app, "type P08"));
+    ASSERT_TRUE(xdo(app, "key Return"));
     ASSERT_TRUE(app.wait_for("intake: refused: participant 'P08' already has a session directory: " + (root / "P08").string()))
         << app.output();
     std::this_thread::sleep_for(300ms);
-    ASSERT_TRUE(xdo("key ctrl+a BackSpace"));
-    ASSERT_TRUE(xdo("type a,b"));
-    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(xdo(app, "key ctrl+a BackSpace"));
+    ASSERT_TRUE(xdo(app, "type a,b"));
+    ASSERT_TRUE(xdo(app, "key Return"));
     ASSERT_TRUE(app.wait_for("intake: refused: participant 'a,b': expected a non-empty UTF-8 name")) << app.output();
-    ASSERT_TRUE(xdo("key Escape"));
+    ASSERT_TRUE(xdo(app, "key Escape"));
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
     EXPECT_NE(app.output().find("intake cancelled: nothing written"), std::string::npos) << app.output();
   }
@@ -451,10 +390,10 @@ TEST_F(StudyGuiFlow, IntakeRefusesADuplicateIdAndWritesNothing) {
   {
     App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
     ASSERT_TRUE(app.wait_for("intake screen")) << app.output();
-    ASSERT_TRUE(xdo("type P09"));
-    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(xdo(app, "type P09"));
+    ASSERT_TRUE(xdo(app, "key Return"));
     ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-    xdo("key Escape");
+    xdo(app, "key Escape");
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
   }
   const nlohmann::json session = nlohmann::json::parse(slurp(root / "P09" / "session.json"));
@@ -472,14 +411,14 @@ TEST_F(StudyGuiFlow, DecliningConsentWritesNothing) {
     SCOPED_TRACE(agree);
     App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
     ASSERT_TRUE(app.wait_for("intake screen")) << app.output();
-    ASSERT_TRUE(xdo("type P10"));
-    ASSERT_TRUE(xdo("key Return"));
+    ASSERT_TRUE(xdo(app, "type P10"));
+    ASSERT_TRUE(xdo(app, "key Return"));
     ASSERT_TRUE(app.wait_for("consent screen: waiting")) << app.output();
     EXPECT_FALSE(fs::exists(root / "P10"));
-    ASSERT_TRUE(xdo(agree ? "key Return" : "key Escape"));
+    ASSERT_TRUE(xdo(app, agree ? "key Return" : "key Escape"));
     if (agree) {
       ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
-      xdo("key Escape");
+      xdo(app, "key Escape");
     }
     EXPECT_EQ(app.wait_exit(), 0) << app.output();
     if (!agree) {
