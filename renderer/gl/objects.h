@@ -173,6 +173,9 @@ class Program {
   void set(std::string_view name, std::span<const glm::vec2> v) const {
     if (!v.empty()) glProgramUniform2fv(id(), location(name), static_cast<GLsizei>(v.size()), &v[0].x);
   }
+  void set(std::string_view name, std::span<const glm::ivec4> v) const {
+    if (!v.empty()) glProgramUniform4iv(id(), location(name), static_cast<GLsizei>(v.size()), &v[0].x);
+  }
 
  private:
   Handle<detail::delete_program> handle_;

@@ -46,6 +46,7 @@ PENUMBRA_CONSTANT(UNIT_MOMENTS, 3)             // filtered moments (VSM, MSM, EV
 PENUMBRA_CONSTANT(UNIT_SCREEN_VISIBILITY, 4)   // shading pass: the screen-space post passes' result
 PENUMBRA_CONSTANT(UNIT_GBUFFER_POSITION, 4)    // post passes: world xyz, signed eye depth
 PENUMBRA_CONSTANT(UNIT_GBUFFER_LIGHT, 5)       // post passes: map uv, reference depth, light depth
+PENUMBRA_CONSTANT(UNIT_DEPTH_MINMAX, 6)        // min-max depth pyramid of the atlas (PCSS bounds)
 PENUMBRA_CONSTANT(UNIT_POST_INPUT, 7)          // post passes: the previous post pass's output
 PENUMBRA_CONSTANT(UNIT_POST_INPUT_2, 8)        // post passes: a second input (site widths)
 

@@ -173,6 +173,7 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
   plan.pcss_requirement = entry.per_pixel_requirement && ap.enabled && ap.pcss == PcssRequirement::per_pixel;
   plan.passes.push_back(PassId::shadow_map);
   if (plan.moments) plan.passes.push_back(PassId::moments_blur);
+  if (entry.depth_minmax && entry.depth_minmax(s)) plan.passes.push_back(PassId::depth_minmax);
   if (entry.screen_space()) {
     plan.passes.push_back(PassId::gbuffer);
     plan.passes.push_back(PassId::post);

@@ -41,7 +41,7 @@ struct PcssRequirementInfo {
 };
 
 // The passes a frame can run, in execution order.
-enum class PassId { shadow_map, moments_blur, gbuffer, post, shading, pcss_requirement };
+enum class PassId { shadow_map, moments_blur, depth_minmax, gbuffer, post, shading, pcss_requirement };
 
 // Region corners per cascade: one row of up to two cells, then a second row. `guard` texels of
 // far depth surround every region.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <span>
 #include <stdexcept>
 
 #include "gl/context.h"
@@ -27,6 +29,7 @@ const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std
 FrameResources::FrameResources(const gl::ShaderLibrary& library) : shaders(library) {
   depth_program = shaders.program({{GL_VERTEX_SHADER, "shadow_depth.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
   requirement_program = shaders.program({{GL_COMPUTE_SHADER, "pcss_requirement.comp"}});
+  minmax_program = shaders.program({{GL_COMPUTE_SHADER, "depth_minmax.comp"}});
   gl::SamplerDesc d;
   d.depth_compare = true;
   cmp_linear = gl::Sampler(d);
@@ -70,6 +73,12 @@ bool FrameResources::prepare(const FramePlan& plan) {
     }
     maps = std::move(m);
     reallocated = true;
+  }
+  if (plan.runs(PassId::depth_minmax) && !maps->depth_minmax.id()) {
+    const int w = (maps->width + 1) / 2, h = (maps->height + 1) / 2;
+    int levels = 1;
+    while ((std::max(w, h) >> levels) > 0) ++levels;
+    maps->depth_minmax = gl::Texture({GL_RG32F, w, h, levels}, "min-max depth pyramid");
   }
   const int w = plan.width_px, h = plan.height_px;
   if (!targets || targets->width != w || targets->height != h || targets->requirement != plan.pcss_requirement) {
@@ -132,6 +141,10 @@ void FrameContext::bind_shadow_maps() const {
   res.cmp_linear.bind(UNIT_SHADOW_CMP);
   res.cmp_nearest.bind(UNIT_SHADOW_CMP_NEAREST);
   res.raw_nearest.bind(UNIT_SHADOW_DEPTH);
+  if (plan.runs(PassId::depth_minmax)) {
+    res.maps->depth_minmax.bind(UNIT_DEPTH_MINMAX);
+    glBindSampler(UNIT_DEPTH_MINMAX, 0);  // texelFetch per level
+  }
   if (plan.moments) {
     glSamplerParameterfv(res.moments_linear.id(), GL_TEXTURE_BORDER_COLOR, plan.moments->far_moments.data());
     res.maps->moments_tex.bind(UNIT_MOMENTS);
@@ -301,6 +314,53 @@ class MomentsBlurPass final : public Pass {
   }
 };
 
+// The min-max depth pyramid of the atlas, level by level over the frame's map regions: a block is
+// known where it lies inside one map's region and guard band (drawn or cleared this frame), and
+// (0, 1) elsewhere, so lookups that reach stale or unused atlas texels only lose the shortcut
+// (depth_minmax.comp).
+class DepthMinmaxPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::depth_minmax; }
+  const char* name() const override { return "depth_minmax"; }
+  unsigned reads() const override { return kDepthAtlas; }
+  unsigned writes() const override { return kDepthMinmax; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    const gl::Program& prog = r.minmax_program;
+    prog.use();
+    const int guard = f.plan.atlas.guard;
+    std::vector<glm::ivec4> regions;
+    glm::ivec2 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+    for (const auto& c : f.plan.cascades) {
+      const glm::ivec4 region(c.atlas_x - guard, c.atlas_y - guard, c.atlas_x + c.resolution_texels + guard,
+                              c.atlas_y + c.resolution_texels + guard);
+      regions.push_back(region);
+      lo = glm::min(lo, glm::ivec2(region.x, region.y));
+      hi = glm::max(hi, glm::ivec2(region.z, region.w));
+    }
+    prog.set("u_regions", static_cast<int>(regions.size()));
+    prog.set("u_region", std::span<const glm::ivec4>(regions));
+    r.maps->depth.bind(0);
+    glBindSampler(0, 0);
+    r.maps->depth_minmax.bind(1);
+    glBindSampler(1, 0);
+    GLint levels = 0;
+    glGetTextureParameteriv(r.maps->depth_minmax.id(), GL_TEXTURE_IMMUTABLE_LEVELS, &levels);
+    for (int level = 1; level <= levels; ++level) {
+      // This level's texels that overlap the regions' bounding box.
+      const glm::ivec2 first = lo >> level, last = (hi - 1) >> level;
+      const glm::ivec2 extent = last - first + 1;
+      prog.set("u_level", level);
+      prog.set("u_origin", first);
+      prog.set("u_extent", extent);
+      glBindImageTexture(0, r.maps->depth_minmax.id(), level - 1, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      glDispatchCompute(static_cast<GLuint>((extent.x + 7) / 8), static_cast<GLuint>((extent.y + 7) / 8), 1);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    gl::check_errors("depth_minmax pass");
+  }
+};
+
 class GbufferPass final : public Pass {
  public:
   PassId id() const override { return PassId::gbuffer; }
@@ -427,6 +487,7 @@ std::vector<std::unique_ptr<Pass>> make_passes() {
   std::vector<std::unique_ptr<Pass>> passes;
   passes.push_back(std::make_unique<ShadowMapPass>());
   passes.push_back(std::make_unique<MomentsBlurPass>());
+  passes.push_back(std::make_unique<DepthMinmaxPass>());
   passes.push_back(std::make_unique<GbufferPass>());
   passes.push_back(std::make_unique<PostPass>());
   passes.push_back(std::make_unique<ShadingPass>());

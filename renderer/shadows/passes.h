@@ -4,6 +4,7 @@
 // executes against the frame's resources:
 //   shadow_map        scene → depth atlas (+ the moments of a filtered-moments technique)
 //   vsm_blur          moments → moments (box blur in place, through a temporary)
+//   depth_minmax      depth atlas → min-max depth pyramid (PCSS's bounds)
 //   gbuffer           scene, depth atlas → G-buffer + camera depth (screen-space techniques)
 //   post              G-buffer, depth atlas → screen visibility (the technique's post passes,
 //                     each reported under its own name)
@@ -39,6 +40,7 @@ enum Resource : unsigned {
   kVisibility = 1u << 6,
   kRequirementImage = 1u << 7,
   kRequirementBuffer = 1u << 8,
+  kDepthMinmax = 1u << 9,
 };
 
 // Programs compiled on first use and kept by key.
@@ -61,6 +63,8 @@ struct FrameResources {
     gl::Framebuffer depth_fbo;
     gl::Texture moments_tex, moments_tmp;
     gl::Framebuffer moments_fbo;
+    // Level k: min (r) and max (g) depth over 2^(k+1)-texel blocks of the atlas (depth_minmax pass).
+    gl::Texture depth_minmax;
   };
   struct Targets {
     int width = 0, height = 0;
@@ -84,7 +88,7 @@ struct FrameResources {
   bool prepare(const FramePlan& plan);
 
   const gl::ShaderLibrary& shaders;
-  gl::Program depth_program, requirement_program;
+  gl::Program depth_program, requirement_program, minmax_program;
   ProgramCache programs;
   gl::Sampler cmp_linear, cmp_nearest, raw_nearest, moments_linear;
   gl::Buffer shadow_frame;  // the ShadowFrame uniform block (shaders/shadow_contract.h)
@@ -115,7 +119,7 @@ struct FrameContext {
   // The technique's own uniforms (its settings, Poisson taps, light size), shared by both camera
   // passes and the screen-space compute passes (uniforms a program lacks are ignored).
   void set_technique_uniforms(const gl::Program& program) const;
-  // Binds the depth atlas and the moments to their units (contract::UNIT_*).
+  // Binds the depth atlas, its min-max pyramid and the moments to their units (contract::UNIT_*).
   void bind_shadow_maps() const;
   // The shading program of the frame's technique; `gbuffer`: the first camera pass of a
   // screen-space technique.

@@ -131,6 +131,7 @@ void Renderer::present(GLuint target, int width_px, int height_px) const {
 }
 
 GLuint Renderer::shadow_map_texture() const { return res_->maps ? res_->maps->depth.id() : 0; }
+GLuint Renderer::depth_minmax_texture() const { return res_->maps ? res_->maps->depth_minmax.id() : 0; }
 
 io::Image8 Renderer::read_color() const {
   if (!res_->targets) throw std::logic_error("read_color before render");

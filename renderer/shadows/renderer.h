@@ -63,6 +63,9 @@ class Renderer {
   void present(GLuint target, int width_px, int height_px) const;
   // The last frame's shadow atlas (for debug views); 0 before the first frame.
   GLuint shadow_map_texture() const;
+  // The min-max depth pyramid of the atlas as the last frame that built one left it (PCSS with
+  // pcss.hierarchical): level k holds min and max depth over 2^(k+1)-texel blocks; 0 when none was.
+  GLuint depth_minmax_texture() const;
   // Forgets the adaptive state (hysteresis, last PCSS requirement), e.g. after a scene change.
   void reset_adaptive();
   // Tints the image by cascade (debug overlay).

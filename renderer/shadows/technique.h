@@ -82,6 +82,9 @@ struct TechniqueEntry {
   // The shading pass can write each pixel's filter radius (PCSS_REQUIREMENT), which the
   // pcss_requirement pass reduces to the resolution the frame needed (adaptive.pcss = per_pixel).
   bool per_pixel_requirement = false;
+  // Whether the shading reads the min-max depth pyramid of the atlas (the depth_minmax pass,
+  // UNIT_DEPTH_MINMAX); nullptr: never.
+  bool (*depth_minmax)(const ShadowSettings&) = nullptr;
 
   // Filtered moments drawn in the shadow-map pass and blurred (VSM, MSM, EVSM); nullptr: depth only.
   std::optional<MomentsLayout> (*moments)(const ShadowSettings&) = nullptr;

@@ -39,6 +39,8 @@ TEST(FramePlan, PassesFollowTheTechnique) {
   EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading, P::pcss_requirement}));
   pcss.adaptive.pcss = PcssRequirement::min_penumbra;
   EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  pcss.pcss.hierarchical = true;  // bounds from the min-max depth pyramid before the search
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_minmax, P::shading}));
 }
 
 TEST(FramePlan, FixedSingleMapFillsItsTextureWithoutGuardBand) {

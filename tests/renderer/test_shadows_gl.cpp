@@ -9,7 +9,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gl_test_env.h"
+#include "scene/scene.h"
+#include "shadows/frame_plan.h"
 #include "shadows/renderer.h"
+#include "shadows/settings_rows.h"
 
 namespace penumbra {
 namespace {
@@ -161,6 +164,120 @@ TEST(Pcss, PenumbraMatchesTheParallelPlanesFormula) {
     EXPECT_NEAR(crossing(profile, 0.5, -half, ws_per_px), 0.0, 0.05 * expected) << "centred on the blocker's edge";
     // Far from the blocker nothing is found: fully lit, exactly.
     for (int x = n - 20; x < n; ++x) EXPECT_EQ(vis.at(x, n / 2), 1.0f);
+  }
+}
+
+// The min-max depth pyramid PCSS bounds its search with (depth_minmax pass): after a frame that
+// moved the maps within a larger atlas (stale texels around them), every pyramid texel bounds
+// the depths of the map texels under it (min below, max above), is exact where its block lies
+// inside one map with its guard band, and says (0, 1) where it cannot know.
+TEST(PcssHierarchy, PyramidBoundsEveryMapTexelAndIsExactInsideAMap) {
+  scene::Scene s = scene::load_scene("demo");
+  shadows::Renderer r;
+  r.set_scene(s);
+  ShadowSettings st = settings(Technique::pcss, 512, true);
+  st.map.cascades = 3;
+  st.adaptive.enabled = true;  // sub-rectangles of a 3 x 256^2 atlas: room for stale texels
+  st.adaptive.max_texels = 256;
+  st.adaptive.shrink_delay_frames = 0;
+  st.pcss.hierarchical = true;
+  r.render(st, 320, 180);
+  r.scene().camera.position = r.scene().camera.target + 0.4f * (r.scene().camera.position - r.scene().camera.target);
+  const shadows::FrameInfo info = r.render(st, 320, 180);
+  ASSERT_NE(r.depth_minmax_texture(), 0u);
+  const int w = info.atlas_width, h = info.atlas_height;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  glGetTextureImage(r.shadow_map_texture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)),
+                    depth.data());
+  // Each map's region with its guard band, as the shadow-map pass drew and cleared it.
+  std::vector<glm::ivec4> regions;
+  for (const auto& c : info.cascades) {
+    const int g = shadows::kGuardTexels;
+    regions.push_back({c.atlas_x - g, c.atlas_y - g, c.atlas_x + c.resolution_texels + g, c.atlas_y + c.resolution_texels + g});
+  }
+  auto in_map = [&](int x, int y) {
+    for (const auto& g : regions)
+      if (x >= g.x && x < g.z && y >= g.y && y < g.w) return true;
+    return false;
+  };
+  GLint levels = 0;
+  glGetTextureParameteriv(r.depth_minmax_texture(), GL_TEXTURE_IMMUTABLE_LEVELS, &levels);
+  ASSERT_GE(levels, 8);
+  long exact = 0, bounded = 0, unknown = 0;
+  for (int k = 0; k < levels; ++k) {
+    GLint lw = 0, lh = 0;
+    glGetTextureLevelParameteriv(r.depth_minmax_texture(), k, GL_TEXTURE_WIDTH, &lw);
+    glGetTextureLevelParameteriv(r.depth_minmax_texture(), k, GL_TEXTURE_HEIGHT, &lh);
+    std::vector<glm::vec2> level(static_cast<std::size_t>(lw) * lh);
+    glGetTextureImage(r.depth_minmax_texture(), k, GL_RG, GL_FLOAT, static_cast<GLsizei>(level.size() * sizeof(glm::vec2)), level.data());
+    const int block = 2 << k;
+    for (int by = 0; by < lh; ++by)
+      for (int bx = 0; bx < lw; ++bx) {
+        float lo = 1, hi = 0;
+        bool any = false, inside_one = false;
+        for (const auto& g : regions)
+          inside_one |= bx * block >= g.x && (bx + 1) * block <= g.z && by * block >= g.y && (by + 1) * block <= g.w;
+        for (int y = by * block; y < std::min((by + 1) * block, h); ++y)
+          for (int x = bx * block; x < std::min((bx + 1) * block, w); ++x)
+            if (in_map(x, y)) {
+              const float d = depth[static_cast<std::size_t>(y) * w + x];
+              lo = std::min(lo, d), hi = std::max(hi, d), any = true;
+            }
+        const glm::vec2 v = level[static_cast<std::size_t>(by) * lw + bx];
+        if (!any) continue;  // nothing a lookup reads
+        ASSERT_LE(v.x, lo) << "level " << k << " block " << bx << "," << by;
+        ASSERT_GE(v.y, hi) << "level " << k << " block " << bx << "," << by;
+        if (inside_one) {
+          ASSERT_EQ(v.x, lo) << "level " << k << " block " << bx << "," << by;
+          ASSERT_EQ(v.y, hi) << "level " << k << " block " << bx << "," << by;
+          ++exact;
+        } else {
+          ++(v == glm::vec2(0, 1) ? unknown : bounded);
+        }
+      }
+  }
+  EXPECT_GT(exact, 1000);
+  EXPECT_GT(unknown, 0) << "blocks across a map's edge must not claim to know";
+  RecordProperty("blocks", std::to_string(exact) + " exact, " + std::to_string(bounded) + " bounded, " + std::to_string(unknown) + " unknown");
+}
+
+// The bounds change what PCSS costs, not what it shows: wherever the full blocker search found a
+// blocker the hierarchical image equals it (lit and umbra decided by the pyramid, the clamp to the
+// minimum penumbra taken without a search, are the search's own answers); where the sparse
+// Poisson search found none and called the pixel lit, the filter at the minimum penumbra may see
+// blockers it missed (darker, never lighter). Every kernel, the demo scene with cascades, and the
+// two planes with a wide penumbra.
+TEST(PcssHierarchy, ImageEqualsTheFullSearchWhereTheSearchFoundBlockers) {
+  for (const std::string name : {"demo", "two-planes"}) {
+    for (Kernel k : {Kernel::grid, Kernel::poisson, Kernel::disk}) {
+      SCOPED_TRACE(name + " " + std::string(shadows::rows::kKernels[static_cast<int>(k)]));
+      scene::Scene s = scene::load_scene(name);
+      ShadowSettings full = settings(Technique::pcss, 1024, true);
+      full.pcss.kernel = k;
+      full.pcss.min_penumbra_ws = 0.05f;
+      full.map.cascades = name == "demo" ? 3 : 1;
+      full.pcss.hierarchical = false;
+      ShadowSettings hier = full;
+      hier.pcss.hierarchical = true;
+      const int n = 256;
+      const io::ImageF a = render_visibility(s, full, n), b = render_visibility(s, hier, n);
+      ASSERT_TRUE(test::all_finite_in(b, 0, 1));
+      int shadowed = 0, darker = 0;
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+          const float va = a.at(x, y), vb = b.at(x, y);
+          if (va < 1) {
+            ++shadowed;
+            ASSERT_NEAR(vb, va, 1e-5) << "pixel " << x << "," << y;
+          } else if (vb < va - 1e-3f) {
+            ++darker;
+          } else {
+            ASSERT_NEAR(vb, va, 1e-3) << "pixel " << x << "," << y;  // a filter's weights sum to 1 within rounding
+          }
+        }
+      EXPECT_GT(shadowed, n * n / 50);
+      EXPECT_LT(darker, n * n / 100) << "only pixels whose blockers the sparse search missed";
+    }
   }
 }
 

@@ -18,6 +18,8 @@ const Setting<PcssParams> kTable[] = {
     PENUMBRA_REAL(PcssParams, search_scale, "", 1, 8,
                   "blocker-search radius over its geometric bound; > 1 lets sparse taps find blockers near the penumbra's outer rim"),
     PENUMBRA_INT(PcssParams, max_grid_taps, "taps", 2, 256, "grid and disk taps per axis before the kernel is strided"),
+    PENUMBRA_BOOL(PcssParams, hierarchical,
+                  "min-max depth bounds skip the blocker search where a pixel is surely lit, in umbra or at the minimum penumbra"),
 };
 
 }  // namespace
@@ -36,10 +38,12 @@ const TechniqueEntry& pcss_technique() {
       .search_scale = [](const ShadowSettings& s) { return s.pcss.search_scale; },
       .pad_texels = 1,
       .per_pixel_requirement = true,
+      .depth_minmax = [](const ShadowSettings& s) { return s.pcss.hierarchical; },
       .variant_defines =
           [](const ShadowSettings& s, std::vector<gl::ShaderDefine>& d) {
             if (s.pcss.kernel == Kernel::grid) d.push_back({"KERNEL_GRID", "1"});
             if (s.pcss.kernel == Kernel::disk) d.push_back({"KERNEL_DISK", "1"});
+            if (s.pcss.hierarchical) d.push_back({"PCSS_HIERARCHICAL", "1"});
           },
       // One disk for both steps, sized for the larger tap count; the filter step takes its own
       // count from the front (the best-candidate order spreads any prefix).
