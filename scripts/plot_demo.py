@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Bar chart of penumbra-demo's report.json: median frame time (with p10-p90 whiskers) of the
-fixed and the adaptive resolution per technique, annotated with the speedup, the adaptive
-resolution range and the worst SSIM. Usage: plot_demo.py REPORT.json OUTDIR (writes demo.png/.svg)."""
+fixed and the adaptive resolution per technique, and of the engine baselines when the run has
+them, annotated with the speedup over the fixed map, the adaptive resolution range and the worst
+SSIM. Usage: plot_demo.py REPORT.json OUTDIR (writes demo.png/.svg)."""
 import json
 import sys
 
@@ -19,25 +20,32 @@ def main():
     techniques = report.get("techniques", [])
     if not techniques:
         sys.exit(f"{sys.argv[1]}: techniques: empty")
-    fig, ax = plt.subplots(figsize=(1.8 + 1.9 * len(techniques), 4.2))
-    width = 0.38
+    bars = max(2 + len(t.get("baselines", [])) for t in techniques)
+    fig, ax = plt.subplots(figsize=(1.8 + 0.95 * bars * len(techniques), 4.2))
+    width = 0.76 / bars
+    colours = ["#8c8c8c", "#2b7bba", "#d9a441", "#8e5ea2"]
     for i, t in enumerate(techniques):
-        for j, (key, colour) in enumerate((("fixed", "#8c8c8c"), ("adaptive", "#2b7bba"))):
-            ms = t[key]["frame_ms"]
-            x = i + (j - 0.5) * width
-            ax.bar(x, ms["median"], width, color=colour, label=key if i == 0 else None)
+        # fixed, adaptive, then the engine baselines (a larger single map, the cascades).
+        series = [(f"fixed {t['fixed']['resolution_texels']}$^2$", t["fixed"]), ("adaptive", t["adaptive"])]
+        series += [(b["name"], b) for b in t.get("baselines", [])]
+        for j, (label, row) in enumerate(series):
+            ms = row["frame_ms"]
+            x = i + (j - (len(series) - 1) / 2) * width
+            ax.bar(x, ms["median"], width, color=colours[j % len(colours)], label=label if i == 0 else None)
             ax.errorbar(x, ms["median"], yerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]], color="black", capsize=3)
         res = t["adaptive"]["resolution_texels"]
-        top = max(t["fixed"]["frame_ms"]["p90"], t["adaptive"]["frame_ms"]["p90"])
-        ax.annotate(f"{t['speedup_median']:.2f}x\n{res['min']:.0f}-{res['max']:.0f}$^2$ vs {t['fixed']['resolution_texels']}$^2$\n"
-                    f"SSIM >= {t['image']['ssim_min']:.4f}", (i, top), textcoords="offset points", xytext=(0, 6),
-                    ha="center", fontsize=8)
+        top = max(row["frame_ms"]["p90"] for _, row in series)
+        note = f"{t['speedup_median']:.2f}x vs fixed\n{res['min']:.0f}-{res['max']:.0f}$^2$ vs {t['fixed']['resolution_texels']}$^2$\n"
+        note += f"SSIM >= {t['image']['ssim_min']:.4f}"
+        if "speedup_vs_engine_median" in t:
+            note += f"\n{t['speedup_vs_engine_median']:.2f}x vs {t['engine_baseline']}"
+        ax.annotate(note, (i, top), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
     ax.set_xticks(range(len(techniques)), [t["technique"] for t in techniques])
     ax.set_ylabel(f"frame time, ms ({report.get('frame_time_method', '')})")
     w, h = report.get("image_px", [0, 0])
     ax.set_title(f"{report.get('scene', '')} {w}x{h}, {report.get('path_frames', 0)} path frames: median, p10-p90", fontsize=9)
     ax.margins(y=0.35)
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4, fontsize=8)
     fig.tight_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{sys.argv[2]}/demo.{ext}", dpi=110)

@@ -4,8 +4,10 @@
 //               fixed resolution (default 2048²) and once with the adaptive rule res = c / r_uv,
 //               and reports frame time (median and spread over the path), per-pass times, the
 //               resolution used, and the image difference (max abs, SSIM, share of pixels off by
-//               more than 1/255). Writes report.json, frames.csv, side-by-side images and a bar
-//               chart (scripts/plot_demo.py) into -o DIR; prints a table.
+//               more than 1/255); beside them the engine baselines (one map of twice the fixed
+//               size, four cascades of the fixed size) with texels drawn and allocated and SSIM
+//               against the cascades. Writes report.json, frames.csv, side-by-side images and a
+//               bar chart (scripts/plot_demo.py) into -o DIR; prints the tables.
 //   windowed    the same renderer in a window with a panel: technique and filter, fitting,
 //               adaptive on/off, c and its calibration file, the resolution in use per cascade,
 //               shadow-map and cascade overlays, fps and per-pass times.
@@ -22,6 +24,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -149,6 +152,7 @@ struct Options {
   std::string python = "/usr/bin/python3";
   std::string plot_script = tool::script_file("plot_demo.py").string();
   bool plot = true;
+  bool baselines = true;       // also the engine baselines: a single map of twice the fixed size, four cascades of it
   std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
   int screenshot_frames = 10;
 };
@@ -207,6 +211,36 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     std::vector<double> ms_f, ms_a, ssim, max_abs, share, res_a;
     io::Image8 shown_f, shown_a;
     shadows::FrameInfo last_a;
+    // The baselines engines ship, drawn along the same path: one map of twice the fixed size, and
+    // the cascaded default (four cascades of the fixed size, practical split, stabilized, blended:
+    // the map.* defaults). Each image is compared with the four cascades' (the engine baseline).
+    struct Baseline {
+      std::string name;
+      shadows::ShadowSettings settings;
+      std::unique_ptr<shadows::Renderer> renderer;
+      std::vector<double> ms, texels, ssim_vs_engine;
+      double allocated = 0;
+    };
+    std::vector<Baseline> baselines;
+    if (opt.baselines) {
+      shadows::ShadowSettings big = fixed, csm = fixed;
+      big.map.resolution_texels = 2 * fixed.map.resolution_texels;
+      big.map.cascades = 1;
+      csm.map.cascades = 4;
+      baselines.push_back({"fixed-" + std::to_string(big.map.resolution_texels), big, std::make_unique<shadows::Renderer>(), {}, {}, {}, 0});
+      baselines.push_back({"4x" + std::to_string(csm.map.resolution_texels) + "-cascades", csm, std::make_unique<shadows::Renderer>(), {}, {}, {}, 0});
+      for (auto& b : baselines) {
+        b.renderer->set_scene(scene);
+        b.renderer->scene().camera = path_camera(scene.camera, 0, opt.frames);
+        b.renderer->render(b.settings, opt.width, opt.height);  // warm-up, not timed
+      }
+    }
+    std::vector<double> texels_f, texels_a, ssim_f_engine, ssim_a_engine;
+    auto texels_of = [](const shadows::FrameInfo& info) {
+      double t = 0;
+      for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
+      return t;
+    };
     for (int i = 0; i < opt.frames; ++i) {
       std::fprintf(stderr, "\r[%d/%d] %s frame %d/%d ", ++done, total, name.c_str(), i + 1, opt.frames);
       std::fflush(stderr);
@@ -215,6 +249,23 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       const Timed a = timed_render(ra, adapt, opt.width, opt.height, timer_a);
       const io::Image8 img_f = rf.read_color(), img_a = ra.read_color();
       const metrics::ImageError e = metrics::compare(img_f, img_a);
+      texels_f.push_back(texels_of(f.info)), texels_a.push_back(texels_of(a.info));
+      if (!baselines.empty()) {
+        gl::PassTimer untimed(false);
+        std::vector<io::Image8> images;
+        for (auto& b : baselines) {
+          b.renderer->scene().camera = rf.scene().camera;
+          const Timed t = timed_render(*b.renderer, b.settings, opt.width, opt.height, untimed);
+          b.ms.push_back(t.ms);
+          b.texels.push_back(texels_of(t.info));
+          b.allocated = static_cast<double>(t.info.atlas_width) * t.info.atlas_height;
+          images.push_back(b.renderer->read_color());
+        }
+        const io::Image8& engine = images.back();
+        for (std::size_t k = 0; k < baselines.size(); ++k) baselines[k].ssim_vs_engine.push_back(metrics::compare(engine, images[k]).ssim);
+        ssim_f_engine.push_back(metrics::compare(engine, img_f).ssim);
+        ssim_a_engine.push_back(metrics::compare(engine, img_a).ssim);
+      }
       ms_f.push_back(f.ms), ms_a.push_back(a.ms);
       ssim.push_back(e.ssim), max_abs.push_back(e.max_abs), share.push_back(e.share_above_threshold);
       res_a.push_back(a.info.resolution_texels);
@@ -256,12 +307,46 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                                            {"above_max_fraction", last_a.pcss_requirement.above_max_fraction}};
     t["speedup_median"] = speedup;
     t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_ssim}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
+    t["fixed"]["texels_rendered"] = to_json(spread(texels_f));
+    t["adaptive"]["texels_rendered"] = to_json(spread(texels_a));
+    if (!baselines.empty()) {
+      const Baseline& engine = baselines.back();
+      const double engine_median = spread(engine.ms).median;
+      t["engine_baseline"] = engine.name;
+      t["speedup_vs_engine_median"] = engine_median / std::max(sa.median, 1e-9);
+      t["fixed"]["ssim_vs_engine_min"] = *std::min_element(ssim_f_engine.begin(), ssim_f_engine.end());
+      t["adaptive"]["ssim_vs_engine_min"] = *std::min_element(ssim_a_engine.begin(), ssim_a_engine.end());
+      for (const auto& b : baselines)
+        t["baselines"].push_back({{"name", b.name},
+                                  {"settings", shadows::to_json(b.settings)},
+                                  {"frame_ms", to_json(spread(b.ms))},
+                                  {"texels_rendered", to_json(spread(b.texels))},
+                                  {"texels_allocated", b.allocated},
+                                  {"ssim_vs_engine_min", *std::min_element(b.ssim_vs_engine.begin(), b.ssim_vs_engine.end())}});
+    }
     report["techniques"].push_back(t);
 
     char range[64];
     std::snprintf(range, sizeof range, "%.0f..%.0f", sr.min, sr.max);
     std::printf("%-6s %8.1f [%6.1f, %6.1f] %8.1f [%6.1f, %6.1f] %7.2fx %14s %8.4f %9.4f %9.4f\n", name.c_str(), sf.median, sf.p10,
                 sf.p90, sa.median, sa.p10, sa.p90, speedup, range, min_ssim, worst_diff, worst_share);
+    if (!baselines.empty()) {
+      // Every configuration against the engine baseline (the last row), texels per frame (median).
+      const double engine_median = spread(baselines.back().ms).median;
+      auto row = [&](const std::string& config, const Spread& ms, double texels, double allocated, double ssim_engine) {
+        std::printf("  %-22s %8.1f [%6.1f, %6.1f] %6.2fx %12.2f %12.2f %10.4f\n", config.c_str(), ms.median, ms.p10, ms.p90,
+                    engine_median / std::max(ms.median, 1e-9), texels / 1e6, allocated / 1e6, ssim_engine);
+      };
+      std::printf("  %-22s %24s %7s %12s %12s %10s\n", "configuration", "frame ms", "vs eng.", "Mtexels drawn", "allocated",
+                  "SSIM vs eng.");
+      row("adaptive", sa, spread(texels_a).median, static_cast<double>(last_a.atlas_width) * last_a.atlas_height,
+          t["adaptive"]["ssim_vs_engine_min"].get<double>());
+      row("fixed-" + std::to_string(fixed.map.resolution_texels), sf, spread(texels_f).median,
+          static_cast<double>(fixed.map.resolution_texels) * fixed.map.resolution_texels, t["fixed"]["ssim_vs_engine_min"].get<double>());
+      for (const auto& b : baselines)
+        row(b.name, spread(b.ms), spread(b.texels).median, b.allocated,
+            *std::min_element(b.ssim_vs_engine.begin(), b.ssim_vs_engine.end()));
+    }
     std::fflush(stdout);
   }
   io::write_file_atomic(out.path() / "frames.csv", csv);
@@ -369,6 +454,8 @@ int main(int argc, char** argv) {
       ->check(cli::path_given());
   app.add_option("--python", opt.python, "Python with matplotlib that draws the chart");
   app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
+  app.add_flag("!--no-baselines", opt.baselines,
+               "skip the engine baselines (one map of twice --fixed-resolution, four cascades of it) and the comparison with them");
   app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);

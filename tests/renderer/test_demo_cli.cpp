@@ -51,7 +51,24 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_GE(t.at("image").at("ssim_min").get<double>(), 0.99);
     EXPECT_LE(t.at("image").at("max_abs_max").get<double>(), 0.25);
     EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png")));
+    // The engine baselines along the same path: one map of twice the fixed size, four cascades of
+    // it (the engine baseline, compared with itself), each with its texels and its SSIM.
+    const auto& baselines = t.at("baselines");
+    ASSERT_EQ(baselines.size(), 2u);
+    EXPECT_EQ(baselines[0].at("name"), "fixed-4096");
+    EXPECT_EQ(baselines[0].at("texels_rendered").at("median").get<double>(), 4096.0 * 4096.0);
+    EXPECT_EQ(baselines[1].at("name"), "4x2048-cascades");
+    EXPECT_EQ(t.at("engine_baseline"), "4x2048-cascades");
+    EXPECT_EQ(baselines[1].at("texels_rendered").at("median").get<double>(), 4 * 2048.0 * 2048.0);
+    EXPECT_GE(baselines[1].at("texels_allocated").get<double>(), 4 * 2048.0 * 2048.0);
+    EXPECT_EQ(baselines[1].at("ssim_vs_engine_min").get<double>(), 1.0);
+    EXPECT_GT(baselines[1].at("frame_ms").at("median").get<double>(), 0);
+    EXPECT_GT(t.at("speedup_vs_engine_median").get<double>(), 0);
+    EXPECT_GE(t.at("adaptive").at("ssim_vs_engine_min").get<double>(), 0.99);
+    EXPECT_LT(t.at("adaptive").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
+    EXPECT_EQ(t.at("fixed").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
   }
+  EXPECT_THAT(r.out, HasSubstr("4x2048-cascades"));
   EXPECT_EQ(report.at("techniques")[1].at("adaptive").at("resolution_source"), "pcss_per_pixel");
   std::istringstream csv(test::read_file(out / "frames.csv"));
   std::string line;
@@ -66,11 +83,12 @@ TEST_F(DemoCli, LightSizeOverridesTheScene) {
   auto clamped_share = [&](const std::string& size) {
     const fs::path out = dir_ / ("light-" + size);
     const auto r = demo({"--headless", "--frames", "2", "--width", "192", "--height", "108", "--techniques", "pcss", "--no-plot",
-                         "--light-size", size, "-o", out.string()});
+                         "--no-baselines", "--light-size", size, "-o", out.string()});
     EXPECT_EQ(r.exit_code, 0) << r.err;
     const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
     EXPECT_EQ(report.at("light").at("size").get<double>(), std::stod(size));
     EXPECT_EQ(report.at("light").at("size_unit"), "deg");
+    EXPECT_FALSE(report.at("techniques")[0].contains("baselines")) << "--no-baselines";
     return report.at("techniques")[0].at("adaptive").at("pcss_requirement").at("clamped_fraction").get<double>();
   };
   const double small = clamped_share("3");
@@ -85,7 +103,7 @@ TEST_F(DemoCli, ExplicitAdaptiveCWinsOverTheCalibrationFile) {
     SCOPED_TRACE(explicit_c ? "--adaptive.c" : "file");
     const fs::path out = dir_ / (explicit_c ? "explicit" : "file");
     std::vector<std::string> args = {"--headless", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
-                                     "--fixed-resolution", "256", "--no-plot", "-o", out.string()};
+                                     "--fixed-resolution", "256", "--no-plot", "--no-baselines", "-o", out.string()};
     if (explicit_c) args.insert(args.end(), {"--adaptive.c", "6.5"});
     const auto r = demo(args);
     ASSERT_EQ(r.exit_code, 0) << r.err;
