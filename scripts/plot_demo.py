@@ -49,6 +49,29 @@ def main():
     fig.tight_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{sys.argv[2]}/demo.{ext}", dpi=110)
+    plot_flicker(report, techniques, sys.argv[2])
+
+
+def plot_flicker(report, techniques, outdir):
+    """flicker.png: mean |visibility change| at reprojected pixels from frame to frame, per
+    configuration along the path (the world-fixed map's line is the measure's own floor)."""
+    with_flicker = [t for t in techniques if any(f["mean_abs_per_frame"] for f in t.get("flicker", []))]
+    if not with_flicker:
+        return
+    fig, axes = plt.subplots(1, len(with_flicker), figsize=(5.2 * len(with_flicker), 3.6), squeeze=False)
+    for ax, t in zip(axes[0], with_flicker):
+        for f in t["flicker"]:
+            ys = f["mean_abs_per_frame"]
+            style = ":" if f["configuration"].startswith("floor") else "-"
+            ax.plot(range(1, len(ys) + 1), ys, style, marker=".", label=f"{f['configuration']} ({f['resolution_changes']} res. changes)")
+        ax.set_title(t["technique"], fontsize=9)
+        ax.set_xlabel("path frame")
+        ax.set_ylabel("mean |V(t) - V(t-1)|, reprojected")
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{report.get('scene', '')}: flicker along the path", fontsize=9)
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{outdir}/flicker.{ext}", dpi=110)
 
 
 if __name__ == "__main__":

@@ -42,6 +42,8 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "metrics/image_error.h"
+#include "metrics/surface_probe.h"
+#include "metrics/temporal.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 
@@ -241,6 +243,43 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
       return t;
     };
+    // Flicker along the path (metrics/temporal.h): each configuration's visibility of frame t
+    // against frame t-1 at the pixels whose surface point stayed in view, and the path's floor,
+    // measured with one unfitted map of the fixed size (fixed in the world, so whatever it
+    // measures is the reprojection's own).
+    struct Temporal {
+      std::string name;
+      io::ImageF previous;
+      std::vector<double> mean_abs, share_changed;
+      std::vector<std::string> resolutions;
+      int resolution_changes = 0;
+    };
+    metrics::SurfaceProbe probe(scene);
+    io::ImageF surface_previous;
+    glm::mat4 view_projection_previous(1);
+    std::vector<Temporal> temporal;
+    auto track = [&](std::size_t k, const std::string& config, const shadows::Renderer& r, const shadows::FrameInfo& info,
+                     const metrics::FrameSample& current) {
+      if (temporal.size() <= k) temporal.push_back({config, {}, {}, {}, {}, 0});
+      Temporal& tm = temporal[k];
+      io::ImageF vis = r.read_visibility();
+      std::string res;
+      for (const auto& c : info.cascades) res += (res.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+      if (!tm.resolutions.empty() && tm.resolutions.back() != res) ++tm.resolution_changes;
+      tm.resolutions.push_back(res);
+      if (!tm.previous.pixels.empty()) {
+        const metrics::Flicker fl = metrics::flicker({&tm.previous, &surface_previous, view_projection_previous},
+                                                     {&vis, current.surface, current.view_projection});
+        tm.mean_abs.push_back(fl.mean_abs);
+        tm.share_changed.push_back(fl.share_changed);
+      }
+      tm.previous = std::move(vis);
+    };
+    shadows::ShadowSettings world_fixed = fixed;
+    world_fixed.map.fit = false;
+    world_fixed.map.cascades = 1;
+    shadows::Renderer floor_renderer;
+    floor_renderer.set_scene(scene);
     for (int i = 0; i < opt.frames; ++i) {
       std::fprintf(stderr, "\r[%d/%d] %s frame %d/%d ", ++done, total, name.c_str(), i + 1, opt.frames);
       std::fflush(stderr);
@@ -250,6 +289,14 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       const io::Image8 img_f = rf.read_color(), img_a = ra.read_color();
       const metrics::ImageError e = metrics::compare(img_f, img_a);
       texels_f.push_back(texels_of(f.info)), texels_a.push_back(texels_of(a.info));
+      const scene::Camera camera = rf.scene().camera;
+      io::ImageF surface = probe.render(camera, opt.width, opt.height);
+      const glm::mat4 view_projection = metrics::camera_view_projection(camera, opt.width, opt.height);
+      const metrics::FrameSample current{nullptr, &surface, view_projection};
+      track(0, "adaptive", ra, a.info, current);
+      track(1, "fixed-" + std::to_string(fixed.map.resolution_texels), rf, f.info, current);
+      floor_renderer.scene().camera = camera;
+      track(2, "floor (world-fixed map)", floor_renderer, floor_renderer.render(world_fixed, opt.width, opt.height), current);
       if (!baselines.empty()) {
         gl::PassTimer untimed(false);
         std::vector<io::Image8> images;
@@ -260,6 +307,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
           b.texels.push_back(texels_of(t.info));
           b.allocated = static_cast<double>(t.info.atlas_width) * t.info.atlas_height;
           images.push_back(b.renderer->read_color());
+          track(3 + images.size() - 1, b.name, *b.renderer, t.info, current);
         }
         const io::Image8& engine = images.back();
         for (std::size_t k = 0; k < baselines.size(); ++k) baselines[k].ssim_vs_engine.push_back(metrics::compare(engine, images[k]).ssim);
@@ -277,6 +325,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       csv += row;
       if (i == opt.frames / 2) shown_f = img_f, shown_a = img_a;
       last_a = a.info;
+      surface_previous = std::move(surface);
+      view_projection_previous = view_projection;
     }
     std::fprintf(stderr, "\r%60s\r", "");
     timer_f.poll(true);
@@ -307,6 +357,16 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                                            {"above_max_fraction", last_a.pcss_requirement.above_max_fraction}};
     t["speedup_median"] = speedup;
     t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_ssim}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
+    for (const Temporal& tm : temporal) {
+      double mean = 0, changed = 0;
+      for (double v : tm.mean_abs) mean += v / static_cast<double>(tm.mean_abs.size());
+      for (double v : tm.share_changed) changed += v / static_cast<double>(tm.share_changed.size());
+      t["flicker"].push_back({{"configuration", tm.name},
+                              {"mean_abs_mean", tm.mean_abs.empty() ? 0.0 : mean},
+                              {"share_changed_mean", tm.share_changed.empty() ? 0.0 : changed},
+                              {"mean_abs_per_frame", tm.mean_abs},
+                              {"resolution_changes", tm.resolution_changes}});
+    }
     t["fixed"]["texels_rendered"] = to_json(spread(texels_f));
     t["adaptive"]["texels_rendered"] = to_json(spread(texels_a));
     if (!baselines.empty()) {
@@ -346,6 +406,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       for (const auto& b : baselines)
         row(b.name, spread(b.ms), spread(b.texels).median, b.allocated,
             *std::min_element(b.ssim_vs_engine.begin(), b.ssim_vs_engine.end()));
+    }
+    if (opt.frames > 1) {
+      std::printf("  %-24s %16s %14s %12s\n", "flicker along the path", "mean |dV|", "share > 1/255", "res changes");
+      for (const auto& f : t["flicker"])
+        std::printf("  %-24s %16.5f %14.4f %12d\n", f["configuration"].get<std::string>().c_str(), f["mean_abs_mean"].get<double>(),
+                    f["share_changed_mean"].get<double>(), f["resolution_changes"].get<int>());
     }
     std::fflush(stdout);
   }

@@ -67,7 +67,21 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_GE(t.at("adaptive").at("ssim_vs_engine_min").get<double>(), 0.99);
     EXPECT_LT(t.at("adaptive").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
     EXPECT_EQ(t.at("fixed").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
+    // Flicker along the path per configuration (3 frames: 2 frame pairs), with the floor of a
+    // world-fixed map; a fixed map never changes its resolution.
+    const auto& flicker = t.at("flicker");
+    ASSERT_EQ(flicker.size(), 5u);
+    for (const auto& f : flicker) {
+      SCOPED_TRACE(f.at("configuration").get<std::string>());
+      EXPECT_EQ(f.at("mean_abs_per_frame").size(), 2u);
+      EXPECT_GE(f.at("mean_abs_mean").get<double>(), 0.0);
+      EXPECT_LT(f.at("mean_abs_mean").get<double>(), 0.05);
+    }
+    EXPECT_EQ(flicker[1].at("configuration"), "fixed-2048");
+    EXPECT_EQ(flicker[1].at("resolution_changes").get<int>(), 0);
+    EXPECT_EQ(flicker[2].at("configuration"), "floor (world-fixed map)");
   }
+  EXPECT_THAT(r.out, HasSubstr("flicker along the path"));
   EXPECT_THAT(r.out, HasSubstr("4x2048-cascades"));
   EXPECT_EQ(report.at("techniques")[1].at("adaptive").at("resolution_source"), "pcss_per_pixel");
   std::istringstream csv(test::read_file(out / "frames.csv"));
