@@ -126,6 +126,13 @@ Timed timed_render(shadows::Renderer& r, const shadows::ShadowSettings& s, int w
   return t;
 }
 
+// The frame's map resolutions, "928" or "1024+1024+512" (one per cascade).
+std::string cascade_resolutions(const shadows::FrameInfo& info) {
+  std::string res;
+  for (const auto& c : info.cascades) res += (res.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+  return res;
+}
+
 // Fixed | adaptive | |difference| × 10 (grey), side by side.
 io::Image8 side_by_side(const io::Image8& a, const io::Image8& b) {
   io::Image8 out{a.width * 3, a.height, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(a.width) * 3 * a.height * 4)};
@@ -251,7 +258,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       std::string name;
       io::ImageF previous;
       std::vector<double> mean_abs, share_changed;
-      std::vector<std::string> resolutions;
+      std::string resolution;  // the last frame's (cascade_resolutions)
       int resolution_changes = 0;
     };
     metrics::SurfaceProbe probe(scene);
@@ -263,10 +270,9 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       if (temporal.size() <= k) temporal.push_back({config, {}, {}, {}, {}, 0});
       Temporal& tm = temporal[k];
       io::ImageF vis = r.read_visibility();
-      std::string res;
-      for (const auto& c : info.cascades) res += (res.empty() ? "" : "+") + std::to_string(c.resolution_texels);
-      if (!tm.resolutions.empty() && tm.resolutions.back() != res) ++tm.resolution_changes;
-      tm.resolutions.push_back(res);
+      const std::string res = cascade_resolutions(info);
+      if (!tm.resolution.empty() && tm.resolution != res) ++tm.resolution_changes;
+      tm.resolution = res;
       if (!tm.previous.pixels.empty()) {
         const metrics::Flicker fl = metrics::flicker({&tm.previous, &surface_previous, view_projection_previous},
                                                      {&vis, current.surface, current.view_projection});
@@ -317,8 +323,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       ms_f.push_back(f.ms), ms_a.push_back(a.ms);
       ssim.push_back(e.ssim), max_abs.push_back(e.max_abs), share.push_back(e.share_above_threshold);
       res_a.push_back(a.info.resolution_texels);
-      std::string cascades;
-      for (const auto& c : a.info.cascades) cascades += (cascades.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+      const std::string cascades = cascade_resolutions(a.info);
       char row[256];
       std::snprintf(row, sizeof row, "%s,%d,%.4f,%.4f,%d,%d,%s,%.6f,%.6f,%.6f\n", name.c_str(), i, f.ms, a.ms,
                     f.info.resolution_texels, a.info.resolution_texels, cascades.c_str(), e.ssim, e.max_abs, e.share_above_threshold);

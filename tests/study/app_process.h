@@ -69,10 +69,10 @@ class App {
     return -1;
   }
   bool wait_for(const std::string& text) { return wait_for_any({text}) == 0; }
-  // The exit code, or -1 when it did not exit normally within 20 s.
-  int wait_exit() {
+  // The exit code, or -1 when it did not exit normally within `limit`.
+  int wait_exit(std::chrono::seconds limit = std::chrono::seconds(20)) {
     using namespace std::chrono_literals;
-    for (auto end = std::chrono::steady_clock::now() + 20s; std::chrono::steady_clock::now() < end;) {
+    for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;) {
       if (!running()) return WIFEXITED(status_) ? WEXITSTATUS(status_) : -1;
       std::this_thread::sleep_for(15ms);
     }

@@ -4,8 +4,6 @@
 // synthetic monitor, give the configured linear contrast; session.json records the calibration,
 // resume checks the file, and the fitter pools sessions by what was measured.
 #include <gtest/gtest.h>
-#include <fcntl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -15,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app_process.h"
 #include "data/dataset.h"
 #include "display/display_calibration.h"
 #include "gl/context.h"
@@ -34,29 +33,14 @@ fs::path fresh(const std::string& name) {
   return d;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::slurp;
 
+// penumbra-study to its end (app_process.h): the exit code, its stdout and stderr in `output`.
 int run(const std::vector<std::string>& args, std::string* output = nullptr) {
-  const fs::path cap = fresh("capture");
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = ::open(cap.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(fd, 1);
-    dup2(fd, 2);
-    std::vector<char*> argv{const_cast<char*>(kExe.c_str())};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(kExe.c_str(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (output) *output = slurp(cap);
-  fs::remove(cap);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  test::App app(kExe, args);
+  const int code = app.wait_exit(std::chrono::hours(1));
+  if (output) *output = app.output();
+  return code;
 }
 
 // The synthetic monitor: black 0.5 cd/m², white 120.5, gamma `gamma`.

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "config_error.h"
 #include "log/trial_log.h"
 #include "procedure/config.h"
 #include "procedure/procedure.h"
@@ -25,14 +26,7 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
-std::string config_error(const nlohmann::json& j) {
-  try {
-    procedure::parse_config(j, "study.json");
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::config_error;
 
 // Four rounds (stair/step x full/half contrast), two sizes, short staircases.
 nlohmann::json four_rounds(const nlohmann::json& practice) {

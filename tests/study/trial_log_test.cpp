@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "config_error.h"
 #include "log/trial_log.h"
 #include "procedure/config.h"
 #include "procedure/procedure.h"
@@ -233,14 +234,7 @@ TEST(TrialLog, BadTimingValuesNameFileLineAndColumn) {
   fs::remove_all(dir);
 }
 
-std::string config_error(const nlohmann::json& j) {
-  try {
-    procedure::parse_config(j, "study.json");
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::config_error;
 
 TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
   const auto c = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default.json");
