@@ -2,7 +2,9 @@
 """Bar chart of penumbra-demo's report.json: median frame time (with p10-p90 whiskers) of the
 fixed and the adaptive resolution per technique, and of the engine baselines when the run has
 them, annotated with the speedup over the fixed map, the adaptive resolution range and the worst
-SSIM. Usage: plot_demo.py REPORT.json OUTDIR (writes demo.png/.svg)."""
+SSIM; flicker along the path (flicker.png), error against the reference against frame time per
+configuration (error.png) and the texels each configuration draws along the path (path.png).
+Usage: plot_demo.py REPORT.json OUTDIR (writes demo, flicker, error and path .png/.svg)."""
 import json
 import sys
 
@@ -50,6 +52,8 @@ def main():
     for ext in ("png", "svg"):
         fig.savefig(f"{sys.argv[2]}/demo.{ext}", dpi=110)
     plot_flicker(report, techniques, sys.argv[2])
+    plot_error(report, techniques, sys.argv[2])
+    plot_path(report, techniques, sys.argv[2])
 
 
 def plot_flicker(report, techniques, outdir):
@@ -65,13 +69,73 @@ def plot_flicker(report, techniques, outdir):
             style = ":" if f["configuration"].startswith("floor") else "-"
             ax.plot(range(1, len(ys) + 1), ys, style, marker=".", label=f"{f['configuration']} ({f['resolution_changes']} res. changes)")
         ax.set_title(t["technique"], fontsize=9)
-        ax.set_xlabel("path frame")
+        ax.set_xlabel("consecutive frame pair along the path")
         ax.set_ylabel("mean |V(t) - V(t-1)|, reprojected")
         ax.legend(fontsize=7)
     fig.suptitle(f"{report.get('scene', '')}: flicker along the path", fontsize=9)
     fig.tight_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{outdir}/flicker.{ext}", dpi=110)
+
+
+def configurations(t):
+    """(name, measured row) of every configuration in the tables: adaptive, fixed, the baselines."""
+    rows = [("adaptive", t["adaptive"]), (f"fixed-{t['fixed']['resolution_texels']}", t["fixed"])]
+    return rows + [(b["name"], b) for b in t.get("baselines", [])]
+
+
+def plot_error(report, techniques, outdir):
+    """error.png: RMSE of the visibility against the technique's reference against median frame
+    time, one point per configuration (lower left is better)."""
+    with_error = [t for t in techniques if any(row.get("reference_error") for _, row in configurations(t))]
+    if not with_error:
+        return
+    fig, axes = plt.subplots(1, len(with_error), figsize=(5.2 * len(with_error), 3.8), squeeze=False)
+    colours = ["#2b7bba", "#8c8c8c", "#d9a441", "#8e5ea2"]
+    for ax, t in zip(axes[0], with_error):
+        for j, (name, row) in enumerate(configurations(t)):
+            err = row.get("reference_error")
+            if not err:
+                continue
+            ms = row["frame_ms"]
+            ax.errorbar(ms["median"], err["rmse_mean"], xerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]],
+                        fmt="o", color=colours[j % len(colours)], capsize=3,
+                        label=f"{name}: {row['texels_rendered']['median'] / 1e6:.1f} Mtexels")
+        ax.set_xlabel(f"frame time, ms ({report.get('frame_time_method', '')}; median, p10-p90)")
+        ax.set_ylabel("visibility RMSE vs reference")
+        ax.set_ylim(bottom=0)
+        ax.set_title(f"{t['technique']}: {t.get('reference', {}).get('description', '')}", fontsize=7, wrap=True)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{report.get('scene', '')}: error against the reference at {with_error[0].get('reference', {}).get('frames', 0)}"
+                 " frames against frame time", fontsize=9)
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{outdir}/error.{ext}", dpi=110)
+
+
+def plot_path(report, techniques, outdir):
+    """path.png: texels drawn per frame along the path by every configuration (the adaptive rule
+    with and without hysteresis follows the view; the fixed maps and cascades stay put)."""
+    frames = report.get("path_frame_index", [])
+    with_path = [t for t in techniques if t.get("along_path")]
+    if not with_path or len(frames) < 2:
+        return
+    fig, axes = plt.subplots(1, len(with_path), figsize=(5.6 * len(with_path), 3.8), squeeze=False)
+    for ax, t in zip(axes[0], with_path):
+        for row in t["along_path"]:
+            if row["configuration"].startswith("floor"):
+                continue
+            style = "--" if "no hysteresis" in row["configuration"] else "-"
+            ax.plot(frames, [v / 1e6 for v in row["texels"]], style, marker=".", label=row["configuration"])
+        ax.set_yscale("log")
+        ax.set_xlabel(f"frame of the {report.get('path_length', len(frames))}-frame {report.get('path', '')} path")
+        ax.set_ylabel("Mtexels drawn per frame")
+        ax.set_title(t["technique"], fontsize=9)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{report.get('scene', '')}: shadow-map texels along the path", fontsize=9)
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{outdir}/path.{ext}", dpi=110)
 
 
 if __name__ == "__main__":

@@ -1,13 +1,16 @@
 // penumbra-demo: adaptive shadow-map resolution against a fixed resolution.
 //
-//   --headless  for each technique, renders the scene along a fixed camera path twice, once at a
-//               fixed resolution (default 2048²) and once with the adaptive rule res = c / r_uv,
-//               and reports frame time (median and spread over the path), per-pass times, the
-//               resolution used, and the image difference (max abs, SSIM, share of pixels off by
-//               more than 1/255); beside them the engine baselines (one map of twice the fixed
-//               size, four cascades of the fixed size) with texels drawn and allocated and SSIM
-//               against the cascades. Writes report.json, frames.csv, side-by-side images and a
-//               bar chart (scripts/plot_demo.py) into -o DIR; prints the tables.
+//   --headless  for each technique, walks the scene's camera path (the outdoor town: --path short
+//               or full; other scenes: an orbit) and renders every frame in each configuration:
+//               the adaptive rule res = c / r_uv (rule-sized cascades, count chosen), a fixed map
+//               (default 2048²), and the baselines engines ship (one map of twice that size, four
+//               stabilized cascades of it: the engine baseline). Per configuration: frame time
+//               (median and spread; per pass), texels drawn and allocated, SSIM against the
+//               engine baseline, error of the visibility against a reference of the technique
+//               (metrics/ground_truth.h) at the reference frames, and flicker from frame to frame
+//               (metrics/temporal.h) beside the adaptive rule without hysteresis and the
+//               measure's floor. Writes report.json, frames.csv, side-by-side images, crops and
+//               the plots (scripts/plot_demo.py) into -o DIR; prints the tables.
 //   windowed    the same renderer in a window with a panel: technique and filter, fitting,
 //               adaptive on/off, c and its calibration file, the resolution in use per cascade,
 //               shadow-map and cascade overlays, fps and per-pass times.
@@ -24,6 +27,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,10 +45,12 @@
 #include "io/image_io.h"
 #include "io/report.h"
 #include "io/staged_dir.h"
+#include "metrics/ground_truth.h"
 #include "metrics/image_error.h"
 #include "metrics/surface_probe.h"
 #include "metrics/temporal.h"
 #include "scene/scene.h"
+#include "shadows/frame_plan.h"
 #include "shadows/renderer.h"
 
 #if PENUMBRA_DEMO_GUI
@@ -149,12 +155,60 @@ io::Image8 side_by_side(const io::Image8& a, const io::Image8& b) {
   return out;
 }
 
+// The frames a comparison visits. A scene with a camera path (the outdoor town) is walked along
+// it: `short` visits stations of three consecutive frames spread evenly over the whole path (the
+// street, the site, the climb, the overview), `full` every frame; a scene without one is orbited
+// (path_camera) over --frames frames. Flicker is measured only between consecutive frames; the
+// error against the reference at each station's middle frame (every 30th frame of a full path,
+// the orbit's middle frame).
+struct PathFrame {
+  int frame = 0;           // frame of the scene's camera path, or of the orbit
+  bool continues = false;  // the frame visited before it is frame - 1
+  bool reference = false;  // measured against the reference here
+};
+struct PathPlan {
+  std::string kind;  // "orbit", "short" or "full"
+  int length = 0;    // frames of the whole path
+  std::vector<PathFrame> frames;
+};
+
+PathPlan plan_path(const scene::Scene& scene, const std::string& path, int frames) {
+  PathPlan p;
+  if (scene.camera_path.empty()) {
+    p.kind = "orbit";
+    p.length = frames;
+    for (int i = 0; i < frames; ++i) p.frames.push_back({i, i > 0, i == frames / 2});
+    return p;
+  }
+  p.length = scene.camera_path.frames();
+  if (path == "full") {
+    p.kind = "full";
+    const int every = std::min(30, p.length);
+    for (int i = 0; i < p.length; ++i) p.frames.push_back({i, i > 0, i % every == every / 2});
+    return p;
+  }
+  p.kind = "short";
+  const int per_station = std::min({3, frames, p.length});
+  const int stations = std::max(1, frames / per_station);
+  for (int s = 0; s < stations; ++s) {
+    const int span = p.length - per_station;
+    const int start = stations == 1 ? span / 2 : static_cast<int>(std::lround(static_cast<double>(s) * span / (stations - 1)));
+    for (int j = 0; j < per_station; ++j) p.frames.push_back({start + j, j > 0, j == per_station / 2});
+  }
+  return p;
+}
+
+scene::Camera camera_at(const scene::Scene& scene, const PathPlan& plan, int frame) {
+  return plan.kind == "orbit" ? path_camera(scene.camera, frame, plan.length) : scene.camera_path.at(scene.camera, frame);
+}
+
 struct Options {
-  std::string scene = "demo";
+  std::string scene = "outdoor";
   float light_size = -1;       // >= 0: overrides the scene light's size
   std::vector<std::string> techniques = {"pcf", "pcss"};
-  int frames = 16;
-  int width = 1280, height = 720;
+  std::string path = "short";  // scenes with a camera path: "short" or "full"
+  int frames = 12;
+  int width = 960, height = 540;
   apps::CalibrationOption calibration;
   bool ci_upper = false;
   std::string output = "out/demo";
@@ -162,33 +216,165 @@ struct Options {
   std::string plot_script = tool::script_file("plot_demo.py").string();
   bool plot = true;
   bool baselines = true;       // also the engine baselines: a single map of twice the fixed size, four cascades of it
+  bool reference = true;       // error against a reference of the technique at the reference frames
+  int reference_samples = 16;  // area-light reference: point lights averaged
   std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
   int screenshot_frames = 10;
 };
 
+// One configuration drawn along the path, with everything measured about it.
+struct Config {
+  std::string name;
+  shadows::ShadowSettings settings;
+  bool timed = true;  // in the tables (the floor only measures the flicker measure's own floor)
+  std::unique_ptr<shadows::Renderer> renderer;
+  std::unique_ptr<gl::PassTimer> timer;
+  // this frame
+  shadows::FrameInfo info;
+  io::Image8 color;
+  io::ImageF visibility, previous;
+  // along the path
+  std::vector<double> ms, texels, ssim_vs_engine, flicker_mean_abs, flicker_share;
+  std::vector<std::string> resolution;  // per frame, cascade_resolutions
+  int resolution_changes = 0;
+  double allocated = 0;
+  std::vector<metrics::ImageError> vs_reference;
+  double thin_shadow = 0, gaps = 0;  // masked sums over the reference frames (ThinMasks)
+};
+
+double texels_of(const shadows::FrameInfo& info) {
+  double t = 0;
+  for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
+  return t;
+}
+
+nlohmann::json reference_error_json(const std::vector<metrics::ImageError>& errors) {
+  if (errors.empty()) return nullptr;
+  double rmse = 0, mean_abs = 0, ssim = 0, ssim_min = 1;
+  for (const auto& e : errors) {
+    const double n = static_cast<double>(errors.size());
+    rmse += e.rmse / n, mean_abs += e.mean_abs / n, ssim += e.ssim / n;
+    ssim_min = std::min(ssim_min, e.ssim);
+  }
+  return {{"frames", errors.size()}, {"rmse_mean", rmse}, {"mean_abs_mean", mean_abs}, {"ssim_mean", ssim}, {"ssim_min", ssim_min}};
+}
+
+// Visibility as grey, cropped to the rectangle [x0, x0 + w) × [y0, y0 + h), under a dark band of
+// `band` rows for the montage's (white) label.
+io::Image8 grey_crop(const io::ImageF& v, int x0, int y0, int w, int h, int band) {
+  io::Image8 out{w, h + band, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * (h + band) * 3, 48)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float value = std::clamp(v.pixels[static_cast<std::size_t>(y0 + y) * v.width + (x0 + x)], 0.0f, 1.0f);
+      for (int c = 0; c < 3; ++c) out.at(x, band + y, c) = static_cast<std::uint8_t>(std::lround(255 * value));
+    }
+  return out;
+}
+
+// The largest map side whose four cascades fit one atlas on this device (a 2 × 2 grid of cells
+// with guard bands), at most 8192.
+int four_cascade_reference_texels() {
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  return std::min(8192, max_size / 2 - 2 * shadows::kGuardTexels);
+}
+
+// Thin casters: the objects a coarse map loses first (the crane's lattice, Kreuzer 2017 Fig. 6.1,
+// and the wires between the poles). Their shadow is found with hard shadows from four fitted
+// cascades of 4096² (about 1 cm texels near the camera), once with every object and once without
+// them: `shadow` marks the pixels only they darken (umbra), `gaps` the lit pixels within two pixels
+// of those (the holes between lattice members and the sides of a wire's shadow). Each
+// configuration keeps thin_shadow = sum over `shadow` of (1 - V) relative to the reference's,
+// and gaps = sum over `gaps` of V relative to the reference's: a map too coarse for a caster
+// drops its shadow (thin_shadow < 1) or closes its gaps (gaps < 1).
+const std::vector<std::string> kThinCasters = {"crane", "wires"};
+
+struct ThinMasks {
+  io::Image8 shadow, gaps;  // one channel, 255 where selected
+  std::int64_t shadow_pixels = 0, gap_pixels = 0;
+};
+
+ThinMasks thin_masks(shadows::Renderer& with, shadows::Renderer& without, const scene::Camera& camera, const io::ImageF& surface,
+                     int width, int height) {
+  shadows::ShadowSettings hard;
+  hard.technique = shadows::Technique::hard;
+  hard.map.resolution_texels = 4096;
+  hard.map.cascades = with.scene().light.type == scene::Light::Type::directional ? 4 : 1;
+  with.scene().camera = without.scene().camera = camera;
+  with.render(hard, width, height);
+  without.render(hard, width, height);
+  const io::ImageF v = with.read_visibility(), v_free = without.read_visibility();
+  const std::size_t n = static_cast<std::size_t>(width) * height;
+  ThinMasks m{{width, height, 1, std::vector<std::uint8_t>(n)}, {width, height, 1, std::vector<std::uint8_t>(n)}};
+  for (std::size_t p = 0; p < n; ++p)
+    if (surface.pixels[4 * p + 3] > 0 && v.pixels[p] < 0.5f && v_free.pixels[p] >= 0.5f) m.shadow.pixels[p] = 255, ++m.shadow_pixels;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * width + x;
+      if (surface.pixels[4 * p + 3] <= 0 || v.pixels[p] < 0.5f || v_free.pixels[p] < 0.5f) continue;
+      bool near = false;
+      for (int dy = -2; dy <= 2 && !near; ++dy)
+        for (int dx = -2; dx <= 2 && !near; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          near = xx >= 0 && yy >= 0 && xx < width && yy < height && m.shadow.pixels[static_cast<std::size_t>(yy) * width + xx];
+        }
+      if (near) m.gaps.pixels[p] = 255, ++m.gap_pixels;
+    }
+  return m;
+}
+
+// sum over the mask of f(v): (1 - v) for the thin shadow, v for the gaps.
+template <class F>
+double masked_sum(const io::ImageF& v, const io::Image8& mask, F f) {
+  double sum = 0;
+  for (std::size_t p = 0; p < mask.pixels.size(); ++p)
+    if (mask.pixels[p]) sum += f(v.pixels[p]);
+  return sum;
+}
+
+// The w × h window (a multiple of 8 pixels) holding the most pixels of `mask`, as x, y.
+std::pair<int, int> densest_window(const io::Image8& mask, int w, int h) {
+  std::pair<int, int> best{(mask.width - w) / 2, (mask.height - h) / 2};
+  std::int64_t most = -1;
+  for (int y0 = 0; y0 + h <= mask.height; y0 += 8)
+    for (int x0 = 0; x0 + w <= mask.width; x0 += 8) {
+      std::int64_t count = 0;
+      for (int y = y0; y < y0 + h; y += 2)
+        for (int x = x0; x < x0 + w; x += 2) count += mask.pixels[static_cast<std::size_t>(y) * mask.width + x] ? 1 : 0;
+      if (count > most) most = count, best = {x0, y0};
+    }
+  return best;
+}
+
 int run_headless(const Options& opt, shadows::ShadowSettings base) {
   gl::HeadlessContext ctx;
+  const double t_scene = now_ms();
   scene::Scene scene = scene::load_scene(opt.scene);
+  std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   if (opt.light_size >= 0) scene.light.size = opt.light_size;
+  const PathPlan plan = plan_path(scene, opt.path, opt.frames);
   io::StagedDirectory out(opt.output, "report.json");
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
+  const bool directional = scene.light.type == scene::Light::Type::directional;
 
   nlohmann::json report;
   report["scene"] = scene.name;
   report["device"] = io::to_json(ctx.info());
   report["image_px"] = {opt.width, opt.height};
-  report["light"] = {{"type", scene.light.type == scene::Light::Type::spot ? "spot" : "directional"},
-                     {"size", scene.light.size},
-                     {"size_unit", scene.light.type == scene::Light::Type::spot ? "world" : "deg"}};
-  report["path_frames"] = opt.frames;
+  report["light"] = {{"type", directional ? "directional" : "spot"}, {"size", scene.light.size}, {"size_unit", directional ? "deg" : "world"}};
+  report["path"] = plan.kind;
+  report["path_length"] = plan.length;
+  report["path_frames"] = plan.frames.size();
+  for (const PathFrame& f : plan.frames) report["path_frame_index"].push_back(f.frame);
   report["frame_time_method"] = "wall_finish";
   report["pass_time_method"] = gl::to_string(method);
   report["calibration"] = apps::calibration_json(opt.calibration, base);
   report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
-  std::string csv = "technique,frame,fixed_ms,adaptive_ms,fixed_texels,adaptive_texels,cascades,ssim,max_abs,share_above_1_255\n";
+  std::string csv = "technique,configuration,path_frame,frame_ms,texels,cascades,ssim_vs_engine,flicker_mean_abs\n";
 
-  std::printf("penumbra-demo: %s at %dx%d on %s; %d path frames; calibration %s\n", scene.name.c_str(), opt.width, opt.height,
-              ctx.info().renderer.c_str(), opt.frames, opt.calibration.loaded.source.c_str());
+  std::printf("penumbra-demo: %s at %dx%d on %s; %zu frames of a %d-frame %s path; calibration %s\n", scene.name.c_str(), opt.width,
+              opt.height, ctx.info().renderer.c_str(), plan.frames.size(), plan.length, plan.kind.c_str(),
+              opt.calibration.loaded.source.c_str());
   for (const std::string& name : opt.techniques) {
     shadows::ShadowSettings s = base;
     s.technique = shadows::technique_from_string(name);
@@ -198,8 +384,22 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])\n");
   std::printf("%-6s %24s %24s %8s %14s %8s %9s %9s\n", "tech", "fixed", "adaptive", "speedup", "adaptive res", "min SSIM",
               "max diff", ">1/255");
-  const int total = static_cast<int>(opt.techniques.size()) * opt.frames;
+  const int total = static_cast<int>(opt.techniques.size() * plan.frames.size());
   int done = 0;
+  metrics::SurfaceProbe probe(scene);
+  // Thin casters, when the scene has them: the scene with and without them for the masks, which
+  // every technique shares (one per reference frame).
+  scene::Scene without_thin = scene;
+  std::erase_if(without_thin.objects, [](const scene::Object& o) {
+    return std::find(kThinCasters.begin(), kThinCasters.end(), o.name) != kThinCasters.end();
+  });
+  const bool thin = opt.reference && without_thin.objects.size() < scene.objects.size();
+  std::unique_ptr<shadows::Renderer> thin_with, thin_without;
+  if (thin) {
+    thin_with = std::make_unique<shadows::Renderer>(), thin_without = std::make_unique<shadows::Renderer>();
+    thin_with->set_scene(scene), thin_without->set_scene(without_thin);
+  }
+  std::map<int, ThinMasks> thin_cache;
   for (const std::string& name : opt.techniques) {
     shadows::ShadowSettings fixed = base;
     fixed.technique = shadows::technique_from_string(name);
@@ -207,187 +407,243 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     fixed.adaptive.enabled = false;
     shadows::ShadowSettings adapt = fixed;
     adapt.adaptive.enabled = true;
+    adapt.map.cascades = 0;  // as many rule-sized cascades as the view needs (adaptive/cascades.h)
+    // The same rule without quantization or hysteresis: every frame the rule's exact answer.
+    shadows::ShadowSettings raw = adapt;
+    raw.adaptive.quantum_texels = 1;
+    raw.adaptive.shrink_delay_frames = 0;
+    // The flicker measure's floor: one map of the fixed size, not fitted (fixed in the world).
+    shadows::ShadowSettings world_fixed = fixed;
+    world_fixed.map.fit = false;
+    world_fixed.map.cascades = 1;
 
-    shadows::Renderer rf, ra;
-    rf.set_scene(scene);
-    ra.set_scene(scene);
-    gl::PassTimer timer_f(method == gl::TimingMethod::gpu_timer), timer_a(method == gl::TimingMethod::gpu_timer);
-    // Warm-up (shader compilation, allocation) at the path's first camera; not timed.
-    rf.scene().camera = ra.scene().camera = path_camera(scene.camera, 0, opt.frames);
-    rf.render(fixed, opt.width, opt.height);
-    ra.render(adapt, opt.width, opt.height);
-
-    std::vector<double> ms_f, ms_a, ssim, max_abs, share, res_a;
-    io::Image8 shown_f, shown_a;
-    shadows::FrameInfo last_a;
-    // The baselines engines ship, drawn along the same path: one map of twice the fixed size, and
-    // the cascaded default (four cascades of the fixed size, practical split, stabilized, blended:
-    // the map.* defaults). Each image is compared with the four cascades' (the engine baseline).
-    struct Baseline {
-      std::string name;
-      shadows::ShadowSettings settings;
-      std::unique_ptr<shadows::Renderer> renderer;
-      std::vector<double> ms, texels, ssim_vs_engine;
-      double allocated = 0;
+    // Configurations 0 and 1 are adaptive and fixed (the first table); then the baselines engines
+    // ship, drawn along the same path: one map of twice the fixed size, and the cascaded default
+    // (four cascades of the fixed size, practical split, stabilized, blended: the map.* defaults),
+    // the engine baseline every image is compared with.
+    std::vector<Config> configs;
+    auto add = [&](std::string config, const shadows::ShadowSettings& settings, bool timed) {
+      Config c;
+      c.name = std::move(config);
+      c.settings = settings;
+      c.timed = timed;
+      c.renderer = std::make_unique<shadows::Renderer>();
+      c.renderer->set_scene(scene);
+      c.timer = std::make_unique<gl::PassTimer>(method == gl::TimingMethod::gpu_timer);
+      configs.push_back(std::move(c));
     };
-    std::vector<Baseline> baselines;
+    const std::string fixed_name = "fixed-" + std::to_string(fixed.map.resolution_texels);
+    add("adaptive", adapt, true);
+    add(fixed_name, fixed, true);
+    std::size_t engine = 1;
     if (opt.baselines) {
       shadows::ShadowSettings big = fixed, csm = fixed;
       big.map.resolution_texels = 2 * fixed.map.resolution_texels;
       big.map.cascades = 1;
       csm.map.cascades = 4;
-      baselines.push_back({"fixed-" + std::to_string(big.map.resolution_texels), big, std::make_unique<shadows::Renderer>(), {}, {}, {}, 0});
-      baselines.push_back({"4x" + std::to_string(csm.map.resolution_texels) + "-cascades", csm, std::make_unique<shadows::Renderer>(), {}, {}, {}, 0});
-      for (auto& b : baselines) {
-        b.renderer->set_scene(scene);
-        b.renderer->scene().camera = path_camera(scene.camera, 0, opt.frames);
-        b.renderer->render(b.settings, opt.width, opt.height);  // warm-up, not timed
-      }
+      add("fixed-" + std::to_string(big.map.resolution_texels), big, true);
+      add("4x" + std::to_string(csm.map.resolution_texels) + "-cascades", csm, true);
+      engine = configs.size() - 1;
     }
-    std::vector<double> texels_f, texels_a, ssim_f_engine, ssim_a_engine;
-    auto texels_of = [](const shadows::FrameInfo& info) {
-      double t = 0;
-      for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
-      return t;
-    };
-    // Flicker along the path (metrics/temporal.h): each configuration's visibility of frame t
-    // against frame t-1 at the pixels whose surface point stayed in view, and the path's floor,
-    // measured with one unfitted map of the fixed size (fixed in the world, so whatever it
-    // measures is the reprojection's own).
-    struct Temporal {
-      std::string name;
-      io::ImageF previous;
-      std::vector<double> mean_abs, share_changed;
-      std::string resolution;  // the last frame's (cascade_resolutions)
-      int resolution_changes = 0;
-    };
-    metrics::SurfaceProbe probe(scene);
+    const std::size_t n_timed = configs.size();
+    add("adaptive, no hysteresis", raw, false);
+    add("floor (world-fixed map)", world_fixed, false);
+
+    // The reference (metrics/ground_truth.h): four cascades of (up to) 8192² with the same
+    // world-space filter, or the mean of hard shadows over the light's area, each from four
+    // cascades of 4096².
+    shadows::ShadowSettings ref_settings = fixed;
+    if (directional) ref_settings.map.cascades = 4;
+    metrics::ReferenceOptions ref_options;
+    ref_options.filter_resolution_texels = four_cascade_reference_texels();
+    ref_options.area_samples = opt.reference_samples;
+    shadows::Renderer ref_renderer;
+    if (opt.reference) ref_renderer.set_scene(scene);
+    std::string ref_description;
+    double ref_ms = 0;
+    int ref_frames = 0;
+    double ref_thin_shadow = 0, ref_gaps = 0;
+    std::int64_t thin_pixels = 0, gap_pixels = 0;
+    int crop_frame = -1;
+    std::int64_t crop_pixels = 0;
+
+    // Warm-up (shader compilation, allocation) at the path's first camera; not timed.
+    for (auto& c : configs) {
+      c.renderer->scene().camera = camera_at(scene, plan, plan.frames.front().frame);
+      c.renderer->render(c.settings, opt.width, opt.height);
+    }
+    io::Image8 shown_f, shown_a;
+    std::vector<double> ssim_fa, max_abs_fa, share_fa;
     io::ImageF surface_previous;
     glm::mat4 view_projection_previous(1);
-    std::vector<Temporal> temporal;
-    auto track = [&](std::size_t k, const std::string& config, const shadows::Renderer& r, const shadows::FrameInfo& info,
-                     const metrics::FrameSample& current) {
-      if (temporal.size() <= k) temporal.push_back({config, {}, {}, {}, {}, 0});
-      Temporal& tm = temporal[k];
-      io::ImageF vis = r.read_visibility();
-      const std::string res = cascade_resolutions(info);
-      if (!tm.resolution.empty() && tm.resolution != res) ++tm.resolution_changes;
-      tm.resolution = res;
-      if (!tm.previous.pixels.empty()) {
-        const metrics::Flicker fl = metrics::flicker({&tm.previous, &surface_previous, view_projection_previous},
-                                                     {&vis, current.surface, current.view_projection});
-        tm.mean_abs.push_back(fl.mean_abs);
-        tm.share_changed.push_back(fl.share_changed);
-      }
-      tm.previous = std::move(vis);
-    };
-    shadows::ShadowSettings world_fixed = fixed;
-    world_fixed.map.fit = false;
-    world_fixed.map.cascades = 1;
-    shadows::Renderer floor_renderer;
-    floor_renderer.set_scene(scene);
-    for (int i = 0; i < opt.frames; ++i) {
-      std::fprintf(stderr, "\r[%d/%d] %s frame %d/%d ", ++done, total, name.c_str(), i + 1, opt.frames);
+    std::vector<io::Image8> crops;
+    std::vector<std::string> crop_labels;
+    for (std::size_t i = 0; i < plan.frames.size(); ++i) {
+      const PathFrame& pf = plan.frames[i];
+      std::fprintf(stderr, "\r[%d/%d] %s frame %d (%zu/%zu)%s ", ++done, total, name.c_str(), pf.frame, i + 1, plan.frames.size(),
+                   pf.reference && opt.reference ? " + reference" : "");
       std::fflush(stderr);
-      rf.scene().camera = ra.scene().camera = path_camera(scene.camera, i, opt.frames);
-      const Timed f = timed_render(rf, fixed, opt.width, opt.height, timer_f);
-      const Timed a = timed_render(ra, adapt, opt.width, opt.height, timer_a);
-      const io::Image8 img_f = rf.read_color(), img_a = ra.read_color();
-      const metrics::ImageError e = metrics::compare(img_f, img_a);
-      texels_f.push_back(texels_of(f.info)), texels_a.push_back(texels_of(a.info));
-      const scene::Camera camera = rf.scene().camera;
+      const scene::Camera camera = camera_at(scene, plan, pf.frame);
       io::ImageF surface = probe.render(camera, opt.width, opt.height);
       const glm::mat4 view_projection = metrics::camera_view_projection(camera, opt.width, opt.height);
-      const metrics::FrameSample current{nullptr, &surface, view_projection};
-      track(0, "adaptive", ra, a.info, current);
-      track(1, "fixed-" + std::to_string(fixed.map.resolution_texels), rf, f.info, current);
-      floor_renderer.scene().camera = camera;
-      track(2, "floor (world-fixed map)", floor_renderer, floor_renderer.render(world_fixed, opt.width, opt.height), current);
-      if (!baselines.empty()) {
-        gl::PassTimer untimed(false);
-        std::vector<io::Image8> images;
-        for (auto& b : baselines) {
-          b.renderer->scene().camera = rf.scene().camera;
-          const Timed t = timed_render(*b.renderer, b.settings, opt.width, opt.height, untimed);
-          b.ms.push_back(t.ms);
-          b.texels.push_back(texels_of(t.info));
-          b.allocated = static_cast<double>(t.info.atlas_width) * t.info.atlas_height;
-          images.push_back(b.renderer->read_color());
-          track(3 + images.size() - 1, b.name, *b.renderer, t.info, current);
+      for (auto& c : configs) {
+        c.renderer->scene().camera = camera;
+        const Timed t = timed_render(*c.renderer, c.settings, opt.width, opt.height, *c.timer);
+        c.info = t.info;
+        c.ms.push_back(t.ms);
+        c.texels.push_back(texels_of(t.info));
+        c.allocated = static_cast<double>(t.info.atlas_width) * t.info.atlas_height;
+        const std::string res = cascade_resolutions(t.info);
+        if (!c.resolution.empty() && c.resolution.back() != res) ++c.resolution_changes;
+        c.resolution.push_back(res);
+        c.color = c.renderer->read_color();
+        c.visibility = c.renderer->read_visibility();
+        // Flicker (metrics/temporal.h): visibility of this frame against the previous one at the
+        // pixels whose surface point stayed in view.
+        if (pf.continues) {
+          const metrics::Flicker fl = metrics::flicker({&c.previous, &surface_previous, view_projection_previous},
+                                                       {&c.visibility, &surface, view_projection});
+          c.flicker_mean_abs.push_back(fl.mean_abs);
+          c.flicker_share.push_back(fl.share_changed);
         }
-        const io::Image8& engine = images.back();
-        for (std::size_t k = 0; k < baselines.size(); ++k) baselines[k].ssim_vs_engine.push_back(metrics::compare(engine, images[k]).ssim);
-        ssim_f_engine.push_back(metrics::compare(engine, img_f).ssim);
-        ssim_a_engine.push_back(metrics::compare(engine, img_a).ssim);
       }
-      ms_f.push_back(f.ms), ms_a.push_back(a.ms);
-      ssim.push_back(e.ssim), max_abs.push_back(e.max_abs), share.push_back(e.share_above_threshold);
-      res_a.push_back(a.info.resolution_texels);
-      const std::string cascades = cascade_resolutions(a.info);
-      char row[256];
-      std::snprintf(row, sizeof row, "%s,%d,%.4f,%.4f,%d,%d,%s,%.6f,%.6f,%.6f\n", name.c_str(), i, f.ms, a.ms,
-                    f.info.resolution_texels, a.info.resolution_texels, cascades.c_str(), e.ssim, e.max_abs, e.share_above_threshold);
-      csv += row;
-      if (i == opt.frames / 2) shown_f = img_f, shown_a = img_a;
-      last_a = a.info;
+      for (std::size_t k = 0; k < n_timed; ++k) configs[k].ssim_vs_engine.push_back(metrics::compare(configs[engine].color, configs[k].color).ssim);
+      const metrics::ImageError e = metrics::compare(configs[1].color, configs[0].color);
+      ssim_fa.push_back(e.ssim), max_abs_fa.push_back(e.max_abs), share_fa.push_back(e.share_above_threshold);
+      if (pf.reference && opt.reference) {
+        ref_renderer.scene().camera = camera;
+        const metrics::Reference ref = metrics::make_reference(ref_renderer, ref_settings, opt.width, opt.height, ref_options);
+            ref_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
+        ref_ms += ref.render_ms;
+        ++ref_frames;
+        // Compared where a surface is drawn (the sky is lit in every image).
+        io::Image8 mask{opt.width, opt.height, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(opt.width) * opt.height)};
+        for (std::size_t p = 0; p < mask.pixels.size(); ++p) mask.pixels[p] = surface.pixels[4 * p + 3] > 0 ? 255 : 0;
+        metrics::CompareOptions masked;
+        masked.mask = &mask;
+        bool any = false;
+        for (std::uint8_t m : mask.pixels) any = any || m;
+        if (any)
+          for (auto& c : configs) c.vs_reference.push_back(metrics::compare(ref.visibility, c.visibility, masked));
+        // Side-by-side crops (reference, adaptive, engine, fixed) of a quarter of the image: where
+        // the thin casters' shadows are densest, or the middle of the first reference frame.
+        const int w = std::max(8, opt.width / 4), h = std::max(8, opt.height / 4);
+        std::pair<int, int> at{(opt.width - w) / 2, (opt.height - h) / 2};
+        bool take_crop = crops.empty();
+        if (thin) {
+          if (!thin_cache.count(pf.frame)) thin_cache[pf.frame] = thin_masks(*thin_with, *thin_without, camera, surface, opt.width, opt.height);
+          const ThinMasks& m = thin_cache[pf.frame];
+          thin_pixels += m.shadow_pixels, gap_pixels += m.gap_pixels;
+          auto dark = [](float v) { return 1.0 - v; };
+          auto lit = [](float v) { return static_cast<double>(v); };
+          ref_thin_shadow += masked_sum(ref.visibility, m.shadow, dark), ref_gaps += masked_sum(ref.visibility, m.gaps, lit);
+          for (auto& c : configs) c.thin_shadow += masked_sum(c.visibility, m.shadow, dark), c.gaps += masked_sum(c.visibility, m.gaps, lit);
+          if (m.shadow_pixels > crop_pixels) {
+            crop_pixels = m.shadow_pixels, crop_frame = pf.frame, take_crop = true;
+            at = densest_window(m.shadow, w, h);
+          }
+        }
+        if (take_crop) {
+          const int band = w >= 120 ? 20 : 0;  // room for the label (drawn 24 px high at twice the crop's size)
+          crops = {grey_crop(ref.visibility, at.first, at.second, w, h, band)};
+          crop_labels = {"reference"};
+          for (std::size_t k : {std::size_t{0}, engine, std::size_t{1}}) {
+            crops.push_back(grey_crop(configs[k].visibility, at.first, at.second, w, h, band));
+            crop_labels.push_back(configs[k].name);
+          }
+          crop_labels.front() += " (frame " + std::to_string(pf.frame) + ")";
+        }
+      }
+      for (std::size_t k = 0; k < configs.size(); ++k) {
+        char row[320];
+        std::snprintf(row, sizeof row, "%s,%s,%d,%.4f,%.0f,%s,%.6f,%.6f\n", name.c_str(), configs[k].name.c_str(), pf.frame,
+                      configs[k].ms.back(), configs[k].texels.back(), configs[k].resolution.back().c_str(),
+                      k < n_timed ? configs[k].ssim_vs_engine.back() : std::nan(""),
+                      pf.continues ? configs[k].flicker_mean_abs.back() : std::nan(""));
+        csv += row;
+      }
+      if (i == plan.frames.size() / 2) shown_f = configs[1].color, shown_a = configs[0].color;
+      for (auto& c : configs) c.previous = std::move(c.visibility);
       surface_previous = std::move(surface);
       view_projection_previous = view_projection;
     }
-    std::fprintf(stderr, "\r%60s\r", "");
-    timer_f.poll(true);
-    timer_a.poll(true);
+    std::fprintf(stderr, "\r%70s\r", "");
+    for (auto& c : configs) c.timer->poll(true);
     io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"), side_by_side(shown_f, shown_a));
+    if (!crops.empty())
+      io::write_png(out.path() / (name + "-crops.png"),
+                    io::montage(crops, crop_labels, static_cast<int>(crops.size()), std::min(2 * crops.front().width, 480)));
 
-    const Spread sf = spread(ms_f), sa = spread(ms_a), sr = spread(res_a);
+    const Config& ca = configs[0];
+    const Config& cf = configs[1];
+    std::vector<double> res_a;
+    for (const auto& r : ca.resolution) res_a.push_back(std::stod(r.substr(0, r.find('+'))));
+    const Spread sf = spread(cf.ms), sa = spread(ca.ms), sr = spread(res_a);
     const double speedup = sf.median / std::max(sa.median, 1e-9);
-    const double min_ssim = *std::min_element(ssim.begin(), ssim.end());
-    const double worst_diff = *std::max_element(max_abs.begin(), max_abs.end());
-    const double worst_share = *std::max_element(share.begin(), share.end());
+    const double min_ssim = *std::min_element(ssim_fa.begin(), ssim_fa.end());
+    const double worst_diff = *std::max_element(max_abs_fa.begin(), max_abs_fa.end());
+    const double worst_share = *std::max_element(share_fa.begin(), share_fa.end());
     double mean_ssim = 0;
-    for (double v : ssim) mean_ssim += v / static_cast<double>(ssim.size());
+    for (double v : ssim_fa) mean_ssim += v / static_cast<double>(ssim_fa.size());
     nlohmann::json t;
     t["technique"] = name;
     t["settings_fixed"] = shadows::to_json(fixed);
     t["settings_adaptive"] = shadows::to_json(adapt);
     t["calibration"] = apps::calibration_json(opt.calibration, adapt);
     t["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
-    t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(timer_f.stats())}};
+    t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(cf.timer->stats())}};
     t["adaptive"] = {{"resolution_texels", to_json(sr)},
-                     {"storage", last_a.storage},
-                     {"resolution_source", last_a.resolution_source},
+                     {"storage", ca.info.storage},
+                     {"resolution_source", ca.info.resolution_source},
                      {"frame_ms", to_json(sa)},
-                     {"passes", io::to_json(timer_a.stats())}};
-    if (last_a.pcss_requirement.valid)
-      t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", last_a.pcss_requirement.clamped_fraction},
-                                           {"above_max_fraction", last_a.pcss_requirement.above_max_fraction}};
+                     {"passes", io::to_json(ca.timer->stats())}};
+    if (ca.info.pcss_requirement.valid)
+      t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", ca.info.pcss_requirement.clamped_fraction},
+                                           {"above_max_fraction", ca.info.pcss_requirement.above_max_fraction}};
     t["speedup_median"] = speedup;
     t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_ssim}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
-    for (const Temporal& tm : temporal) {
+    if (opt.reference && ref_frames > 0)
+      t["reference"] = {{"description", ref_description}, {"frames", ref_frames}, {"render_ms_mean", ref_ms / ref_frames}};
+    if (thin && ref_frames > 0)
+      t["thin_casters"] = {{"objects", kThinCasters},
+                           {"shadow_pixels", thin_pixels},
+                           {"gap_pixels", gap_pixels},
+                           {"reference_shadow_darkness_mean", thin_pixels > 0 ? ref_thin_shadow / static_cast<double>(thin_pixels) : 0.0},
+                           {"reference_gap_visibility_mean", gap_pixels > 0 ? ref_gaps / static_cast<double>(gap_pixels) : 0.0},
+                           {"crop_frame", crop_frame}};
+    for (const Config& c : configs) {
       double mean = 0, changed = 0;
-      for (double v : tm.mean_abs) mean += v / static_cast<double>(tm.mean_abs.size());
-      for (double v : tm.share_changed) changed += v / static_cast<double>(tm.share_changed.size());
-      t["flicker"].push_back({{"configuration", tm.name},
-                              {"mean_abs_mean", tm.mean_abs.empty() ? 0.0 : mean},
-                              {"share_changed_mean", tm.share_changed.empty() ? 0.0 : changed},
-                              {"mean_abs_per_frame", tm.mean_abs},
-                              {"resolution_changes", tm.resolution_changes}});
+      for (double v : c.flicker_mean_abs) mean += v / static_cast<double>(c.flicker_mean_abs.size());
+      for (double v : c.flicker_share) changed += v / static_cast<double>(c.flicker_share.size());
+      t["flicker"].push_back({{"configuration", c.name},
+                              {"mean_abs_mean", c.flicker_mean_abs.empty() ? 0.0 : mean},
+                              {"share_changed_mean", c.flicker_share.empty() ? 0.0 : changed},
+                              {"mean_abs_per_frame", c.flicker_mean_abs},
+                              {"resolution_changes", c.resolution_changes}});
+      t["along_path"].push_back({{"configuration", c.name}, {"frame_ms", c.ms}, {"texels", c.texels}, {"resolution", c.resolution}});
     }
-    t["fixed"]["texels_rendered"] = to_json(spread(texels_f));
-    t["adaptive"]["texels_rendered"] = to_json(spread(texels_a));
-    if (!baselines.empty()) {
-      const Baseline& engine = baselines.back();
-      const double engine_median = spread(engine.ms).median;
-      t["engine_baseline"] = engine.name;
-      t["speedup_vs_engine_median"] = engine_median / std::max(sa.median, 1e-9);
-      t["fixed"]["ssim_vs_engine_min"] = *std::min_element(ssim_f_engine.begin(), ssim_f_engine.end());
-      t["adaptive"]["ssim_vs_engine_min"] = *std::min_element(ssim_a_engine.begin(), ssim_a_engine.end());
-      for (const auto& b : baselines)
-        t["baselines"].push_back({{"name", b.name},
-                                  {"settings", shadows::to_json(b.settings)},
-                                  {"frame_ms", to_json(spread(b.ms))},
-                                  {"texels_rendered", to_json(spread(b.texels))},
-                                  {"texels_allocated", b.allocated},
-                                  {"ssim_vs_engine_min", *std::min_element(b.ssim_vs_engine.begin(), b.ssim_vs_engine.end())}});
+    auto measured = [&](const Config& c, nlohmann::json& j) {
+      j["texels_rendered"] = to_json(spread(c.texels));
+      j["texels_allocated"] = c.allocated;
+      j["ssim_vs_engine_min"] = *std::min_element(c.ssim_vs_engine.begin(), c.ssim_vs_engine.end());
+      j["reference_error"] = reference_error_json(c.vs_reference);
+      if (thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", c.thin_shadow / std::max(ref_thin_shadow, 1e-9)},
+                                               {"gaps_kept", gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0}};
+    };
+    measured(cf, t["fixed"]);
+    measured(ca, t["adaptive"]);
+    t["adaptive"]["without_hysteresis"] = {{"resolution_changes", configs[n_timed].resolution_changes},
+                                           {"texels_rendered", to_json(spread(configs[n_timed].texels))},
+                                           {"reference_error", reference_error_json(configs[n_timed].vs_reference)}};
+    t["engine_baseline"] = configs[engine].name;
+    t["speedup_vs_engine_median"] = spread(configs[engine].ms).median / std::max(sa.median, 1e-9);
+    for (std::size_t k = 2; k < n_timed; ++k) {
+      nlohmann::json b = {{"name", configs[k].name},
+                          {"settings", shadows::to_json(configs[k].settings)},
+                          {"frame_ms", to_json(spread(configs[k].ms))},
+                          {"passes", io::to_json(configs[k].timer->stats())}};
+      measured(configs[k], b);
+      t["baselines"].push_back(b);
     }
     report["techniques"].push_back(t);
 
@@ -395,24 +651,31 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     std::snprintf(range, sizeof range, "%.0f..%.0f", sr.min, sr.max);
     std::printf("%-6s %8.1f [%6.1f, %6.1f] %8.1f [%6.1f, %6.1f] %7.2fx %14s %8.4f %9.4f %9.4f\n", name.c_str(), sf.median, sf.p10,
                 sf.p90, sa.median, sa.p10, sa.p90, speedup, range, min_ssim, worst_diff, worst_share);
-    if (!baselines.empty()) {
-      // Every configuration against the engine baseline (the last row), texels per frame (median).
-      const double engine_median = spread(baselines.back().ms).median;
-      auto row = [&](const std::string& config, const Spread& ms, double texels, double allocated, double ssim_engine) {
-        std::printf("  %-22s %8.1f [%6.1f, %6.1f] %6.2fx %12.2f %12.2f %10.4f\n", config.c_str(), ms.median, ms.p10, ms.p90,
-                    engine_median / std::max(ms.median, 1e-9), texels / 1e6, allocated / 1e6, ssim_engine);
-      };
-      std::printf("  %-22s %24s %7s %12s %12s %10s\n", "configuration", "frame ms", "vs eng.", "Mtexels drawn", "allocated",
-                  "SSIM vs eng.");
-      row("adaptive", sa, spread(texels_a).median, static_cast<double>(last_a.atlas_width) * last_a.atlas_height,
-          t["adaptive"]["ssim_vs_engine_min"].get<double>());
-      row("fixed-" + std::to_string(fixed.map.resolution_texels), sf, spread(texels_f).median,
-          static_cast<double>(fixed.map.resolution_texels) * fixed.map.resolution_texels, t["fixed"]["ssim_vs_engine_min"].get<double>());
-      for (const auto& b : baselines)
-        row(b.name, spread(b.ms), spread(b.texels).median, b.allocated,
-            *std::min_element(b.ssim_vs_engine.begin(), b.ssim_vs_engine.end()));
+    // Every configuration against the engine baseline and the reference, texels per frame (median).
+    const double engine_median = spread(configs[engine].ms).median;
+    std::printf("  %-24s %24s %7s %9s %9s %8s %9s %8s %7s %7s\n", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
+                "SSIM eng", "RMSE ref", "SSIM ref", "thin", "gaps");
+    for (std::size_t k = 0; k < n_timed; ++k) {
+      const Config& c = configs[k];
+      const Spread ms = spread(c.ms);
+      const nlohmann::json err = reference_error_json(c.vs_reference);
+      std::printf("  %-24s %8.1f [%6.1f, %6.1f] %6.2fx %10.2f %9.2f %8.4f", c.name.c_str(), ms.median, ms.p10, ms.p90,
+                  engine_median / std::max(ms.median, 1e-9), spread(c.texels).median / 1e6, c.allocated / 1e6,
+                  *std::min_element(c.ssim_vs_engine.begin(), c.ssim_vs_engine.end()));
+      if (!err.is_null()) std::printf(" %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
+      if (thin_pixels > 0)
+        std::printf(" %7.3f %7.3f", c.thin_shadow / std::max(ref_thin_shadow, 1e-9), gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0);
+      std::printf("\n");
     }
-    if (opt.frames > 1) {
+    if (t.contains("reference")) std::printf("  reference: %s\n", ref_description.c_str());
+    if (t.contains("thin_casters"))
+      std::printf("  thin casters (crane, wires): %lld shadow and %lld gap pixels over %d frames; thin = their shadow kept, gaps = "
+                  "their gaps kept, relative to the reference\n",
+                  static_cast<long long>(thin_pixels), static_cast<long long>(gap_pixels), ref_frames);
+    if (ca.info.pcss_requirement.valid)
+      std::printf("  PCSS: %.1f %% of the adaptive frame's pixels at the minimum penumbra (clamped)\n",
+                  100 * ca.info.pcss_requirement.clamped_fraction);
+    if (plan.frames.size() > 1) {
       std::printf("  %-24s %16s %14s %12s\n", "flicker along the path", "mean |dV|", "share > 1/255", "res changes");
       for (const auto& f : t["flicker"])
         std::printf("  %-24s %16.5f %14.4f %12d\n", f["configuration"].get<std::string>().c_str(), f["mean_abs_mean"].get<double>(),
@@ -444,7 +707,10 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   double fps = 0, last = now_ms();
   while (!window.should_close()) {
     window.begin_frame();
-    if (animate) renderer.scene().camera = path_camera(scene.camera, path_i++ % (4 * opt.frames), 4 * opt.frames);
+    if (animate)
+      renderer.scene().camera = scene.camera_path.empty()
+                                    ? path_camera(scene.camera, path_i++ % (4 * opt.frames), 4 * opt.frames)
+                                    : scene.camera_path.at(scene.camera, path_i++ % scene.camera_path.frames());
     int fb_w = 0, fb_h = 0;
     window.framebuffer_size(fb_w, fb_h);
     if (frame % 30 == 0) timer.clear();
@@ -514,7 +780,12 @@ int main(int argc, char** argv) {
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
   apps::add_light_size_option(app, opt.light_size);
   app.add_option("--techniques", opt.techniques, "techniques to compare (comma separated)")->delimiter(',');
-  app.add_option("--frames", opt.frames, "camera-path frames per technique")->check(CLI::Range(1, 100000));
+  app.add_option("--path", opt.path,
+                 "scenes with a camera path: short (--frames frames, as stations of 3 consecutive frames spread over the path) "
+                 "or full (every frame)")
+      ->check(CLI::IsMember({"short", "full"}));
+  app.add_option("--frames", opt.frames, "frames per technique: of the short path, or of the orbit of a scene without a camera path")
+      ->check(CLI::Range(1, 100000));
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(16, 16384));
   app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(16, 16384));
   app.add_option("--fixed-resolution", base.map.resolution_texels, "resolution of the fixed comparison, texels per side")
@@ -527,6 +798,10 @@ int main(int argc, char** argv) {
   app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
   app.add_flag("!--no-baselines", opt.baselines,
                "skip the engine baselines (one map of twice --fixed-resolution, four cascades of it) and the comparison with them");
+  app.add_flag("!--no-reference", opt.reference,
+               "skip the error against the reference (four cascades of 8192² with the same filter, or the area-light mean)");
+  app.add_option("--reference-samples", opt.reference_samples, "area-light reference: point lights averaged (rounded up to a square)")
+      ->check(CLI::Range(1, 4096));
   app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);

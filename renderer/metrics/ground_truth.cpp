@@ -65,6 +65,12 @@ shadows::FrameInfo render_with_fallback(shadows::Renderer& renderer, shadows::Sh
   }
 }
 
+// "4096² maps" or "4 cascades of 4096²" (the renderer splits a directional light's view when asked).
+std::string maps_of(const shadows::ShadowMapParams& map, int resolution_texels) {
+  const std::string res = std::to_string(resolution_texels) + "²";
+  return map.cascades > 1 ? std::to_string(map.cascades) + " cascades of " + res : res + " maps";
+}
+
 }  // namespace
 
 std::string_view to_string(ReferenceKind k) { return k == ReferenceKind::area_light ? "area_light" : "same_filter"; }
@@ -151,14 +157,14 @@ Reference make_reference(shadows::Renderer& renderer, const shadows::ShadowSetti
     ref.description = "mean of " + std::to_string(ref.samples) + " hard shadows, point lights stratified over the " +
                       (light.type == scene::Light::Type::directional ? "sun disk of " + std::to_string(light.size) + " deg"
                                                                      : "spot emitter of width " + std::to_string(light.size)) +
-                      ", fitted " + std::to_string(ref.resolution_texels) + "² maps";
+                      ", fitted " + maps_of(settings.map, ref.resolution_texels);
   } else {
     shadows::ShadowSettings s = settings;
     s.map.resolution_texels = options.filter_resolution_texels;
     render_with_fallback(renderer, s, width_px, height_px, ref.note);
     ref.resolution_texels = s.map.resolution_texels;
     ref.visibility = renderer.read_visibility();
-    ref.description = shadows::describe(s) + " at " + std::to_string(ref.resolution_texels) + "²";
+    ref.description = shadows::describe(s) + " at " + maps_of(s.map, ref.resolution_texels);
   }
   if (!ref.note.empty() && ref.note.back() == ' ') ref.note.pop_back();
   ref.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -34,7 +34,7 @@ class DemoCli : public ::testing::Test {
 
 TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   const fs::path out = dir_ / "out";
-  const auto r = demo({"--headless", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss", "--no-plot",
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss", "--no-plot",
                        "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("speedup"));
@@ -67,19 +67,37 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_GE(t.at("adaptive").at("ssim_vs_engine_min").get<double>(), 0.99);
     EXPECT_LT(t.at("adaptive").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
     EXPECT_EQ(t.at("fixed").at("texels_rendered").at("median").get<double>(), 2048.0 * 2048.0);
-    // Flicker along the path per configuration (3 frames: 2 frame pairs), with the floor of a
-    // world-fixed map; a fixed map never changes its resolution.
+    // Error of the visibility against the reference at the orbit's middle frame, for every
+    // configuration in the tables; the engine's cascades are closer to it than one fixed map.
+    EXPECT_EQ(t.at("reference").at("frames").get<int>(), 1);
+    EXPECT_THAT(t.at("reference").at("description").get<std::string>(),
+                HasSubstr(t["technique"] == "pcf" ? "4 cascades of 8188²" : "4 cascades of 4096²"));
+    for (const auto* row : {&t.at("adaptive"), &t.at("fixed"), &baselines[0], &baselines[1]}) {
+      const auto& err = row->at("reference_error");
+      EXPECT_EQ(err.at("frames").get<int>(), 1);
+      EXPECT_GT(err.at("rmse_mean").get<double>(), 0.0);
+      EXPECT_LT(err.at("rmse_mean").get<double>(), 0.2);
+      EXPECT_GT(err.at("ssim_min").get<double>(), 0.5);
+    }
+    // Flicker along the path per configuration (3 frames: 2 frame pairs), beside the rule without
+    // hysteresis and the floor of a world-fixed map; a fixed map never changes its resolution.
     const auto& flicker = t.at("flicker");
-    ASSERT_EQ(flicker.size(), 5u);
+    ASSERT_EQ(flicker.size(), 6u);
+    std::vector<std::string> names;
     for (const auto& f : flicker) {
       SCOPED_TRACE(f.at("configuration").get<std::string>());
+      names.push_back(f.at("configuration"));
       EXPECT_EQ(f.at("mean_abs_per_frame").size(), 2u);
       EXPECT_GE(f.at("mean_abs_mean").get<double>(), 0.0);
       EXPECT_LT(f.at("mean_abs_mean").get<double>(), 0.05);
     }
-    EXPECT_EQ(flicker[1].at("configuration"), "fixed-2048");
+    EXPECT_THAT(names, ::testing::ElementsAre("adaptive", "fixed-2048", "fixed-4096", "4x2048-cascades", "adaptive, no hysteresis",
+                                              "floor (world-fixed map)"));
     EXPECT_EQ(flicker[1].at("resolution_changes").get<int>(), 0);
-    EXPECT_EQ(flicker[2].at("configuration"), "floor (world-fixed map)");
+    // Texels per frame along the path for every configuration.
+    ASSERT_EQ(t.at("along_path").size(), 6u);
+    for (const auto& row : t["along_path"]) EXPECT_EQ(row.at("texels").size(), 3u);
+    EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-crops.png")));
   }
   EXPECT_THAT(r.out, HasSubstr("flicker along the path"));
   EXPECT_THAT(r.out, HasSubstr("4x2048-cascades"));
@@ -88,7 +106,35 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   std::string line;
   int rows = -1;
   while (std::getline(csv, line)) ++rows;
-  EXPECT_EQ(rows, 6);
+  EXPECT_EQ(rows, 2 * 3 * 6);  // technique x frame x configuration
+  EXPECT_EQ(report.at("path"), "orbit");
+}
+
+// A scene with a camera path is walked along it: --path short visits stations of three
+// consecutive frames spread over the whole path (flicker only within a station), --path full
+// every frame.
+TEST_F(DemoCli, ShortPathVisitsStationsOfTheScenesCameraPath) {
+  const fs::path out = dir_ / "outdoor";
+  const auto r = demo({"--headless", "--scene", "outdoor", "--frames", "6", "--width", "64", "--height", "36", "--techniques", "pcf",
+                       "--no-plot", "--no-baselines", "--no-reference", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_EQ(report.at("path"), "short");
+  EXPECT_EQ(report.at("path_length").get<int>(), 360);
+  EXPECT_EQ(report.at("path_frame_index"), nlohmann::json({0, 1, 2, 357, 358, 359}));
+  const auto& t = report.at("techniques")[0];
+  EXPECT_FALSE(t.contains("reference")) << "--no-reference";
+  EXPECT_TRUE(t.at("adaptive").at("reference_error").is_null());
+  for (const auto& f : t.at("flicker")) EXPECT_EQ(f.at("mean_abs_per_frame").size(), 4u) << "two pairs per station";
+  // The walk at eye height and the overview need different maps: the adaptive rule follows.
+  const auto& texels = t.at("along_path")[0].at("texels");
+  EXPECT_NE(texels[0].get<double>(), texels[5].get<double>());
+  EXPECT_THAT(r.err, HasSubstr("frame 358"));  // progress names the path frame
+
+  const auto bad = demo({"--headless", "--scene", "outdoor", "--path", "half", "--no-plot", "-o", (dir_ / "bad").string()});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_THAT(bad.err, HasSubstr("--path"));
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
 // --light-size reaches the renderer: a wider light widens PCSS's penumbrae, so fewer pixels are
@@ -96,7 +142,7 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
 TEST_F(DemoCli, LightSizeOverridesTheScene) {
   auto clamped_share = [&](const std::string& size) {
     const fs::path out = dir_ / ("light-" + size);
-    const auto r = demo({"--headless", "--frames", "2", "--width", "192", "--height", "108", "--techniques", "pcss", "--no-plot",
+    const auto r = demo({"--headless", "--scene", "demo", "--frames", "2", "--width", "192", "--height", "108", "--techniques", "pcss", "--no-plot",
                          "--no-baselines", "--light-size", size, "-o", out.string()});
     EXPECT_EQ(r.exit_code, 0) << r.err;
     const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
@@ -116,7 +162,7 @@ TEST_F(DemoCli, ExplicitAdaptiveCWinsOverTheCalibrationFile) {
   for (const bool explicit_c : {false, true}) {
     SCOPED_TRACE(explicit_c ? "--adaptive.c" : "file");
     const fs::path out = dir_ / (explicit_c ? "explicit" : "file");
-    std::vector<std::string> args = {"--headless", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
+    std::vector<std::string> args = {"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
                                      "--fixed-resolution", "256", "--no-plot", "--no-baselines", "-o", out.string()};
     if (explicit_c) args.insert(args.end(), {"--adaptive.c", "6.5"});
     const auto r = demo(args);
@@ -147,6 +193,7 @@ TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
   };
   for (const auto& c : cases) {
     std::vector<std::string> args = c.args;
+    if (std::find(args.begin(), args.end(), "--scene") == args.end()) args.insert(args.end(), {"--scene", "demo"});
     args.insert(args.end(), {"--frames", "1", "--width", "32", "--height", "32", "--no-plot", "-o", out.string()});
     const auto r = demo(args);
     EXPECT_NE(r.exit_code, 0) << c.says;
