@@ -68,7 +68,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // The demo's defaults: filters sized in world units (the rule needs a world-space radius), grid
-// kernels (exact, deterministic: the two images differ only by the map's resolution).
+// kernels (exact, deterministic: the two images differ only by the map's resolution), and the
+// rule as a careful engine applies it: no texel finer than a pixel footprint at its cascade's
+// near end (adaptive.min_texel_px; 0 gives the rule alone).
 shadows::ShadowSettings demo_defaults() {
   shadows::ShadowSettings s;
   s.technique = shadows::Technique::pcf;
@@ -80,6 +82,7 @@ shadows::ShadowSettings demo_defaults() {
   s.pcss.min_penumbra_ws = 0.12f;
   s.vsm.radius = 0.12f;
   s.vsm.radius_unit = shadows::RadiusUnit::world;
+  s.adaptive.min_texel_px = 1;
   return s;
 }
 
@@ -381,6 +384,11 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     apps::apply_calibration_for(opt.calibration, s);
     std::printf("c for %s = %.3g texels: %s\n", name.c_str(), s.adaptive.c, opt.calibration.source_of_c(s).c_str());
   }
+  const auto& ap = base.adaptive;
+  std::printf("adaptive: res = c L / r per cascade, as many cascades as the rule needs; texels no finer than %s at a cascade's near end "
+              "(--adaptive.min_texel_px), no wider than %s (--adaptive.max_texel_ws)\n",
+              ap.min_texel_px > 0 ? (std::to_string(ap.min_texel_px).substr(0, 4) + " px").c_str() : "the rule's (off)",
+              ap.max_texel_ws > 0 ? (std::to_string(ap.max_texel_ws).substr(0, 5) + " ws").c_str() : "the rule's (off)");
   std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])\n");
   std::printf("%-6s %24s %24s %8s %14s %8s %9s %9s\n", "tech", "fixed", "adaptive", "speedup", "adaptive res", "min SSIM",
               "max diff", ">1/255");

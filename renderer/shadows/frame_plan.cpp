@@ -9,12 +9,22 @@
 namespace penumbra::shadows {
 namespace {
 
-// The rule for one map: directional c · L / r_ws; spot: c / r_uv at the far end of the depth
-// range, where a world-space radius spans the fewest texels.
+// World units per map uv: directional 1 / L (the orthographic window); spot at the far end of
+// the depth range, where a world-space length spans the fewest texels.
+double uv_per_ws(const LightFrame& f) {
+  if (!f.perspective) return 1.0 / std::max(static_cast<double>(f.extent_ws), 1e-12);
+  return f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
+}
+
+// The rule for one map: c / r_uv (directional: c · L / r_ws).
 double rule_texels(float c, const LightFrame& f, float radius_ws) {
   if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
-  const double uv_per_ws = f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
-  return adaptive::required_texels_uv(c, radius_ws * uv_per_ws);
+  return adaptive::required_texels_uv(c, radius_ws * uv_per_ws(f));
+}
+
+// The texels a map needs for texels no wider than adaptive.max_texel_ws; 0 without a ceiling.
+double texel_ceiling_texels(const AdaptiveParams& ap, const LightFrame& f) {
+  return ap.max_texel_ws > 0 ? 1.0 / (static_cast<double>(ap.max_texel_ws) * uv_per_ws(f)) : 0.0;
 }
 
 // Padding of the fitted frustum by the filter's reach: a fixed filter by its radius, a blocker
@@ -91,9 +101,23 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
     return compute_cascades(scene, CascadeRequest{count, s.map.cascade_lambda, s.map.cascade_stabilize, plan.aspect, res,
                                                   fit.pad_texels, fit.pad_ws, s.map.fit});
   };
+  // World width one pixel covers at view depth d, facing the camera.
+  const scene::Camera& camera = scene.camera;
+  auto pixel_ws = [&](double depth_ws) {
+    if (camera.projection == scene::Camera::Projection::orthographic) return camera.ortho_height_ws / static_cast<double>(height_px);
+    return 2.0 * depth_ws * std::tan(glm::radians(static_cast<double>(camera.fov_y_deg)) / 2) / static_cast<double>(height_px);
+  };
   auto requirements = [&](const Cascades& c) {
     std::vector<double> req;
-    for (const auto& f : c.frames) req.push_back(rule_texels(ap.c, f, radius_ws));
+    for (std::size_t i = 0; i < c.frames.size(); ++i) {
+      const LightFrame& f = c.frames[i];
+      double r = rule_texels(ap.c, f, radius_ws);
+      if (ap.min_texel_px > 0 && !f.perspective) {
+        const double finest_ws = ap.min_texel_px * pixel_ws(c.splits_ws[i]);
+        if (finest_ws > 0) r = std::min(r, f.extent_ws / finest_ws);
+      }
+      req.push_back(std::max(r, texel_ceiling_texels(ap, f)));
+    }
     return req;
   };
   // Screen-space techniques work on one map.
@@ -130,11 +154,14 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
       const int cur = ad.controllers[i].current();
       previous[i] = cur > 0 ? cur : largest;
     }
-    req = requirements(cascades_for(count, previous));
+    const Cascades sized = cascades_for(count, previous);
+    req = requirements(sized);
     plan.resolution_source = entry.per_pixel_requirement ? "pcss_min_penumbra" : "rule";
     if (entry.per_pixel_requirement && ap.pcss == PcssRequirement::per_pixel && ad.last.valid && ad.last_cascades == count) {
       // Measured last frame: c / r_filter over the visible pixels, never above the min-penumbra bound.
-      for (std::size_t i = 0; i < n; ++i) req[i] = std::min(req[i], ad.last.required_texels[i] * ap.c / ad.last_c);
+      // The texel ceiling holds here too.
+      for (std::size_t i = 0; i < n; ++i)
+        req[i] = std::max(std::min(req[i], ad.last.required_texels[i] * ap.c / ad.last_c), texel_ceiling_texels(ap, sized.frames[i]));
       plan.resolution_source = "pcss_per_pixel";
       plan.used_requirement = ad.last;
     }

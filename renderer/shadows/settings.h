@@ -53,6 +53,18 @@ struct AdaptiveParams {
   int max_texels = 4096;
   int quantum_texels = 32;
   int shrink_delay_frames = 30;       // frames a smaller requirement must hold before shrinking
+  // The coarsest texel allowed, world units; 0 = the rule alone. The rule is measured on edges: a
+  // caster narrower than a texel covers some texel centres and misses others, and its shadow
+  // breaks up whatever the filter. Set it to the thinnest caster that must keep its shadow (the
+  // outdoor crane's lattice: 0.06); each map then has at least L_ws / max_texel_ws texels.
+  float max_texel_ws = 0;
+  // The finest texel worth drawing, in pixel footprints at the map's nearest receiver (directional
+  // lights); 0 = the rule alone. A texel narrower than the pixel it lands on cannot show a stair
+  // (its stair is below the image's resolution), so a map (a far cascade) needs no more than
+  // L_ws / (min_texel_px · footprint) texels, the footprint being the width one pixel covers at the
+  // cascade's near split, facing the camera (the smallest it gets in the cascade). The texel
+  // ceiling (max_texel_ws) wins over it.
+  float min_texel_px = 0;
   Storage storage = Storage::subrect; // sub-rectangle of a max-size texture, or a texture per size
   PcssRequirement pcss = PcssRequirement::per_pixel;  // GPU max of c / r_filter (one frame late), or c / min penumbra
 };

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/glm.hpp>
+
 #include "adaptive/resolution_rule.h"
 #include "scene/scene.h"
 #include "shadows/frame_plan.h"
@@ -125,6 +127,85 @@ TEST(FramePlan, RuleGivesCTimesExtentOverRadius) {
   // Doubling the radius halves the requirement.
   s.pcf.radius = 0.1f;
   EXPECT_NEAR(plan(s).cascades[0].required_texels, p.cascades[0].required_texels / 2, 0.01 * p.cascades[0].required_texels);
+}
+
+// adaptive.max_texel_ws: no map's texel wider than the ceiling (for casters thinner than the
+// rule's texel), the rule alone where its texel is already narrower, for PCF and for PCSS's
+// measured requirement.
+TEST(FramePlan, TexelCeilingRaisesTheRuleOnlyWhereItsTexelIsWider) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.quantum_texels = 1;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = 0.4f;
+  const FramePlan rule = plan(s);
+  const double extent = rule.cascades[0].light.extent_ws;
+  const double rule_texel = extent / rule.cascades[0].required_texels;
+  s.adaptive.max_texel_ws = static_cast<float>(rule_texel / 4);
+  const FramePlan capped = plan(s);
+  EXPECT_NEAR(capped.cascades[0].required_texels, 4 * rule.cascades[0].required_texels, 0.02 * 4 * rule.cascades[0].required_texels);
+  EXPECT_LE(capped.cascades[0].light.extent_ws / capped.cascades[0].resolution_texels, s.adaptive.max_texel_ws * 1.0001);
+  s.adaptive.max_texel_ws = static_cast<float>(rule_texel * 4);  // coarser than the rule's: no effect
+  EXPECT_DOUBLE_EQ(plan(s).cascades[0].required_texels, rule.cascades[0].required_texels);
+  s.adaptive.max_texel_ws = 1e-9f;  // a ceiling no map can meet: the largest map
+  EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.max_texels);
+
+  // Cascades: each one at least its own extent over the ceiling (within the 1-2 % the padding
+  // changes between the frame the requirement is read from and the final one).
+  ShadowSettings c = s;
+  c.map.cascades = 3;
+  c.adaptive.max_texel_ws = static_cast<float>(rule_texel / 2);
+  const FramePlan cascaded = plan(c);
+  ASSERT_EQ(cascaded.cascades.size(), 3u);
+  for (const auto& ci : cascaded.cascades)
+    EXPECT_GE(ci.resolution_texels * 1.02, ci.light.extent_ws / c.adaptive.max_texel_ws) << ci.split_near_ws;
+
+  // PCSS: a measured requirement below the ceiling is raised to it.
+  ShadowSettings p = with(Technique::pcss);
+  p.adaptive.enabled = true;
+  const scene::Scene demo = scene::make_builtin_scene("demo");
+  AdaptiveState state;
+  state.last.valid = true;
+  state.last.required_texels = {10.0};
+  state.last_cascades = 1;
+  state.last_c = p.adaptive.c;
+  p.adaptive.max_texel_ws = 0.05f;
+  const FramePlan measured = plan_frame(p, demo, kWidth, kHeight, state);
+  EXPECT_EQ(measured.resolution_source, "pcss_per_pixel");
+  EXPECT_NEAR(measured.cascades[0].required_texels, measured.cascades[0].light.extent_ws / 0.05, 0.02 * measured.cascades[0].light.extent_ws / 0.05);
+}
+
+// adaptive.min_texel_px: a cascade needs no texel narrower than a pixel footprint at its near
+// split; the first cascade (from the camera's near plane) keeps the rule, far ones are capped.
+TEST(FramePlan, PixelFloorCapsFarCascadesOnly) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.quantum_texels = 1;
+  s.adaptive.max_texels = 65536;
+  s.map.cascades = 4;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = 0.002f;  // a rule far finer than the pixels
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  const FramePlan rule = plan(s, scene);
+  s.adaptive.min_texel_px = 1;
+  const FramePlan floored = plan(s, scene);
+  ASSERT_EQ(floored.cascades.size(), 4u);
+  const double pixel_per_depth = 2 * std::tan(glm::radians(static_cast<double>(scene.camera.fov_y_deg)) / 2) / kHeight;
+  for (std::size_t i = 0; i < 4; ++i) {
+    const CascadeInfo& c = floored.cascades[i];
+    SCOPED_TRACE(i);
+    const double cap = c.light.extent_ws / (c.split_near_ws * pixel_per_depth);
+    EXPECT_LE(c.required_texels, rule.cascades[i].required_texels * 1.02);
+    if (cap < rule.cascades[i].required_texels / 1.05) EXPECT_NEAR(c.required_texels, cap, 0.02 * cap);
+  }
+  EXPECT_LT(floored.cascades[3].required_texels, rule.cascades[3].required_texels / 2);  // the far end saves most
+  // Twice the pixel footprint: half the texels per side where the floor holds.
+  s.adaptive.min_texel_px = 2;
+  EXPECT_NEAR(plan(s, scene).cascades[3].required_texels, floored.cascades[3].required_texels / 2,
+              0.02 * floored.cascades[3].required_texels);
+  // The texel ceiling wins over it.
+  s.adaptive.max_texel_ws = 1e-4f;
+  EXPECT_GE(plan(s, scene).cascades[3].required_texels * 1.02, floored.cascades[3].light.extent_ws / 1e-4);
 }
 
 TEST(FramePlan, RuleClampsAtTheExtremes) {
