@@ -126,7 +126,18 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
     const adaptive::CascadeChoice choice = adaptive::choose_cascade_count(kMaxCascades, largest, [&](int n) {
       return requirements(cascades_for(n, std::vector<int>(static_cast<std::size_t>(n), largest)));
     });
-    count = choice.count;
+    // Like each cascade's resolution: more cascades at once (a requirement above the largest map
+    // would show its staircase), fewer only after the smaller count has sufficed for
+    // shrink_delay_frames frames in a row (the count flipping with every small camera move
+    // re-splits the view and restarts the resolutions: flicker).
+    if (ad.auto_count == 0 || choice.count > ad.auto_count) {
+      ad.auto_count = choice.count, ad.auto_count_frames_below = 0;
+    } else if (choice.count < ad.auto_count) {
+      if (++ad.auto_count_frames_below >= ap.shrink_delay_frames) ad.auto_count = choice.count, ad.auto_count_frames_below = 0;
+    } else {
+      ad.auto_count_frames_below = 0;
+    }
+    count = ad.auto_count;
   }
   count = std::clamp(count, 1, kMaxCascades);
   if (!single.receivers_visible) count = 1;  // nothing to split (compute_cascades returns one map)

@@ -60,6 +60,10 @@ struct AdaptiveState {
   PcssRequirementInfo last;  // the newest measured requirement
   int last_cascades = 0;     // cascade count it was measured with
   float last_c = 0;
+  // The automatic cascade count (map.cascades = 0) with hysteresis: the count in use, and the
+  // frames a smaller count has sufficed (it drops after adaptive.shrink_delay_frames of them).
+  int auto_count = 0;
+  int auto_count_frames_below = 0;
   void reset() { *this = {}; }
 };
 

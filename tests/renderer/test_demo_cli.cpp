@@ -70,8 +70,9 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     // Error of the visibility against the reference at the orbit's middle frame, for every
     // configuration in the tables; the engine's cascades are closer to it than one fixed map.
     EXPECT_EQ(t.at("reference").at("frames").get<int>(), 1);
+    // PCF: 8188² on llvmpipe (16384² textures), 8192² where larger textures fit.
     EXPECT_THAT(t.at("reference").at("description").get<std::string>(),
-                HasSubstr(t["technique"] == "pcf" ? "4 cascades of 8188²" : "4 cascades of 4096²"));
+                HasSubstr(t["technique"] == "pcf" ? "4 cascades of 81" : "4 cascades of 4096²"));
     for (const auto* row : {&t.at("adaptive"), &t.at("fixed"), &baselines[0], &baselines[1]}) {
       const auto& err = row->at("reference_error");
       EXPECT_EQ(err.at("frames").get<int>(), 1);
@@ -126,8 +127,12 @@ TEST_F(DemoCli, ShortPathVisitsStationsOfTheScenesCameraPath) {
   EXPECT_FALSE(t.contains("reference")) << "--no-reference";
   EXPECT_TRUE(t.at("adaptive").at("reference_error").is_null());
   for (const auto& f : t.at("flicker")) EXPECT_EQ(f.at("mean_abs_per_frame").size(), 4u) << "two pairs per station";
-  // The walk at eye height and the overview need different maps: the adaptive rule follows.
-  const auto& texels = t.at("along_path")[0].at("texels");
+  // The walk at eye height and the overview need different maps: the rule without hysteresis
+  // follows at once (with it, a smaller need waits shrink_delay_frames).
+  const auto& along = t.at("along_path");
+  const auto raw = std::find_if(along.begin(), along.end(), [](const auto& row) { return row.at("configuration") == "adaptive, no hysteresis"; });
+  ASSERT_NE(raw, along.end());
+  const auto& texels = raw->at("texels");
   EXPECT_NE(texels[0].get<double>(), texels[5].get<double>());
   EXPECT_THAT(r.err, HasSubstr("frame 358"));  // progress names the path frame
 

@@ -277,6 +277,44 @@ TEST(FramePlan, AutomaticCascadeCountStaysInRange) {
   }
 }
 
+// The automatic count has hysteresis like each cascade's resolution: it grows at once and drops
+// only after the smaller count has sufficed for shrink_delay_frames frames in a row.
+TEST(FramePlan, AutomaticCascadeCountGrowsAtOnceAndDropsAfterTheDelay) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.adaptive.max_texels = 1024;
+  s.adaptive.shrink_delay_frames = 3;
+  s.map.cascades = 0;
+  s.pcf.radius_unit = RadiusUnit::world;
+  const scene::Scene scene = scene::make_builtin_scene("demo");
+  const float wide = 1.0f, fine = 0.01f;  // one map suffices / needs more cascades
+  s.pcf.radius = fine;
+  ASSERT_GT(plan(s, scene).cascades.size(), 1u) << "the fine filter must need cascades";
+  s.pcf.radius = wide;
+  ASSERT_EQ(plan(s, scene).cascades.size(), 1u) << "the wide filter must fit one map";
+
+  AdaptiveState state;
+  auto count = [&](float radius) {
+    s.pcf.radius = radius;
+    return plan_frame(s, scene, kWidth, kHeight, state).cascades.size();
+  };
+  EXPECT_EQ(count(wide), 1u);
+  const std::size_t many = count(fine);  // grows at once
+  EXPECT_GT(many, 1u);
+  EXPECT_EQ(count(wide), many);
+  EXPECT_EQ(count(wide), many);
+  EXPECT_EQ(count(fine), many);  // needed again: the wait starts over
+  EXPECT_EQ(count(wide), many);
+  EXPECT_EQ(count(wide), many);
+  EXPECT_EQ(count(wide), 1u);  // the third frame in a row
+  // Without a delay the count follows the view every frame.
+  s.adaptive.shrink_delay_frames = 0;
+  AdaptiveState fresh;
+  state = fresh;
+  EXPECT_EQ(count(fine), many);
+  EXPECT_EQ(count(wide), 1u);
+}
+
 TEST(FramePlan, PcssUsesTheMeasuredRequirementWhenLower) {
   ShadowSettings s = with(Technique::pcss);
   s.adaptive.enabled = true;
