@@ -229,7 +229,6 @@ struct Options {
 struct Config {
   std::string name;
   shadows::ShadowSettings settings;
-  bool timed = true;  // in the tables (the floor only measures the flicker measure's own floor)
   std::unique_ptr<shadows::Renderer> renderer;
   std::unique_ptr<gl::PassTimer> timer;
   // this frame
@@ -437,32 +436,31 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     // (four cascades of the fixed size, practical split, stabilized, blended: the map.* defaults),
     // the engine baseline every image is compared with.
     std::vector<Config> configs;
-    auto add = [&](std::string config, const shadows::ShadowSettings& settings, bool timed) {
+    auto add = [&](std::string config, const shadows::ShadowSettings& settings) {
       Config c;
       c.name = std::move(config);
       c.settings = settings;
-      c.timed = timed;
       c.renderer = std::make_unique<shadows::Renderer>();
       c.renderer->set_scene(scene);
       c.timer = std::make_unique<gl::PassTimer>(method == gl::TimingMethod::gpu_timer);
       configs.push_back(std::move(c));
     };
     const std::string fixed_name = "fixed-" + std::to_string(fixed.map.resolution_texels);
-    add("adaptive", adapt, true);
-    add(fixed_name, fixed, true);
+    add("adaptive", adapt);
+    add(fixed_name, fixed);
     std::size_t engine = 1;
     if (opt.baselines) {
       shadows::ShadowSettings big = fixed, csm = fixed;
       big.map.resolution_texels = 2 * fixed.map.resolution_texels;
       big.map.cascades = 1;
       csm.map.cascades = 4;
-      add("fixed-" + std::to_string(big.map.resolution_texels), big, true);
-      add("4x" + std::to_string(csm.map.resolution_texels) + "-cascades", csm, true);
+      add("fixed-" + std::to_string(big.map.resolution_texels), big);
+      add("4x" + std::to_string(csm.map.resolution_texels) + "-cascades", csm);
       engine = configs.size() - 1;
     }
-    const std::size_t n_timed = configs.size();
-    add("adaptive, no hysteresis", raw, false);
-    add("floor (world-fixed map)", world_fixed, false);
+    const std::size_t n_timed = configs.size();  // those in the tables; the next two only measure flicker
+    add("adaptive, no hysteresis", raw);
+    add("floor (world-fixed map)", world_fixed);
 
     // The reference (metrics/ground_truth.h): four cascades of (up to) 8192² with the same
     // world-space filter, or the mean of hard shadows over the light's area, each from four
@@ -529,7 +527,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       if (pf.reference && opt.reference) {
         ref_renderer.scene().camera = camera;
         const metrics::Reference ref = metrics::make_reference(ref_renderer, ref_settings, opt.width, opt.height, ref_options);
-            ref_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
+        ref_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
         ref_ms += ref.render_ms;
         ++ref_frames;
         // Compared where a surface is drawn (the sky is lit in every image).
