@@ -219,6 +219,7 @@ struct Options {
   std::string plot_script = tool::script_file("plot_demo.py").string();
   bool plot = true;
   bool baselines = true;       // also the engine baselines: a single map of twice the fixed size, four cascades of it
+  bool auto_cascades = true;   // adaptive: as many cascades as the rule needs (unless --map.cascades is given)
   bool reference = true;       // error against a reference of the technique at the reference frames
   int reference_samples = 16;  // area-light reference: point lights averaged
   std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
@@ -421,7 +422,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     fixed.adaptive.enabled = false;
     shadows::ShadowSettings adapt = fixed;
     adapt.adaptive.enabled = true;
-    adapt.map.cascades = 0;  // as many rule-sized cascades as the view needs (adaptive/cascades.h)
+    if (opt.auto_cascades) adapt.map.cascades = 0;  // as many rule-sized cascades as the view needs (adaptive/cascades.h)
     // The same rule without quantization or hysteresis: every frame the rule's exact answer.
     shadows::ShadowSettings raw = adapt;
     raw.adaptive.quantum_texels = 1;
@@ -716,6 +717,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   shadows::Renderer renderer;
   renderer.set_scene(scene);
   settings.adaptive.enabled = true;
+  if (opt.auto_cascades) settings.map.cascades = 0;
   apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
   gl::PassTimer timer(!window.info().software);
   bool show_map = true, show_cascades = false, animate = true;
@@ -822,6 +824,7 @@ int main(int argc, char** argv) {
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
   apps::add_settings_options(app, base);
   if (const auto status = cli::parse(app, argc, argv, "penumbra-demo")) return *status;
+  opt.auto_cascades = app.count("--map.cascades") == 0;
   try {
     for (const auto& t : opt.techniques) shadows::technique_from_string(t);
     apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
