@@ -500,7 +500,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       const scene::Camera camera = camera_at(scene, plan, pf.frame);
       io::ImageF surface = probe.render(camera, opt.width, opt.height);
       const glm::mat4 view_projection = metrics::camera_view_projection(camera, opt.width, opt.height);
-      for (auto& c : configs) {
+      for (std::size_t k = 0; k < configs.size(); ++k) {
+        Config& c = configs[k];
         c.renderer->scene().camera = camera;
         const Timed t = timed_render(*c.renderer, c.settings, opt.width, opt.height, *c.timer);
         c.info = t.info;
@@ -511,7 +512,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
         const std::string res = cascade_resolutions(t.info);
         if (!c.resolution.empty() && c.resolution.back() != res) ++c.resolution_changes;
         c.resolution.push_back(res);
-        c.color = c.renderer->read_color();
+        if (k < n_timed) c.color = c.renderer->read_color();  // the lit image: compared in the tables only
         c.visibility = c.renderer->read_visibility();
         // Flicker (metrics/temporal.h): visibility of this frame against the previous one at the
         // pixels whose surface point stayed in view.
@@ -598,8 +599,6 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     const double min_ssim = *std::min_element(ssim_fa.begin(), ssim_fa.end());
     const double worst_diff = *std::max_element(max_abs_fa.begin(), max_abs_fa.end());
     const double worst_share = *std::max_element(share_fa.begin(), share_fa.end());
-    double mean_ssim = 0;
-    for (double v : ssim_fa) mean_ssim += v / static_cast<double>(ssim_fa.size());
     nlohmann::json t;
     t["technique"] = name;
     t["settings_fixed"] = shadows::to_json(fixed);
@@ -617,7 +616,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                                            {"clamped_fraction_mean", mean_of(ca.pcss_clamped)},
                                            {"above_max_fraction", ca.info.pcss_requirement.above_max_fraction}};
     t["speedup_median"] = speedup;
-    t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_ssim}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
+    t["image"] = {{"ssim_min", min_ssim}, {"ssim_mean", mean_of(ssim_fa)}, {"max_abs_max", worst_diff}, {"share_above_1_255_max", worst_share}};
     if (opt.reference && ref_frames > 0)
       t["reference"] = {{"description", ref_description}, {"frames", ref_frames}, {"render_ms_mean", ref_ms / ref_frames}};
     if (thin && ref_frames > 0)
@@ -628,23 +627,22 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                            {"reference_gap_visibility_mean", gap_pixels > 0 ? ref_gaps / static_cast<double>(gap_pixels) : 0.0},
                            {"crop_frame", crop_frame}};
     for (const Config& c : configs) {
-      double mean = 0, changed = 0;
-      for (double v : c.flicker_mean_abs) mean += v / static_cast<double>(c.flicker_mean_abs.size());
-      for (double v : c.flicker_share) changed += v / static_cast<double>(c.flicker_share.size());
       t["flicker"].push_back({{"configuration", c.name},
-                              {"mean_abs_mean", c.flicker_mean_abs.empty() ? 0.0 : mean},
-                              {"share_changed_mean", c.flicker_share.empty() ? 0.0 : changed},
+                              {"mean_abs_mean", mean_of(c.flicker_mean_abs)},
+                              {"share_changed_mean", mean_of(c.flicker_share)},
                               {"mean_abs_per_frame", c.flicker_mean_abs},
                               {"resolution_changes", c.resolution_changes}});
       t["along_path"].push_back({{"configuration", c.name}, {"frame_ms", c.ms}, {"texels", c.texels}, {"resolution", c.resolution}});
     }
+    // The thin casters' shadow and gaps a configuration keeps, relative to the reference's.
+    auto shadow_kept = [&](const Config& c) { return c.thin_shadow / std::max(ref_thin_shadow, 1e-9); };
+    auto gaps_kept = [&](const Config& c) { return gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0; };
     auto measured = [&](const Config& c, nlohmann::json& j) {
       j["texels_rendered"] = to_json(spread(c.texels));
       j["texels_allocated"] = c.allocated;
       j["ssim_vs_engine_min"] = *std::min_element(c.ssim_vs_engine.begin(), c.ssim_vs_engine.end());
       j["reference_error"] = reference_error_json(c.vs_reference);
-      if (thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", c.thin_shadow / std::max(ref_thin_shadow, 1e-9)},
-                                               {"gaps_kept", gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0}};
+      if (thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(c)}, {"gaps_kept", gaps_kept(c)}};
     };
     measured(cf, t["fixed"]);
     measured(ca, t["adaptive"]);
@@ -680,7 +678,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                   *std::min_element(c.ssim_vs_engine.begin(), c.ssim_vs_engine.end()));
       if (!err.is_null()) std::printf(" %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
       if (thin_pixels > 0)
-        std::printf(" %7.3f %7.3f", c.thin_shadow / std::max(ref_thin_shadow, 1e-9), gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0);
+        std::printf(" %7.3f %7.3f", shadow_kept(c), gaps_kept(c));
       std::printf("\n");
     }
     if (t.contains("reference")) std::printf("  reference: %s\n", ref_description.c_str());

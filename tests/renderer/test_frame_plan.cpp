@@ -27,6 +27,15 @@ ShadowSettings with(Technique t) {
   return s;
 }
 
+// PCF with a world-space radius (what the rule is for) and adaptive resolution on.
+ShadowSettings adaptive_pcf(float radius_ws) {
+  ShadowSettings s = with(Technique::pcf);
+  s.adaptive.enabled = true;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = radius_ws;
+  return s;
+}
+
 TEST(FramePlan, PassesFollowTheTechnique) {
   using P = PassId;
   EXPECT_EQ(plan(with(Technique::hard)).passes, (std::vector<P>{P::shadow_map, P::shading}));
@@ -111,11 +120,8 @@ TEST(FramePlan, EmptySceneHasOneMap) {
 }
 
 TEST(FramePlan, RuleGivesCTimesExtentOverRadius) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.05f);
   s.adaptive.quantum_texels = 1;
-  s.pcf.radius_unit = RadiusUnit::world;
-  s.pcf.radius = 0.05f;
   const FramePlan p = plan(s);
   ASSERT_EQ(p.cascades.size(), 1u);
   EXPECT_EQ(p.resolution_source, "rule");
@@ -133,11 +139,8 @@ TEST(FramePlan, RuleGivesCTimesExtentOverRadius) {
 // rule's texel), the rule alone where its texel is already narrower, for PCF and for PCSS's
 // measured requirement.
 TEST(FramePlan, TexelCeilingRaisesTheRuleOnlyWhereItsTexelIsWider) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.4f);
   s.adaptive.quantum_texels = 1;
-  s.pcf.radius_unit = RadiusUnit::world;
-  s.pcf.radius = 0.4f;
   const FramePlan rule = plan(s);
   const double extent = rule.cascades[0].light.extent_ws;
   const double rule_texel = extent / rule.cascades[0].required_texels;
@@ -178,13 +181,10 @@ TEST(FramePlan, TexelCeilingRaisesTheRuleOnlyWhereItsTexelIsWider) {
 // adaptive.min_texel_px: a cascade needs no texel narrower than a pixel footprint at its near
 // split; the first cascade (from the camera's near plane) keeps the rule, far ones are capped.
 TEST(FramePlan, PixelFloorCapsFarCascadesOnly) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.002f);  // a rule far finer than the pixels
   s.adaptive.quantum_texels = 1;
   s.adaptive.max_texels = 65536;
   s.map.cascades = 4;
-  s.pcf.radius_unit = RadiusUnit::world;
-  s.pcf.radius = 0.002f;  // a rule far finer than the pixels
   const scene::Scene scene = scene::make_builtin_scene("demo");
   const FramePlan rule = plan(s, scene);
   s.adaptive.min_texel_px = 1;
@@ -196,7 +196,9 @@ TEST(FramePlan, PixelFloorCapsFarCascadesOnly) {
     SCOPED_TRACE(i);
     const double cap = c.light.extent_ws / (c.split_near_ws * pixel_per_depth);
     EXPECT_LE(c.required_texels, rule.cascades[i].required_texels * 1.02);
-    if (cap < rule.cascades[i].required_texels / 1.05) EXPECT_NEAR(c.required_texels, cap, 0.02 * cap);
+    if (cap < rule.cascades[i].required_texels / 1.05) {
+      EXPECT_NEAR(c.required_texels, cap, 0.02 * cap);
+    }
   }
   EXPECT_LT(floored.cascades[3].required_texels, rule.cascades[3].required_texels / 2);  // the far end saves most
   // Twice the pixel footprint: half the texels per side where the floor holds.
@@ -209,10 +211,7 @@ TEST(FramePlan, PixelFloorCapsFarCascadesOnly) {
 }
 
 TEST(FramePlan, RuleClampsAtTheExtremes) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
-  s.pcf.radius_unit = RadiusUnit::world;
-  s.pcf.radius = 1e-6f;  // a vanishing filter wants an infinite map
+  ShadowSettings s = adaptive_pcf(1e-6f);  // a vanishing filter wants an infinite map
   EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.max_texels);
   s.pcf.radius = 0;
   EXPECT_EQ(plan(s).cascades[0].resolution_texels, s.adaptive.max_texels);
@@ -224,10 +223,8 @@ TEST(FramePlan, RuleClampsAtTheExtremes) {
 }
 
 TEST(FramePlan, HysteresisGrowsAtOnceAndShrinksAfterTheDelay) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.1f);
   s.adaptive.shrink_delay_frames = 3;
-  s.pcf.radius_unit = RadiusUnit::world;
   const scene::Scene scene = scene::make_builtin_scene("demo");
   AdaptiveState state;
   s.pcf.radius = 0.2f;
@@ -265,10 +262,8 @@ TEST(FramePlan, SubrectStorageReservesMaxTexelsPerCascade) {
 }
 
 TEST(FramePlan, AutomaticCascadeCountStaysInRange) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.1f);
   s.map.cascades = 0;
-  s.pcf.radius_unit = RadiusUnit::world;
   for (float r : {1e-4f, 0.01f, 0.1f, 10.0f}) {
     s.pcf.radius = r;
     const auto n = plan(s).cascades.size();
@@ -280,12 +275,10 @@ TEST(FramePlan, AutomaticCascadeCountStaysInRange) {
 // The automatic count has hysteresis like each cascade's resolution: it grows at once and drops
 // only after the smaller count has sufficed for shrink_delay_frames frames in a row.
 TEST(FramePlan, AutomaticCascadeCountGrowsAtOnceAndDropsAfterTheDelay) {
-  ShadowSettings s = with(Technique::pcf);
-  s.adaptive.enabled = true;
+  ShadowSettings s = adaptive_pcf(0.1f);
   s.adaptive.max_texels = 1024;
   s.adaptive.shrink_delay_frames = 3;
   s.map.cascades = 0;
-  s.pcf.radius_unit = RadiusUnit::world;
   const scene::Scene scene = scene::make_builtin_scene("demo");
   const float wide = 1.0f, fine = 0.01f;  // one map suffices / needs more cascades
   s.pcf.radius = fine;
