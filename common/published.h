@@ -1,5 +1,5 @@
 #pragma once
-// Published values Penumbra starts from (shared/DESIGN.md, "Background").
+// Published values Penumbra starts from (docs/architecture.md, "Background").
 
 namespace penumbra {
 

@@ -4,7 +4,7 @@
 //
 //   psi(x) = gamma + (1 - gamma - lambda) F(x; alpha, beta)        (quest/psychometric.h)
 //
-// Parameters are fitted where the science works (shared/DESIGN.md, "Numerics"): the threshold
+// Parameters are fitted where the science works (docs/architecture.md, "Numerics"): the threshold
 // location u (the x at which psi = p_threshold; for the linear Weibull the log10 of that x, so u is
 // always in log10 units of the stimulus ratio for study data), log beta, and lambda in
 // [0, lapse_max] or fixed; alpha is derived from them (psychometric::alpha_for_threshold).

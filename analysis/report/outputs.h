@@ -1,5 +1,5 @@
 #pragma once
-// What penumbra-fit writes: calibration.json (the contract in shared/DESIGN.md, read by the
+// What penumbra-fit writes: calibration.json (the contract in docs/architecture.md, read by the
 // renderer's adaptive::load_calibration), report.json (every number, for people and the plotting
 // script) and a plain-text summary table.
 #include <filesystem>

@@ -1,5 +1,5 @@
 #pragma once
-// The trial log (contract in shared/DESIGN.md): one CSV per session, header first, one row per
+// The trial log (contract in docs/architecture.md): one CSV per session, header first, one row per
 // trial appended with a single write() and fsync()ed before the next trial starts; never
 // rewritten. Doubles are written with 17 significant digits so replaying the log restores every
 // QUEST staircase bit for bit.

@@ -1,6 +1,6 @@
 #pragma once
 // Revectorization-based shadow mapping (Macedo & Apolinario 2016, "Revectorization-Based Shadow
-// Mapping", GI; summarized in /work/shared/papers/001_*): hard shadows whose texel staircase is
+// Mapping", GI; summarized in their "Efficient Shadow Anti-Aliasing Techniques using Silhouette Revectorization"): hard shadows whose texel staircase is
 // replaced by the line through the steps' risers. The shader (shaders/shadow_rbsm.glsl) exposes
 //   float shadow_rbsm(vec3 sc, vec2 gradient)   revectorized hard visibility, 0 or 1
 // so that screen-space techniques can start from RBSM's hard shadow. Procedure and the choices
