@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.h"
 #include "json/json_input.h"
+#include "text/fingerprint.h"
 
 namespace penumbra::display {
 
@@ -216,15 +217,6 @@ void write_calibration(const std::filesystem::path& path, const DisplayCalibrati
   io::write_file_atomic(path, json_input::dump(to_json(c), 2) + "\n");
 }
 
-std::string fingerprint(const nlohmann::json& calibration_json) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const unsigned char byte : json_input::dump(calibration_json)) {
-    h ^= byte;
-    h *= 1099511628211ull;
-  }
-  char b[17];
-  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(h));
-  return b;
-}
+std::string fingerprint(const nlohmann::json& calibration_json) { return text::fnv1a64_hex(json_input::dump(calibration_json)); }
 
 }  // namespace penumbra::display

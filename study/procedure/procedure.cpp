@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "sampling/random.h"
+#include "text/fingerprint.h"
 #include "text/printable.h"
 
 namespace penumbra::procedure {
@@ -20,12 +21,6 @@ std::string fmt(double v) {
 }  // namespace
 
 namespace {
-// FNV-1a: a participant id to 64 bits, the same on every machine.
-std::uint64_t hash_name(const std::string& name) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
 constexpr std::uint64_t kRoundOrderStream = 0x726f756e645f6f72ull;  // "round_or": apart from the trials' streams
 }  // namespace
 
@@ -43,7 +38,7 @@ Randomization randomize(const StudyConfig& config, const std::string& participan
     r.seed = *explicit_seed;
     r.seed_from = "--seed";
   } else {
-    r.seed = sampling::derive_seed(config.seed, hash_name(participant)) >> 12;  // fits a double and a JSON number exactly
+    r.seed = sampling::derive_seed(config.seed, text::fnv1a64(participant)) >> 12;  // fits a double and a JSON number exactly
     r.seed_from = "participant";
   }
   if (config.round_order == "shuffled") {
