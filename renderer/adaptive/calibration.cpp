@@ -67,15 +67,36 @@ CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::j
   e.condition = field("condition", false);
   const std::string method = field("obtained_by", true);
   const auto m = method_from_name(method);
-  if (!m) fail(path, at + "obtained_by", "expected study, image-observer, simulated or published, got '" + json_input::printable(method) + "'");
+  if (!m)
+    fail(path, at + "obtained_by",
+         "expected study, image-observer, simulated, mixed or published, got '" + json_input::printable(method) + "'");
   e.obtained_by = *m;
   e.participants = static_cast<int>(count(path, j, at, "participants"));
   e.trials = count(path, j, at, "trials");
+  auto names = [&](const char* field) {
+    std::vector<std::string> list;
+    if (!j.contains(field)) return list;
+    const auto& v = j[field];
+    if (!v.is_array() || v.size() > 64) fail(path, at + field, "expected an array of at most 64 names");
+    for (const auto& n : v) {
+      if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > 128)
+        fail(path, at + field, "expected names (strings of 1..128 bytes)");
+      list.push_back(n.get<std::string>());
+    }
+    return list;
+  };
+  e.flags = names("flags");
+  if (j.contains("usable")) {
+    if (!j["usable"].is_boolean()) fail(path, at + "usable", "expected true or false");
+    e.usable = j["usable"].get<bool>();
+  }
+  e.unusable_because = names("unusable_because");
+  if (!e.usable && e.unusable_because.empty()) e.unusable_because.push_back("marked usable: false");
   return e;
 }
 
 std::string describe(const CalibrationEntry& e) {
-  std::string s = e.label() + " entry (" + std::string(method_name(e.obtained_by));
+  std::string s = e.label() + " entry (" + std::string(method_description(e.obtained_by));
   if (e.participants > 0) s += ", " + std::to_string(e.participants) + (e.participants == 1 ? " participant" : " participants");
   return s + ")";
 }
@@ -92,13 +113,38 @@ std::string_view method_name(CalibrationMethod m) {
     case CalibrationMethod::study: return "study";
     case CalibrationMethod::image_observer: return "image-observer";
     case CalibrationMethod::simulated: return "simulated";
+    case CalibrationMethod::mixed: return "mixed";
   }
   return "?";
 }
 
+std::string_view method_description(CalibrationMethod m) {
+  switch (m) {
+    case CalibrationMethod::published: return "published";
+    case CalibrationMethod::study: return "people";
+    case CalibrationMethod::image_observer: return "image observer";
+    case CalibrationMethod::simulated: return "psychometric simulation";
+    case CalibrationMethod::mixed: return "observer kinds pooled";
+  }
+  return "?";
+}
+
+std::string CalibrationChoice::warnings() const {
+  if (!entry) return "";
+  std::string s;
+  auto list = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const std::string& x : v) out += (out.empty() ? "" : ", ") + x;
+    return out;
+  };
+  if (!entry->usable) s = "NOT USABLE: " + list(entry->unusable_because);
+  if (!entry->flags.empty()) s += (s.empty() ? "" : "; ") + std::string("flags: ") + list(entry->flags);
+  return s;
+}
+
 std::optional<CalibrationMethod> method_from_name(std::string_view name) {
   for (CalibrationMethod m : {CalibrationMethod::published, CalibrationMethod::study, CalibrationMethod::image_observer,
-                              CalibrationMethod::simulated})
+                              CalibrationMethod::simulated, CalibrationMethod::mixed})
     if (method_name(m) == name) return m;
   return std::nullopt;
 }

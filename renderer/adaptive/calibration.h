@@ -32,8 +32,11 @@ enum class CalibrationMethod {
   study,           // penumbra-fit on the logs of human participants
   image_observer,  // penumbra-fit on logs answered by the image observer (a model prediction)
   simulated,       // penumbra-fit on logs answered by a psychometric observer with a planted c
+  mixed,           // penumbra-fit --pool-observers: kinds of observer pooled on request
 };
-std::string_view method_name(CalibrationMethod m);
+std::string_view method_name(CalibrationMethod m);  // as calibration.json holds it: study, image-observer, ...
+// In words for a line of output: "people" for study, "psychometric simulation", "image observer", ...
+std::string_view method_description(CalibrationMethod m);
 std::optional<CalibrationMethod> method_from_name(std::string_view name);
 
 struct CalibrationEntry {
@@ -46,6 +49,11 @@ struct CalibrationEntry {
   CalibrationMethod obtained_by = CalibrationMethod::published;
   int participants = 0;  // 0: not stated
   long trials = 0;       // 0: not stated
+  std::vector<std::string> flags;  // what the fitter flagged (one_participant, slope_at_upper_bound, ...)
+  // false: penumbra-fit --allow-unusable wrote a fit it judged unusable (not converged, an open or
+  // infinite interval, an implausible c); `unusable_because` says why. Read, used, and said loudly.
+  bool usable = true;
+  std::vector<std::string> unusable_because;
 
   // "pcf grid", or "pcf" for any kernel.
   std::string label() const { return kernel.empty() ? technique : technique + " " + kernel; }
@@ -60,9 +68,12 @@ struct CalibrationChoice {
   std::optional<CalibrationEntry> entry;
   // True when the entry was measured for another technique or kernel than the one rendered.
   bool fallback = false;
-  // One phrase: "pcf grid entry (study, 5 participants)", "pcf entry (published), not measured for
+  // One phrase: "pcf grid entry (people, 5 participants)", "pcf entry (published), not measured for
   // rpcf", "published PCF value, not measured for vsm".
   std::string from;
+  // What an operator must know before trusting c: "flags: one_participant", "NOT USABLE: not_converged"
+  // ("" when the entry has neither).
+  std::string warnings() const;
 };
 
 struct Calibration {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -159,8 +160,24 @@ inline void apply_calibration(const CLI::App& app, CalibrationOption& calibratio
   apply_calibration_for(calibration, settings);
 }
 
+// The line every renderer app prints before it renders with the adaptive rule: the c it uses for
+// the settings' technique, where it came from, and what the fitter flagged ("c for pcf disk = 3.47
+// texels: pcf disk entry (published) of data/calibration/default.json").
+inline std::string calibration_line(const CalibrationOption& calibration, const shadows::ShadowSettings& settings) {
+  const std::string kernel = shadows::variant_choice(settings);
+  const std::string name = std::string(shadows::to_string(settings.technique)) + (kernel.empty() ? "" : " " + kernel);
+  char c[32];
+  std::snprintf(c, sizeof c, "%.3g", settings.adaptive.c);
+  std::string line = "c for " + name + " = " + c + " texels";
+  if (calibration.ci_upper && !calibration.c_from_command_line) line += " (the upper ci95 bound)";
+  line += ": " + calibration.source_of_c(settings);
+  if (!calibration.c_from_command_line)
+    if (const std::string w = calibration.choice(settings).warnings(); !w.empty()) line += "; " + w;
+  return line;
+}
+
 // The record for report.json: {file, schema_version, technique, kernel, c (as used), ci95, entry,
-// obtained_by, fallback, from, source_of_c}.
+// obtained_by, observers, fallback, from, source_of_c, flags, usable}.
 inline nlohmann::json calibration_json(const CalibrationOption& calibration, const shadows::ShadowSettings& settings) {
   const adaptive::CalibrationChoice chosen = calibration.choice(settings);
   const std::string kernel = shadows::variant_choice(settings);
@@ -172,9 +189,13 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
                       {"ci95", {chosen.ci95_lo, chosen.ci95_hi}},
                       {"entry", chosen.entry ? nlohmann::json(chosen.entry->label()) : nlohmann::json(nullptr)},
                       {"obtained_by", chosen.entry ? std::string(adaptive::method_name(chosen.entry->obtained_by)) : "published"},
+                      {"observers", chosen.entry ? std::string(adaptive::method_description(chosen.entry->obtained_by)) : "published"},
                       {"fallback", chosen.fallback},
                       {"from", chosen.from},
-                      {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"}};
+                      {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"},
+                      {"flags", chosen.entry ? chosen.entry->flags : std::vector<std::string>{}},
+                      {"usable", !chosen.entry || chosen.entry->usable}};
+  if (chosen.entry && !chosen.entry->usable) j["unusable_because"] = chosen.entry->unusable_because;
   return j;
 }
 

@@ -377,6 +377,16 @@ int main(int argc, char** argv) {
     const bool gpu = !ctx.software && timing == "auto";
 
     const std::vector<Variant> variants = make_variants(opt);
+    {
+      // The c each technique's adaptive rows use, where it came from and what the fitter flagged.
+      std::vector<std::string> c_lines;
+      for (const Variant& v : variants)
+        if (const std::string line = apps::calibration_line(opt.calibration, v.settings);
+            std::find(c_lines.begin(), c_lines.end(), line) == c_lines.end()) {
+          c_lines.push_back(line);
+          std::printf("%s\n", line.c_str());
+        }
+    }
     int adaptive_variants = 0;
     for (const auto& v : variants) adaptive_variants += opt.adaptive && has_rule_radius(v);
     const int total_rows = static_cast<int>(scenes.size() * (variants.size() * opt.resolutions.size() + static_cast<std::size_t>(adaptive_variants)));

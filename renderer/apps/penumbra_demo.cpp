@@ -389,7 +389,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     shadows::ShadowSettings s = base;
     s.technique = shadows::technique_from_string(name);
     apps::apply_calibration_for(opt.calibration, s);
-    std::printf("c for %s = %.3g texels: %s\n", name.c_str(), s.adaptive.c, opt.calibration.source_of_c(s).c_str());
+    std::printf("%s\n", apps::calibration_line(opt.calibration, s).c_str());
   }
   const auto& ap = base.adaptive;
   std::printf("adaptive: res = c L / r per cascade, as many cascades as the rule needs; texels no finer than %s at a cascade's near end "
@@ -745,7 +745,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     ImGui::Text("%s | %s | %.1f fps", scene.name.c_str(), window.info().renderer.c_str(), fps);
     ImGui::Checkbox("camera path", &animate);
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
-    ImGui::Text("c = %.3f texels: %s", settings.adaptive.c, opt.calibration.source_of_c(settings).c_str());
+    ImGui::Text("%s", apps::calibration_line(opt.calibration, settings).c_str());
     gui::shadow_settings_panel(settings);
     gui::light_size_control(renderer.scene().light);
     ImGui::Separator();

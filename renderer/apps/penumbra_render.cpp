@@ -153,6 +153,16 @@ int main(int argc, char** argv) {
               << ctx.platform << "); times: median of " << frames << " frames, ms, "
               << (ctx.software ? "wall clock around glFinish (wall_finish)" : "GPU timer queries (gpu_timer); wall_finish in report.json")
               << "\n";
+    // The c of each technique the adaptive rule sizes, where it came from and what the fitter
+    // flagged, before anything is rendered with it.
+    std::vector<std::string> c_lines;
+    for (const auto& v : variants)
+      if (v.settings.adaptive.enabled)
+        if (const std::string line = apps::calibration_line(calibration, v.settings);
+            std::find(c_lines.begin(), c_lines.end(), line) == c_lines.end()) {
+          c_lines.push_back(line);
+          std::cout << line << "\n";
+        }
     // screen: the G-buffer and post passes of the screen-space techniques.
     std::printf("%-12s %6s %10s %10s %10s %10s %10s\n", "technique", "res", "shadow_map", "vsm_blur", "screen", "shading", "total");
     const bool progress = ::isatty(STDERR_FILENO) != 0;  // a progress line only where it can be redrawn

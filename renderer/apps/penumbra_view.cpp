@@ -9,6 +9,7 @@
 #include <imgui.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
   try {
     shadows::ShadowSettings settings;
     apps::apply_calibration(app, calibration, settings);
+    std::printf("%s\n", apps::calibration_line(calibration, settings).c_str());
     apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
     scene::Scene scene = scene::load_scene(scene_arg);
     gl::WindowContext window(width, height, "Penumbra — " + scene.name);
@@ -97,7 +99,7 @@ int main(int argc, char** argv) {
       ImGui::Begin("Penumbra");
       ImGui::PushItemWidth(200);
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
-      ImGui::Text("c = %.3f texels: %s", settings.adaptive.c, calibration.source_of_c(settings).c_str());
+      ImGui::Text("%s", apps::calibration_line(calibration, settings).c_str());
       gui::shadow_settings_panel(settings);
       gui::light_size_control(renderer.scene().light);
       ImGui::Separator();

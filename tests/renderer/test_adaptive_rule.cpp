@@ -184,11 +184,11 @@ TEST_F(CalibrationFile, EachTechniqueGetsItsOwnEntryOrASaidFallback) {
     bool fallback;
     const char* from;
   };
-  for (const Case& k : {Case{"pcf", "poisson", 3.0, false, "pcf poisson entry (study, 5 participants)"},
-                        Case{"pcf", "grid", 2.0, false, "pcf grid entry (image-observer)"},
-                        Case{"vsm", "", 4.0, false, "vsm entry (simulated)"},
-                        Case{"rpcf", "", 0.8, true, "rpcf wide entry (study, 1 participant), not measured for rpcf"},
-                        Case{"msm", "", 3.0, true, "pcf poisson entry (study, 5 participants), not measured for msm"}}) {
+  for (const Case& k : {Case{"pcf", "poisson", 3.0, false, "pcf poisson entry (people, 5 participants)"},
+                        Case{"pcf", "grid", 2.0, false, "pcf grid entry (image observer)"},
+                        Case{"vsm", "", 4.0, false, "vsm entry (psychometric simulation)"},
+                        Case{"rpcf", "", 0.8, true, "rpcf wide entry (people, 1 participant), not measured for rpcf"},
+                        Case{"msm", "", 3.0, true, "pcf poisson entry (people, 5 participants), not measured for msm"}}) {
     SCOPED_TRACE(std::string(k.technique) + " " + k.kernel);
     const CalibrationChoice got = cal.choose(k.technique, k.kernel);
     EXPECT_DOUBLE_EQ(got.c, k.c);

@@ -372,10 +372,10 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
     bool fallback;
     std::string from;
   };
-  for (const Case& c : {Case{{"--technique", "pcf", "--pcf.kernel", "grid"}, "pcf-grid", 2.5, false, "pcf grid entry (study, 3 participants)"},
-                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson"}, "pcf-poisson", 3.25, false, "pcf poisson entry (image-observer)"},
-                        Case{{"--technique", "vsm"}, "vsm", 6.0, false, "vsm entry (simulated)"},
-                        Case{{"--technique", "rpcf"}, "rpcf", 2.5, true, "pcf grid entry (study, 3 participants), not measured for rpcf"}}) {
+  for (const Case& c : {Case{{"--technique", "pcf", "--pcf.kernel", "grid"}, "pcf-grid", 2.5, false, "pcf grid entry (people, 3 participants)"},
+                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson"}, "pcf-poisson", 3.25, false, "pcf poisson entry (image observer)"},
+                        Case{{"--technique", "vsm"}, "vsm", 6.0, false, "vsm entry (psychometric simulation)"},
+                        Case{{"--technique", "rpcf"}, "rpcf", 2.5, true, "pcf grid entry (people, 3 participants), not measured for rpcf"}}) {
     SCOPED_TRACE(c.dir);
     const fs::path out = work_ / ("out-" + c.dir);
     std::vector<std::string> args = c.args;
@@ -391,6 +391,34 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
     EXPECT_EQ(cal.at("schema_version"), 2);
     EXPECT_EQ(read_json(out / "report.json").at("calibration"), cal) << "the summary names the rendered technique's c";
   }
+}
+
+// Issue 26: a render with the adaptive rule says the c it uses, where it came from and what the fitter
+// flagged, before it renders: an entry written with --allow-unusable is named NOT USABLE.
+TEST_F(RenderCli, TheAdaptiveRulesCIsPrintedWithItsFlags) {
+  const fs::path cal_file = scratch_ / "flagged.json";
+  std::ofstream(cal_file) << R"({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "disk", "c": 0.647, "obtained_by": "study", "participants": 1,
+       "flags": ["not_converged", "slope_at_upper_bound", "one_participant"], "usable": false,
+       "unusable_because": ["not_converged", "interval_open"]}]})"
+                          << "\n";
+  const fs::path out = work_ / "out-flagged";
+  const Result r = run_render(small_args({"--technique", "pcf", "--pcf.kernel", "disk", "--adaptive.enabled", "true", "--calibration",
+                                          cal_file.string(), "-o", out.string()}),
+                              scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string line = "c for pcf disk = 0.647 texels: pcf disk entry (people, 1 participant) of " + cal_file.string() +
+                           "; NOT USABLE: not_converged, interval_open; flags: not_converged, slope_at_upper_bound, one_participant";
+  EXPECT_NE(r.out.find(line + "\n"), std::string::npos) << r.out;
+  EXPECT_LT(r.out.find(line), r.out.find("technique ")) << "said before the table of renders";
+  const auto cal = read_json(out / "pcf-disk" / "report.json").at("calibration");
+  EXPECT_EQ(cal.at("usable"), false);
+  EXPECT_EQ(cal.at("observers"), "people");
+  EXPECT_EQ(cal.at("flags").size(), 3u);
+  // Without the adaptive rule c is not used, and not said.
+  const Result fixed = run_render(small_args({"--technique", "pcf", "--calibration", cal_file.string(), "-o", (work_ / "out-fixed").string()}), scratch_);
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.err;
+  EXPECT_EQ(fixed.out.find("c for "), std::string::npos) << fixed.out;
 }
 
 // A bad calibration file is refused before anything is created: one line naming the file and field.
