@@ -4,14 +4,17 @@
     /usr/bin/python3 scripts/plot_fit.py OUT [--units px|arcmin|deg] [--participants p01,p02]
 
 reads OUT/report.json (and, for the visual angles, each input session's session.json) and writes
-into OUT/plots/:
+into OUT/plots/ (pixels) or OUT/plots/arcmin/, OUT/plots/deg/ (--units), so that figures in
+different units sit side by side:
   thresholds.{png,svg}           threshold filter radius vs artifact size per condition: the
                                  per-size thresholds (Wald 95 %), every staircase's threshold, the
                                  fitted r = c a with its 95 % band, the published c = 3.47 and the
                                  reference filter size when the fit was given one; panels share
                                  their axes
   psychometric_<participant>.*   per staircase: binned proportion correct and the fitted curve
-                                 against r / a (shared axes)
+                                 against r / a (shared axes); each staircase's threshold with the
+                                 slope and lapse of its condition (penumbra-fit holds them: a
+                                 staircase's trials sit near its threshold and cannot tell a slope)
   quest_<participant>.*          per condition: the QUEST tracks (trial -> radius shown)
   thresholds.csv                 one row per participant x condition x artifact size (one
                                  staircase): participant, technique, pattern, contrast, artifact_px,
@@ -433,7 +436,7 @@ def main():
         if unknown:
             fail("--participants: not in the report: " + ", ".join(unknown))
         participants = wanted
-    out_dir = os.path.join(args.out, "plots")
+    out_dir = os.path.join(args.out, "plots") if args.units == "px" else os.path.join(args.out, "plots", args.units)
     os.makedirs(out_dir, exist_ok=True)
     plot_thresholds(report, units, out_dir)
     for p in participants:

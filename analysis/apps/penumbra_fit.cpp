@@ -129,6 +129,8 @@ struct StudyOptions {
   bool no_progress = false;
   bool accept_inconsistent = false;
   bool pool = false;
+  bool pool_observers = false;
+  bool allow_unusable = false;
 };
 
 int run_study(const StudyOptions& so, const ModelOptions& mo) {
@@ -165,7 +167,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
     }
   }();
   // Before the fit: sessions of different kernels or observer kinds are refused at once.
-  const CalibrationProvenance provenance = calibration_provenance(data);
+  const CalibrationProvenance provenance = calibration_provenance(data, so.pool_observers);
   const auto start = std::chrono::steady_clock::now();
   const StudyFit fit = [&] {
     ProgressBar bar("bootstrap", !so.no_progress && ::isatty(STDERR_FILENO));
@@ -173,17 +175,25 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
     return fit_study(data, options);
   }();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  calibration_condition(fit, so.condition);  // an unknown --condition fails before anything is written
+  const ConditionFit& chosen = calibration_condition(fit, so.condition);  // an unknown --condition fails before anything is written
 
   std::vector<std::string> inputs;
   for (const fs::path& p : so.inputs) inputs.push_back(p.string());
   const std::string created = utc_now();
   const ReferenceTable* ref = reference ? &*reference : nullptr;
   const nlohmann::json calibration = calibration_json(fit, so.condition, created, inputs, provenance);
-  nlohmann::json report = report_json(fit, ref, inputs, created);
+  nlohmann::json report = report_json(fit, ref, inputs, created, provenance);
   report["fit_seconds"] = seconds;
   report["threads"] = so.threads > 0 ? so.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const std::string summary = summary_text(fit, ref, so.condition);
+  const std::string summary = summary_text(fit, ref, so.condition, provenance);
+  // A fit nobody should use does not become a calibration the renderer reads without a word.
+  if (const std::vector<std::string> why = unusable_because(chosen); !why.empty() && !so.allow_unusable) {
+    std::cout << summary;
+    std::string list;
+    for (const std::string& w : why) list += (list.empty() ? "" : ", ") + w;
+    throw std::runtime_error("the fit of " + chosen.condition + " is not usable as a calibration (" + list +
+                             "); nothing written (the summary above says why; --allow-unusable writes it marked \"usable\": false)");
+  }
   // The three files are one output: staged together and swapped in as a unit, so a failure (a full
   // disk) never leaves a new report beside an old calibration.
   io::StagedDirectory out(so.output.string(), "calibration.json");
@@ -192,8 +202,9 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   io::write_file_atomic(out.path() / "calibration.json", json_input::dump(calibration, 2) + "\n");
   out.commit();
   std::cout << summary;
-  std::printf("calibration.json: entry %s %s (%s, %d participant%s)\n", provenance.technique.c_str(), provenance.kernel.c_str(),
-              provenance.obtained_by.c_str(), provenance.participants, provenance.participants == 1 ? "" : "s");
+  std::printf("calibration.json: entry %s %s (%s, %d participant%s)%s\n", provenance.technique.c_str(), provenance.kernel.c_str(),
+              provenance.observers.c_str(), provenance.participants, provenance.participants == 1 ? "" : "s",
+              unusable_because(chosen).empty() ? "" : ", marked NOT USABLE (--allow-unusable)");
   std::printf("fit took %.2f s; wrote %s/{calibration.json, report.json, summary.txt}\n", seconds,
               so.output.string().c_str());
   std::printf("plots: /usr/bin/python3 %s %s\n", tool::script_file("plot_fit.py").c_str(), fs::absolute(so.output).string().c_str());
@@ -227,6 +238,12 @@ int main(int argc, char** argv) {
   app.add_flag("--pool", so.pool,
                "fit sessions whose setup differs (stimulus size, display geometry, transfer, task, QUEST parameters) "
                "together, listing the differences in report.json and summary.txt; without it such sessions are refused");
+  app.add_flag("--pool-observers", so.pool_observers,
+               "fit sessions answered by different kinds of observer (people, psychometric simulations, the image "
+               "observer) together; the entry says obtained_by \"mixed\" and lists the kinds. Without it they are refused");
+  app.add_flag("--allow-unusable", so.allow_unusable,
+               "write calibration.json even when the chosen condition's fit is not usable (not converged, threshold at a bound, "
+               "open or infinite interval, c outside [0.5, 20]), marked \"usable\": false; without it nothing is written");
   add_model_options(app, study_model);
 
   auto* psychometric = app.add_subcommand("psychometric", "fit one data set and print JSON");

@@ -48,10 +48,8 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
   }
   info.session_id = j["session_id"].get<std::string>();
   info.participant = j["participant"].get<std::string>();
-  if (j.contains("observer")) {
-    if (!j["observer"].is_string()) throw std::runtime_error(file + ": observer: expected a string");
-    info.observer = j["observer"].get<std::string>();
-  }
+  info.observer_kind = procedure::to_string(procedure::observer_kind(j, file));
+  if (j.contains("observer")) info.observer = j["observer"].get<std::string>();  // a string: observer_kind checked it
   if (j.contains("quest")) {
     const auto& q = j["quest"];
     if (!q.is_object()) throw std::runtime_error(file + ": quest: expected an object");
@@ -121,13 +119,13 @@ void check_without_config(const SessionInfo& info, const std::vector<trial_log::
     if (row.staircase != name)
       fail(line, row, "column 'staircase': '" + json_input::printable(row.staircase) + "' where the design names the staircase of artifact_px " +
                           format_number(row.artifact_px) + " '" + name + "'");
-    const auto [it, first] = round_condition.try_emplace(row.round, row.pattern, row.contrast);
+    const auto [it, first] = round_condition.try_emplace(row.condition_index, row.pattern, row.contrast);
     if (!first && (it->second.first != row.pattern || it->second.second != row.contrast))
-      fail(line, row, "column 'pattern': round " + std::to_string(row.round) + " is " +
+      fail(line, row, "column 'pattern': round " + std::to_string(row.condition_index) + " is " +
                           condition_name(it->second.first, it->second.second) + " in earlier rows, " +
                           condition_name(row.pattern, row.contrast) + " here");
     if (!info.quest) continue;
-    auto q = staircases.try_emplace({row.round, row.staircase}, *info.quest, info.quest_dim).first;
+    auto q = staircases.try_emplace({row.condition_index, row.staircase}, *info.quest, info.quest_dim).first;
     // As the procedure updates: not on practice trials, not on yes/no catch (straight) trials.
     if (!row.practice && !(row.task == "yesno" && row.target == "straight"))
       q->second.update(row.intensity, row.correct);

@@ -22,9 +22,10 @@ struct SessionInfo {
   int quest_dim = 0;
   double sd_below = 0.1;                   // the study's convergence criterion (session.json), else 0.1
   bool torn_tail = false;                  // the last line was cut (a trial unanswered when the app died)
-  // session.json's "observer": "" for a person, else the simulated observer's spec
-  // ("psychometric:c=..", "image:..").
-  std::string observer;
+  // Who answered (procedure::ObserverKind as session.json holds it): "person",
+  // "psychometric-simulation" or "image-observer"; "" for a log without a session.json beside it.
+  std::string observer_kind;
+  std::string observer;  // session.json's "observer": a simulated observer's spec ("psychometric:c=..", "image:..")
   // How the session measured, flattened from session.json ("display.viewing_distance_mm" -> "600"):
   // the task, the stimulus block, the display as recorded (geometry, transfer; a measured
   // transfer by its calibration's fingerprint, "display.calibration") and the QUEST parameters.

@@ -73,7 +73,8 @@ std::vector<SimulatedSession> simulate_study(const SimulatedStudy& study) {
         r.session_id = session_id_of(session.participant);
         r.participant = session.participant;
         r.utc_time = "2024-01-01T00:00:00.000Z";
-        r.round = static_cast<int>(round);
+        r.condition_index = static_cast<int>(round);
+        r.round_position = static_cast<int>(round) + 1;  // the simulated study runs its conditions in order
         r.trial = trial++;
         r.staircase = "a" + format_number(a);
         r.pattern = condition.pattern;
@@ -114,6 +115,7 @@ Dataset as_dataset(const SimulatedStudy& study, const std::vector<SimulatedSessi
     info.quest = q.params();
     info.quest_dim = q.dim();
     info.observer = "psychometric:c=" + format_number(s.c_planted);
+    info.observer_kind = "psychometric-simulation";
     const std::size_t index = data.sessions.size();
     data.sessions.push_back(info);
     int line = 1;
@@ -135,6 +137,7 @@ std::vector<fs::path> write_sessions(const SimulatedStudy& study, const std::vec
         {"software", {{"name", "penumbra-fit simulate"}, {"version", "0.1.0"}}},
         {"planted_c", s.c_planted},
         {"observer", "psychometric:c=" + format_number(s.c_planted)},
+        {"observer_kind", "psychometric-simulation"},
         {"quest", {{"t_guess", q.params().t_guess}, {"t_guess_sd", q.params().t_guess_sd},
                    {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta}, {"delta", q.params().delta},
                    {"gamma", q.params().gamma}, {"grain", q.params().grain}, {"dim", q.dim()},

@@ -246,8 +246,9 @@ void data_flags(const ModelSpec& spec, FitResult& out) {
   }
   out.trials = static_cast<int>(n);
   // Perfect separation (one data set): every level above some split all correct, every level
-  // below it at or under the guess rate. A step then fits best and the slope runs to its bound.
-  if (spec.groups.size() == 1) {
+  // below it at or under the guess rate. A step then fits best and a free slope runs to its bound
+  // (with the slope held, the threshold is still found: nothing to flag).
+  if (spec.groups.size() == 1 && !spec.slope.fixed) {
     std::vector<BinomialRow> rows = spec.groups[0].rows;
     std::sort(rows.begin(), rows.end(), [](const BinomialRow& a, const BinomialRow& b) { return a.x < b.x; });
     for (std::size_t split = 1; split < rows.size(); ++split) {

@@ -273,7 +273,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     options.progress(done, total_bootstrap);
   };
 
-  std::map<std::string, double> condition_lambda;
+  std::map<std::string, double> condition_lambda, condition_beta;
   for (const std::string& name : order) {
     const auto& trials = by_condition[name];
     ConditionFit cf;
@@ -326,6 +326,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       if (std::isfinite(profile_width) && boot_width > 1.5 * profile_width) cf.flags.add("participants_differ");
     }
     condition_lambda[name] = cf.linear.params.lambda;
+    condition_beta[name] = std::exp(cf.linear.params.log_beta);
     out.conditions.push_back(std::move(cf));
   }
 
@@ -333,7 +334,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   std::map<std::tuple<std::size_t, int, std::string>, std::vector<const Trial*>> staircases;
   std::vector<std::tuple<std::size_t, int, std::string>> staircase_order;
   for (const Trial& t : data.trials) {
-    const auto key = std::make_tuple(t.session, t.row.round, t.row.staircase);
+    const auto key = std::make_tuple(t.session, t.row.condition_index, t.row.staircase);
     if (!staircases.count(key)) staircase_order.push_back(key);
     staircases[key].push_back(&t);
   }
@@ -347,9 +348,13 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     sf.condition = condition_name(first.pattern, first.contrast);
     sf.staircase = first.staircase;
     sf.artifact_px = first.artifact_px;
-    sf.round = first.round;
+    sf.round = first.condition_index;
     ModelSpec spec = base_spec(options, out.p_threshold, out.guess);
+    // A staircase's 20-40 trials sit near its threshold and cannot tell a slope: free, it ran to
+    // its bound on half of clean simulated staircases (a step function, flagged). The slope and
+    // the lapse are the condition's, so each staircase gives its threshold only.
     spec.lapse.fixed = condition_lambda.at(sf.condition);
+    spec.slope.fixed = condition_beta.at(sf.condition);
     std::vector<BinomialRow> rows;
     for (const Trial* t : trials) {
       if (t->row.artifact_px != first.artifact_px || condition_name(t->row.pattern, t->row.contrast) != sf.condition)

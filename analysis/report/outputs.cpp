@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -100,22 +101,30 @@ const ConditionFit& calibration_condition(const StudyFit& fit, const std::option
   return *worst;
 }
 
-CalibrationProvenance calibration_provenance(const Dataset& data) {
+CalibrationProvenance calibration_provenance(const Dataset& data, bool pool_observers) {
   // The technique that drew a session's stimuli (session.json's config.stimulus.technique); the
   // study's own filter shader (earlier logs) measured PCF's kernels.
   const auto technique_of = [](const SessionInfo& s) -> std::string {
     const auto it = s.setup.find("stimulus.technique");
     return it == s.setup.end() ? "pcf" : it->second;
   };
-  CalibrationProvenance p;
-  auto kind = [](const std::string& observer) -> std::string {
-    if (observer.empty()) return "study";
-    return observer.rfind("image", 0) == 0 ? "image-observer" : "simulated";
+  // session.json's observer_kind -> calibration.json's obtained_by, and in words.
+  const auto method_of = [](const std::string& kind) -> std::string {
+    return kind == "person" ? "study" : kind == "psychometric-simulation" ? "simulated" : "image-observer";
   };
+  const auto words = [](const std::string& kind, int count) -> std::string {
+    if (kind == "person") return count == 1 ? "a person" : "people";
+    return kind == "psychometric-simulation" ? "psychometric simulation" : "image observer";
+  };
+  CalibrationProvenance p;
   std::set<std::string> participants;
+  std::map<std::string, int> sessions_of_kind;
   std::size_t first = data.sessions.size();  // the session p was taken from
   for (const Trial& t : data.trials) {
     const SessionInfo& s = data.sessions[t.session];
+    if (s.observer_kind.empty())
+      throw std::runtime_error(s.log_file + ": no session.json beside it: who answered (a person, a psychometric simulation or the "
+                                            "image observer) is not recorded; fit the session directory");
     if (first == data.sessions.size()) {
       first = t.session;
       p.kernel = t.row.kernel;
@@ -125,7 +134,7 @@ CalibrationProvenance calibration_provenance(const Dataset& data) {
         const auto kernel = s.setup.find("stimulus.settings." + it->second + ".kernel");
         p.kernel = kernel == s.setup.end() ? "" : kernel->second;
       }
-      p.obtained_by = kind(s.observer);
+      p.obtained_by = method_of(s.observer_kind);
       p.technique = technique_of(s);
     }
     const SessionInfo& f = data.sessions[first];
@@ -135,15 +144,38 @@ CalibrationProvenance calibration_provenance(const Dataset& data) {
     if (t.row.kernel != data.trials[0].row.kernel)
       throw std::runtime_error(s.log_file + ": kernel '" + t.row.kernel + "' where " + f.log_file + " has '" + data.trials[0].row.kernel +
                                "': a c per kernel needs one fit per kernel (fit the sessions of each kernel separately)");
-    if (kind(s.observer) != p.obtained_by)
-      throw std::runtime_error(s.log_file + ": answered by " + (s.observer.empty() ? "a person" : "observer '" + s.observer + "'") +
-                               " where " + f.log_file + " was answered by " +
-                               (f.observer.empty() ? "a person" : "observer '" + f.observer + "'") +
-                               ": people and simulated observers are not pooled (fit them separately)");
+    if (s.observer_kind != f.observer_kind && !pool_observers)
+      throw std::runtime_error(s.log_file + ": answered by " + words(s.observer_kind, 1) + " (session.json observer_kind) where " +
+                               f.log_file + " was answered by " + words(f.observer_kind, 1) +
+                               ": people and simulated observers are not pooled (fit them separately, or --pool-observers)");
     participants.insert(s.participant);
   }
+  for (const SessionInfo& s : data.sessions) ++sessions_of_kind[s.observer_kind];
   p.participants = static_cast<int>(participants.size());
+  p.observers = words(data.sessions[first].observer_kind, p.participants);
+  if (sessions_of_kind.size() > 1) {
+    p.obtained_by = "mixed";
+    p.observers.clear();
+    for (const auto& [kind, n] : sessions_of_kind) {
+      p.pooled_kinds.push_back(kind + " (" + std::to_string(n) + (n == 1 ? " session)" : " sessions)"));
+      p.observers += (p.observers.empty() ? "" : " + ") + words(kind, n);
+    }
+    p.observers = "pooled: " + p.observers;
+  }
   return p;
+}
+
+std::vector<std::string> unusable_because(const ConditionFit& c) {
+  std::vector<std::string> why;
+  for (const char* flag : {"not_converged", "threshold_at_bound", "slope_at_upper_bound", "interval_open"})
+    if (c.flags.has(flag)) why.push_back(flag);
+  if (!(std::isfinite(c.c_profile.lo) && std::isfinite(c.c_profile.hi) && c.c_profile.lo > 0)) why.push_back("interval_not_finite");
+  if (!(c.c >= kPlausibleCMin && c.c <= kPlausibleCMax)) {
+    char b[96];
+    std::snprintf(b, sizeof b, "c_outside_%g_%g", kPlausibleCMin, kPlausibleCMax);
+    why.push_back(b);
+  }
+  return why;
 }
 
 Json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition, const std::string& created_utc,
@@ -167,21 +199,29 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
          << " trials from " << fit.sessions << " sessions; ci95 by profile likelihood; "
          << (condition ? "condition chosen by --condition" : "the condition with the largest c (worst case)")
          << "; inputs: " << join(inputs, " ");
-  const Json entry = {{"technique", provenance.technique},
-                      {"kernel", provenance.kernel},
-                      {"c", number(chosen.c)},
-                      {"ci95", {number(std::min(chosen.c_profile.lo, chosen.c)), number(std::max(chosen.c_profile.hi, chosen.c))}},
-                      {"condition", chosen.condition},
-                      {"obtained_by", provenance.obtained_by},
-                      {"participants", provenance.participants},
-                      {"trials", fit.trials},
-                      {"per_condition", per},
-                      {"flags", chosen.flags.list}};
+  Json entry = {{"technique", provenance.technique},
+                {"kernel", provenance.kernel},
+                {"c", number(chosen.c)},
+                {"condition", chosen.condition},
+                {"obtained_by", provenance.obtained_by},
+                {"observers", provenance.observers},
+                {"participants", provenance.participants},
+                {"trials", fit.trials},
+                {"per_condition", per},
+                {"flags", chosen.flags.list}};
+  // An interval that is not finite is left out (the renderer reads a present one as numbers).
+  if (std::isfinite(chosen.c_profile.lo) && std::isfinite(chosen.c_profile.hi) && chosen.c_profile.lo > 0)
+    entry["ci95"] = {std::min(chosen.c_profile.lo, chosen.c), std::max(chosen.c_profile.hi, chosen.c)};
+  if (!provenance.pooled_kinds.empty()) entry["pooled_observer_kinds"] = provenance.pooled_kinds;
+  if (const std::vector<std::string> why = unusable_because(chosen); !why.empty()) {
+    entry["usable"] = false;
+    entry["unusable_because"] = why;
+  }
   return {{"schema_version", 2}, {"created_utc", created_utc}, {"source", source.str()}, {"entries", Json::array({entry})}};
 }
 
 Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std::vector<std::string>& inputs,
-                 const std::string& created_utc) {
+                 const std::string& created_utc, const CalibrationProvenance& provenance) {
   Json conditions = Json::array();
   for (const ConditionFit& c : fit.conditions) {
     Json sizes = Json::array();
@@ -310,6 +350,10 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                        {"pool", fit.options.pool}}},
           {"inconsistent_logs", inconsistent},
           {"pooled_differences", fit.pooled_differences},
+          {"observers", {{"obtained_by", provenance.obtained_by},
+                         {"in_words", provenance.observers},
+                         {"participants", provenance.participants},
+                         {"pooled_kinds", provenance.pooled_kinds}}},
           {"sessions", fit.sessions},
           {"trials", fit.trials},
           {"practice_rows_excluded", fit.practice_rows_excluded},
@@ -321,13 +365,19 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
 }
 
 std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
-                         const std::optional<std::string>& wanted) {
+                         const std::optional<std::string>& wanted, const CalibrationProvenance& provenance) {
   std::ostringstream o;
   o << "penumbra-fit: " << fit.trials << " trials (" << fit.practice_rows_excluded << " practice rows excluded) from "
-    << fit.sessions << " sessions; " << psychometric::model_name(fit.options.family) << ", threshold at "
+    << fit.sessions << " sessions answered by " << provenance.observers << " (" << provenance.participants
+    << (provenance.participants == 1 ? " participant" : " participants") << "); " << psychometric::model_name(fit.options.family) << ", threshold at "
     << fit.p_threshold << " correct, guess " << fit.guess << ", lapse "
     << (fit.options.lapse.fixed ? "fixed " + fmt("%g", *fit.options.lapse.fixed) : "in [0, " + fmt("%g", fit.options.lapse.max) + "]")
     << "\n";
+  if (!provenance.pooled_kinds.empty()) {
+    o << "OBSERVER KINDS POOLED (--pool-observers):";
+    for (const std::string& k : provenance.pooled_kinds) o << " " << k;
+    o << "\n";
+  }
   if (!fit.pooled_differences.empty()) {
     o << "SESSIONS POOLED ALTHOUGH MEASURED DIFFERENTLY (--pool): " << fit.pooled_differences.size() << " field(s)\n";
     for (const std::string& d : fit.pooled_differences) o << "  " << d << "\n";
@@ -406,7 +456,12 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
   const ConditionFit& chosen = calibration_condition(fit, wanted);
   o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.c_profile.lo) << ", "
     << fmt("%.3f", chosen.c_profile.hi) << "] from " << chosen.condition
-    << (wanted ? " (--condition)" : " (largest c)") << "; published c = " << fmt("%g", kPublishedC) << "\n";
+    << (wanted ? " (--condition)" : " (largest c)") << ", " << provenance.observers << "; published c = " << fmt("%g", kPublishedC)
+    << "\n";
+  if (const std::vector<std::string> why = unusable_because(chosen); !why.empty())
+    o << "NOT USABLE as a calibration: " << join(why, ", ") << " (c is trusted in [" << fmt("%g", kPlausibleCMin) << ", "
+      << fmt("%g", kPlausibleCMax) << "] from a converged fit with a closed interval); penumbra-fit writes it only with "
+         "--allow-unusable, marked \"usable\": false\n";
   return o.str();
 }
 

@@ -48,7 +48,11 @@ int CalibrateDisplayCommand::run() const {
     throw std::invalid_argument("--luminances: the readings are in the file; --levels, --monitor and --windowed are for the window");
   display::DisplayCalibration calibration;
   if (!luminances_.empty()) {
-    calibration = display::fit_readings(display::read_readings_csv(luminances_), model);
+    const std::vector<display::Reading> readings = display::read_readings_csv(luminances_);
+    for (const display::Reading& r : readings)  // the window asks about these; a file can only be warned about
+      if (const std::string odd = display::implausible_reading(r.level, r.luminance_cd_m2); !odd.empty())
+        std::cerr << "penumbra-study: warning: " << luminances_.string() << ": " << odd << "\n";
+    calibration = display::fit_readings(readings, model);
     calibration.source = "photometer readings from " + fs::absolute(luminances_).lexically_normal().string();
   } else {
 #ifdef PENUMBRA_STUDY_GUI
@@ -60,7 +64,7 @@ int CalibrateDisplayCommand::run() const {
       calibration.source = "checkerboard match in the window";
       calibration.monitor = match->monitor;
     } else {
-      const auto measured = study_gui::measure_levels(display::calibration_levels(levels_), screen);
+      const auto measured = study_gui::measure_levels(display::calibration_levels(levels_), model, screen);
       if (!measured) throw std::runtime_error("calibrate-display: stopped before every level was read; nothing written");
       calibration = display::fit_readings(measured->readings, model);
       calibration.source = "photometer readings typed in the window";
@@ -70,6 +74,11 @@ int CalibrateDisplayCommand::run() const {
     throw std::runtime_error("calibrate-display: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); give --luminances FILE.csv");
 #endif
   }
+  if (calibration.method == "photometer")
+    if (const std::string odd = display::check_fitted_levels(*calibration.black_cd_m2, *calibration.white_cd_m2,
+                                                              calibration.model == display::Model::gamma ? "the gamma model's" : "the table's");
+        !odd.empty())
+      std::cerr << "penumbra-study: warning: " << odd << "\n";
   calibration.created_utc = procedure::utc_now();
   display::write_calibration(output_, calibration);
   if (calibration.method == "photometer")

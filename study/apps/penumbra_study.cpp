@@ -117,8 +117,8 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   return 0;
 }
 
-// "name:k=v,k=v" -> {k, v}.
-std::vector<std::pair<std::string, double>> parse_key_values(const std::string& spec) {
+// "name:k=v,k=v" -> {k, v}; a key given twice is refused (the last would silently win).
+std::vector<std::pair<std::string, double>> parse_key_values(const std::string& spec, const std::string& where) {
   std::vector<std::pair<std::string, double>> out;
   const std::string body = spec.substr(spec.find(':') == std::string::npos ? spec.size() : spec.find(':') + 1);
   std::size_t pos = 0;
@@ -126,7 +126,7 @@ std::vector<std::pair<std::string, double>> parse_key_values(const std::string& 
     const std::size_t comma = body.find(',', pos);
     const std::string kv = body.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     const std::size_t eq = kv.find('=');
-    if (eq == std::string::npos) throw std::invalid_argument("--observer: '" + json_input::printable(kv) + "': expected key=value");
+    if (eq == std::string::npos) throw std::invalid_argument(where + ": '" + json_input::printable(kv) + "': expected key=value");
     const std::string value = kv.substr(eq + 1);
     std::size_t used = 0;
     double v = NAN;
@@ -135,7 +135,9 @@ std::vector<std::pair<std::string, double>> parse_key_values(const std::string& 
     } catch (const std::exception&) {
     }
     if (used != value.size() || !std::isfinite(v))
-      throw std::invalid_argument("--observer: '" + json_input::printable(kv) + "': expected a finite number");
+      throw std::invalid_argument(where + ": '" + json_input::printable(kv) + "': expected a finite number");
+    for (const auto& [k, _] : out)
+      if (k == kv.substr(0, eq)) throw std::invalid_argument(where + ": " + json_input::printable(k) + " given twice");
     out.emplace_back(kv.substr(0, eq), v);
     if (comma == std::string::npos) break;
     pos = comma + 1;
@@ -162,15 +164,15 @@ std::optional<std::string> take_key(std::string& spec, const std::string& key) {
 }
 
 // "psychometric:c=3.0,beta=3.5,lapse=0.02" -> the planted model (same for every condition).
-observers::PlantedModel parse_psychometric(const std::string& spec) {
+observers::PlantedModel parse_psychometric(const std::string& spec, const std::string& where) {
   observers::PlantedModel m;
   m.slope = 3.5;
-  for (const auto& [k, v] : parse_key_values(spec)) {
+  for (const auto& [k, v] : parse_key_values(spec, where)) {
     if (k == "c") m.c_true = v;
     else if (k == "beta") m.slope = v;
     else if (k == "lapse") m.lapse = v;
     else if (k == "p_threshold") m.p_threshold = v;
-    else throw std::invalid_argument("--observer: unknown parameter '" + json_input::printable(k) + "' (c, beta, lapse, p_threshold)");
+    else throw std::invalid_argument(where + ": unknown parameter '" + json_input::printable(k) + "' (c, beta, lapse, p_threshold)");
   }
   return m;
 }
@@ -185,12 +187,13 @@ struct ObserverSetup {
   observers::ImageObserverParams image_params;
 };
 
-ObserverSetup parse_observer(const std::string& given, const procedure::StudyConfig& config) {
+// `where` names the source in errors: "--observer", or "<session.json>: observer" on a resume.
+ObserverSetup parse_observer(const std::string& given, const procedure::StudyConfig& config, const std::string& where = "--observer") {
   ObserverSetup setup;
   setup.spec = given;
   setup.image = given.rfind("image", 0) == 0;
   if (!setup.image && given.rfind("psychometric", 0) != 0)
-    throw std::invalid_argument("--observer '" + json_input::printable(given) +
+    throw std::invalid_argument(where + " '" + json_input::printable(given) +
                                 "': expected psychometric:c=..,beta=..,lapse=.. or image:noise=..,blur_arcmin=..");
   const bool yesno = config.task == "yesno";
   std::string observer_spec = given;
@@ -201,7 +204,7 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
       setup.false_alarm = -1;
     }
     if (!(setup.false_alarm > 0 && setup.false_alarm < 0.5))
-      throw std::invalid_argument("--observer: fa: expected a rate in (0, 0.5)");
+      throw std::invalid_argument(where + ": fa: expected a rate in (0, 0.5)");
   }
   if (setup.image) {
     auto& p = setup.image_params;
@@ -209,25 +212,25 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
     p.false_alarm = setup.false_alarm;
     if (const auto criterion = take_key(observer_spec, "criterion")) {
       if (*criterion != "local" && *criterion != "global")
-        throw std::invalid_argument("--observer: criterion: expected local or global");
+        throw std::invalid_argument(where + ": criterion: expected local or global");
       p.criterion = *criterion == "local" ? observers::StraightnessCriterion::local : observers::StraightnessCriterion::global;
     }
-    for (const auto& [k, v] : parse_key_values(observer_spec)) {
+    for (const auto& [k, v] : parse_key_values(observer_spec, where)) {
       const bool positive = k == "ppd" || k == "weber" || k == "window";
       if (positive ? !(v > 0) : !(v >= 0))
-        throw std::invalid_argument("--observer: " + k + ": expected a number " + (positive ? "> 0" : ">= 0"));
+        throw std::invalid_argument(where + ": " + k + ": expected a number " + (positive ? "> 0" : ">= 0"));
       if (k == "noise") p.noise_sd = v;
       else if (k == "blur_arcmin") p.blur_sigma_arcmin = v;
       else if (k == "ppd") p.pixels_per_degree = v;
       else if (k == "weber") p.weber = v;
       else if (k == "window") p.window_r = v;
-      else throw std::invalid_argument("--observer: unknown image parameter '" + json_input::printable(k) +
+      else throw std::invalid_argument(where + ": unknown image parameter '" + json_input::printable(k) +
                                        "' (noise, blur_arcmin, ppd, weber, window, fa, criterion=global)");
     }
     return setup;
   }
   observers::PlantedModel& model = setup.model;
-  model = parse_psychometric(observer_spec);
+  model = parse_psychometric(observer_spec, where);
   if (yesno) {
     // The same detection function F as in 2afc (threshold where F reaches the 2afc F*), with
     // hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa.
@@ -236,13 +239,13 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
     model.p_threshold = setup.false_alarm + (1 - setup.false_alarm - model.lapse) * f_star;
   }
   if (!(model.lapse >= 0 && model.lapse < 1 - model.guess))
-    throw std::invalid_argument("--observer: lapse: expected a rate in [0, 1 - guess)");
+    throw std::invalid_argument(where + ": lapse: expected a rate in [0, 1 - guess)");
   try {
     observers::PsychometricObserver probe({{"any", model}}, 0);
   } catch (const std::invalid_argument& e) {
     std::string what = e.what();
     if (const auto colon = what.rfind("': "); colon != std::string::npos) what = what.substr(colon + 3);
-    throw std::invalid_argument("--observer: " + what);
+    throw std::invalid_argument(where + ": " + what);
   }
   return setup;
 }
@@ -259,6 +262,7 @@ struct RunOptions {
   std::uint64_t seed = 0;  // --seed: the session's seed instead of the one derived from the participant id
   // Which options the command line gave (a resumed session takes the rest from session.json).
   bool participant_given = false, observer_given = false, observer_seed_given = false, seed_given = false;
+  std::function<bool(const std::string&)> gui_given;  // whether the command line gave a window option
 #ifdef PENUMBRA_STUDY_GUI
   study_gui::GuiOptions gui;
 #endif
@@ -302,22 +306,25 @@ void check_stimulus_technique(const procedure::StudyConfig& config, const fs::pa
   throw std::runtime_error(file.string() + ": stimulus." + (problem.rfind("technique: ", 0) == 0 ? "" : "settings.") + problem);
 }
 
-procedure::Session open_session(const RunOptions& o, const std::string& observer,
-                                const std::function<void(const nlohmann::json&, const procedure::StudyConfig&)>& accept = {}) {
-  if (!o.resume.empty())
-    return procedure::Session::resume(o.resume, [&](const nlohmann::json& session, const procedure::StudyConfig& config) {
-      check_resume_options(o, session);
-      if (accept) accept(session, config);
-    });
+// A new session's config, checked in full before any directory exists.
+procedure::StudyConfig new_session_config(const RunOptions& o) {
   if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
   procedure::StudyConfig config = procedure::load_config(o.config);
   if (!o.display_calibration.empty()) procedure::load_display_calibration(config, o.display_calibration);
   check_stimulus_technique(config, o.config);
-  nlohmann::json extra = {{"observer", observer}, {"config_file", o.config.string()}};
-  if (accept) {
-    accept(extra, config);
-    extra["observer_seed"] = o.observer_seed;
-  }
+  return config;
+}
+
+// A resumed session (`accept` may refuse it before anything is written) or a new one of `config`
+// in o.output; `extra` goes into the new session.json (who answers: observer_kind, observer, ...).
+procedure::Session open_session(const RunOptions& o, const std::function<void(const procedure::Session&)>& accept) {
+  return procedure::Session::resume(o.resume, [&](const procedure::Session& s) {
+    check_resume_options(o, s.session_json());
+    if (accept) accept(s);
+  });
+}
+procedure::Session create_session(const RunOptions& o, const procedure::StudyConfig& config, nlohmann::json extra) {
+  extra["config_file"] = o.config.string();
   return procedure::Session::create(config, o.output, o.participant, extra,
                                     o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt);
 }
@@ -356,37 +363,47 @@ std::string intake_problem(const fs::path& root, const procedure::StudyConfig& c
 
 // A participant session in the windows (study/gui); the same Session, so the same log. Without
 // --participant (a new session), the intake screen asks for the id and -o is the folder of sessions.
-int run_participant(const RunOptions& o) {
+// Consent, when the config has a text for it, is asked before the session is created either way.
+int run_participant(RunOptions o) {
 #ifdef PENUMBRA_STUDY_GUI
-  const std::optional<std::uint64_t> seed = o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt;
-  if (o.resume.empty() && !o.participant_given) {
-    if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
-    study_gui::Intake intake;
-    intake.config = procedure::load_config(o.config);
-    check_stimulus_technique(intake.config, o.config);
-    intake.problem = [root = o.output, config = intake.config, seed](const std::string& id) {
-      return intake_problem(root, config, id, seed);
+  study_gui::SessionStart start;
+  if (!o.resume.empty()) {
+    // The session's own presentation options (window, admin panel, refresh rate), unless given
+    // again: `--resume DIR` alone shows it as it was shown. Read-only here; the resume checks the rest.
+    const fs::path json = o.resume / "session.json";
+    if (fs::is_regular_file(json)) {
+      const nlohmann::json recorded = json_input::read_file(json, {.max_bytes = 1 << 20, .max_depth = 8});
+      if (recorded.is_object() && recorded.contains("presentation_options"))
+        study_gui::reuse_presentation_options(o.gui, recorded["presentation_options"], o.gui_given, json.string());
+    }
+    start.resume = [&](const std::function<void(const procedure::Session&)>& accept) {
+      return open_session(o, [&](const procedure::Session& s) {
+        // A person may not answer a simulated session's trials (a finished one may be looked at).
+        const procedure::ObserverKind kind = procedure::observer_kind(s.session_json(), (s.dir() / "session.json").string());
+        if (kind != procedure::ObserverKind::person && s.next())
+          throw std::invalid_argument(std::string("--resume: the session was answered by a ") + procedure::describe(kind) +
+                                      "; continue it with --headless");
+        accept(s);
+      });
     };
-    return study_gui::run_session(
-        [&](const std::function<void(const procedure::StudyConfig&)>& check, const std::string& participant) {
-          RunOptions typed = o;
-          typed.participant = participant;
-          typed.output = o.output / participant;
-          const procedure::StudyConfig config = procedure::load_config(o.config);
-          check(config);
-          return open_session(typed, "participant");
-        },
-        o.gui, intake);
+    return study_gui::run_session(start, o.gui);
   }
-  return study_gui::run_session(
-      [&](const std::function<void(const procedure::StudyConfig&)>& check, const std::string&) {
-        if (o.resume.empty()) {
-          if (!o.config.empty()) check(procedure::load_config(o.config));  // before the directory exists
-          return open_session(o, "participant");
-        }
-        return open_session(o, "participant", [&](const nlohmann::json&, const procedure::StudyConfig& c) { check(c); });
-      },
-      o.gui);
+  start.config = new_session_config(o);
+  start.intake = !o.participant_given;
+  start.participant = o.participant_given ? o.participant : "";
+  const std::optional<std::uint64_t> seed = o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt;
+  if (start.intake)
+    start.id_problem = [root = o.output, config = start.config, seed](const std::string& id) { return intake_problem(root, config, id, seed); };
+  start.create = [&](const std::string& participant, const nlohmann::json& consent) {
+    RunOptions typed = o;
+    typed.participant = participant;
+    if (start.intake) typed.output = o.output / participant;
+    nlohmann::json extra = {{"observer_kind", procedure::to_string(procedure::ObserverKind::person)},
+                            {"presentation_options", study_gui::presentation_options(o.gui)}};
+    if (!consent.is_null()) extra["consent"] = consent;
+    return create_session(typed, start.config, extra);
+  };
+  return study_gui::run_session(start, o.gui);
 #else
   (void)o;
   throw std::runtime_error("run: this binary was built without the GUI (PENUMBRA_BUILD_GUI=OFF); only --headless runs");
@@ -397,12 +414,15 @@ int run_study(const RunOptions& o) {
   if (!o.headless) return run_participant(o);
   ObserverSetup setup;
   std::uint64_t observer_seed = o.observer_seed;
-  procedure::Session session = open_session(o, o.observer, [&](const nlohmann::json& session_json, const procedure::StudyConfig& config) {
-    std::string spec = o.observer;
-    if (!o.resume.empty()) {
+  std::optional<procedure::Session> opened;
+  if (!o.resume.empty()) {
+    opened.emplace(open_session(o, [&](const procedure::Session& s) {
+      const nlohmann::json& session_json = s.session_json();
+      const std::string file = (s.dir() / "session.json").string();
+      if (procedure::observer_kind(session_json, file) == procedure::ObserverKind::person)
+        throw std::invalid_argument("--headless: the session was answered by a person; resume it without --headless");
+      std::string spec = o.observer;
       const std::string recorded = session_json.value("observer", std::string());
-      if (recorded == "participant")
-        throw std::invalid_argument("--headless: the session was run by a participant; resume it without --headless");
       if (!recorded.empty()) {
         if (o.observer_given && o.observer != recorded)
           throw std::invalid_argument("--observer '" + json_input::printable(o.observer) + "': the session was run with '" +
@@ -416,9 +436,17 @@ int run_study(const RunOptions& o) {
                                       std::to_string(seed) + " (session.json)");
         observer_seed = seed;
       }
-    }
-    setup = parse_observer(spec, config);
-  });
+      setup = parse_observer(spec, s.config(), o.observer_given || recorded.empty() ? "--observer" : file + ": observer");
+    }));
+  } else {
+    const procedure::StudyConfig config = new_session_config(o);
+    setup = parse_observer(o.observer, config);
+    opened.emplace(create_session(o, config,
+                                  {{"observer", o.observer},
+                                   {"observer_kind", procedure::to_string(procedure::observer_kind_of_spec(o.observer))},
+                                   {"observer_seed", o.observer_seed}}));
+  }
+  procedure::Session& session = *opened;
   const bool yesno = session.config().task == "yesno";
   const bool image_observer = setup.image;
   const double false_alarm = setup.false_alarm;
@@ -531,7 +559,11 @@ int main(int argc, char** argv) {
                   "the session goes into as <folder>/<participant id>")
       ->check(cli::path_given());
   run->add_option("--resume", ro.resume, "continue the session in this directory")->check(cli::path_given());
-  run->add_option("--observer", ro.observer, "psychometric:c=..,beta=..,lapse=..")->capture_default_str();
+  run->add_option("--observer", ro.observer,
+                  "headless: the simulated observer, psychometric:c=..,beta=..,lapse=..[,p_threshold=..][,fa=..] (a planted "
+                  "psychometric function) or image:noise=..,blur_arcmin=..[,ppd=..,weber=..,window=..,fa=..,criterion=global] "
+                  "(the image observer, a model that looks at the stimuli)")
+      ->capture_default_str();
   run->add_option("--observer-seed", ro.observer_seed, "seed of the simulated observer")
       ->capture_default_str()
       ->check(cli::non_negative_integer());
@@ -571,6 +603,7 @@ int main(int argc, char** argv) {
     ro.observer_given = run->count("--observer") > 0;
     ro.observer_seed_given = run->count("--observer-seed") > 0;
     ro.seed_given = run->count("--seed") > 0;
+    ro.gui_given = [run](const std::string& name) { return run->count(name) > 0; };
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
     return cli::fail("penumbra-study", e.what());

@@ -29,7 +29,56 @@ std::string trim(const std::string& s) {
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
 }
 
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
 }  // namespace
+
+double parse_luminance(const std::string& text_in) {
+  const std::string t = trim(text_in);
+  const std::string quoted = "'" + text::printable(t) + "'";
+  if (t.empty()) throw std::invalid_argument("no reading typed: a luminance in cd/m2, e.g. 85.2");
+  // A decimal comma is the most likely slip of a European keyboard: never dropped, never guessed.
+  if (t.find(',') != std::string::npos && t.find_first_not_of("0123456789,") == std::string::npos)
+    throw std::invalid_argument(quoted + ": a decimal comma; type a point (" + [&] {
+      std::string p = t;
+      std::replace(p.begin(), p.end(), ',', '.');
+      return p;
+    }() + ")");
+  char* end = nullptr;
+  const double v = std::strtod(t.c_str(), &end);
+  if (end != t.c_str() + t.size() || !std::isfinite(v) || t.find_first_of("xXpPnNiI") != std::string::npos)
+    throw std::invalid_argument(quoted + " is not a number");
+  if (!(v >= 0 && v <= 1e5)) throw std::invalid_argument(quoted + " is not a luminance in [0, 100000] cd/m2");
+  return v;
+}
+
+std::string implausible_reading(int level, double l) {
+  if (level == 0 && l > kPlausibleBlackMaxCdM2)
+    return "black (level 0) at " + fmt(l) + " cd/m2 is above any monitor's black (0.." + fmt(kPlausibleBlackMaxCdM2) +
+           "): is the room lit, or the photometer off the screen?";
+  if (level == 255 && (l < kPlausibleWhiteMinCdM2 || l > kPlausibleWhiteMaxCdM2))
+    return "white (level 255) at " + fmt(l) + " cd/m2 is outside the range of monitors (" + fmt(kPlausibleWhiteMinCdM2) + ".." +
+           fmt(kPlausibleWhiteMaxCdM2) + " cd/m2): a typing slip, or another unit?";
+  if (l > kPlausibleWhiteMaxCdM2)
+    return "level " + std::to_string(level) + " at " + fmt(l) + " cd/m2 is brighter than any monitor's white (" +
+           fmt(kPlausibleWhiteMaxCdM2) + " cd/m2): a typing slip?";
+  return "";
+}
+
+std::string check_fitted_levels(double black, double white, const std::string& what) {
+  if (!(black >= 0))
+    throw std::invalid_argument(what + " black level is " + fmt(black) +
+                                " cd/m2, below 0: the readings do not follow the model near black (measure level 0 and the "
+                                "darkest levels again, or use --model table)");
+  if (!(white > black)) throw std::invalid_argument(what + " white level " + fmt(white) + " cd/m2 is not above its black " + fmt(black));
+  std::string warning = implausible_reading(0, black);
+  if (warning.empty()) warning = implausible_reading(255, white);
+  return warning.empty() ? "" : what + " " + warning;
+}
 
 std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
   const std::string file = path.string();
@@ -65,12 +114,12 @@ std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
       throw std::runtime_error(where + "column 'level': '" + text::printable(lv) + "' is not an 8-bit level (an integer 0..255)");
     const int level = std::stoi(lv);
     const std::string& lum = fields[1];
-    char* end = nullptr;
-    const double luminance = lum.empty() ? NAN : std::strtod(lum.c_str(), &end);
-    if (lum.empty() || end != lum.c_str() + lum.size() || !std::isfinite(luminance))
-      throw std::runtime_error(where + "column 'luminance_cd_m2': '" + text::printable(lum) + "' is not a number");
-    if (!(luminance >= 0 && luminance <= 1e5))
-      throw std::runtime_error(where + "column 'luminance_cd_m2': " + lum + " is not a luminance in [0, 100000] cd/m2");
+    double luminance = 0;
+    try {
+      luminance = parse_luminance(lum);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(where + "column 'luminance_cd_m2': " + e.what());
+    }
     const auto [it, fresh] = by_level.try_emplace(level, luminance, number);
     if (!fresh)
       throw std::runtime_error(where + "column 'level': " + lv + " was read already on line " + std::to_string(it->second.second));
@@ -143,6 +192,14 @@ DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
     double residual = 0;
     GammaResidual{r.level / 255.0, r.luminance_cd_m2}(&black, &white, &gamma, &residual);
     sum += residual * residual;
+  }
+  // The table is the readings themselves: its black and white are what was measured. The gamma
+  // model's come from the fit, and a fit below 0 is no monitor.
+  if (model == Model::table) {
+    black = readings.front().luminance_cd_m2;
+    white = readings.back().luminance_cd_m2;
+  } else {
+    (void)check_fitted_levels(black, white, "the gamma model's");
   }
   DisplayCalibration c;
   c.model = model;

@@ -14,6 +14,21 @@ namespace penumbra::display {
 // 9 -> 0, 32, 64, ..., 223, 255. Throws std::invalid_argument outside [kMinReadings, 256].
 std::vector<int> calibration_levels(int count);
 
+// Luminances a monitor can have. Any desktop or lab monitor's black lies in [0, 5] cd/m² and its
+// white in [20, 2000] cd/m² (HDR peaks aside); a value outside is asked about (the window) or warned
+// about (a CSV), not refused: a bright projector or a dim laptop can be real.
+inline constexpr double kPlausibleBlackMaxCdM2 = 5, kPlausibleWhiteMinCdM2 = 20, kPlausibleWhiteMaxCdM2 = 2000;
+// A photometer reading as text (typed in the window, or a CSV field): a plain number with a decimal
+// point, >= 0 and at most 100000 cd/m². Throws std::invalid_argument saying what is wrong, e.g.
+// "'8,1': a decimal comma; type a point (8.1)".
+double parse_luminance(const std::string& text);
+// What is implausible about a reading of `level` (black over 5 cd/m², white outside [20, 2000]),
+// "" if nothing.
+std::string implausible_reading(int level, double luminance_cd_m2);
+// The same for a fitted model's black and white levels (`what`: "the gamma model's"); throws
+// std::invalid_argument for an impossible one (black below 0, white not above black).
+std::string check_fitted_levels(double black_cd_m2, double white_cd_m2, const std::string& what);
+
 // A CSV of photometer readings: the header `level,luminance_cd_m2`, then one row per level
 // (an integer 0..255, a luminance >= 0 in cd/m²), in any order. Throws std::runtime_error, one
 // line naming the file, the line and the column ("r.csv:4: column 'luminance_cd_m2': 'n/a' is not
@@ -22,8 +37,10 @@ std::vector<Reading> read_readings_csv(const std::filesystem::path& path);
 
 // Readings (any order) -> a calibration of `model`: the gamma model L(v) = L_black + (L_white -
 // L_black) (v/255)^gamma fitted by least squares in cd/m² (Ceres; gamma in [0.5, 5]), its RMS
-// residual, and the readings themselves (the table model interpolates them). Throws
-// std::invalid_argument as check_readings does.
+// residual, and the readings themselves (the table model interpolates them, and its black and
+// white are the readings of levels 0 and 255). Throws std::invalid_argument as check_readings
+// does, and for a gamma fit whose black lies below 0 (the readings do not follow the model near
+// black).
 DisplayCalibration fit_readings(std::vector<Reading> readings, Model model);
 
 // Without a photometer: a 1-px checkerboard of levels 0 and 255 averages to half way between

@@ -6,20 +6,11 @@
 #include <string>
 
 #include "procedure/session.h"
+#include "procedure/session_flow.h"
 
 namespace penumbra::study_gui {
 
-struct AdminStatus {
-  std::string screen;       // what the participant sees now, e.g. "trial on screen"
-  bool paused = false;
-  std::string last_answer;  // e.g. "trial 12: right (correct), 532 ms"
-  // Frame timing of the trials answered since the window opened (trials.csv's timing columns).
-  std::string last_timing;  // e.g. "trial 12: 41 frames, mean 16.7 ms, max 17.9 ms"
-  double dropped_frame_ms = 0;  // an interval over this is a dropped frame; 0: refresh rate unknown
-  int timed_trials = 0;
-  int trials_with_drops = 0;
-  int dropped_frames = 0;
-};
+using AdminStatus = procedure::FlowStatus;
 
 struct AdminActions {
   bool toggle_pause = false;

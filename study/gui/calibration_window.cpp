@@ -15,6 +15,7 @@
 
 #include "gl/objects.h"
 #include "gui/gui_window.h"
+#include "display/typed_readings.h"
 #include "gui/study_gui.h"
 
 namespace penumbra::study_gui {
@@ -64,12 +65,6 @@ Screen open_screen(const Glfw& glfw, const CalibrationScreen& s, const std::stri
   return screen;
 }
 
-bool escape_pressed(GuiWindow& window) {
-  bool escape = false;
-  for (const Press& p : window.take_presses()) escape = escape || p.key == GLFW_KEY_ESCAPE;
-  return escape;
-}
-
 // A small opaque box of text in a corner of the window, over whatever is drawn.
 void begin_corner_box(const char* id, ImVec2 pivot) {
   const ImVec2 size = ImGui::GetIO().DisplaySize;
@@ -82,18 +77,32 @@ void begin_corner_box(const char* id, ImVec2 pivot) {
 
 }  // namespace
 
-std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, const CalibrationScreen& s) {
+std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, display::Model model, const CalibrationScreen& s) {
   Glfw glfw;
   Screen screen = open_screen(glfw, s, "Penumbra display calibration");
   GuiWindow& window = *screen.window;
-  MeasuredLevels out;
-  out.monitor = screen.monitor;
-  char typed[32] = "";
-  std::string problem;
-  std::size_t shown = levels.size();
-  for (std::size_t i = 0; i < levels.size();) {
+  display::TypedReadings entry(levels, model);
+  std::size_t shown = levels.size() + 1;
+  bool review_said = false;
+  for (;;) {
     glfw.wait_events(0.05);
-    if (window.close_requested() || escape_pressed(window)) return std::nullopt;
+    if (window.close_requested()) return std::nullopt;
+    bool write = false;
+    for (const Press& p : window.take_presses()) {
+      if (p.key == GLFW_KEY_ESCAPE) return std::nullopt;
+      if (!entry.reviewing()) continue;  // the text box takes the keys while levels are read
+      if (p.key == GLFW_KEY_BACKSPACE) {
+        entry.undo();
+        review_said = false;
+        say("measuring level " + std::to_string(entry.level()) + " again");
+      } else if ((p.key == GLFW_KEY_ENTER || p.key == GLFW_KEY_KP_ENTER) && entry.fitted()) {
+        write = true;
+      }
+    }
+    if (write) {
+      say("readings accepted");
+      return MeasuredLevels{entry.readings(), screen.monitor};
+    }
     window.begin_frame();
     int w = 0, h = 0;
     window.framebuffer_size(w, h);
@@ -101,47 +110,81 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, con
     glDisable(GL_FRAMEBUFFER_SRGB);
     glDisable(GL_SCISSOR_TEST);
     glViewport(0, 0, w, h);
-    const float v = static_cast<float>(levels[i]) / 255.0f;  // stored as exactly levels[i]
-    glClearColor(v, v, v, 1);
-    glClear(GL_COLOR_BUFFER_BIT);
-    begin_corner_box("##reading", {0.0f, 1.0f});
-    ImGui::Text("Level %d (%zu of %zu): point the photometer at the centre,", levels[i], i + 1, levels.size());
-    ImGui::Text("type its reading in cd/m\xc2\xb2 and press Enter. Escape: stop, nothing written.");
-    if (!problem.empty()) ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "%s", problem.c_str());
-    if (!ImGui::IsAnyItemActive()) ImGui::SetKeyboardFocusHere();
-    ImGui::SetNextItemWidth(160);
-    const bool entered = ImGui::InputText("cd/m\xc2\xb2", typed, sizeof typed,
-                                          ImGuiInputTextFlags_CharsScientific | ImGuiInputTextFlags_EnterReturnsTrue);
-    const bool typing = ImGui::IsItemActive();
-    ImGui::End();
+    bool typing = false, entered = false;
+    if (!entry.reviewing()) {
+      const int level = entry.level();
+      const float v = static_cast<float>(level) / 255.0f;  // stored as exactly the level
+      glClearColor(v, v, v, 1);
+      glClear(GL_COLOR_BUFFER_BIT);
+      begin_corner_box("##reading", {0.0f, 1.0f});
+      ImGui::Text("Level %d (%zu of %zu): point the photometer at the centre,", level, entry.current() + 1, levels.size());
+      ImGui::Text("type its reading in cd/m\xc2\xb2 (a decimal point: 8.1) and press Enter. Escape: stop, nothing written.");
+      if (!entry.message().empty()) ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "%s", entry.message().c_str());
+      if (!ImGui::IsAnyItemActive()) ImGui::SetKeyboardFocusHere();
+      ImGui::SetNextItemWidth(160);
+      char typed[32] = {};
+      entry.field().copy(typed, sizeof typed - 1);
+      // No character filter: a typed comma reaches the parser, which says what to type instead.
+      entered = ImGui::InputText("cd/m\xc2\xb2", typed, sizeof typed, ImGuiInputTextFlags_EnterReturnsTrue);
+      // Enter leaves the box; it takes the keyboard back at once, so the next reading's first
+      // characters are not lost.
+      if (entered) ImGui::SetKeyboardFocusHere(-1);
+      entry.field() = typed;
+      typing = ImGui::IsItemActive();
+      ImGui::End();
+    } else {
+      // The review: every reading and the fitted model, before anything is written.
+      glClearColor(0.5f, 0.5f, 0.5f, 1);
+      glClear(GL_COLOR_BUFFER_BIT);
+      begin_corner_box("##review", {0.0f, 1.0f});
+      ImGui::Text("All %zu levels read. Check them before the calibration is written:", levels.size());
+      if (ImGui::BeginTable("readings", 2, ImGuiTableFlags_Borders | ImGuiTableFlags_SizingFixedFit)) {
+        ImGui::TableSetupColumn("level");
+        ImGui::TableSetupColumn("cd/m\xc2\xb2");
+        ImGui::TableHeadersRow();
+        for (const display::Reading& r : entry.readings()) {
+          ImGui::TableNextRow();
+          ImGui::TableNextColumn();
+          ImGui::Text("%d", r.level);
+          ImGui::TableNextColumn();
+          ImGui::Text("%g", r.luminance_cd_m2);
+        }
+        ImGui::EndTable();
+      }
+      if (const auto& c = entry.fitted()) {
+        ImGui::Text("gamma %.3f, black %.4g cd/m\xc2\xb2, white %.4g cd/m\xc2\xb2, RMS residual %.3g cd/m\xc2\xb2", c->gamma,
+                    *c->black_cd_m2, *c->white_cd_m2, *c->residual_rms_cd_m2);
+        if (!entry.fit_warning().empty()) ImGui::TextColored({1.0f, 0.8f, 0.4f, 1.0f}, "%s", entry.fit_warning().c_str());
+        ImGui::Text("Enter: write the calibration. Backspace: measure the last level again. Escape: stop, nothing written.");
+      } else {
+        ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "No calibration from these readings: %s", entry.fit_problem().c_str());
+        ImGui::Text("Backspace: measure the last level again. Escape: stop, nothing written.");
+      }
+      ImGui::End();
+    }
     window.end_frame();
     window.swap();
     // Announced once the level is on screen and the entry box takes keys.
-    if (shown != i && typing) {
-      shown = i;
-      say("showing level " + std::to_string(levels[i]) + " (" + std::to_string(i + 1) + " of " + std::to_string(levels.size()) + ")");
+    if (!entry.reviewing() && shown != entry.current() && typing) {
+      shown = entry.current();
+      say("showing level " + std::to_string(entry.level()) + " (" + std::to_string(entry.current() + 1) + " of " +
+          std::to_string(levels.size()) + ")");
+    }
+    if (entry.reviewing() && !review_said) {
+      review_said = true;
+      shown = levels.size() + 1;
+      say(entry.fitted() ? "review: " + std::to_string(levels.size()) + " readings, Enter writes" + (entry.fit_warning().empty() ? "" : "; warning: " + entry.fit_warning())
+                         : "review: no calibration from these readings: " + entry.fit_problem());
     }
     if (!entered) continue;
-    char* end = nullptr;
-    const double luminance = std::strtod(typed, &end);
-    if (end == typed || *end != '\0' || !std::isfinite(luminance) || !(luminance >= 0 && luminance <= 1e5)) {
-      problem = "'" + std::string(typed) + "' is not a luminance in cd/m\xc2\xb2 (a number >= 0)";
-      continue;
+    const std::string typed = entry.field();
+    const int level = entry.level();
+    switch (entry.enter()) {
+      case display::TypedReadings::Outcome::accepted: say("level " + std::to_string(level) + ": " + typed + " cd/m2"); break;
+      case display::TypedReadings::Outcome::refused: say("level " + std::to_string(level) + ": refused: " + entry.message()); break;
+      case display::TypedReadings::Outcome::confirm: say("level " + std::to_string(level) + ": confirm: " + entry.message()); break;
     }
-    if (!out.readings.empty() && !(luminance > out.readings.back().luminance_cd_m2)) {
-      char b[160];
-      std::snprintf(b, sizeof b, "%g is not above level %d's %g: luminance must rise with the level (measure again)", luminance,
-                    out.readings.back().level, out.readings.back().luminance_cd_m2);
-      problem = b;
-      continue;
-    }
-    say("level " + std::to_string(levels[i]) + ": " + typed + " cd/m2");
-    out.readings.push_back({levels[i], luminance});
-    typed[0] = '\0';
-    problem.clear();
-    ++i;
   }
-  return out;
 }
 
 std::optional<CheckerboardMatch> match_checkerboard(const CalibrationScreen& s, int start_level) {

@@ -25,9 +25,11 @@ struct MeasuredLevels {
   nlohmann::json monitor;  // name, video mode, full screen or not
 };
 // Shows each level full screen (a small entry box in the lower left corner, away from the
-// photometer's spot at the centre) and takes the luminance typed for it (Enter). Escape or
-// closing the window: nothing (the caller writes nothing).
-std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, const CalibrationScreen& screen);
+// photometer's spot at the centre) and takes the luminance typed for it (Enter), by the rules of
+// display::TypedReadings; then the review of every reading with `model` fitted, where Enter accepts
+// them and Backspace measures the last level again. Escape or closing the window: nothing (the
+// caller writes nothing).
+std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, display::Model model, const CalibrationScreen& screen);
 
 struct CheckerboardMatch {
   int level = 128;

@@ -121,12 +121,6 @@ Answer answer_for_key(int key) {
   return Answer::none;
 }
 
-std::string response_for(Answer answer, const std::string& task) {
-  if (answer == Answer::none) throw std::invalid_argument("response_for: no answer");
-  if (task == "2afc") return answer == Answer::first ? "left" : "right";
-  return answer == Answer::first ? "yes" : "no";
-}
-
 ParticipantView::ParticipantView(std::string task) : task_(std::move(task)) {
   ImGuiStyle& style = ImGui::GetStyle();
   style.FrameRounding = 6;

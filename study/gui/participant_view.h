@@ -8,6 +8,7 @@
 
 #include "gl/objects.h"
 #include "io/image_io.h"
+#include "procedure/session_flow.h"
 
 namespace penumbra::study_gui {
 
@@ -24,12 +25,9 @@ struct StimulusLayout {
 // Throws when the framebuffer cannot hold the stimuli with room for the question and buttons.
 StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count);
 
-// The two answers: first = left (2afc) / yes (yesno); second = right / no.
-enum class Answer { none, first, second };
+using procedure::Answer;
 // Left arrow or F -> first; right arrow or J -> second (GLFW key codes).
 Answer answer_for_key(int key);
-// The log's response for an answer: left|right (2afc), yes|no (yesno).
-std::string response_for(Answer answer, const std::string& task);
 
 // Display value of the background (8-bit, the same on all channels).
 inline constexpr int kBackgroundValue = 128;

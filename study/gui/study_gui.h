@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "procedure/session.h"
 
 namespace CLI {
@@ -29,30 +31,44 @@ struct GuiOptions {
   std::string screenshot_at = "trial";
 };
 
-// A new session whose participant id the experimenter types at the start screen (no --participant):
-// the config is known before the session exists (its texts, its consent, the screen check).
-struct Intake {
+// How the session of a participant run comes about.
+struct SessionStart {
+  // A new session: the config (its texts, its consent, the screen check) before the session exists.
   procedure::StudyConfig config;
-  // Why `id` cannot start a session (bad id, an existing session of that participant), "" if it can.
-  std::function<std::string(const std::string& id)> problem;
+  // The experimenter types the participant id at the intake screen (no --participant).
+  bool intake = false;
+  std::string participant;  // --participant
+  // Why a typed id cannot start a session ("" if it can).
+  std::function<std::string(const std::string& id)> id_problem;
+  // Creates the new session (consent: procedure::consent_record, or null without a consent text).
+  std::function<procedure::Session(const std::string& participant, const nlohmann::json& consent)> create;
+  // Set for --resume: opens the session; `accept` sees it replayed, before anything is written, and
+  // may throw to refuse.
+  std::function<procedure::Session(const std::function<void(const procedure::Session&)>& accept)> resume;
 };
-
-// Opens or creates the session; must call `check(config)` before it creates or writes anything.
-// `participant`: the id typed at the intake screen ("" without one).
-using OpenSession = std::function<procedure::Session(const std::function<void(const procedure::StudyConfig&)>& check,
-                                                     const std::string& participant)>;
 
 // Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --screenshot-at, --refresh-hz to `run`.
 void add_options(CLI::App& run, GuiOptions& options);
 
+// What a session remembers of how it was presented (session.json "presentation_options"), so that
+// `penumbra-study run --resume DIR` alone shows it the same way: the monitor, the window size, the
+// admin panel, the refresh rate given and the blank interval.
+nlohmann::json presentation_options(const GuiOptions& options);
+// Takes each option the command line did not give (`given("--windowed")` false) from `recorded`
+// (a session written before these were recorded has none). Throws std::runtime_error
+// "<file>: presentation_options.<key>: ..." for a value of the wrong type or out of range.
+void reuse_presentation_options(GuiOptions& options, const nlohmann::json& recorded, const std::function<bool(const std::string&)>& given,
+                                const std::string& file);
+
 // "--windowed WxH": the size in pixels; throws std::invalid_argument naming the option otherwise.
 void parse_window_size(const std::string& windowed, int& width, int& height);
 
-// Opens the windows, then the session (`open_session` creates or resumes it: after every check
-// that can refuse, so a refusal leaves no new session behind), and runs it until it is finished
-// or stopped. With `intake`, the participant window first asks for the participant id (refused
-// ids are named on screen) and shows the config's consent text; Escape or declining ends the app
-// with nothing written. Returns the process exit code (0).
-int run_session(const OpenSession& open_session, const GuiOptions& options, const std::optional<Intake>& intake = std::nullopt);
+// Opens the windows and runs the participant's flow (procedure/session_flow.h) until the session is
+// finished or stopped. Everything that can refuse (monitors, the stimulus size on this screen, a
+// --screenshot-at screen the session would never show, a resumed session without the consent its
+// config asks for) comes before a session is created or resumed; a new session is created only once
+// the id is known and consent given, so Escape or declining ends the app with nothing written.
+// Returns the process exit code (0).
+int run_session(const SessionStart& start, const GuiOptions& options);
 
 }  // namespace penumbra::study_gui

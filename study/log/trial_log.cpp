@@ -24,12 +24,23 @@ const std::vector<std::string>& columns(Layout layout) {
       "artifact_px", "task", "intensity", "filter_radius_px", "kernel", "target", "response", "correct",
       "rt_ms", "quest_mean", "quest_sd", "practice", "requested_filter_radius_px", "clamped",
       "artifact_arcmin", "filter_radius_arcmin", "stimulus_seed"};
-  static const std::vector<std::string> current = [] {
+  static const std::vector<std::string> with_timing = [] {
     std::vector<std::string> c = without_timing;
     c.insert(c.end(), {"onset_s", "frames", "frame_ms_mean", "frame_ms_max", "dropped_frames"});
     return c;
   }();
-  return layout == Layout::current ? current : without_timing;
+  static const std::vector<std::string> current = [] {
+    std::vector<std::string> c = with_timing;
+    c[3] = "condition_index";
+    c.insert(c.begin() + 4, "round_position");
+    return c;
+  }();
+  switch (layout) {
+    case Layout::without_timing: return without_timing;
+    case Layout::with_timing: return with_timing;
+    case Layout::current: return current;
+  }
+  return current;
 }
 
 std::string header_line(Layout layout) {
@@ -43,6 +54,13 @@ namespace {
 std::string num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// A reaction time to the microsecond (a clock finer than that says nothing about a key press).
+std::string ms_to_us(double ms) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.3f", ms);
   return buf;
 }
 
@@ -65,13 +83,14 @@ bool valid_text(const std::string& s) {
 std::string format_row(const TrialRow& r, Layout layout) {
   std::ostringstream o;
   o << text(r.session_id, "session_id") << ',' << text(r.participant, "participant") << ',' << r.utc_time << ','
-    << r.round << ',' << r.trial << ',' << text(r.staircase, "staircase") << ',' << r.pattern << ',' << num(r.contrast)
+    << r.condition_index << ',' << (layout == Layout::current ? std::to_string(r.round_position) + "," : std::string()) << r.trial
+    << ',' << text(r.staircase, "staircase") << ',' << r.pattern << ',' << num(r.contrast)
     << ',' << num(r.artifact_px) << ',' << r.task << ',' << num(r.intensity) << ',' << num(r.filter_radius_px) << ','
-    << r.kernel << ',' << r.target << ',' << r.response << ',' << r.correct << ',' << num(r.rt_ms) << ','
+    << r.kernel << ',' << r.target << ',' << r.response << ',' << r.correct << ',' << ms_to_us(r.rt_ms) << ','
     << num(r.quest_mean) << ',' << num(r.quest_sd) << ',' << r.practice << ',' << num(r.requested_filter_radius_px)
     << ',' << r.clamped << ',' << num(r.artifact_arcmin) << ',' << num(r.filter_radius_arcmin) << ','
     << r.stimulus_seed;
-  if (layout == Layout::current) {
+  if (layout != Layout::without_timing) {
     if (r.timing)
       o << ',' << num(r.timing->onset_s) << ',' << r.timing->frames << ',' << num(r.timing->frame_ms_mean) << ','
         << num(r.timing->frame_ms_max) << ',' << (r.timing->dropped_frames ? std::to_string(*r.timing->dropped_frames) : "");
@@ -130,68 +149,71 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
     return f[i];
   };
   TrialRow r;
+  // The current layout has round_position after condition_index: the columns after it move by one.
+  const std::size_t k = layout == Layout::current ? 1 : 0;
   r.session_id = nonempty(0);
   r.participant = nonempty(1);
   r.utc_time = nonempty(2);
-  r.round = integer(3, 0, 1000);
-  r.trial = integer(4, 0, 1000000);
-  r.staircase = nonempty(5);
-  r.pattern = one_of(6, {"stair", "step"});
-  r.contrast = real(7);
-  if (!(r.contrast > 0 && r.contrast <= 1)) fail(7, "expected a lit level in (0, 1]");
-  r.artifact_px = real(8);
-  if (!(r.artifact_px > 0)) fail(8, "expected > 0");
-  r.task = one_of(9, {"2afc", "yesno"});
-  r.intensity = real(10);
-  r.filter_radius_px = real(11);
-  if (!(r.filter_radius_px > 0)) fail(11, "expected > 0");
+  r.condition_index = integer(3, 0, 1000);
+  if (layout == Layout::current) r.round_position = integer(4, 1, 1001);
+  r.trial = integer(4 + k, 0, 1000000);
+  r.staircase = nonempty(5 + k);
+  r.pattern = one_of(6 + k, {"stair", "step"});
+  r.contrast = real(7 + k);
+  if (!(r.contrast > 0 && r.contrast <= 1)) fail(7 + k, "expected a lit level in (0, 1]");
+  r.artifact_px = real(8 + k);
+  if (!(r.artifact_px > 0)) fail(8 + k, "expected > 0");
+  r.task = one_of(9 + k, {"2afc", "yesno"});
+  r.intensity = real(10 + k);
+  r.filter_radius_px = real(11 + k);
+  if (!(r.filter_radius_px > 0)) fail(11 + k, "expected > 0");
   if (std::abs(r.intensity - std::log10(r.artifact_px / r.filter_radius_px)) > 1e-9)
-    fail(10, "expected log10(artifact_px / filter_radius_px)");
-  r.kernel = one_of(12, {"disk", "grid", "poisson"});
+    fail(10 + k, "expected log10(artifact_px / filter_radius_px)");
+  r.kernel = one_of(12 + k, {"disk", "grid", "poisson"});
   if (r.task == "2afc") {
-    r.target = one_of(13, {"left", "right"});
-    r.response = one_of(14, {"left", "right"});
+    r.target = one_of(13 + k, {"left", "right"});
+    r.response = one_of(14 + k, {"left", "right"});
   } else {
-    r.target = one_of(13, {"jagged", "straight"});
-    r.response = one_of(14, {"yes", "no"});
+    r.target = one_of(13 + k, {"jagged", "straight"});
+    r.response = one_of(14 + k, {"yes", "no"});
   }
-  r.correct = integer(15, 0, 1);
+  r.correct = integer(15 + k, 0, 1);
   const bool right = r.task == "2afc" ? r.response == r.target : (r.response == "yes") == (r.target == "straight");
-  if (r.correct != (right ? 1 : 0)) fail(15, "does not agree with target and response");
-  r.rt_ms = real(16);
-  if (r.rt_ms < 0) fail(16, "expected >= 0");
-  r.quest_mean = real(17);
-  r.quest_sd = real(18);
-  if (r.quest_sd < 0) fail(18, "expected >= 0");
-  r.practice = integer(19, 0, 1);
-  r.requested_filter_radius_px = real(20);
-  r.clamped = integer(21, 0, 1);
-  r.artifact_arcmin = real(22);
-  r.filter_radius_arcmin = real(23);
+  if (r.correct != (right ? 1 : 0)) fail(15 + k, "does not agree with target and response");
+  r.rt_ms = real(16 + k);
+  if (r.rt_ms < 0) fail(16 + k, "expected >= 0");
+  r.quest_mean = real(17 + k);
+  r.quest_sd = real(18 + k);
+  if (r.quest_sd < 0) fail(18 + k, "expected >= 0");
+  r.practice = integer(19 + k, 0, 1);
+  r.requested_filter_radius_px = real(20 + k);
+  r.clamped = integer(21 + k, 0, 1);
+  r.artifact_arcmin = real(22 + k);
+  r.filter_radius_arcmin = real(23 + k);
   {
     std::uint64_t v = 0;
-    const auto [p, ec] = std::from_chars(f[24].data(), f[24].data() + f[24].size(), v);
-    if (ec != std::errc() || p != f[24].data() + f[24].size()) fail(24, "expected an unsigned integer");
+    const auto [p, ec] = std::from_chars(f[24 + k].data(), f[24 + k].data() + f[24 + k].size(), v);
+    if (ec != std::errc() || p != f[24 + k].data() + f[24 + k].size()) fail(24 + k, "expected an unsigned integer");
     r.stimulus_seed = v;
   }
-  if (layout == Layout::current) {
+  if (layout != Layout::without_timing) {
     // Either all five timing columns are empty (not measured) or all hold values, but for
     // dropped_frames, empty when the refresh rate was unknown.
-    constexpr std::size_t first = 25, n = 5;
+    const std::size_t first = 25 + k, n = 5;
     std::size_t empty = 0;
     for (std::size_t i = first; i < first + n; ++i) empty += f[i].empty();
     if (empty == n) return r;
     for (std::size_t i = first; i < first + n - 1; ++i)
       if (f[i].empty()) fail(i, "expected a value (the timing columns are all empty or all filled)");
     FrameTiming t;
-    t.onset_s = real(25);
-    if (t.onset_s < 0) fail(25, "expected >= 0");
-    t.frames = integer(26, 1, 1000000000);
-    t.frame_ms_mean = real(27);
-    if (t.frame_ms_mean < 0) fail(27, "expected >= 0");
-    t.frame_ms_max = real(28);
-    if (t.frame_ms_max < t.frame_ms_mean) fail(28, "expected >= frame_ms_mean");
-    if (!f[29].empty()) t.dropped_frames = integer(29, 0, t.frames);
+    t.onset_s = real(25 + k);
+    if (t.onset_s < 0) fail(25 + k, "expected >= 0");
+    t.frames = integer(26 + k, 1, 1000000000);
+    t.frame_ms_mean = real(27 + k);
+    if (t.frame_ms_mean < 0) fail(27 + k, "expected >= 0");
+    t.frame_ms_max = real(28 + k);
+    if (t.frame_ms_max < t.frame_ms_mean) fail(28 + k, "expected >= frame_ms_mean");
+    if (!f[29 + k].empty()) t.dropped_frames = integer(29 + k, 0, t.frames);
     r.timing = t;
   }
   return r;
@@ -221,9 +243,10 @@ Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
     std::string first;
     std::getline(in, first);
     first += '\n';
-    if (first == header_line(Layout::without_timing)) layout_ = Layout::without_timing;
-    else if (in && first != header_line(Layout::current))
-      throw std::runtime_error(path.string() + ":1: the header does not match the trial-log columns");
+    bool known = false;
+    for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current})
+      if (first == header_line(l)) layout_ = l, known = true;
+    if (in && !known) throw std::runtime_error(path.string() + ":1: the header does not match the trial-log columns");
   }
   const int flags = O_WRONLY | O_APPEND | O_CLOEXEC | (create ? (O_CREAT | O_EXCL) : 0);
   fd_ = ::open(path.c_str(), flags, 0644);
@@ -279,9 +302,10 @@ ReadResult read(const std::filesystem::path& path) {
     }
     const std::string line = all.substr(pos, nl - pos);
     if (line_number == 1) {
-      if (line + "\n" == header_line(Layout::without_timing))
-        result.layout = Layout::without_timing;
-      else if (line + "\n" != header_line())
+      bool known = false;
+      for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current})
+        if (line + "\n" == header_line(l)) result.layout = l, known = true;
+      if (!known)
         throw std::runtime_error(file + ":1: the header does not match the trial-log columns (" +
                                  header_line().substr(0, header_line().size() - 1) + ")");
     } else {

@@ -35,7 +35,8 @@ struct TrialRow {
   std::string session_id;
   std::string participant;
   std::string utc_time;       // ISO 8601, when the response was given
-  int round = 0;              // 0-based
+  int condition_index = 0;    // the round's condition: 0-based index into the config's rounds (column 'round' in older logs)
+  int round_position = 0;     // where that round ran in this session, 1-based ("Round 2 of 4"); 0: not recorded (older logs)
   int trial = 0;              // 0-based, across the session (practice included)
   std::string staircase;      // e.g. "a10": one QUEST per artifact size within a round
   std::string pattern;        // stair | step
@@ -48,7 +49,7 @@ struct TrialRow {
   std::string target;         // 2afc: side of the jagged stimulus (left|right); yesno: jagged|straight
   std::string response;       // 2afc: left|right; yesno: yes|no ("the original was a straight line")
   int correct = 0;
-  double rt_ms = 0;
+  double rt_ms = 0;             // written to the microsecond
   double quest_mean = 0;      // the staircase's estimate after this trial
   double quest_sd = 0;
   int practice = 0;
@@ -62,9 +63,12 @@ struct TrialRow {
   std::optional<FrameTiming> timing;
 };
 
-// The log's layouts: `current` ends with the timing columns; `without_timing` (logs written before
-// them) is read and, when such a session is resumed, appended to in its own layout.
-enum class Layout { without_timing, current };
+// The log's layouts, oldest first. `current` names the round two ways: `condition_index` (the
+// config's round, 0-based) and `round_position` (1-based, as the participant's screens number it);
+// the older layouts had one column `round` holding the condition index, and `without_timing` lacks
+// the timing columns. Older logs are read and, when such a session is resumed, appended to in their
+// own layout.
+enum class Layout { without_timing, with_timing, current };
 
 const std::vector<std::string>& columns(Layout layout = Layout::current);
 std::string header_line(Layout layout = Layout::current);  // with '\n'

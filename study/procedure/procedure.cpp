@@ -113,10 +113,6 @@ int Procedure::current_round() const {
   return static_cast<int>(rounds_.size());
 }
 
-bool Procedure::break_due() const {
-  return config_.break_every_trials > 0 && trials_done_ > 0 && trials_done_ % config_.break_every_trials == 0;
-}
-
 void Procedure::end_round(int round) { ended_rounds_.at(static_cast<std::size_t>(round)) = true; }
 
 const Staircase& Procedure::staircase(const TrialPlan& plan) const {

@@ -91,7 +91,6 @@ class Procedure {
   const Staircase& staircase(const TrialPlan& plan) const;
   int current_round() const;  // rounds().size() when finished
   int trials_done() const { return trials_done_; }
-  bool break_due() const;     // a break screen belongs before the next trial
 
  private:
   StudyConfig config_;

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <stdexcept>
 
@@ -84,7 +85,7 @@ Session Session::start(const StudyConfig& config, const fs::path& dir, const std
   return s;
 }
 
-Session Session::resume(const fs::path& dir, const std::function<void(const nlohmann::json&, const StudyConfig&)>& accept) {
+Session Session::resume(const fs::path& dir, const std::function<void(const Session&)>& accept) {
   const fs::path json_path = dir / "session.json", log_path = dir / "trials.csv";
   if (!fs::exists(json_path)) throw std::runtime_error(json_path.string() + ": no session to resume");
   trial_log::DirectoryLock lock(dir);
@@ -101,7 +102,7 @@ Session Session::resume(const fs::path& dir, const std::function<void(const nloh
   s.session_id_ = record.session_id;
   s.participant_ = record.participant;
   s.procedure_ = replay_log(record, log.rows, log_path.string());
-  if (accept) accept(s.session_json_, s.config());
+  if (accept) accept(s);
   check_display_calibration_file(record.config, json_path.string());
   // Only now may the torn last line (the trial on screen when the process died) be cut.
   if (log.torn_tail) fs::resize_file(log_path, log.complete_bytes);
@@ -118,7 +119,8 @@ trial_log::TrialRow Session::make_row(const TrialPlan& plan, const std::string& 
   r.session_id = session_id_;
   r.participant = participant_;
   r.utc_time = utc_now();
-  r.round = plan.round;
+  r.condition_index = plan.round;
+  r.round_position = procedure_.round_position(plan.round) + 1;
   r.trial = plan.trial;
   r.staircase = plan.staircase_name;
   r.pattern = stimuli::to_string(plan.stimulus.pattern);
@@ -131,7 +133,7 @@ trial_log::TrialRow Session::make_row(const TrialPlan& plan, const std::string& 
   r.target = plan.target;
   r.response = response;
   r.correct = correct ? 1 : 0;
-  r.rt_ms = rt_ms;
+  r.rt_ms = std::round(rt_ms * 1000.0) / 1000.0;  // as the log writes it: to the microsecond
   r.quest_mean = sc.quest.mean();
   r.quest_sd = sc.quest.sd();
   r.practice = plan.practice ? 1 : 0;

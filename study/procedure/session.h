@@ -29,12 +29,12 @@ class Session {
                         const nlohmann::json& extra, std::optional<std::uint64_t> seed = std::nullopt);
   // Replays dir/trials.csv after checking session.json (types, sizes, nesting, agreement with its
   // config block) and every row against it (replay_log: participant, session id, seed, design,
-  // display, QUEST posteriors). `accept`, when given, sees the checked session.json and its config and may throw to refuse (e.g.
-  // a command-line option that contradicts it). Only after all of that is a torn last line (the
+  // display, QUEST posteriors). `accept`, when given, sees the replayed session (its session.json,
+  // config and next trial) and may throw to refuse (e.g. a command-line option that contradicts it). Only after all of that is a torn last line (the
   // trial on screen when the process died) cut off and anything written: a refused resume leaves
   // every byte as it was.
   static Session resume(const std::filesystem::path& dir,
-                        const std::function<void(const nlohmann::json&, const StudyConfig&)>& accept = {});
+                        const std::function<void(const Session&)>& accept = {});
 
   // The next trial, or nothing when every round is finished.
   std::optional<TrialPlan> next() const { return procedure_.next(); }
@@ -61,7 +61,6 @@ class Session {
   const std::vector<std::vector<Staircase>>& rounds() const { return procedure_.rounds(); }
   int current_round() const { return procedure_.current_round(); }  // rounds().size() when finished
   int trials_done() const { return procedure_.trials_done(); }
-  bool break_due() const { return procedure_.break_due(); }  // a break screen belongs before the next trial
   const std::string& session_id() const { return session_id_; }
   const std::filesystem::path& dir() const { return dir_; }
   const nlohmann::json& session_json() const { return session_json_; }

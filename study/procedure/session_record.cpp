@@ -65,6 +65,46 @@ void check_display_calibration_file(const StudyConfig& recorded, const std::stri
                              "): the monitor was recalibrated? Start a new session, or restore the file to resume");
 }
 
+const char* to_string(ObserverKind kind) {
+  switch (kind) {
+    case ObserverKind::person: return "person";
+    case ObserverKind::psychometric: return "psychometric-simulation";
+    case ObserverKind::image: return "image-observer";
+  }
+  return "";
+}
+
+const char* describe(ObserverKind kind, int count) {
+  switch (kind) {
+    case ObserverKind::person: return count == 1 ? "a person" : "people";
+    case ObserverKind::psychometric: return "psychometric simulation";
+    case ObserverKind::image: return "image observer";
+  }
+  return "";
+}
+
+ObserverKind observer_kind_of_spec(const std::string& spec) {
+  return spec.rfind("image", 0) == 0 ? ObserverKind::image : ObserverKind::psychometric;
+}
+
+ObserverKind observer_kind(const nlohmann::json& j, const std::string& file) {
+  if (j.contains("observer_kind")) {
+    const nlohmann::json& v = j["observer_kind"];
+    for (ObserverKind k : {ObserverKind::person, ObserverKind::psychometric, ObserverKind::image})
+      if (v.is_string() && v.get<std::string>() == to_string(k)) return k;
+    throw std::runtime_error(file + ": observer_kind: " + (v.is_string() ? "'" + json_input::printable(v.get<std::string>()) + "'" : v.dump(-1).substr(0, 40)) +
+                             " is not one of person, psychometric-simulation, image-observer");
+  }
+  // Sessions written before observer_kind: the windows recorded "participant", headless runs the spec.
+  if (!j.contains("observer")) return ObserverKind::person;
+  if (!j["observer"].is_string()) throw std::runtime_error(file + ": observer: expected a string");
+  const std::string spec = j["observer"].get<std::string>();
+  if (spec.empty() || spec == "participant") return ObserverKind::person;
+  if (spec.rfind("psychometric", 0) == 0 || spec.rfind("image", 0) == 0) return observer_kind_of_spec(spec);
+  throw std::runtime_error(file + ": observer: '" + json_input::printable(spec) +
+                           "': expected participant, psychometric:... or image:... (who answered cannot be told)");
+}
+
 // Every field checked for type, size and agreement with the config block, since each is carried
 // into the continued rows (or read by the fitter).
 SessionRecord check_session_json(const nlohmann::json& j, const std::string& file) {
@@ -75,7 +115,7 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
                                               "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
                                               "observer_seed", "config_file", "randomization", "presentation",
-                                              "display_calibration"};
+                                              "display_calibration", "observer_kind", "consent", "presentation_options"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
   for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
@@ -94,6 +134,9 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   if (const std::string bad = name_problem(r.participant); !bad.empty()) fail("participant", bad);
   text("created_utc", 64);
   text("observer", 1000);
+  r.observer_kind = observer_kind(j, file);
+  if (j.contains("consent") && !j["consent"].is_object() && !j["consent"].is_null()) fail("consent", "expected an object");
+  if (j.contains("presentation_options") && !j["presentation_options"].is_object()) fail("presentation_options", "expected an object");
   text("config_file", 4096);
   if (j.contains("log") && j["log"] != "trials.csv") fail("log", "expected \"trials.csv\"");
   if (j.contains("observer_seed") && !j["observer_seed"].is_number_unsigned())
@@ -219,7 +262,9 @@ Procedure replay_log(const SessionRecord& record, const std::vector<trial_log::T
     const StudyConfig& c = record.config;
     expect(row.session_id == record.session_id, "session_id", row.session_id, record.session_id);
     expect(row.participant == record.participant, "participant", row.participant, record.participant);
-    integer(row.round, plan->round, "round");
+    // Older logs name the condition in a column 'round' and have no round_position (0 here).
+    integer(row.condition_index, plan->round, row.round_position > 0 ? "condition_index" : "round");
+    if (row.round_position > 0) integer(row.round_position, p.round_position(plan->round) + 1, "round_position");
     integer(row.trial, plan->trial, "trial");
     expect(row.staircase == plan->staircase_name, "staircase", row.staircase, plan->staircase_name);
     const std::string pattern = stimuli::to_string(plan->stimulus.pattern);

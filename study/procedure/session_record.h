@@ -34,11 +34,30 @@ std::optional<nlohmann::json> display_calibration_block(const StudyConfig& confi
 // Throws std::runtime_error "<session.json>: display_calibration: ..." otherwise.
 void check_display_calibration_file(const StudyConfig& recorded, const std::string& session_file);
 
+// Who answered a session's trials: a closed set, session.json's "observer_kind". People and
+// simulated observers are never pooled into one c without saying so (penumbra-fit).
+enum class ObserverKind {
+  person,        // a participant in the windows
+  psychometric,  // a simulated observer with a planted psychometric function (--observer psychometric:...)
+  image,         // the image observer, a model that looks at the stimuli (--observer image:...)
+};
+// "person", "psychometric-simulation", "image-observer": the values session.json holds.
+const char* to_string(ObserverKind kind);
+// In words for a line of output: "people", "psychometric simulation", "image observer".
+const char* describe(ObserverKind kind, int count = 2);
+// The kind of a headless run's --observer spec ("psychometric:...", "image:...").
+ObserverKind observer_kind_of_spec(const std::string& spec);
+// session.json's kind: "observer_kind" (anything outside the set is refused), or for sessions
+// written before it, their "observer": absent or "participant" (the windows), "psychometric:...",
+// "image:...". Throws std::runtime_error "<file>: observer_kind: ..." (or "observer: ...").
+ObserverKind observer_kind(const nlohmann::json& session_json, const std::string& file);
+
 struct SessionRecord {
   StudyConfig config;
   std::string session_id, participant;
   std::vector<std::pair<int, int>> ended;  // (round, after_trial): rounds the experimenter ended
   Randomization randomization;             // session.json's, or the config's for older sessions
+  ObserverKind observer_kind = ObserverKind::person;
 };
 
 // session.json as written by Session::create. Throws std::runtime_error "<file>: <field>: <what>".

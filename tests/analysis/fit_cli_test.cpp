@@ -121,7 +121,8 @@ TEST(FitCli, RefusesToPoolSessionsOfDifferentObserversOrKernels) {
     const fs::path edited = sessions[2];
     if (what == "observer") {
       nlohmann::json j = nlohmann::json::parse(read(edited / "session.json"));
-      j.erase("observer");  // as if a person had answered
+      j.erase("observer");  // as if a person had answered (a session from before observer_kind)
+      j.erase("observer_kind");
       std::ofstream(edited / "session.json") << j.dump(2) << "\n";
     } else {
       std::string log = read(edited / "trials.csv");
@@ -138,6 +139,99 @@ TEST(FitCli, RefusesToPoolSessionsOfDifferentObserversOrKernels) {
     EXPECT_NE(out.find(what == "observer" ? "a person" : "kernel 'grid'"), std::string::npos) << out;
     EXPECT_FALSE(fs::exists(dir / "out"));
   }
+}
+
+// Issue 26: who answered comes from session.json, a closed set. A session the participant window
+// wrote ("observer": "participant" before observer_kind existed, "observer_kind": "person" now) is
+// fitted as people, never as a simulation (it was: "obtained_by": "simulated"); people and
+// simulations are pooled only with --pool-observers, which the entry records; an unknown kind is
+// refused naming the file and field.
+TEST(FitCli, PeopleFitAsPeopleAndArePooledWithSimulationsOnlyOnRequest) {
+  const fs::path dir = fresh("observer-kinds");
+  const auto sessions = simulated_sessions(dir / "sessions", 4);
+  auto edit = [&](const fs::path& session, const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json j = nlohmann::json::parse(read(session / "session.json"));
+    change(j);
+    std::ofstream(session / "session.json") << j.dump(2) << "\n";
+  };
+  edit(sessions[0], [](nlohmann::json& j) {
+    j["observer"] = "participant";
+    j.erase("observer_kind");
+  });
+  edit(sessions[1], [](nlohmann::json& j) {
+    j.erase("observer");
+    j["observer_kind"] = "person";
+  });
+  const std::string people = sessions[0].string() + " " + sessions[1].string() + " ";
+  std::string out;
+  ASSERT_EQ(run(people + "-o " + (dir / "people").string() + " --bootstrap 0", &out), 0) << out;
+  EXPECT_NE(out.find("sessions answered by people (2 participants)"), std::string::npos) << out;
+  EXPECT_NE(out.find("calibration.json: entry pcf disk (people, 2 participants)"), std::string::npos) << out;
+  const nlohmann::json cal = nlohmann::json::parse(read(dir / "people" / "calibration.json"));
+  EXPECT_EQ(cal["entries"][0]["obtained_by"], "study");
+  EXPECT_EQ(cal["entries"][0]["observers"], "people");
+  EXPECT_EQ(adaptive::load_calibration(dir / "people" / "calibration.json").entries[0].obtained_by, adaptive::CalibrationMethod::study);
+  const nlohmann::json report = nlohmann::json::parse(read(dir / "people" / "report.json"));
+  EXPECT_EQ(report["observers"]["obtained_by"], "study");
+  EXPECT_NE(read(dir / "people" / "summary.txt").find("answered by people"), std::string::npos);
+
+  // A person beside a psychometric simulation: one line naming both logs, nothing written.
+  const std::string mixed = people + sessions[2].string() + " ";
+  EXPECT_EQ(run(mixed + "-o " + (dir / "mixed").string() + " --bootstrap 0", &out), 1) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find((sessions[2] / "trials.csv").string() + ": answered by psychometric simulation (session.json observer_kind) where " +
+                     (sessions[0] / "trials.csv").string() + " was answered by a person"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("--pool-observers"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "mixed"));
+  // Asked for: pooled, and the entry says so.
+  ASSERT_EQ(run(mixed + "-o " + (dir / "pooled").string() + " --bootstrap 0 --pool-observers", &out), 0) << out;
+  EXPECT_NE(out.find("OBSERVER KINDS POOLED (--pool-observers): person (2 sessions) psychometric-simulation (1 session)"),
+            std::string::npos)
+      << out;
+  const nlohmann::json pooled = nlohmann::json::parse(read(dir / "pooled" / "calibration.json"));
+  EXPECT_EQ(pooled["entries"][0]["obtained_by"], "mixed");
+  EXPECT_EQ(pooled["entries"][0]["pooled_observer_kinds"], nlohmann::json({"person (2 sessions)", "psychometric-simulation (1 session)"}));
+  EXPECT_EQ(adaptive::load_calibration(dir / "pooled" / "calibration.json").entries[0].obtained_by, adaptive::CalibrationMethod::mixed);
+
+  // An unknown kind is refused by file and field.
+  edit(sessions[3], [](nlohmann::json& j) { j["observer_kind"] = "robot"; });
+  EXPECT_EQ(run(sessions[3].string() + " -o " + (dir / "robot").string() + " --bootstrap 0", &out), 1) << out;
+  EXPECT_NE(out.find((sessions[3] / "session.json").string() +
+                     ": observer_kind: 'robot' is not one of person, psychometric-simulation, image-observer"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(fs::exists(dir / "robot"));
+  fs::remove_all(dir);
+}
+
+// Issue 26: one short session gave c = 0.647 (not converged, slope at its bound, one participant)
+// and went into calibration.json with exit 0. An unusable fit is written only with
+// --allow-unusable, marked so in the file.
+TEST(FitCli, AnUnusableFitIsNotWrittenWithoutAFlag) {
+  const fs::path dir = fresh("unusable");
+  analysis::SimulatedStudy s;
+  s.participants = 1;
+  s.trials_per_staircase = 4;
+  s.conditions[0].planted.c_true = 3.0;
+  s.seed = 5;
+  const auto sessions = analysis::write_sessions(s, analysis::simulate_study(s), dir / "sessions");
+  std::string out;
+  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "fit").string() + " --bootstrap 0", &out), 1) << out;
+  EXPECT_NE(out.find("NOT USABLE as a calibration: "), std::string::npos) << out;  // the summary says why
+  EXPECT_NE(out.find("penumbra-fit: the fit of stair/1 is not usable as a calibration ("), std::string::npos) << out;
+  EXPECT_NE(out.find("--allow-unusable"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir / "fit"));
+  ASSERT_EQ(run(sessions[0].string() + " -o " + (dir / "fit").string() + " --bootstrap 0 --allow-unusable", &out), 0) << out;
+  EXPECT_NE(out.find("marked NOT USABLE"), std::string::npos) << out;
+  const nlohmann::json cal = nlohmann::json::parse(read(dir / "fit" / "calibration.json"));
+  EXPECT_EQ(cal["entries"][0]["usable"], false);
+  EXPECT_FALSE(cal["entries"][0]["unusable_because"].empty());
+  const adaptive::CalibrationEntry e = adaptive::load_calibration(dir / "fit" / "calibration.json").entries[0];
+  EXPECT_FALSE(e.usable);
+  EXPECT_EQ(e.unusable_because, cal["entries"][0]["unusable_because"].get<std::vector<std::string>>());
+  fs::remove_all(dir);
 }
 
 // Sessions measured differently (here the viewing distance and the QUEST beta) are refused with one
@@ -189,11 +283,11 @@ TEST(FitCli, BadRowNamesFileLineAndColumnAndWritesNothing) {
   const auto sessions = simulated_sessions(dir / "sessions", 2);
   const fs::path log = sessions[1] / "trials.csv";
   std::string text = read(log);
-  // Line 4: the intensity column (11th) becomes nan.
+  // Line 4: the intensity column (12th) becomes nan.
   std::size_t line_start = 0;
   for (int i = 0; i < 3; ++i) line_start = text.find('\n', line_start) + 1;
   std::size_t field = line_start;
-  for (int i = 0; i < 10; ++i) field = text.find(',', field) + 1;
+  for (int i = 0; i < 11; ++i) field = text.find(',', field) + 1;
   text.replace(field, text.find(',', field) - field, "nan");
   std::ofstream(log) << text;
   std::string out;
@@ -316,7 +410,7 @@ void write_renumbered(const fs::path& log, std::vector<trial_log::TrialRow> rows
 // Index of the first row after `from` in the same round and staircase that updates QUEST.
 std::size_t next_of_staircase(const std::vector<trial_log::TrialRow>& rows, std::size_t from) {
   for (std::size_t i = from + 1; i < rows.size(); ++i)
-    if (rows[i].staircase == rows[from].staircase && rows[i].round == rows[from].round && !rows[i].practice) return i;
+    if (rows[i].staircase == rows[from].staircase && rows[i].condition_index == rows[from].condition_index && !rows[i].practice) return i;
   return rows.size();
 }
 
@@ -617,7 +711,7 @@ TEST(FitCli, PlotFitWritesFiguresAndATidyThresholdTable) {
   ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "fit").string() + " --units arcmin > " +
                          (dir / "plot.txt").string() + " 2>&1").c_str()), 0)
       << read(dir / "plot.txt");
-  const fs::path plots = dir / "fit" / "plots";
+  const fs::path plots = dir / "fit" / "plots" / "arcmin";  // beside the pixel figures of plots/, not over them
   for (const char* f : {"thresholds.png", "thresholds.svg", "psychometric_p1.png", "quest_p2.png", "summary.txt"})
     EXPECT_TRUE(fs::exists(plots / f)) << f;
 
@@ -635,6 +729,21 @@ TEST(FitCli, PlotFitWritesFiguresAndATidyThresholdTable) {
     staircases[key] = &s;
   }
   ASSERT_EQ(staircases.size(), 8u);  // 2 participants x 2 conditions x 2 sizes
+  // Issue 26: each staircase's curve has its condition's slope (free, 25 of 48 clean staircases ran
+  // to the slope's bound and were flagged: step functions no paper could print).
+  std::map<std::string, double> condition_beta;
+  for (const auto& c : report["conditions"]) condition_beta[c["condition"]] = c["linear_fit"]["beta"].get<double>();
+  for (const auto& [key, s] : staircases) {
+    EXPECT_NEAR((*s)["fit"]["beta"].get<double>(), condition_beta.at((*s)["condition"]), 1e-9) << key;
+    for (const char* flag : {"slope_at_upper_bound", "slope_at_lower_bound", "perfect_separation"})
+      EXPECT_EQ(std::count((*s)["flags"].begin(), (*s)["flags"].end(), flag), 0) << key << " " << flag;
+  }
+  // The pixel figures go to plots/, the arcmin ones stay where they are.
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "fit").string() + " > " + (dir / "plot-px.txt").string() + " 2>&1").c_str()), 0)
+      << read(dir / "plot-px.txt");
+  EXPECT_TRUE(fs::exists(dir / "fit" / "plots" / "thresholds.png"));
+  EXPECT_TRUE(fs::exists(plots / "thresholds.png"));
+  EXPECT_NE(read(dir / "fit" / "plots" / "summary.txt"), read(plots / "summary.txt"));
   std::istringstream csv(read(plots / "thresholds.csv"));
   std::string line;
   std::getline(csv, line);

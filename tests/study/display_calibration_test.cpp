@@ -11,6 +11,7 @@
 
 #include "display/display_calibration.h"
 #include "display/display_fit.h"
+#include "display/typed_readings.h"
 
 namespace {
 
@@ -160,7 +161,10 @@ TEST(DisplayCalibration, CsvReadingsAreReadStrictly) {
       {"level,luminance_cd_m2\n0,0.5\n12.5,3\n", f + ":3: column 'level': '12.5' is not an 8-bit level (an integer 0..255)"},
       {"level,luminance_cd_m2\n0,0.5\n64,8,1\n", f + ":3: expected 2 columns (level,luminance_cd_m2), found 3"},
       {"level,luminance_cd_m2\n0,0.5\n\n", f + ":3: empty line; expected 'level,luminance_cd_m2' values"},
-      {"level,luminance_cd_m2\n0,0.5\n64,-1\n", f + ":3: column 'luminance_cd_m2': -1 is not a luminance in [0, 100000] cd/m2"},
+      {"level,luminance_cd_m2\n0,0.5\n64,-1\n", f + ":3: column 'luminance_cd_m2': '-1' is not a luminance in [0, 100000] cd/m2"},
+      {"level,luminance_cd_m2\n0,0.5\n64,1e308\n", f + ":3: column 'luminance_cd_m2': '1e308' is not a luminance in [0, 100000] cd/m2"},
+      {"level,luminance_cd_m2\n0,0.5\n64,inf\n", f + ":3: column 'luminance_cd_m2': 'inf' is not a number"},
+      {"level,luminance_cd_m2\n0,0.5\n64,0x10\n", f + ":3: column 'luminance_cd_m2': '0x10' is not a number"},
       {"level,luminance_cd_m2\n0,0.5\n64,8\n64,9\n", f + ":4: column 'level': 64 was read already on line 3"},
       {"level,luminance_cd_m2\n0,0.5\n64,8\n128,7\n192,61\n255,120\n",
        f + ":4: column 'luminance_cd_m2': 7 cd/m2 at level 128 is not above 8 at level 64 (line 3); luminance must rise with the level"},
@@ -178,6 +182,88 @@ TEST(DisplayCalibration, CsvReadingsAreReadStrictly) {
     }
   }
   fs::remove(p);
+}
+
+// Issue 26: readings typed into the window go through the CSV's number rule. "8,1" once became 81
+// (the text box dropped the comma); a refused reading stayed in the box and the next one was
+// appended to it ("30" then "95,1" gave 30951, accepted).
+TEST(DisplayCalibration, TypedReadingsAreStrictNumbersAndTheFieldEmptiesAfterEachEntry) {
+  EXPECT_DOUBLE_EQ(display::parse_luminance(" 8.1 "), 8.1);
+  EXPECT_DOUBLE_EQ(display::parse_luminance("1e2"), 100.0);
+  auto refusal = [](const std::string& text) {
+    try {
+      display::parse_luminance(text);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal("8,1"), "'8,1': a decimal comma; type a point (8.1)");
+  EXPECT_EQ(refusal("95,1"), "'95,1': a decimal comma; type a point (95.1)");
+  EXPECT_EQ(refusal("1,234.5"), "'1,234.5' is not a number");
+  EXPECT_EQ(refusal(""), "no reading typed: a luminance in cd/m2, e.g. 85.2");
+  EXPECT_EQ(refusal("nan"), "'nan' is not a number");
+  EXPECT_EQ(refusal("-0.5"), "'-0.5' is not a luminance in [0, 100000] cd/m2");
+
+  display::TypedReadings t(display::calibration_levels(5), display::Model::gamma);  // 0, 64, 128, 191, 255
+  t.field() = "0.5";
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::accepted);
+  EXPECT_EQ(t.field(), "");
+  t.field() = "8,1";
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::refused);
+  EXPECT_EQ(t.message(), "'8,1': a decimal comma; type a point (8.1)");
+  EXPECT_EQ(t.field(), "") << "a refused reading leaves the box";
+  EXPECT_EQ(t.current(), 1u);
+  t.field() = "0.4";  // not above black
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::refused);
+  EXPECT_EQ(t.message(), "0.4 is not above level 0's 0.5: luminance must rise with the level (measure again)");
+  EXPECT_EQ(t.field(), "");
+  for (const char* v : {"8.44", "26.6", "61"}) {
+    t.field() = v;
+    EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::accepted) << v;
+  }
+  // A white no monitor has (a slip: 30951 for 120.5) is asked about; Enter on it again keeps it.
+  t.field() = "30951";
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::confirm);
+  EXPECT_NE(t.message().find("white (level 255) at 30951 cd/m2 is outside the range of monitors (20..2000 cd/m2)"), std::string::npos)
+      << t.message();
+  EXPECT_EQ(t.field(), "30951");
+  EXPECT_FALSE(t.reviewing());
+  t.field() = "120.5";  // or another value, taken as any other
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::accepted);
+  ASSERT_TRUE(t.reviewing());
+  ASSERT_TRUE(t.fitted().has_value()) << t.fit_problem();
+  EXPECT_NEAR(t.fitted()->gamma, 2.4, 0.1);  // readings of the synthetic monitor, rounded
+  EXPECT_EQ(t.fit_warning(), "");
+  t.undo();  // Backspace on the review: white again
+  EXPECT_FALSE(t.reviewing());
+  EXPECT_EQ(t.level(), 255);
+  t.field() = "30951";
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::confirm);
+  EXPECT_EQ(t.enter(), display::TypedReadings::Outcome::accepted);  // confirmed
+  EXPECT_TRUE(t.reviewing());
+}
+
+// The fitted model is held to the readings' rules: a gamma fit whose black lies below 0 (the
+// defect: black -1.045 cd/m², written with exit 0) is refused; an implausible white is named.
+TEST(DisplayCalibration, AFittedBlackBelowZeroIsRefused) {
+  // A monitor that stays nearly black up to level 64 and then climbs steeply (crushed blacks): the
+  // least-squares gamma curve passes below 0 at level 0 (black about -2.8 cd/m²).
+  const std::vector<display::Reading> r{{0, 0.3}, {64, 2.0}, {128, 30.0}, {191, 95.0}, {255, 180.0}};
+  try {
+    display::fit_readings(r, display::Model::gamma);
+    ADD_FAILURE() << "a gamma fit with a negative black was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the gamma model's black level is -"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("below 0"), std::string::npos) << e.what();
+  }
+  // The table model is the readings: its black is the reading of level 0.
+  const auto table = display::fit_readings(r, display::Model::table);
+  EXPECT_EQ(*table.black_cd_m2, 0.3);
+  EXPECT_EQ(*table.white_cd_m2, 180.0);
+  EXPECT_THROW(display::check_fitted_levels(-1.045, 1812, "the gamma model's"), std::invalid_argument);
+  EXPECT_EQ(display::check_fitted_levels(0.3, 150, "the gamma model's"), "");
+  EXPECT_NE(display::check_fitted_levels(0.3, 30951, "the gamma model's").find("outside the range of monitors"), std::string::npos);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "log/trial_log.h"
 #include "procedure/session.h"
 #include "stimuli/stimulus.h"
+#include "text/fingerprint.h"
 
 namespace {
 
@@ -215,6 +216,34 @@ TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
   fs::remove(config);
 }
 
+// Issue 26: a screenshot shows what the participant sees. With --admin-panel the panel stays hidden
+// in participant.png, as in a live run (it was drawn over the stimuli), and admin.png is the same
+// screen with the panel over it.
+TEST_F(StudyGui, ScreenshotsHideTheAdminPanelAsALiveRunDoes) {
+  const fs::path config = tiny_config("2afc"), dir = fresh("session-panel-shot"), shots = fresh("panel-shots");
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "p", "--admin-panel", "--screenshot",
+                      shots.string()}));
+    ASSERT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  const io::Image8 participant = io::read_image8(shots / "participant.png");
+  const io::Image8 admin = io::read_image8(shots / "admin.png");
+  ASSERT_EQ(participant.width, admin.width);
+  // The panel sits at the top left (12, 12); the participant's screen there, left of and above the
+  // stimuli and the question, is the neutral background.
+  int background = 0, differ = 0;
+  for (int y = 20; y < 120; ++y)
+    for (int x = 20; x < 180; ++x) {
+      background += participant.at(x, y, 0) == study_gui::kBackgroundValue;
+      differ += participant.at(x, y, 0) != admin.at(x, y, 0);
+    }
+  EXPECT_GT(background, 0.95 * 100 * 160) << "the participant's screenshot has the panel over it";
+  EXPECT_GT(differ, 0.5 * 100 * 160) << "admin.png shows the panel";
+  fs::remove_all(dir);
+  fs::remove_all(shots);
+  fs::remove(config);
+}
+
 // Issue 16: --screenshot of a finished session captures the end screen, and the admin view says
 // which round its plots show (a line in its own light blue: 140, 191, 255).
 TEST_F(StudyGui, AFinishedSessionsAdminViewSaysWhichRoundItShows) {
@@ -305,7 +334,7 @@ TEST_F(StudyGuiFlow, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) 
     for (int t = 0; t < 6; ++t) {
       const bool practice = t == 0 || t == 3;
       EXPECT_EQ(out.find("trial " + std::to_string(t) + " feedback: ") != std::string::npos, practice) << "trial " << t << "\n" << out;
-      const std::string shown = "trial " + std::to_string(t) + " on screen (round " + std::to_string(t < 3 ? 1 : 2);
+      const std::string shown = "trial " + std::to_string(t) + " on screen (Round " + std::to_string(t < 3 ? 1 : 2) + " of 2";
       EXPECT_NE(out.find(shown), std::string::npos) << shown;
     }
     EXPECT_EQ(out.find("round screen: Round 1"), std::string::npos) << "the welcome screen introduces the first round";
@@ -316,7 +345,7 @@ TEST_F(StudyGuiFlow, PracticeOpensEveryRoundWithFeedbackAndARoundScreenBetween) 
   ASSERT_EQ(rows.size(), 6u);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(rows[i].practice, i == 0 || i == 3 ? 1 : 0) << i;
-    EXPECT_EQ(rows[i].round, i < 3 ? 0 : 1) << i;
+    EXPECT_EQ(rows[i].condition_index, i < 3 ? 0 : 1) << i;
     EXPECT_EQ(rows[i].pattern, i < 3 ? "stair" : "step") << i;
     EXPECT_EQ(rows[i].contrast, i < 3 ? 1.0 : 0.5) << i;
   }
@@ -432,6 +461,78 @@ TEST_F(StudyGuiFlow, DecliningConsentWritesNothing) {
     }
   }
   fs::remove_all(root);
+  fs::remove(config);
+}
+
+// Issue 26: with --participant the consent was skipped (straight to the welcome screen, session
+// created). Consent is asked however the id arrives; declining writes nothing; session.json
+// records when it was given and which text; --screenshot-at consent reaches the screen (it hung at
+// the welcome screen) and a screen the run cannot reach is refused in one line.
+TEST_F(StudyGuiFlow, ConsentIsAskedWithAGivenParticipantIdAndRecorded) {
+  const std::string text = "I agree to take part in this study.";
+  const fs::path config = flow_config(R"(, "texts": {"consent": ")" + text + R"("})");
+  const fs::path dir = fresh("consent-given-id");
+  for (const bool agree : {false, true}) {
+    SCOPED_TRACE(agree);
+    App app(windowed({"run", "--config", config.string(), "-o", dir.string(), "--participant", "P05"}));
+    ASSERT_TRUE(app.wait_for("consent screen: waiting for agree (Enter) or decline (Escape)")) << app.output();
+    EXPECT_FALSE(fs::exists(dir));
+    if (agree) {
+      ASSERT_TRUE(xdo(app, "key Return"));
+      ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+      xdo(app, "key Escape");
+    } else {
+      xdo(app, "key Escape");  // closes the window: xdotool may fail as it goes
+    }
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    if (!agree) {
+      EXPECT_NE(app.output().find("consent declined: nothing written"), std::string::npos) << app.output();
+      EXPECT_FALSE(fs::exists(dir));
+    }
+  }
+  const nlohmann::json session = nlohmann::json::parse(slurp(dir / "session.json"));
+  EXPECT_EQ(session.at("consent").at("given"), true);
+  EXPECT_EQ(session.at("consent").at("text_fingerprint"), text::fnv1a64_hex(text));
+  EXPECT_EQ(session.at("observer_kind"), "person");
+  EXPECT_EQ(session.at("presentation_options").at("windowed"), "800x520");
+  // Resume does not ask again.
+  {
+    App app({"run", "--resume", dir.string()});  // the window size and the rest from session.json
+    ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+    EXPECT_EQ(app.output().find("consent screen"), std::string::npos) << app.output();
+    xdo(app, "key Escape");
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+  }
+  // A session without the consent its config asks for is not resumed.
+  nlohmann::json edited = session;
+  edited.erase("consent");
+  std::ofstream(dir / "session.json") << edited.dump(2);
+  {
+    App app({"run", "--resume", dir.string()});
+    EXPECT_EQ(app.wait_exit(), 1);
+    EXPECT_EQ(app.output(), "penumbra-study: " + (dir / "session.json").string() +
+                                ": consent: the config has a consent text but the session records no consent; a participant who "
+                                "has not agreed cannot be run (start a new session)\n");
+  }
+  // Screenshots: the consent screen is reached with a given id; the intake screen is not, and says so.
+  const fs::path shots = fresh("consent-shot"), other = fresh("consent-shot-dir");
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", other.string(), "--participant", "P06", "--screenshot", shots.string(),
+                      "--screenshot-at", "consent"}));
+    EXPECT_EQ(app.wait_exit(), 0) << app.output();
+    EXPECT_TRUE(fs::exists(shots / "participant.png"));
+    EXPECT_FALSE(fs::exists(other));
+  }
+  {
+    App app(windowed({"run", "--config", config.string(), "-o", other.string(), "--participant", "P06", "--screenshot", shots.string(),
+                      "--screenshot-at", "intake"}));
+    EXPECT_EQ(app.wait_exit(), 1);
+    EXPECT_EQ(app.output(),
+              "penumbra-study: --screenshot-at intake: there is no intake screen: the participant id is given (--participant or --resume)\n");
+    EXPECT_FALSE(fs::exists(other));
+  }
+  fs::remove_all(dir);
+  fs::remove_all(shots);
   fs::remove(config);
 }
 

@@ -93,7 +93,7 @@ TEST(StudyRun, HeadlessSimulationLogsValidRowsAndConvergesToThePlantedThreshold)
       ++practice;
       continue;
     }
-    staircases[std::to_string(r.round) + "/" + r.staircase].push_back(&r);
+    staircases[std::to_string(r.condition_index) + "/" + r.staircase].push_back(&r);
   }
   EXPECT_EQ(practice, 4);
   ASSERT_EQ(staircases.size(), 12u);  // 4 rounds x 3 artifact sizes
@@ -191,7 +191,7 @@ TEST(StudyRun, EachParticipantGetsAnotherSequenceAndTheSameOneAgain) {
     // Practice shows the first round's condition.
     const auto rows = trial_log::read(dir / "trials.csv").rows;
     ASSERT_EQ(rows.size(), 1u);
-    EXPECT_EQ(rows[0].round, order.front());
+    EXPECT_EQ(rows[0].condition_index, order.front());
     fs::remove_all(dir);
   }
   EXPECT_GE(first_rounds.size(), 3u);
@@ -297,7 +297,7 @@ TEST(StudyRun, HeadlessYesNoFeedsQuestTheJaggedTrialsAndConverges) {
     ASSERT_TRUE(r.response == "yes" || r.response == "no") << r.response;
     EXPECT_EQ(r.correct, (r.response == "yes") == (r.target == "straight") ? 1 : 0);
     if (r.practice) continue;
-    const std::string key = std::to_string(r.round) + "/" + r.staircase;
+    const std::string key = std::to_string(r.condition_index) + "/" + r.staircase;
     if (r.target == "straight") {
       ++straight;
       false_alarms += r.response == "no";

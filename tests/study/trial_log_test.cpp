@@ -30,6 +30,7 @@ trial_log::TrialRow sample_row(int trial) {
   r.session_id = "p1-20250101T000000";
   r.participant = "p1";
   r.utc_time = "2025-01-01T00:00:00.000Z";
+  r.round_position = 1;
   r.trial = trial;
   r.staircase = "a10";
   r.pattern = "stair";
@@ -95,7 +96,7 @@ TEST(TrialLog, ReaderNamesFileLineAndColumn) {
   std::string wrong_intensity = good;
   wrong_intensity.replace(wrong_intensity.find(",2afc,") + 6, 4, "0.25");
   EXPECT_NE(message(write(wrong_intensity)).find("column 'intensity'"), std::string::npos);
-  EXPECT_NE(message(write("a,b\n")).find(":2: expected 30 columns, found 2"), std::string::npos);
+  EXPECT_NE(message(write("a,b\n")).find(":2: expected 31 columns, found 2"), std::string::npos);
   // Free text the writer would refuse (a quote, a CR of a CRLF file, bytes that are not UTF-8) is
   // refused by the reader too, and the value is echoed short and escaped.
   for (const auto& [participant, shown] : std::vector<std::pair<std::string, std::string>>{
@@ -196,13 +197,52 @@ TEST(TrialLog, TimingColumnsRoundTripAndLogsWithoutThemStillRead) {
   EXPECT_EQ(old.layout, trial_log::Layout::without_timing);
   ASSERT_EQ(old.rows.size(), 3u);
   for (const auto& r : old.rows) EXPECT_FALSE(r.timing.has_value());
-  EXPECT_EQ(trial_log::format_row(old.rows[2]), trial_log::format_row(sample_row(2)));
+  EXPECT_EQ(trial_log::format_row(old.rows[2], trial_log::Layout::without_timing),
+            trial_log::format_row(sample_row(2), trial_log::Layout::without_timing));
   // Rows of one layout under the other's header are refused by their column count.
   {
     std::ofstream mixed(dir / "mixed.csv");
     mixed << trial_log::header_line(trial_log::Layout::without_timing) << trial_log::format_row(timed_row(0));
   }
-  EXPECT_EQ(read_error(dir / "mixed.csv"), (dir / "mixed.csv").string() + ":2: expected 25 columns, found 30");
+  EXPECT_EQ(read_error(dir / "mixed.csv"), (dir / "mixed.csv").string() + ":2: expected 25 columns, found 31");
+  fs::remove_all(dir);
+}
+
+// Issue 26: the log names the round two ways (the config's condition, the position a participant
+// saw); logs with one column 'round' (the condition) still read and are appended to as they are.
+TEST(TrialLog, RoundsAreNamedByConditionAndPositionAndOlderLogsStillRead) {
+  const fs::path dir = fresh_dir("log-rounds");
+  trial_log::TrialRow row = timed_row(0);
+  row.condition_index = 3;
+  row.round_position = 1;
+  row.rt_ms = 412.34567891;
+  const std::string line = trial_log::format_row(row);
+  EXPECT_EQ(line.rfind("p1-20250101T000000,p1,2025-01-01T00:00:00.000Z,3,1,0,a10,", 0), 0u) << line;
+  EXPECT_NE(line.find(",412.346,"), std::string::npos) << line;  // to the microsecond
+  EXPECT_EQ(trial_log::columns()[3], "condition_index");
+  EXPECT_EQ(trial_log::columns()[4], "round_position");
+  EXPECT_EQ(trial_log::columns(trial_log::Layout::with_timing)[3], "round");
+  {
+    std::ofstream old(dir / "round.csv");
+    old << trial_log::header_line(trial_log::Layout::with_timing) << trial_log::format_row(row, trial_log::Layout::with_timing);
+  }
+  {
+    trial_log::Writer w(dir / "round.csv", false);
+    w.append(timed_row(1));
+  }
+  const auto old = trial_log::read(dir / "round.csv");
+  EXPECT_EQ(old.layout, trial_log::Layout::with_timing);
+  ASSERT_EQ(old.rows.size(), 2u);
+  EXPECT_EQ(old.rows[0].condition_index, 3);
+  EXPECT_EQ(old.rows[0].round_position, 0);  // not recorded then
+  // A position outside 1.. is refused by name.
+  std::string bad = line;
+  bad.replace(bad.find(",3,1,0,"), 7, ",3,0,0,");
+  {
+    std::ofstream(dir / "bad.csv") << trial_log::header_line() << bad;
+  }
+  EXPECT_EQ(read_error(dir / "bad.csv"),
+            (dir / "bad.csv").string() + ":2: column 'round_position': expected an integer in [1, 1001] (found '0')");
   fs::remove_all(dir);
 }
 

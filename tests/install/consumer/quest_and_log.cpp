@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
       row.session_id = "s";
       row.participant = "p01";
       row.utc_time = "2024-01-01T00:00:00Z";
+      row.round_position = 1;
       row.trial = i;
       row.staircase = "a10";
       row.pattern = "step";
