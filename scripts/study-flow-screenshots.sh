@@ -2,9 +2,9 @@
 # Screenshots of the participant's flow for docs/study.md, taken under Xvfb with
 # data/studies/default-lab.json (practice before every round, with feedback):
 #   the first instruction screen with its examples (1920x1080, the config's display: examples 1:1),
-#   a practice trial's feedback (xdotool answers it), the next round's screen (a simulated
-#   participant runs round 1 headless, the session is resumed and its last trial answered), and
-#   the intake screen (no --participant).
+#   a practice trial's feedback (xdotool answers it), the next round's screen (xdotool answers
+#   round 1 in the window: a person's session is never continued from a simulated one), and the
+#   intake screen (no --participant).
 #   scripts/study-flow-screenshots.sh [build-dir]
 #     -> docs/images/study-instructions.png, study-feedback.png, study-round.png, study-intake.png
 set -euo pipefail
@@ -24,25 +24,30 @@ xvfb-run -a -s "-screen 0 3200x1200x24" "$exe" run --config "$cfg" --participant
   --screenshot "$work/instructions" --screenshot-at welcome >/dev/null
 xvfb-run -a -s "-screen 0 2560x900x24" "$exe" run --config "$cfg" -o "$work/root" --windowed 1280x720 \
   --screenshot "$work/intake" --screenshot-at intake >/dev/null
-# xdotool drives the window under one Xvfb: Space at the first screen, then an answer.
+# xdotool drives the window under one Xvfb: Space at the first screen, then F at every trial until
+# the app has written the screenshot and exited.
 drive() {  # drive OUT_DIR SCREEN ARGS... : runs the app, presses Space and F until it wrote the screenshot
   local out=$1 screen=$2
   shift 2
   xvfb-run -a -s "-screen 0 2560x900x24" bash -c '
-    "$@" --windowed 1280x720 --screenshot "'"$out"'" --screenshot-at '"$screen"' > "'"$out"'.log" 2>&1 &
+    "$@" --windowed 1280x720 --iti-ms 50 --screenshot "'"$out"'" --screenshot-at '"$screen"' > "'"$out"'.log" 2>&1 &
     app=$!
     for i in $(seq 100); do grep -q "welcome screen" "'"$out"'.log" 2>/dev/null && break; sleep 0.1; done
     xdotool search --sync --name "^Penumbra study$" windowfocus --sync key space
-    for i in $(seq 100); do grep -q "on screen" "'"$out"'.log" && break; sleep 0.1; done
-    xdotool search --sync --name "^Penumbra study$" windowfocus --sync key f || true
+    answered=0
+    while kill -0 $app 2>/dev/null; do
+      shown=$(grep -c " on screen" "'"$out"'.log" || true)
+      if [ "$shown" -gt "$answered" ]; then
+        xdotool search --name "^Penumbra study$" key f 2>/dev/null || true
+        answered=$shown
+      fi
+      sleep 0.05
+    done
     wait $app' _ "$@"
 }
 drive "$work/feedback" feedback "$exe" run --config "$cfg" --participant demo -o "$work/s2"
-# Round 1 headless up to its last trial (the first row of the next round, less one), then resumed.
-"$exe" run --config "$cfg" --participant demo --headless -o "$work/full" >/dev/null
-last=$(awk -F, 'NR == 2 {r = $4} NR > 2 && $4 != r {print NR - 3; exit}' "$work/full/trials.csv")
-"$exe" run --config "$cfg" --participant demo --headless --stop-after "$last" -o "$work/s3" >/dev/null
-drive "$work/round" round "$exe" run --resume "$work/s3"
+# The next round's screen: round 1 answered in the window (4 practice trials, 3 staircases of 10).
+drive "$work/round" round "$exe" run --config "$cfg" --participant demo -o "$work/s3"
 cp "$work/instructions/participant.png" docs/images/study-instructions.png
 cp "$work/feedback/participant.png" docs/images/study-feedback.png
 cp "$work/round/participant.png" docs/images/study-round.png
