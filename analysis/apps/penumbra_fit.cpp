@@ -261,6 +261,6 @@ int main(int argc, char** argv) {
     if (psychometric->parsed()) return run_psychometric(input, format, single_model);
     return run_study(so, study_model);
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-fit", e.what());
+    return cli::fail("penumbra-fit", e);
   }
 }

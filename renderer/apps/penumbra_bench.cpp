@@ -520,6 +520,6 @@ int main(int argc, char** argv) {
     std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
     return 0;
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-bench", e.what());
+    return cli::fail("penumbra-bench", e);
   }
 }

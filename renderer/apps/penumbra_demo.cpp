@@ -833,6 +833,6 @@ int main(int argc, char** argv) {
     return cli::fail("penumbra-demo", "built without GUI support; use --headless", cli::kExitUsage);
 #endif
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-demo", e.what());
+    return cli::fail("penumbra-demo", e);
   }
 }

@@ -234,6 +234,6 @@ int main(int argc, char** argv) {
     std::cout << "wrote " << out.target().string() << "/\n";
     return 0;
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-render", e.what());
+    return cli::fail("penumbra-render", e);
   }
 }

@@ -71,6 +71,6 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-scene", e.what());
+    return cli::fail("penumbra-scene", e);
   }
 }

@@ -123,6 +123,6 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-view", e.what());
+    return cli::fail("penumbra-view", e);
   }
 }

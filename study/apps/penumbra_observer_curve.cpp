@@ -180,7 +180,7 @@ int main(int argc, char** argv) {
                   kernel.empty() ? "" : (" " + kernel).c_str(), largest, largest_condition.c_str());
     }
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-observer-curve", e.what());
+    return cli::fail("penumbra-observer-curve", e);
   }
   return 0;
 }

@@ -31,9 +31,7 @@ using penumbra::quest::Quest;
 using penumbra::quest::QuestParams;
 
 // A user error: the message is printed as one line and the program exits with status 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using penumbra::cli::UsageError;
 
 Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nullptr); }
 

@@ -606,7 +606,7 @@ int main(int argc, char** argv) {
     ro.gui_given = [run](const std::string& name) { return run->count(name) > 0; };
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-study", e.what());
+    return cli::fail("penumbra-study", e);
   }
   return 0;
 }

@@ -297,7 +297,7 @@ TEST(FitCli, BadRowNamesFileLineAndColumnAndWritesNothing) {
   EXPECT_FALSE(fs::exists(dir / "out"));
   EXPECT_EQ(run((dir / "nothing").string() + " -o " + (dir / "out").string(), &out), 1);
   EXPECT_NE(out.find("no such file"), std::string::npos) << out;
-  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "out").string() + " --condition step/1", &out), 1);
+  EXPECT_EQ(run(sessions[0].string() + " -o " + (dir / "out").string() + " --condition step/1", &out), 2);
   EXPECT_NE(out.find("--condition 'step/1'"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir / "out" / "calibration.json"));
   EXPECT_EQ(run(sessions[0].string() + " " + sessions[0].string() + " -o " + (dir / "out").string(), &out), 1);
@@ -351,7 +351,7 @@ TEST(FitCli, PsychometricSubcommandPrintsTheFitAsJson) {
   std::ofstream(dir / "more.csv") << "-1,3,2\n";
   EXPECT_EQ(run("psychometric --input " + (dir / "more.csv").string(), &out), 1);
   EXPECT_NE(out.find("column 'n_correct'"), std::string::npos) << out;
-  EXPECT_EQ(run("psychometric --input " + (dir / "counts.csv").string() + " --family gompertz", &out), 1);
+  EXPECT_EQ(run("psychometric --input " + (dir / "counts.csv").string() + " --family gompertz", &out), 2);
   EXPECT_NE(out.find("--family 'gompertz'"), std::string::npos) << out;
   fs::remove_all(dir);
 }

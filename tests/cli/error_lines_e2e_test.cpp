@@ -144,10 +144,10 @@ TEST(ErrorLines, TheFieldThatIsWrongIsTheOneBlamed) {
                       s),
                   1, "penumbra-study", "size_px: expected 16..4096");
   EXPECT_FALSE(fs::exists(s / "st"));
-  expect_one_line(run(kFit, {"psychometric", "--input", (s / "counts.csv").string(), "--guess", "1"}, s), 1,
+  expect_one_line(run(kFit, {"psychometric", "--input", (s / "counts.csv").string(), "--guess", "1"}, s), 2,
                   "penumbra-fit", "--guess: expected a rate in [0, 1)");
   const auto sessions = simulated_sessions(s / "sessions", 1);
-  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string(), "--guess", "1"}, s), 1, "penumbra-fit",
+  expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string(), "--guess", "1"}, s), 2, "penumbra-fit",
                   "--guess: expected a rate in [0, 1)");
   // QUEST's own refusal of a session.json value, with the file and block named.
   nlohmann::json session = nlohmann::json::parse(read(sessions[0] / "session.json"));
@@ -229,14 +229,14 @@ TEST(ErrorLines, HugeValuesAndControlBytesAreNotEchoedWhole) {
   config["task"] = std::string(500000, 't');
   std::ofstream(s / "config.json") << config.dump();
   const std::vector<std::tuple<std::string, std::vector<std::string>, int, std::string>> cases = {
-      {kFit, {"psychometric", "--input", input, "--family", kHuge}, 1, "--family 'xxxxx"},
-      {kFit, {"psychometric", "--input", input, "--format", "a\x01\x1b[31mred"}, 1, "--format 'a\\x01\\x1b[31mred'"},
-      {kFit, {"psychometric", "--input", input, "--family", std::string(5000, 'a') + " " + std::string(5000, 'b')}, 1,
+      {kFit, {"psychometric", "--input", input, "--family", kHuge}, 2, "--family 'xxxxx"},
+      {kFit, {"psychometric", "--input", input, "--format", "a\x01\x1b[31mred"}, 2, "--format 'a\\x01\\x1b[31mred'"},
+      {kFit, {"psychometric", "--input", input, "--family", std::string(5000, 'a') + " " + std::string(5000, 'b')}, 2,
        "--family"},
       {kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--kernel", kHuge, "-o",
                 (s / "st").string()}, 1, "kernel 'xxxx"},
       {kStudy, {"run", "--config", kConfig, "--headless", "--observer", "psychometric:c=" + kHuge, "-o",
-                (s / "p").string()}, 1, "--observer"},
+                (s / "p").string()}, 2, "--observer"},
       {kStudy, {"run", "--config", kConfig, "--headless", "--pace-ms", digits, "-o", (s / "p").string()}, 2, "--pace-ms"},
       {kStudy, {"run", "--config", (s / "config.json").string(), "--headless", "-o", (s / "p").string()}, 1,
        "config.json: task"},

@@ -197,7 +197,7 @@ TEST(StudyRun, EachParticipantGetsAnotherSequenceAndTheSameOneAgain) {
   EXPECT_GE(first_rounds.size(), 3u);
   // A resume keeps the recorded randomization and refuses a --seed that contradicts it.
   std::string out;
-  EXPECT_EQ(run({"run", "--resume", seeded.dir.string(), "--headless", "--seed", "999"}, &out), 1) << out;
+  EXPECT_EQ(run({"run", "--resume", seeded.dir.string(), "--headless", "--seed", "999"}, &out), 2) << out;  // the command line
   EXPECT_NE(out.find("--seed 999: the session was run with seed 12345"), std::string::npos) << out;
   EXPECT_EQ(run({"run", "--resume", seeded.dir.string(), "--headless", "--seed", "12345", "--stop-after", "70"}, &out), 0) << out;
   const auto resumed = trial_log::read(seeded.dir / "trials.csv").rows;
@@ -598,7 +598,7 @@ TEST(StudyRun, ResumeRestoresTheRecordedObserverAndRefusesContradictions) {
     std::vector<std::string> args = {"run", "--resume", dir.string(), "--headless"};
     args.insert(args.end(), options.begin(), options.end());
     std::string out;
-    EXPECT_EQ(run(args, &out), 1) << expected;
+    EXPECT_EQ(run(args, &out), 2) << expected;  // an option that contradicts the session: the command line
     EXPECT_NE(out.find(expected), std::string::npos) << out;
     EXPECT_EQ(lines_of(out), 1) << out;
     EXPECT_EQ(bytes(dir / "trials.csv"), log);
@@ -627,7 +627,7 @@ TEST(StudyRun, ARejectedObserverCreatesNothing) {
   };
   for (const auto& [observer, expected] : cases) {
     std::string out;
-    EXPECT_EQ(run({"run", "--config", kConfig, "--observer", observer, "--headless", "-o", dir.string()}, &out), 1)
+    EXPECT_EQ(run({"run", "--config", kConfig, "--observer", observer, "--headless", "-o", dir.string()}, &out), 2)
         << observer;
     EXPECT_NE(out.find("penumbra-study: " + expected), std::string::npos) << out;
     EXPECT_EQ(lines_of(out), 1) << out;
