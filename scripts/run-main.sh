@@ -10,4 +10,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
+mkdir -p out  # outputs never create the folders above them (docs/data-safety.md)
 build/renderer/penumbra-demo --headless --output out/demo "$@"

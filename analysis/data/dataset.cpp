@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "procedure/session_record.h"
 
@@ -40,7 +41,9 @@ double number_field(const nlohmann::json& j, const std::string& file, const std:
 // session.json's QUEST block and stopping rule; absent fields are an error only where present
 // blocks are malformed (a bare log is fine, it just has no QUEST to recompute). Returns the file.
 nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
-  nlohmann::json j = json_input::read_file(path, {.max_bytes = 1 << 20, .max_depth = 8});
+  // A session directory's file: never read through a link (trials.csv likewise, trial_log::read).
+  constexpr json_input::Limits limits{.max_bytes = 1 << 20, .max_depth = 8};
+  nlohmann::json j = json_input::parse(io::read_file(path, limits.max_bytes, io::Links::refuse), path.string(), limits);
   const std::string file = path.string();
   if (!j.is_object()) throw std::runtime_error(file + ": expected an object");
   for (const char* key : {"session_id", "participant"}) {
@@ -226,7 +229,8 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
       json = input.parent_path() / "session.json";
     }
     nlohmann::json session_json;
-    if (!json.empty() && fs::exists(json)) session_json = read_session_json(json, info);
+    std::error_code ec;
+    if (!json.empty() && fs::exists(fs::symlink_status(json, ec))) session_json = read_session_json(json, info);
     info.log_file = log.string();
     const trial_log::ReadResult read = trial_log::read(log);
     info.torn_tail = read.torn_tail;
@@ -263,7 +267,11 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
       throw std::runtime_error(info.log_file + ": session '" + info.session_id + "' was given twice");
     data.sessions.push_back(info);
   }
-  if (data.trials.empty()) throw std::runtime_error("no trials to fit (only headers or practice rows in the input)");
+  if (data.trials.empty()) {
+    std::string named;
+    for (const fs::path& input : inputs) named += (named.empty() ? "" : ", ") + input.string();
+    throw std::runtime_error(named + ": no trials to fit (only headers, practice rows or catch trials)");
+  }
   check_poolable(data, options.pool);
   return data;
 }

@@ -4,7 +4,9 @@
 // Header only (CLI11).
 #include <CLI/CLI.hpp>
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -27,12 +29,16 @@ inline CLI::Validator finite_range(double lo, double hi) {
       "FLOAT in " + text, "FINITE_RANGE");
 }
 
-// Digits only: no sign, so nothing wraps.
+// Digits only, no sign, and at most 2^64 - 1: nothing wraps, nothing saturates (CLI11 stored
+// 18446744073709551616 and beyond as 18446744073709551615 without a word).
 inline CLI::Validator non_negative_integer() {
   return CLI::Validator(
       [](std::string& input) -> std::string {
-        if (input.empty() || input.find_first_not_of("0123456789") != std::string::npos)
-          return "expected a non-negative integer";
+        std::uint64_t value = 0;
+        const auto [end, error] = std::from_chars(input.data(), input.data() + input.size(), value);
+        if (input.empty() || input.find_first_not_of("0123456789") != std::string::npos) return "expected a non-negative integer";
+        if (error == std::errc::result_out_of_range || end != input.data() + input.size())
+          return "expected a non-negative integer of at most 18446744073709551615 (2^64 - 1)";
         return {};
       },
       "UINT", "NON_NEGATIVE_INTEGER");

@@ -1,5 +1,7 @@
 #include "io/atomic_file.h"
 
+#include "io/safe_path.h"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -25,10 +27,13 @@ int write_all(int fd, std::string_view bytes) {
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
-  // The rename would replace anything: never a directory, a device (-o /dev/null as root) or a fifo.
+  // The rename would replace anything: never a directory, a device (-o /dev/null as root), a fifo
+  // or a symbolic link (it would be replaced by a file, not written through; said, not done).
   struct stat existing {};
+  if (::lstat(path.c_str(), &existing) == 0 && S_ISLNK(existing.st_mode)) refuse_link(path);
   if (::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode))
     throw std::runtime_error(path.string() + ": cannot write: exists and is not a regular file");
+  remove_abandoned_partials(path);  // the temporary of a run killed while it wrote this file
   const std::filesystem::path tmp =
       path.parent_path() / ("." + path.filename().string() + ".partial-" + std::to_string(::getpid()));
   auto fail = [&](int error, const char* step) {

@@ -3,7 +3,8 @@
 // write(2) (short writes continued, EINTR retried), fsync()ed, then renamed over `path`. A failure
 // (a full disk, a file-size limit) removes the temporary, leaves a previous `path` untouched and
 // throws std::runtime_error "<path>: cannot write: <strerror of that call>". An existing `path`
-// that is not a regular file (a directory, a device) is refused, not replaced.
+// that is not a regular file (a directory, a device, a symbolic link) is refused, not replaced. The
+// temporaries of runs killed while writing `path` (their process gone) are removed first.
 #include <filesystem>
 #include <string_view>
 

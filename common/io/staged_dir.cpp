@@ -1,5 +1,7 @@
 #include "io/staged_dir.h"
 
+#include "io/safe_path.h"
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -14,41 +16,18 @@ namespace fs = std::filesystem;
 
 namespace penumbra::io {
 
-namespace {
-
-// Removes `<target>.partial-<pid>` directories of processes that no longer exist (runs killed
-// before their destructor could clean up). Directories of live processes are left alone.
-void remove_abandoned_staging(const fs::path& target) {
-  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string prefix = target.filename().string() + ".partial-";
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(parent, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::string_view digits = std::string_view(name).substr(prefix.size());
-    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string_view::npos) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(std::string(digits)));
-    if (pid <= 0 || !entry.is_directory(ec)) continue;
-    if (::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
-  }
-}
-
-}  // namespace
-
 StagedDirectory::StagedDirectory(const std::string& target, const std::string& marker) {
   // "out/" and "out" name the same directory; without the trailing separator the staging
   // directory lands beside it, not inside it.
   if (target.empty()) throw std::runtime_error("output directory: expected a path, got ''");
   target_ = fs::path(target).lexically_normal();
   if (!target_.has_filename() && target_.has_parent_path()) target_ = target_.parent_path();
-  std::error_code ec;
-  if (fs::exists(target_, ec) &&
-      (!fs::is_directory(target_, ec) || (!fs::is_empty(target_, ec) && !fs::exists(target_ / marker, ec))))
-    throw std::runtime_error(target + ": exists and is not a previous output (no " + marker + "); choose another output directory");
-  remove_abandoned_staging(target_);
+  check_output(target, OutputKind::directory, marker);
+  remove_abandoned_partials(target_);
   staging_ = target_.string() + ".partial-" + std::to_string(::getpid());
+  std::error_code ec;
   fs::remove_all(staging_, ec);
-  fs::create_directories(staging_, ec);
+  fs::create_directory(staging_, ec);
   if (ec) throw std::runtime_error(target + ": cannot create the output directory: " + ec.message());
 }
 
@@ -62,9 +41,7 @@ void StagedDirectory::commit() {
   auto fail = [&](const std::error_code& error) {
     throw std::runtime_error(target_.string() + ": cannot move the new output in place: " + error.message());
   };
-  if (target_.has_parent_path()) fs::create_directories(target_.parent_path(), ec);
-  if (ec) fail(ec);
-  if (!fs::exists(target_, ec)) {
+  if (!fs::exists(fs::symlink_status(target_, ec))) {
     fs::rename(staging_, target_, ec);
     if (ec) fail(ec);
     committed_ = true;

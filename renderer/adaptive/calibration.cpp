@@ -73,14 +73,14 @@ CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::j
   e.obtained_by = *m;
   e.participants = static_cast<int>(count(path, j, at, "participants"));
   e.trials = count(path, j, at, "trials");
-  auto names = [&](const char* field) {
+  auto names = [&](const char* key) {
     std::vector<std::string> list;
-    if (!j.contains(field)) return list;
-    const auto& v = j[field];
-    if (!v.is_array() || v.size() > 64) fail(path, at + field, "expected an array of at most 64 names");
+    if (!j.contains(key)) return list;
+    const auto& v = j[key];
+    if (!v.is_array() || v.size() > 64) fail(path, at + key, "expected an array of at most 64 names");
     for (const auto& n : v) {
       if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > 128)
-        fail(path, at + field, "expected names (strings of 1..128 bytes)");
+        fail(path, at + key, "expected names (strings of 1..128 bytes)");
       list.push_back(n.get<std::string>());
     }
     return list;

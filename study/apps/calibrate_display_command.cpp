@@ -5,6 +5,7 @@
 
 #include "cli/checks.h"
 #include "display/display_fit.h"
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "procedure/session.h"
 #ifdef PENUMBRA_STUDY_GUI
@@ -42,10 +43,14 @@ int CalibrateDisplayCommand::run() const {
       throw std::invalid_argument(std::string("--model: ") + e.what());
     }
   }();
+  io::check_output(output_, io::OutputKind::file);  // before the window: a folder that exists, no link
   if (checkerboard_ && !luminances_.empty()) throw std::invalid_argument("--checkerboard: not with --luminances (readings need no match)");
   if (checkerboard_ && model != display::Model::gamma) throw std::invalid_argument("--model table: a checkerboard match gives a gamma, not a table");
-  if (!luminances_.empty() && (command_->count("--levels") || command_->count("--windowed") || command_->count("--monitor")))
-    throw std::invalid_argument("--luminances: the readings are in the file; --levels, --monitor and --windowed are for the window");
+  if (!luminances_.empty())
+    for (const char* window_option : {"--levels", "--monitor", "--windowed"})
+      if (command_->count(window_option))
+        throw std::invalid_argument(std::string(window_option) + ": not with --luminances (the readings are in the file; " +
+                                    window_option + " is for the window)");
   display::DisplayCalibration calibration;
   if (!luminances_.empty()) {
     const std::vector<display::Reading> readings = display::read_readings_csv(luminances_);

@@ -19,6 +19,7 @@
 
 #include "cli/main.h"
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
   app.add_option("--weber", params.weber, "decision noise sd (relative deviation)")->capture_default_str();
   if (const auto status = cli::parse(app, argc, argv, "penumbra-observer-curve")) return *status;
   try {
+    if (!json_out.empty()) io::check_output(json_out, io::OutputKind::file);  // before the curves: every output's rule
     stimuli::StimulusSpec base;
     base.size_px = size_px;
     base.technique = technique;

@@ -18,6 +18,8 @@
 #include "apps/calibrate_display_command.h"
 #include "apps/reference_command.h"
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
+#include "io/staged_dir.h"
 #include "cli/checks.h"
 #include "cli/main.h"
 #include "gl/context.h"
@@ -80,23 +82,51 @@ int run_display_check(const fs::path& config_file) {
   return 0;
 }
 
+// The stimulus spec's errors name its fields ("size_px: expected 16..4096"); on the command line
+// they name the option to change, and exit 2 (cli::exit_code).
+template <class F>
+auto as_option(const char* option, F&& f) {
+  try {
+    return f();
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(std::string(option) + ": " + e.what());
+  }
+}
+void validate_options(const stimuli::StimulusSpec& spec) {
+  static const std::map<std::string, std::string> option_of = {{"artifact_px", "--artifact-px"},
+                                                               {"filter_radius_px", "--filter-radius-px"},
+                                                               {"contrast", "--contrast"},
+                                                               {"size_px", "--size-px"},
+                                                               {"poisson_taps", "--taps"}};
+  try {
+    stimuli::validate(spec);
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const auto it = option_of.find(what.substr(0, what.find(':')));
+    if (it == option_of.end()) throw;
+    throw cli::UsageError(it->second + what.substr(what.find(':')));
+  }
+}
+
 int run_stimulus(const std::string& pattern, const std::string& kernel, const std::string& transfer,
                  const fs::path& display_calibration, stimuli::StimulusSpec spec, const fs::path& out) {
-  spec.pattern = stimuli::parse_pattern(pattern);
-  spec.kernel = stimuli::parse_kernel(kernel);
-  spec.transfer = stimuli::parse_transfer(transfer);
+  spec.pattern = as_option("--pattern", [&] { return stimuli::parse_pattern(pattern); });
+  spec.kernel = as_option("--kernel", [&] { return stimuli::parse_kernel(kernel); });
+  spec.transfer = as_option("--transfer", [&] { return stimuli::parse_transfer(transfer); });
   if (!display_calibration.empty()) spec.transfer = stimuli::Transfer::measured(display::load_calibration(display_calibration));
   // The spec as given first, so a bad size is blamed on the size and not on the radius it clamps.
-  stimuli::validate(spec);
+  validate_options(spec);
   const auto shown = stimuli::clamp_filter_radius(spec.filter_radius_px, spec.size_px);
   const double requested = spec.filter_radius_px;
   spec.filter_radius_px = shown.filter_radius_px;
+  // DIR as a whole or not at all (a full disk left a new artifact.png beside an old line.png), and
+  // only a new, empty or earlier stimulus directory: every program's output rule.
+  io::StagedDirectory staged(out.string(), "stimulus.json");
   gl::HeadlessContext context;
   stimuli::StimulusRenderer renderer;
   const stimuli::StimulusPair pair = renderer.render(spec);
-  fs::create_directories(out);
-  io::write_png(out / "artifact.png", pair.artifact);
-  io::write_png(out / "line.png", pair.line);
+  io::write_png(staged.path() / "artifact.png", pair.artifact);
+  io::write_png(staged.path() / "line.png", pair.line);
   nlohmann::json j = stimuli::to_json(spec, pair.geometry);
   if (!spec.technique.empty()) {
     j["technique"] = spec.technique;
@@ -112,7 +142,8 @@ int run_stimulus(const std::string& pattern, const std::string& kernel, const st
   j["intensity"] = std::log10(spec.artifact_px / spec.filter_radius_px);
   j["images"] = {{"artifact", "artifact.png"}, {"line", "line.png"}};
   j["renderer"] = context.info().renderer;
-  io::write_file_atomic(out / "stimulus.json", json_input::dump(j, 2) + "\n");
+  io::write_file_atomic(staged.path() / "stimulus.json", json_input::dump(j, 2) + "\n");
+  staged.commit();
   std::cout << "wrote " << (out / "artifact.png").string() << ", line.png, stimulus.json\n";
   return 0;
 }
@@ -390,6 +421,16 @@ int run_participant(RunOptions o) {
   }
   start.config = new_session_config(o);
   start.intake = !o.participant_given;
+  if (start.intake) {
+    // -o is the folder of sessions: it may hold others, must not be a link, and its own folder must
+    // exist (it is made with the first session, so declining consent leaves nothing behind).
+    io::refuse_link(o.output, "the folder of sessions is named itself, not through a link");
+    std::error_code ec;
+    const fs::path above = o.output.lexically_normal().has_parent_path() ? o.output.lexically_normal().parent_path() : fs::path(".");
+    if (fs::exists(o.output, ec) ? !fs::is_directory(o.output, ec) : !fs::is_directory(above, ec))
+      throw std::invalid_argument("-o " + o.output.string() + ": " +
+                                  (fs::exists(o.output, ec) ? "not a folder" : "its folder " + above.string() + " does not exist (create it first)"));
+  }
   start.participant = o.participant_given ? o.participant : "";
   const std::optional<std::uint64_t> seed = o.seed_given ? std::optional<std::uint64_t>(o.seed) : std::nullopt;
   if (start.intake)
@@ -397,7 +438,11 @@ int run_participant(RunOptions o) {
   start.create = [&](const std::string& participant, const nlohmann::json& consent) {
     RunOptions typed = o;
     typed.participant = participant;
-    if (start.intake) typed.output = o.output / participant;
+    if (start.intake) {
+      std::error_code ec;
+      fs::create_directory(o.output, ec);  // the folder of sessions, with its first session
+      typed.output = o.output / participant;
+    }
     nlohmann::json extra = {{"observer_kind", procedure::to_string(procedure::ObserverKind::person)},
                             {"presentation_options", study_gui::presentation_options(o.gui)}};
     if (!consent.is_null()) extra["consent"] = consent;

@@ -1,5 +1,6 @@
 #include "apps/reference_command.h"
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "cli/checks.h"
 
@@ -28,7 +29,9 @@ ReferenceCommand::ReferenceCommand(CLI::App& app) {
   command_->add_option("--size-px", size_px_, "stimulus side (px)")->capture_default_str();
   command_->add_option("--transfer", transfer_, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
   command_->add_option("--seeds", search_.seeds, "edge phases/orientations to check (the result is the worst)")
-      ->delimiter(',')->capture_default_str();
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(cli::non_negative_integer());  // each item: `--seeds ""` ran with seed 0
   command_->add_option("--r-min", search_.r_min_px, "smallest radius scanned (px)")->capture_default_str();
   command_->add_option("--r-max", search_.r_max_px, "largest radius scanned (px); 0 = size/2")->capture_default_str();
   command_->add_option("--growth", search_.growth, "ratio between scanned radii")->capture_default_str();
@@ -41,6 +44,7 @@ ReferenceCommand::ReferenceCommand(CLI::App& app) {
 }
 
 int ReferenceCommand::run() const {
+  io::check_output(output_, io::OutputKind::file);  // before the long search: a folder that exists, no link
   stimuli::ReferenceSearch search = search_;
   search.partner = stimuli::parse_partner(partner_);
   std::vector<stimuli::StimulusSpec> specs;
@@ -86,7 +90,6 @@ int ReferenceCommand::run() const {
                "still differ at r_max"},
       {"renderer", context.info().renderer},
       {"entries", entries}};
-  if (output_.has_parent_path()) fs::create_directories(output_.parent_path());
   io::write_file_atomic(output_, json_input::dump(out, 2) + "\n");
   for (const auto& e : entries) {
     const auto& r = e["reference_filter_radius_px"];

@@ -95,8 +95,9 @@ void check_readings(const std::vector<Reading>& r) {
                                 " levels, including 0 and 255");
   for (const Reading& p : r) {
     if (p.level < 0 || p.level > 255) throw std::invalid_argument("level " + std::to_string(p.level) + ": expected 0..255");
-    if (!(std::isfinite(p.luminance_cd_m2) && p.luminance_cd_m2 >= 0))
-      throw std::invalid_argument("level " + std::to_string(p.level) + ": expected a luminance >= 0 cd/m2");
+    if (!(std::isfinite(p.luminance_cd_m2) && p.luminance_cd_m2 >= 0 && p.luminance_cd_m2 <= kMaxLuminanceCdM2))
+      throw std::invalid_argument("level " + std::to_string(p.level) + ": " + fmt(p.luminance_cd_m2) +
+                                  " is not a luminance in [0, 100000] cd/m2");
   }
   if (r.front().level != 0 || r.back().level != 255)
     throw std::invalid_argument("expected readings of level 0 (black) and 255 (white); the lowest is " +
@@ -167,9 +168,9 @@ DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string&
   if (!j["gamma"].is_number() || !(j["gamma"].get<double>() >= 0.5 && j["gamma"].get<double>() <= 5))
     fail("gamma", "expected a number in [0.5, 5]");
   c.gamma = j["gamma"].get<double>();
-  c.black_cd_m2 = number("black_cd_m2", 0, 1e5);
-  c.white_cd_m2 = number("white_cd_m2", 0, 1e5);
-  c.residual_rms_cd_m2 = number("residual_rms_cd_m2", 0, 1e5);
+  c.black_cd_m2 = number("black_cd_m2", 0, kMaxLuminanceCdM2);
+  c.white_cd_m2 = number("white_cd_m2", 0, kMaxLuminanceCdM2);
+  c.residual_rms_cd_m2 = number("residual_rms_cd_m2", 0, kMaxLuminanceCdM2);
   if (j.contains("monitor")) {
     if (!j["monitor"].is_object() && !j["monitor"].is_null()) fail("monitor", "expected an object or null");
     if (json_input::dump(j["monitor"]).size() > 4096) fail("monitor", "longer than 4096 bytes");
@@ -194,6 +195,23 @@ DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string&
     }
     if (!c.black_cd_m2 || !c.white_cd_m2 || !(*c.white_cd_m2 > *c.black_cd_m2))
       fail("white_cd_m2", "expected black_cd_m2 and white_cd_m2 with white above black");
+    // The model's numbers must describe the readings they came from (an edited gamma, black or
+    // white would encode every stimulus with a transfer nobody measured). The gamma model through
+    // black, white and gamma is held to the readings within twice its recorded RMS residual, and
+    // at least 2 % of the range (a table encodes with its readings alone).
+    const double range = *c.white_cd_m2 - *c.black_cd_m2;
+    double sum = 0;
+    for (const Reading& r : c.points) {
+      const double predicted = *c.black_cd_m2 + range * std::pow(r.level / 255.0, c.gamma);
+      sum += (predicted - r.luminance_cd_m2) * (predicted - r.luminance_cd_m2);
+    }
+    const double rms = std::sqrt(sum / static_cast<double>(c.points.size()));
+    const double allowed = std::max(2.0 * c.residual_rms_cd_m2.value_or(0.0), 0.02 * range);
+    if (c.model == Model::gamma && !(rms <= allowed))
+      fail("gamma", fmt(c.gamma) + " (black " + fmt(*c.black_cd_m2) + ", white " + fmt(*c.white_cd_m2) +
+                        ") contradicts the points: the model misses them by " + fmt(rms) + " cd/m2 RMS, more than " +
+                        fmt(allowed) + " (twice residual_rms_cd_m2, at least 2 % of the range)");
+
     if (j.contains("matched_level")) fail("matched_level", "only for method checkerboard-match");
   } else {
     if (c.model != Model::gamma) fail("model", "a checkerboard match gives a gamma, not a table");

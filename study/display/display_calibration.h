@@ -16,6 +16,7 @@ namespace penumbra::display {
 
 inline constexpr int kSchemaVersion = 1;
 inline constexpr int kMinReadings = 5;  // the gamma model has three parameters; two readings are left to judge it
+inline constexpr double kMaxLuminanceCdM2 = 1e5;  // above any display; the CSV, the window and the file share it
 
 struct Reading {
   int level = 0;                // 8-bit display value shown full screen
@@ -50,8 +51,9 @@ struct DisplayCalibration {
 };
 
 // Throws std::invalid_argument naming what is wrong with readings a calibration cannot come from:
-// fewer than kMinReadings, no level 0 or 255, a level twice, or luminance that does not rise with
-// the level (named by level).
+// fewer than kMinReadings, no level 0 or 255, a level twice, a luminance outside [0, 100000]
+// cd/m², or luminance that does not rise with the level (named by level). The one check of
+// readings for every path: the CSV, the window, and a calibration file read back.
 void check_readings(const std::vector<Reading>& sorted_by_level);
 
 nlohmann::json to_json(const DisplayCalibration& c);

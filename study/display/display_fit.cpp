@@ -52,7 +52,7 @@ double parse_luminance(const std::string& text_in) {
   const double v = std::strtod(t.c_str(), &end);
   if (end != t.c_str() + t.size() || !std::isfinite(v) || t.find_first_of("xXpPnNiI") != std::string::npos)
     throw std::invalid_argument(quoted + " is not a number");
-  if (!(v >= 0 && v <= 1e5)) throw std::invalid_argument(quoted + " is not a luminance in [0, 100000] cd/m2");
+  if (!(v >= 0 && v <= kMaxLuminanceCdM2)) throw std::invalid_argument(quoted + " is not a luminance in [0, 100000] cd/m2");
   return v;
 }
 

@@ -1,5 +1,7 @@
 #include "gui/gui_window.h"
 
+#include "procedure/config.h"
+
 #include "gl/window.h"
 
 #include <epoxy/gl.h>
@@ -24,15 +26,25 @@ namespace {
 std::string g_glfw_error;
 void on_glfw_error(int, const char* message) { g_glfw_error = message; }
 
-// Latin (with Extended-A/B), Greek and Cyrillic for translated texts (config "texts"), quotes,
-// dashes, the bullet, the arrows and the minus sign.
-const ImWchar kGlyphs[] = {0x0020, 0x024F, 0x0370, 0x03FF, 0x0400, 0x04FF, 0x2013, 0x2014, 0x2018, 0x201E,
-                           0x2022, 0x2022, 0x2026, 0x2026, 0x2190, 0x2193, 0x2212, 0x2212, 0};
+// The characters a config's texts may hold (procedure::drawable_ranges: the config reader refuses
+// any other), as ImGui's zero-terminated list of ranges.
+const ImWchar* glyph_ranges() {
+  static const std::vector<ImWchar> ranges = [] {
+    std::vector<ImWchar> r;
+    for (const auto& [first, last] : procedure::drawable_ranges()) {
+      r.push_back(static_cast<ImWchar>(first));
+      r.push_back(static_cast<ImWchar>(last));
+    }
+    r.push_back(0);
+    return r;
+  }();
+  return ranges.data();
+}
 const char* kFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";  // fonts-dejavu-core
 
 ImFont* add_font(float px) {
   ImGuiIO& io = ImGui::GetIO();
-  if (std::filesystem::exists(kFont)) return io.Fonts->AddFontFromFileTTF(kFont, px, nullptr, kGlyphs);
+  if (std::filesystem::exists(kFont)) return io.Fonts->AddFontFromFileTTF(kFont, px, nullptr, glyph_ranges());
   ImFontConfig config;  // ImGui's built-in bitmap font, scaled: readable, if plain
   config.SizePixels = px;
   return io.Fonts->AddFontDefault(&config);

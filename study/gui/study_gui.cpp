@@ -18,6 +18,7 @@
 #include <string>
 
 #include "cli/checks.h"
+#include "io/safe_path.h"
 #include "gui/admin_view.h"
 #include "gui/gui_window.h"
 #include "gui/participant_view.h"
@@ -159,6 +160,7 @@ struct Screens {
 // A --screenshot-at screen the session would never reach, refused with one line.
 void check_screenshot_reachable(const GuiOptions& o, const procedure::StudyConfig& config, bool intake, const procedure::Session* resumed) {
   if (o.screenshot_dir.empty()) return;
+  io::check_output(o.screenshot_dir, io::OutputKind::directory, "participant.png");  // every output's rule
   for (Screen s : {Screen::intake, Screen::consent, Screen::welcome, Screen::round, Screen::feedback})
     if (o.screenshot_at == procedure::name_of(s))
       if (const std::string why = procedure::unreachable(s, config, intake, resumed); !why.empty())
@@ -452,14 +454,14 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
     }
     bool shot_done = false, admin_shot_now = false;
     if (shoot && !shoot_trial && o.screenshot_at == procedure::name_of(drawn)) {
-      fs::create_directories(o.screenshot_dir);
+      fs::create_directory(o.screenshot_dir);
       write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
       say("wrote " + (o.screenshot_dir / "participant.png").string() + " (" + o.screenshot_at + ")");
       shot_done = true;
     }
     const bool first_trial_frame = drawn == Screen::trial && flow.screen() == Screen::trial && !flow.answerable();
     if (shoot_trial && (first_trial_frame || drawn == Screen::finished)) {
-      fs::create_directories(o.screenshot_dir);
+      fs::create_directory(o.screenshot_dir);
       write_rgb_png(o.screenshot_dir / "participant.png", participant.read_back());
       if (o.admin_panel) admin_shot_due = true;
       else admin_shot_now = true;

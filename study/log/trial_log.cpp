@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "text/printable.h"
 
@@ -69,6 +70,21 @@ const std::string& text(const std::string& v, const char* name) {
   if (v.find_first_of(",\"\n\r") != std::string::npos)
     throw std::invalid_argument(std::string("trial log: ") + name + " '" + text::printable(v) + "' contains , \" or a newline");
   return v;
+}
+
+// Bounds no real session reaches: a log holding more is edited or corrupt.
+constexpr double kMaxRtMs = 1e8, kMaxOnsetS = 1e7, kMaxFrameMs = 1e6;
+
+// "2026-12-03T09:15:02.123Z" (the study writes milliseconds; seconds alone are read too).
+bool utc_time_ok(const std::string& t) {
+  int year = 0, month = 0, day = 0, hour = 0, minute = 0, second = 0, millis = 0, used = 0;
+  const bool with_ms = std::sscanf(t.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d.%3dZ%n", &year, &month, &day, &hour, &minute, &second, &millis, &used) == 7;
+  if (!with_ms) {
+    used = 0;
+    if (std::sscanf(t.c_str(), "%4d-%2d-%2dT%2d:%2d:%2dZ%n", &year, &month, &day, &hour, &minute, &second, &used) != 6) return false;
+  }
+  return static_cast<std::size_t>(used) == t.size() && t.size() >= 20 && year >= 2000 && year <= 9999 && month >= 1 &&
+         month <= 12 && day >= 1 && day <= 31 && hour <= 23 && minute <= 59 && second <= 60 && t[4] == '-' && t[10] == 'T';
 }
 
 // UTF-8 without control characters.
@@ -154,6 +170,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
   r.session_id = nonempty(0);
   r.participant = nonempty(1);
   r.utc_time = nonempty(2);
+  if (!utc_time_ok(r.utc_time)) fail(2, "expected a UTC time as the study writes it, 2026-12-03T09:15:02.123Z");
   r.condition_index = integer(3, 0, 1000);
   if (layout == Layout::current) r.round_position = integer(4, 1, 1001);
   r.trial = integer(4 + k, 0, 1000000);
@@ -181,7 +198,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
   const bool right = r.task == "2afc" ? r.response == r.target : (r.response == "yes") == (r.target == "straight");
   if (r.correct != (right ? 1 : 0)) fail(15 + k, "does not agree with target and response");
   r.rt_ms = real(16 + k);
-  if (r.rt_ms < 0) fail(16 + k, "expected >= 0");
+  if (!(r.rt_ms >= 0 && r.rt_ms <= kMaxRtMs)) fail(16 + k, "expected a time in [0, 1e8] ms");
   r.quest_mean = real(17 + k);
   r.quest_sd = real(18 + k);
   if (r.quest_sd < 0) fail(18 + k, "expected >= 0");
@@ -207,12 +224,13 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
       if (f[i].empty()) fail(i, "expected a value (the timing columns are all empty or all filled)");
     FrameTiming t;
     t.onset_s = real(25 + k);
-    if (t.onset_s < 0) fail(25 + k, "expected >= 0");
+    if (!(t.onset_s >= 0 && t.onset_s <= kMaxOnsetS)) fail(25 + k, "expected a time in [0, 1e7] s since the window opened");
     t.frames = integer(26 + k, 1, 1000000000);
     t.frame_ms_mean = real(27 + k);
-    if (t.frame_ms_mean < 0) fail(27 + k, "expected >= 0");
+    if (!(t.frame_ms_mean >= 0 && t.frame_ms_mean <= kMaxFrameMs)) fail(27 + k, "expected a frame interval in [0, 1e6] ms");
     t.frame_ms_max = real(28 + k);
     if (t.frame_ms_max < t.frame_ms_mean) fail(28 + k, "expected >= frame_ms_mean");
+    if (t.frame_ms_max > kMaxFrameMs) fail(28 + k, "expected a frame interval in [0, 1e6] ms");
     if (!f[29 + k].empty()) t.dropped_frames = integer(29 + k, 0, t.frames);
     r.timing = t;
   }
@@ -239,6 +257,7 @@ FrameTiming frame_timing(double onset_s, const std::vector<double>& intervals_ms
 
 Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
   if (!create) {
+    io::refuse_link(path, "a session directory holds its own files, never links");
     std::ifstream in(path, std::ios::binary);
     std::string first;
     std::getline(in, first);
@@ -248,11 +267,8 @@ Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
       if (first == header_line(l)) layout_ = l, known = true;
     if (in && !known) throw std::runtime_error(path.string() + ":1: the header does not match the trial-log columns");
   }
-  const int flags = O_WRONLY | O_APPEND | O_CLOEXEC | (create ? (O_CREAT | O_EXCL) : 0);
-  fd_ = ::open(path.c_str(), flags, 0644);
-  if (fd_ < 0)
-    throw std::runtime_error(path.string() + ": cannot " + (create ? "create" : "open") + " the trial log: " +
-                             std::strerror(errno));
+  // Never through a symbolic link: rows appended to trials.csv went to whatever file it pointed at.
+  fd_ = io::open_no_follow(path, O_WRONLY | O_APPEND | (create ? (O_CREAT | O_EXCL) : 0), 0644, "the trial log");
   if (create) {
     int error = io::write_all(fd_, header_line());
     if (error == 0 && ::fsync(fd_) != 0) error = errno;
@@ -265,6 +281,11 @@ Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
 
 Writer::~Writer() {
   if (fd_ >= 0) ::close(fd_);
+}
+
+void Writer::cut_to(std::uintmax_t bytes) {
+  if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0 || ::fsync(fd_) != 0)
+    throw std::runtime_error(path_.string() + ": cannot cut the torn last line: " + std::strerror(errno));
 }
 
 void Writer::append(const TrialRow& row) {
@@ -280,15 +301,8 @@ void Writer::append(const TrialRow& row) {
 }
 
 ReadResult read(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw std::runtime_error(path.string() + ": cannot read the trial log: " +
-                             (std::filesystem::exists(path, ec) ? "not a regular file" : "no such file"));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open the trial log");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  const std::string all = ss.str();
+  // A session directory's log, never through a link; a million trials stay far below the bound.
+  const std::string all = io::read_file(path, std::size_t{256} << 20, io::Links::refuse);
   ReadResult result;
   const std::string file = path.string();
   std::size_t pos = 0;
@@ -305,9 +319,16 @@ ReadResult read(const std::filesystem::path& path) {
       bool known = false;
       for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current})
         if (line + "\n" == header_line(l)) result.layout = l, known = true;
-      if (!known)
+      if (!known) {
+        // The two ways a spreadsheet saves a good log badly, named (they look like the right header).
+        if (line.rfind("\xEF\xBB\xBF", 0) == 0)
+          throw std::runtime_error(file + ":1: starts with a UTF-8 byte-order mark (saved by a spreadsheet?); the log is plain UTF-8: "
+                                          "remove the first three bytes");
+        if (!line.empty() && line.back() == '\r')
+          throw std::runtime_error(file + ":1: lines end with \\r\\n (saved on Windows?); the log ends its lines with \\n only");
         throw std::runtime_error(file + ":1: the header does not match the trial-log columns (" +
                                  header_line().substr(0, header_line().size() - 1) + ")");
+      }
     } else {
       result.rows.push_back(parse_row(line, file, line_number, result.layout));
     }

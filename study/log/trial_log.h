@@ -87,6 +87,9 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
   // One write() of the whole line, then fsync(); throws naming the file on failure.
   void append(const TrialRow& row);
+  // Cuts the log to its first `bytes` (a torn last line, ReadResult::complete_bytes) through this
+  // writer's descriptor, which was opened without following a link.
+  void cut_to(std::uintmax_t bytes);
 
  private:
   std::filesystem::path path_;
@@ -100,7 +103,8 @@ struct ReadResult {
   std::uintmax_t complete_bytes = 0;  // bytes up to the end of the last complete line
   Layout layout = Layout::current;    // from the header
 };
-// Reads and validates a log (header and every row). Throws std::runtime_error naming file and line.
+// Reads and validates a log (header and every row); a symbolic link is refused, not followed.
+// Throws std::runtime_error naming file and line.
 ReadResult read(const std::filesystem::path& path);
 
 }  // namespace penumbra::trial_log

@@ -70,6 +70,46 @@ const std::vector<TextEntry>& text_table() {
 #undef PENUMBRA_LEFT
 #undef PENUMBRA_RIGHT
 
+const std::vector<std::pair<char32_t, char32_t>>& drawable_ranges() {
+  static const std::vector<std::pair<char32_t, char32_t>> ranges = {
+      {0x0020, 0x007E}, {0x00A0, 0x024F}, {0x0370, 0x03FF}, {0x0400, 0x04FF}, {0x2013, 0x2014}, {0x2018, 0x201E},
+      {0x2022, 0x2022}, {0x2026, 0x2026}, {0x2190, 0x2193}, {0x2212, 0x2212}};
+  return ranges;
+}
+
+bool drawable(char32_t cp) {
+  for (const auto& [first, last] : drawable_ranges())
+    if (cp >= first && cp <= last) return true;
+  return false;
+}
+
+std::string text_problem(const std::string& key, const std::string& value) {
+  if (!text::valid_utf8(value)) return "not valid UTF-8 (save the file as UTF-8)";
+  for (std::size_t i = 0; i < value.size();) {
+    const auto lead = static_cast<unsigned char>(value[i]);
+    const int n = lead < 0x80 ? 1 : lead < 0xE0 ? 2 : lead < 0xF0 ? 3 : 4;
+    char32_t cp = n == 1 ? lead : lead & (0xFF >> (n + 1));
+    for (int k = 1; k < n; ++k) cp = (cp << 6) | (static_cast<unsigned char>(value[i + static_cast<std::size_t>(k)]) & 0x3F);
+    if (cp != '\n' && !drawable(cp)) {
+      char code[16];
+      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(cp));
+      if (cp < 0x20 || (cp >= 0x7F && cp < 0xA0)) return std::string("a control character (") + code + "); only a newline (\\n) is allowed";
+      return std::string("character ") + code + " '" + value.substr(i, static_cast<std::size_t>(n)) +
+             "' cannot be drawn by the participant's window (its font covers Latin, Greek and Cyrillic); translate or remove it";
+    }
+    i += static_cast<std::size_t>(n);
+  }
+  for (std::size_t open = value.find('{'); open != std::string::npos; open = value.find('{', open + 1)) {
+    const std::size_t close = value.find('}', open);
+    if (close == std::string::npos) break;
+    const std::string name = value.substr(open, close - open + 1);
+    const bool filled = key == "round" && (name == "{round}" || name == "{rounds}");
+    if (!filled && name.size() > 2 && name.find_first_not_of("abcdefghijklmnopqrstuvwxyz_", 1) == name.size() - 1)
+      return "placeholder " + name + " is not filled in" + (key == "round" ? " (texts.round fills {round} and {rounds})" : " this text (only texts.round fills {round} and {rounds})");
+  }
+  return "";
+}
+
 std::string StudyConfig::text(const std::string& key, int round, int round_count) const {
   std::string out;
   const auto given = std::find_if(texts.begin(), texts.end(), [&](const auto& kv) { return kv.first == key; });
@@ -249,8 +289,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
       const std::string value = it->get<std::string>();
       if (!text::valid_utf8(value)) r.fail(field, "not valid UTF-8 (save the file as UTF-8)");
       if (value.size() > kMaxTextBytes) r.fail(field, "longer than " + std::to_string(kMaxTextBytes) + " bytes");
-      if (std::any_of(value.begin(), value.end(), [](char ch) { return (static_cast<unsigned char>(ch) < 0x20 && ch != '\n') || ch == 0x7f; }))
-        r.fail(field, "control characters other than a newline (\\n)");
+      if (const std::string problem = text_problem(it.key(), value); !problem.empty()) r.fail(field, problem);
       if (value.empty() && it.key() != "consent") r.fail(field, "expected a non-empty text");
       c.texts.emplace_back(it.key(), value);
     }

@@ -61,6 +61,17 @@ struct TextEntry {
   const char* help;
 };
 const std::vector<TextEntry>& text_table();
+
+// The characters the participant's window can draw: its font (DejaVu Sans) is loaded with these
+// ranges, first to last inclusive (Latin with Extended-A/B, Greek, Cyrillic, quotes, dashes, the
+// bullet, the ellipsis, the arrows, the minus sign). A text with any other character is refused when
+// the config is read, naming the field and the character: the window showed "?" for it.
+const std::vector<std::pair<char32_t, char32_t>>& drawable_ranges();
+bool drawable(char32_t code_point);
+// Why `value` cannot be texts.<key> ("" if it can): a character the window cannot draw (named as
+// U+XXXX), a control character other than a newline (C0 and C1), or a placeholder the text does not
+// fill (only texts.round fills {round} and {rounds}).
+std::string text_problem(const std::string& key, const std::string& value);
 inline constexpr std::size_t kMaxTextBytes = 4000;
 
 struct StudyConfig {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
 #include "json/json_input.h"
 #include "procedure/session_record.h"
 
@@ -31,13 +32,21 @@ Session Session::create(const StudyConfig& config, const fs::path& dir, const st
                         const nlohmann::json& extra, std::optional<std::uint64_t> seed) {
   if (const std::string bad = name_problem(participant); !bad.empty())
     throw std::runtime_error("participant '" + json_input::printable(participant) + "': " + bad);
+  // Every program's output rule (io::check_output): not a link, in a folder that exists, new or
+  // empty. The lock comes before the look inside, so a second process is told the directory is in
+  // use, and a session already there is named as one.
   std::error_code ec;
-  const bool made = !fs::exists(dir, ec);
-  fs::create_directories(dir, ec);
+  const bool made = !fs::exists(fs::symlink_status(dir, ec));
+  if (made) io::check_output(dir, io::OutputKind::directory);
+  else io::refuse_link(dir, "a session directory is named itself, not through a link");
+  fs::create_directory(dir, ec);
   if (ec) throw std::runtime_error(dir.string() + ": cannot create the session directory: " + ec.message());
   trial_log::DirectoryLock lock(dir);
-  if (fs::exists(dir / "session.json") || fs::exists(dir / "trials.csv"))
+  if (fs::exists(fs::symlink_status(dir / "session.json", ec)) || fs::exists(fs::symlink_status(dir / "trials.csv", ec)))
     throw std::runtime_error(dir.string() + ": already holds a session; refusing to overwrite it (use --resume)");
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().filename() != trial_log::DirectoryLock::kFileName)
+      throw std::runtime_error(dir.string() + ": exists and is not empty; choose a new session directory");
   // A session that cannot be started (a full disk) leaves nothing behind: not half a session, not
   // a directory that the next try would refuse.
   try {
@@ -87,12 +96,15 @@ Session Session::start(const StudyConfig& config, const fs::path& dir, const std
 
 Session Session::resume(const fs::path& dir, const std::function<void(const Session&)>& accept) {
   const fs::path json_path = dir / "session.json", log_path = dir / "trials.csv";
-  if (!fs::exists(json_path)) throw std::runtime_error(json_path.string() + ": no session to resume");
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(json_path, ec))) throw std::runtime_error(json_path.string() + ": no session to resume");
   trial_log::DirectoryLock lock(dir);
   // Nothing is written until session.json, the log and the caller's options all agree: a refused
-  // resume leaves every byte as it was. session.json is small and flat; the bounds refuse an edited
-  // one that would make resume allocate or write without bound.
-  nlohmann::json json = json_input::read_file(json_path, {.max_bytes = 1 << 20, .max_depth = 8});
+  // resume leaves every byte as it was (and no lock file). session.json is small and flat; the
+  // bounds refuse an edited one that would make resume allocate or write without bound. No file of
+  // the directory is reached through a link.
+  constexpr json_input::Limits limits{.max_bytes = 1 << 20, .max_depth = 8};
+  nlohmann::json json = json_input::parse(io::read_file(json_path, limits.max_bytes, io::Links::refuse), json_path.string(), limits);
   const SessionRecord record = check_session_json(json, json_path.string());
   const trial_log::ReadResult log = trial_log::read(log_path);
   Session s(record.config, record.randomization);
@@ -105,10 +117,10 @@ Session Session::resume(const fs::path& dir, const std::function<void(const Sess
   if (accept) accept(s);
   check_display_calibration_file(record.config, json_path.string());
   // Only now may the torn last line (the trial on screen when the process died) be cut.
-  if (log.torn_tail) fs::resize_file(log_path, log.complete_bytes);
+  s.writer_ = std::make_unique<trial_log::Writer>(log_path, false);
+  if (log.torn_tail) s.writer_->cut_to(log.complete_bytes);
   s.session_json_["resumed_utc"].push_back(utc_now());
   s.write_session_json();
-  s.writer_ = std::make_unique<trial_log::Writer>(log_path, false);
   return s;
 }
 

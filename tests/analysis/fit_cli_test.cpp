@@ -206,6 +206,24 @@ TEST(FitCli, PeopleFitAsPeopleAndArePooledWithSimulationsOnlyOnRequest) {
   fs::remove_all(dir);
 }
 
+// Issue 27: the files a fit reads are never reached through a symbolic link.
+TEST(FitCli, LinkedLogsAreRefused) {
+  const fs::path dir = fresh("links");
+  const auto sessions = simulated_sessions(dir / "sessions", 2);
+  for (const char* name : {"trials.csv", "session.json"}) {
+    SCOPED_TRACE(name);
+    fs::rename(sessions[1] / name, dir / name);
+    fs::create_symlink(dir / name, sessions[1] / name);
+    std::string out;
+    EXPECT_EQ(run(sessions[0].string() + " " + sessions[1].string() + " -o " + (dir / "out").string() + " --bootstrap 0", &out), 1) << out;
+    EXPECT_NE(out.find((sessions[1] / name).string() + ": is a symbolic link; refusing to follow it"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+    fs::remove(sessions[1] / name);
+    fs::rename(dir / name, sessions[1] / name);
+  }
+  fs::remove_all(dir);
+}
+
 // Issue 26: one short session gave c = 0.647 (not converged, slope at its bound, one participant)
 // and went into calibration.json with exit 0. An unusable fit is written only with
 // --allow-unusable, marked so in the file.

@@ -142,7 +142,7 @@ TEST(ErrorLines, TheFieldThatIsWrongIsTheOneBlamed) {
   expect_one_line(run(kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--size-px", "0", "-o",
                                (s / "st").string()},
                       s),
-                  1, "penumbra-study", "size_px: expected 16..4096");
+                  2, "penumbra-study", "--size-px: expected 16..4096");  // the option to change, not the spec's field
   EXPECT_FALSE(fs::exists(s / "st"));
   expect_one_line(run(kFit, {"psychometric", "--input", (s / "counts.csv").string(), "--guess", "1"}, s), 2,
                   "penumbra-fit", "--guess: expected a rate in [0, 1)");
@@ -174,7 +174,7 @@ TEST(ErrorLines, ADirectoryGivenAsAFileIsNamedAsOne) {
   expect_one_line(run(kFit, {"psychometric", "--input", (s / "dir.json").string()}, s), 1, "penumbra-fit",
                   "dir.json: cannot read: not a regular file");
   expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string()}, s), 1, "penumbra-fit",
-                  "trials.csv: cannot read the trial log: not a regular file");
+                  "trials.csv: cannot read: not a regular file (a directory)");
   expect_one_line(run(kFit, {sessions[0].string(), "-o", (s / "out").string(), "--reference", (s / "dir.json").string()}, s),
                   1, "penumbra-fit", "dir.json: cannot read: not a regular file");
   expect_one_line(run(kRender, {"--scene", (s / "dir.json").string(), "-o", (s / "r").string()}, s), 1, "penumbra-render",
@@ -234,7 +234,7 @@ TEST(ErrorLines, HugeValuesAndControlBytesAreNotEchoedWhole) {
       {kFit, {"psychometric", "--input", input, "--family", std::string(5000, 'a') + " " + std::string(5000, 'b')}, 2,
        "--family"},
       {kStudy, {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--kernel", kHuge, "-o",
-                (s / "st").string()}, 1, "kernel 'xxxx"},
+                (s / "st").string()}, 2, "--kernel: kernel 'xxxx"},
       {kStudy, {"run", "--config", kConfig, "--headless", "--observer", "psychometric:c=" + kHuge, "-o",
                 (s / "p").string()}, 2, "--observer"},
       {kStudy, {"run", "--config", kConfig, "--headless", "--pace-ms", digits, "-o", (s / "p").string()}, 2, "--pace-ms"},
@@ -288,12 +288,68 @@ TEST(ErrorLines, AFullDiskIsOneLineAndLeavesThePreviousOutput) {
                                                     (s / "render").string()},
                                       s),
                   1, "penumbra-render", "lit.png: cannot write: File too large");
+  // Issue 27: a stimulus directory is committed whole: a full disk left the new artifact.png beside
+  // the old line.png and stimulus.json (and, for a new directory, an empty one).
+  const std::vector<std::string> stimulus = {"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--size-px", "1024",
+                                             "-o", (s / "stim").string()};
+  ASSERT_EQ(run(kStudy, stimulus, s).exit_code, 0);
+  const std::string line_png = read(s / "stim" / "line.png"), artifact_png = read(s / "stim" / "artifact.png");
+  std::vector<std::string> other = stimulus;
+  other[2] = "5";  // another artifact size: other images
+  expect_one_line(run_with_file_limit(1, kStudy, other, s), 1, "penumbra-study", "artifact.png: cannot write: File too large");
+  EXPECT_EQ(read(s / "stim" / "artifact.png"), artifact_png);
+  EXPECT_EQ(read(s / "stim" / "line.png"), line_png);
+  other.back() = (s / "stim-new").string();
+  expect_one_line(run_with_file_limit(1, kStudy, other, s), 1, "penumbra-study", "artifact.png: cannot write: File too large");
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(s.dir())) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{"fit", "p", "sessions"}));
+  EXPECT_EQ(left, (std::vector<std::string>{"fit", "p", "sessions", "stim"}));
   for (const auto& e : fs::recursive_directory_iterator(s / "fit"))
     EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+}
+
+// Issue 27: errors that were unclear, each with the line it must print now.
+TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
+  const Scratch s("unclear");
+  std::ofstream(s / "file.txt") << "x\n";
+  std::ofstream(s / "readings.csv") << "level,luminance_cd_m2\n0,0.5\n64,8.4\n128,26.6\n191,61\n255,120.5\n";
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  {
+    std::string log = read(sessions[0] / "trials.csv");
+    for (std::size_t at = log.find('\n'); at != std::string::npos; at = log.find('\n', at + 2)) log.insert(at, "\r");
+    std::ofstream(s / "crlf.csv", std::ios::binary) << log;
+    std::ofstream(s / "header-only.csv") << trial_log::header_line();
+  }
+  struct Case {
+    std::string exe;
+    std::vector<std::string> args;
+    int status;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      // was: filesystem error: cannot create directories: Not a directory [...]
+      {kStudy, {"run", "--config", kConfig, "--headless", "-o", (s / "file.txt" / "p").string()}, 1,
+       (s / "file.txt" / "p").string() + ": " + (s / "file.txt").string() + " is not a folder"},
+      // was: the valid CSV blamed for another option
+      {kStudy, {"calibrate-display", "--luminances", (s / "readings.csv").string(), "--levels", "9", "-o", (s / "cal.json").string()}, 2,
+       "--levels: not with --luminances (the readings are in the file; --levels is for the window)"},
+      // was: "/dev/null" called missing
+      {kStudy, {"display-check", "--config", "/dev/null"}, 1, "/dev/null: cannot read: not a regular file"},
+      // was: a header mismatch without the cause
+      {kFit, {(s / "crlf.csv").string(), "-o", (s / "fit").string()}, 1,
+       (s / "crlf.csv").string() + ":1: lines end with \\r\\n (saved on Windows?); the log ends its lines with \\n only"},
+      // was: "no trials to fit" without a file
+      {kFit, {(s / "header-only.csv").string(), "-o", (s / "fit").string()}, 1,
+       (s / "header-only.csv").string() + ": no trials to fit (only headers, practice rows or catch trials)"},
+  };
+  for (const Case& c : cases) {
+    std::string tool = fs::path(c.exe).filename().string();
+    SCOPED_TRACE(tool + " " + c.line);
+    expect_one_line(run(c.exe, c.args, s), c.status, tool, c.line);
+  }
+  EXPECT_FALSE(fs::exists(s / "fit"));
+  EXPECT_FALSE(fs::exists(s / "cal.json"));
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 #include "cli/checks.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
+#include "io/safe_path.h"
+#include "io/staged_dir.h"
 #include "text/printable.h"
 
 namespace {
@@ -151,6 +153,92 @@ TEST(AtomicFile, AFailedWriteNamesItsReasonAndKeepsTheOldFile) {
   EXPECT_EQ(read(dir / "a.txt"), "old");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
   fs::remove_all(dir);
+}
+
+// Issue 27: one rule for every output path, and no file of ours reached through a link.
+TEST(SafePath, OneRuleForEveryOutput) {
+  const fs::path d = scratch("outputs");
+  auto refusal = [](const fs::path& p, io::OutputKind kind, const std::string& marker = "") {
+    try {
+      io::check_output(p, kind, marker);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal(d / "new", io::OutputKind::directory), "accepted");
+  EXPECT_EQ(refusal(d / "new.json", io::OutputKind::file), "accepted");
+  EXPECT_EQ(refusal(d / "a" / "b" / "c.json", io::OutputKind::file),
+            (d / "a" / "b" / "c.json").string() + ": the folder " + (d / "a" / "b").string() +
+                " does not exist (create it first: an output never creates the folders above it)");
+  EXPECT_FALSE(fs::exists(d / "a"));
+  std::ofstream(d / "file") << "x";
+  EXPECT_EQ(refusal(d / "file" / "out", io::OutputKind::directory), (d / "file" / "out").string() + ": " + (d / "file").string() + " is not a folder");
+  EXPECT_EQ(refusal(d / "file", io::OutputKind::directory), (d / "file").string() + ": exists and is not a directory");
+  EXPECT_EQ(refusal(d / "file", io::OutputKind::file), "accepted");
+  fs::create_directories(d / "full");
+  std::ofstream(d / "full" / "notes.txt") << "x";
+  EXPECT_EQ(refusal(d / "full", io::OutputKind::directory), (d / "full").string() + ": exists and is not empty; choose a new output directory");
+  EXPECT_EQ(refusal(d / "full", io::OutputKind::directory, "report.json"),
+            (d / "full").string() + ": exists and is not a previous output (no report.json); choose another output directory");
+  std::ofstream(d / "full" / "report.json") << "{}";
+  EXPECT_EQ(refusal(d / "full", io::OutputKind::directory, "report.json"), "accepted");
+  EXPECT_EQ(refusal(d / "full/", io::OutputKind::directory, "report.json"), "accepted");
+  fs::create_symlink(d / "full", d / "link");
+  EXPECT_EQ(refusal(d / "link", io::OutputKind::directory, "report.json"),
+            (d / "link").string() + ": is a symbolic link; refusing to follow it (an output is written where it is named, not through a link)");
+  fs::create_symlink(d / "file", d / "file-link");
+  EXPECT_EQ(refusal(d / "file-link", io::OutputKind::file).rfind((d / "file-link").string() + ": is a symbolic link", 0), 0u);
+  // The staged directory and the atomic file keep to it.
+  EXPECT_THROW(io::StagedDirectory((d / "link").string(), "report.json"), std::runtime_error);
+  EXPECT_THROW(io::StagedDirectory((d / "x" / "y").string(), "report.json"), std::runtime_error);
+  EXPECT_FALSE(fs::exists(d / "x"));
+  EXPECT_THROW(io::write_file_atomic(d / "file-link", "new"), std::runtime_error);
+  EXPECT_EQ(read(d / "file"), "x");
+  fs::remove_all(d);
+}
+
+TEST(SafePath, ReadingRefusesLinksAndNamesWhatIsNotAFile) {
+  const fs::path d = scratch("reading");
+  std::ofstream(d / "log.csv") << "a,b\n";
+  fs::create_symlink(d / "log.csv", d / "link.csv");
+  EXPECT_EQ(io::read_file(d / "log.csv", 100, io::Links::refuse), "a,b\n");
+  EXPECT_EQ(io::read_file(d / "link.csv", 100, io::Links::follow), "a,b\n");
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message([&] { io::read_file(d / "link.csv", 100, io::Links::refuse); }),
+            (d / "link.csv").string() + ": is a symbolic link; refusing to follow it (give the file itself)");
+  EXPECT_EQ(message([&] { io::read_file("/dev/null", 100); }), "/dev/null: cannot read: not a regular file");
+  EXPECT_EQ(message([&] { io::read_file(d, 100); }), d.string() + ": cannot read: not a regular file (a directory)");
+  EXPECT_EQ(message([&] { io::read_file(d / "none", 100); }), (d / "none").string() + ": cannot read: no such file");
+  EXPECT_EQ(message([&] { io::read_file(d / "log.csv", 2); }), (d / "log.csv").string() + ": larger than 2 bytes (4)");
+  // A kill's temporaries (their process gone) are removed beside the target, a live one's kept.
+  std::ofstream(d / ".session.json.partial-999999999") << "{";
+  std::ofstream(d / (".session.json.partial-" + std::to_string(::getpid()))) << "{";
+  fs::create_directories(d / "out.partial-999999998");
+  io::remove_abandoned_partials(d / "session.json");
+  io::remove_abandoned_partials(d / "out");
+  EXPECT_FALSE(fs::exists(d / ".session.json.partial-999999999"));
+  EXPECT_FALSE(fs::exists(d / "out.partial-999999998"));
+  EXPECT_TRUE(fs::exists(d / (".session.json.partial-" + std::to_string(::getpid()))));
+  fs::remove_all(d);
+}
+
+// Issue 27: one rule for exit codes. A UsageError or a line that begins with an option's name is
+// the command line's fault (2); a line that begins with a file is the data's (1).
+TEST(Cli, ExitCodesFollowOneRule) {
+  EXPECT_EQ(cli::exit_code(std::invalid_argument("--seed 5: the session was run with seed 3")), cli::kExitUsage);
+  EXPECT_EQ(cli::exit_code(std::runtime_error("-o: not with --resume")), cli::kExitUsage);
+  EXPECT_EQ(cli::exit_code(cli::UsageError("two options that contradict each other")), cli::kExitUsage);
+  EXPECT_EQ(cli::exit_code(std::runtime_error("study.json: stopping.min_trials: expected an integer")), cli::kExitError);
+  EXPECT_EQ(cli::exit_code(std::runtime_error("-0.5 is not a luminance")), cli::kExitError);
+  EXPECT_EQ(cli::exit_code(std::invalid_argument("--")), cli::kExitError);
 }
 
 }  // namespace

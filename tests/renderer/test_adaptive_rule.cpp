@@ -1,5 +1,6 @@
 // The filter-to-resolution rule, its clamping and the hysteresis controller (label `unit`).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -103,7 +104,9 @@ TEST(ResolutionController, ConstantRequirementNeverChanges) {
 class CalibrationFile : public ::testing::Test {
  protected:
   std::filesystem::path write(const std::string& text) {
-    const auto p = std::filesystem::temp_directory_path() / ("penumbra_cal_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" + std::to_string(n_++) + ".json");
+    // The process id: CTest runs each test of this fixture as its own process, side by side under
+    // -j2, and the same names raced (a test read another's file now and then).
+    const auto p = std::filesystem::temp_directory_path() / ("penumbra_cal_" + std::to_string(::getpid()) + "_" + std::to_string(n_++) + ".json");
     std::ofstream(p) << text;
     files_.push_back(p);
     return p;

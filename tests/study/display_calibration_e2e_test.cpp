@@ -120,7 +120,7 @@ TEST(DisplayCalibrationCli, BadReadingsAreRefusedWithOneLineAndNothingWritten) {
   std::string output;
   EXPECT_EQ(run({"calibrate-display", "--luminances", csv.string(), "-o", out.string()}, &output), 1);
   EXPECT_EQ(slurp(out), before);
-  EXPECT_EQ(run({"calibrate-display", "--luminances", csv.string(), "--model", "spline", "-o", out.string()}, &output), 1);
+  EXPECT_EQ(run({"calibrate-display", "--luminances", csv.string(), "--model", "spline", "-o", out.string()}, &output), 2);
   EXPECT_EQ(output, "penumbra-study: --model: model 'spline': expected gamma or table\n");
   fs::remove_all(dir);
 }
@@ -232,7 +232,7 @@ TEST(DisplayCalibrationStudy, ResumeChecksTheFileAndTheFitterPoolsByWhatWasMeasu
   EXPECT_NE(output.find("display_calibration: " + cal.string() + " changed since the session started"), std::string::npos) << output;
   EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 1) << output;
   EXPECT_EQ(slurp(dir / "p1" / "session.json"), session_before);
-  EXPECT_EQ(run({"run", "--resume", (dir / "p1").string(), "--headless", "--display-calibration", cal.string()}, &output), 1);
+  EXPECT_EQ(run({"run", "--resume", (dir / "p1").string(), "--headless", "--display-calibration", cal.string()}, &output), 2);
   EXPECT_EQ(output, "penumbra-study: --display-calibration: not with --resume (the session's calibration is in its session.json)\n");
   std::ofstream(cal, std::ios::binary) << kept;  // restored: the session continues
   ASSERT_EQ(run({"run", "--resume", (dir / "p1").string(), "--headless"}, &output), 0) << output;

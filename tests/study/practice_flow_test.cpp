@@ -147,7 +147,7 @@ TEST(PracticeFlow, PracticeBlockAndTextsRoundTripAndErrorsNameTheField) {
   EXPECT_EQ(with("texts", "hello"), "study.json: texts: expected an object of \"name\": \"text\"");
   EXPECT_EQ(with("texts", {{"welcome", 3}}), "study.json: texts.welcome: expected a string");
   EXPECT_EQ(with("texts", {{"welcome", "caf\xe9"}}), "study.json: texts.welcome: not valid UTF-8 (save the file as UTF-8)");
-  EXPECT_EQ(with("texts", {{"task", "a\tb"}}), "study.json: texts.task: control characters other than a newline (\\n)");
+  EXPECT_EQ(with("texts", {{"task", "a\tb"}}), "study.json: texts.task: a control character (U+0009); only a newline (\\n) is allowed");
   EXPECT_EQ(with("texts", {{"start", ""}}), "study.json: texts.start: expected a non-empty text");
   EXPECT_EQ(with("texts", {{"consent", ""}}), "no error");
   EXPECT_EQ(with("texts", {{"welcome", std::string(procedure::kMaxTextBytes + 1, 'x')}}),

@@ -658,4 +658,140 @@ TEST(StudyRun, NaNAndNegativeOptionsAreRefusedBeforeAnythingIsCreated) {
   }
 }
 
+// Issue 27: values that saturated or where the last one won are refused.
+TEST(StudyRun, SeedsBeyondSixtyFourBitsAndRepeatedObserverKeysAreRefused) {
+  const fs::path dir = fresh("saturate");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--seed", "18446744073709551616"},
+       "--seed: expected a non-negative integer of at most 18446744073709551615 (2^64 - 1)"},
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--observer-seed", "99999999999999999999999"},
+       "--observer-seed: expected a non-negative integer of at most"},
+      {{"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--seed", "18446744073709551616", "-o", dir.string()},
+       "--seed: expected a non-negative integer of at most"},
+      {{"run", "--config", kConfig, "--headless", "-o", dir.string(), "--observer", "psychometric:c=3,c=5"}, "--observer: c given twice"},
+      {{"reference", "--seeds", "", "-o", (dir / "ref.json").string()}, "--seeds: expected a non-negative integer"},
+  };
+  for (const auto& [args, expected] : cases) {
+    std::string out;
+    EXPECT_EQ(run(args, &out), 2) << expected;
+    EXPECT_NE(out.find(expected), std::string::npos) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+    EXPECT_FALSE(fs::exists(dir)) << expected;
+  }
+  // 2^64 - 1 itself is a seed.
+  EXPECT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string(), "--seed", "18446744073709551615", "--stop-after", "2"}), 0);
+  fs::remove_all(dir);
+}
+
+// Issue 27: a session directory is data another machine may hand us. A symbolic link in it is
+// refused, never followed: with session.lock a link, --resume truncated the file it pointed at and
+// wrote its pid there; with trials.csv a link, rows were appended to the other file.
+TEST(StudyRun, LinksInASessionDirectoryAreRefusedAndTheirTargetsUntouched) {
+  const fs::path dir = fresh("links"), victim = fresh("links-victim.txt");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(), "--stop-after", "5"}), 0);
+  EXPECT_FALSE(fs::exists(dir / "session.lock")) << "released: the lock file goes with the lock";
+  const std::string victim_text = "precious\n";
+  for (const char* name : {"session.lock", "trials.csv", "session.json"}) {
+    SCOPED_TRACE(name);
+    std::ofstream(victim) << victim_text;
+    const fs::path kept = dir.string() + "-kept";
+    fs::remove_all(kept);
+    fs::copy(dir, kept);
+    fs::remove(dir / name);
+    if (std::string(name) != "session.lock") fs::copy_file(kept / name, victim, fs::copy_options::overwrite_existing);
+    const std::string target_before = bytes(victim);
+    fs::create_symlink(victim, dir / name);
+    std::string out;
+    EXPECT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 1) << out;
+    EXPECT_NE(out.find((dir / name).string() + ": is a symbolic link; refusing to follow it"), std::string::npos) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+    EXPECT_EQ(bytes(victim), target_before) << "the link's target was written";
+    EXPECT_TRUE(fs::is_symlink(dir / name));
+    fs::remove_all(dir);
+    fs::rename(kept, dir);
+  }
+  // -o that is a link is refused too, before anything is written.
+  const fs::path real = fresh("links-real"), link = fresh("links-link");
+  fs::create_directories(real);
+  fs::create_symlink(real, link);
+  std::string out;
+  EXPECT_EQ(run({"run", "--config", kConfig, "--headless", "-o", link.string()}, &out), 1) << out;
+  EXPECT_NE(out.find(link.string() + ": is a symbolic link"), std::string::npos) << out;
+  EXPECT_TRUE(fs::is_empty(real));
+  fs::remove(link);
+  fs::remove_all(real);
+  fs::remove_all(dir);
+  fs::remove(victim);
+}
+
+// Issue 27: every program's output path follows one rule (io::check_output): a folder that exists,
+// no link, and a directory that is new, empty or a previous output of the same kind. `run -o` and
+// `stimulus -o` wrote into directories of unrelated files; `reference -o a/b/c/ref.json` created
+// every missing folder (one at the filesystem root when run as root). A refused run leaves no
+// session.lock; a kill's temporary beside session.json is removed by the next run.
+TEST(StudyRun, OutputsFollowOneRuleAndRefusalsLeaveNothing) {
+  const fs::path foreign = fresh("foreign"), missing = fresh("missing");
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "thesis.tex") << "not ours\n";
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{"run", "--config", kConfig, "--headless", "-o", foreign.string()}, foreign.string() + ": exists and is not empty"},
+      {{"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "-o", foreign.string()},
+       foreign.string() + ": exists and is not a previous output (no stimulus.json)"},
+      {{"reference", "--artifact-px", "10", "-o", (missing / "a" / "b" / "ref.json").string()},
+       (missing / "a" / "b" / "ref.json").string() + ": the folder " + (missing / "a" / "b").string() + " does not exist"},
+      {{"run", "--config", kConfig, "--headless", "-o", (foreign / "thesis.tex" / "s").string()},
+       (foreign / "thesis.tex" / "s").string() + ": " + (foreign / "thesis.tex").string() + " is not a folder"},
+  };
+  for (const Case& c : cases) {
+    std::string out;
+    EXPECT_EQ(run(c.args, &out), 1) << c.expected;
+    EXPECT_NE(out.find(c.expected), std::string::npos) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+  }
+  EXPECT_FALSE(fs::exists(missing));
+  std::vector<std::string> listing;
+  for (const auto& e : fs::directory_iterator(foreign)) listing.push_back(e.path().filename().string());
+  EXPECT_EQ(listing, std::vector<std::string>{"thesis.tex"});
+
+  // A stimulus directory is replaced whole, and a new one appears whole.
+  const fs::path stim = fresh("stim");
+  ASSERT_EQ(run({"stimulus", "--artifact-px", "10", "--filter-radius-px", "20", "--size-px", "64", "-o", stim.string()}), 0);
+  ASSERT_EQ(run({"stimulus", "--artifact-px", "5", "--filter-radius-px", "20", "--size-px", "64", "-o", stim.string()}), 0);
+  EXPECT_NE(bytes(stim / "stimulus.json").find("\"artifact_px\": 5"), std::string::npos);
+
+  // Refused runs leave no lock file; a kill's temporary is removed by the next write of session.json.
+  const fs::path dir = fresh("no-lock");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(), "--stop-after", "3"}), 0);
+  std::string out;
+  EXPECT_EQ(run({"run", "--config", kConfig, "--headless", "-o", dir.string()}, &out), 1) << out;  // holds a session
+  EXPECT_EQ(run({"run", "--resume", dir.string(), "--headless", "--seed", "1"}, &out), 2) << out;  // contradicts it
+  EXPECT_FALSE(fs::exists(dir / "session.lock"));
+  const fs::path abandoned = dir / ".session.json.partial-999999999";  // above any pid_max: its process is gone
+  std::ofstream(abandoned) << "{";
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless", "--stop-after", "4"}, &out), 0) << out;
+  EXPECT_FALSE(fs::exists(abandoned));
+  EXPECT_FALSE(fs::exists(dir / "session.lock"));
+  fs::remove_all(dir);
+  fs::remove_all(stim);
+  fs::remove_all(foreign);
+}
+
+// Issue 27: a bad observer in session.json was reported as the --observer option nobody passed.
+TEST(StudyRun, ABadObserverInSessionJsonIsBlamedOnTheFile) {
+  const fs::path dir = fresh("bad-observer");
+  ASSERT_EQ(run({"run", "--config", kConfig, "--observer", kObserver, "--headless", "-o", dir.string(), "--stop-after", "3"}), 0);
+  nlohmann::json j = nlohmann::json::parse(bytes(dir / "session.json"));
+  j["observer"] = "psychometric:c=-4";
+  std::ofstream(dir / "session.json") << j.dump(2);
+  std::string out;
+  EXPECT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 1) << out;
+  EXPECT_NE(out.find("penumbra-study: " + (dir / "session.json").string() + ": observer: c_true must be positive"), std::string::npos)
+      << out;
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -254,13 +254,13 @@ TEST(TrialLog, BadTimingValuesNameFileLineAndColumn) {
     std::string timing, message;
   };
   const std::vector<Case> cases{
-      {"-0.5,4,22.5,40.1,1", "column 'onset_s': expected >= 0 (found '-0.5')"},
+      {"-0.5,4,22.5,40.1,1", "column 'onset_s': expected a time in [0, 1e7] s since the window opened (found '-0.5')"},
       {"nan,4,22.5,40.1,1", "column 'onset_s': expected a finite number (found 'nan')"},
       {"NA,4,22.5,40.1,1", "column 'onset_s': expected a finite number (found 'NA')"},
       {"12.5,0,22.5,40.1,0", "column 'frames': expected an integer in [1, 1000000000] (found '0')"},
       {"12.5,4.5,22.5,40.1,1", "column 'frames': expected an integer in [1, 1000000000] (found '4.5')"},
       {"12.5,4,inf,40.1,1", "column 'frame_ms_mean': expected a finite number (found 'inf')"},
-      {"12.5,4,-1,40.1,1", "column 'frame_ms_mean': expected >= 0 (found '-1')"},
+      {"12.5,4,-1,40.1,1", "column 'frame_ms_mean': expected a frame interval in [0, 1e6] ms (found '-1')"},
       {"12.5,4,22.5,20,1", "column 'frame_ms_max': expected >= frame_ms_mean (found '20')"},
       {"12.5,4,22.5,40.1,5", "column 'dropped_frames': expected an integer in [0, 4] (found '5')"},
       {"12.5,4,22.5,40.1,-1", "column 'dropped_frames': expected an integer in [0, 4] (found '-1')"},
@@ -378,6 +378,66 @@ TEST(StudyConfig, LatinSquareRoundOrderIsBalanced) {
   c.round_order = "latin-square";
   EXPECT_EQ(procedure::randomize(c, "p2", std::nullopt).round_order, procedure::latin_square_row(4, 2));
   EXPECT_EQ(procedure::randomize(c, "p2", std::nullopt).round_order, (std::vector<int>{1, 2, 0, 3}));
+}
+
+// Issue 27: a log that resume and the fit passed although no session writes it: a utc_time of
+// "yesterday", an onset of 1e308 s; and a CRLF or BOM file reported as a header mismatch without
+// the cause.
+TEST(TrialLog, ValuesNoSessionWritesAreRefusedAndSpreadsheetDamageIsNamed) {
+  const fs::path dir = fresh_dir("log-values");
+  const std::string good = trial_log::format_row(timed_row(0));
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string row = good;
+    const std::size_t at = row.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    row.replace(at, from.size(), to);
+    std::ofstream(dir / "t.csv") << trial_log::header_line() << row;
+    return read_error(dir / "t.csv");
+  };
+  const std::string f = (dir / "t.csv").string();
+  EXPECT_EQ(with("2025-01-01T00:00:00.000Z", "yesterday"),
+            f + ":2: column 'utc_time': expected a UTC time as the study writes it, 2026-12-03T09:15:02.123Z (found 'yesterday')");
+  EXPECT_EQ(with("2025-01-01T00:00:00.000Z", "2025-13-01T00:00:00.000Z").find("column 'utc_time'"), f.size() + 4);
+  EXPECT_EQ(with(",12.5,4,", ",1e308,4,"), f + ":2: column 'onset_s': expected a time in [0, 1e7] s since the window opened (found '1e308')");
+  EXPECT_EQ(with(",22.574999999999999,", ",1e300,").find("column 'frame_ms_mean'"), f.size() + 4);
+  EXPECT_EQ(read_error(dir / "t.csv").find("no error"), std::string::npos);
+  {
+    std::ofstream(dir / "crlf.csv", std::ios::binary) << "session_id,participant\r\n";
+    std::ofstream(dir / "bom.csv", std::ios::binary) << "\xEF\xBB\xBF" << trial_log::header_line() << good;
+  }
+  EXPECT_EQ(read_error(dir / "crlf.csv"),
+            (dir / "crlf.csv").string() + ":1: lines end with \\r\\n (saved on Windows?); the log ends its lines with \\n only");
+  EXPECT_EQ(read_error(dir / "bom.csv"), (dir / "bom.csv").string() +
+                                             ":1: starts with a UTF-8 byte-order mark (saved by a spreadsheet?); the log is plain UTF-8: "
+                                             "remove the first three bytes");
+  fs::remove_all(dir);
+}
+
+// Issue 27: texts the participant's window cannot draw were shown as "??????"; a C1 control and an
+// unknown {placeholder} were taken. Each is refused naming the field and the character.
+TEST(StudyConfig, TextsTheWindowCannotDrawAreRefusedNamingTheCharacter) {
+  nlohmann::json base = nlohmann::json::parse(R"({"rounds": [{"pattern": "stair", "contrast": 1.0}]})");
+  auto with_text = [&](const std::string& key, const std::string& value) {
+    nlohmann::json j = base;
+    j["texts"] = {{key, value}};
+    return config_error(j);
+  };
+  EXPECT_EQ(with_text("welcome", "\u4f60\u597d"),  // Chinese
+            "study.json: texts.welcome: character U+4F60 '\u4f60' cannot be drawn by the participant's window (its font covers Latin, "
+            "Greek and Cyrillic); translate or remove it");
+  EXPECT_EQ(with_text("welcome", "Hallo\u0085Welt"), "study.json: texts.welcome: a control character (U+0085); only a newline (\\n) is allowed");
+  EXPECT_EQ(with_text("welcome", "Hello {bogus}"),
+            "study.json: texts.welcome: placeholder {bogus} is not filled in this text (only texts.round fills {round} and {rounds})");
+  EXPECT_EQ(with_text("round", "Runde {round} von {total}"),
+            "study.json: texts.round: placeholder {total} is not filled in (texts.round fills {round} and {rounds})");
+  EXPECT_EQ(with_text("round", "Runde {round} von {rounds}"), "no error");
+  EXPECT_EQ(with_text("welcome", "Gr\u00fc\u00dfe \u2014 \u0417\u0434\u0440\u0430\u0432\u0441\u0442\u0432\u0443\u0439\u0442\u0435 \u2190 {ok"), "no error");
+  // Every default text can be drawn.
+  for (const auto& e : procedure::text_table())
+    for (const char* text : {e.default_2afc, e.default_yesno})
+      if (text) {
+        EXPECT_EQ(procedure::text_problem(e.key, text), "") << e.key;
+      }
 }
 
 }  // namespace
