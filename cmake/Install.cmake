@@ -53,7 +53,8 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DO
 # --- libraries, headers, CMake package, pkg-config -----------------------------------------------
 
 # component -> targets (export name = the target's name without "penumbra_")
-set(penumbra_export_core penumbra_published penumbra_random penumbra_text penumbra_json_input penumbra_staged_dir)
+set(penumbra_export_core penumbra_published penumbra_random penumbra_psychometric_math penumbra_text penumbra_json_input
+    penumbra_staged_dir)
 set(penumbra_export_adaptive penumbra_adaptive)
 set(penumbra_export_psychometrics penumbra_psychometrics)
 set(penumbra_export_study_log penumbra_study_log)
@@ -103,6 +104,7 @@ function(penumbra_install_headers subdir)
 endfunction()
 penumbra_install_headers("" ${PROJECT_SOURCE_DIR}/common/published.h)
 penumbra_install_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/random.h)
+penumbra_install_headers(psychometric ${PROJECT_SOURCE_DIR}/common/psychometric/psychometric.h)
 file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/adaptive/*.h)
 penumbra_install_headers(adaptive ${headers})
 file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/study/quest/*.h)

@@ -6,20 +6,21 @@
 # radius of the grid twice per condition; the filtered-moments techniques draw their partner on a
 # map of up to 4096² texels (docs/study.md).
 #   scripts/predict-calibration.sh [OUTPUT] [TECHNIQUE-SPEC...]
-# A TECHNIQUE-SPEC is "pcf:pcf.kernel=grid" or "vsm"; without any, all of them.
+# A TECHNIQUE-SPEC is "pcf:pcf.kernel=grid" or "vsm"; without any, all of them. Entries of other
+# techniques already in OUTPUT are kept, so one technique can be re-predicted alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-data/calibration/predicted.json}"
 shift || true
 specs=("$@")
 if [[ ${#specs[@]} -eq 0 ]]; then
-  specs=("pcf:pcf.kernel=grid" "pcf:pcf.kernel=poisson" "rpcf" "vsm" "msm" "evsm" "esm")
+  specs=("pcf:pcf.kernel=disk" "pcf:pcf.kernel=grid" "pcf:pcf.kernel=poisson" "rpcf" "vsm" "msm" "evsm" "esm")
 fi
 curve="${PENUMBRA_OBSERVER_CURVE:-build/study/penumbra-observer-curve}"
 [[ -x "$curve" ]] || { echo "predict-calibration: $curve not built (scripts/build.sh)" >&2; exit 1; }
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-grid=(--pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20 --ratio-min 0.7 --ratio-max 6 --ratio-step 1.15 --seeds 2)
+grid=(--pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20 --ratio-min 0.7 --ratio-max 6 --ratio-step 1.15 --seeds 3)
 parts=()
 for spec in "${specs[@]}"; do
   technique="${spec%%:*}"
@@ -38,13 +39,18 @@ done
 import json, sys, datetime, os
 out, parts = sys.argv[1], sys.argv[2:]
 entries = [json.load(open(p))["entries"][0] for p in parts]
+key = lambda e: (e["technique"], e.get("kernel") or "")
+if os.path.exists(out):
+    new = {key(e) for e in entries}
+    entries = [e for e in json.load(open(out))["entries"] if key(e) not in new] + entries
+    entries.sort(key=key)
 doc = {
     "schema_version": 2,
     "created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
     "source": "image-observer predictions (a model of the observer, not human data), made by scripts/predict-calibration.sh: "
               "per technique the largest condition's c; a condition's c is the geometric mean over artifact sizes of the r / a "
-              "beyond which the model's 2afc P(correct) stays below 0.82; ci95 is [c, c] (a deterministic model has no "
-              "sampling interval). Each entry's command reproduces it.",
+              "beyond which the model's 2afc P(correct) stays below 0.82; ci95 is a percentile bootstrap over the stimuli "
+              "(phase and orientation) rendered per radius, widened to contain c. Each entry's command reproduces it.",
     "entries": entries,
 }
 tmp = out + ".tmp"

@@ -98,7 +98,7 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
       {"format", format},
       {"family", psychometric::model_name(spec.family)},
       {"model", "psi(x) = gamma + (1 - gamma - lambda) F(x; alpha, beta)"},
-      {"parameters", {{"alpha", number(alpha_of(spec, u, beta, fit.params.lambda))},
+      {"parameters", {{"alpha", number(alpha_of(spec, u, beta))},
                       {"beta", number(beta)},
                       {"gamma", spec.guess},
                       {"lambda", number(fit.params.lambda)}}},
@@ -175,7 +175,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
     return fit_study(data, options);
   }();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const ConditionFit& chosen = calibration_condition(fit, so.condition);  // an unknown --condition fails before anything is written
+  const WorstCase chosen = entry_choice(fit, so.condition);  // an unknown --condition fails before anything is written
 
   std::vector<std::string> inputs;
   for (const fs::path& p : so.inputs) inputs.push_back(p.string());

@@ -95,6 +95,13 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
     const auto& config = j["config"];
     if (config.contains("stimulus")) flatten("stimulus.", config["stimulus"]);
     if (config.contains("task") && config["task"].is_string()) info.setup["task"] = config["task"].get<std::string>();
+    if (config.contains("yesno_scoring")) {
+      if (!config["yesno_scoring"].is_string() ||
+          (config["yesno_scoring"] != "jagged_only" && config["yesno_scoring"] != "balanced"))
+        throw std::runtime_error(file + ": config.yesno_scoring: expected jagged_only or balanced");
+      info.yesno_scoring = config["yesno_scoring"].get<std::string>();
+      info.setup["yesno_scoring"] = info.yesno_scoring;
+    }
   }
   if (j.contains("config") && j["config"].is_object() && j["config"].contains("stopping")) {
     const auto& s = j["config"]["stopping"];
@@ -254,6 +261,7 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
       if (row.task == "yesno" && row.target == "straight") {
         ++data.catch_rows;
         data.catch_false_alarms += row.response == "no" ? 1 : 0;
+        data.catch_trials.push_back({row, index, line});
         continue;
       }
       data.trials.push_back({row, index, line});

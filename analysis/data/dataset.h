@@ -1,7 +1,7 @@
 #pragma once
 // The study's trial logs as the fitter sees them: session directories (trials.csv + session.json)
 // or bare trial CSVs, read through the study's validating reader (penumbra_study_log, no GL).
-// Practice rows and yes/no catch trials are counted and left out.
+// Practice rows are counted and left out; yes/no catch trials are kept apart (Dataset::catch_trials).
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -26,6 +26,8 @@ struct SessionInfo {
   // "psychometric-simulation" or "image-observer"; "" for a log without a session.json beside it.
   std::string observer_kind;
   std::string observer;  // session.json's "observer": a simulated observer's spec ("psychometric:c=..", "image:..")
+  // yes/no: what QUEST was fed (the config's yesno_scoring): "jagged_only" or "balanced".
+  std::string yesno_scoring = "jagged_only";
   // How the session measured, flattened from session.json ("display.viewing_distance_mm" -> "600"):
   // the task, the stimulus block, the display as recorded (geometry, transfer; a measured
   // transfer by its calibration's fingerprint, "display.calibration") and the QUEST parameters.
@@ -74,6 +76,9 @@ struct Dataset {
   // (study/procedure/session.cpp) the fits use the jagged trials only, where correct = detected.
   int catch_rows = 0;
   int catch_false_alarms = 0;  // catch trials answered "not straight"
+  // The catch trials themselves, in log order per session: a participant's false-alarm rate is
+  // the guess rate of their detections (fit_study), and a balanced-scored session's QUEST saw them.
+  std::vector<Trial> catch_trials;
 };
 
 // Throws std::runtime_error naming the file (and line and column for log rows) on bad input: a

@@ -35,18 +35,29 @@ namespace {
 
 constexpr double kTiny = 1e-300;
 
+// alpha that puts F at the criterion F* at threshold u. A group with its own guess rate takes F*
+// directly (F* on F needs no guess rate); the others go through ModelSpec's p_threshold, guess and
+// criterion lapse, which give the same F*.
+template <typename T>
+T threshold_alpha(const ModelSpec& spec, const std::optional<double>& group_guess, const T& u, const T& beta) {
+  using std::pow;
+  const T threshold_x = spec.family == psy::Model::weibull ? T(pow(T(10.0), u)) : u;
+  if (group_guess) return psy::alpha_for_threshold(spec.family, threshold_x, T(spec.criterion_f()), beta, T(0.0), T(0.0));
+  return psy::alpha_for_threshold(spec.family, threshold_x, T(spec.p_threshold), beta, T(spec.guess), T(spec.criterion_lapse));
+}
+
 // The model at one group threshold u, with what does not depend on x computed once.
 template <typename T>
 struct GroupModel {
   T alpha, beta, gamma, lambda, scale;
-  GroupModel(const ModelSpec& spec, const T& u, const T& log_beta, const T& lambda_in) {
+  GroupModel(const ModelSpec& spec, const std::optional<double>& group_guess, const T& u, const T& log_beta,
+             const T& lambda_in) {
     using std::exp;
     using std::pow;
     beta = exp(log_beta);
-    gamma = T(spec.guess);
+    gamma = T(group_guess.value_or(spec.guess));
     lambda = lambda_in;
-    const T threshold_x = spec.family == psy::Model::weibull ? T(pow(T(10.0), u)) : u;
-    alpha = psy::alpha_for_threshold(spec.family, threshold_x, T(spec.p_threshold), beta, gamma, lambda);
+    alpha = threshold_alpha(spec, group_guess, u, beta);
     scale = T(1.0) - gamma - lambda;
   }
   // log psi and log(1 - psi) at x; 1 - psi is built from 1 - F so that it keeps its precision far
@@ -66,14 +77,12 @@ struct GroupModel {
 };
 
 template <typename T>
-T probability(const ModelSpec& spec, double x, const T& u, const T& log_beta, const T& lambda) {
+T probability(const ModelSpec& spec, const std::optional<double>& group_guess, double x, const T& u, const T& log_beta,
+              const T& lambda) {
   using std::exp;
-  using std::pow;
   const T beta = exp(log_beta);
-  const T threshold_x = spec.family == psy::Model::weibull ? T(pow(T(10.0), u)) : u;
-  const T alpha =
-      psy::alpha_for_threshold(spec.family, threshold_x, T(spec.p_threshold), beta, T(spec.guess), lambda);
-  return psy::probability(spec.family, T(x), psy::Params<T>{alpha, beta, T(spec.guess), lambda});
+  const T alpha = threshold_alpha(spec, group_guess, u, beta);
+  return psy::probability(spec.family, T(x), psy::Params<T>{alpha, beta, T(group_guess.value_or(spec.guess)), lambda});
 }
 
 // NLL of one group as residuals: sqrt(-2 k log psi), sqrt(-2 (n - k) log(1 - psi)) per row.
@@ -83,7 +92,7 @@ struct GroupNllCost {
   template <typename T>
   bool operator()(const T* u, const T* s, const T* log_beta, const T* lambda, T* residuals) const {
     using std::sqrt;
-    const GroupModel<T> model(*spec, u[0] + s[0] * group->offset, log_beta[0], lambda[0]);
+    const GroupModel<T> model(*spec, group->guess, u[0] + s[0] * group->offset, log_beta[0], lambda[0]);
     for (std::size_t i = 0; i < group->rows.size(); ++i) {
       const BinomialRow& row = group->rows[i];
       T log_p, log_q;
@@ -106,7 +115,7 @@ struct GroupFisherCost {
   bool operator()(const T* u, const T* s, const T* log_beta, const T* lambda, T* residuals) const {
     const T threshold = u[0] + s[0] * group->offset;
     for (std::size_t i = 0; i < group->rows.size(); ++i)
-      residuals[i] = T(weights[i]) * probability(*spec, group->rows[i].x, threshold, log_beta[0], lambda[0]);
+      residuals[i] = T(weights[i]) * probability(*spec, group->guess, group->rows[i].x, threshold, log_beta[0], lambda[0]);
     return true;
   }
 };
@@ -119,8 +128,10 @@ void validate(const ModelSpec& spec) {
   const double lapse_hi = spec.lapse.fixed ? *spec.lapse.fixed : spec.lapse.max;
   if (!(lapse_hi >= 0.0 && spec.guess + lapse_hi < 1.0))
     throw std::invalid_argument("lapse must be in [0, 1 - guess)");
-  if (!(spec.p_threshold > spec.guess && spec.p_threshold < 1.0 - lapse_hi))
-    throw std::invalid_argument("threshold percent correct must lie between the guess rate and 1 - lapse");
+  if (!(spec.criterion_lapse >= 0.0 && spec.guess + spec.criterion_lapse < 1.0))
+    throw std::invalid_argument("the criterion's lapse must be in [0, 1 - guess)");
+  if (!(spec.p_threshold > spec.guess && spec.p_threshold < 1.0 - spec.criterion_lapse))
+    throw std::invalid_argument("threshold percent correct must lie between the guess rate and 1 - the criterion's lapse");
   if (spec.slope.fixed && !(*spec.slope.fixed > 0 && std::isfinite(*spec.slope.fixed)))
     throw std::invalid_argument("a fixed slope must be positive");
   if (!(spec.slope.min > 0 && spec.slope.min < spec.slope.max && std::isfinite(spec.slope.max)))
@@ -131,6 +142,8 @@ void validate(const ModelSpec& spec) {
     if (g.threshold_index < 0 || g.threshold_index >= spec.thresholds)
       throw std::invalid_argument("group threshold index out of range");
     if (!std::isfinite(g.offset)) throw std::invalid_argument("group offset must be finite");
+    if (g.guess && !(*g.guess >= 0.0 && *g.guess + lapse_hi < 1.0))
+      throw std::invalid_argument("a group's guess rate must be in [0, 1 - lapse)");
     for (const BinomialRow& r : g.rows) {
       if (!std::isfinite(r.x)) throw std::invalid_argument("stimulus level must be finite");
       if (spec.family == psy::Model::weibull && !(r.x > 0))
@@ -235,12 +248,13 @@ void add_nll_blocks(ceres::Problem& problem, const ModelSpec& spec, Blocks& bloc
 bool near(double v, double bound, double span) { return std::abs(v - bound) <= 1e-6 * std::max(1.0, span); }
 
 void data_flags(const ModelSpec& spec, FitResult& out) {
-  double k = 0, n = 0;
+  double k = 0, n = 0, chance = 0;  // chance: correct answers expected from guessing alone
   std::vector<double> levels;
   for (const Group& g : spec.groups) {
     for (const BinomialRow& r : g.rows) {
       k += r.n_correct;
       n += r.n_total;
+      chance += g.guess.value_or(spec.guess) * r.n_total;
       levels.push_back(r.x);
     }
   }
@@ -255,14 +269,15 @@ void data_flags(const ModelSpec& spec, FitResult& out) {
       if (rows[split - 1].x == rows[split].x) continue;
       bool separated = true;
       for (std::size_t i = 0; i < rows.size() && separated; ++i)
-        separated = i < split ? rows[i].n_correct <= spec.guess * rows[i].n_total : rows[i].n_correct == rows[i].n_total;
+        separated = i < split ? rows[i].n_correct <= spec.groups[0].guess.value_or(spec.guess) * rows[i].n_total
+                              : rows[i].n_correct == rows[i].n_total;
       if (separated) out.flags.add("perfect_separation");
     }
   }
   std::sort(levels.begin(), levels.end());
   if (std::unique(levels.begin(), levels.end()) - levels.begin() < 2) out.flags.add("one_level");
   if (k == n) out.flags.add("all_correct");
-  if (k <= spec.guess * n) out.flags.add("none_above_chance");
+  if (k <= chance) out.flags.add("none_above_chance");
 }
 
 // Covariance from the Fisher information at `out.params`; parameters held fixed or at a bound are
@@ -281,7 +296,8 @@ void compute_covariance(const ModelSpec& spec, const Bounds& b, const std::optio
     std::vector<double> weights;
     const double u = out.params.u[static_cast<std::size_t>(group.threshold_index)] + out.params.s * group.offset;
     for (const BinomialRow& r : group.rows) {
-      const double p = std::clamp(probability(spec, r.x, u, out.params.log_beta, out.params.lambda), 1e-12, 1 - 1e-12);
+      const double p =
+          std::clamp(probability(spec, group.guess, r.x, u, out.params.log_beta, out.params.lambda), 1e-12, 1 - 1e-12);
       weights.push_back(std::sqrt(r.n_total / (p * (1 - p))));
     }
     auto* cost = new ceres::AutoDiffCostFunction<GroupFisherCost, ceres::DYNAMIC, 1, 1, 1, 1>(
@@ -443,7 +459,7 @@ FitResult solve(const ModelSpec& spec, const Bounds& b, Parameters start, const 
 double negative_log_likelihood(const ModelSpec& spec, const Parameters& params) {
   double nll = 0;
   for (const Group& g : spec.groups) {
-    const GroupModel<double> model(spec, params.u.at(static_cast<std::size_t>(g.threshold_index)) + params.s * g.offset,
+    const GroupModel<double> model(spec, g.guess, params.u.at(static_cast<std::size_t>(g.threshold_index)) + params.s * g.offset,
                                    params.log_beta, params.lambda);
     for (const BinomialRow& r : g.rows) {
       double log_p = 0, log_q = 0;
@@ -514,19 +530,19 @@ ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, i
   return out;
 }
 
-double alpha_of(const ModelSpec& spec, double u, double beta, double lambda) {
+double alpha_of(const ModelSpec& spec, double u, double beta) {
   const double threshold_x = spec.family == psy::Model::weibull ? std::pow(10.0, u) : u;
-  return psy::alpha_for_threshold(spec.family, threshold_x, spec.p_threshold, beta, spec.guess, lambda);
+  return psy::alpha_for_threshold(spec.family, threshold_x, spec.p_threshold, beta, spec.guess, spec.criterion_lapse);
 }
 
 double alpha_se(const ModelSpec& spec, const FitResult& fit, int threshold_index) {
   using Jet = ceres::Jet<double, 3>;
   const Jet u(fit.params.u.at(static_cast<std::size_t>(threshold_index)), 0);
-  const Jet log_beta(fit.params.log_beta, 1);
-  const Jet lambda(fit.params.lambda, 2);
+  const Jet log_beta(fit.params.log_beta, 1);  // alpha does not depend on the fitted lapse (a threshold is on F)
   const Jet threshold_x = spec.family == psy::Model::weibull ? Jet(pow(Jet(10.0), u)) : u;
   const Jet alpha =
-      psy::alpha_for_threshold(spec.family, threshold_x, Jet(spec.p_threshold), Jet(exp(log_beta)), Jet(spec.guess), lambda);
+      psy::alpha_for_threshold(spec.family, threshold_x, Jet(spec.p_threshold), Jet(exp(log_beta)), Jet(spec.guess),
+                               Jet(spec.criterion_lapse));
   const int index[3] = {threshold_index, fit.index_log_beta(), fit.index_lambda()};
   // Parameters held fixed or at a bound carry no uncertainty; without a threshold variance there is no answer.
   if (!fit.covariance_ok || !fit.estimated[static_cast<std::size_t>(threshold_index)]) return NAN;

@@ -5,7 +5,7 @@
 //   psi(x) = gamma + (1 - gamma - lambda) F(x; alpha, beta)        (quest/psychometric.h)
 //
 // Parameters are fitted where the science works (docs/architecture.md, "Numerics"): the threshold
-// location u (the x at which psi = p_threshold; for the linear Weibull the log10 of that x, so u is
+// location u (the x at which F reaches the criterion F*, ModelSpec; for the linear Weibull the log10 of that x, so u is
 // always in log10 units of the stimulus ratio for study data), log beta, and lambda in
 // [0, lapse_max] or fixed; alpha is derived from them (psychometric::alpha_for_threshold).
 // A group's threshold is u[threshold_index] + s * offset: one u for all groups is the linear
@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 
 namespace penumbra::analysis {
 
@@ -37,6 +37,10 @@ struct Group {
   std::vector<BinomialRow> rows;
   int threshold_index = 0;
   double offset = 0;  // multiplies the power-law slope s
+  // The lower asymptote of these rows when it is not ModelSpec::guess: a yes/no participant's own
+  // false-alarm rate (from the catch trials). The threshold stays at ModelSpec::criterion_f() on F,
+  // so groups with different guess rates share one meaning of a threshold.
+  std::optional<double> guess;
 };
 
 struct LapseSpec {
@@ -52,7 +56,14 @@ struct SlopeSpec {
 struct ModelSpec {
   psychometric::Model family = psychometric::Model::log_weibull;
   double guess = 0.5;
-  double p_threshold = 0.82;  // the threshold is the x where psi reaches this
+  double p_threshold = 0.82;  // with criterion_lapse, the criterion F* that defines a threshold
+  // A threshold is the x where F (lapse free) reaches the criterion
+  //   F* = (p_threshold - guess) / (1 - guess - criterion_lapse),
+  // QUEST's with criterion_lapse = delta (1 - guess) (psychometric::criterion_f). The fitted lapse
+  // lowers psi's upper asymptote and does not move a threshold: defined on psi instead, c fell by
+  // up to 6 % as the fitted lapse went from 0 to 0.06.
+  double criterion_lapse = 0.0;
+  double criterion_f() const { return psychometric::core_level(p_threshold, guess, criterion_lapse); }
   LapseSpec lapse;
   SlopeSpec slope;
   std::vector<Group> groups;
@@ -128,7 +139,7 @@ ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, i
 // alpha of the model at (u, beta, lambda), and its standard error by the delta method from the
 // covariance of u[threshold_index], log beta and lambda (parameters held fixed or at a bound
 // contribute nothing; NaN without a threshold variance).
-double alpha_of(const ModelSpec& spec, double u, double beta, double lambda);
+double alpha_of(const ModelSpec& spec, double u, double beta);
 double alpha_se(const ModelSpec& spec, const FitResult& fit, int threshold_index);
 
 // Chi-square(1) quantile for a confidence level (0.95 -> 3.8415), for profile intervals.

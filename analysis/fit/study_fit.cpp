@@ -50,11 +50,12 @@ Interval wald_c(const FitResult& f, int index, double level) {
   return c_interval(u - z * se, u + z * se, false, false);
 }
 
-ModelSpec base_spec(const StudyFitOptions& o, double p_threshold, double guess) {
+ModelSpec base_spec(const StudyFitOptions& o, double p_threshold, double guess, double quest_delta) {
   ModelSpec s;
   s.family = o.family;
   s.guess = guess;
   s.p_threshold = p_threshold;
+  s.criterion_lapse = psychometric::quest_lapse(quest_delta, guess);  // thresholds on F, as QUEST's
   s.lapse = o.lapse;
   return s;
 }
@@ -157,12 +158,18 @@ void fit_linearity(ConditionFit& cf, const std::vector<std::pair<std::size_t, Gr
   cf.lr_power_p = chi2_survival(cf.lr_power_stat, 1);
 }
 
-void recompute_quest(StaircaseFit& sf, const SessionInfo& session, const std::vector<const Trial*>& trials) {
-  sf.logged_quest_mean = trials.back()->row.quest_mean;
-  sf.logged_quest_sd = trials.back()->row.quest_sd;
+// `catches`: the staircase's yes/no catch trials, which its QUEST saw when the session was scored
+// balanced (empty otherwise); merged with `trials` in trial order.
+void recompute_quest(StaircaseFit& sf, const SessionInfo& session, const std::vector<const Trial*>& trials,
+                     const std::vector<const Trial*>& catches) {
+  std::vector<const Trial*> seen = trials;
+  seen.insert(seen.end(), catches.begin(), catches.end());
+  std::sort(seen.begin(), seen.end(), [](const Trial* a, const Trial* b) { return a->row.trial < b->row.trial; });
+  sf.logged_quest_mean = seen.back()->row.quest_mean;
+  sf.logged_quest_sd = seen.back()->row.quest_sd;
   if (!session.quest) return;
   quest::Quest q(*session.quest, session.quest_dim);
-  for (const Trial* t : trials) q.update(t->row.intensity, t->row.correct);
+  for (const Trial* t : seen) q.update(t->row.intensity, t->row.correct);
   sf.quest_recomputed = true;
   sf.quest_mean = q.mean();
   sf.quest_sd = q.sd();
@@ -216,6 +223,186 @@ BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector
   return out;
 }
 
+namespace {
+
+// Runs body(i) for i in [0, n) on `threads` threads.
+void parallel_for(int n, int threads, const std::function<void(int)>& body) {
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int i = next++; i < n; i = next++) body(i);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, std::min(threads, n)); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+}
+
+Interval hull(const Interval& a, const Interval& b) {
+  if (!std::isfinite(a.lo) || !std::isfinite(a.hi)) return b;
+  if (!std::isfinite(b.lo) || !std::isfinite(b.hi)) return a;
+  return {std::min(a.lo, b.lo), std::max(a.hi, b.hi), a.lo_open || b.lo_open, a.hi_open || b.hi_open};
+}
+
+// One model over every condition: thresholds per condition (or one for all), slope and lapse shared.
+ModelSpec joint_spec(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups, bool one_threshold) {
+  ModelSpec spec = fit.conditions.front().spec;
+  spec.groups.clear();
+  spec.thresholds = one_threshold ? 1 : static_cast<int>(groups.size());
+  spec.u_min = std::nullopt;
+  spec.u_max = std::nullopt;
+  for (std::size_t k = 0; k < groups.size(); ++k)
+    for (const auto& [participant, list] : groups[k])
+      for (Group g : list) {
+        g.threshold_index = one_threshold ? 0 : static_cast<int>(k);
+        spec.groups.push_back(std::move(g));
+      }
+  return spec;
+}
+
+}  // namespace
+
+WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
+                     const StudyFitOptions& options, int threads, const std::function<void()>& one_done) {
+  WorstCase w;
+  if (fit.conditions.empty()) return w;
+  const double tail = 0.5 * (1.0 - options.level);
+  if (fit.conditions.size() == 1) {
+    const ConditionFit& only = fit.conditions.front();
+    w.method = "single condition";
+    w.condition = only.condition;
+    w.c = only.c;
+    w.profile = only.c_profile;
+    w.bootstrap = only.bootstrap.c;
+    w.resamples = only.bootstrap.resamples;
+    w.ci95 = hull(w.profile, w.bootstrap);
+    w.beta = only.beta;
+    w.beta_wald = only.beta_wald;
+    w.lapse = only.linear.params.lambda;
+    w.flags = only.flags;
+    return w;
+  }
+  // Do the conditions differ? One threshold for all against one per condition.
+  const ModelSpec one = joint_spec(fit, groups, true), each = joint_spec(fit, groups, false);
+  const FitResult f_one = analysis::fit(one), f_each = analysis::fit(each);
+  w.lr_dof = static_cast<int>(fit.conditions.size()) - 1;
+  w.lr_stat = std::max(0.0, 2.0 * (f_one.nll - f_each.nll));
+  w.lr_p = chi2_survival(w.lr_stat, w.lr_dof);
+  const ConditionFit* largest = &fit.conditions.front();
+  for (const ConditionFit& c : fit.conditions)
+    if (c.c > largest->c) largest = &c;
+  w.max_c = largest->c;
+  const bool pooled = w.lr_p >= 0.05;
+  // The participants, and each one's groups per condition (empty where a participant lacks one).
+  std::vector<std::string> people;
+  for (const auto& per_condition : groups)
+    for (const auto& [participant, list] : per_condition)
+      if (std::find(people.begin(), people.end(), participant) == people.end()) people.push_back(participant);
+  if (pooled) {
+    w.method = "pooled";
+    w.condition = "all conditions";
+    w.c = std::pow(10.0, -f_one.params.u[0]);
+    ModelSpec bounded = one;
+    bounded.u_min = f_one.u_min;
+    bounded.u_max = f_one.u_max;
+    const ProfileInterval p = profile_interval(bounded, f_one, 0, options.level);
+    w.profile = c_interval(p.lo, p.hi, p.lo_open, p.hi_open);
+    w.beta = std::exp(f_one.params.log_beta);
+    w.lapse = f_one.params.lambda;
+    w.flags = f_one.flags;
+    if (p.lo_open || p.hi_open) w.flags.add("interval_open");
+    if (const double se = f_one.se(f_one.index_log_beta()); std::isfinite(se)) {
+      const double z = z_of(options.level);
+      w.beta_wald = {std::exp(f_one.params.log_beta - z * se), std::exp(f_one.params.log_beta + z * se), false, false};
+    }
+  } else {
+    w.method = "bias-corrected maximum";
+    w.condition = largest->condition;
+    w.profile = largest->c_profile;
+    w.beta = largest->beta;
+    w.beta_wald = largest->beta_wald;
+    w.lapse = largest->linear.params.lambda;
+    w.flags = largest->flags;
+  }
+  if (options.bootstrap > 0 && people.size() >= 2) {
+    // Participants resampled with replacement, the same draw for every condition (paired).
+    std::vector<double> values(static_cast<std::size_t>(options.bootstrap), NAN);
+    parallel_for(options.bootstrap, threads, [&](int i) {
+      sampling::Random random(sampling::derive_seed(options.seed, 0x776f727374ull + static_cast<std::uint64_t>(i)));  // "worst"
+      std::vector<std::string> draw;
+      for (std::size_t j = 0; j < people.size(); ++j) draw.push_back(people[random.bits() % people.size()]);
+      std::vector<std::map<std::string, std::vector<Group>>> resampled(groups.size());
+      for (std::size_t k = 0; k < groups.size(); ++k)
+        for (std::size_t j = 0; j < draw.size(); ++j)
+          if (const auto it = groups[k].find(draw[j]); it != groups[k].end())
+            resampled[k][draw[j] + "#" + std::to_string(j)] = it->second;  // a participant drawn twice counts twice
+      double value = NAN;
+      if (pooled) {
+        const FitResult f = analysis::fit(joint_spec(fit, resampled, true), f_one.params, false);
+        value = -f.params.u[0];
+      } else {
+        double best = -INFINITY;
+        for (std::size_t k = 0; k < groups.size(); ++k) {
+          if (resampled[k].empty()) continue;
+          ModelSpec spec = fit.conditions[k].spec;
+          spec.groups.clear();
+          for (const auto& [name, list] : resampled[k]) spec.groups.insert(spec.groups.end(), list.begin(), list.end());
+          best = std::max(best, -analysis::fit(spec, fit.conditions[k].linear.params, false).params.u[0]);
+        }
+        value = std::isfinite(best) ? best : NAN;
+      }
+      values[static_cast<std::size_t>(i)] = value;
+      if (one_done) one_done();
+    });
+    values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+    if (!values.empty()) {
+      w.resamples = static_cast<int>(values.size());
+      double shift = 0;
+      if (!pooled) {
+        double mean = 0;
+        for (double v : values) mean += v;
+        mean /= static_cast<double>(values.size());
+        w.bias_log10 = mean - std::log10(w.max_c);
+        shift = w.bias_log10;
+      }
+      w.bootstrap = {std::pow(10.0, percentile(values, tail) - shift), std::pow(10.0, percentile(values, 1.0 - tail) - shift), false,
+                     false};
+    }
+  }
+  if (!pooled) w.c = std::isfinite(w.bias_log10) ? std::pow(10.0, std::log10(w.max_c) - w.bias_log10) : w.max_c;
+  w.ci95 = hull(w.profile, w.bootstrap);
+  return w;
+}
+
+std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit) {
+  std::vector<ThesisEstimate> out;
+  for (const ConditionFit& c : fit.conditions) {
+    ThesisEstimate t;
+    t.condition = c.condition;
+    // Per participant and size one staircase: its radius r = a 10^-(QUEST's final mean).
+    std::map<double, std::vector<double>> radii;
+    for (const StaircaseFit& s : fit.staircases) {
+      if (s.condition != c.condition) continue;
+      const double mean = s.quest_recomputed ? s.quest_mean : s.logged_quest_mean;
+      if (!std::isfinite(mean)) continue;
+      radii[s.artifact_px].push_back(s.artifact_px * std::pow(10.0, -mean));
+      ++t.staircases;
+    }
+    double num = 0, den = 0;
+    for (const auto& [a, r] : radii) {
+      double sum = 0;
+      for (double v : r) sum += v;
+      const double mean_r = sum / static_cast<double>(r.size());
+      t.artifact_px.push_back(a);
+      t.mean_radius_px.push_back(mean_r);
+      num += a * mean_r;
+      den += a * a;
+    }
+    t.c = den > 0 ? num / den : NAN;  // least squares through the origin: r = c a
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   if (!(options.level > 0 && options.level < 1)) throw std::invalid_argument("confidence level must be in (0, 1)");
   if (options.bootstrap < 0) throw std::invalid_argument("bootstrap resamples must be >= 0");
@@ -227,11 +414,12 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.inconsistencies = data.inconsistencies;
   out.pooled_differences = data.pooled_differences;
   // pThreshold: the option, else the sessions' QUEST value when they agree, else QUEST's default.
-  std::set<double> p_thresholds, gammas;
+  std::set<double> p_thresholds, gammas, deltas;
   for (const SessionInfo& s : data.sessions) {
     if (s.quest) {
       p_thresholds.insert(s.quest->p_threshold);
       gammas.insert(s.quest->gamma);
+      deltas.insert(s.quest->delta);
     }
     else out.notes.push_back(s.log_file + ": no session.json with QUEST parameters; QUEST posterior not recomputed");
     if (s.torn_tail) out.notes.push_back(s.log_file + ": last line torn (an unanswered trial); ignored");
@@ -243,10 +431,42 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.guess = options.guess ? *options.guess : (gammas.size() == 1 ? *gammas.begin() : 0.5);
   if (!options.guess && gammas.size() > 1)
     out.notes.push_back("sessions use different QUEST gamma values; the guess rate is 0.5");
+  // The criterion F* of a threshold is QUEST's (its delta), so c means what QUEST converged to.
+  out.quest_delta = deltas.size() == 1 ? *deltas.begin() : 0.01;
+  if (deltas.size() > 1) out.notes.push_back("sessions use different QUEST delta values; the criterion uses delta 0.01");
+  out.criterion_f = psychometric::criterion_f(out.p_threshold, out.guess, out.quest_delta);
+  if (!data.trials.empty()) out.task = data.trials.front().row.task;
+  // yes/no: the fits model detections on the jagged trials, P = fa + (1 - fa - lambda) F, with
+  // each participant's own false-alarm rate as the guess rate. QUEST's gamma is what the session
+  // assumed (0.5 in the published design, where it misreads a participant who rarely says "not
+  // straight"); the data say what the participant did.
+  std::optional<double> forced_guess = options.guess;
+  if (out.task == "yesno" && !options.guess) {
+    for (const Trial& t : data.trials) out.false_alarms[t.row.participant];
+    for (const Trial& t : data.catch_trials) {
+      StudyFit::FalseAlarms& fa = out.false_alarms[t.row.participant];
+      ++fa.catch_trials;
+      fa.false_alarms += t.row.response == "no" ? 1 : 0;
+    }
+    for (auto& [participant, fa] : out.false_alarms) {
+      if (fa.catch_trials == 0) {
+        fa.rate = out.guess;
+        out.notes.push_back("yesno: participant " + participant + " has no catch trials; their guess rate is QUEST's " +
+                            format_number(out.guess));
+      } else {
+        fa.rate = (fa.false_alarms + 0.5) / (fa.catch_trials + 1.0);
+      }
+    }
+  }
+  auto participant_guess = [&](const std::string& participant) -> std::optional<double> {
+    if (forced_guess || out.task != "yesno") return std::nullopt;
+    return out.false_alarms.at(participant).rate;
+  };
   if (data.catch_rows > 0)
     out.notes.push_back("yesno: " + std::to_string(data.catch_rows) +
-                        " straight (catch) trials left out of the fits, as QUEST does; false-alarm rate " +
-                        format_number(double(data.catch_false_alarms) / data.catch_rows));
+                        " straight (catch) trials give each participant's false-alarm rate (all: " +
+                        format_number(double(data.catch_false_alarms) / data.catch_rows) +
+                        "), the guess rate of their detections; the fits use the jagged trials");
   const int threads = options.threads > 0 ? options.threads
                                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 
@@ -264,6 +484,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     for (const Trial* t : by_condition[name]) people.insert(t->row.participant);
     if (people.size() >= 2) total_bootstrap += options.bootstrap;
   }
+  if (order.size() > 1 && options.bootstrap > 0) total_bootstrap += options.bootstrap;  // the worst case's
   std::atomic<int> bootstrap_done{0};
   std::mutex progress_mutex;
   const auto one_done = [&] {
@@ -274,6 +495,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   };
 
   std::map<std::string, double> condition_lambda, condition_beta;
+  std::vector<std::map<std::string, std::vector<Group>>> condition_groups;  // per condition: participant -> groups
   for (const std::string& name : order) {
     const auto& trials = by_condition[name];
     ConditionFit cf;
@@ -294,9 +516,9 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     }
     std::vector<std::pair<std::size_t, Group>> sized_groups;
     std::map<std::string, std::vector<Group>> by_participant;
-    cf.spec = base_spec(options, out.p_threshold, out.guess);
+    cf.spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
     for (auto& [key, r] : rows) {
-      Group g{merge_rows(std::move(r)), 0, 0.0};
+      Group g{merge_rows(std::move(r)), 0, 0.0, participant_guess(key.first)};
       sized_groups.emplace_back(key.second, g);
       by_participant[key.first].push_back(g);
       cf.spec.groups.push_back(g);
@@ -311,8 +533,14 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     cf.c_profile = c_interval(profile.lo, profile.hi, profile.lo_open, profile.hi_open);
     if (profile.lo_open || profile.hi_open) cf.flags.add("interval_open");
     cf.c_wald = wald_c(cf.linear, 0, options.level);
+    cf.beta = std::exp(cf.linear.params.log_beta);
+    if (const double se = cf.linear.se(cf.linear.index_log_beta()); std::isfinite(se)) {
+      const double z = z_of(options.level);
+      cf.beta_wald = {std::exp(cf.linear.params.log_beta - z * se), std::exp(cf.linear.params.log_beta + z * se), false, false};
+    }
     fit_linearity(cf, sized_groups, options);
     fit_participants(cf, by_participant, options);
+    condition_groups.push_back(by_participant);
     if (by_participant.size() < 2) {
       cf.flags.add("one_participant");
     } else if (options.bootstrap > 0) {
@@ -329,6 +557,8 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     condition_beta[name] = std::exp(cf.linear.params.log_beta);
     out.conditions.push_back(std::move(cf));
   }
+
+  out.worst = worst_case(out, condition_groups, options, threads, one_done);
 
   // Staircases: (session, round, staircase) in log order.
   std::map<std::tuple<std::size_t, int, std::string>, std::vector<const Trial*>> staircases;
@@ -349,7 +579,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     sf.staircase = first.staircase;
     sf.artifact_px = first.artifact_px;
     sf.round = first.condition_index;
-    ModelSpec spec = base_spec(options, out.p_threshold, out.guess);
+    ModelSpec spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
     // A staircase's 20-40 trials sit near its threshold and cannot tell a slope: free, it ran to
     // its bound on half of clean simulated staircases (a step function, flagged). The slope and
     // the lapse are the condition's, so each staircase gives its threshold only.
@@ -363,20 +593,26 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       rows.push_back({model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
       sf.track.push_back({t->row.trial, t->row.intensity, t->row.filter_radius_px, t->row.correct, t->row.clamped != 0});
     }
-    spec.groups.push_back({merge_rows(std::move(rows)), 0, 0.0});
+    spec.groups.push_back({merge_rows(std::move(rows)), 0, 0.0, participant_guess(session.participant)});
     sf.fit = fit(spec);
     sf.flags = sf.fit.flags;
     sf.c = std::pow(10.0, -sf.fit.params.u[0]);
     const Interval w = wald_c(sf.fit, 0, options.level);
     sf.c_lo = w.lo;
     sf.c_hi = w.hi;
-    recompute_quest(sf, session, trials);
+    std::vector<const Trial*> catches;
+    if (session.yesno_scoring == "balanced")
+      for (const Trial& t : data.catch_trials)
+        if (t.session == std::get<0>(key) && t.row.condition_index == first.condition_index && t.row.staircase == first.staircase)
+          catches.push_back(&t);
+    recompute_quest(sf, session, trials, catches);
     const double final_sd = sf.quest_recomputed ? sf.quest_sd : sf.logged_quest_sd;
     sf.converged = final_sd <= session.sd_below && !sf.fit.flags.has("threshold_at_bound") &&
                    !sf.fit.flags.has("covariance_failed") && !sf.fit.flags.has("not_converged");
     if (!sf.converged) sf.flags.add("staircase_not_converged");
     out.staircases.push_back(std::move(sf));
   }
+  out.thesis = thesis_estimates(out);
   return out;
 }
 

@@ -112,20 +112,77 @@ struct ConditionFit {
   double a_ref_px = NAN, exponent = NAN, exponent_se = NAN, k_px = NAN;
   Interval exponent_wald;
   double lr_power_stat = NAN, lr_power_p = NAN;
+  double beta = NAN;   // the linear model's slope (shared by the condition's participants and sizes)
+  Interval beta_wald;  // its Wald 95 % interval, from the SE of log beta
   std::vector<ParticipantFit> participants;
   Flags flags;
+};
+
+// The c calibration.json takes: the worst case over conditions, without the selection bias of a
+// plain maximum (with conditions of equal c, the largest of their estimates is biased upward by
+// 3-4 % and its interval covers about 90 %). First a likelihood-ratio test of whether the
+// conditions differ at all (one threshold against one per condition, slope and lapse shared):
+//  - they do not (p >= 0.05): c is the one threshold of all conditions pooled, which no selection
+//    touched ("pooled");
+//  - they do: c is the largest condition's, less the maximum's bias estimated by a bootstrap over
+//    participants (each resample refits every condition and takes the maximum: bias =
+//    mean log10 max* - log10 max), "bias-corrected maximum".
+// The interval the renderer reads (ci95) holds both the trial-level profile interval and the
+// participant bootstrap's (so differences between participants widen it); the profile interval
+// alone is kept beside it. With --condition, that condition's c with the same two intervals.
+struct WorstCase {
+  std::string method;     // single condition | pooled | bias-corrected maximum | chosen (--condition)
+  std::string condition;  // the condition c is taken from, or "all conditions" (pooled)
+  double c = NAN;
+  Interval profile;       // trial-level: profile likelihood of the chosen estimate
+  Interval bootstrap;     // participants resampled (percentile; bias-corrected for the maximum)
+  Interval ci95;          // what calibration.json's ci95 holds: the hull of the two above
+  double lr_stat = NAN, lr_p = NAN;  // conditions differ? (dof = conditions - 1)
+  int lr_dof = 0;
+  double max_c = NAN, bias_log10 = NAN;  // the plain maximum and its estimated bias (bias-corrected case)
+  int resamples = 0;
+  // The psychometric function c is a threshold on: the fit c came from (the pooled model, or the
+  // largest condition's).
+  double beta = NAN, lapse = NAN;
+  Interval beta_wald;
+  Flags flags;  // of that fit
+};
+
+// What the thesis did (Kreuzer 2017, sec. 4.4 and 5.1): per participant and artifact size the
+// radius of QUEST's final estimate, their mean per size, and a line through the origin r = c a
+// per condition (least squares) -- beside the model fit, to say how far they differ.
+struct ThesisEstimate {
+  std::string condition;
+  double c = NAN;                          // slope of the line through the origin
+  std::vector<double> artifact_px, mean_radius_px;  // the points it was fitted to
+  int staircases = 0;
 };
 
 struct StudyFit {
   StudyFitOptions options;
   double p_threshold = 0.82;
+  double quest_delta = 0.01;  // the sessions' QUEST delta
+  // The detection probability F at every threshold and c (lapse free): QUEST's criterion,
+  // psychometric::criterion_f(p_threshold, guess, quest_delta), 0.6465 for 2AFC at 0.82.
+  double criterion_f = 0.6465;
   double guess = 0.5;
+  std::string task = "2afc";  // of the trials fitted (2afc | yesno)
+  // yes/no: each participant's detections have their own guess rate, the false-alarm rate of
+  // their catch (straight) trials, (false alarms + 0.5) / (catch trials + 1) so that none is 0;
+  // a participant without catch trials takes `guess` (noted). Thresholds stay at criterion_f.
+  struct FalseAlarms {
+    int catch_trials = 0, false_alarms = 0;
+    double rate = NAN;  // the guess rate used
+  };
+  std::map<std::string, FalseAlarms> false_alarms;
   int sessions = 0, trials = 0, practice_rows_excluded = 0;
   std::vector<std::string> notes;  // torn logs, missing session.json, ...
   std::vector<Inconsistency> inconsistencies;  // logs fitted although inconsistent (--accept-inconsistent)
   std::vector<std::string> pooled_differences;  // setups pooled although they differ (--pool)
   std::vector<ConditionFit> conditions;
   std::vector<StaircaseFit> staircases;
+  WorstCase worst;                       // the entry's c (calibration_condition applies --condition)
+  std::vector<ThesisEstimate> thesis;    // the thesis's own estimate per condition
 };
 
 // Throws std::invalid_argument for bad options.
@@ -135,6 +192,13 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options);
 BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector<std::vector<Group>>& participants,
                                         const Parameters& start, int resamples, std::uint64_t seed, int threads,
                                         double level, const std::function<void()>& one_done = {});
+
+// The entry's c over the study's conditions (WorstCase); `groups` holds each condition's groups by
+// participant, in fit.conditions' order.
+WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
+                     const StudyFitOptions& options, int threads, const std::function<void()>& one_done = {});
+// The thesis's estimate per condition (ThesisEstimate), from fit.staircases' QUEST means.
+std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit);
 
 // The stimulus level of a logged intensity in the family's x units (the ratio for the Weibull).
 double model_x(psychometric::Model family, double intensity);

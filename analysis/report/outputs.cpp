@@ -165,11 +165,35 @@ CalibrationProvenance calibration_provenance(const Dataset& data, bool pool_obse
   return p;
 }
 
-std::vector<std::string> unusable_because(const ConditionFit& c) {
+WorstCase entry_choice(const StudyFit& fit, const std::optional<std::string>& wanted) {
+  if (!wanted) {
+    if (fit.conditions.empty()) throw std::invalid_argument("no conditions were fitted");
+    return fit.worst;
+  }
+  const ConditionFit& c = calibration_condition(fit, wanted);
+  WorstCase w;
+  w.method = "chosen (--condition)";
+  w.condition = c.condition;
+  w.c = c.c;
+  w.profile = c.c_profile;
+  w.bootstrap = c.bootstrap.c;
+  w.resamples = c.bootstrap.resamples;
+  const bool boot = std::isfinite(w.bootstrap.lo) && std::isfinite(w.bootstrap.hi);
+  w.ci95 = boot && std::isfinite(w.profile.lo) && std::isfinite(w.profile.hi)
+               ? Interval{std::min(w.profile.lo, w.bootstrap.lo), std::max(w.profile.hi, w.bootstrap.hi), w.profile.lo_open, w.profile.hi_open}
+               : w.profile;
+  w.beta = c.beta;
+  w.beta_wald = c.beta_wald;
+  w.lapse = c.linear.params.lambda;
+  w.flags = c.flags;
+  return w;
+}
+
+std::vector<std::string> unusable_because(const WorstCase& c) {
   std::vector<std::string> why;
   for (const char* flag : {"not_converged", "threshold_at_bound", "slope_at_upper_bound", "interval_open"})
     if (c.flags.has(flag)) why.push_back(flag);
-  if (!(std::isfinite(c.c_profile.lo) && std::isfinite(c.c_profile.hi) && c.c_profile.lo > 0)) why.push_back("interval_not_finite");
+  if (!(std::isfinite(c.profile.lo) && std::isfinite(c.profile.hi) && c.profile.lo > 0)) why.push_back("interval_not_finite");
   if (!(c.c >= kPlausibleCMin && c.c <= kPlausibleCMax)) {
     char b[96];
     std::snprintf(b, sizeof b, "c_outside_%g_%g", kPlausibleCMin, kPlausibleCMax);
@@ -180,7 +204,7 @@ std::vector<std::string> unusable_because(const ConditionFit& c) {
 
 Json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition, const std::string& created_utc,
                       const std::vector<std::string>& inputs, const CalibrationProvenance& provenance) {
-  const ConditionFit& chosen = calibration_condition(fit, condition);
+  const WorstCase chosen = entry_choice(fit, condition);
   Json per = Json::array();
   for (const ConditionFit& c : fit.conditions) {
     per.push_back({{"condition", c.condition},
@@ -189,16 +213,32 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
                    {"c", number(c.c)},
                    {"ci95", {number(std::min(c.c_profile.lo, c.c)), number(std::max(c.c_profile.hi, c.c))}},
                    {"ci95_bootstrap", {number(c.bootstrap.c.lo), number(c.bootstrap.c.hi)}},
+                   {"beta", number(c.beta)},
+                   {"beta_ci95", {number(c.beta_wald.lo), number(c.beta_wald.hi)}},
                    {"trials", c.trials},
                    {"participants", c.participant_count},
                    {"flags", c.flags.list}});
   }
   std::ostringstream source;
   source << "penumbra-fit: joint maximum-likelihood fit of r = c a (" << psychometric::model_name(fit.options.family)
-         << ", threshold at " << fit.p_threshold << " correct, shared slope and lapse) to " << fit.trials
-         << " trials from " << fit.sessions << " sessions; ci95 by profile likelihood; "
-         << (condition ? "condition chosen by --condition" : "the condition with the largest c (worst case)")
-         << "; inputs: " << join(inputs, " ");
+         << "; c is the radius at detection probability F = " << fmt("%.4g", fit.criterion_f) << ", QUEST's criterion for "
+         << fit.p_threshold << " correct, lapse free) to " << fit.trials << " trials from " << fit.sessions << " sessions; "
+         << (condition ? "condition chosen by --condition"
+                       : chosen.method == "pooled" ? "the conditions do not differ (LR test): one c for all, no maximum"
+                                                   : chosen.method == "bias-corrected maximum"
+                                                         ? "the worst condition, its maximum's selection bias removed by a bootstrap over participants"
+                                                         : "one condition")
+         << "; ci95 holds the profile-likelihood and the participant-bootstrap intervals; inputs: " << join(inputs, " ");
+  Json threshold = {{"task", fit.task},
+                    {"guess", fit.guess},
+                    {"criterion_f", fit.criterion_f},
+                    {"p_correct_at_criterion", fit.p_threshold},
+                    {"quest_delta", fit.quest_delta},
+                    {"family", std::string(psychometric::model_name(fit.options.family))},
+                    {"beta", number(chosen.beta)},
+                    {"lapse", number(chosen.lapse)}};
+  if (std::isfinite(chosen.beta_wald.lo) && std::isfinite(chosen.beta_wald.hi) && chosen.beta_wald.lo > 0)
+    threshold["beta_ci95"] = {std::min(chosen.beta_wald.lo, chosen.beta), std::max(chosen.beta_wald.hi, chosen.beta)};
   Json entry = {{"technique", provenance.technique},
                 {"kernel", provenance.kernel},
                 {"c", number(chosen.c)},
@@ -207,11 +247,21 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
                 {"observers", provenance.observers},
                 {"participants", provenance.participants},
                 {"trials", fit.trials},
+                {"threshold", threshold},
+                {"worst_case", {{"method", chosen.method},
+                                {"conditions_differ_lr", number(chosen.lr_stat)},
+                                {"conditions_differ_dof", chosen.lr_dof},
+                                {"conditions_differ_p", number(chosen.lr_p)},
+                                {"largest_c", number(chosen.max_c)},
+                                {"bias_log10", number(chosen.bias_log10)},
+                                {"resamples", chosen.resamples}}},
                 {"per_condition", per},
                 {"flags", chosen.flags.list}};
   // An interval that is not finite is left out (the renderer reads a present one as numbers).
-  if (std::isfinite(chosen.c_profile.lo) && std::isfinite(chosen.c_profile.hi) && chosen.c_profile.lo > 0)
-    entry["ci95"] = {std::min(chosen.c_profile.lo, chosen.c), std::max(chosen.c_profile.hi, chosen.c)};
+  auto finite = [](const Interval& i) { return std::isfinite(i.lo) && std::isfinite(i.hi) && i.lo > 0; };
+  if (finite(chosen.ci95)) entry["ci95"] = {std::min(chosen.ci95.lo, chosen.c), std::max(chosen.ci95.hi, chosen.c)};
+  if (finite(chosen.profile)) entry["ci95_profile"] = {std::min(chosen.profile.lo, chosen.c), std::max(chosen.profile.hi, chosen.c)};
+  if (finite(chosen.bootstrap)) entry["ci95_bootstrap"] = {chosen.bootstrap.lo, chosen.bootstrap.hi};
   if (!provenance.pooled_kinds.empty()) entry["pooled_observer_kinds"] = provenance.pooled_kinds;
   if (const std::vector<std::string> why = unusable_because(chosen); !why.empty()) {
     entry["usable"] = false;
@@ -258,6 +308,8 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
     Json j = {{"condition", c.condition},
               {"pattern", c.pattern},
               {"contrast", c.contrast},
+              {"beta", number(c.beta)},
+              {"beta_wald95", {number(c.beta_wald.lo), number(c.beta_wald.hi)}},
               {"trials", c.trials},
               {"participants", c.participant_count},
               {"artifact_px", c.artifact_px},
@@ -315,7 +367,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
               {"c", number(s.c)},
               {"c_wald", {number(s.c_lo), number(s.c_hi)}},
               {"r_threshold_px", number(s.c * s.artifact_px)},
-              {"alpha", number(alpha_of(spec, s.fit.params.u[0], std::exp(s.fit.params.log_beta), s.fit.params.lambda))},
+              {"alpha", number(alpha_of(spec, s.fit.params.u[0], std::exp(s.fit.params.log_beta)))},
               {"fit", to_json(s.fit, spec)},
               {"quest", {{"recomputed", s.quest_recomputed},
                          {"mean", number(s.quest_mean)},
@@ -359,6 +411,52 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
           {"practice_rows_excluded", fit.practice_rows_excluded},
           {"notes", fit.notes},
           {"published_c", kPublishedC},
+          {"criterion", {{"detection_probability_f", fit.criterion_f},
+                         {"p_correct", fit.p_threshold},
+                         {"task", fit.task},
+                         {"guess", fit.guess},
+                         {"quest_delta", fit.quest_delta},
+                         {"false_alarms", [&] {
+                            // yes/no: each participant's catch trials and the guess rate their detections were fitted with
+                            Json by = Json::object();
+                            for (const auto& [participant, fa] : fit.false_alarms)
+                              by[participant] = {{"catch_trials", fa.catch_trials}, {"false_alarms", fa.false_alarms},
+                                                 {"guess", number(fa.rate)}};
+                            return by;
+                          }()},
+                         {"meaning", "c is the filter radius per artifact at which the staircase is still detected with probability F "
+                                     "(lapse free); a lower F needs a larger c"}}},
+          {"worst_case", {{"method", fit.worst.method},
+                          {"condition", fit.worst.condition},
+                          {"c", number(fit.worst.c)},
+                          {"ci95", interval(fit.worst.ci95)},
+                          {"ci95_profile", interval(fit.worst.profile)},
+                          {"ci95_bootstrap", interval(fit.worst.bootstrap)},
+                          {"conditions_differ_lr", number(fit.worst.lr_stat)},
+                          {"conditions_differ_dof", fit.worst.lr_dof},
+                          {"conditions_differ_p", number(fit.worst.lr_p)},
+                          {"largest_c", number(fit.worst.max_c)},
+                          {"bias_log10", number(fit.worst.bias_log10)},
+                          {"resamples", fit.worst.resamples},
+                          {"beta", number(fit.worst.beta)}}},
+          {"thesis_estimate", [&] {
+             Json list = Json::array();
+             for (const ThesisEstimate& t : fit.thesis) {
+               double model_c = NAN;
+               for (const ConditionFit& k : fit.conditions)
+                 if (k.condition == t.condition) model_c = k.c;
+               list.push_back({{"condition", t.condition},
+                               {"method", "per participant and artifact size the radius of QUEST's final estimate; their mean per "
+                                          "size; a line through the origin r = c a (least squares), as Kreuzer 2017 sec. 4.4, 5.1"},
+                               {"c", number(t.c)},
+                               {"model_c", number(model_c)},
+                               {"relative_difference", number(t.c / model_c - 1.0)},
+                               {"artifact_px", t.artifact_px},
+                               {"mean_radius_px", t.mean_radius_px},
+                               {"staircases", t.staircases}});
+             }
+             return list;
+           }()},
           {"reference", reference_info},
           {"conditions", conditions},
           {"staircases", staircases}};
@@ -453,11 +551,30 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
     o << line;
   }
   for (const std::string& n : fit.notes) o << "note: " << n << "\n";
-  const ConditionFit& chosen = calibration_condition(fit, wanted);
-  o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.c_profile.lo) << ", "
-    << fmt("%.3f", chosen.c_profile.hi) << "] from " << chosen.condition
-    << (wanted ? " (--condition)" : " (largest c)") << ", " << provenance.observers << "; published c = " << fmt("%g", kPublishedC)
-    << "\n";
+  const WorstCase chosen = entry_choice(fit, wanted);
+  o << "\nc is the radius at which the staircase is still detected with probability F = " << fmt("%.4g", fit.criterion_f)
+    << " (QUEST's criterion, " << fit.p_threshold << " correct in " << fit.task << "), not hidden; lower F needs a larger c\n";
+  for (const ConditionFit& c : fit.conditions)
+    o << "  " << c.condition << ": slope beta " << fmt("%.2f", c.beta) << " [" << fmt("%.2f", c.beta_wald.lo) << ", "
+      << fmt("%.2f", c.beta_wald.hi) << "], lapse " << fmt("%.3f", c.linear.params.lambda) << "\n";
+  if (fit.conditions.size() > 1)
+    o << "conditions differ? LR " << fmt("%.2f", chosen.lr_stat) << " on " << chosen.lr_dof << " dof, p " << fmt("%.3g", chosen.lr_p)
+      << (wanted ? "" : chosen.method == "pooled" ? ": no, one c for all (no maximum, no selection bias)"
+                                                  : ": yes, the largest (" + fmt("%.3f", chosen.max_c) + ") less its bias")
+      << "\n";
+  o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.ci95.lo) << ", " << fmt("%.3f", chosen.ci95.hi)
+    << "] (profile and participant bootstrap; profile alone [" << fmt("%.3f", chosen.profile.lo) << ", "
+    << fmt("%.3f", chosen.profile.hi) << "]) from " << chosen.condition << " (" << chosen.method << "), " << provenance.observers
+    << "; published c = " << fmt("%g", kPublishedC) << "\n";
+  for (const ThesisEstimate& t : fit.thesis) {
+    const ConditionFit* c = nullptr;
+    for (const ConditionFit& k : fit.conditions)
+      if (k.condition == t.condition) c = &k;
+    o << "thesis-style estimate (mean QUEST radius per size, a line through the origin): " << t.condition << " c = "
+      << fmt("%.3f", t.c);
+    if (c) o << " against the model's " << fmt("%.3f", c->c) << " (" << fmt("%+.1f", 100.0 * (t.c / c->c - 1.0)) << " %)";
+    o << "\n";
+  }
   if (const std::vector<std::string> why = unusable_because(chosen); !why.empty())
     o << "NOT USABLE as a calibration: " << join(why, ", ") << " (c is trusted in [" << fmt("%g", kPlausibleCMin) << ", "
       << fmt("%g", kPlausibleCMax) << "] from a converged fit with a closed interval); penumbra-fit writes it only with "

@@ -49,7 +49,12 @@ inline constexpr double kPlausibleCMin = 0.5, kPlausibleCMax = 20.0;
 // its threshold or its slope sits at a bound (a slope at its upper bound is a step function: the
 // interval then holds for an infinitely steep observer only), its interval is open or not
 // finite, or c is implausible.
-std::vector<std::string> unusable_because(const ConditionFit& c);
+std::vector<std::string> unusable_because(const WorstCase& c);
+
+// What calibration.json's entry takes: the study's worst case (StudyFit::worst), or with `wanted`
+// (--condition) that condition's c with its profile and bootstrap intervals. Throws
+// std::invalid_argument naming the conditions for an unknown `wanted`.
+WorstCase entry_choice(const StudyFit& fit, const std::optional<std::string>& wanted);
 
 // calibration.json (schema_version 2, data/calibration/calibration.schema.json): one entry for
 // the provenance's technique and kernel with the chosen condition's c and interval; an unusable

@@ -2,7 +2,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
+
 #include "json/json_input.h"
+#include "psychometric/psychometric.h"
 
 namespace penumbra::adaptive {
 namespace {
@@ -55,6 +59,41 @@ long count(const std::filesystem::path& path, const nlohmann::json& j, const std
   return static_cast<long>(v.get<long long>());
 }
 
+// An entry's "threshold": what its c is a threshold of (penumbra-fit writes it; default.json states
+// the published design's).
+ThresholdDefinition read_threshold(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at) {
+  if (!j.is_object()) fail(path, at.substr(0, at.size() - 1), "expected an object");
+  ThresholdDefinition t;
+  auto real = [&](const char* key, double lo, double hi, double fallback) {
+    if (!j.contains(key)) return fallback;
+    if (!j[key].is_number() || !(j[key].get<double>() >= lo && j[key].get<double>() <= hi))
+      fail(path, at + key, "expected a number in [" + json_input::printable(nlohmann::json(lo).dump()) + ", " +
+                               json_input::printable(nlohmann::json(hi).dump()) + "]");
+    return j[key].get<double>();
+  };
+  t.task = text(path, j, at, "task", false);
+  if (t.task.empty()) t.task = "2afc";
+  if (t.task != "2afc" && t.task != "yesno") fail(path, at + "task", "expected 2afc or yesno");
+  t.guess = real("guess", 0, 0.99, 0.5);
+  t.criterion_f = real("criterion_f", 1e-6, 1 - 1e-6, t.criterion_f);
+  t.family = text(path, j, at, "family", false);
+  if (t.family.empty()) t.family = "log-weibull";
+  if (!psychometric::parse_model(t.family)) fail(path, at + "family", "expected log-weibull, weibull, normal or logistic");
+  t.beta = real("beta", 0.01, 1000, 3.5);
+  t.beta_assumed = !j.contains("beta_ci95");
+  t.beta_lo = t.beta_hi = t.beta;
+  if (j.contains("beta_ci95")) {
+    const auto& ci = j["beta_ci95"];
+    if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number() ||
+        !(ci[0].get<double>() > 0 && ci[0].get<double>() <= t.beta && t.beta <= ci[1].get<double>() && ci[1].get<double>() <= 1000))
+      fail(path, at + "beta_ci95", "expected [lo, hi] with 0 < lo <= beta <= hi <= 1000");
+    t.beta_lo = ci[0].get<double>();
+    t.beta_hi = ci[1].get<double>();
+  }
+  t.lapse = real("lapse", 0, 0.5, 0);
+  return t;
+}
+
 CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::json& j, std::size_t index) {
   const std::string at = "entries[" + std::to_string(index) + "].";
   if (!j.is_object()) fail(path, "entries[" + std::to_string(index) + "]", "expected an object");
@@ -92,6 +131,7 @@ CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::j
   }
   e.unusable_because = names("unusable_because");
   if (!e.usable && e.unusable_because.empty()) e.unusable_because.push_back("marked usable: false");
+  if (j.contains("threshold")) e.threshold = read_threshold(path, j["threshold"], at + "threshold.");
   return e;
 }
 
@@ -127,6 +167,34 @@ std::string_view method_description(CalibrationMethod m) {
     case CalibrationMethod::mixed: return "observer kinds pooled";
   }
   return "?";
+}
+
+const ThresholdDefinition& CalibrationEntry::definition() const {
+  static const ThresholdDefinition published{};
+  return threshold ? *threshold : published;
+}
+
+double c_at_visibility(double c, double criterion_f, double visibility, double beta, std::string_view family) {
+  if (!(visibility > 0 && visibility < 1)) throw std::invalid_argument("visibility: expected a detection probability in (0, 1)");
+  const auto model = psychometric::parse_model(family);
+  if (!model) throw std::invalid_argument("family '" + std::string(family) + "': expected log-weibull, weibull, normal or logistic");
+  if (visibility == criterion_f) return c;
+  // c is a filter radius per artifact; the model's x is log10(a / r) (log families) or a / r.
+  const bool linear = *model == psychometric::Model::weibull;
+  const double x = psychometric::threshold_at(*model, linear ? 1.0 / c : -std::log10(c), criterion_f, visibility, beta);
+  return linear ? 1.0 / x : std::pow(10.0, -x);
+}
+
+CAtVisibility c_at_visibility(const CalibrationEntry& e, double visibility) {
+  const ThresholdDefinition& t = e.definition();
+  CAtVisibility out{c_at_visibility(e.c, t.criterion_f, visibility, t.beta, t.family), INFINITY, 0};
+  for (const double c : {e.ci95_lo, e.ci95_hi})
+    for (const double beta : {t.beta_lo, t.beta_hi}) {
+      const double v = c_at_visibility(c, t.criterion_f, visibility, beta, t.family);
+      out.lo = std::min(out.lo, v);
+      out.hi = std::max(out.hi, v);
+    }
+  return out;
 }
 
 std::string CalibrationChoice::warnings() const {

@@ -39,6 +39,22 @@ std::string_view method_name(CalibrationMethod m);  // as calibration.json holds
 std::string_view method_description(CalibrationMethod m);
 std::optional<CalibrationMethod> method_from_name(std::string_view name);
 
+// What an entry's c is a threshold of: the detection probability F (lapse free) at which an
+// observer still sees the staircase, on the psychometric function the study fitted. c is not the
+// radius that hides the artifact: at r = c a it is detected with probability `criterion_f` (in 2AFC
+// at QUEST's 82 % correct, F* = 0.6465). With the slope, c at any other detection probability
+// follows (c_at_visibility).
+struct ThresholdDefinition {
+  std::string task = "2afc";          // 2afc | yesno
+  double guess = 0.5;                 // the task's guess rate (gamma)
+  double criterion_f = 0.6465;        // detection probability F at c
+  std::string family = "log-weibull"; // psychometric function: log-weibull, weibull, normal, logistic
+  double beta = 3.5;                  // its slope, in the family's units (per log10 unit for log-weibull)
+  double beta_lo = 3.5, beta_hi = 3.5;  // 95 % interval of the slope (= beta when assumed)
+  double lapse = 0.0;                 // the fitted lapse (it lowers psi's asymptote, not c)
+  bool beta_assumed = true;           // the slope was assumed (QUEST's), not fitted
+};
+
 struct CalibrationEntry {
   std::string technique;  // a registry name: pcf, vsm, rpcf, ...
   std::string kernel;     // the technique's kernel (pcf: grid, poisson) or "" for any
@@ -54,10 +70,28 @@ struct CalibrationEntry {
   // infinite interval, an implausible c); `unusable_because` says why. Read, used, and said loudly.
   bool usable = true;
   std::vector<std::string> unusable_because;
+  // What c is a threshold of; absent in files written before (and in version-1 files): the
+  // published design's is assumed then (2afc-equivalent criterion 0.6465, log-Weibull, slope 3.5).
+  std::optional<ThresholdDefinition> threshold;
+  const ThresholdDefinition& definition() const;
 
   // "pcf grid", or "pcf" for any kernel.
   std::string label() const { return kernel.empty() ? technique : technique + " " + kernel; }
 };
+
+// c at detection probability `visibility` for a threshold c at `criterion_f` on a psychometric
+// function of `family` ("log-weibull", "weibull", "normal", "logistic") with slope `beta`: for the
+// log-Weibull, c · (ln(1 - visibility) / ln(1 - criterion_f))^(-1/beta). A lower visibility needs a
+// larger radius: with beta 3.5, bringing 2AFC down to 55 % correct (F 0.10) takes about 1.9 c.
+// Throws std::invalid_argument for a visibility outside (0, 1) or an unknown family.
+double c_at_visibility(double c, double criterion_f, double visibility, double beta, std::string_view family = "log-weibull");
+
+// An entry's c at `visibility` with its interval: the entry's ci95 mapped through the slope's
+// interval (the widest combination). visibility = the entry's criterion gives c and ci95 back.
+struct CAtVisibility {
+  double c = kPublishedC, lo = kPublishedC, hi = kPublishedC;
+};
+CAtVisibility c_at_visibility(const CalibrationEntry& entry, double visibility);
 
 // The c the rule uses for one technique, and where it came from, for output and reports.
 struct CalibrationChoice {

@@ -1,7 +1,9 @@
 #pragma once
-// The filter-to-resolution rule r = c·a (Kreuzer 2017, eq. 5.1–5.6): a filter of radius r hides the
-// staircase of texels of size a when a <= r / c, so the smallest shadow map that a filter can hide
-// has res = c / r_uv texels per side, or res = c · L_ws / r_ws for a world-space radius over a
+// The filter-to-resolution rule r = c·a (Kreuzer 2017, eq. 5.1–5.6): the staircase of texels of
+// size a under a filter of radius r is detected with no more than the calibration's criterion
+// probability when a <= r / c (c is a threshold: at r = c·a it is still seen at that criterion;
+// choose a lower visibility with a larger c, calibration.h's c_at_visibility). So the smallest
+// shadow map at that visibility has res = c / r_uv texels per side, or res = c · L_ws / r_ws for a world-space radius over a
 // light view plane of extent L_ws (with fitting, L_ws is the fitted extent: r_uv = r_ws / L_ws · s_xy
 // with L_ws unfitted is the same thing).
 //

@@ -121,6 +121,14 @@ inline void apply_calibration_for(const CalibrationOption& calibration, shadows:
     return;
   }
   const adaptive::CalibrationChoice chosen = calibration.choice(settings);
+  if (settings.adaptive.visibility > 0) {
+    // c at the chosen detection probability on the entry's psychometric function.
+    adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
+    if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
+    const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
+    settings.adaptive.c = static_cast<float>(calibration.ci_upper ? at.hi : at.c);
+    return;
+  }
   settings.adaptive.c = static_cast<float>(calibration.ci_upper ? chosen.ci95_hi : chosen.c);
 }
 
@@ -170,6 +178,18 @@ inline std::string calibration_line(const CalibrationOption& calibration, const 
   std::snprintf(c, sizeof c, "%.3g", settings.adaptive.c);
   std::string line = "c for " + name + " = " + c + " texels";
   if (calibration.ci_upper && !calibration.c_from_command_line) line += " (the upper ci95 bound)";
+  if (!calibration.c_from_command_line) {
+    // What c means: the detection probability at which the staircase is still seen.
+    const adaptive::CalibrationChoice chosen = calibration.choice(settings);
+    const double criterion = chosen.entry ? chosen.entry->definition().criterion_f : adaptive::ThresholdDefinition{}.criterion_f;
+    char at[160];
+    if (settings.adaptive.visibility > 0)
+      std::snprintf(at, sizeof at, " at visibility F = %.3g (the entry's c %.3g is at its criterion F = %.3g)",
+                    settings.adaptive.visibility, chosen.c, criterion);
+    else
+      std::snprintf(at, sizeof at, " at the entry's criterion, detection probability F = %.3g", criterion);
+    line += at;
+  }
   line += ": " + calibration.source_of_c(settings);
   if (!calibration.c_from_command_line)
     if (const std::string w = calibration.choice(settings).warnings(); !w.empty()) line += "; " + w;
@@ -194,7 +214,16 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
                       {"from", chosen.from},
                       {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"},
                       {"flags", chosen.entry ? chosen.entry->flags : std::vector<std::string>{}},
-                      {"usable", !chosen.entry || chosen.entry->usable}};
+                      {"usable", !chosen.entry || chosen.entry->usable},
+                      {"visibility", settings.adaptive.visibility > 0 ? nlohmann::json(settings.adaptive.visibility) : nlohmann::json("criterion")},
+                      {"criterion_f", chosen.entry ? chosen.entry->definition().criterion_f : adaptive::ThresholdDefinition{}.criterion_f},
+                      {"c_at_criterion", chosen.c}};
+  if (settings.adaptive.visibility > 0 && !calibration.c_from_command_line) {
+    adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
+    if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
+    const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
+    j["ci95_at_visibility"] = {at.lo, at.hi};
+  }
   if (chosen.entry && !chosen.entry->usable) j["unusable_because"] = chosen.entry->unusable_because;
   return j;
 }

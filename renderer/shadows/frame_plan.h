@@ -91,7 +91,7 @@ struct FramePlan {
 // std::runtime_error for an empty image, a map below one texel or inconsistent adaptive limits.
 FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int width_px, int height_px, AdaptiveState& state);
 
-// World-space radius the adaptive rule hides texels with, for the technique's filter; 0 when the
+// World-space radius the adaptive rule sizes texels for, for the technique's filter; 0 when the
 // technique has none. Radii given in texels are taken at map.resolution_texels of the single
 // fitted map `single`: "the filter the user sees at the configured resolution".
 float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws);

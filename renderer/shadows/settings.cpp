@@ -36,7 +36,11 @@ const Setting<ShadowMapParams> kMapTable[] = {
 
 const Setting<AdaptiveParams> kAdaptiveTable[] = {
     PENUMBRA_BOOL(AdaptiveParams, enabled, "choose the resolution from the filter with res = c / r_uv"),
-    PENUMBRA_REAL(AdaptiveParams, c, "texels", 0.01, 100, "filter radius per hidden texel (calibration.json)"),
+    PENUMBRA_REAL(AdaptiveParams, c, "texels", 0.01, 100,
+                  "filter radius per texel at which its staircase is still detected with the entry's criterion probability (calibration.json)"),
+    PENUMBRA_REAL(AdaptiveParams, visibility, "", 0, 0.999,
+                  "detection probability F the rule is for (0 = the calibration entry's criterion, 0.65 for 82 % correct in 2AFC); lower "
+                  "needs a larger c"),
     PENUMBRA_INT(AdaptiveParams, min_texels, "texels", 1, 65536, "smallest resolution"),
     PENUMBRA_INT(AdaptiveParams, max_texels, "texels", 1, 65536, "largest resolution (sub-rectangle storage allocates this)"),
     PENUMBRA_INT(AdaptiveParams, quantum_texels, "texels", 1, 4096, "resolutions are rounded up to a multiple of this"),

@@ -48,7 +48,14 @@ struct ShadowMapParams {
 // quantized and rate-limited (adaptive/resolution_rule.h). Off: map.resolution_texels is used.
 struct AdaptiveParams {
   bool enabled = false;
-  float c = static_cast<float>(kPublishedC);  // texels; from calibration.json
+  // texels: from calibration.json, the radius per artifact at which the staircase is still detected
+  // with the entry's criterion probability (not hidden), or at `visibility` when that is set.
+  float c = static_cast<float>(kPublishedC);
+  // The detection probability F the rule is for; 0 = the calibration entry's own criterion (in 2AFC
+  // terms F* = 0.6465, 82 % correct). Lower is less visible and needs a larger filter radius per
+  // texel (adaptive::c_at_visibility: about 1.9 c at F 0.10 with slope 3.5). Used when c comes from
+  // the calibration file; an explicit --adaptive.c is taken as it is.
+  float visibility = 0;
   int min_texels = 32;
   int max_texels = 4096;
   int quantum_texels = 32;

@@ -3,17 +3,20 @@
 // orientation), takes the observer's noise-free local deviations of the jagged and the straight
 // image, and turns their difference into P(correct) = Phi(diff / (sqrt 2 weber)) (2afc: both
 // decisions carry independent N(0, weber) noise). The implied c is the r / a beyond which P stays
-// below p_threshold (interpolated in log r / a at the last crossing): the filter that hides the
-// artifact for every larger radius.
+// below p_threshold (interpolated in log r / a at the last crossing): the radius from which on the
+// artifact is detected at no more than the criterion.
 // With --technique the renderer's technique draws the stimuli (docs/study.md); --json writes the
-// implied c per condition as a calibration.json image-observer entry (data/calibration/predicted.json).
+// implied c per condition as a calibration.json image-observer entry (data/calibration/predicted.json),
+// with a percentile bootstrap interval over the stimuli (seeds) rendered per radius.
 //   penumbra-observer-curve --pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20
 //       --technique pcf --set pcf.kernel=grid --json pcf-grid.json
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,7 +26,7 @@
 #include "json/json_input.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 #include "sampling/random.h"
 #include "stimuli/stimulus.h"
 
@@ -35,6 +38,69 @@ struct Curve {
   double implied = NAN;   // c: r / a beyond which P stays below p_threshold
   bool at_most = false;   // P was below p_threshold from the first ratio on: c <= implied
 };
+
+// One radius of one artifact size: the observer's deviations per stimulus (seed: phase, orientation).
+struct Point {
+  double ratio = 0;
+  std::vector<double> jagged, straight;
+};
+
+// 2afc P(correct) at one radius over the stimuli `pick` (indices into the seeds, repeats allowed).
+double p_correct(const Point& point, const std::vector<int>& pick, double weber) {
+  double jagged = 0, straight = 0;
+  for (const int s : pick) {
+    jagged += point.jagged[static_cast<std::size_t>(s)] / pick.size();
+    straight += point.straight[static_cast<std::size_t>(s)] / pick.size();
+  }
+  return 0.5 * std::erfc(-(jagged - straight) / (2 * weber));  // Phi(d / (sqrt2 w))
+}
+
+// The r / a beyond which P stays below p_threshold, interpolated in log r / a at the last crossing.
+Curve implied_c(const std::vector<Point>& points, const std::vector<int>& pick, double weber, double p_threshold) {
+  Curve curve;
+  double last_ratio = NAN, last_p = NAN;
+  for (const Point& point : points) {
+    const double p = p_correct(point, pick, weber);
+    if (p >= p_threshold) {
+      curve.implied = NAN;
+      curve.at_most = false;
+    } else if (std::isnan(curve.implied)) {  // crossed down: interpolate in log r/a
+      curve.at_most = std::isnan(last_p);
+      curve.implied = curve.at_most ? point.ratio
+                                    : last_ratio * std::pow(point.ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
+    }
+    last_ratio = point.ratio;
+    last_p = p;
+  }
+  return curve;
+}
+
+// A condition's c as penumbra-fit's one c per condition would see it: the geometric mean over
+// artifact sizes (those that crossed); NAN when none did.
+double condition_c(const std::vector<std::vector<Point>>& per_artifact, const std::vector<int>& pick, double weber,
+                   double p_threshold) {
+  double log_sum = 0;
+  int count = 0;
+  for (const auto& points : per_artifact) {
+    const Curve curve = implied_c(points, pick, weber, p_threshold);
+    if (std::isnan(curve.implied)) continue;
+    log_sum += std::log(curve.implied);
+    ++count;
+  }
+  return count ? std::exp(log_sum / count) : NAN;
+}
+
+// The q-quantile of `values` (linear between order statistics); NAN when empty.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return NAN;
+  std::sort(values.begin(), values.end());
+  const double at = q * static_cast<double>(values.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(at);
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (at - static_cast<double>(lo)) * (values[hi] - values[lo]);
+}
+
+constexpr int kResamples = 400;  // bootstrap over the stimuli per radius
 
 }  // namespace
 
@@ -90,18 +156,19 @@ int main(int argc, char** argv) {
     nlohmann::json per_condition = nlohmann::json::array();
     double largest = NAN;
     std::string largest_condition;
+    std::vector<int> all_seeds(static_cast<std::size_t>(seeds));
+    for (int s = 0; s < seeds; ++s) all_seeds[static_cast<std::size_t>(s)] = s;
+    std::vector<std::vector<std::vector<Point>>> data;  // condition -> artifact size -> radius
     for (const stimuli::Pattern pattern : parsed_patterns) {
       for (const double contrast : contrasts) {
         char contrast_text[32];
         std::snprintf(contrast_text, sizeof contrast_text, "%g", contrast);  // "stair/1", "step/0.5": penumbra-fit's names
         const std::string condition = stimuli::to_string(pattern) + "/" + contrast_text;
         nlohmann::json per_artifact = nlohmann::json::array();
-        double log_sum = 0;
-        int count = 0;
+        std::vector<std::vector<Point>> condition_points;
         for (const double a : artifacts) {
-          Curve curve;
-          double last_ratio = NAN, last_p = NAN;
           std::printf("%s, a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", condition.c_str(), a);
+          std::vector<Point> points;
           for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
             stimuli::StimulusSpec spec = base;
             spec.pattern = pattern;
@@ -110,48 +177,73 @@ int main(int argc, char** argv) {
             const auto shown = stimuli::clamp_filter_radius(ratio * a, size_px);
             if (shown.clamped) break;
             spec.filter_radius_px = shown.filter_radius_px;
-            double jagged = 0, straight = 0;
+            Point point;
+            point.ratio = ratio;
             for (int s = 0; s < seeds; ++s) {
               spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
               const stimuli::StimulusPair pair = renderer.render(spec);
-              jagged += eye.local_deviation(pair.artifact, spec, pair.geometry, false) / seeds;
-              straight += eye.local_deviation(pair.line, spec, pair.geometry, false) / seeds;
+              point.jagged.push_back(eye.local_deviation(pair.artifact, spec, pair.geometry, false));
+              point.straight.push_back(eye.local_deviation(pair.line, spec, pair.geometry, false));
             }
-            const double p = 0.5 * std::erfc(-(jagged - straight) / (2 * params.weber));  // Phi(d / (sqrt2 w))
-            if (p >= p_threshold) {
-              curve.implied = NAN;
-              curve.at_most = false;
-            } else if (std::isnan(curve.implied)) {  // crossed down: interpolate in log r/a
-              curve.at_most = std::isnan(last_p);
-              curve.implied = curve.at_most ? ratio
-                                            : last_ratio * std::pow(ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
+            double jagged = 0, straight = 0;
+            for (int s = 0; s < seeds; ++s) {
+              jagged += point.jagged[static_cast<std::size_t>(s)] / seeds;
+              straight += point.straight[static_cast<std::size_t>(s)] / seeds;
             }
-            last_ratio = ratio;
-            last_p = p;
-            std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p);
+            std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p_correct(point, all_seeds, params.weber));
+            points.push_back(std::move(point));
           }
+          const Curve curve = implied_c(points, all_seeds, params.weber, p_threshold);
           std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %s%.2f\n", curve.at_most ? "at most " : "",
                       curve.implied);
           std::fflush(stdout);
           nlohmann::json per = {{"artifact_px", a}, {"c", std::isnan(curve.implied) ? nlohmann::json(nullptr) : nlohmann::json(curve.implied)}};
           if (curve.at_most) per["at_most"] = true;  // hidden at the smallest ratio tried already
           per_artifact.push_back(per);
-          if (!std::isnan(curve.implied)) {
-            log_sum += std::log(curve.implied);
-            ++count;
-          }
+          condition_points.push_back(std::move(points));
         }
-        // The condition's c as penumbra-fit's one c per condition would see it: the geometric mean
-        // over artifact sizes; their range beside it.
-        const double c = count ? std::exp(log_sum / count) : NAN;
+        const double c = condition_c(condition_points, all_seeds, params.weber, p_threshold);
         nlohmann::json entry = {{"condition", condition}, {"c", std::isnan(c) ? nlohmann::json(nullptr) : nlohmann::json(c)},
                                 {"per_artifact", per_artifact}};
         per_condition.push_back(entry);
+        data.push_back(std::move(condition_points));
         if (!std::isnan(c) && !(c <= largest)) {
           largest = c;
           largest_condition = condition;
         }
       }
+    }
+    // The interval from the stimuli themselves: a percentile bootstrap over the seeds (each one
+    // phase and orientation of the edge), the same resampled seeds for every radius, size and
+    // condition, so the entry's c (the largest condition's) is resampled as a whole. With one
+    // seed there is nothing to resample: [c, c].
+    std::vector<std::vector<double>> condition_draws(data.size());
+    std::vector<double> largest_draws;
+    if (seeds > 1) {
+      sampling::Random random(sampling::derive_seed(29, static_cast<std::uint64_t>(seeds)));
+      std::vector<int> pick(static_cast<std::size_t>(seeds));
+      for (int b = 0; b < kResamples; ++b) {
+        for (int& s : pick) s = static_cast<int>(random.uniform() * seeds);
+        double draw_largest = NAN;
+        for (std::size_t k = 0; k < data.size(); ++k) {
+          const double c = condition_c(data[k], pick, params.weber, p_threshold);
+          if (std::isnan(c)) continue;
+          condition_draws[k].push_back(c);
+          if (!(c <= draw_largest)) draw_largest = c;
+        }
+        if (!std::isnan(draw_largest)) largest_draws.push_back(draw_largest);
+      }
+    }
+    auto interval = [&](const std::vector<double>& draws, double c) {
+      if (draws.empty()) return nlohmann::json::array({c, c});
+      return nlohmann::json::array({std::min(c, quantile(draws, 0.025)), std::max(c, quantile(draws, 0.975))});
+    };
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      const nlohmann::json& c = per_condition[k]["c"];
+      if (c.is_null()) continue;
+      per_condition[k]["ci95"] = interval(condition_draws[k], c.get<double>());
+      std::printf("%s: c = %.3f, 95 %% over the stimuli [%.3f, %.3f]\n", per_condition[k]["condition"].get<std::string>().c_str(),
+                  c.get<double>(), per_condition[k]["ci95"][0].get<double>(), per_condition[k]["ci95"][1].get<double>());
     }
     if (!json_out.empty()) {
       if (std::isnan(largest)) throw std::runtime_error("--json: no condition crossed p_threshold within the ratio range; nothing to write");
@@ -160,7 +252,7 @@ int main(int argc, char** argv) {
       const nlohmann::json entry = {{"technique", technique.empty() ? "pcf" : technique},
                                     {"kernel", kernel},
                                     {"c", largest},
-                                    {"ci95", {largest, largest}},
+                                    {"ci95", interval(largest_draws, largest)},
                                     {"condition", largest_condition},
                                     {"obtained_by", "image-observer"},
                                     {"participants", nullptr},
@@ -169,13 +261,15 @@ int main(int argc, char** argv) {
                                     {"observer", {{"window_r", params.window_r}, {"weber", params.weber},
                                                   {"blur_sigma_arcmin", params.blur_sigma_arcmin},
                                                   {"pixels_per_degree", params.pixels_per_degree},
-                                                  {"p_threshold", p_threshold}, {"seeds", seeds}, {"size_px", size_px}}},
+                                                  {"p_threshold", p_threshold}, {"seeds", seeds}, {"size_px", size_px},
+                                                  {"resamples", seeds > 1 ? kResamples : 0}}},
                                     {"command", command}};
       const nlohmann::json file = {
           {"schema_version", 2},
           {"source", "image-observer prediction (a model of the observer, not human data): the largest condition's c; "
                      "a condition's c is the geometric mean over artifact sizes of the r / a beyond which the model's "
-                     "2afc P(correct) stays below p_threshold; ci95 is [c, c]: a deterministic model has no sampling interval"},
+                     "2afc P(correct) stays below p_threshold; ci95 is a percentile bootstrap over the stimuli (phase and "
+                     "orientation) rendered per radius ([c, c] with one stimulus), widened to contain c"},
           {"entries", {entry}}};
       io::write_file_atomic(json_out, json_input::dump(file, 2) + "\n");
       std::printf("wrote %s: %s%s c = %.3f (%s), image-observer prediction\n", json_out.c_str(), entry["technique"].get<std::string>().c_str(),

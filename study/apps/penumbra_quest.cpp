@@ -20,7 +20,7 @@
 #include "common/progress_bar.h"
 #include "observers/staircase_simulation.h"
 #include "published.h"
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 #include "quest/quest.h"
 
 namespace {

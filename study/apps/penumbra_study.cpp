@@ -263,11 +263,12 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
   observers::PlantedModel& model = setup.model;
   model = parse_psychometric(observer_spec, where);
   if (yesno) {
-    // The same detection function F as in 2afc (threshold where F reaches the 2afc F*), with
-    // hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa.
-    const double f_star = (model.p_threshold - model.guess) / (1 - model.guess - model.lapse);
+    // The same detection function F as in 2afc (threshold where F reaches the 2afc criterion F*),
+    // with hits = fa + (1 - fa - lapse) F; a straight edge gets "jagged" with probability fa. The
+    // p_threshold that gives that F* with the yes/no guess rate fa:
+    const double f_star = psychometric::criterion_f(model.p_threshold, model.guess, model.quest_delta);
     model.guess = setup.false_alarm;
-    model.p_threshold = setup.false_alarm + (1 - setup.false_alarm - model.lapse) * f_star;
+    model.p_threshold = setup.false_alarm + (1 - setup.false_alarm) * (1 - model.quest_delta) * f_star;
   }
   if (!(model.lapse >= 0 && model.lapse < 1 - model.guess))
     throw std::invalid_argument(where + ": lapse: expected a rate in [0, 1 - guess)");

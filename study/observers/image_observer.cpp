@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 
 namespace penumbra::observers {
 

@@ -11,7 +11,7 @@ namespace penumbra::observers {
 struct Stimulus {
   std::string condition;    // e.g. "stair/full": selects the observer's per-condition parameters
   double artifact_px;       // staircase step on screen (one shadow-map texel)
-  double filter_radius_px;  // PCF radius; the artifact hides when radius >= c * artifact
+  double filter_radius_px;  // PCF radius; at radius = c * artifact the artifact is detected at the criterion
 
   // The study's QUEST intensity, log10(artifact_px / filter_radius_px): rises as the filter
   // shrinks, i.e. as the artifact becomes easier to see.

@@ -22,11 +22,13 @@ PsychometricObserver::PsychometricObserver(std::map<std::string, PlantedModel> c
     // Threshold in the model's x: a / r at r = c a is 1 / c; its log10 is -log10(c).
     const double threshold_x =
         model.model == psychometric::Model::weibull ? 1.0 / model.c_true : -std::log10(model.c_true);
-    const double alpha = psychometric::alpha_for_threshold(model.model, threshold_x, model.p_threshold, model.slope,
-                                                           model.guess, model.lapse);
+    if (!(model.lapse >= 0.0 && model.lapse < 1.0 - model.guess))
+      throw std::invalid_argument("PsychometricObserver: condition '" + name + "': lapse must be in [0, 1 - guess)");
+    const double alpha = psychometric::alpha_for_threshold(model.model, threshold_x, model.p_threshold, model.slope, model.guess,
+                                                           psychometric::quest_lapse(model.quest_delta, model.guess));
     if (!std::isfinite(alpha))
-      throw std::invalid_argument("PsychometricObserver: condition '" + name + "': psi never reaches p_threshold " +
-                                  std::to_string(model.p_threshold));
+      throw std::invalid_argument("PsychometricObserver: condition '" + name + "': the criterion F* of p_threshold " +
+                                  std::to_string(model.p_threshold) + " is not in (0, 1)");
     conditions_.emplace(name, Planted{model, {alpha, model.slope, model.guess, model.lapse}});
   }
 }

@@ -1,8 +1,10 @@
 #pragma once
 // A simulated observer that answers from a planted psychometric model. Its threshold is planted
-// in filter-radius terms, the way the study reports it: at artifact size a the observer is correct
-// with probability p_threshold when filter_radius_px = c_true * a, i.e. at intensity
-// log10(a / (c_true a)) = -log10(c_true) whatever a is.
+// in filter-radius terms, the way the study reports it, and on the detection probability F (lapse
+// free), as QUEST defines it: at artifact size a its F is the study's criterion
+// F* = psychometric::criterion_f(p_threshold, guess, quest_delta) when filter_radius_px = c_true * a,
+// i.e. at intensity log10(a / (c_true a)) = -log10(c_true) whatever a is. Its own lapse only lowers
+// psi's upper asymptote: with lapse = quest_delta (1 - guess) psi is p_threshold there.
 
 #include <cstdint>
 #include <map>
@@ -10,7 +12,7 @@
 
 #include "observers/observer.h"
 #include "published.h"
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 #include "sampling/random.h"
 
 namespace penumbra::observers {
@@ -21,7 +23,8 @@ struct PlantedModel {
   double slope = 3.5;          // beta in the model's units (per log10 unit for the log models)
   double guess = 0.5;          // gamma
   double lapse = 0.0;          // lambda
-  double p_threshold = 0.82;   // the percent correct at which c_true is the threshold
+  double p_threshold = 0.82;   // with quest_delta, the criterion F* at which c_true is the threshold
+  double quest_delta = 0.01;   // QUEST's delta: F* = (p_threshold - guess) / ((1 - guess) (1 - delta))
 };
 
 class PsychometricObserver : public Observer {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 #include "quest/quest_plus.h"
 #include "sampling/random.h"
 

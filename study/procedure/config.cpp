@@ -198,11 +198,27 @@ class Reader {
 StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const Reader r(file);
   r.only(j, "", {"name", "task", "artifact_px", "rounds", "quest", "intensity_bounds", "stopping", "practice_trials",
-                 "practice_intensity", "practice", "texts", "break_every_trials", "seed", "round_order", "stimulus", "display", "description"});
+                 "practice_intensity", "practice", "texts", "break_every_trials", "seed", "round_order", "stimulus", "display", "description",
+                 "yesno_scoring", "readings"});
   StudyConfig c;
   c.name = r.text(j, "", "name", "study");
   c.task = r.text(j, "", "task", "2afc");
   if (c.task != "2afc" && c.task != "yesno") r.fail("task", "expected 2afc or yesno");
+  if (r.find(j, "yesno_scoring")) {
+    if (c.task != "yesno") r.fail("yesno_scoring", "only for task yesno (a 2afc trial is scored one way)");
+    c.yesno_scoring = r.text(j, "", "yesno_scoring", "jagged_only");
+    if (c.yesno_scoring != "jagged_only" && c.yesno_scoring != "balanced")
+      r.fail("yesno_scoring", "expected jagged_only or balanced, got '" + json_input::printable(c.yesno_scoring) + "'");
+  }
+  if (const auto* readings = r.find(j, "readings")) {
+    if (!readings->is_object()) r.fail("readings", "expected an object of \"choice\": \"what was chosen and why\"");
+    for (auto it = readings->begin(); it != readings->end(); ++it) {
+      const std::string field = "readings." + text::printable(it.key());
+      if (!it->is_string() || it->get<std::string>().empty()) r.fail(field, "expected a non-empty string");
+      if (!text::valid_utf8(it->get<std::string>())) r.fail(field, "not valid UTF-8 (save the file as UTF-8)");
+      c.readings.emplace_back(it.key(), it->get<std::string>());
+    }
+  }
 
   if (const auto* a = r.find(j, "artifact_px")) {
     if (!a->is_array() || a->empty()) r.fail("artifact_px", "expected a non-empty array of sizes in px");
@@ -228,8 +244,9 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   }
   // yesno feeds QUEST the jagged trials only (hit = "not straight"): its guess rate is the
   // false-alarm rate, and p_threshold puts the threshold at the same point of the underlying
-  // detection function F as 2afc's .82 does (F = 0.6465 with delta .01; docs/study.md).
-  const bool yesno = c.task == "yesno";
+  // detection function F as 2afc's .82 does (F = 0.6465 with delta .01; docs/study.md). Scored
+  // balanced, every trial counts and the guess rate is 2afc's.
+  const bool yesno = c.task == "yesno" && c.yesno_scoring == "jagged_only";
   const double default_gamma = yesno ? 0.05 : 0.5, default_p = yesno ? 0.658 : 0.82;
   if (const auto* q = r.find(j, "quest")) {
     r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range"});
@@ -451,6 +468,12 @@ nlohmann::json to_json(const StudyConfig& c) {
   if (!c.texts.empty()) {
     j["texts"] = nlohmann::json::object();
     for (const auto& [key, value] : c.texts) j["texts"][key] = value;
+  }
+  // Only when not the default, so that sessions written before the field existed read back equal.
+  if (c.yesno_scoring != "jagged_only") j["yesno_scoring"] = c.yesno_scoring;
+  if (!c.readings.empty()) {
+    j["readings"] = nlohmann::json::object();
+    for (const auto& [key, value] : c.readings) j["readings"][key] = value;
   }
   return j;
 }

@@ -77,6 +77,12 @@ inline constexpr std::size_t kMaxTextBytes = 4000;
 struct StudyConfig {
   std::string name;
   std::string task = "2afc";                 // 2afc | yesno
+  // yesno only: what QUEST is fed. "jagged_only" (default): the jagged trials as detections
+  // ("not straight" = seen), guess rate = the false-alarm rate (gamma 0.05, p_threshold 0.658 by
+  // default). "balanced": every trial, jagged and straight, scored correct or not, so P(correct)
+  // = 0.5 + 0.5 (1 - fa) F: a 2AFC-like guess rate of 0.5 (gamma 0.5, p_threshold 0.82 by
+  // default), one reading of the published design (docs/study.md).
+  std::string yesno_scoring = "jagged_only";
   std::vector<double> artifact_px = {5, 10, 20};
   std::vector<RoundConfig> rounds;
   quest::QuestParams quest;                  // t_guess, t_guess_sd in intensity units
@@ -101,6 +107,10 @@ struct StudyConfig {
   std::vector<std::pair<std::string, std::string>> technique_settings;
   Display display;
   std::vector<std::pair<std::string, std::string>> texts;  // as given (text_table keys); the rest default
+  // "readings": the choices a design's source does not state, as declared by the config
+  // ({"kernel": "disk: the thesis does not name it", ...}); documentation carried into
+  // session.json, never used to run.
+  std::vector<std::pair<std::string, std::string>> readings;
   // The text for `key` (a text_table key): the config's, else the task's default. "round" has
   // {round} and {rounds} replaced when `round` > 0.
   std::string text(const std::string& key, int round = 0, int round_count = 0) const;

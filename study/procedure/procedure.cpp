@@ -199,8 +199,9 @@ void Procedure::apply(const TrialPlan& plan, bool correct) {
     return;
   }
   // yesno: a straight stimulus (catch trial) says nothing about the artifact's visibility; only
-  // the jagged ones update QUEST, with "not straight" = detected.
-  if (config_.task == "yesno" && plan.target == "straight") return;
+  // the jagged ones update QUEST, with "not straight" = detected. Scored balanced, the straight
+  // ones count too (correct = "straight"), as a percent correct over both kinds.
+  if (config_.task == "yesno" && plan.target == "straight" && config_.yesno_scoring != "balanced") return;
   Staircase& sc = rounds_[static_cast<std::size_t>(plan.round)][static_cast<std::size_t>(plan.staircase)];
   sc.quest.update(plan.intensity, correct ? 1 : 0);
   sc.filter_radius_px.push_back(plan.stimulus.filter_radius_px);

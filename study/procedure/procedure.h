@@ -70,7 +70,8 @@ class Procedure {
 
   // The next trial, or nothing when every round is finished.
   std::optional<TrialPlan> next() const;
-  // Counts the trial and updates its staircase (practice and yes/no catch trials update none).
+  // Counts the trial and updates its staircase (practice trials update none, nor do yes/no catch
+  // trials unless the config scores yes/no balanced).
   void apply(const TrialPlan& plan, bool correct);
   // Finishes `round` now (the experimenter's "end round").
   void end_round(int round);

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 
 namespace penumbra::quest {
 namespace {

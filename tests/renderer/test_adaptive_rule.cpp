@@ -141,6 +141,15 @@ TEST_F(CalibrationFile, ShippedDefaultIsThePublishedConstant) {
   EXPECT_DOUBLE_EQ(e.c, kPublishedC);
   EXPECT_EQ(e.obtained_by, CalibrationMethod::published);
   EXPECT_EQ(e.participants, 10);
+  // Issue 29: the published entry says what its c is a threshold of, as this project reads the
+  // thesis (yes/no scored as balanced percent correct): F 0.674, QUEST's assumed slope 3.5; in 2AFC
+  // terms (F* 0.6465) 3.54, or 3.97 if QUEST was fed the jagged trials only.
+  ASSERT_TRUE(e.threshold.has_value());
+  EXPECT_EQ(e.threshold->task, "yesno");
+  EXPECT_NEAR(e.threshold->criterion_f, 0.6737, 1e-4);
+  EXPECT_TRUE(e.threshold->beta_assumed);
+  EXPECT_NEAR(c_at_visibility(e, 0.6464646464646464).c, 3.54, 0.01);
+  EXPECT_NEAR(c_at_visibility(3.47, 0.8105, 0.6464646464646464, 3.5), 3.97, 0.01);
   const CalibrationChoice grid = cal.choose("pcf", "grid");
   EXPECT_DOUBLE_EQ(grid.c, kPublishedC);
   EXPECT_FALSE(grid.fallback);

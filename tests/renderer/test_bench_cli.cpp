@@ -317,6 +317,16 @@ TEST_F(BenchCli, CalibrationIsRecordedAndExplicitAdaptiveCWins) {
   EXPECT_NEAR(required_per_c[2] / required_per_c[0], 1.0, 1e-4);
 }
 
+// Issue 29: the bench's adaptive rows take --adaptive.visibility, and say the c it gives.
+TEST_F(BenchCli, AChosenVisibilityGivesItsC) {
+  const fs::path out = work() / "visibility";
+  const test::Result r = bench({"--techniques", "pcf", "--resolutions", "64", "--no-plot", "--adaptive.visibility", "0.1", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("texels at visibility F = 0.1"), std::string::npos) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_NEAR(report.at("calibration").at("c").get<double>(), 6.817, 1e-3);
+}
+
 TEST_F(BenchCli, BadCalibrationFileIsRefusedWithNothingWritten) {
   const fs::path bad = tmp_ / "scratch" / "bad-calibration.json";
   { std::ofstream(bad) << R"({"c": -1})" << "\n"; }

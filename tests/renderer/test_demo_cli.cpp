@@ -183,6 +183,18 @@ TEST_F(DemoCli, ExplicitAdaptiveCWinsOverTheCalibrationFile) {
   }
 }
 
+// Issue 29: the demo takes --adaptive.visibility too, says it, and records the c it gives.
+TEST_F(DemoCli, AChosenVisibilityGivesItsC) {
+  const fs::path out = dir_ / "visibility";
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
+                       "--fixed-resolution", "256", "--no-plot", "--no-baselines", "--adaptive.visibility", "0.1", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(" = 6.82 texels at visibility F = 0.1 (the entry's c 3.47 is at its criterion F = 0.674)"), std::string::npos)
+      << r.out;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_NEAR(report.at("techniques")[0].at("settings_adaptive").at("adaptive").at("c").get<double>(), 6.817, 1e-3);
+}
+
 TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
   const fs::path out = dir_ / "out";
   struct Case {

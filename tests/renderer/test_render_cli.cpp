@@ -17,6 +17,8 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include "adaptive/calibration.h"
 #include <nlohmann/json.hpp>
 
 #include "io/image_io.h"
@@ -407,7 +409,8 @@ TEST_F(RenderCli, TheAdaptiveRulesCIsPrintedWithItsFlags) {
                                           cal_file.string(), "-o", out.string()}),
                               scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string line = "c for pcf disk = 0.647 texels: pcf disk entry (people, 1 participant) of " + cal_file.string() +
+  const std::string line = "c for pcf disk = 0.647 texels at the entry's criterion, detection probability F = 0.646: pcf disk entry "
+                           "(people, 1 participant) of " + cal_file.string() +
                            "; NOT USABLE: not_converged, interval_open; flags: not_converged, slope_at_upper_bound, one_participant";
   EXPECT_NE(r.out.find(line + "\n"), std::string::npos) << r.out;
   EXPECT_LT(r.out.find(line), r.out.find("technique ")) << "said before the table of renders";
@@ -419,6 +422,35 @@ TEST_F(RenderCli, TheAdaptiveRulesCIsPrintedWithItsFlags) {
   const Result fixed = run_render(small_args({"--technique", "pcf", "--calibration", cal_file.string(), "-o", (work_ / "out-fixed").string()}), scratch_);
   ASSERT_EQ(fixed.exit_code, 0) << fixed.err;
   EXPECT_EQ(fixed.out.find("c for "), std::string::npos) << fixed.out;
+}
+
+// Issue 29: --adaptive.visibility chooses the detection probability the rule is for. At F 0.1
+// (about 55 % correct in 2AFC) the published entry's c becomes c(0.1) = 1.96 c(F*) on its
+// psychometric function as data/calibration/default.json reads it (log-Weibull, slope 3.5,
+// criterion F* 0.6737), and the map grows by that factor (within a resolution quantum of 32 texels).
+TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
+  auto render = [&](const std::vector<std::string>& extra, const std::string& name) {
+    std::vector<std::string> args = {"--technique", "pcf", "--pcf.radius", "0.1", "--pcf.radius_unit", "world", "--adaptive.enabled", "true"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    args.insert(args.end(), {"-o", (work_ / name).string()});
+    const Result r = run_render(small_args(args), scratch_);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return std::make_pair(r.out, read_json(work_ / name / "pcf-poisson" / "report.json"));
+  };
+  const auto [out_default, base] = render({}, "criterion");
+  const auto [out_low, low] = render({"--adaptive.visibility", "0.1"}, "low");
+  const double factor = penumbra::adaptive::c_at_visibility(3.47, 0.6737, 0.1, 3.5) / 3.47;
+  EXPECT_NEAR(factor, 1.965, 0.01);
+  EXPECT_NEAR(low.at("calibration").at("c").get<double>(), 3.47 * factor, 1e-3);
+  EXPECT_EQ(low.at("calibration").at("visibility").get<double>(), 0.1f);
+  const double r0 = base.at("resolution_texels").get<double>(), r1 = low.at("resolution_texels").get<double>();
+  EXPECT_GT(r1, r0);
+  EXPECT_NEAR(r1 / r0, factor, 32.0 / r0 * factor + 1e-9) << r0 << " -> " << r1;
+  EXPECT_NE(out_low.find("c for pcf poisson = 6.82 texels at visibility F = 0.1"), std::string::npos) << out_low;
+  EXPECT_NE(out_default.find("at the entry's criterion, detection probability F = 0.674"), std::string::npos) << out_default;
+  // A visibility no function reaches is refused by the settings table.
+  const Result bad = run_render(small_args({"--adaptive.visibility", "1.5", "-o", (work_ / "bad").string()}), scratch_);
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 
 // A bad calibration file is refused before anything is created: one line naming the file and field.

@@ -22,13 +22,20 @@ TEST(PsychometricObserver, PlantsTheThresholdAtCTrueTimesTheArtifact) {
     planted.model = model;
     planted.lapse = 0.02;
     const obs::PsychometricObserver observer({{"stair", planted}}, 1);
+    // Planted on F (lapse free), as QUEST defines a threshold: F(c a) = F*, so psi there is
+    // gamma + (1 - gamma - lapse) F*; 0.82 exactly when the lapse is QUEST's delta (1 - gamma).
+    const double f_star = psy::criterion_f(0.82, 0.5, 0.01);
+    EXPECT_NEAR(f_star, 0.6464646464646464, 1e-15);
     for (double artifact_px : {1.0, 4.0, 10.0, 20.0}) {
       const obs::Stimulus at_threshold{"stair", artifact_px, 3.47 * artifact_px};
-      EXPECT_NEAR(observer.p_correct(at_threshold), 0.82, 1e-12) << psy::model_name(model) << " a=" << artifact_px;
+      EXPECT_NEAR(observer.p_correct(at_threshold), 0.5 + (1 - 0.5 - 0.02) * f_star, 1e-12) << psy::model_name(model) << " a=" << artifact_px;
       const obs::Stimulus sharper{"stair", artifact_px, 2.0 * artifact_px};
       EXPECT_GT(observer.p_correct(sharper), 0.82);  // smaller filter: artifact easier to see
     }
     EXPECT_NEAR(observer.threshold_intensity("stair"), -std::log10(3.47), 1e-15);
+    planted.lapse = psy::quest_lapse(0.01, 0.5);
+    const obs::PsychometricObserver quest_like({{"stair", planted}}, 1);
+    EXPECT_NEAR(quest_like.p_correct({"stair", 5.0, 3.47 * 5.0}), 0.82, 1e-12) << psy::model_name(model);
   }
 }
 
@@ -49,16 +56,19 @@ TEST(PsychometricObserver, PerConditionParametersAndSeededAnswers) {
   }
   EXPECT_EQ(agree_same, n);
   EXPECT_LT(agree_other, n);
-  EXPECT_NEAR(static_cast<double>(correct) / n, 0.82, 0.01);
-  EXPECT_NEAR(a.p_correct({"half", 4.0, 4.0 * 2.5}), 0.82, 1e-12);
+  const double at_threshold = 0.5 + 0.5 * psy::criterion_f(0.82, 0.5, 0.01);  // no lapse: a little above 0.82
+  EXPECT_NEAR(static_cast<double>(correct) / n, at_threshold, 0.01);
+  EXPECT_NEAR(a.p_correct({"half", 4.0, 4.0 * 2.5}), at_threshold, 1e-12);
   EXPECT_THROW(a.respond({"unknown", 4.0, 10.0}), std::invalid_argument);
   EXPECT_THROW(a.p_correct({"full", 0.0, 10.0}), std::invalid_argument);
   obs::PlantedModel bad;
   bad.c_true = -1.0;
   EXPECT_THROW(obs::PsychometricObserver({{"x", bad}}, 1), std::invalid_argument);
   bad.c_true = 3.0;
-  bad.p_threshold = 0.99;
-  bad.lapse = 0.05;  // psi tops out at 0.95
+  bad.p_threshold = 0.999;  // above QUEST's own ceiling 1 - delta (1 - gamma): no F reaches it
+  EXPECT_THROW(obs::PsychometricObserver({{"x", bad}}, 1), std::invalid_argument);
+  bad.p_threshold = 0.82;
+  bad.lapse = 0.6;  // more than 1 - guess
   EXPECT_THROW(obs::PsychometricObserver({{"x", bad}}, 1), std::invalid_argument);
 }
 

@@ -3,7 +3,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 
 namespace {
 

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 
 namespace {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "quest/psychometric.h"
+#include "psychometric/psychometric.h"
 #include "quest/quest_plus.h"
 #include "sampling/random.h"
 

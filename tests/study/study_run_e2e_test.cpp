@@ -434,6 +434,16 @@ TEST(ObserverCurve, StepNeedsALargerFilterThanTheStairOnTheRenderersPcf) {
                 a == 10 ? "25" : ">= 50", c["step/1"][a] * a);
   }
   EXPECT_EQ(entry["c"], std::max(entry["per_condition"][0]["c"], entry["per_condition"][1]["c"]));
+  // Two stimuli per radius: the interval is a bootstrap over them, so it has width and holds c.
+  for (const auto& condition : entry["per_condition"]) {
+    const double lo = condition["ci95"][0], hi = condition["ci95"][1], value = condition["c"];
+    EXPECT_LE(lo, value) << condition["condition"];
+    EXPECT_GE(hi, value) << condition["condition"];
+    EXPECT_LT(lo, hi) << condition["condition"];
+  }
+  EXPECT_LE(entry["ci95"][0].get<double>(), entry["c"].get<double>());
+  EXPECT_GE(entry["ci95"][1].get<double>(), entry["c"].get<double>());
+  EXPECT_EQ(entry["observer"]["seeds"], 2);
   fs::remove(out);
 }
 

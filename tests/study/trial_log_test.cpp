@@ -315,6 +315,68 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
             "study.json: rounds: expected a non-empty array of {pattern, contrast}");
 }
 
+// yesno_scoring (issue 29): what a yes/no QUEST is fed, with the guess rate each scoring implies;
+// readings: a design's declared choices, carried into session.json. The published design declares
+// both and asks the thesis's question.
+TEST(StudyConfig, YesNoScoringAndDeclaredReadings) {
+  const nlohmann::json yesno = {{"task", "yesno"}, {"rounds", {{{"pattern", "stair"}, {"contrast", 1.0}}}}};
+  auto error = [](nlohmann::json j, const std::string& key, const nlohmann::json& v) {
+    j[key] = v;
+    return config_error(j);
+  };
+  EXPECT_EQ(error(yesno, "yesno_scoring", "jagged_only"), "no error");
+  EXPECT_EQ(error(yesno, "yesno_scoring", "both"), "study.json: yesno_scoring: expected jagged_only or balanced, got 'both'");
+  nlohmann::json twoafc = yesno;
+  twoafc["task"] = "2afc";
+  EXPECT_EQ(error(twoafc, "yesno_scoring", "balanced"),
+            "study.json: yesno_scoring: only for task yesno (a 2afc trial is scored one way)");
+  EXPECT_EQ(error(yesno, "readings", {{"kernel", 3}}), "study.json: readings.kernel: expected a non-empty string");
+  EXPECT_EQ(error(yesno, "readings", "disk"),
+            "study.json: readings: expected an object of \"choice\": \"what was chosen and why\"");
+
+  nlohmann::json balanced_json = yesno;
+  balanced_json["yesno_scoring"] = "balanced";
+  const procedure::StudyConfig jagged = procedure::parse_config(yesno, "study.json");
+  const procedure::StudyConfig balanced = procedure::parse_config(balanced_json, "study.json");
+  EXPECT_DOUBLE_EQ(jagged.quest.gamma, 0.05);
+  EXPECT_DOUBLE_EQ(jagged.quest.p_threshold, 0.658);
+  EXPECT_DOUBLE_EQ(balanced.quest.gamma, 0.5);
+  EXPECT_DOUBLE_EQ(balanced.quest.p_threshold, 0.82);
+  EXPECT_FALSE(procedure::to_json(jagged).contains("yesno_scoring"));  // older sessions read back equal
+  EXPECT_EQ(procedure::to_json(balanced)["yesno_scoring"], "balanced");
+
+  // Scored balanced, a straight (catch) trial moves its staircase; scored jagged_only it does not.
+  for (const procedure::StudyConfig* config : {&jagged, &balanced}) {
+    procedure::StudyConfig c = *config;
+    c.practice.trials = 0;
+    procedure::Procedure proc(c);
+    int straight_seen = 0;
+    for (int i = 0; i < 40 && straight_seen == 0; ++i) {
+      const std::optional<procedure::TrialPlan> plan = proc.next();
+      ASSERT_TRUE(plan);
+      const std::size_t before = proc.staircase(*plan).quest.trial_count();
+      proc.apply(*plan, true);
+      const std::size_t after = proc.staircase(*plan).quest.trial_count();
+      if (plan->target == "straight") {
+        ++straight_seen;
+        EXPECT_EQ(after, before + (c.yesno_scoring == "balanced" ? 1u : 0u)) << c.yesno_scoring;
+      } else {
+        EXPECT_EQ(after, before + 1) << c.yesno_scoring;
+      }
+    }
+    EXPECT_EQ(straight_seen, 1) << c.yesno_scoring;
+  }
+
+  const procedure::StudyConfig published = procedure::load_config(PENUMBRA_DATA_DIR "/studies/kreuzer2017.json");
+  EXPECT_EQ(published.yesno_scoring, "balanced");
+  EXPECT_EQ(published.text("question"), "Is the original image a line?");
+  std::set<std::string> declared;
+  for (const auto& [key, value] : published.readings) declared.insert(key);
+  for (const char* key : {"question", "yesno_scoring", "straight_share", "kernel", "stimulus.size_px", "display", "contrast",
+                          "practice", "break_every_trials"})
+    EXPECT_TRUE(declared.count(key)) << key;
+}
+
 // stimulus.technique: the renderer's technique and its settings by penumbra-render's keys; the
 // earlier kernel and taps fields do not mix with it, and pcf names its kernel (the log's column).
 TEST(StudyConfig, StimulusTechniqueAndItsSettings) {

@@ -29,8 +29,23 @@ enum class Model {
 };
 
 // Parses "weibull", "log-weibull" (or "log_weibull", "gumbel"), "normal", "logistic".
-std::optional<Model> parse_model(std::string_view name);
-std::string_view model_name(Model model);
+inline std::optional<Model> parse_model(std::string_view name) {
+  if (name == "weibull") return Model::weibull;
+  if (name == "log-weibull" || name == "log_weibull" || name == "gumbel") return Model::log_weibull;
+  if (name == "normal") return Model::normal;
+  if (name == "logistic") return Model::logistic;
+  return std::nullopt;
+}
+
+inline std::string_view model_name(Model model) {
+  switch (model) {
+    case Model::weibull: return "weibull";
+    case Model::log_weibull: return "log-weibull";
+    case Model::normal: return "normal";
+    case Model::logistic: return "logistic";
+  }
+  return "unknown";
+}
 
 template <typename T>
 struct Params {
@@ -210,6 +225,27 @@ T quest_weibull(const T& x, const T& beta, const T& delta, const T& gamma) {
 template <typename T>
 T quest_lapse(const T& delta, const T& gamma) {
   return delta * (T(1.0) - gamma);
+}
+
+// The detection probability F* that defines a study's threshold, as QUEST defines it: QUEST's
+// model reaches p_correct where F = F*, its fixed lapse being delta (1 - gamma), so
+//   F* = (p_correct - gamma) / ((1 - gamma) (1 - delta)),
+// 0.6465 for 2AFC at 0.82 with delta 0.01. A threshold on F does not move with an observer's (or a
+// fit's) own lapse, which only lowers the upper asymptote of psi.
+inline double criterion_f(double p_correct, double gamma, double quest_delta) {
+  return core_level(p_correct, gamma, quest_lapse(quest_delta, gamma));
+}
+
+// The x at which F reaches `f`, for a model whose F reaches `criterion` at `threshold_x`: the
+// threshold at another detection probability on the same psychometric function. NaN outside (0, 1).
+inline double threshold_at(Model model, double threshold_x, double criterion, double f, double beta) {
+  if (!(criterion > 0.0 && criterion < 1.0 && f > 0.0 && f < 1.0 && beta > 0.0)) return NAN;
+  if (model == Model::weibull) {
+    const double alpha = threshold_x / core_inverse(model, criterion, 1.0, beta);
+    return core_inverse(model, f, alpha, beta);
+  }
+  const double alpha = threshold_x - core_inverse(model, criterion, 0.0, beta);
+  return core_inverse(model, f, alpha, beta);
 }
 
 }  // namespace penumbra::psychometric
