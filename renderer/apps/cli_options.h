@@ -3,6 +3,7 @@
 // comma-separated number lists, the light-size override and the calibration file (parsing and
 // error lines: cli/main.h). Errors are CLI::ValidationError naming the option.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -14,6 +15,7 @@
 
 #include "adaptive/resolution_rule.h"
 #include "cli/checks.h"
+#include "json/json_input.h"
 #include "shadows/settings.h"
 #include "tool/tool.h"
 
@@ -50,16 +52,21 @@ inline void add_settings_options(CLI::App& app, shadows::ShadowSettings& s) {
   });
 }
 
-// "a,b,c" → numbers in [lo, hi]; integers only when T is integral. Throws CLI::ValidationError
-// naming `option` and the accepted form.
+// The most values a comma list of the renderer's apps takes: each value is a whole render, so a
+// longer list is a mistake (a 1000-entry --resolution ran for minutes), not a request.
+inline constexpr std::size_t kMaxListValues = 64;
+
+// "a,b,c" → numbers in [lo, hi]; integers only when T is integral; at most kMaxListValues of
+// them. Throws CLI::ValidationError naming `option` and the accepted form.
 template <class T>
 std::vector<T> parse_list(const std::string& option, const std::string& text, T lo, T hi) {
   std::ostringstream expected;
-  expected << (std::is_integral_v<T> ? "integers" : "numbers") << " in [" << lo << ", " << hi << "] separated by commas, got '" << text
-           << "'";
+  expected << "at most " << kMaxListValues << " " << (std::is_integral_v<T> ? "integers" : "numbers") << " in [" << lo << ", " << hi
+           << "] separated by commas, got '" << json_input::printable(text.size() > 80 ? text.substr(0, 77) + "..." : text) << "'";
   std::vector<T> out;
   std::size_t pos = 0;
   for (;;) {
+    if (out.size() == kMaxListValues) throw CLI::ValidationError(option, "expected " + expected.str());
     const std::size_t comma = text.find(',', pos);
     const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
     std::size_t used = 0;
@@ -77,6 +84,33 @@ std::vector<T> parse_list(const std::string& option, const std::string& text, T 
     pos = comma + 1;
   }
   return out;
+}
+
+// A settings option the tool sets itself from its own option (penumbra-render's --resolution sets
+// map.resolution_texels): given alone it stands for the tool's option, given with it the command
+// is contradictory. Returns whether `setting` was given (then `own` should take its value).
+inline bool setting_stands_for(const CLI::App& app, const std::string& setting, const std::string& own) {
+  if (app.count(setting) == 0) return false;
+  if (app.count(own) > 0) throw CLI::ValidationError(setting, "sets what " + own + " sets; give one of them");
+  return true;
+}
+
+// Options of a technique's parameters section (--vsm.radius) when no technique that reads them is
+// rendered are refused: the run would ignore them without a word (--technique hard --vsm.radius 3).
+// `rendered` names the techniques the command renders; `by` says how they were chosen
+// ("--technique hard").
+inline void refuse_unused_technique_options(const CLI::App& app, const std::vector<shadows::Technique>& rendered, const std::string& by) {
+  shadows::ShadowSettings probe;
+  shadows::for_each_technique_section(probe, [&](std::string_view section, auto& params) {
+    bool read = false;
+    for (const shadows::Technique t : rendered) read = read || shadows::to_string(t) == section;
+    if (read) return;
+    for (const auto& row : shadows::settings_table(&params)) {
+      const std::string name = "--" + std::string(section) + "." + std::string(row.key);
+      if (app.count(name) > 0)
+        throw CLI::ValidationError(name, "a parameter of " + std::string(section) + ", which " + by + " does not render");
+    }
+  });
 }
 
 // --light-size: overrides the scene light's size; `size` < 0 (its default here) keeps the scene's.
@@ -110,7 +144,8 @@ struct CalibrationOption {
 inline void add_calibration_option(CLI::App& app, CalibrationOption& calibration) {
   app.add_option("--calibration", calibration.file,
                  "calibration.json with the constant c of the adaptive rule per technique (an explicit --adaptive.c wins over the file)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(cli::path_given());
 }
 
 // Sets settings.adaptive.c to the c of the settings' technique (its ci95 upper bound with
@@ -154,11 +189,22 @@ inline void apply_calibration(const CLI::App& app, CalibrationOption& calibratio
                               bool ci_upper = false) {
   calibration.loaded = adaptive::load_calibration(calibration.file);
   for (std::size_t i = 0; i < calibration.loaded.entries.size(); ++i) {
-    const std::string& name = calibration.loaded.entries[i].technique;
+    const adaptive::CalibrationEntry& entry = calibration.loaded.entries[i];
+    const std::string at = calibration.loaded.source + ": entries[" + std::to_string(i) + "]";
+    shadows::Technique technique{};
     try {
-      (void)shadows::technique_from_string(name);
+      technique = shadows::technique_from_string(entry.technique);
     } catch (const std::invalid_argument& e) {
-      throw adaptive::CalibrationError(calibration.loaded.source + ": entries[" + std::to_string(i) + "].technique: " + e.what());
+      throw adaptive::CalibrationError(at + ".technique: " + e.what());
+    }
+    // A kernel the technique does not have would never be chosen and its entry would stand in as
+    // the technique's fallback ("gauss" for pcf): refused.
+    const std::vector<std::string> kernels = shadows::variant_choices(technique);
+    if (!entry.kernel.empty() && std::find(kernels.begin(), kernels.end(), entry.kernel) == kernels.end()) {
+      std::string known;
+      for (const auto& k : kernels) known += (known.empty() ? "" : ", ") + k;
+      throw adaptive::CalibrationError(at + ".kernel: '" + json_input::printable(entry.kernel) + "' is not a kernel of " + entry.technique +
+                                       (known.empty() ? " (it has none: omit the field)" : " (known: " + known + ")"));
     }
   }
   const CLI::Option* explicit_c = app.get_option_no_throw("--adaptive.c");

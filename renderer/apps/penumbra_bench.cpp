@@ -350,7 +350,14 @@ int main(int argc, char** argv) {
         }
       }
     }
+    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolutions"))
+      resolutions_arg = std::to_string(opt.base.map.resolution_texels);
     opt.resolutions = apps::parse_list<int>("--resolutions", resolutions_arg, 1, 65536);
+    if (techniques_arg != "all") {
+      std::vector<shadows::Technique> rendered;
+      for (const auto& t : opt.techniques) rendered.push_back(shadows::technique_from_string(t));
+      apps::refuse_unused_technique_options(app, rendered, "--techniques " + techniques_arg);
+    }
     opt.radii_ws = apps::parse_list<double>("--radii", radii_arg, 1e-6, 1e6);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
@@ -364,8 +371,7 @@ int main(int argc, char** argv) {
     apps::apply_calibration(app, opt.calibration, opt.base);
     std::vector<scene::Scene> scenes;
     for (const auto& name : opt.scenes) scenes.push_back(scene::load_scene(name));
-    if (opt.plot && !fs::exists(opt.plot_script))
-      throw std::runtime_error("--plot-script " + opt.plot_script + ": no such file (use --no-plot to skip the plots)");
+    if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the plots");
 
     gl::HeadlessContext context;
     const gl::ContextInfo& ctx = context.info();

@@ -357,13 +357,16 @@ std::pair<int, int> densest_window(const io::Image8& mask, int w, int h) {
 }
 
 int run_headless(const Options& opt, shadows::ShadowSettings base) {
+  // Everything that can refuse the command comes before any output: the plotter, the output
+  // directory, the scene and its path; then the first line of progress.
+  if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the chart");
+  io::StagedDirectory out(opt.output, "report.json");
   gl::HeadlessContext ctx;
   const double t_scene = now_ms();
   scene::Scene scene = scene::load_scene(opt.scene);
-  std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   if (opt.light_size >= 0) scene.light.size = opt.light_size;
   const PathPlan plan = plan_path(scene, opt.path, opt.frames);
-  io::StagedDirectory out(opt.output, "report.json");
+  std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
   const bool directional = scene.light.type == scene::Light::Type::directional;
 
@@ -824,7 +827,14 @@ int main(int argc, char** argv) {
   if (const auto status = cli::parse(app, argc, argv, "penumbra-demo")) return *status;
   opt.auto_cascades = app.count("--map.cascades") == 0;
   try {
-    for (const auto& t : opt.techniques) shadows::technique_from_string(t);
+    std::vector<shadows::Technique> compared;
+    std::string listed;
+    for (const auto& t : opt.techniques) {
+      compared.push_back(shadows::technique_from_string(t));
+      listed += (listed.empty() ? "" : ",") + t;
+    }
+    (void)apps::setting_stands_for(app, "--map.resolution_texels", "--fixed-resolution");
+    if (headless) apps::refuse_unused_technique_options(app, compared, "--techniques " + listed);
     apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
     if (headless) return run_headless(opt, base);
 #if PENUMBRA_DEMO_GUI

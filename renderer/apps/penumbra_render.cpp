@@ -82,7 +82,10 @@ int main(int argc, char** argv) {
 
   try {
     apps::apply_calibration(app, calibration, base);
+    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolution")) resolution_arg = std::to_string(base.map.resolution_texels);
     const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);
+    if (technique_arg != "all")
+      apps::refuse_unused_technique_options(app, {shadows::technique_from_string(technique_arg)}, "--technique " + technique_arg);
     scene::Scene scene = scene::load_scene(scene_arg);
     if (light_size >= 0) scene.light.size = light_size;
     if (path_frame >= 0) {

@@ -1,6 +1,8 @@
 #pragma once
 // Runs a plotting script with the user's Python (penumbra-demo, penumbra-bench).
 #include <spawn.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <sys/wait.h>
 
 #include <stdexcept>
@@ -10,6 +12,17 @@
 extern char** environ;
 
 namespace penumbra::apps {
+
+// Checks, before any work, that `python` can be started and `script` exists, so that a run of
+// minutes does not end in "cannot be started". run_python_script starts it with posix_spawn,
+// which does not search PATH: it must be a path to an executable file. Throws one line beginning with the option (exit 2: the command line must change).
+inline void check_python(const std::string& python, const std::string& script, const std::string& what) {
+  struct stat st {};
+  if (python.empty() || ::stat(python.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || ::access(python.c_str(), X_OK) != 0)
+    throw std::runtime_error("--python " + python + ": not an executable file (give its path, or --no-plot to skip " + what + ")");
+  if (::stat(script.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    throw std::runtime_error("--plot-script " + script + ": no such file (use --no-plot to skip " + what + ")");
+}
 
 // Runs `python script args...` and waits for it. Throws one line naming the interpreter (when it
 // cannot be started) or the script and its exit status (when it fails), with the hint to pass

@@ -14,7 +14,15 @@ namespace {
 template <class T>
 std::vector<unsigned char> encode(const Image<T>& image, const char* format, const char* name, OIIO::TypeDesc type) {
   auto out = OIIO::ImageOutput::create(format);
-  if (!out || !out->supports("ioproxy")) throw std::runtime_error(std::string("no OpenImageIO writer to memory for ") + format);
+  if (!out) {
+    // create() fails for a missing plugin and as often for memory it could not get: say what
+    // OpenImageIO says rather than guess.
+    const std::string why = OIIO::geterror();
+    throw std::runtime_error(std::string("cannot encode ") + name + ": OpenImageIO could not create its " + format + " writer" +
+                             (why.empty() ? " (out of memory, or the plugin is missing)" : ": " + why));
+  }
+  if (!out->supports("ioproxy"))
+    throw std::runtime_error(std::string("cannot encode ") + name + ": this OpenImageIO's " + format + " writer cannot write to memory");
   std::vector<unsigned char> bytes;
   OIIO::Filesystem::IOVecOutput proxy(bytes);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type);

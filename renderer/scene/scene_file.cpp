@@ -336,6 +336,58 @@ std::optional<std::string> gltf_data_uri_problem(const std::filesystem::path& fi
   return std::nullopt;
 }
 
+// Where Assimp refused an OBJ file, the line that made it, for the error: Assimp's OBJ messages
+// name no line ("vertex index out of range" for "v 0 0 zz"). Checks what the format requires of
+// the lines Assimp reads: numbers in v/vn/vt, and in every face at least three corners whose
+// indices (1-based, or negative: relative to the end) point at an element already read.
+std::optional<std::string> obj_problem(const std::filesystem::path& file, const std::string& as_written) {
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  long counts[3] = {0, 0, 0};  // v, vt, vn
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string key;
+    words >> key;
+    const std::string at = as_written + ":" + std::to_string(number) + ": ";
+    const int kind = key == "v" ? 0 : key == "vt" ? 1 : key == "vn" ? 2 : -1;
+    if (kind >= 0) {
+      const int needed = kind == 1 ? 1 : 3;
+      std::string word;
+      int read = 0;
+      for (; read < needed && words >> word; ++read) {
+        char* end = nullptr;
+        (void)std::strtod(word.c_str(), &end);
+        if (end == word.c_str() || *end != '\0') return at + "'" + one_line(word) + "' in a '" + key + "' line is not a number";
+      }
+      if (read < needed) return at + "a '" + key + "' line needs " + std::to_string(needed) + " numbers";
+      ++counts[kind];
+    } else if (key == "f") {
+      std::string corner;
+      int corners = 0;
+      while (words >> corner) {
+        ++corners;
+        std::size_t start = 0;
+        for (int slot = 0; slot < 3 && start <= corner.size(); ++slot) {
+          const std::size_t slash = corner.find('/', start);
+          const std::string index = corner.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
+          start = slash == std::string::npos ? corner.size() + 1 : slash + 1;
+          if (index.empty() && slot > 0) continue;  // v//vn
+          char* end = nullptr;
+          const long i = std::strtol(index.c_str(), &end, 10);
+          if (index.empty() || *end != '\0') return at + "face corner '" + one_line(corner) + "' is not an index";
+          const long count = counts[slot];
+          if (i == 0 || i > count || i < -count)
+            return at + "face index " + std::to_string(i) + " is out of range (" + std::to_string(count) + " " +
+                   (slot == 0 ? "vertices" : slot == 1 ? "texture coordinates" : "normals") + " before this line)";
+        }
+      }
+      if (corners < 3) return at + "a face needs at least 3 corners, this one has " + std::to_string(corners);
+    }
+  }
+  return std::nullopt;
+}
+
 // All triangles of every mesh in a model file, node transforms applied, as one mesh.
 MeshData load_model(const SceneReader& r, const std::filesystem::path& file, const std::string& path, const std::string& as_written) {
   const std::string prefix = "cannot read model '" + as_written + "': ";
@@ -350,7 +402,11 @@ MeshData load_model(const SceneReader& r, const std::filesystem::path& file, con
   Assimp::Importer importer;
   const aiScene* s = importer.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_GenSmoothNormals |
                                                           aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
-  if (!s) r.fail(path, prefix + importer.GetErrorString());
+  if (!s) {
+    if (extension == ".obj")
+      if (const auto problem = obj_problem(file, as_written)) r.fail(path, "cannot read model " + *problem);
+    r.fail(path, prefix + importer.GetErrorString());
+  }
 
   MeshData out;
   for (unsigned mi = 0; mi < s->mNumMeshes; ++mi) {

@@ -26,6 +26,12 @@ layout(local_size_x = 64) in;
 #  define AS_VEC4(v) vec4((v), 0.0, 0.0)
 #endif
 
+#if defined(DIRECT_SUMS)
+// The line in CHUNKS chunks, each summed once per work group (see main).
+#  define CHUNKS 256
+shared moments_t s_chunk[CHUNKS];
+#endif
+
 layout(binding = 0) uniform sampler2D u_source;
 layout(binding = 0, MOMENTS_FORMAT) uniform writeonly image2D u_target;
 
@@ -80,13 +86,39 @@ void main() {
   // streaks. One texel per invocation also keeps every invocation's loop short: llvmpipe ends an
   // invocation's loops after 65535 iterations in all, which a whole line of windows (len * 2r)
   // exceeds at 2048^2 and r = 16 texels.
+  //
+  // A wide window would make that len texels per invocation (len^2 per line: 20 s for one EVSM map
+  // of 2048^2 at r = 1e6 on llvmpipe). So the 64 invocations of a group (all of one line) first sum
+  // the line in CHUNKS chunks into shared memory, and a window wider than a few chunks adds the
+  // whole chunks it holds and fetches only the texels at its ends: at most CHUNKS + 2 chunk lengths
+  // per texel, bounded by the map and not by r. Still a sum of the window's own texels, no sliding.
+  // `chunked` depends on r and the map only, so the barrier is reached by the whole group.
+  int chunk = (len + CHUNKS - 1) / CHUNKS;
+  bool chunked = full_hi - full_lo + 1 > 4 * chunk;
+  if (chunked) {
+    for (int k = int(gl_LocalInvocationID.x); k < CHUNKS; k += 64) {
+      moments_t s = moments_t(0.0);
+      int end = min((k + 1) * chunk, len);
+      for (int j = k * chunk; j < end; ++j) s += fetch(j, line, len);
+      s_chunk[k] = s;
+    }
+    memoryBarrierShared();
+    barrier();
+  }
   int i = int(gl_GlobalInvocationID.x);
   if (i >= len) return;
   int lo = i + full_lo, hi = i + full_hi;
   int first = clamp(lo, 0, len), last = clamp(hi, -1, len - 1);
   moments_t total = float(clamp(-lo, 0, hi - lo + 1)) * fetch(0, line, len) +
                     float(clamp(hi - (len - 1), 0, hi - lo + 1)) * fetch(len - 1, line, len);
-  for (int j = first; j <= last; ++j) total += fetch(j, line, len);
+  int k0 = (first + chunk - 1) / chunk, k1 = (last + 1) / chunk;  // the whole chunks k0 .. k1 - 1 in [first, last]
+  if (chunked && k0 < k1) {
+    for (int j = first; j < k0 * chunk; ++j) total += fetch(j, line, len);
+    for (int k = k0; k < k1; ++k) total += s_chunk[k];
+    for (int j = k1 * chunk; j <= last; ++j) total += fetch(j, line, len);
+  } else {
+    for (int j = first; j <= last; ++j) total += fetch(j, line, len);
+  }
   total += w_left * fetch(lo - 1, line, len) + w_right * fetch(hi + 1, line, len);
   store(i, line, total * norm);
   return;

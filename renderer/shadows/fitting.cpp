@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -9,14 +11,23 @@
 
 namespace penumbra::shadows {
 
-Polyhedron box_polyhedron(const scene::Aabb& b) {
-  if (b.empty()) return {};
-  auto c = [&](int i) { return glm::dvec3(b.corner(i)); };
-  // Faces as corner indices (bit 0: x, bit 1: y, bit 2: z).
+namespace {
+
+// A convex hexahedron from its eight corners (bit 0: x, bit 1: y, bit 2: z picks the far one).
+Polyhedron hexahedron(const std::array<glm::dvec3, 8>& c) {
   const int faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   Polyhedron p;
-  for (const auto& f : faces) p.push_back({c(f[0]), c(f[1]), c(f[2]), c(f[3])});
+  for (const auto& f : faces) p.push_back({c[f[0]], c[f[1]], c[f[2]], c[f[3]]});
   return p;
+}
+
+}  // namespace
+
+Polyhedron box_polyhedron(const scene::Aabb& b) {
+  if (b.empty()) return {};
+  std::array<glm::dvec3, 8> c{};
+  for (int i = 0; i < 8; ++i) c[static_cast<std::size_t>(i)] = glm::dvec3(b.corner(i));
+  return hexahedron(c);
 }
 
 Polyhedron clip(const Polyhedron& poly, const glm::dvec4& plane) {
@@ -95,10 +106,148 @@ glm::mat4 light_view(const scene::Light& light, const glm::vec3& centre, float d
   return glm::lookAt(centre - dir * distance, centre, up);
 }
 
+// The eight world-space corners of the camera frustum between view depths z0 and z1.
+std::array<glm::dvec3, 8> slice_corners(const scene::Camera& cam, float aspect, double z0, double z1) {
+  const glm::dmat4 to_world = glm::inverse(glm::dmat4(cam.view()));
+  std::array<glm::dvec3, 8> c{};
+  const double tan_half = std::tan(glm::radians(static_cast<double>(cam.fov_y_deg)) / 2);
+  for (int i = 0; i < 8; ++i) {
+    const double z = (i & 4) ? z1 : z0;
+    const double half_h = cam.projection == scene::Camera::Projection::perspective ? z * tan_half : cam.ortho_height_ws / 2.0;
+    const double half_w = half_h * aspect;
+    const glm::dvec4 p(((i & 1) ? half_w : -half_w), ((i & 2) ? half_h : -half_h), -z, 1);
+    c[static_cast<std::size_t>(i)] = glm::dvec3(to_world * p);
+  }
+  return c;
+}
+
 // The camera frustum as clipping planes (world space).
 std::array<glm::dvec4, 6> camera_planes(const scene::Camera& camera, float aspect) {
   return frustum_planes(glm::dmat4(camera.projection_matrix(aspect) * camera.view()));
 }
+
+// Whether every corner of `b` lies outside one of the planes (then b misses the convex volume
+// they bound; a box that passes may still miss it near an edge, which only keeps a little more).
+bool outside_a_plane(const scene::Aabb& b, const std::array<glm::dvec4, 6>& planes) {
+  for (const auto& plane : planes) {
+    bool all_out = true;
+    for (int i = 0; i < 8 && all_out; ++i) all_out = glm::dot(glm::dvec3(plane), glm::dvec3(b.corner(i))) + plane.w < 0;
+    if (all_out) return true;
+  }
+  return false;
+}
+
+// The bounds of the objects whose boxes reach into the volume the planes bound.
+scene::Aabb bounds_within(const scene::Scene& scene, const std::array<glm::dvec4, 6>& planes) {
+  scene::Aabb out;
+  for (const auto& o : scene.objects) {
+    const scene::Aabb b = o.mesh->bounds().transformed(o.model);
+    if (!b.empty() && !outside_a_plane(b, planes)) out.extend(b);
+  }
+  return out;
+}
+
+// S of PSR = L ∩ V ∩ S: the bounds of the objects the camera sees or that lie within 1000 times
+// the view's size of what it sees, not the scene's bounds: one object at x = 1e20 would stretch
+// those across the whole view (and overflow the fit).
+scene::Aabb near_view_bounds(const scene::Scene& scene, float aspect) {
+  const scene::Camera& cam = scene.camera;
+  scene::Aabb view;
+  for (const auto& p : slice_corners(cam, aspect, cam.near_ws, cam.far_ws)) view.extend(glm::vec3(p));
+  const double reach = 1000.0 * glm::length(glm::dvec3(view.hi - view.lo));
+  const auto planes = camera_planes(cam, aspect);
+  scene::Aabb out;
+  for (const auto& o : scene.objects) {
+    const scene::Aabb b = o.mesh->bounds().transformed(o.model);
+    if (b.empty()) continue;
+    double gap = 0;  // the distance between the two boxes
+    for (int axis = 0; axis < 3; ++axis)
+      gap = std::max({gap, static_cast<double>(b.lo[axis]) - view.hi[axis], static_cast<double>(view.lo[axis]) - b.hi[axis]});
+    if (!outside_a_plane(b, planes) || gap <= reach) out.extend(b);
+  }
+  return out;
+}
+
+// The part of the box `b` inside the camera frustum between view depths z0 and z1. The frustum is
+// clipped by the box's planes, not the box by the frustum: a box reaching 1e30 (one far-away
+// object) would put cut points at 1e30 ± 1e14 in double precision; the frustum's corners stay
+// where the camera is.
+Polyhedron visible_part(const scene::Aabb& b, const scene::Camera& cam, float aspect, double z0, double z1) {
+  if (b.empty()) return {};
+  Polyhedron p = hexahedron(slice_corners(cam, aspect, z0, z1));
+  for (int axis = 0; axis < 3; ++axis) {
+    glm::dvec4 lo(0), hi(0);
+    lo[axis] = 1, lo.w = -static_cast<double>(b.lo[axis]);  // x >= lo.x
+    hi[axis] = -1, hi.w = static_cast<double>(b.hi[axis]);  // x <= hi.x
+    p = clip(clip(p, lo), hi);
+  }
+  return p;
+}
+
+// A box in the light's rotation frame: x and y across the light, z the depth along it.
+struct LightBox {
+  glm::dvec3 lo{1e300}, hi{-1e300};
+  bool empty() const { return lo.x > hi.x; }
+  void extend(const glm::dvec3& p) { lo = glm::min(lo, p), hi = glm::max(hi, p); }
+};
+
+// World → the directional light's rotation frame (x, y across the light, depth along it).
+glm::dmat3 light_rotation(const scene::Light& light) {
+  const glm::dvec3 dir = glm::normalize(glm::dvec3(light.direction));
+  const glm::dvec3 up = std::abs(dir.y) < 0.99 ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, -1);
+  return glm::dmat3(glm::lookAt(glm::dvec3(0), dir, up));
+}
+
+glm::dvec3 in_light_frame(const glm::dmat3& rotation, const glm::dvec3& p) {
+  const glm::dvec3 q = rotation * p;
+  return {q.x, q.y, -q.z};
+}
+
+LightBox light_box(const scene::Aabb& b, const glm::dmat3& rotation) {
+  LightBox out;
+  if (!b.empty())
+    for (int i = 0; i < 8; ++i) out.extend(in_light_frame(rotation, glm::dvec3(b.corner(i))));
+  return out;
+}
+
+// How far beyond the receivers (in multiples of their size) a directional map holds casters: a
+// caster farther toward the light is depth-clamped onto the near plane (it still shadows), and no
+// part of the scene farther across the light can cast onto a receiver. 1000 sizes keep every
+// scene of the project whole and a far-away object (x = 1e20) out of the fit.
+constexpr double kReachInReceiverSizes = 1000;
+
+// The region a directional light's frame holds, in its rotation frame: the bounds of the objects
+// that can cast onto the potential receivers (their boxes overlap the receivers' window across the
+// light, padded by the receivers' size, and begin nearer the light than the farthest receiver),
+// with the receivers, clipped to kReachInReceiverSizes around them. With nothing visible, the
+// camera's frustum stands for the receivers.
+LightBox shadow_region(const scene::Scene& scene, const std::vector<glm::dvec3>& psr, float aspect,
+                       const glm::dmat3& rotation) {
+  LightBox receivers;
+  for (const auto& p : psr) receivers.extend(in_light_frame(rotation, p));
+  if (receivers.empty())
+    for (const auto& p : slice_corners(scene.camera, aspect, scene.camera.near_ws, scene.camera.far_ws))
+      receivers.extend(in_light_frame(rotation, p));
+  const glm::dvec3 extent = receivers.hi - receivers.lo;
+  const double size = std::max({extent.x, extent.y, extent.z, 1e-3});
+  scene::Aabb kept;
+  for (const auto& o : scene.objects) {
+    const scene::Aabb b = o.mesh->bounds().transformed(o.model);
+    const LightBox l = light_box(b, rotation);
+    if (l.empty()) continue;
+    const bool across = l.lo.x <= receivers.hi.x + size && l.hi.x >= receivers.lo.x - size && l.lo.y <= receivers.hi.y + size &&
+                        l.hi.y >= receivers.lo.y - size;
+    if (across && l.lo.z <= receivers.hi.z + size) kept.extend(b);
+  }
+  LightBox region = light_box(kept, rotation);  // the box of the kept objects' bounds, as the map's unfitted extent
+  region.extend(receivers.lo);
+  region.extend(receivers.hi);
+  const double reach = kReachInReceiverSizes * size;
+  region.lo = glm::max(region.lo, receivers.lo - reach);
+  region.hi = glm::min(region.hi, receivers.hi + reach);
+  return region;
+}
+
 
 // Projection of the spot light's cone onto its unfitted frustum for the scene's depth range.
 glm::mat4 spot_projection(const scene::Light& light, float near_ws, float far_ws) {
@@ -115,18 +264,39 @@ double padded_half(double half, int resolution, float pad_texels, double pad) {
 }  // namespace
 
 std::vector<glm::dvec3> potential_receivers(const scene::Scene& scene, float camera_aspect) {
-  Polyhedron psr = box_polyhedron(scene.bounds());
-  for (const auto& plane : camera_planes(scene.camera, camera_aspect)) psr = clip(psr, plane);
+  const scene::Aabb seen = near_view_bounds(scene, camera_aspect);
+  Polyhedron psr = visible_part(seen, scene.camera, camera_aspect, scene.camera.near_ws, scene.camera.far_ws);
   if (scene.light.type == scene::Light::Type::spot && !psr.empty()) {
-    const scene::Aabb b = scene.bounds();
-    const glm::mat4 view = light_view(scene.light, {}, 0);
-    float far_ws = 0;
-    for (int i = 0; i < 8; ++i) far_ws = std::max(far_ws, -(view * glm::vec4(b.corner(i), 1)).z);
+    // The cone's far end: the farthest visible receiver (the scene's bounds may reach 1e30).
+    const glm::dmat4 view(light_view(scene.light, {}, 0));
+    double far = 0;
+    for (const auto& p : vertices(psr)) far = std::max(far, -(view * glm::dvec4(p, 1)).z);
+    // 1 % beyond it: receivers lying on the far plane (a flat ground seen from above) must not be
+    // lost to the float rounding of the cone's planes.
+    const float far_ws = static_cast<float>(far * 1.01);
     const glm::mat4 proj = spot_projection(scene.light, std::max(far_ws * 1e-4f, 1e-3f), std::max(far_ws, 1e-2f));
-    for (const auto& plane : frustum_planes(glm::dmat4(proj * view))) psr = clip(psr, plane);
+    for (const auto& plane : frustum_planes(glm::dmat4(proj) * view)) psr = clip(psr, plane);
   }
   return vertices(psr);
 }
+
+namespace {
+
+// Every number of a light frame is finite and its depth range is not empty: the fit bounds what it
+// holds (shadow_region), so a frame that is not is a defect here, refused before it reaches a map
+// or a report.json as null.
+LightFrame checked(const LightFrame& f) {
+  bool finite = std::isfinite(f.near_ws) && std::isfinite(f.far_ws) && std::isfinite(f.extent_ws) && std::isfinite(f.s_xy) &&
+                f.far_ws > f.near_ws && f.extent_ws > 0;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) finite = finite && std::isfinite(f.view[c][r]) && std::isfinite(f.projection[c][r]);
+  if (!finite)
+    throw std::runtime_error("light fit: the shadow map's frame is not finite (near " + std::to_string(f.near_ws) + ", far " +
+                             std::to_string(f.far_ws) + ", extent " + std::to_string(f.extent_ws) + ")");
+  return f;
+}
+
+}  // namespace
 
 LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& request) {
   LightFrame f;
@@ -136,36 +306,41 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
     bounds.extend(glm::vec3(-0.5f));
     bounds.extend(glm::vec3(0.5f));
   }
-  const glm::vec3 centre = (bounds.lo + bounds.hi) * 0.5f;
-  const float radius = std::max(glm::length(bounds.hi - bounds.lo) * 0.5f, 1e-3f);
-  f.view = light_view(light, centre, 2 * radius);
   f.perspective = light.type == scene::Light::Type::spot;
-
-  // Light-view depth range of the scene (all casters and receivers lie in S).
-  float zmin = std::numeric_limits<float>::max(), zmax = std::numeric_limits<float>::lowest();
-  for (int i = 0; i < 8; ++i) {
-    const float z = -(f.view * glm::vec4(bounds.corner(i), 1)).z;
-    zmin = std::min(zmin, z);
-    zmax = std::max(zmax, z);
-  }
-  // A margin keeps surfaces lying exactly on the near or far plane off the depth range's ends,
-  // where quantization would make a receiver shadow itself.
-  const float margin = 0.01f * std::max(zmax - zmin, 1e-3f);
-  zmin -= margin;
-  zmax += margin;
   const std::vector<glm::dvec3> psr = potential_receivers(scene, request.camera_aspect);
   f.receivers_visible = !psr.empty();
   const bool fit = request.fit && f.receivers_visible;
   f.fitted = fit;
 
   if (!f.perspective) {
-    double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300, far_z = zmax;
+    // The view is centred on the region that can cast onto what the camera sees, not on the
+    // scene's bounds: one object at 1e20 would otherwise put every receiver 1e20 from the origin
+    // of a float matrix.
+    const glm::dmat3 rotation = light_rotation(light);
+    const LightBox region = scene.objects.empty() ? light_box(bounds, rotation) : shadow_region(scene, psr, request.camera_aspect, rotation);
+    glm::dvec3 mid = (region.lo + region.hi) * 0.5;
+    const double radius = std::max(glm::length(region.hi - region.lo) * 0.5, 1e-3);
+    // The view's axis through the scene's centre, as long as that lies within the region's reach:
+    // it does not move with the camera, so stabilized cascades snap to a fixed texel grid.
+    const glm::dvec3 scene_mid = in_light_frame(rotation, glm::dvec3((bounds.lo + bounds.hi) * 0.5f));
+    if (std::abs(scene_mid.x - mid.x) <= kReachInReceiverSizes * radius && std::abs(scene_mid.y - mid.y) <= kReachInReceiverSizes * radius)
+      mid.x = scene_mid.x, mid.y = scene_mid.y;
+    const glm::dvec3 centre_ws = glm::transpose(rotation) * glm::dvec3(mid.x, mid.y, -mid.z);
+    f.view = light_view(light, glm::vec3(centre_ws), static_cast<float>(2 * radius));
+    // Light-view depth range of the region (all casters that matter and the receivers). A margin
+    // keeps surfaces lying exactly on the near or far plane off the depth range's ends, where
+    // quantization would make a receiver shadow itself.
+    const double to_view_depth = 2 * radius - mid.z;
+    const double margin = 0.01 * std::max(region.hi.z - region.lo.z, 1e-3);
+    const double zmin = region.lo.z + to_view_depth - margin, zmax = region.hi.z + to_view_depth + margin;
+    // Across the light, relative to the view's axis.
+    double lo_x = region.lo.x - mid.x, hi_x = region.hi.x - mid.x, lo_y = region.lo.y - mid.y, hi_y = region.hi.y - mid.y;
+    double far_z = zmax;
     auto extend = [&](const glm::dvec3& p) {
       const glm::dvec4 q = glm::dmat4(f.view) * glm::dvec4(p, 1);
       lo_x = std::min(lo_x, q.x), hi_x = std::max(hi_x, q.x);
       lo_y = std::min(lo_y, q.y), hi_y = std::max(hi_y, q.y);
     };
-    for (int i = 0; i < 8; ++i) extend(glm::dvec3(bounds.corner(i)));
     const double unfitted_side = std::max(hi_x - lo_x, hi_y - lo_y);
     if (fit) {
       lo_x = lo_y = 1e300, hi_x = hi_y = -1e300, far_z = -1e300;
@@ -178,19 +353,48 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
     // Only a fitted frustum is padded: the unfitted one already spans every caster and receiver.
     const double tight_half = std::max({hi_x - lo_x, hi_y - lo_y, 1e-6}) / 2;
     const double half = fit ? padded_half(tight_half, request.resolution_texels, request.pad_texels, request.pad_ws) : tight_half;
-    f.near_ws = zmin;
-    f.far_ws = static_cast<float>(std::max(fit ? far_z + margin : far_z, static_cast<double>(zmin) + 1e-4));
+    f.near_ws = static_cast<float>(zmin);
+    f.far_ws = static_cast<float>(std::max(fit ? far_z + margin : far_z, zmin + 1e-4));
     f.projection = glm::ortho(static_cast<float>(cx - half), static_cast<float>(cx + half),
                               static_cast<float>(cy - half), static_cast<float>(cy + half), f.near_ws, f.far_ws);
     f.extent_ws = static_cast<float>(2 * half);
     f.s_xy = fit ? static_cast<float>(unfitted_side / (2 * half)) : 1.0f;
-    return f;
+    return checked(f);
   }
 
-  // Spot light: perspective projection, then a crop (fitting) matrix in clip space.
+  // Spot light: the scene's depth range along the light, its far end the farthest visible
+  // receiver when there is one (nothing beyond it can cast onto what the camera sees).
+  f.view = light_view(light, {}, 0);
+  const glm::dmat4 view(f.view);
+  auto depth_range = [&](const scene::Aabb& b) {
+    double lo = 1e300, hi = -1e300;
+    for (int i = 0; i < 8; ++i) {
+      const double z = -(view * glm::dvec4(glm::dvec3(b.corner(i)), 1)).z;
+      lo = std::min(lo, z), hi = std::max(hi, z);
+    }
+    return std::array<double, 2>{lo, hi};
+  };
+  auto [zmin, zmax] = depth_range(bounds);
+  if (!psr.empty()) {
+    double receivers_far = -1e300;
+    for (const auto& p : psr) receivers_far = std::max(receivers_far, -(view * glm::dvec4(p, 1)).z);
+    // The casters: the objects in the cone up to the farthest receiver.
+    const glm::dmat4 cone(spot_projection(light, std::max(static_cast<float>(receivers_far) * 1e-4f, 1e-3f),
+                                          std::max(static_cast<float>(receivers_far), 1e-2f)));
+    const scene::Aabb casters = bounds_within(scene, frustum_planes(cone * view));
+    if (!casters.empty()) zmin = depth_range(casters)[0];
+    zmax = std::min(zmax, receivers_far);
+    zmin = std::min(zmin, zmax);
+  }
+  // Nothing behind the light by more than the far end can matter (it casts away from the cone).
+  const double margin = 0.01 * std::max(zmax - std::max(zmin, -zmax), 1e-3);
+  zmin -= margin;
+  zmax += margin;
+
+  // Perspective projection, then a crop (fitting) matrix in clip space.
   f.fov_deg = light.spot_fov_deg;
-  f.far_ws = std::max(zmax, 1e-2f);
-  f.near_ws = std::clamp(zmin, f.far_ws * 1e-4f, f.far_ws * 0.999f);
+  f.far_ws = std::max(static_cast<float>(zmax), 1e-2f);
+  f.near_ws = std::clamp(static_cast<float>(zmin), f.far_ws * 1e-4f, f.far_ws * 0.999f);
   const glm::mat4 proj = spot_projection(light, f.near_ws, f.far_ws);
   const float tan_half = std::tan(glm::radians(f.fov_deg) / 2);
   f.extent_ws = 2 * f.near_ws * tan_half;
@@ -222,7 +426,14 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
       f.s_xy = static_cast<float>(1 / half);
     }
   }
-  return f;
+  return checked(f);
+}
+
+float shadow_region_diagonal_ws(const scene::Scene& scene, float camera_aspect) {
+  if (scene.objects.empty()) return 1.0f;
+  const glm::dmat3 rotation = light_rotation(scene.light);
+  const LightBox region = shadow_region(scene, potential_receivers(scene, camera_aspect), camera_aspect, rotation);
+  return static_cast<float>(glm::length(region.hi - region.lo));
 }
 
 std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camera_aspect) {
@@ -239,25 +450,6 @@ std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camer
   const float far_ws = std::clamp(static_cast<float>(hi), near_ws, cam.far_ws);
   return {near_ws, far_ws};
 }
-
-namespace {
-
-// The eight world-space corners of the camera frustum between view depths z0 and z1.
-std::array<glm::dvec3, 8> slice_corners(const scene::Camera& cam, float aspect, double z0, double z1) {
-  const glm::dmat4 to_world = glm::inverse(glm::dmat4(cam.view()));
-  std::array<glm::dvec3, 8> c{};
-  const double tan_half = std::tan(glm::radians(static_cast<double>(cam.fov_y_deg)) / 2);
-  for (int i = 0; i < 8; ++i) {
-    const double z = (i & 4) ? z1 : z0;
-    const double half_h = cam.projection == scene::Camera::Projection::perspective ? z * tan_half : cam.ortho_height_ws / 2.0;
-    const double half_w = half_h * aspect;
-    const glm::dvec4 p(((i & 1) ? half_w : -half_w), ((i & 2) ? half_h : -half_h), -z, 1);
-    c[static_cast<std::size_t>(i)] = glm::dvec3(to_world * p);
-  }
-  return c;
-}
-
-}  // namespace
 
 Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request) {
   Cascades out;
@@ -281,6 +473,7 @@ Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& reque
   const double unfitted_side = base.extent_ws;
   const glm::dmat4 light_view(base.view);
 
+  const scene::Aabb seen = near_view_bounds(scene, request.camera_aspect);
   const std::vector<double> splits = adaptive::cascade_splits(range[0], range[1], request.count, request.lambda);
   for (double z : splits) out.splits_ws.push_back(static_cast<float>(z));
   const scene::Camera& cam = scene.camera;
@@ -289,12 +482,7 @@ Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& reque
     const int res = res_of(i);
     double cx = 0, cy = 0, half = 0;
     // The slice's receivers, clipped like the single fitted map.
-    scene::Camera slice_camera = cam;
-    slice_camera.near_ws = static_cast<float>(z0);
-    slice_camera.far_ws = static_cast<float>(z1);
-    Polyhedron psr = box_polyhedron(scene.bounds());
-    for (const auto& plane : camera_planes(slice_camera, request.camera_aspect)) psr = clip(psr, plane);
-    const std::vector<glm::dvec3> v = vertices(psr);
+    const std::vector<glm::dvec3> v = vertices(visible_part(seen, cam, request.camera_aspect, z0, z1));
     if (!v.empty()) {
       double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
       for (const auto& p : v) {

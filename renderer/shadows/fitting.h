@@ -78,6 +78,11 @@ struct Cascades {
 // `request.fit` says (an empty PSR cannot be fitted). splits_ws always has frames + 1 entries.
 Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request);
 
+// Diagonal of what a directional light's frame holds: the objects that can cast onto the
+// potential receivers, within 1000 receiver sizes of them (not the scene's bounds: one object at
+// 1e20 would make it 1e20).
+float shadow_region_diagonal_ws(const scene::Scene& scene, float camera_aspect);
+
 // Camera view-depth range [near, far] of the potential receivers; {cam near, cam far} when empty.
 std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camera_aspect);
 

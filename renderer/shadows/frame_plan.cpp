@@ -36,10 +36,10 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
     const FilterRadius r = entry.filter_radius(s);
     (r.unit == RadiusUnit::texels ? fit.pad_texels : fit.pad_ws) = r.radius;
   } else if (entry.search_scale) {
-    const scene::Aabb b = scene.bounds();
-    const float depth_range = b.empty() ? 1.0f : glm::length(b.hi - b.lo);
     const scene::Light& light = scene.light;
-    fit.pad_ws = entry.search_scale(s) * (light.type == scene::Light::Type::spot ? light.size / 2 : tan_half_angle * depth_range);
+    fit.pad_ws = entry.search_scale(s) * (light.type == scene::Light::Type::spot
+                                              ? light.size / 2
+                                              : tan_half_angle * shadow_region_diagonal_ws(scene, aspect));
   }
   return fit;
 }

@@ -292,7 +292,11 @@ class MomentsBlurPass final : public Pass {
     for (const auto& c : f.plan.cascades) {
       // World-space radii span a different number of texels in each cascade.
       const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
-      blur.set("u_radius_texels", radius.unit == RadiusUnit::texels ? radius.radius : radius.radius / texel);
+      // A window wider than the map is cut to the map's width: beyond it only the edge texels'
+      // weights would grow (clamp to edge), and the sliding sum's first window would cost r fetches
+      // (ESM at r = 1e6 took 30 s).
+      const float r_texels = radius.unit == RadiusUnit::texels ? radius.radius : radius.radius / texel;
+      blur.set("u_radius_texels", std::min(r_texels, static_cast<float>(c.resolution_texels)));
       blur.set("u_origin", glm::ivec2(c.atlas_x, c.atlas_y));
       blur.set("u_size", c.resolution_texels);
       const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);

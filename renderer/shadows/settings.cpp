@@ -184,4 +184,17 @@ std::string variant_choice(const ShadowSettings& s) {
   return out;
 }
 
+std::vector<std::string> variant_choices(Technique t) {
+  const std::string_view key = technique_entry(t).variant_setting;
+  std::vector<std::string> out;
+  if (key.empty()) return out;
+  ShadowSettings s;
+  s.technique = t;
+  visit_technique_section(s, [&](std::string_view, const auto& params) {
+    for (const auto& row : settings_table(&params))
+      if (row.key == key && row.type == SettingType::choice) out.assign(row.choices.begin(), row.choices.end());
+  });
+  return out;
+}
+
 }  // namespace penumbra::shadows

@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -131,5 +132,8 @@ std::string describe(const ShadowSettings& s);
 // The value of the technique's variant setting (PCF's kernel: "grid", "poisson"), or "" for a
 // technique without one: with the technique's name, what calibration.json entries are keyed by.
 std::string variant_choice(const ShadowSettings& s);
+// Every value the technique's variant setting can take (PCF: disk, grid, poisson); empty for a
+// technique without one.
+std::vector<std::string> variant_choices(Technique t);
 
 }  // namespace penumbra::shadows

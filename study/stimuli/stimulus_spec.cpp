@@ -61,7 +61,12 @@ void set_technique_settings(StimulusSpec& spec, const std::vector<std::string>& 
   for (const std::string& kv : key_values) {
     const std::size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw std::invalid_argument("--set '" + text::printable(kv) + "': expected KEY=VALUE");
-    spec.technique_settings.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+    const std::string key = kv.substr(0, eq);
+    // A key given twice is refused, as the JSON readers refuse a repeated key: the last would
+    // silently win.
+    for (const auto& [given, value] : spec.technique_settings)
+      if (given == key) throw std::invalid_argument("--set " + text::printable(key) + ": given twice");
+    spec.technique_settings.emplace_back(key, kv.substr(eq + 1));
   }
   if (!spec.technique_settings.empty() && spec.technique.empty()) throw std::invalid_argument("--set: needs --technique");
 }

@@ -92,7 +92,7 @@ for tool in "${tools[@]}"; do
 done
 echo "${#tools[@]} tools: $("$prefix/bin/penumbra-render" --version)"
 help=$("$prefix/bin/penumbra-demo" --help)
-grep -q -- "--calibration TEXT=$prefix/share/penumbra/calibration/default.json$" <<<"$help" ||
+grep -q -- "--calibration TEXT:PATH=$prefix/share/penumbra/calibration/default.json$" <<<"$help" ||
   fail "penumbra-demo's default calibration is not the installed one"
 "$prefix/bin/penumbra-study" display-check --config default >"$work/display-check.txt" || fail "penumbra-study display-check --config default"
 help=$("$prefix/bin/penumbra-study" run --help)

@@ -109,5 +109,69 @@ TEST(Fitting, NothingVisibleFallsBackToTheUnfittedFrustum) {
   EXPECT_GT(empty.far_ws, empty.near_ws);
 }
 
+// Issue 27: one sphere at x = 1e20 (or any object far outside what the camera sees) made the fit
+// overflow (near = far = 3.4e38, s_xy NaN) and removed every shadow. The fit holds only what can
+// cast onto the visible receivers: the far object changes nothing, and every number is finite.
+void expect_far_object_changes_nothing(scene::Scene s, const glm::vec3& where) {
+  const float aspect = 16.0f / 9.0f;
+  for (const bool fit : {true, false}) {
+    const LightFrame before = compute_light_frame(s, {fit, aspect, 1024, 2, 0});
+    scene::Scene far = s;
+    scene::Object o = s.objects.back();
+    o.name = "far-away";
+    o.model = glm::translate(glm::mat4(1), where) * o.model;
+    far.objects.push_back(o);
+    const LightFrame after = compute_light_frame(far, {fit, aspect, 1024, 2, 0});
+    EXPECT_EQ(after.fitted, fit) << s.name;
+    EXPECT_NEAR(after.extent_ws, before.extent_ws, 1e-4f * before.extent_ws) << s.name << " fit " << fit;
+    EXPECT_NEAR(after.s_xy, before.s_xy, 1e-4f * before.s_xy) << s.name << " fit " << fit;
+    EXPECT_NEAR(after.far_ws - after.near_ws, before.far_ws - before.near_ws, 1e-3f * (before.far_ws - before.near_ws)) << s.name;
+    // The same receivers land on the same texels.
+    const glm::mat4 a = before.view_projection(), b = after.view_projection();
+    for (const glm::vec3 p : {glm::vec3(0, 0, 0), glm::vec3(1, 0.5f, -1), glm::vec3(-2, 1, 2)}) {
+      const glm::vec4 pa = a * glm::vec4(p, 1), pb = b * glm::vec4(p, 1);
+      EXPECT_NEAR(pa.x / pa.w, pb.x / pb.w, 1e-4f) << s.name;
+      EXPECT_NEAR(pa.y / pa.w, pb.y / pb.w, 1e-4f) << s.name;
+    }
+    if (s.light.type == scene::Light::Type::spot) continue;
+    const Cascades cascades = compute_cascades(far, {4, 0.75f, true, aspect, {1024}, 2, 0, true});
+    for (const LightFrame& f : cascades.frames) {
+      EXPECT_TRUE(std::isfinite(f.extent_ws) && std::isfinite(f.s_xy) && std::isfinite(f.near_ws) && std::isfinite(f.far_ws));
+      EXPECT_LT(f.extent_ws, 2 * before.extent_ws / before.s_xy) << s.name;
+    }
+  }
+}
+
+TEST(Fitting, AFarAwayObjectStaysOutOfTheDirectionalFit) {
+  expect_far_object_changes_nothing(scene::make_builtin_scene("demo"), {1e20f, 0, 0});
+  expect_far_object_changes_nothing(scene::make_builtin_scene("demo"), {3e37f, -3e37f, 3e37f});
+}
+
+TEST(Fitting, AFarAwayObjectStaysOutOfTheSpotFit) {
+  scene::Scene s = scene::make_two_planes_scene(3, 10, 1);
+  s.camera.projection = scene::Camera::Projection::perspective;
+  s.camera.position = {2, 3, 4};
+  s.camera.target = {2, 0, 1};
+  expect_far_object_changes_nothing(s, {1e20f, 0, 0});
+  expect_far_object_changes_nothing(s, {0, -1e20f, 0});  // behind the receivers, along the light
+}
+
+// An object of size 1e30 that the camera sees into: the frame holds the receivers and the casters
+// within 1000 receiver sizes of them (farther ones are clamped onto the near plane), finite.
+TEST(Fitting, AnEnormousObjectIsClippedToTheReceiversReach) {
+  scene::Scene s = scene::make_builtin_scene("demo");
+  scene::Object o = s.objects.back();
+  o.name = "enormous";
+  o.model = glm::translate(glm::mat4(1), glm::vec3(0, 0, -1e29f)) * glm::scale(glm::mat4(1), glm::vec3(1e28f));
+  s.objects.push_back(o);
+  for (const bool fit : {true, false}) {
+    const LightFrame f = compute_light_frame(s, {fit, 16.0f / 9.0f, 1024, 2, 0});
+    EXPECT_TRUE(std::isfinite(f.near_ws) && std::isfinite(f.far_ws) && std::isfinite(f.s_xy)) << fit;
+    EXPECT_LT(f.extent_ws, 1e6f) << fit;
+    EXPECT_LT(f.far_ws - f.near_ws, 1e6f) << fit;
+  }
+  EXPECT_LT(shadow_region_diagonal_ws(s, 16.0f / 9.0f), 1e6f);
+}
+
 }  // namespace
 }  // namespace penumbra::shadows

@@ -219,6 +219,10 @@ TEST_P(BadSceneFile, NamesFileAndField) {
   dir.write("junk.glb", "this is not a binary glTF file at all");
   dir.write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
   dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  // Issue 27: Assimp's own text named no line ("vertex index out of range" for a bad number).
+  dir.write("bad-number.obj", "v 0 0 0\nv 1 0 zz\nv 0 1 0\nf 1 2 3\n");
+  dir.write("bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# a comment\nf 1 2 7\n");
+  dir.write("bad-corner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n");
   const fs::path file = dir.write("bad.json", GetParam().json);
   try {
     load_scene_file(file);
@@ -290,6 +294,12 @@ INSTANTIATE_TEST_SUITE_P(
                 "objects[0].path: model 'lines.obj' contains no triangles"},
         BadCase{"ModelWithOnlyDegenerateTriangles", R"({"objects": [{"shape": "model", "path": "flat.obj"}]})",
                 "objects[0].path: model 'flat.obj' contains no triangles"},
+        BadCase{"ObjNotANumberNamesItsLine", R"({"objects": [{"shape": "model", "path": "bad-number.obj"}]})",
+                "objects[0].path: cannot read model bad-number.obj:2: 'zz' in a 'v' line is not a number"},
+        BadCase{"ObjIndexOutOfRangeNamesItsLine", R"({"objects": [{"shape": "model", "path": "bad-index.obj"}]})",
+                "objects[0].path: cannot read model bad-index.obj:5: face index 7 is out of range (3 vertices before this line)"},
+        BadCase{"ObjCornerNotAnIndexNamesItsLine", R"({"objects": [{"shape": "model", "path": "bad-corner.obj"}]})",
+                "objects[0].path: cannot read model bad-corner.obj:4: face corner 'x' is not an index"},
         BadCase{"EmptyFile", "", ":1:1: malformed JSON"},
         BadCase{"PathWithOneKey", R"({"camera_path": {"keys": [{"frame": 0, "position": [0, 1, 0], "target": [1, 1, 0]}]}})",
                 "camera_path.keys: expected an array of at least 2 keys, got an array of 1 element"},
