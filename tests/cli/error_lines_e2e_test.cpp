@@ -321,6 +321,8 @@ TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
     std::ofstream(s / "crlf.csv", std::ios::binary) << log;
     std::ofstream(s / "header-only.csv") << trial_log::header_line();
   }
+  std::ofstream(s / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n";
+  std::ofstream(s / "obj.json") << R"({"objects": [{"shape": "model", "path": "bad.obj"}]})" << "\n";
   struct Case {
     std::string exe;
     std::vector<std::string> args;
@@ -342,6 +344,19 @@ TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
       // was: "no trials to fit" without a file
       {kFit, {(s / "header-only.csv").string(), "-o", (s / "fit").string()}, 1,
        (s / "header-only.csv").string() + ": no trials to fit (only headers, practice rows or catch trials)"},
+      // was: Assimp's own text without a line ("OBJ: vertex index out of range")
+      {kRender, {"--scene", (s / "obj.json").string(), "-o", (s / "r").string()}, 1,
+       (s / "obj.json").string() + ": objects[0].path: cannot read model bad.obj:4: face index 7 is out of range (3 vertices before this line)"},
+      // was: exit 1 where -o "" exits 2
+      {kRender, {"--calibration", "", "-o", (s / "r").string()}, 2, "--calibration: expected a path, got ''"},
+      // was: checked only after the whole run
+      {kBench, {"--quick", "--python", (s / "no-python").string(), "-o", (s / "b").string()}, 2,
+       "--python " + (s / "no-python").string() + ": not an executable file (give its path, or --no-plot to skip the plots)"},
+      // was: taken and ignored
+      {kRender, {"--technique", "hard", "--vsm.radius", "3", "-o", (s / "r").string()}, 2,
+       "--vsm.radius: a parameter of vsm, which --technique hard does not render"},
+      {kCurve, {"--technique", "pcf", "--set", "pcf.kernel=grid", "--set", "pcf.kernel=disk", "--json", (s / "c.json").string()}, 2,
+       "--set pcf.kernel: given twice"},
   };
   for (const Case& c : cases) {
     std::string tool = fs::path(c.exe).filename().string();
@@ -350,6 +365,9 @@ TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
   }
   EXPECT_FALSE(fs::exists(s / "fit"));
   EXPECT_FALSE(fs::exists(s / "cal.json"));
+  EXPECT_FALSE(fs::exists(s / "r"));
+  EXPECT_FALSE(fs::exists(s / "b"));
+  EXPECT_FALSE(fs::exists(s / "c.json"));
 }
 
 }  // namespace
