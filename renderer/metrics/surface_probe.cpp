@@ -7,6 +7,7 @@
 
 #include "gl/context.h"
 #include "gl/shader_library.h"
+#include "scene/gpu_mesh.h"
 
 namespace penumbra::metrics {
 namespace {

@@ -1,12 +1,11 @@
 #pragma once
-// Triangle meshes on the CPU (procedural shapes, loaded models) and their GPU counterpart.
+// Triangle meshes on the CPU (procedural shapes, loaded models); GL-free (the GPU copy:
+// scene/gpu_mesh.h).
 #include <cstdint>
 #include <limits>
 #include <vector>
 
 #include <glm/glm.hpp>
-
-#include "gl/objects.h"
 
 namespace penumbra::scene {
 
@@ -56,19 +55,5 @@ MeshData make_lattice(float width, float height, int bars_x, int bars_y, float b
 MeshData make_tube(const std::vector<glm::vec3>& points, const std::vector<float>& radii, int sides);
 // A straight bar of square cross-section `width` from `a` to `b` (a lattice member).
 MeshData make_beam(const glm::vec3& a, const glm::vec3& b, float width);
-
-// GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.
-class GpuMesh {
- public:
-  explicit GpuMesh(const MeshData& mesh);
-  void draw() const;
-  std::size_t index_count() const { return index_count_; }
-
- private:
-  gl::Buffer vertices_;
-  gl::Buffer indices_;
-  gl::VertexArray vao_;
-  std::size_t index_count_ = 0;
-};
 
 }  // namespace penumbra::scene

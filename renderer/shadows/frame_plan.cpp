@@ -48,6 +48,65 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
 
 bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }
 
+PassIo pass_io(PassId pass, const FramePlan& plan) {
+  const bool moments = plan.moments.has_value();
+  const bool screen = plan.technique && plan.technique->screen_space();
+  switch (pass) {
+    case PassId::shadow_map: return {kSceneMeshes, kDepthAtlas | (moments ? kMoments : 0u)};
+    case PassId::moments_blur: return {kMoments, kMoments};
+    case PassId::depth_minmax: return {kDepthAtlas, kDepthMinmax};
+    case PassId::gbuffer: return {kSceneMeshes | kDepthAtlas, kGbuffer};
+    case PassId::post: return {kGbuffer | kDepthAtlas, kScreenVisibility};
+    case PassId::shading:
+      return {kSceneMeshes | kDepthAtlas | (moments ? kMoments : 0u) | (screen ? kScreenVisibility : 0u) |
+                  (plan.runs(PassId::depth_minmax) ? kDepthMinmax : 0u),
+              kColor | kVisibility | (plan.pcss_requirement ? kRequirementImage : 0u)};
+    case PassId::pcss_requirement: return {kRequirementImage, kRequirementBuffer};
+  }
+  return {};
+}
+
+std::string_view pass_name(PassId pass) {
+  switch (pass) {
+    case PassId::shadow_map: return "shadow_map";
+    case PassId::moments_blur: return "vsm_blur";
+    case PassId::depth_minmax: return "depth_minmax";
+    case PassId::gbuffer: return "gbuffer";
+    case PassId::post: return "post";
+    case PassId::shading: return "shading";
+    case PassId::pcss_requirement: return "pcss_requirement";
+  }
+  return "?";
+}
+
+std::string resource_names(unsigned resources) {
+  static constexpr std::pair<Resource, std::string_view> kNames[] = {
+      {kSceneMeshes, "scene meshes"}, {kDepthAtlas, "depth atlas"},   {kMoments, "moments"},
+      {kGbuffer, "G-buffer"},         {kScreenVisibility, "screen visibility"}, {kColor, "colour"},
+      {kVisibility, "visibility"},    {kRequirementImage, "requirement image"}, {kRequirementBuffer, "requirement buffer"},
+      {kDepthMinmax, "depth min-max pyramid"}};
+  std::string out;
+  for (const auto& [bit, name] : kNames)
+    if (resources & bit) out += (out.empty() ? "" : ", ") + std::string(name);
+  return out;
+}
+
+std::string plan_problem(const FramePlan& plan) {
+  unsigned written = kSceneMeshes;
+  int last = -1;
+  for (const PassId p : plan.passes) {
+    if (static_cast<int>(p) <= last)
+      return "pass " + std::string(pass_name(p)) + " runs twice or out of order";
+    last = static_cast<int>(p);
+    const PassIo io = pass_io(p, plan);
+    if (const unsigned missing = io.reads & ~written)
+      return "pass " + std::string(pass_name(p)) + " reads " + resource_names(missing) + ", which no earlier pass of the frame writes";
+    written |= io.writes;
+  }
+  if (const unsigned missing = (kColor | kVisibility) & ~written) return "the frame never writes its " + resource_names(missing);
+  return "";
+}
+
 float rule_radius_ws(const ShadowSettings& s, const LightFrame& single, float mid_depth_ws) {
   const TechniqueEntry& entry = technique_entry(s.technique);
   if (entry.filter_radius) {

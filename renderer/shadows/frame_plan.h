@@ -87,6 +87,35 @@ struct FramePlan {
   const LightFrame& light() const { return cascades.front().light; }
 };
 
+// What the passes of a frame hand each other. The scene's meshes are the frame's input; colour and
+// visibility its output.
+enum Resource : unsigned {
+  kSceneMeshes = 1u << 0,
+  kDepthAtlas = 1u << 1,
+  kMoments = 1u << 2,
+  kGbuffer = 1u << 3,
+  kScreenVisibility = 1u << 4,
+  kColor = 1u << 5,
+  kVisibility = 1u << 6,
+  kRequirementImage = 1u << 7,
+  kRequirementBuffer = 1u << 8,
+  kDepthMinmax = 1u << 9,
+};
+
+// The resources a pass reads and writes in the frame `plan` describes (the shading pass reads the
+// moments only when the plan has moments, ...): the frame's data flow, in one table.
+struct PassIo {
+  unsigned reads = 0, writes = 0;
+};
+PassIo pass_io(PassId pass, const FramePlan& plan);
+std::string_view pass_name(PassId pass);  // "shadow_map", "vsm_blur", ... (the timers' names)
+std::string resource_names(unsigned resources);  // "depth atlas, moments"
+
+// "" when the plan is a frame: no pass twice or out of order, every resource a pass reads written
+// by an earlier pass (or the scene's meshes), colour and visibility written; else one line naming
+// the pass and what it lacks. Renderer::render refuses a plan that is not a frame.
+std::string plan_problem(const FramePlan& plan);
+
 // Plans one frame of `scene` at width × height. Updates the hysteresis in `state`. Throws
 // std::runtime_error for an empty image, a map below one texel or inconsistent adaptive limits.
 FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int width_px, int height_px, AdaptiveState& state);

@@ -1,27 +1,25 @@
 #include "shadows/moments.h"
 
-#include <stdexcept>
-
 namespace penumbra::shadows {
 
-int channel_count(GLenum format) {
+int channel_count(MomentsFormat format) {
   switch (format) {
-    case GL_R32F: return 1;
-    case GL_RG32F: return 2;
-    case GL_RGBA32F:
-    case GL_RGBA16F: return 4;
-    default: throw std::logic_error("moments: unsupported texture format");
+    case MomentsFormat::r32f: return 1;
+    case MomentsFormat::rg32f: return 2;
+    case MomentsFormat::rgba16f:
+    case MomentsFormat::rgba32f: return 4;
   }
+  return 4;
 }
 
-const char* image_format_qualifier(GLenum format) {
+const char* image_format_qualifier(MomentsFormat format) {
   switch (format) {
-    case GL_R32F: return "r32f";
-    case GL_RG32F: return "rg32f";
-    case GL_RGBA32F: return "rgba32f";
-    case GL_RGBA16F: return "rgba16f";
-    default: throw std::logic_error("moments: unsupported texture format");
+    case MomentsFormat::r32f: return "r32f";
+    case MomentsFormat::rg32f: return "rg32f";
+    case MomentsFormat::rgba16f: return "rgba16f";
+    case MomentsFormat::rgba32f: return "rgba32f";
   }
+  return "rgba32f";
 }
 
 }  // namespace penumbra::shadows

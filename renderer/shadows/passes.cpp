@@ -15,6 +15,21 @@
 
 namespace penumbra::shadows {
 
+namespace {
+
+// The sized internal format of a moments texture (the planner's MomentsFormat has no GL in it).
+GLenum gl_format(MomentsFormat format) {
+  switch (format) {
+    case MomentsFormat::r32f: return GL_R32F;
+    case MomentsFormat::rg32f: return GL_RG32F;
+    case MomentsFormat::rgba16f: return GL_RGBA16F;
+    case MomentsFormat::rgba32f: return GL_RGBA32F;
+  }
+  return GL_RGBA32F;
+}
+
+}  // namespace
+
 const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std::string& key, const std::vector<gl::ShaderStage>& stages,
                                      const std::vector<gl::ShaderDefine>& defines) {
   auto it = programs_.find(key);
@@ -47,7 +62,7 @@ FrameResources::FrameResources(const gl::ShaderLibrary& library) : shaders(libra
 bool FrameResources::prepare(const FramePlan& plan) {
   bool reallocated = false;
   const AtlasLayout& layout = plan.atlas;
-  const GLenum moments_format = plan.moments ? plan.moments->format : 0;
+  const GLenum moments_format = plan.moments ? gl_format(plan.moments->format) : 0;
   if (!maps || maps->width != layout.width || maps->height != layout.height || maps->moments_format != moments_format) {
     GLint max_size = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
@@ -228,9 +243,6 @@ namespace {
 class ShadowMapPass final : public Pass {
  public:
   PassId id() const override { return PassId::shadow_map; }
-  const char* name() const override { return "shadow_map"; }
-  unsigned reads() const override { return kSceneMeshes; }
-  unsigned writes() const override { return kDepthAtlas | kMoments; }
   void execute(FrameContext& f) override {
     const auto& moments = f.plan.moments;
     FrameResources& r = f.res;
@@ -272,9 +284,6 @@ class ShadowMapPass final : public Pass {
 class MomentsBlurPass final : public Pass {
  public:
   PassId id() const override { return PassId::moments_blur; }
-  const char* name() const override { return "vsm_blur"; }
-  unsigned reads() const override { return kMoments; }
-  unsigned writes() const override { return kMoments; }
   void execute(FrameContext& f) override {
     const MomentsLayout& moments = *f.plan.moments;
     const FilterRadius radius = *f.plan.filter_radius;
@@ -305,12 +314,12 @@ class MomentsBlurPass final : public Pass {
       const GLuint lines_y = moments.direct_sums ? static_cast<GLuint>(c.resolution_texels) : 1;
       blur.set("u_axis", 0);
       r.maps->moments_tex.bind(0);
-      glBindImageTexture(0, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments.format);
+      glBindImageTexture(0, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
       glDispatchCompute(groups, lines_y, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
       blur.set("u_axis", 1);
       r.maps->moments_tmp.bind(0);
-      glBindImageTexture(0, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, moments.format);
+      glBindImageTexture(0, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
       glDispatchCompute(groups, lines_y, 1);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
@@ -325,9 +334,6 @@ class MomentsBlurPass final : public Pass {
 class DepthMinmaxPass final : public Pass {
  public:
   PassId id() const override { return PassId::depth_minmax; }
-  const char* name() const override { return "depth_minmax"; }
-  unsigned reads() const override { return kDepthAtlas; }
-  unsigned writes() const override { return kDepthMinmax; }
   void execute(FrameContext& f) override {
     FrameResources& r = f.res;
     const gl::Program& prog = r.minmax_program;
@@ -368,9 +374,6 @@ class DepthMinmaxPass final : public Pass {
 class GbufferPass final : public Pass {
  public:
   PassId id() const override { return PassId::gbuffer; }
-  const char* name() const override { return "gbuffer"; }
-  unsigned reads() const override { return kSceneMeshes | kDepthAtlas; }
-  unsigned writes() const override { return kGbuffer; }
   void execute(FrameContext& f) override {
     FrameResources& r = f.res;
     if (!r.screen_space) r.screen_space = std::make_unique<ScreenSpace>(r.shaders);
@@ -393,9 +396,6 @@ class GbufferPass final : public Pass {
 class PostPass final : public Pass {
  public:
   PassId id() const override { return PassId::post; }
-  const char* name() const override { return "post"; }
-  unsigned reads() const override { return kGbuffer | kDepthAtlas; }
-  unsigned writes() const override { return kScreenVisibility; }
   bool reports_subpasses() const override { return true; }
   void execute(FrameContext& f) override {
     const scene::Camera& cam = f.scene.camera;
@@ -414,9 +414,6 @@ class PostPass final : public Pass {
 class ShadingPass final : public Pass {
  public:
   PassId id() const override { return PassId::shading; }
-  const char* name() const override { return "shading"; }
-  unsigned reads() const override { return kSceneMeshes | kDepthAtlas | kMoments | kScreenVisibility; }
-  unsigned writes() const override { return kColor | kVisibility | kRequirementImage; }
   void execute(FrameContext& f) override {
     FrameResources& r = f.res;
     const bool requirement = f.plan.pcss_requirement;
@@ -459,9 +456,6 @@ class ShadingPass final : public Pass {
 class PcssRequirementPass final : public Pass {
  public:
   PassId id() const override { return PassId::pcss_requirement; }
-  const char* name() const override { return "pcss_requirement"; }
-  unsigned reads() const override { return kRequirementImage; }
-  unsigned writes() const override { return kRequirementBuffer; }
   void execute(FrameContext& f) override {
     FrameResources& r = f.res;
     FrameResources::Requirement& q = r.requirement;

@@ -21,6 +21,7 @@
 #include "gl/objects.h"
 #include "gl/shader_library.h"
 #include "gl/timer.h"
+#include "scene/gpu_mesh.h"
 #include "scene/scene.h"
 #include "shadows/frame_plan.h"
 #include "shadows/screen_space.h"
@@ -28,20 +29,6 @@
 namespace penumbra::shadows {
 
 struct FrameInfo;
-
-// Resources a pass reads or writes.
-enum Resource : unsigned {
-  kSceneMeshes = 1u << 0,
-  kDepthAtlas = 1u << 1,
-  kMoments = 1u << 2,
-  kGbuffer = 1u << 3,
-  kScreenVisibility = 1u << 4,
-  kColor = 1u << 5,
-  kVisibility = 1u << 6,
-  kRequirementImage = 1u << 7,
-  kRequirementBuffer = 1u << 8,
-  kDepthMinmax = 1u << 9,
-};
 
 // Programs compiled on first use and kept by key.
 class ProgramCache {
@@ -58,7 +45,7 @@ class ProgramCache {
 struct FrameResources {
   struct Maps {
     int width = 0, height = 0;
-    GLenum moments_format = 0;  // 0: depth only
+    GLenum moments_format = 0;  // gl_format(MomentsLayout::format); 0: depth only
     gl::Texture depth;
     gl::Framebuffer depth_fbo;
     gl::Texture moments_tex, moments_tmp;
@@ -130,9 +117,9 @@ class Pass {
  public:
   virtual ~Pass() = default;
   virtual PassId id() const = 0;
-  virtual const char* name() const = 0;
-  virtual unsigned reads() const = 0;
-  virtual unsigned writes() const = 0;
+  // The name its time is reported under (pass_name: "shadow_map", "vsm_blur", ...); what it
+  // reads and writes is pass_io(id(), plan), checked for the whole frame by plan_problem.
+  const char* name() const { return pass_name(id()).data(); }
   // Whether the pass reports its own sub-passes (post) instead of being timed as one.
   virtual bool reports_subpasses() const { return false; }
   bool needed(const FramePlan& plan) const { return plan.runs(id()); }

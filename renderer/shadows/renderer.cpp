@@ -63,6 +63,7 @@ void read_back_requirement(FrameResources::Requirement& q, AdaptiveState& state)
 FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px, gl::PassTimer* timer) {
   read_back_requirement(res_->requirement, adaptive_);
   const FramePlan plan = plan_frame(s, scene_, width_px, height_px, adaptive_);
+  if (const std::string problem = plan_problem(plan); !problem.empty()) throw std::logic_error("frame plan: " + problem);
 
   FrameInfo info;
   info.width_px = width_px;

@@ -17,6 +17,7 @@
 #include "gl/shader_library.h"
 #include "gl/timer.h"
 #include "io/image_io.h"
+#include "scene/gpu_mesh.h"
 #include "scene/scene.h"
 #include "shadows/fitting.h"
 #include "shadows/frame_plan.h"

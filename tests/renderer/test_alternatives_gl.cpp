@@ -424,7 +424,7 @@ TEST(Esm, ExponentIsClampedToTheFloatRange) {
   st.esm.exponent = 1000;
   const auto layout = shadows::technique_entry(Technique::esm).moments(st);
   ASSERT_TRUE(layout.has_value());
-  EXPECT_EQ(layout->format, static_cast<GLenum>(GL_R32F));
+  EXPECT_EQ(layout->format, shadows::MomentsFormat::r32f);
   EXPECT_FLOAT_EQ(layout->far_moments[0], std::exp(shadows::kEsmMaxExponent));
   EXPECT_TRUE(layout->direct_sums);
 }

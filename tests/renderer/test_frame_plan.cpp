@@ -54,6 +54,39 @@ TEST(FramePlan, PassesFollowTheTechnique) {
   EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_minmax, P::shading}));
 }
 
+// Issue 28: the passes' reads and writes were declared and read by nothing. Every plan of every
+// technique (fixed, adaptive, cascaded, PCSS measuring its requirement, hierarchical) is a frame:
+// each pass reads only what an earlier one wrote; and a plan missing a writer is named.
+TEST(FramePlan, EveryPlanIsAFrameWhosePassesReadWhatEarlierOnesWrote) {
+  for (const auto name : technique_names()) {
+    for (const bool adaptive : {false, true})
+      for (const int cascades : {1, 3}) {
+        ShadowSettings s = with(technique_from_string(name));
+        s.adaptive.enabled = adaptive;
+        s.map.cascades = cascades;
+        s.pcss.hierarchical = cascades == 3;
+        const FramePlan p = plan(s);
+        EXPECT_EQ(plan_problem(p), "") << name << " adaptive " << adaptive << " cascades " << cascades;
+      }
+  }
+  FramePlan vsm = plan(with(Technique::vsm));
+  EXPECT_EQ(resource_names(pass_io(PassId::shading, vsm).reads), "scene meshes, depth atlas, moments");
+  vsm.passes.erase(vsm.passes.begin());  // no shadow_map
+  EXPECT_EQ(plan_problem(vsm), "pass vsm_blur reads moments, which no earlier pass of the frame writes");
+  FramePlan pcf = plan(with(Technique::pcf));
+  pcf.passes.pop_back();  // no shading
+  EXPECT_EQ(plan_problem(pcf), "the frame never writes its colour, visibility");
+  pcf.passes.push_back(PassId::shading);
+  pcf.passes.push_back(PassId::shadow_map);
+  EXPECT_EQ(plan_problem(pcf), "pass shadow_map runs twice or out of order");
+  ShadowSettings pcss = with(Technique::pcss);
+  pcss.adaptive.enabled = true;
+  FramePlan measured = plan(pcss);
+  ASSERT_TRUE(measured.pcss_requirement);
+  measured.pcss_requirement = false;  // shading no longer writes the requirement image
+  EXPECT_EQ(plan_problem(measured), "pass pcss_requirement reads requirement image, which no earlier pass of the frame writes");
+}
+
 TEST(FramePlan, FixedSingleMapFillsItsTextureWithoutGuardBand) {
   ShadowSettings s = with(Technique::pcf);
   s.map.resolution_texels = 777;

@@ -32,7 +32,7 @@ const TechniqueEntry& esm_technique() {
       // anew per window: a sliding sum's rounding follows the largest value in a line, exp(c).
       .moments =
           [](const ShadowSettings& s) {
-            return std::optional<MomentsLayout>({GL_R32F, {std::exp(esm_exponent(s.esm)), 0, 0, 0}, /*direct_sums=*/true});
+            return std::optional<MomentsLayout>({MomentsFormat::r32f, {std::exp(esm_exponent(s.esm)), 0, 0, 0}, /*direct_sums=*/true});
           },
       // The exponent serves the moments pass and the shading pass alike.
       .set_uniforms = [](const gl::Program& p, const ShadowSettings& s) { p.set("u_esm_exponent", esm_exponent(s.esm)); },

@@ -34,7 +34,7 @@ MomentsLayout evsm_layout(const EvsmParams& p) {
   // The far plane x = 1: (e^c+, e^2c+, -e^-c-, e^-2c-), as evsm_moments(1) in the shader.
   const glm::vec2 c = evsm_exponents(p);
   const float pos = std::exp(c.x), neg = -std::exp(-c.y);
-  return {p.format == MomentFormat::rgba16f ? static_cast<GLenum>(GL_RGBA16F) : static_cast<GLenum>(GL_RGBA32F),
+  return {p.format == MomentFormat::rgba16f ? MomentsFormat::rgba16f : MomentsFormat::rgba32f,
           {pos, pos * pos, neg, neg * neg},
           /*direct_sums=*/true};
 }

@@ -26,7 +26,7 @@ const TechniqueEntry& msm_technique() {
       .filter_radius = section_radius<&ShadowSettings::msm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::msm>,
       // (z, z², z³, z⁴) of z in [-1, 1]; the far plane z = 1 has every moment 1.
-      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RGBA32F, {1, 1, 1, 1}}); },
+      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({MomentsFormat::rgba32f, {1, 1, 1, 1}}); },
       .set_uniforms =
           [](const gl::Program& p, const ShadowSettings& s) {
             p.set("u_msm_moment_bias", s.msm.moment_bias);

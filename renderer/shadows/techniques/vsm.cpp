@@ -25,7 +25,7 @@ const TechniqueEntry& vsm_technique() {
       .filter_radius = section_radius<&ShadowSettings::vsm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::vsm>,
       // (t, t² + texel variance) of normalized linear depth t; the far plane t = 1.
-      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({GL_RG32F, {1, 1, 0, 0}}); },
+      .moments = [](const ShadowSettings&) { return std::optional<MomentsLayout>({MomentsFormat::rg32f, {1, 1, 0, 0}}); },
       .set_uniforms =
           [](const gl::Program& p, const ShadowSettings& s) {
             p.set("u_vsm_min_variance", s.vsm.min_variance);

@@ -1,0 +1,24 @@
+#pragma once
+// The GPU copy of a CPU mesh (scene/mesh.h).
+#include <cstddef>
+
+#include "gl/objects.h"
+#include "scene/mesh.h"
+
+namespace penumbra::scene {
+
+// GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.
+class GpuMesh {
+ public:
+  explicit GpuMesh(const MeshData& mesh);
+  void draw() const;
+  std::size_t index_count() const { return index_count_; }
+
+ private:
+  gl::Buffer vertices_;
+  gl::Buffer indices_;
+  gl::VertexArray vao_;
+  std::size_t index_count_ = 0;
+};
+
+}  // namespace penumbra::scene
