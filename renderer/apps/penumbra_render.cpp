@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
 
     std::cout << "scene " << scene.name << ", " << width << "x" << height << ", " << ctx.renderer << " ("
               << ctx.platform << "); times: median of " << frames << " frames, ms, "
-              << (ctx.software ? "wall clock around glFinish (wall_finish)" : "GPU timer queries (gpu_timer); wall_finish in report.json")
+              << (ctx.software ? "wall clock around glFinish (wall_finish)" : "GPU timer queries (gpu_timer)")
               << "\n";
     // The c of each technique the adaptive rule sizes, where it came from and what the fitter
     // flagged, before anything is rendered with it.

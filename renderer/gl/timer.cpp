@@ -39,6 +39,7 @@ void PassTimer::begin(const std::string& pass) {
     }
     glBeginQuery(GL_TIME_ELAPSED, p->query->id());
     pending_.push_back(std::move(p));
+    return;  // no glFinish: it would serialise the frame the queries measure
   }
   glFinish();
   t0_ = std::chrono::steady_clock::now();
@@ -46,7 +47,11 @@ void PassTimer::begin(const std::string& pass) {
 
 void PassTimer::end() {
   if (current_.empty()) throw std::logic_error("PassTimer::end without begin");
-  if (use_gpu_) glEndQuery(GL_TIME_ELAPSED);
+  if (use_gpu_) {
+    glEndQuery(GL_TIME_ELAPSED);
+    current_.clear();
+    return;
+  }
   glFinish();
   const auto t1 = std::chrono::steady_clock::now();
   wall_ms_[current_].push_back(std::chrono::duration<double, std::milli>(t1 - t0_).count());

@@ -1,7 +1,9 @@
 #pragma once
-// Per-pass timing. Wall clock around glFinish is always taken (the only meaningful method on
-// software GL); GL_TIME_ELAPSED queries are added on real GPUs and read a few frames late so that
-// they never stall the pipeline. Every number is reported with the method that produced it.
+// Per-pass timing, one method per timer. On software GL (llvmpipe, whose timer queries mean
+// nothing) wall clock around glFinish (`wall_finish`); on a real GPU GL_TIME_ELAPSED queries
+// (`gpu_timer`) in a ring read a few frames late, with no glFinish, which would serialise the frame
+// being measured (a whole frame's wall time is the caller's, around one glFinish). Every number is
+// reported with the method that produced it.
 #include <chrono>
 #include <map>
 #include <memory>
@@ -29,7 +31,8 @@ class PassTimer {
   explicit PassTimer(bool use_gpu_queries);
   ~PassTimer();
 
-  // Brackets one pass of the current frame. Passes may not nest.
+  // Brackets one pass of the current frame (`use_gpu_queries`: a timer query, else glFinish and
+  // the wall clock). Passes may not nest.
   void begin(const std::string& pass);
   void end();
   // Collects GPU query results that are ready (all of them when `wait` is set).

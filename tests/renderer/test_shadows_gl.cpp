@@ -8,6 +8,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "gl/timer.h"
 #include "gl_test_env.h"
 #include "scene/scene.h"
 #include "shadows/frame_plan.h"
@@ -435,6 +436,28 @@ TEST(Extremes, MaximumTextureSizeIsRenderedOrRefusedClearly) {
     ADD_FAILURE() << "a map larger than GL_MAX_TEXTURE_SIZE must be refused";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("GL_MAX_TEXTURE_SIZE"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 28: the pass timer called glFinish around every pass even when it used GL timer queries,
+// serialising on a GPU the frame it measured. One method per timer: wall clock (software GL) or
+// queries, never both, and each pass's numbers say which.
+TEST(PassTimer, OneMethodPerTimerAndQueriesWithoutWallClock) {
+  scene::Scene s = scene::make_builtin_scene("demo");
+  shadows::Renderer r;
+  r.set_scene(s);
+  shadows::ShadowSettings st;
+  st.map.resolution_texels = 256;
+  for (const bool queries : {false, true}) {
+    gl::PassTimer timer(queries);
+    for (int i = 0; i < 3; ++i) r.render(st, 64, 36, &timer);
+    timer.poll(true);
+    const auto stats = timer.stats();
+    ASSERT_FALSE(stats.empty());
+    for (const auto& p : stats) {
+      EXPECT_EQ(p.method, queries ? gl::TimingMethod::gpu_timer : gl::TimingMethod::wall_finish) << p.pass;
+      EXPECT_EQ(p.samples, 3) << p.pass;
+    }
   }
 }
 
