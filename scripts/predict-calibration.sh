@@ -36,9 +36,11 @@ for spec in "${specs[@]}"; do
   parts+=("$part")
 done
 /usr/bin/python3 - "$out" "${parts[@]}" <<'PY'
-import json, sys, datetime, os
+import json, sys, datetime, os, re
 out, parts = sys.argv[1], sys.argv[2:]
 entries = [json.load(open(p))["entries"][0] for p in parts]
+for e in entries:  # the part's temporary path is no part of the recipe
+    e["command"] = re.sub(r"--json \S+", "--json OUT.json", e["command"])
 key = lambda e: (e["technique"], e.get("kernel") or "")
 if os.path.exists(out):
     new = {key(e) for e in entries}
