@@ -10,14 +10,19 @@ render=$build/renderer/penumbra-render
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 crop=(317 250 504 330)  # x y w h in the 1280x720 image
+# Every technique of the registry (penumbra-render's --technique choices, less "all"); screen-space
+# ones are those whose render ran a G-buffer pass. hard, pcf and pcss head both grids.
+techniques=$("$render" --help | sed -n 's/.*--technique TEXT:{\([^}]*\)}.*/\1/p' | tr ',' ' ' | sed 's/ all$//')
+[[ -n $techniques ]] || { echo "docs-technique-images: no technique list in $render --help" >&2; exit 1; }
 for res in 512 2048; do
-  for t in hard pcf pcss edtsm edtssm erosion rbsm rpcf msm evsm; do
-    "$render" --scene demo --technique "$t" --resolution "$res" --frames 1 --warmup 0 -o "$work/$t-$res" >/dev/null
-  done
+  screen=() map=()
   lit() { local png=("$work/$1-$res"/*/lit.png); echo "$1 $res=${png[0]}"; }  # pcf writes pcf-poisson/
-  /usr/bin/python3 scripts/technique_crops.py "docs/images/screen-space-$res.png" 3 "${crop[@]}" \
-    "$(lit hard)" "$(lit pcf)" "$(lit pcss)" "$(lit edtsm)" "$(lit edtssm)" "$(lit erosion)"
-  /usr/bin/python3 scripts/technique_crops.py "docs/images/map-side-$res.png" 4 "${crop[@]}" \
-    "$(lit hard)" "$(lit pcf)" "$(lit pcss)" "$(lit rbsm)" "$(lit rpcf)" "$(lit msm)" "$(lit evsm)"
+  for t in $techniques; do
+    "$render" --scene demo --technique "$t" --resolution "$res" --frames 1 --warmup 0 -o "$work/$t-$res" >/dev/null
+    case $t in hard|pcf|pcss) screen+=("$(lit "$t")"); map+=("$(lit "$t")"); continue ;; esac
+    if grep -q '"gbuffer"' "$work/$t-$res"/*/report.json; then screen+=("$(lit "$t")"); else map+=("$(lit "$t")"); fi
+  done
+  /usr/bin/python3 scripts/technique_crops.py "docs/images/screen-space-$res.png" 3 "${crop[@]}" "${screen[@]}"
+  /usr/bin/python3 scripts/technique_crops.py "docs/images/map-side-$res.png" 4 "${crop[@]}" "${map[@]}"
 done
 ls -l docs/images/screen-space-*.png docs/images/map-side-*.png

@@ -190,8 +190,12 @@ shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texe
     refuse_setting("technique", e.what());
   }
   const TechniqueEntry& entry = technique_entry(s.technique);
-  if (!entry.set_filter_radius)
-    refuse_setting("technique", "'" + spec.technique + "' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)");
+  if (!entry.set_filter_radius) {
+    std::string with;  // from the registry: every technique whose radius a trial can set
+    for (const auto name : technique_names())
+      if (technique_entry(technique_from_string(name)).set_filter_radius) with += (with.empty() ? "" : ", ") + std::string(name);
+    refuse_setting("technique", "'" + spec.technique + "' has no fixed filter radius for the trial to set (" + with + " have)");
+  }
   s.pcf.rotate = false;          // one tap pattern for every pixel (a rotated one is noise)
   s.pcf.max_grid_taps = 256;     // exact box up to a radius of 127 texels
   s.rpcf.max_grid_taps = 256;
