@@ -3,38 +3,36 @@
 // was raised to the minimum penumbra, and those that need more than the largest map (Kreuzer 2017
 // eq. 5.12: res = max over fragments of c / r_filter). Positive floats order like their bits, so
 // atomicMax on the bits is a float max. One global atomic per workgroup and counter; a workgroup
-// covers 64 x 64 pixels (the renderer dispatches ceil(width / 64) x ceil(height / 64) groups).
+// covers PCSS_REQUIREMENT_GROUP_PIXELS² pixels (the renderer dispatches that many fewer groups
+// per axis); the result's layout is the contract's PcssRequirementResult.
+#define PENUMBRA_PCSS_REQUIREMENT_RESULT
+#include "shadow_contract.h"
+
 layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(binding = 0) uniform sampler2D u_requirement;  // (1 / r_uv or 0, cascade + 0.5 if clamped)
-layout(std430, binding = 0) buffer Result {
-  uint max_inverse_uv[4];
-  uint evaluated[4];
-  uint clamped[4];
-  uint above_max[4];
-};
 uniform float u_limit_inverse_uv;  // max_texels / c: pixels above this are limited by the largest map
 
-shared uint s_max[4];
-shared uint s_evaluated[4];
-shared uint s_clamped[4];
-shared uint s_above[4];
+shared uint s_max[MAX_CASCADES];
+shared uint s_evaluated[MAX_CASCADES];
+shared uint s_clamped[MAX_CASCADES];
+shared uint s_above[MAX_CASCADES];
 
 // Each invocation reduces a BLOCK x BLOCK square of pixels in registers first, so that shared
 // atomics and workgroup barriers (costly on software GL) are paid per 16 pixels, not per pixel.
-const int BLOCK = 4;
+const int BLOCK = PCSS_REQUIREMENT_GROUP_PIXELS / 16;
 
 void main() {
   uint lane = gl_LocalInvocationIndex;
-  if (lane < 4u) {
+  if (lane < uint(MAX_CASCADES)) {
     s_max[lane] = 0u;
     s_evaluated[lane] = 0u;
     s_clamped[lane] = 0u;
     s_above[lane] = 0u;
   }
   barrier();
-  uint m[4] = uint[](0u, 0u, 0u, 0u), e[4] = uint[](0u, 0u, 0u, 0u);
-  uint c[4] = uint[](0u, 0u, 0u, 0u), a[4] = uint[](0u, 0u, 0u, 0u);
+  uint m[MAX_CASCADES], e[MAX_CASCADES], c[MAX_CASCADES], a[MAX_CASCADES];
+  for (int k = 0; k < MAX_CASCADES; ++k) m[k] = e[k] = c[k] = a[k] = 0u;
   ivec2 size = textureSize(u_requirement, 0);
   ivec2 origin = ivec2(gl_GlobalInvocationID.xy) * BLOCK;
   for (int y = 0; y < BLOCK; ++y)
@@ -43,13 +41,13 @@ void main() {
       if (any(greaterThanEqual(p, size))) continue;
       vec2 r = texelFetch(u_requirement, p, 0).rg;
       if (r.x <= 0.0) continue;
-      int k = clamp(int(r.y), 0, 3);
+      int k = clamp(int(r.y), 0, MAX_CASCADES - 1);
       m[k] = max(m[k], floatBitsToUint(r.x));
       e[k] += 1u;
       if (fract(r.y) > 0.25) c[k] += 1u;
       if (r.x > u_limit_inverse_uv) a[k] += 1u;
     }
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < MAX_CASCADES; ++k) {
     if (e[k] == 0u) continue;
     atomicMax(s_max[k], m[k]);
     atomicAdd(s_evaluated[k], e[k]);
@@ -57,7 +55,7 @@ void main() {
     atomicAdd(s_above[k], a[k]);
   }
   barrier();
-  if (lane < 4u && s_evaluated[lane] > 0u) {
+  if (lane < uint(MAX_CASCADES) && s_evaluated[lane] > 0u) {
     atomicMax(max_inverse_uv[lane], s_max[lane]);
     atomicAdd(evaluated[lane], s_evaluated[lane]);
     atomicAdd(clamped[lane], s_clamped[lane]);

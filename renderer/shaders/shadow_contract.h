@@ -28,10 +28,13 @@ using bool32 = std::uint32_t;
 #define PENUMBRA_CONSTANT(name, value) inline constexpr int name = value;
 #define PENUMBRA_ALIGN16 alignas(16)
 #define PENUMBRA_UNIFORM_BLOCK(name, binding_point) struct alignas(16) name
+#define PENUMBRA_STORAGE_BUFFER(name, binding_point) struct name
+using uint = std::uint32_t;
 #else
 #define PENUMBRA_CONSTANT(name, value) const int name = value;
 #define PENUMBRA_ALIGN16
 #define PENUMBRA_UNIFORM_BLOCK(name, binding_point) layout(std140, binding = binding_point) uniform name
+#define PENUMBRA_STORAGE_BUFFER(name, binding_point) layout(std430, binding = binding_point) buffer name
 #define bool32 bool
 #endif
 
@@ -88,7 +91,25 @@ PENUMBRA_UNIFORM_BLOCK(ShadowFrame, BLOCK_SHADOW_FRAME) {
   bool32 u_show_cascades;                     // tint by cascade (debug overlay)
 };
 
+// The PCSS requirement pass (pcss_requirement.comp) reduces the shading pass's per-pixel
+// requirement into this std430 buffer, read back a frame later (Renderer::render): per cascade the
+// largest 1 / r_uv (float bits: positive floats order like their bits) and pixel counts. One work
+// group covers PCSS_REQUIREMENT_GROUP_PIXELS² pixels (16 × 16 invocations of 4 × 4 pixels each).
+PENUMBRA_CONSTANT(BUFFER_PCSS_REQUIREMENT, 0)
+PENUMBRA_CONSTANT(PCSS_REQUIREMENT_GROUP_PIXELS, 64)
+// (GLSL declares the buffer only where PENUMBRA_PCSS_REQUIREMENT_RESULT is defined: a vertex
+// stage may have no storage blocks at all.)
+#if defined(__cplusplus) || defined(PENUMBRA_PCSS_REQUIREMENT_RESULT)
+PENUMBRA_STORAGE_BUFFER(PcssRequirementResult, BUFFER_PCSS_REQUIREMENT) {
+  uint max_inverse_uv[MAX_CASCADES];
+  uint evaluated[MAX_CASCADES];
+  uint clamped[MAX_CASCADES];
+  uint above_max[MAX_CASCADES];
+};
+#endif
+
 #ifdef __cplusplus
+static_assert(sizeof(PcssRequirementResult) == 4 * MAX_CASCADES * sizeof(std::uint32_t), "std430: four uint arrays, no padding");
 static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_cascade_res, ...)");
 }  // namespace penumbra::shadows::contract
 #else
@@ -97,5 +118,6 @@ static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_casca
 #undef PENUMBRA_CONSTANT
 #undef PENUMBRA_ALIGN16
 #undef PENUMBRA_UNIFORM_BLOCK
+#undef PENUMBRA_STORAGE_BUFFER
 
 #endif  // PENUMBRA_SHADOW_CONTRACT_H

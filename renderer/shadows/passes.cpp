@@ -461,16 +461,16 @@ class PcssRequirementPass final : public Pass {
     FrameResources::Requirement& q = r.requirement;
     const AdaptiveParams& ap = f.settings.adaptive;
     const int slot = q.frame % 2;
-    if (!q.buffer[slot].id()) q.buffer[slot] = gl::Buffer(16 * sizeof(std::uint32_t), nullptr, 0);
+    if (!q.buffer[slot].id()) q.buffer[slot] = gl::Buffer(sizeof(contract::PcssRequirementResult), nullptr, 0);
     const std::uint32_t zero = 0;
     glClearNamedBufferData(q.buffer[slot].id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     r.requirement_program.use();
     r.targets->requirement_tex.bind(0);
     glBindSampler(0, 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, q.buffer[slot].id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_PCSS_REQUIREMENT, q.buffer[slot].id());
     r.requirement_program.set("u_limit_inverse_uv", static_cast<float>(ap.max_texels) / ap.c);
-    // 64² pixels per group
-    glDispatchCompute(static_cast<GLuint>((f.plan.width_px + 63) / 64), static_cast<GLuint>((f.plan.height_px + 63) / 64), 1);
+    constexpr int group = contract::PCSS_REQUIREMENT_GROUP_PIXELS;  // pixels per side of a work group
+    glDispatchCompute(static_cast<GLuint>((f.plan.width_px + group - 1) / group), static_cast<GLuint>((f.plan.height_px + group - 1) / group), 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     q.pending[slot] = true;
     q.cascades[slot] = static_cast<int>(f.plan.cascades.size());

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "shaders/shadow_contract.h"
 #include "shadows/passes.h"
 #include "shadows/scoped_pass.h"
 #include "shadows/screen_space.h"
@@ -36,19 +37,19 @@ namespace {
 void read_back_requirement(FrameResources::Requirement& q, AdaptiveState& state) {
   const int other = 1 - q.frame % 2;
   if (!q.pending[other]) return;
-  std::uint32_t raw[16] = {};
-  glGetNamedBufferSubData(q.buffer[other].id(), 0, sizeof raw, raw);
+  contract::PcssRequirementResult raw{};
+  glGetNamedBufferSubData(q.buffer[other].id(), 0, sizeof raw, &raw);
   q.pending[other] = false;
   PcssRequirementInfo r;
   r.valid = true;
   double evaluated = 0, clamped = 0, above = 0;
   for (int i = 0; i < q.cascades[other]; ++i) {
     float max_inverse_uv = 0;
-    std::memcpy(&max_inverse_uv, &raw[i], sizeof max_inverse_uv);
+    std::memcpy(&max_inverse_uv, &raw.max_inverse_uv[i], sizeof max_inverse_uv);
     r.required_texels.push_back(static_cast<double>(q.c[other]) * max_inverse_uv);
-    evaluated += raw[4 + i];
-    clamped += raw[8 + i];
-    above += raw[12 + i];
+    evaluated += raw.evaluated[i];
+    clamped += raw.clamped[i];
+    above += raw.above_max[i];
   }
   r.evaluated_pixels = evaluated;
   r.clamped_fraction = evaluated > 0 ? clamped / evaluated : 0;
