@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "adaptive/calibration.h"
-#include "published.h"
+#include <penumbra/adaptive/calibration.h>
+#include <penumbra/published.h>
 
 namespace penumbra::adaptive {
 

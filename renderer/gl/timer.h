@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "gl/objects.h"
+#include <penumbra/gl/objects.h>
 
 namespace penumbra::gl {
 

@@ -6,7 +6,7 @@
 
 #include <glm/glm.hpp>
 
-#include "gl/objects.h"
+#include <penumbra/gl/objects.h>
 
 namespace penumbra::scene {
 

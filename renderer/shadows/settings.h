@@ -12,9 +12,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "published.h"
-#include "shadows/settings_table.h"
-#include "shadows/technique_list.h"
+#include <penumbra/published.h>
+#include <penumbra/shadows/settings_table.h>
+#include <penumbra/shadows/technique_list.h>
 
 namespace penumbra::shadows {
 

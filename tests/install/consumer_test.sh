@@ -2,10 +2,11 @@
 # ctest -L install: install.consumer (tests/install/CMakeLists.txt). What an engine developer does
 # with Penumbra, checked from outside the build tree:
 #   1. cmake --install of the build tree into a fresh prefix;
-#   2. every public header of the GL-free components (adaptive, psychometrics, study_log), with only
-#      the installed include directory, includes nothing but other installed headers and the C and
-#      C++ standard libraries, and compiles at the C++ standard its target asks for (17;
-#      psychometrics 20);
+#   2. include/ holds penumbra/ and nothing else, and every installed header includes its siblings
+#      as <penumbra/...> (no quoted includes); every public header of the GL-free components
+#      (adaptive, psychometrics, study_log), with include/ alone on the include path, includes
+#      nothing but other installed headers and the C and C++ standard libraries, and compiles at
+#      the C++ standard its target asks for (17; psychometrics 20);
 #   3. tests/install/consumer (and examples/engine_integration through it) configures with
 #      find_package(Penumbra CONFIG REQUIRED), checks what each target links, builds and runs;
 #   4. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
@@ -26,7 +27,21 @@ cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 include=$prefix/include
 [[ -f $include/penumbra/adaptive/resolution_rule.h ]] || fail "no adaptive/resolution_rule.h under $include/penumbra"
 
-step "GL-free public headers: what they include, and that they compile (installed include directory only)"
+step "include/: penumbra/ alone, its headers included as <penumbra/...>"
+# What an engine puts on its include path is include/: anything beside penumbra/ would land there
+# (a log/, gl/ or published.h of Penumbra's beside the engine's own).
+others=$(cd "$include" && find . -mindepth 1 -maxdepth 1 ! -name penumbra -printf '%P ')
+[[ -z $others ]] || fail "include/ holds more than penumbra/: $others"
+# A quoted include would find a sibling by its short name (the including file's directory first).
+quoted=$(grep -rn '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$include/penumbra" || true)
+[[ -z $quoted ]] || fail "installed headers include by a short name, not <penumbra/...>: $quoted"
+# Nor by an angle-bracket name of its own tree without the prefix (<adaptive/...>, <published.h>).
+names=$(cd "$include/penumbra" && { find . -mindepth 1 -maxdepth 1 -type d -printf '%P/\n'; find . -mindepth 1 -maxdepth 1 -type f -printf '%P>\n'; } |
+  sed 's/[.]/[.]/g' | paste -sd'|')
+short=$(grep -rnE "^[[:space:]]*#[[:space:]]*include[[:space:]]*<($names)" "$include/penumbra" || true)
+[[ -z $short ]] || fail "installed headers include a sibling without penumbra/: $short"
+
+step "GL-free public headers: what they include, and that they compile (include/ alone)"
 # What a header may reach: installed headers, libstdc++, GCC's own headers, libc.
 allowed="^($include/penumbra/|/usr/include/c\+\+/|/usr/include/[^/]*-linux-gnu/c\+\+/|/usr/lib/gcc/|/usr/include/[^/]+\.h$|/usr/include/[^/]*-linux-gnu/(bits|sys|gnu|asm)/|/usr/include/(linux|asm-generic)/)"
 headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h penumbra/adaptive/*.h penumbra/quest/*.h \
@@ -34,7 +49,7 @@ headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h pe
 for h in $headers; do
   echo "#include <$h>" >"$work/header.cpp"
   # The files it includes, one per line (-M: preprocessing only, so a header not installed fails here).
-  "$cxx" -std=c++20 -M -I"$include/penumbra" -I"$include" "$work/header.cpp" >"$work/header.d" ||
+  "$cxx" -std=c++20 -M -I"$include" "$work/header.cpp" >"$work/header.d" ||
     fail "$h includes a header that is not installed"
   # shellcheck disable=SC2046  # one word per file
   outside=$(realpath -m -- $(sed -e 's/^[^:]*://' -e 's/\\$//' "$work/header.d") | grep -v -e 'header.cpp$' | grep -Ev "$allowed" || true)
@@ -44,7 +59,7 @@ for h in $headers; do
   echo "#include <$h>" >>"$work/headers-$standard.cpp"
 done
 for standard in c++17 c++20; do
-  "$cxx" -std=$standard -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I"$include/penumbra" -I"$include" "$work/headers-$standard.cpp" ||
+  "$cxx" -std=$standard -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I"$include" "$work/headers-$standard.cpp" ||
     fail "the headers of $work/headers-$standard.cpp do not compile as $standard"
 done
 echo "$(wc -w <<<"$headers") headers"
