@@ -7,10 +7,12 @@
 #      (adaptive, psychometrics, study_log), with include/ alone on the include path, includes
 #      nothing but other installed headers and the C and C++ standard libraries, and compiles at
 #      the C++ standard its target asks for (17; psychometrics 20);
-#   3. tests/install/consumer (and examples/engine_integration through it) configures with
+#   3. a call to required_texels_ws with the light's extent and the filter radius swapped (or
+#      given as bare numbers) fails to compile, the right one compiles;
+#   4. tests/install/consumer (and examples/engine_integration through it) configures with
 #      find_package(Penumbra CONFIG REQUIRED), checks what each target links, builds and runs;
-#   4. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
-#   5. every installed tool prints its version, and its --help names the installed docs page; the
+#   5. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
+#   6. every installed tool prints its version, and its --help names the installed docs page; the
 #      installed tools find the installed calibration and study configs.
 # usage: consumer_test.sh BUILD_DIR SOURCE_DIR WORK_DIR CXX_COMPILER VERSION
 set -euo pipefail
@@ -63,6 +65,26 @@ for standard in c++17 c++20; do
     fail "the headers of $work/headers-$standard.cpp do not compile as $standard"
 done
 echo "$(wc -w <<<"$headers") headers"
+
+step "required_texels_ws: the light's extent and the filter radius cannot be swapped (try-compiles that must fail)"
+# Both are world-space lengths; the rule takes them as LightExtentWs and FilterRadiusWs, whose
+# constructors are explicit. Each call below must fail to compile; the first, in the right order,
+# must compile (so the others fail for their arguments, not for the setup).
+calls=("required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{0.05})"
+       "required_texels_ws(3.47, FilterRadiusWs{0.05}, LightExtentWs{20.0})"
+       "required_texels_ws(3.47, 0.05, 20.0)"
+       "required_texels_ws(3.47, {0.05}, {20.0})"
+       "required_texels_uv(3.47, 0.05)"
+       "required_texels_uv(3.47, FilterRadiusWs{0.05})")
+for i in "${!calls[@]}"; do
+  printf '#include <penumbra/adaptive/resolution_rule.h>\nusing namespace penumbra::adaptive;\ndouble f() { return %s; }\n' "${calls[i]}" >"$work/call-$i.cpp"
+  if "$cxx" -std=c++17 -fsyntax-only -I"$include" "$work/call-$i.cpp" 2>"$work/call-$i.log"; then
+    ((i == 0)) || fail "compiles, and must not (the rule's arguments can be swapped or given bare): ${calls[i]}"
+  else
+    ((i != 0)) || { cat "$work/call-$i.log"; fail "does not compile: ${calls[i]}"; }
+  fi
+done
+echo "$((${#calls[@]} - 1)) calls refused by the compiler: ${calls[*]:1}"
 
 step "find_package(Penumbra CONFIG REQUIRED): tests/install/consumer and examples/engine_integration"
 cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Release \
