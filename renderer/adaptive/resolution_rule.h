@@ -19,9 +19,14 @@
 
 namespace penumbra::adaptive {
 
+// The limits of the maps a renderer allocates: 32 to 4096 texels per side in steps of 32 by
+// default, the one set of defaults of Penumbra (shadows::AdaptiveParams, and so the tools'
+// adaptive.min_texels, max_texels and quantum_texels, take theirs from here). 4096² keeps a 32-bit
+// depth map at 64 MiB (a sub-rectangle atlas allocates max_texels² per cascade); an engine that
+// can afford larger maps raises max_texels, one that cannot lowers it.
 struct ResolutionLimits {
-  int min_texels = 16;
-  int max_texels = 8192;
+  int min_texels = 32;
+  int max_texels = 4096;
   int quantum_texels = 32;  // results are rounded *up* to a multiple of this (never below the rule)
 };
 
@@ -64,7 +69,7 @@ class ResolutionController {
  public:
   struct Params {
     ResolutionLimits limits;
-    int shrink_delay_frames = 30;
+    int shrink_delay_frames = 30;  // also the renderer's default (shadows::AdaptiveParams)
     double shrink_fraction = 0.8;
   };
   explicit ResolutionController(Params params);
