@@ -32,6 +32,20 @@ set(PENUMBRA_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/Penumbra)
 set(PENUMBRA_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/penumbra)
 set(PENUMBRA_BUILD_INCLUDEDIR ${PROJECT_BINARY_DIR}/include)  # its penumbra/: the public headers in the build
 
+# --- stripped: `cmake --install` as `cmake --install --strip` --------------------------------------
+#
+# The tools' debug information made an installed prefix of ~320 MB (bin/ 257 MB, lib/ 63 MB) for
+# ~26 MB of program (docs/install.md). Installed, they are stripped (CMake's own strip of each
+# installed executable, and of the static archives below: --strip-debug, keeping their symbols),
+# as `--strip` and the Debian package (CPACK_STRIP_FILES) always did. The first rule of the
+# install script (the subdirectories have none) sets CMAKE_INSTALL_DO_STRIP, which the later
+# rules read. A developer who wants an installed tool with its debug information configures with
+# -DPENUMBRA_INSTALL_STRIP=OFF (`--strip` and the package still strip then).
+option(PENUMBRA_INSTALL_STRIP "cmake --install strips the tools and libraries, with or without --strip" ON)
+if(PENUMBRA_INSTALL_STRIP)
+  install(CODE "set(CMAKE_INSTALL_DO_STRIP 1)  # PENUMBRA_INSTALL_STRIP (cmake/Install.cmake)" ALL_COMPONENTS)
+endif()
+
 # --- the tools, their data and the documentation ----------------------------------------------
 
 set(penumbra_tools penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-view
@@ -169,8 +183,8 @@ foreach(link IN LISTS links)
   endif()
 endforeach()
 
-# Static archives keep their debug information in `cmake --install`; `--strip` and the Debian
-# package (CPACK_STRIP_FILES) strip it, as CMake does for executables.
+# Static archives: CMake strips installed executables only; these lose their debug information
+# (not their symbols) when installing strips (above).
 install(CODE "
   if(CMAKE_INSTALL_DO_STRIP)
     file(GLOB archives \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/libpenumbra_*.a\")

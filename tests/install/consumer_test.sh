@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # ctest -L install: install.consumer (tests/install/CMakeLists.txt). What an engine developer does
 # with Penumbra, checked from outside the build tree:
-#   1. cmake --install of the build tree into a fresh prefix;
+#   1. cmake --install of the build tree into a fresh prefix, its tools and libraries stripped;
 #   2. include/ holds penumbra/ and nothing else, and every installed header includes its siblings
 #      as <penumbra/...> (no quoted includes); every public header of the GL-free components
 #      (adaptive, psychometrics, study_log), with include/ alone on the include path, includes
@@ -28,6 +28,18 @@ step "cmake --install $build --prefix $prefix"
 cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 include=$prefix/include
 [[ -f $include/penumbra/adaptive/resolution_rule.h ]] || fail "no adaptive/resolution_rule.h under $include/penumbra"
+
+step "installed stripped: no debug information in the tools or the libraries"
+# cmake --install strips without --strip (PENUMBRA_INSTALL_STRIP, cmake/Install.cmake), unless the
+# build was configured not to.
+if grep -q '^PENUMBRA_INSTALL_STRIP:BOOL=ON$' "$build/CMakeCache.txt"; then
+  for f in "$prefix"/bin/* "$prefix"/lib/libpenumbra_*.a; do
+    ! readelf -S --wide "$f" 2>/dev/null | grep -q '[[:space:]]\.debug_info[[:space:]]' || fail "$f keeps its debug information"
+  done
+  echo "$(ls "$prefix"/bin | wc -l) tools and $(ls "$prefix"/lib/libpenumbra_*.a | wc -l) libraries without .debug_info; the prefix: $(du -sk "$prefix" | cut -f1) KiB"
+else
+  echo "PENUMBRA_INSTALL_STRIP is off: not checked"
+fi
 
 step "include/: penumbra/ alone, its headers included as <penumbra/...>"
 # What an engine puts on its include path is include/: anything beside penumbra/ would land there
@@ -135,6 +147,6 @@ grep -q -- "--calibration TEXT:PATH=$prefix/share/penumbra/calibration/default.j
 help=$("$prefix/bin/penumbra-study" run --help)
 grep -q "shipped in $prefix/share/penumbra/studies: .*default" <<<"$help" ||
   fail "penumbra-study run --help does not list the installed study configs"
-# The prefix holds the tools with their debug information (~300 MB); kept only when a check failed.
+# The prefix is kept only when a check failed.
 rm -rf "$prefix"
 step "done"
