@@ -23,14 +23,28 @@
 # and the internal set `core` the others link (published, random, text, json_input, staged_dir):
 # installed as libraries, with headers only where a public header includes them.
 #
-# Headers are installed under include/penumbra with the paths the sources include them by
-# ("adaptive/resolution_rule.h"); the targets put include/penumbra and include on the include
-# path, so an engine may write <penumbra/adaptive/resolution_rule.h>.
+# Headers are installed under include/penumbra and included as <penumbra/adaptive/resolution_rule.h>,
+# by an engine and by each other; the targets put include/ alone on the include path (below).
 
 include(CMakePackageConfigHelpers)
 
 set(PENUMBRA_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/Penumbra)
 set(PENUMBRA_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/penumbra)
+set(PENUMBRA_BUILD_INCLUDEDIR ${PROJECT_BINARY_DIR}/include)  # its penumbra/: the public headers in the build
+
+# --- stripped: `cmake --install` as `cmake --install --strip` --------------------------------------
+#
+# The tools' debug information made an installed prefix of ~320 MB (bin/ 257 MB, lib/ 63 MB) for
+# ~26 MB of program (docs/install.md). Installed, they are stripped (CMake's own strip of each
+# installed executable, and of the static archives below: --strip-debug, keeping their symbols),
+# as `--strip` and the Debian package (CPACK_STRIP_FILES) always did. The first rule of the
+# install script (the subdirectories have none) sets CMAKE_INSTALL_DO_STRIP, which the later
+# rules read. A developer who wants an installed tool with its debug information configures with
+# -DPENUMBRA_INSTALL_STRIP=OFF (`--strip` and the package still strip then).
+option(PENUMBRA_INSTALL_STRIP "cmake --install strips the tools and libraries, with or without --strip" ON)
+if(PENUMBRA_INSTALL_STRIP)
+  install(CODE "set(CMAKE_INSTALL_DO_STRIP 1)  # PENUMBRA_INSTALL_STRIP (cmake/Install.cmake)" ALL_COMPONENTS)
+endif()
 
 # --- the tools, their data and the documentation ----------------------------------------------
 
@@ -84,53 +98,93 @@ foreach(set IN ITEMS core ${penumbra_components})
     endif()
     get_target_property(type ${target} TYPE)
     if(type STREQUAL "INTERFACE_LIBRARY")
-      target_compile_features(${target} INTERFACE ${standard})
+      set(scope INTERFACE)
     else()
-      target_compile_features(${target} PUBLIC ${standard})
+      set(scope PUBLIC)
     endif()
+    target_compile_features(${target} ${scope} ${standard})
+    # <penumbra/...> in the build: the public headers' tree below (installed: include/).
+    target_include_directories(${target} ${scope} $<BUILD_INTERFACE:${PENUMBRA_BUILD_INCLUDEDIR}>)
   endforeach()
   set(file_stem ${penumbra_export_file_${set}})
   install(TARGETS ${penumbra_export_${set}} EXPORT Penumbra${file_stem}
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT Development
-          INCLUDES DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR} ${CMAKE_INSTALL_INCLUDEDIR})
+          INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
   install(EXPORT Penumbra${file_stem} NAMESPACE Penumbra:: FILE Penumbra${file_stem}Targets.cmake
           DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR} COMPONENT Development)
 endforeach()
 
-# Public headers, by the path the sources include them with. A public header may include only
-# headers installed here (tests/install checks it with the installed include directory alone).
-function(penumbra_install_headers subdir)
+# --- public headers: include/penumbra/ when installed, build/include/penumbra/ in the build ----------
+#
+# A public header is included as <penumbra/adaptive/resolution_rule.h>, by an engine and by its
+# installed siblings alike; only include/ goes on the consumer's include path. The sources keep their
+# short includes ("adaptive/calibration.h", through the directories their targets already put on
+# the build's include path). penumbra_public_headers() installs each header under
+# include/penumbra/<subdir>/ and links it (a symbolic link to the source) into
+# build/include/penumbra/<subdir>/, which every exported target puts on the build's include path:
+# one list gives the installed tree and the build's, so what a public header includes resolves
+# alike in both, and only headers on this list can be reached as <penumbra/...>.
+# tests/install/consumer_test.sh checks the installed headers with include/ alone.
+set(penumbra_public_header_links "")
+function(penumbra_public_headers subdir)
   install(FILES ${ARGN} DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR}/${subdir} COMPONENT Development)
+  set(links ${penumbra_public_header_links})
+  foreach(header IN LISTS ARGN)
+    cmake_path(GET header FILENAME name)
+    cmake_path(APPEND PENUMBRA_BUILD_INCLUDEDIR penumbra ${subdir} ${name} OUTPUT_VARIABLE link)
+    if(link IN_LIST links)
+      message(FATAL_ERROR "penumbra: two public headers at ${link}")
+    endif()
+    list(APPEND links ${link})
+    if(IS_SYMLINK ${link})
+      file(READ_SYMLINK ${link} target)
+    else()
+      set(target "")
+    endif()
+    if(NOT target STREQUAL header)  # made once; a configure leaves it (and what depends on it) alone
+      cmake_path(GET link PARENT_PATH dir)
+      file(MAKE_DIRECTORY ${dir})
+      file(CREATE_LINK ${header} ${link} SYMBOLIC)
+    endif()
+  endforeach()
+  set(penumbra_public_header_links ${links} PARENT_SCOPE)
 endfunction()
-penumbra_install_headers("" ${PROJECT_SOURCE_DIR}/common/published.h)
-penumbra_install_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/random.h)
-penumbra_install_headers(psychometric ${PROJECT_SOURCE_DIR}/common/psychometric/psychometric.h)
+penumbra_public_headers("" ${PROJECT_SOURCE_DIR}/common/published.h)
+penumbra_public_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/random.h)
+penumbra_public_headers(psychometric ${PROJECT_SOURCE_DIR}/common/psychometric/psychometric.h)
 file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/adaptive/*.h)
-penumbra_install_headers(adaptive ${headers})
+penumbra_public_headers(adaptive ${headers})
 file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/study/quest/*.h)
-penumbra_install_headers(quest ${headers})
+penumbra_public_headers(quest ${headers})
 # observers/image_observer.h belongs to penumbra_study (GL), which is not installed.
-penumbra_install_headers(observers ${PROJECT_SOURCE_DIR}/study/observers/observer.h
-                         ${PROJECT_SOURCE_DIR}/study/observers/psychometric_observer.h
-                         ${PROJECT_SOURCE_DIR}/study/observers/staircase_simulation.h)
+penumbra_public_headers(observers ${PROJECT_SOURCE_DIR}/study/observers/observer.h
+                        ${PROJECT_SOURCE_DIR}/study/observers/psychometric_observer.h
+                        ${PROJECT_SOURCE_DIR}/study/observers/staircase_simulation.h)
 file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/study/log/*.h)
-penumbra_install_headers(log ${headers})
+penumbra_public_headers(log ${headers})
 # The renderer: everything its headers reach (gl/window.h is the GUI's, io/image_codec.h the
 # image backend's, neither installed).
-penumbra_install_headers(image ${PROJECT_SOURCE_DIR}/common/image/image.h)
-penumbra_install_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/poisson_disk.h)
+penumbra_public_headers(image ${PROJECT_SOURCE_DIR}/common/image/image.h)
+penumbra_public_headers(sampling ${PROJECT_SOURCE_DIR}/common/sampling/poisson_disk.h)
 foreach(h context embedded_files objects shader_library timer)
-  penumbra_install_headers(gl ${PROJECT_SOURCE_DIR}/renderer/gl/${h}.h)
+  penumbra_public_headers(gl ${PROJECT_SOURCE_DIR}/renderer/gl/${h}.h)
 endforeach()
-penumbra_install_headers(io ${PROJECT_SOURCE_DIR}/renderer/io/image_io.h ${PROJECT_SOURCE_DIR}/renderer/io/report.h)
-penumbra_install_headers(shaders ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h)
+penumbra_public_headers(io ${PROJECT_SOURCE_DIR}/renderer/io/image_io.h ${PROJECT_SOURCE_DIR}/renderer/io/report.h)
+penumbra_public_headers(shaders ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h)
 foreach(dir scene shadows shadows/techniques)
   file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/${dir}/*.h)
-  penumbra_install_headers(${dir} ${headers})
+  penumbra_public_headers(${dir} ${headers})
+endforeach()
+# A header no longer public (or renamed) leaves no link behind.
+file(GLOB_RECURSE links LIST_DIRECTORIES false ${PENUMBRA_BUILD_INCLUDEDIR}/*)
+foreach(link IN LISTS links)
+  if(NOT link IN_LIST penumbra_public_header_links)
+    file(REMOVE ${link})
+  endif()
 endforeach()
 
-# Static archives keep their debug information in `cmake --install`; `--strip` and the Debian
-# package (CPACK_STRIP_FILES) strip it, as CMake does for executables.
+# Static archives: CMake strips installed executables only; these lose their debug information
+# (not their symbols) when installing strips (above).
 install(CODE "
   if(CMAKE_INSTALL_DO_STRIP)
     file(GLOB archives \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/libpenumbra_*.a\")

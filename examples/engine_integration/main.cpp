@@ -75,7 +75,8 @@ int main(int argc, char** argv) {
       const std::vector<double> splits = adaptive::cascade_splits(f.near_ws, f.far_ws, n, kLambda);
       std::vector<double> texels;
       for (int i = 0; i < n; ++i)
-        texels.push_back(adaptive::required_texels_ws(c.c, light_extent_ws(f, splits[i], splits[i + 1]), f.filter_radius_ws));
+        texels.push_back(adaptive::required_texels_ws(c.c, adaptive::LightExtentWs{light_extent_ws(f, splits[i], splits[i + 1])},
+                                                  adaptive::FilterRadiusWs{f.filter_radius_ws}));
       return texels;
     };
     // 2. The fewest cascades whose every map fits the largest resolution (fits = false: even

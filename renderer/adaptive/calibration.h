@@ -20,7 +20,7 @@
 #include <string_view>
 #include <vector>
 
-#include "published.h"
+#include <penumbra/published.h>
 
 namespace penumbra::adaptive {
 

@@ -2,19 +2,39 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace penumbra::adaptive {
 
-double required_texels_uv(double c, double radius_uv) {
-  if (!(radius_uv > 0) || !std::isfinite(c)) return std::numeric_limits<double>::infinity();
-  return std::max(c, 0.0) / radius_uv;
+namespace {
+
+// The rule's inputs are lengths and a constant of the calibration: positive and finite, or the
+// call is refused with the parameter's name (a swapped or unset value would otherwise be clamped
+// into a plausible resolution).
+double positive_finite(const char* function, const char* parameter, double value) {
+  if (!(value > 0) || !std::isfinite(value)) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    throw std::invalid_argument(std::string(function) + ": " + parameter + " must be positive and finite, got " + text);
+  }
+  return value;
 }
 
-double required_texels_ws(double c, double light_extent_ws, double radius_ws) {
-  if (!(light_extent_ws > 0)) return 0;  // nothing to cover: the smallest map does
-  if (!(radius_ws > 0)) return std::numeric_limits<double>::infinity();
-  return required_texels_uv(c, radius_ws / light_extent_ws);
+}  // namespace
+
+double required_texels_uv(double c, FilterRadiusUv radius) {
+  const double c_texels = positive_finite("required_texels_uv", "c", c);
+  return c_texels / positive_finite("required_texels_uv", "radius_uv", radius.value);
+}
+
+double required_texels_ws(double c, LightExtentWs light_extent, FilterRadiusWs radius) {
+  const double c_texels = positive_finite("required_texels_ws", "c", c);
+  const double extent_ws = positive_finite("required_texels_ws", "light_extent_ws", light_extent.value);
+  const double radius_ws = positive_finite("required_texels_ws", "radius_ws", radius.value);
+  return c_texels / (radius_ws / extent_ws);  // c / r_uv; r_uv underflowing to 0 gives +inf
 }
 
 int clamp_resolution(double required, const ResolutionLimits& limits) {

@@ -14,25 +14,51 @@
 #include <string>
 #include <vector>
 
-#include "adaptive/calibration.h"
-#include "published.h"
+#include <penumbra/adaptive/calibration.h>
+#include <penumbra/published.h>
 
 namespace penumbra::adaptive {
 
+// The limits of the maps a renderer allocates: 32 to 4096 texels per side in steps of 32 by
+// default, the one set of defaults of Penumbra (shadows::AdaptiveParams, and so the tools'
+// adaptive.min_texels, max_texels and quantum_texels, take theirs from here). 4096² keeps a 32-bit
+// depth map at 64 MiB (a sub-rectangle atlas allocates max_texels² per cascade); an engine that
+// can afford larger maps raises max_texels, one that cannot lowers it.
 struct ResolutionLimits {
-  int min_texels = 16;
-  int max_texels = 8192;
+  int min_texels = 32;
+  int max_texels = 4096;
   int quantum_texels = 32;  // results are rounded *up* to a multiple of this (never below the rule)
 };
 
-// The rule before clamping and quantization, in texels per side: c / r_uv. Infinite for r_uv <= 0,
-// NaN never (NaN inputs give +inf, i.e. the maximum after clamping).
-double required_texels_uv(double c, double radius_uv);
-// c · L_ws / r_ws for a world-space radius over a light view plane of extent L_ws.
-double required_texels_ws(double c, double light_extent_ws, double radius_ws);
+// The lengths the rule takes, each a type of its own: a call names what it passes
+// (required_texels_ws(c, LightExtentWs{20.0}, FilterRadiusWs{0.05})), and the light's extent and
+// the filter radius, both world units, cannot be swapped or given as bare numbers (the
+// constructors are explicit). The rule throws std::invalid_argument, naming the parameter, for a
+// value that is not positive and finite.
+struct LightExtentWs {  // side of the light's view plane the map is spread over (fitted), world units
+  constexpr explicit LightExtentWs(double v) : value(v) {}
+  double value;
+};
+struct FilterRadiusWs {  // the shadow filter's radius, world units
+  constexpr explicit FilterRadiusWs(double v) : value(v) {}
+  double value;
+};
+struct FilterRadiusUv {  // the shadow filter's radius in shadow-map uv (a fraction of the map's side)
+  constexpr explicit FilterRadiusUv(double v) : value(v) {}
+  double value;
+};
+
+// The rule before clamping and quantization, in texels per side: c / r_uv. c (texels, from the
+// calibration) and the radius must be positive and finite: anything else throws
+// std::invalid_argument naming the parameter. The result is positive, and +inf only where the
+// quotient overflows (clamp_resolution gives max_texels then).
+double required_texels_uv(double c, FilterRadiusUv radius);
+// c · L_ws / r_ws for a world-space radius over a light view plane of extent L_ws; c, L_ws and
+// r_ws positive and finite, or std::invalid_argument naming the one that is not.
+double required_texels_ws(double c, LightExtentWs light_extent, FilterRadiusWs radius);
 
 // Clamped to [min, max] and rounded up to the quantum (then clamped again), always finite:
-// r → 0 or NaN gives max, r huge or L → 0 gives min.
+// +inf (r → 0) or NaN gives max, 0 or less (r huge, L → 0) gives min.
 int clamp_resolution(double required_texels, const ResolutionLimits& limits);
 
 // Rate limits resolution changes so edges do not wobble: grows at once to the (quantized)
@@ -43,7 +69,7 @@ class ResolutionController {
  public:
   struct Params {
     ResolutionLimits limits;
-    int shrink_delay_frames = 30;
+    int shrink_delay_frames = 30;  // also the renderer's default (shadows::AdaptiveParams)
     double shrink_fraction = 0.8;
   };
   explicit ResolutionController(Params params);

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "gl/objects.h"
+#include <penumbra/gl/objects.h>
 
 namespace penumbra::gl {
 

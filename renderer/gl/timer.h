@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "gl/objects.h"
+#include <penumbra/gl/objects.h>
 
 namespace penumbra::gl {
 

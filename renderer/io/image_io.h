@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "image/image.h"
+#include <penumbra/image/image.h>
 
 namespace penumbra::io {
 

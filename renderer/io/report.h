@@ -5,8 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gl/context.h"
-#include "gl/timer.h"
+#include <penumbra/gl/context.h>
+#include <penumbra/gl/timer.h>
 
 namespace penumbra::io {
 

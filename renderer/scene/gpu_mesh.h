@@ -2,8 +2,8 @@
 // The GPU copy of a CPU mesh (scene/mesh.h).
 #include <cstddef>
 
-#include "gl/objects.h"
-#include "scene/mesh.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/scene/mesh.h>
 
 namespace penumbra::scene {
 

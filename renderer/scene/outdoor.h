@@ -25,7 +25,7 @@
 // the renderer shades with the scene's one light.
 #include <cstdint>
 
-#include "scene/scene.h"
+#include <penumbra/scene/scene.h>
 
 namespace penumbra::scene {
 

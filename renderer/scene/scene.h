@@ -11,7 +11,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene/mesh.h"
+#include <penumbra/scene/mesh.h>
 
 namespace penumbra::scene {
 

@@ -3,8 +3,8 @@
 // points and the std140 ShadowFrame block, plus the check that a linked program agrees with it.
 #include <string_view>
 
-#include "gl/objects.h"
-#include "shaders/shadow_contract.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/shaders/shadow_contract.h>
 
 namespace penumbra::shadows {
 

@@ -4,8 +4,8 @@
 // then one per row; Meijster et al. 2000, the integer form of Felzenszwalb & Huttenlocher's
 // lower envelope). Ties between equidistant sites go to the one with the smaller column, then the
 // smaller row, but any equidistant site is a correct answer.
-#include "gl/objects.h"
-#include "gl/shader_library.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/gl/shader_library.h>
 
 namespace penumbra::shadows {
 

@@ -7,7 +7,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene/scene.h"
+#include <penumbra/scene/scene.h>
 
 namespace penumbra::shadows {
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "adaptive/cascades.h"
@@ -16,10 +17,23 @@ double uv_per_ws(const LightFrame& f) {
   return f.s_xy / (2.0 * std::max(f.far_ws, 1e-6f) * std::tan(glm::radians(f.fov_deg) / 2));
 }
 
-// The rule for one map: c / r_uv (directional: c · L / r_ws).
+// The rule for one map: c / r_uv (directional: c · L / r_ws). The rule takes positive, finite
+// lengths only; a frame has others by design: a technique without a shadow-map filter (radius 0:
+// hard, screen-space) asks for the largest map, a light window with no extent for the smallest.
 double rule_texels(float c, const LightFrame& f, float radius_ws) {
-  if (!f.perspective) return adaptive::required_texels_ws(c, f.extent_ws, radius_ws);
-  return adaptive::required_texels_uv(c, radius_ws * uv_per_ws(f));
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (!(c > 0) || !std::isfinite(c)) throw std::runtime_error("render: adaptive.c must be positive and finite");
+  if (!f.perspective && !(f.extent_ws > 0)) return 0;
+  if (!(radius_ws > 0)) return kInf;
+  if (!std::isfinite(radius_ws)) return 0;
+  if (!f.perspective) {
+    if (!std::isfinite(f.extent_ws)) return kInf;
+    return adaptive::required_texels_ws(c, adaptive::LightExtentWs{f.extent_ws}, adaptive::FilterRadiusWs{radius_ws});
+  }
+  const double radius_uv = radius_ws * uv_per_ws(f);
+  if (!(radius_uv > 0)) return kInf;
+  if (!std::isfinite(radius_uv)) return 0;
+  return adaptive::required_texels_uv(c, adaptive::FilterRadiusUv{radius_uv});
 }
 
 // The texels a map needs for texels no wider than adaptive.max_texel_ws; 0 without a ceiling.

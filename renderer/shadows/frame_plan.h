@@ -10,12 +10,12 @@
 
 #include <glm/glm.hpp>
 
-#include "adaptive/resolution_rule.h"
-#include "shaders/shadow_contract.h"
-#include "scene/scene.h"
-#include "shadows/fitting.h"
-#include "shadows/settings.h"
-#include "shadows/technique.h"
+#include <penumbra/adaptive/resolution_rule.h>
+#include <penumbra/shaders/shadow_contract.h>
+#include <penumbra/scene/scene.h>
+#include <penumbra/shadows/fitting.h>
+#include <penumbra/shadows/settings.h>
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -5,10 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gl/timer.h"
-#include "shadows/fitting.h"
-#include "shadows/renderer.h"
-#include "shadows/settings.h"
+#include <penumbra/gl/timer.h>
+#include <penumbra/shadows/fitting.h>
+#include <penumbra/shadows/renderer.h>
+#include <penumbra/shadows/settings.h>
 
 namespace penumbra::shadows {
 

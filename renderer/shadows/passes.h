@@ -18,13 +18,13 @@
 #include <string_view>
 #include <vector>
 
-#include "gl/objects.h"
-#include "gl/shader_library.h"
-#include "gl/timer.h"
-#include "scene/gpu_mesh.h"
-#include "scene/scene.h"
-#include "shadows/frame_plan.h"
-#include "shadows/screen_space.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/gl/shader_library.h>
+#include <penumbra/gl/timer.h>
+#include <penumbra/scene/gpu_mesh.h>
+#include <penumbra/scene/scene.h>
+#include <penumbra/shadows/frame_plan.h>
+#include <penumbra/shadows/screen_space.h>
 
 namespace penumbra::shadows {
 

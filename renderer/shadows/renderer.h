@@ -12,16 +12,16 @@
 #include <string>
 #include <vector>
 
-#include "gl/context.h"
-#include "gl/objects.h"
-#include "gl/shader_library.h"
-#include "gl/timer.h"
-#include "io/image_io.h"
-#include "scene/gpu_mesh.h"
-#include "scene/scene.h"
-#include "shadows/fitting.h"
-#include "shadows/frame_plan.h"
-#include "shadows/settings.h"
+#include <penumbra/gl/context.h>
+#include <penumbra/gl/objects.h>
+#include <penumbra/gl/shader_library.h>
+#include <penumbra/gl/timer.h>
+#include <penumbra/io/image_io.h>
+#include <penumbra/scene/gpu_mesh.h>
+#include <penumbra/scene/scene.h>
+#include <penumbra/shadows/fitting.h>
+#include <penumbra/shadows/frame_plan.h>
+#include <penumbra/shadows/settings.h>
 
 namespace penumbra::shadows {
 

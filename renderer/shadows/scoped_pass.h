@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "gl/timer.h"
+#include <penumbra/gl/timer.h>
 
 namespace penumbra::shadows {
 

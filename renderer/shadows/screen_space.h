@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "gl/objects.h"
-#include "gl/shader_library.h"
-#include "gl/timer.h"
-#include "shadows/edt.h"
-#include "shadows/settings.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/gl/shader_library.h>
+#include <penumbra/gl/timer.h>
+#include <penumbra/shadows/edt.h>
+#include <penumbra/shadows/settings.h>
 
 namespace penumbra::shadows {
 

@@ -12,9 +12,10 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "published.h"
-#include "shadows/settings_table.h"
-#include "shadows/technique_list.h"
+#include <penumbra/adaptive/resolution_rule.h>
+#include <penumbra/published.h>
+#include <penumbra/shadows/settings_table.h>
+#include <penumbra/shadows/technique_list.h>
 
 namespace penumbra::shadows {
 
@@ -57,10 +58,13 @@ struct AdaptiveParams {
   // texel (adaptive::c_at_visibility: about 1.9 c at F 0.10 with slope 3.5). Used when c comes from
   // the calibration file; an explicit --adaptive.c is taken as it is.
   float visibility = 0;
-  int min_texels = 32;
-  int max_texels = 4096;
-  int quantum_texels = 32;
-  int shrink_delay_frames = 30;       // frames a smaller requirement must hold before shrinking
+  // The limits and the hysteresis delay default to the library's (adaptive/resolution_rule.h):
+  // one set of defaults for the tools and for an engine linking Penumbra::adaptive.
+  int min_texels = adaptive::ResolutionLimits{}.min_texels;          // 32
+  int max_texels = adaptive::ResolutionLimits{}.max_texels;          // 4096
+  int quantum_texels = adaptive::ResolutionLimits{}.quantum_texels;  // 32
+  // 30: frames a smaller requirement must hold before shrinking
+  int shrink_delay_frames = adaptive::ResolutionController::Params{}.shrink_delay_frames;
   // The coarsest texel allowed, world units; 0 = the rule alone. The rule is measured on edges: a
   // caster narrower than a texel covers some texel centres and misses others, and its shadow
   // breaks up whatever the filter. Set it to the thinnest caster that must keep its shadow (the

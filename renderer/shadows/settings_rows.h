@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string_view>
 
-#include "shadows/settings_table.h"
+#include <penumbra/shadows/settings_table.h>
 
 namespace penumbra::shadows::rows {
 

@@ -12,8 +12,8 @@
 #include <string_view>
 #include <vector>
 
-#include "shadows/moments.h"
-#include "shadows/settings_table.h"
+#include <penumbra/shadows/moments.h>
+#include <penumbra/shadows/settings_table.h>
 
 namespace penumbra::gl {
 class Program;

@@ -3,18 +3,18 @@
 // choices and reports. Adding a technique is one line here and one techniques/<name>.{h,cpp}
 // (its parameters, table and registry entry) plus one shaders/shadow_<name>.glsl; see
 // docs/renderer.md, "Adding a technique".
-#include "shadows/techniques/edtsm.h"
-#include "shadows/techniques/edtssm.h"
-#include "shadows/techniques/erosion.h"
-#include "shadows/techniques/esm.h"
-#include "shadows/techniques/evsm.h"
-#include "shadows/techniques/hard.h"
-#include "shadows/techniques/msm.h"
-#include "shadows/techniques/pcf.h"
-#include "shadows/techniques/pcss.h"
-#include "shadows/techniques/rbsm.h"
-#include "shadows/techniques/rpcf.h"
-#include "shadows/techniques/vsm.h"
+#include <penumbra/shadows/techniques/edtsm.h>
+#include <penumbra/shadows/techniques/edtssm.h>
+#include <penumbra/shadows/techniques/erosion.h>
+#include <penumbra/shadows/techniques/esm.h>
+#include <penumbra/shadows/techniques/evsm.h>
+#include <penumbra/shadows/techniques/hard.h>
+#include <penumbra/shadows/techniques/msm.h>
+#include <penumbra/shadows/techniques/pcf.h>
+#include <penumbra/shadows/techniques/pcss.h>
+#include <penumbra/shadows/techniques/rbsm.h>
+#include <penumbra/shadows/techniques/rpcf.h>
+#include <penumbra/shadows/techniques/vsm.h>
 
 #define PENUMBRA_TECHNIQUES(X) \
   X(hard, NoParams)            \

@@ -10,10 +10,10 @@
 #include <map>
 #include <string>
 
-#include "observers/observer.h"
-#include "published.h"
-#include "psychometric/psychometric.h"
-#include "sampling/random.h"
+#include <penumbra/observers/observer.h>
+#include <penumbra/published.h>
+#include <penumbra/psychometric/psychometric.h>
+#include <penumbra/sampling/random.h>
 
 namespace penumbra::observers {
 

@@ -9,9 +9,9 @@
 #include <string_view>
 #include <vector>
 
-#include "observers/observer.h"
-#include "observers/psychometric_observer.h"
-#include "quest/quest.h"
+#include <penumbra/observers/observer.h>
+#include <penumbra/observers/psychometric_observer.h>
+#include <penumbra/quest/quest.h>
 
 namespace penumbra::observers {
 

@@ -1,15 +1,18 @@
 #!/usr/bin/env bash
 # ctest -L install: install.consumer (tests/install/CMakeLists.txt). What an engine developer does
 # with Penumbra, checked from outside the build tree:
-#   1. cmake --install of the build tree into a fresh prefix;
-#   2. every public header of the GL-free components (adaptive, psychometrics, study_log), with only
-#      the installed include directory, includes nothing but other installed headers and the C and
-#      C++ standard libraries, and compiles at the C++ standard its target asks for (17;
-#      psychometrics 20);
-#   3. tests/install/consumer (and examples/engine_integration through it) configures with
+#   1. cmake --install of the build tree into a fresh prefix, its tools and libraries stripped;
+#   2. include/ holds penumbra/ and nothing else, and every installed header includes its siblings
+#      as <penumbra/...> (no quoted includes); every public header of the GL-free components
+#      (adaptive, psychometrics, study_log), with include/ alone on the include path, includes
+#      nothing but other installed headers and the C and C++ standard libraries, and compiles at
+#      the C++ standard its target asks for (17; psychometrics 20);
+#   3. a call to required_texels_ws with the light's extent and the filter radius swapped (or
+#      given as bare numbers) fails to compile, the right one compiles;
+#   4. tests/install/consumer (and examples/engine_integration through it) configures with
 #      find_package(Penumbra CONFIG REQUIRED), checks what each target links, builds and runs;
-#   4. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
-#   5. every installed tool prints its version, and its --help names the installed docs page; the
+#   5. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
+#   6. every installed tool prints its version, and its --help names the installed docs page; the
 #      installed tools find the installed calibration and study configs.
 # usage: consumer_test.sh BUILD_DIR SOURCE_DIR WORK_DIR CXX_COMPILER VERSION
 set -euo pipefail
@@ -26,7 +29,33 @@ cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 include=$prefix/include
 [[ -f $include/penumbra/adaptive/resolution_rule.h ]] || fail "no adaptive/resolution_rule.h under $include/penumbra"
 
-step "GL-free public headers: what they include, and that they compile (installed include directory only)"
+step "installed stripped: no debug information in the tools or the libraries"
+# cmake --install strips without --strip (PENUMBRA_INSTALL_STRIP, cmake/Install.cmake), unless the
+# build was configured not to.
+if grep -q '^PENUMBRA_INSTALL_STRIP:BOOL=ON$' "$build/CMakeCache.txt"; then
+  for f in "$prefix"/bin/* "$prefix"/lib/libpenumbra_*.a; do
+    ! readelf -S --wide "$f" 2>/dev/null | grep -q '[[:space:]]\.debug_info[[:space:]]' || fail "$f keeps its debug information"
+  done
+  echo "$(ls "$prefix"/bin | wc -l) tools and $(ls "$prefix"/lib/libpenumbra_*.a | wc -l) libraries without .debug_info; the prefix: $(du -sk "$prefix" | cut -f1) KiB"
+else
+  echo "PENUMBRA_INSTALL_STRIP is off: not checked"
+fi
+
+step "include/: penumbra/ alone, its headers included as <penumbra/...>"
+# What an engine puts on its include path is include/: anything beside penumbra/ would land there
+# (a log/, gl/ or published.h of Penumbra's beside the engine's own).
+others=$(cd "$include" && find . -mindepth 1 -maxdepth 1 ! -name penumbra -printf '%P ')
+[[ -z $others ]] || fail "include/ holds more than penumbra/: $others"
+# A quoted include would find a sibling by its short name (the including file's directory first).
+quoted=$(grep -rn '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$include/penumbra" || true)
+[[ -z $quoted ]] || fail "installed headers include by a short name, not <penumbra/...>: $quoted"
+# Nor by an angle-bracket name of its own tree without the prefix (<adaptive/...>, <published.h>).
+names=$(cd "$include/penumbra" && { find . -mindepth 1 -maxdepth 1 -type d -printf '%P/\n'; find . -mindepth 1 -maxdepth 1 -type f -printf '%P>\n'; } |
+  sed 's/[.]/[.]/g' | paste -sd'|')
+short=$(grep -rnE "^[[:space:]]*#[[:space:]]*include[[:space:]]*<($names)" "$include/penumbra" || true)
+[[ -z $short ]] || fail "installed headers include a sibling without penumbra/: $short"
+
+step "GL-free public headers: what they include, and that they compile (include/ alone)"
 # What a header may reach: installed headers, libstdc++, GCC's own headers, libc.
 allowed="^($include/penumbra/|/usr/include/c\+\+/|/usr/include/[^/]*-linux-gnu/c\+\+/|/usr/lib/gcc/|/usr/include/[^/]+\.h$|/usr/include/[^/]*-linux-gnu/(bits|sys|gnu|asm)/|/usr/include/(linux|asm-generic)/)"
 headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h penumbra/adaptive/*.h penumbra/quest/*.h \
@@ -34,7 +63,7 @@ headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h pe
 for h in $headers; do
   echo "#include <$h>" >"$work/header.cpp"
   # The files it includes, one per line (-M: preprocessing only, so a header not installed fails here).
-  "$cxx" -std=c++20 -M -I"$include/penumbra" -I"$include" "$work/header.cpp" >"$work/header.d" ||
+  "$cxx" -std=c++20 -M -I"$include" "$work/header.cpp" >"$work/header.d" ||
     fail "$h includes a header that is not installed"
   # shellcheck disable=SC2046  # one word per file
   outside=$(realpath -m -- $(sed -e 's/^[^:]*://' -e 's/\\$//' "$work/header.d") | grep -v -e 'header.cpp$' | grep -Ev "$allowed" || true)
@@ -44,10 +73,30 @@ for h in $headers; do
   echo "#include <$h>" >>"$work/headers-$standard.cpp"
 done
 for standard in c++17 c++20; do
-  "$cxx" -std=$standard -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I"$include/penumbra" -I"$include" "$work/headers-$standard.cpp" ||
+  "$cxx" -std=$standard -Wall -Wextra -Wpedantic -Werror -fsyntax-only -I"$include" "$work/headers-$standard.cpp" ||
     fail "the headers of $work/headers-$standard.cpp do not compile as $standard"
 done
 echo "$(wc -w <<<"$headers") headers"
+
+step "required_texels_ws: the light's extent and the filter radius cannot be swapped (try-compiles that must fail)"
+# Both are world-space lengths; the rule takes them as LightExtentWs and FilterRadiusWs, whose
+# constructors are explicit. Each call below must fail to compile; the first, in the right order,
+# must compile (so the others fail for their arguments, not for the setup).
+calls=("required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{0.05})"
+       "required_texels_ws(3.47, FilterRadiusWs{0.05}, LightExtentWs{20.0})"
+       "required_texels_ws(3.47, 0.05, 20.0)"
+       "required_texels_ws(3.47, {0.05}, {20.0})"
+       "required_texels_uv(3.47, 0.05)"
+       "required_texels_uv(3.47, FilterRadiusWs{0.05})")
+for i in "${!calls[@]}"; do
+  printf '#include <penumbra/adaptive/resolution_rule.h>\nusing namespace penumbra::adaptive;\ndouble f() { return %s; }\n' "${calls[i]}" >"$work/call-$i.cpp"
+  if "$cxx" -std=c++17 -fsyntax-only -I"$include" "$work/call-$i.cpp" 2>"$work/call-$i.log"; then
+    ((i == 0)) || fail "compiles, and must not (the rule's arguments can be swapped or given bare): ${calls[i]}"
+  else
+    ((i != 0)) || { cat "$work/call-$i.log"; fail "does not compile: ${calls[i]}"; }
+  fi
+done
+echo "$((${#calls[@]} - 1)) calls refused by the compiler: ${calls[*]:1}"
 
 step "find_package(Penumbra CONFIG REQUIRED): tests/install/consumer and examples/engine_integration"
 cmake -S "$source/tests/install/consumer" -B "$work/consumer" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Release \
@@ -98,6 +147,6 @@ grep -q -- "--calibration TEXT:PATH=$prefix/share/penumbra/calibration/default.j
 help=$("$prefix/bin/penumbra-study" run --help)
 grep -q "shipped in $prefix/share/penumbra/studies: .*default" <<<"$help" ||
   fail "penumbra-study run --help does not list the installed study configs"
-# The prefix holds the tools with their debug information (~300 MB); kept only when a check failed.
+# The prefix is kept only when a check failed.
 rm -rf "$prefix"
 step "done"

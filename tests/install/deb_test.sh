@@ -2,7 +2,8 @@
 # ctest -L install: install.deb (tests/install/CMakeLists.txt). The Debian package as a user gets it:
 #   1. cpack -G DEB builds it (stripped, Depends from dpkg-shlibdeps);
 #   2. its Depends name the shared libraries the tools link; dpkg-deb -c lists the tools, the
-#      headers, the CMake and pkg-config files, the data and the docs;
+#      headers (under /usr/include/penumbra/ and nowhere else in /usr/include), the CMake and
+#      pkg-config files, the data and the docs;
 #   3. unpacked into a scratch root (dpkg -x, no installation), the tools run from there and use the
 #      data unpacked beside them: penumbra-render's default calibration, penumbra-study's shipped
 #      study configs;
@@ -39,6 +40,8 @@ for f in ./usr/bin/penumbra-render ./usr/bin/penumbra-study ./usr/bin/penumbra-f
          ./usr/share/doc/penumbra/examples/engine_integration/main.cpp; do
   grep -qx -- "$f" "$work/contents.txt" || fail "the package has no $f"
 done
+others=$(grep '^\./usr/include/.' "$work/contents.txt" | grep -v '^\./usr/include/penumbra/' || true)
+[[ -z $others ]] || fail "the package puts more than penumbra/ into /usr/include: $others"
 awk -F/ 'NF > 2 && $NF != "" {print "  " $2 "/" $3 "/" $4}' "$work/contents.txt" | sort | uniq -c
 
 step "dpkg -x into $work/root: the tools and the data unpacked beside them"

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "adaptive/cascades.h"
 #include "adaptive/resolution_rule.h"
@@ -15,30 +17,64 @@ namespace {
 
 TEST(ResolutionRule, PublishedConstantGivesTheThesisResolutions) {
   // r = c·a: a radius of 3.47 texels of a 1024 map hides that map's staircase exactly.
-  EXPECT_DOUBLE_EQ(required_texels_uv(3.47, 3.47 / 1024.0), 1024.0);
+  EXPECT_DOUBLE_EQ(required_texels_uv(3.47, FilterRadiusUv{3.47 / 1024.0}), 1024.0);
   // World space: a 0.1-unit radius over a 20-unit view plane needs c · 200 texels.
-  EXPECT_NEAR(required_texels_ws(3.47, 20.0, 0.1), 694.0, 1e-9);
+  EXPECT_NEAR(required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{0.1}), 694.0, 1e-9);
   // Doubling the radius halves the resolution.
-  EXPECT_DOUBLE_EQ(required_texels_ws(3.47, 20.0, 0.2), required_texels_ws(3.47, 20.0, 0.1) / 2);
+  EXPECT_DOUBLE_EQ(required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{0.2}),
+                   required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{0.1}) / 2);
 }
 
 TEST(ResolutionRule, ExtremesAreClampedAndFinite) {
   const ResolutionLimits lim{16, 8192, 32};
   const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
-  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, 0.0), lim), 8192);     // r → 0
-  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, 1e-300), lim), 8192);
-  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, -1.0), lim), 8192);    // invalid radius: be safe, not small
-  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, nan), lim), 8192);
-  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, 1e300), lim), 16);    // r huge
-  EXPECT_EQ(clamp_resolution(required_texels_ws(3.47, 0.0, 0.1), lim), 16);   // L → 0
-  EXPECT_EQ(clamp_resolution(required_texels_ws(3.47, 1e-30, 0.1), lim), 16);
-  EXPECT_EQ(clamp_resolution(required_texels_ws(3.47, inf, 0.1), lim), 8192);
+  // Not lengths (r = 0, r < 0, NaN, L = 0, L = inf): refused by the rule, which used to clamp them
+  // (to max, max, max, min, max); ResolutionRule.RefusesWhatIsNotAPositiveFiniteLength.
+  EXPECT_THROW(required_texels_uv(3.47, FilterRadiusUv{0.0}), std::invalid_argument);
+  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, FilterRadiusUv{1e-300}), lim), 8192);  // r → 0
+  EXPECT_THROW(required_texels_uv(3.47, FilterRadiusUv{-1.0}), std::invalid_argument);
+  EXPECT_THROW(required_texels_uv(3.47, FilterRadiusUv{nan}), std::invalid_argument);
+  EXPECT_EQ(clamp_resolution(required_texels_uv(3.47, FilterRadiusUv{1e300}), lim), 16);    // r huge
+  EXPECT_THROW(required_texels_ws(3.47, LightExtentWs{0.0}, FilterRadiusWs{0.1}), std::invalid_argument);
+  EXPECT_EQ(clamp_resolution(required_texels_ws(3.47, LightExtentWs{1e-30}, FilterRadiusWs{0.1}), lim), 16);  // L → 0
+  EXPECT_THROW(required_texels_ws(3.47, LightExtentWs{inf}, FilterRadiusWs{0.1}), std::invalid_argument);
+  EXPECT_EQ(clamp_resolution(required_texels_ws(3.47, LightExtentWs{1e300}, FilterRadiusWs{1e-300}), lim), 8192);  // r_uv underflows
   EXPECT_EQ(clamp_resolution(inf, lim), 8192);
   EXPECT_EQ(clamp_resolution(-inf, lim), 16);
   EXPECT_EQ(clamp_resolution(nan, lim), 8192);
   // Degenerate limits still give a positive size.
   EXPECT_EQ(clamp_resolution(100, {0, 0, 0}), 1);
   EXPECT_EQ(clamp_resolution(100, {64, 32, 7}), 64);  // max below min: min wins
+}
+
+// Each parameter of the rule, given 0, a negative, NaN or infinity, is refused by name: a value
+// swapped or never set must not come back as a plausible resolution.
+TEST(ResolutionRule, RefusesWhatIsNotAPositiveFiniteLength) {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  auto message = [](auto&& call) -> std::string {
+    try {
+      call();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "(no exception)";
+  };
+  auto starts_with = [](const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; };
+  for (const double bad : {0.0, -0.0, -1.0, nan, inf, -inf}) {
+    SCOPED_TRACE(bad);
+    EXPECT_PRED2(starts_with, message([&] { required_texels_ws(bad, LightExtentWs{20.0}, FilterRadiusWs{0.1}); }),
+                 "required_texels_ws: c must be positive and finite, got ");
+    EXPECT_PRED2(starts_with, message([&] { required_texels_ws(3.47, LightExtentWs{bad}, FilterRadiusWs{0.1}); }),
+                 "required_texels_ws: light_extent_ws must be positive and finite, got ");
+    EXPECT_PRED2(starts_with, message([&] { required_texels_ws(3.47, LightExtentWs{20.0}, FilterRadiusWs{bad}); }),
+                 "required_texels_ws: radius_ws must be positive and finite, got ");
+    EXPECT_PRED2(starts_with, message([&] { required_texels_uv(bad, FilterRadiusUv{0.01}); }),
+                 "required_texels_uv: c must be positive and finite, got ");
+    EXPECT_PRED2(starts_with, message([&] { required_texels_uv(3.47, FilterRadiusUv{bad}); }),
+                 "required_texels_uv: radius_uv must be positive and finite, got ");
+  }
+  EXPECT_EQ(message([] { required_texels_ws(3.47, LightExtentWs{0.05}, FilterRadiusWs{-20}); }),
+            "required_texels_ws: radius_ws must be positive and finite, got -20");
 }
 
 TEST(ResolutionRule, QuantizationRoundsUpSoTheRuleStillHolds) {

@@ -158,7 +158,8 @@ TEST(FramePlan, RuleGivesCTimesExtentOverRadius) {
   const FramePlan p = plan(s);
   ASSERT_EQ(p.cascades.size(), 1u);
   EXPECT_EQ(p.resolution_source, "rule");
-  const double expected = adaptive::required_texels_ws(s.adaptive.c, p.cascades[0].light.extent_ws, 0.05);
+  const double expected = adaptive::required_texels_ws(s.adaptive.c, adaptive::LightExtentWs{p.cascades[0].light.extent_ws},
+                                                      adaptive::FilterRadiusWs{0.05});
   // The requirement comes from the frame at the previous resolution (here: max_texels), so the
   // extent differs by the texel-sized padding only.
   EXPECT_NEAR(p.cascades[0].required_texels, expected, 0.01 * expected);

@@ -207,6 +207,19 @@ TEST(Settings, DefaultsLieWithinTheirRanges) {
   for_every_table([](auto& params) { check_defaults_in_range<std::decay_t<decltype(params)>>(); });
 }
 
+// One set of defaults (issue 28): the tools' adaptive limits are the library's ResolutionLimits.
+TEST(Settings, AdaptiveDefaultsAreTheLibrarys) {
+  const AdaptiveParams tools;
+  const penumbra::adaptive::ResolutionLimits library;
+  EXPECT_EQ(tools.min_texels, library.min_texels);
+  EXPECT_EQ(tools.max_texels, library.max_texels);
+  EXPECT_EQ(tools.quantum_texels, library.quantum_texels);
+  EXPECT_EQ(tools.shrink_delay_frames, penumbra::adaptive::ResolutionController::Params{}.shrink_delay_frames);
+  EXPECT_EQ(library.min_texels, 32);  // docs/adaptive.md and docs/install.md give these numbers
+  EXPECT_EQ(library.max_texels, 4096);
+  EXPECT_EQ(library.quantum_texels, 32);
+}
+
 TEST(Settings, SetFromStringAcceptsValuesInRange) {
   for_every_table([](auto& params) { check_accepts_valid<std::decay_t<decltype(params)>>(); });
 }

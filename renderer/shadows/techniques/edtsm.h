@@ -4,7 +4,7 @@
 // G-buffer positions) -> edge-aware mean filter. Eye-depth differences are relative
 // (|z_a - z_b| / min(z_a, z_b)) so one threshold serves every scene scale. Choices not fixed by the
 // paper: docs/alternatives.md.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -2,7 +2,7 @@
 // EDT soft shadows (Macedo & Apolinario 2017), screen space: PCSS blocker search at silhouette
 // pixels only -> w_p = w_light (z_R - z_avg) / z_avg -> EDT propagates w_p -> alpha = 1/2 -+ d / (beta w_p)
 // -> mean filter.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

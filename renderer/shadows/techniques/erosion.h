@@ -2,7 +2,7 @@
 // Contact-hardening soft shadows by erosion (Klein, Nischwitz & Obermeier 2012), screen space:
 // hard shadows -> 4-neighbour Laplacian edges with their penumbra width -> min-max mip-map erosion
 // -> PCF scaled by the eroded width.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -5,7 +5,7 @@
 // linear depth z, box-blurred like VSM, and a receiver at depth d reads
 // clamp(E[exp(c z)] exp(-c d), 0, 1) (shaders/shadow_esm.glsl). The clamp is the paper's: a
 // receiver in front of its filtered occluders (d < z, non-planar receivers) would exceed 1.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -5,7 +5,7 @@
 // (shaders/shadow_evsm.glsl).
 #include <glm/glm.hpp>
 
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -1,6 +1,6 @@
 #pragma once
 // Hard shadows: one nearest-texel depth comparison (shaders/shadow_hard.glsl). No parameters.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

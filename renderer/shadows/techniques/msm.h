@@ -3,7 +3,7 @@
 // light-space depth z in [-1, 1], box-blurred like VSM, evaluated with the Hamburger 4MSM bound
 // (shaders/shadow_msm.glsl). Stored as plain RGBA32F (no 16-bit quantization); see
 // docs/alternatives.md for the choice of bias.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

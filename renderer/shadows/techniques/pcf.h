@@ -2,7 +2,7 @@
 // Percentage-closer filtering (Reeves et al. 1987): the mean of the depth test over a fixed
 // box of whole texels (grid, coverage-weighted), a rotated Poisson disk, or the exact disk of whole
 // texels (disk, coverage-weighted: the ideal filter the perception studies use) (shaders/shadow_pcf.glsl).
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

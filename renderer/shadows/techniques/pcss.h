@@ -1,7 +1,7 @@
 #pragma once
 // Percentage-closer soft shadows (Fernando 2005): blocker search, penumbra estimate from the
 // light size, PCF of that radius (shaders/shadow_pcss.glsl).
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -5,7 +5,7 @@
 //   float shadow_rbsm(vec3 sc, vec2 gradient)   revectorized hard visibility, 0 or 1
 // so that screen-space techniques can start from RBSM's hard shadow. Procedure and the choices
 // the paper leaves open: docs/alternatives.md.
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::gl {
 class Program;

@@ -1,7 +1,7 @@
 #pragma once
 // RPCF: the box PCF of the revectorized hard shadow (rbsm.h), each texel under the box
 // integrated exactly (shaders/shadow_rbsm.glsl).
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

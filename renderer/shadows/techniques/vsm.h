@@ -1,7 +1,7 @@
 #pragma once
 // Variance shadow maps (Donnelly & Lauritzen 2006): box-blurred moments (t, t²) of linear depth
 // and Chebyshev's bound (shaders/shadow_vsm.glsl).
-#include "shadows/technique.h"
+#include <penumbra/shadows/technique.h>
 
 namespace penumbra::shadows {
 

@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
 
   // A PCF radius of 0.05 world units over a 20-unit light window: 3.47 · 20 / 0.05 = 1388 texels,
   // rounded up to a multiple of 32: 1408.
-  const double required = required_texels_ws(c.c, 20.0, 0.05);
+  const double required = required_texels_ws(c.c, LightExtentWs{20.0}, FilterRadiusWs{0.05});
   if (!check(std::abs(required - 1388.0) < 1e-9, "required_texels_ws(3.47, 20, 0.05)", required)) return 1;
   const ResolutionLimits limits{16, 8192, 32};
   const int resolution = clamp_resolution(required, limits);
