@@ -191,9 +191,12 @@ shadows::ShadowSettings stimulus_settings(const StimulusSpec& spec, int map_texe
   }
   const TechniqueEntry& entry = technique_entry(s.technique);
   if (!entry.set_filter_radius) {
-    std::string with;  // from the registry: every technique whose radius a trial can set
+    std::vector<std::string> names;  // from the registry: every technique whose radius a trial can set
     for (const auto name : technique_names())
-      if (technique_entry(technique_from_string(name)).set_filter_radius) with += (with.empty() ? "" : ", ") + std::string(name);
+      if (technique_entry(technique_from_string(name)).set_filter_radius) names.emplace_back(name);
+    std::string with;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      with += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
     refuse_setting("technique", "'" + spec.technique + "' has no fixed filter radius for the trial to set (" + with + " have)");
   }
   s.pcf.rotate = false;          // one tap pattern for every pixel (a rotated one is noise)

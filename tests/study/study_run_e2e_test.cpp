@@ -350,7 +350,7 @@ TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   EXPECT_FALSE(fs::exists(fresh("never")));
   // The stimulus technique is checked against the renderer's tables before the directory exists.
   for (const auto& [stimulus, says] : std::vector<std::pair<std::string, std::string>>{
-           {R"({"technique": "pcss"})", "stimulus.technique: 'pcss' has no fixed filter radius for the trial to set (pcf, rpcf, vsm, msm, evsm and esm have)"},
+           {R"({"technique": "pcss"})", "stimulus.technique: 'pcss' has no fixed filter radius for the trial to set (pcf, vsm, rpcf, msm, evsm and esm have)"},
            {R"({"technique": "pcf", "settings": {"pcf.kernel": "poisson", "pcf.rotate": true}})",
             "stimulus.settings.pcf.rotate: a disk rotated per pixel has no partner here (set it false)"},
            {R"({"technique": "pcf", "settings": {"pcf.kernel": "grid", "pcf.kernal": "grid"}})", "stimulus.settings.pcf.kernal: no such setting"},
