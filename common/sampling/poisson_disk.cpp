@@ -1,41 +1,26 @@
 #include "sampling/poisson_disk.h"
 
 #include <algorithm>
-#include <random>
-
-#include <glm/geometric.hpp>
+#include <cstddef>
+#include <iterator>
 
 namespace penumbra::sampling {
+namespace {
+
+// The frozen sets of n = 1..64 taps, one after the other, x and y per tap (how they were made: the
+// file's header).
+constexpr float kTaps[] = {
+#include "sampling/poisson_disk_taps.inc"
+};
+static_assert(std::size(kTaps) == 2 * 64 * 65 / 2, "one set of n taps for every n in [1, 64]");
+
+}  // namespace
 
 std::vector<glm::vec2> poisson_disk(int taps) {
-  taps = std::clamp(taps, 1, 64);
-  // The standard library's distribution (not sampling::Random): the taps of every image made so
-  // far come from this sequence.
-  std::mt19937 rng(20170815u + static_cast<unsigned>(taps));
-  std::uniform_real_distribution<float> u(-1, 1);
-  std::vector<glm::vec2> pts;
-  auto random_in_disk = [&] {
-    for (;;) {
-      glm::vec2 p(u(rng), u(rng));
-      if (glm::dot(p, p) <= 1) return p;
-    }
-  };
-  // Mitchell's best candidate: each new tap is the candidate farthest from those placed so far.
-  for (int i = 0; i < taps; ++i) {
-    glm::vec2 best{};
-    float best_d = -1;
-    for (int c = 0; c < 32 * (i + 1); ++c) {
-      const glm::vec2 p = random_in_disk();
-      float d = 1e9f;
-      for (const auto& q : pts) d = std::min(d, glm::distance(p, q));
-      if (d > best_d) best_d = d, best = p;
-    }
-    pts.push_back(best);
-  }
-  float r_max = 0;
-  for (const auto& p : pts) r_max = std::max(r_max, glm::length(p));
-  if (r_max > 0)
-    for (auto& p : pts) p /= r_max;
+  const auto n = static_cast<std::size_t>(std::clamp(taps, 1, 64));
+  const float* first = kTaps + n * (n - 1);  // 2 floats a tap, sets 1..n-1 before this one
+  std::vector<glm::vec2> pts(n);
+  for (std::size_t i = 0; i < n; ++i) pts[i] = {first[2 * i], first[2 * i + 1]};
   return pts;
 }
 

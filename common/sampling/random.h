@@ -1,6 +1,8 @@
 #pragma once
-// Seeded randomness whose sequence is the same on every platform: std::mt19937_64 is fully
-// specified by the standard, std::uniform_real_distribution is not, so uniforms are made here.
+// The project's one convention for seeded randomness, the same sequence on every platform:
+// std::mt19937_64 is fully specified by the standard, std::uniform_real_distribution is not, so
+// uniforms are made here; independent streams come from derive_seed. Where a sequence must not
+// change (the Poisson taps every image used), it is frozen as a table instead.
 
 #include <cstdint>
 #include <random>
@@ -12,6 +14,12 @@ class Random {
   explicit Random(std::uint64_t seed) : engine_(seed) {}
   // Uniform in [0, 1) with 53 random bits.
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+  // Uniform in [lo, hi).
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+  // Uniform integer in [lo, hi], lo <= hi.
+  int integer(int lo, int hi) { return lo + static_cast<int>(uniform() * (static_cast<double>(hi) - lo + 1)); }
+  // True with probability p.
+  bool chance(double p) { return uniform() < p; }
   std::uint64_t bits() { return engine_(); }
 
  private:

@@ -6,10 +6,11 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 
 #include <epoxy/gl.h>
+
+#include "sampling/random.h"
 
 namespace penumbra::metrics {
 namespace {
@@ -81,8 +82,8 @@ ReferenceKind reference_kind(std::string_view technique_name) {
 
 std::vector<glm::vec2> stratified_disk(int per_side) {
   if (per_side < 1) throw std::invalid_argument("stratified_disk: per_side must be at least 1, got " + std::to_string(per_side));
-  std::mt19937 rng(0x5eed1e55u);  // the engine's sequence is fixed by the standard
-  auto unit = [&] { return static_cast<float>(rng() >> 8) * 0x1p-24f; };  // [0, 1), 24 bits
+  sampling::Random random(0x5eed1e55u);
+  auto unit = [&] { return static_cast<float>(random.uniform()); };  // [0, 1] once rounded to float
   std::vector<glm::vec2> points;
   points.reserve(static_cast<std::size_t>(per_side) * static_cast<std::size_t>(per_side));
   const float cell = 2.0f / static_cast<float>(per_side);

@@ -49,5 +49,22 @@ TEST(PoissonDisk, TapsArePinnedAndFillTheUnitDisk) {
   EXPECT_EQ(poisson_disk(1000).size(), 64u);
 }
 
+// The frozen table holds a best-candidate set for every count: inside the unit disk, the farthest
+// tap on its rim, and no two taps closer than 1.3/sqrt(n) (the tightest set has 1.40/sqrt(n)).
+TEST(PoissonDisk, EveryFrozenSetIsAWellSpreadDiskSet) {
+  for (int n = 1; n <= 64; ++n) {
+    SCOPED_TRACE(n);
+    const auto taps = poisson_disk(n);
+    ASSERT_EQ(taps.size(), static_cast<std::size_t>(n));
+    float r_max = 0, closest = 2;
+    for (std::size_t i = 0; i < taps.size(); ++i) {
+      r_max = std::max(r_max, glm::length(taps[i]));
+      for (std::size_t j = 0; j < i; ++j) closest = std::min(closest, glm::distance(taps[i], taps[j]));
+    }
+    EXPECT_FLOAT_EQ(r_max, 1.0f);
+    if (n > 1) EXPECT_GT(closest * std::sqrt(static_cast<float>(n)), 1.3f);
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::sampling
