@@ -44,14 +44,16 @@ int main(int argc, char** argv) {
     }
     const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-    std::size_t triangles = 0;
+    std::size_t triangles = 0, units = 0;
     std::printf("scene %s: built or loaded in %.0f ms\n", s.name.c_str(), build_ms);
-    std::printf("%-16s %12s %12s\n", "object", "triangles", "vertices");
+    std::printf("%-16s %12s %12s %8s\n", "object", "triangles", "vertices", "units");  // units: what culling keeps or drops
     for (const auto& o : s.objects) {
+      const std::size_t n = o.mesh->draw_units().size();
       triangles += o.mesh->indices.size() / 3;
-      std::printf("%-16s %12zu %12zu\n", o.name.c_str(), o.mesh->indices.size() / 3, o.mesh->vertices.size());
+      units += n;
+      std::printf("%-16s %12zu %12zu %8zu\n", o.name.c_str(), o.mesh->indices.size() / 3, o.mesh->vertices.size(), n);
     }
-    std::printf("%-16s %12zu\n", "total", triangles);
+    std::printf("%-16s %12zu %12s %8zu\n", "total", triangles, "", units);
     const scene::Aabb b = s.bounds();
     if (!b.empty())
       std::printf("bounds [%.2f, %.2f, %.2f] .. [%.2f, %.2f, %.2f]\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);

@@ -7,7 +7,8 @@ namespace penumbra::scene {
 GpuMesh::GpuMesh(const MeshData& mesh)
     : vertices_(mesh.vertices.size() * sizeof(Vertex), mesh.vertices.data()),
       indices_(mesh.indices.size() * sizeof(std::uint32_t), mesh.indices.data()),
-      index_count_(mesh.indices.size()) {
+      index_count_(mesh.indices.size()),
+      units_(mesh.draw_units()) {
   const GLuint vao = vao_.id();
   glVertexArrayVertexBuffer(vao, 0, vertices_.id(), 0, sizeof(Vertex));
   glVertexArrayElementBuffer(vao, indices_.id());
@@ -23,6 +24,18 @@ void GpuMesh::draw() const {
   if (index_count_ == 0) return;
   vao_.bind();
   glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(index_count_), GL_UNSIGNED_INT, nullptr);
+}
+
+void GpuMesh::draw(const DrawRanges& ranges) const {
+  if (ranges.first_index.empty()) return;
+  std::vector<GLsizei> counts(ranges.index_count.size());
+  std::vector<const void*> offsets(ranges.first_index.size());
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    counts[i] = static_cast<GLsizei>(ranges.index_count[i]);
+    offsets[i] = reinterpret_cast<const void*>(static_cast<std::uintptr_t>(ranges.first_index[i]) * sizeof(std::uint32_t));
+  }
+  vao_.bind();
+  glMultiDrawElements(GL_TRIANGLES, counts.data(), GL_UNSIGNED_INT, offsets.data(), static_cast<GLsizei>(counts.size()));
 }
 
 }  // namespace penumbra::scene

@@ -32,6 +32,27 @@ void MeshData::append(const MeshData& other, const glm::mat4& transform) {
 }
 
 namespace {
+DrawUnit unit_of(const MeshData& m, std::uint32_t first, std::uint32_t end) {
+  DrawUnit u{first, end - first, {}};
+  for (std::uint32_t i = first; i < end; ++i) u.bounds.extend(m.vertices[m.indices[i]].position);
+  return u;
+}
+std::uint32_t units_end(const MeshData& m) { return m.units.empty() ? 0 : m.units.back().first_index + m.units.back().index_count; }
+}  // namespace
+
+void MeshData::close_unit() {
+  const std::uint32_t first = units_end(*this), end = static_cast<std::uint32_t>(indices.size());
+  if (end > first) units.push_back(unit_of(*this, first, end));
+}
+
+std::vector<DrawUnit> MeshData::draw_units() const {
+  std::vector<DrawUnit> out = units;
+  const std::uint32_t first = units_end(*this), end = static_cast<std::uint32_t>(indices.size());
+  if (end > first) out.push_back(unit_of(*this, first, end));
+  return out;
+}
+
+namespace {
 // Adds a quad with corners a, b, c, d (counter-clockwise seen from the side `normal` points to).
 void add_quad(MeshData& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 normal) {
   const auto base = static_cast<std::uint32_t>(m.vertices.size());

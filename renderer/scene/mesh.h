@@ -34,12 +34,31 @@ struct Aabb {
   Aabb transformed(const glm::mat4& m) const;
 };
 
+// One draw unit of a mesh: a run of its index list (a building, a tree, a pole, one node of a
+// model) with the bounds of the vertices it uses, in the mesh's space. Culling keeps or drops a
+// unit as a whole.
+struct DrawUnit {
+  std::uint32_t first_index = 0;
+  std::uint32_t index_count = 0;
+  Aabb bounds;
+};
+
 struct MeshData {
   std::vector<Vertex> vertices;
   std::vector<std::uint32_t> indices;  // triangle list
+  // Units in index order, each starting where the previous one ended; empty: the whole mesh is one
+  // unit (draw_units()).
+  std::vector<DrawUnit> units;
 
   Aabb bounds() const;
+  // Appends `other`'s triangles (its units are not kept: close_unit() marks what the caller calls one).
   void append(const MeshData& other, const glm::mat4& transform);
+  // Ends a unit at the current end of the index list: the indices since the previous unit's end
+  // (none: nothing is added). Indices appended after the last close_unit() become a unit of their own.
+  void close_unit();
+  // The units to draw: `units` plus the indices after the last of them, or one unit for the whole
+  // mesh when none was closed. Together they cover every index exactly once.
+  std::vector<DrawUnit> draw_units() const;
 };
 
 // Procedural shapes, centred on the origin.

@@ -5,37 +5,25 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
-#include <random>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
+
+#include "sampling/random.h"
 
 namespace penumbra::scene {
 namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
 
-// Uniform numbers from a fixed-seed mt19937 (its sequence is fixed by the standard) with our own
-// conversion to float: the standard distributions differ between library implementations.
-class Random {
- public:
-  explicit Random(std::uint32_t seed) : rng_(seed) {}
-  float uniform() { return static_cast<float>(rng_() >> 8) * 0x1p-24f; }  // [0, 1)
-  float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
-  int integer(int lo, int hi) { return lo + static_cast<int>(uniform() * static_cast<float>(hi - lo + 1)); }  // [lo, hi]
-  bool chance(float p) { return uniform() < p; }
+using sampling::Random;
 
- private:
-  std::mt19937 rng_;
-};
+// The town is built in float: a draw from the one Random, narrowed.
+float uniform(Random& rng, float lo, float hi) { return static_cast<float>(rng.uniform(lo, hi)); }
 
 // Independent streams per part of the scene, so that changing one part leaves the others as
 // they were for the same seed.
-std::uint32_t stream(std::uint32_t seed, std::uint32_t part) {
-  std::uint32_t h = seed * 0x9e3779b9u ^ (part + 0x7f4a7c15u);
-  h ^= h >> 16, h *= 0x85ebca6bu, h ^= h >> 13, h *= 0xc2b2ae35u, h ^= h >> 16;
-  return h;
-}
+std::uint64_t stream(std::uint64_t seed, std::uint64_t part) { return sampling::derive_seed(seed, part); }
 
 glm::mat4 translate(glm::vec3 t) { return glm::translate(glm::mat4(1), t); }
 
@@ -49,6 +37,7 @@ constexpr float kBlockPitch = 40;
 constexpr float kBlockHalf = 14;     // blocks 28 m wide, streets 12 m wide
 constexpr float kGroundHalf = 300;
 constexpr int kGroundCells = 320;    // per side: 1.9 m cells
+constexpr int kGroundTile = 20;      // cells per side of one draw unit: 16 × 16 tiles of 37.5 m
 const glm::vec3 kCraneBase{-4, 0, 4};  // in the construction-site block centred on the origin
 constexpr float kMastHeight = 45;
 
@@ -59,11 +48,11 @@ constexpr int kBlocks = 7;
 float street_centre(int k) { return -kTownHalf + kBlockPitch * static_cast<float>(k); }
 
 // Smooth value noise in [0, 1) on a grid of `cell` metres.
-float lattice_value(int ix, int iz, std::uint32_t seed) {
-  std::uint32_t h = stream(seed, static_cast<std::uint32_t>(ix) * 73856093u ^ static_cast<std::uint32_t>(iz) * 19349663u);
-  return static_cast<float>(h >> 8) * 0x1p-24f;
+float lattice_value(int ix, int iz, std::uint64_t seed) {
+  const std::uint64_t cell = static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32 | static_cast<std::uint32_t>(iz);
+  return static_cast<float>(stream(seed, cell) >> 40) * 0x1p-24f;
 }
-float value_noise(float x, float z, float cell, std::uint32_t seed) {
+float value_noise(float x, float z, float cell, std::uint64_t seed) {
   const float fx = x / cell, fz = z / cell;
   const float x0 = std::floor(fx), z0 = std::floor(fz);
   const auto fade = [](float t) { return t * t * t * (t * (t * 6 - 15) + 10); };
@@ -75,7 +64,7 @@ float value_noise(float x, float z, float cell, std::uint32_t seed) {
 }
 
 // Terrain height: flat under the town, hills up to ~14 m rising over the 150-230 m ring.
-float terrain_height(float x, float z, std::uint32_t seed) {
+float terrain_height(float x, float z, std::uint64_t seed) {
   const float d = std::max(std::abs(x), std::abs(z));
   const float t = std::clamp((d - 150) / 80, 0.0f, 1.0f);
   const float w = t * t * (3 - 2 * t);
@@ -84,7 +73,7 @@ float terrain_height(float x, float z, std::uint32_t seed) {
   return w * n;
 }
 
-MeshData make_ground(std::uint32_t seed) {
+MeshData make_ground(std::uint64_t seed) {
   MeshData m;
   const int n = kGroundCells;
   const float cell = 2 * kGroundHalf / static_cast<float>(n);
@@ -97,11 +86,18 @@ MeshData make_ground(std::uint32_t seed) {
       m.vertices.push_back({{x, terrain_height(x, z, seed), z}, glm::normalize(glm::vec3(-dx, 2 * e, -dz))});
     }
   }
+  // One draw unit per tile of kGroundTile × kGroundTile cells, so that culling can drop ground
+  // outside a map or the view.
   const auto row = static_cast<std::uint32_t>(n + 1);
-  for (std::uint32_t j = 0; j < static_cast<std::uint32_t>(n); ++j)
-    for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(n); ++i) {
-      const std::uint32_t a = j * row + i, b = a + 1, c = a + row, d = c + 1;
-      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});  // counter-clockwise seen from above
+  const auto tile = static_cast<std::uint32_t>(kGroundTile), cells = static_cast<std::uint32_t>(n);
+  for (std::uint32_t tj = 0; tj < cells; tj += tile)
+    for (std::uint32_t ti = 0; ti < cells; ti += tile) {
+      for (std::uint32_t j = tj; j < std::min(tj + tile, cells); ++j)
+        for (std::uint32_t i = ti; i < std::min(ti + tile, cells); ++i) {
+          const std::uint32_t a = j * row + i, b = a + 1, c = a + row, d = c + 1;
+          m.indices.insert(m.indices.end(), {a, c, b, b, c, d});  // counter-clockwise seen from above
+        }
+      m.close_unit();
     }
   return m;
 }
@@ -115,7 +111,7 @@ void add_building(MeshData& m, Random& rng, glm::vec2 centre, glm::vec2 size, fl
   glm::vec2 roof = size;
   // A setback tower on some tall buildings.
   if (height > 25 && rng.chance(0.4f)) {
-    const glm::vec2 tower = size - glm::vec2(rng.uniform(4, 7), rng.uniform(4, 7));
+    const glm::vec2 tower = size - glm::vec2(uniform(rng, 4, 7), uniform(rng, 4, 7));
     if (tower.x > 5 && tower.y > 5) {
       const float extra = 3.5f * static_cast<float>(rng.integer(2, 6));
       add_box(m, c + glm::vec3(0, height + extra / 2, 0), {tower.x, extra, tower.y});
@@ -123,10 +119,12 @@ void add_building(MeshData& m, Random& rng, glm::vec2 centre, glm::vec2 size, fl
       roof = tower;
     }
   }
+  m.close_unit();  // body and tower
   // Floor ledges (thin slabs around the facade) on about half of the buildings.
   if (rng.chance(0.5f)) {
-    const float protrude = rng.uniform(0.2f, 0.5f);
+    const float protrude = uniform(rng, 0.2f, 0.5f);
     for (float y = 3.5f; y < height - 1; y += 3.5f) add_box(m, c + glm::vec3(0, y, 0), {size.x + 2 * protrude, 0.2f, size.y + 2 * protrude});
+    m.close_unit();  // ledges
   }
   // Parapet around the roof.
   const float ph = 1.0f, pw = 0.3f;
@@ -135,21 +133,23 @@ void add_building(MeshData& m, Random& rng, glm::vec2 centre, glm::vec2 size, fl
   add_box(m, c + glm::vec3(0, top + ph / 2, -hz), {roof.x, ph, pw});
   add_box(m, c + glm::vec3(hx, top + ph / 2, 0), {pw, ph, roof.y - 2 * pw});
   add_box(m, c + glm::vec3(-hx, top + ph / 2, 0), {pw, ph, roof.y - 2 * pw});
-  // Rooftop units.
+  m.close_unit();  // parapet
+  // Rooftop units, one draw unit each.
   for (int i = rng.integer(0, 3); i > 0; --i) {
-    const glm::vec3 unit(rng.uniform(1.5f, 4), rng.uniform(1.2f, 3), rng.uniform(1.5f, 4));
-    const float ux = rng.uniform(-1, 1) * std::max(roof.x / 2 - unit.x / 2 - 1, 0.0f);
-    const float uz = rng.uniform(-1, 1) * std::max(roof.y / 2 - unit.z / 2 - 1, 0.0f);
+    const glm::vec3 unit(uniform(rng, 1.5f, 4), uniform(rng, 1.2f, 3), uniform(rng, 1.5f, 4));
+    const float ux = uniform(rng, -1, 1) * std::max(roof.x / 2 - unit.x / 2 - 1, 0.0f);
+    const float uz = uniform(rng, -1, 1) * std::max(roof.y / 2 - unit.z / 2 - 1, 0.0f);
     add_box(m, c + glm::vec3(ux, top + unit.y / 2, uz), unit);
+    m.close_unit();
   }
   // A thin antenna on the tallest.
   if (top > 40) {
-    const glm::vec3 base = c + glm::vec3(rng.uniform(-1, 1) * roof.x / 4, top, rng.uniform(-1, 1) * roof.y / 4);
-    m.append(make_tube({base, base + glm::vec3(0, rng.uniform(5, 9), 0)}, {0.06f, 0.04f}, 6), glm::mat4(1));
+    const glm::vec3 base = c + glm::vec3(uniform(rng, -1, 1) * roof.x / 4, top, uniform(rng, -1, 1) * roof.y / 4);
+    m.append(make_tube({base, base + glm::vec3(0, uniform(rng, 5, 9), 0)}, {0.06f, 0.04f}, 6), glm::mat4(1));
   }
 }
 
-MeshData make_buildings(std::uint32_t seed) {
+MeshData make_buildings(std::uint64_t seed) {
   Random rng(stream(seed, 1));
   MeshData m;
   for (int bz = 0; bz < kBlocks; ++bz) {
@@ -175,10 +175,11 @@ MeshData make_buildings(std::uint32_t seed) {
       const float from_centre = glm::length(block);
       const float from_crane = glm::length(block - glm::vec2(kCraneBase.x, kCraneBase.z));
       for (const auto& [centre, lot] : lots) {
-        const glm::vec2 size = lot - glm::vec2(rng.uniform(1, 3), rng.uniform(1, 3));
-        float floors = static_cast<float>(rng.integer(2, 6)) + std::round(rng.uniform(0, 14) * std::exp(-from_centre * from_centre / 9000));
+        const glm::vec2 size = lot - glm::vec2(uniform(rng, 1, 3), uniform(rng, 1, 3));
+        float floors = static_cast<float>(rng.integer(2, 6)) + std::round(uniform(rng, 0, 14) * std::exp(-from_centre * from_centre / 9000));
         if (from_crane < 70) floors = std::min(floors, 10.0f);  // the jib swings at 45 m
         add_building(m, rng, centre, size, 3.5f * floors);
+        m.close_unit();  // the antenna, if any
       }
     }
   }
@@ -190,8 +191,11 @@ MeshData make_buildings(std::uint32_t seed) {
 MeshData make_site() {
   MeshData m;
   add_box(m, kCraneBase + glm::vec3(0, 0.5f, 0), {6, 1, 6});                    // crane footing
+  m.close_unit();
   add_box(m, {8, 1.3f, 9}, {6.1f, 2.6f, 2.45f});                               // container
+  m.close_unit();
   for (int i = 0; i < 3; ++i) add_box(m, {-10 + 1.4f * static_cast<float>(i), 0.4f, -9}, {1.2f, 0.8f, 1.2f});  // pallets
+  m.close_unit();
   // A three-storey concrete frame: columns on a 5 m grid and floor slabs, the top one half done.
   const float x0 = 2, z0 = -10;
   for (int level = 0; level < 3; ++level) {
@@ -201,6 +205,7 @@ MeshData make_site() {
       for (int j = 0; j < (level == 2 ? 2 : 3); ++j)
         add_box(m, {x0 + 5 * static_cast<float>(i), y + 1.75f, z0 + 5 * static_cast<float>(j)}, {0.4f, 3.5f, 0.4f});
     add_box(m, {x0 + 5, y + 3.65f, z0 + depth / 2}, {10.6f, 0.3f, depth + 0.6f});
+    m.close_unit();  // one storey of the frame
   }
   return m;
 }
@@ -224,6 +229,7 @@ MeshData make_crane() {
       if (p % 2 == 0) add_beam(m, at(c, y0), at(d, y1), member);  // zigzag diagonals on every face
       else add_beam(m, at(d, y0), at(c, y1), member);
     }
+    m.close_unit();  // the four chords with the first panel, then one unit per mast panel
   }
   // Slewing unit, cab and apex.
   add_box(m, {b.x, top + 0.75f, b.z}, {2.4f, 1.5f, 2.4f});
@@ -231,6 +237,7 @@ MeshData make_crane() {
   const float deck = top + 1.5f;
   const glm::vec3 apex(b.x, deck + 7, b.z);
   for (int c = 0; c < 4; ++c) add_beam(m, at(c, deck), apex, chord);
+  m.close_unit();  // slewing unit, cab and apex
 
   // Jib: bottom chords at x = ±0.7, top chord 1.5 m above the middle, 1.25 m panels to 50 m.
   const float jib_length = 50, jib_panel = 1.25f, jib_half = 0.7f, jib_height = 1.5f, jib_member = 0.06f, jib_chord = 0.12f;
@@ -252,7 +259,9 @@ MeshData make_crane() {
     add_beam(m, right(z), ridge(z1), jib_member);
     if (p % 2 == 0) add_beam(m, left(z), right(z1), jib_member);
     else add_beam(m, right(z), left(z1), jib_member);
+    m.close_unit();  // the three chords with the first panel, then one unit per jib panel
   }
+  m.close_unit();
   // Counter-jib: flat, 15 m to the north, with counterweights at its end.
   const float counter_length = 15, counter_half = 0.9f;
   const auto cl = [&](float z) { return glm::vec3(b.x - counter_half, deck, b.z - half - z); };
@@ -265,6 +274,7 @@ MeshData make_crane() {
     if (p < 10) add_beam(m, cl(z), cr(z + 1.5f), jib_member);
   }
   for (int i = 0; i < 3; ++i) add_box(m, {b.x, deck - 1.3f, b.z - half - 11.5f - 1.1f * static_cast<float>(i)}, {2.2f, 2.6f, 1.0f});
+  m.close_unit();  // counter-jib and counterweights
   // Pendants from the apex to the jib and the counter-jib; the trolley's hook cable and block.
   m.append(make_tube({apex, ridge(32)}, {0.03f, 0.03f}, 4), glm::mat4(1));
   m.append(make_tube({apex, glm::vec3(b.x, deck, b.z - half - counter_length)}, {0.03f, 0.03f}, 4), glm::mat4(1));
@@ -272,6 +282,7 @@ MeshData make_crane() {
   add_box(m, trolley, {1.6f, 0.5f, 1.2f});
   m.append(make_tube({trolley, trolley - glm::vec3(0, 24, 0)}, {0.025f, 0.025f}, 4), glm::mat4(1));
   add_box(m, trolley - glm::vec3(0, 24.5f, 0), {0.6f, 1.0f, 0.4f});
+  m.close_unit();  // pendants, trolley and hook
   return m;
 }
 
@@ -293,6 +304,7 @@ MeshData make_fence() {
       m.append(lattice, glm::rotate(translate(at), angle, glm::vec3(0, 1, 0)));
       const glm::vec3 post = side < 2 ? glm::vec3(u - panel / 2, 0, offset) : glm::vec3(offset, 0, u - panel / 2);
       add_box(m, post + glm::vec3(0, 1.1f, 0), {0.08f, 2.2f, 0.08f});
+      m.close_unit();  // one panel and its post
     }
   }
   return m;
@@ -311,33 +323,35 @@ glm::vec3 perpendicular(glm::vec3 v) {
 // One branch (a slightly bent tapered tube) and, recursively, its children.
 void grow(MeshData& m, Random& rng, glm::vec3 base, glm::vec3 dir, float length, float radius, int level) {
   const glm::vec3 side = perpendicular(dir);
-  const glm::vec3 bend = glm::normalize(side * std::cos(rng.uniform(0, 2 * kPi)) + glm::cross(dir, side) * std::sin(rng.uniform(0, 2 * kPi)));
+  const glm::vec3 bend = glm::normalize(side * std::cos(uniform(rng, 0, 2 * kPi)) + glm::cross(dir, side) * std::sin(uniform(rng, 0, 2 * kPi)));
   const glm::vec3 mid = base + dir * (0.5f * length) + bend * (0.06f * length);
   const glm::vec3 tip = base + dir * length + bend * (0.02f * length);
   const int sides = std::max(3, 8 - level);
   m.append(make_tube({base, mid, tip}, {radius, 0.85f * radius, 0.7f * radius}, sides), glm::mat4(1));
+  if (level == 0) m.close_unit();  // the trunk
   if (level == kTreeLevels) return;
   const int children = level == 0 ? rng.integer(3, 4) : rng.integer(2, 3);
-  const float spin = rng.uniform(0, 2 * kPi);
+  const float spin = uniform(rng, 0, 2 * kPi);
   for (int c = 0; c < children; ++c) {
     const bool leader = c == 0;
-    const float t = leader ? 1.0f : rng.uniform(0.55f, 0.95f);
+    const float t = leader ? 1.0f : uniform(rng, 0.55f, 0.95f);
     const glm::vec3 from = t < 0.5f ? base + (mid - base) * (2 * t) : mid + (tip - mid) * (2 * t - 1);
-    const float azimuth = spin + 2 * kPi * static_cast<float>(c) / static_cast<float>(children) + rng.uniform(-0.4f, 0.4f);
-    const float tilt = glm::radians(leader ? rng.uniform(10, 25) : rng.uniform(30, 55));
+    const float azimuth = spin + 2 * kPi * static_cast<float>(c) / static_cast<float>(children) + uniform(rng, -0.4f, 0.4f);
+    const float tilt = glm::radians(leader ? uniform(rng, 10, 25) : uniform(rng, 30, 55));
     const glm::vec3 out = side * std::cos(azimuth) + glm::cross(dir, side) * std::sin(azimuth);
     glm::vec3 child = glm::normalize(dir * std::cos(tilt) + out * std::sin(tilt) + glm::vec3(0, 0.12f, 0));
-    grow(m, rng, from, child, length * rng.uniform(0.66f, 0.8f), radius * (leader ? 0.68f : rng.uniform(0.5f, 0.62f)), level + 1);
+    grow(m, rng, from, child, length * uniform(rng, 0.66f, 0.8f), radius * (leader ? 0.68f : uniform(rng, 0.5f, 0.62f)), level + 1);
+    if (level == 0) m.close_unit();  // each main limb with its branches: one draw unit
   }
 }
 
 void add_tree(MeshData& m, Random& rng, glm::vec3 at) {
-  const float trunk = rng.uniform(2.6f, 4.0f);
-  const glm::vec3 lean = glm::vec3(rng.uniform(-0.08f, 0.08f), 1, rng.uniform(-0.08f, 0.08f));
-  grow(m, rng, at - glm::vec3(0, 0.2f, 0), glm::normalize(lean), trunk, rng.uniform(0.16f, 0.26f), 0);
+  const float trunk = uniform(rng, 2.6f, 4.0f);
+  const glm::vec3 lean = glm::vec3(uniform(rng, -0.08f, 0.08f), 1, uniform(rng, -0.08f, 0.08f));
+  grow(m, rng, at - glm::vec3(0, 0.2f, 0), glm::normalize(lean), trunk, uniform(rng, 0.16f, 0.26f), 0);
 }
 
-MeshData make_trees(std::uint32_t seed) {
+MeshData make_trees(std::uint64_t seed) {
   Random rng(stream(seed, 2));
   MeshData m;
   // Street trees on both sides of the two main streets (z = -20 and x = -20), clear of crossings.
@@ -346,15 +360,15 @@ MeshData make_trees(std::uint32_t seed) {
     for (int k = 0; k <= kBlocks; ++k) crossing = crossing || std::abs(along - street_centre(k)) < 8;
     if (crossing) continue;
     for (float side : {-4.6f, 4.6f}) {
-      add_tree(m, rng, {along + rng.uniform(-0.5f, 0.5f), 0, -20 + side});
-      if (along > -112 && along < 112) add_tree(m, rng, {-20 + side, 0, along + rng.uniform(-0.5f, 0.5f)});
+      add_tree(m, rng, {along + uniform(rng, -0.5f, 0.5f), 0, -20 + side});
+      if (along > -112 && along < 112) add_tree(m, rng, {-20 + side, 0, along + uniform(rng, -0.5f, 0.5f)});
     }
   }
   // The park block west of the site.
-  for (int i = 0; i < 14; ++i) add_tree(m, rng, {-40 + rng.uniform(-12, 12), 0, rng.uniform(-12, 12)});
+  for (int i = 0; i < 14; ++i) add_tree(m, rng, {-40 + uniform(rng, -12, 12), 0, uniform(rng, -12, 12)});
   // Countryside: scattered outside the town, on the terrain.
   for (int planted = 0; planted < 150;) {
-    const float x = rng.uniform(-285, 285), z = rng.uniform(-285, 285);
+    const float x = uniform(rng, -285, 285), z = uniform(rng, -285, 285);
     if (std::max(std::abs(x), std::abs(z)) < 152) continue;
     add_tree(m, rng, {x, terrain_height(x, z, seed), z});
     ++planted;
@@ -381,7 +395,7 @@ MeshData make_wire(glm::vec3 a, glm::vec3 b, float sag) {
   return make_tube(points, radii, 4);
 }
 
-void make_pole_lines(std::uint32_t seed, MeshData& poles, MeshData& wires) {
+void make_pole_lines(std::uint64_t seed, MeshData& poles, MeshData& wires) {
   Random rng(stream(seed, 3));
   std::vector<PoleLine> lines(2);
   // Along the south side of the walking street and on into the country; along the site's east street.
@@ -395,7 +409,7 @@ void make_pole_lines(std::uint32_t seed, MeshData& poles, MeshData& wires) {
       const glm::vec3 foot = line.feet[i];
       const glm::vec3 along = glm::normalize(line.feet[i + 1 < line.feet.size() ? i + 1 : i] - line.feet[i > 0 ? i - 1 : 0]);
       const glm::vec3 across = glm::normalize(glm::cross(glm::vec3(0, 1, 0), along));
-      const float h = height + rng.uniform(-0.3f, 0.3f);
+      const float h = height + uniform(rng, -0.3f, 0.3f);
       poles.append(make_tube({foot - glm::vec3(0, 0.3f, 0), foot + glm::vec3(0, h, 0)}, {0.13f, 0.1f}, 8), glm::mat4(1));
       const glm::vec3 arm_centre = foot + glm::vec3(0, h - 0.6f, 0);
       add_beam(poles, arm_centre - across * (arm / 2), arm_centre + across * (arm / 2), 0.1f);
@@ -405,10 +419,14 @@ void make_pole_lines(std::uint32_t seed, MeshData& poles, MeshData& wires) {
         add_box(poles, p, {0.07f, 0.2f, 0.07f});  // insulator
         points[static_cast<std::size_t>(w)] = p + glm::vec3(0, 0.1f, 0);
       }
+      poles.close_unit();
       attach.push_back(points);
     }
     for (std::size_t i = 0; i + 1 < attach.size(); ++i)
-      for (std::size_t w = 0; w < 3; ++w) wires.append(make_wire(attach[i][w], attach[i + 1][w], rng.uniform(0.7f, 1.0f)), glm::mat4(1));
+      for (std::size_t w = 0; w < 3; ++w) {
+        wires.append(make_wire(attach[i][w], attach[i + 1][w], uniform(rng, 0.7f, 1.0f)), glm::mat4(1));
+        wires.close_unit();  // one span
+      }
   }
 }
 
@@ -433,7 +451,7 @@ CameraPath outdoor_path() {
 }  // namespace
 
 Scene make_outdoor_scene(const OutdoorOptions& options) {
-  const std::uint32_t seed = options.seed;
+  const std::uint64_t seed = options.seed;
   Scene s;
   s.name = options.light == OutdoorLight::sun ? "outdoor" : "outdoor-spot";
   if (seed != OutdoorOptions{}.seed) s.name += "-seed" + std::to_string(seed);

@@ -40,6 +40,7 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
     cascades.push_back(cj);
   }
   j["cascades"] = cascades;
+  j["triangles"] = {{"maps", frame.map_triangles}, {"camera", frame.camera_triangles}, {"scene", frame.scene_triangles}};
   if (frame.pcss_requirement.valid) {
     const auto& r = frame.pcss_requirement;
     j["pcss_requirement"] = {{"required_texels", r.required_texels},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <stdexcept>
 
@@ -118,17 +119,33 @@ bool FrameResources::prepare(const FramePlan& plan) {
   return reallocated;
 }
 
-void FrameContext::draw_scene(const gl::Program& program, bool shading) const {
+std::uint64_t FrameContext::draw_scene(const gl::Program& program, bool shading, const glm::mat4& clip_from_world,
+                                       scene::CullVolume volume) const {
+  std::uint64_t triangles = 0;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const auto& o = scene.objects[i];
+    std::optional<scene::DrawRanges> kept;
+    if (settings.map.culling) {
+      kept = scene::cull_units(meshes[i]->units(), clip_from_world * o.model, volume);
+      if (kept->first_index.empty()) continue;
+    }
     program.set("u_model", o.model);
     if (shading) {
       program.set("u_normal_matrix", glm::transpose(glm::inverse(glm::mat3(o.model))));
       program.set("u_albedo", o.albedo);
     }
-    meshes[i]->draw();
+    if (kept) {
+      meshes[i]->draw(*kept);
+      triangles += kept->triangles;
+    } else {
+      meshes[i]->draw();
+      triangles += meshes[i]->index_count() / 3;
+    }
   }
+  return triangles;
 }
+
+glm::mat4 FrameContext::camera_view_projection() const { return scene.camera.projection_matrix(plan.aspect) * scene.camera.view(); }
 
 const gl::Program& FrameContext::shading_program(bool gbuffer) const {
   const TechniqueEntry& entry = *plan.technique;
@@ -176,7 +193,7 @@ void FrameContext::upload_shadow_frame() const {
   const int res0 = plan.cascades.front().resolution_texels;
   const float texel_mid_ws = lf.texel_ws(0.5f * (lf.near_ws + lf.far_ws), res0);
   contract::ShadowFrame b{};
-  b.u_view_projection = cam.projection_matrix(plan.aspect) * cam.view();
+  b.u_view_projection = camera_view_projection();
   b.u_camera_view = cam.view();
   b.u_light_view = lf.view;
   const float w = static_cast<float>(plan.atlas.width), h = static_cast<float>(plan.atlas.height);
@@ -272,7 +289,7 @@ class ShadowMapPass final : public Pass {
       prog.set("u_light_view_projection", c.light.view_projection());
       // The light view and the moments' depth range are the frame's (ShadowFrame): cascades share them.
       if (moments && f.plan.technique->set_uniforms) f.plan.technique->set_uniforms(prog, f.settings);
-      f.draw_scene(prog, false);
+      f.info.map_triangles.push_back(f.draw_scene(prog, false, c.light.view_projection(), scene::CullVolume::caster));
     }
     glDisable(GL_SCISSOR_TEST);
     glDisable(GL_POLYGON_OFFSET_FILL);
@@ -388,7 +405,7 @@ class GbufferPass final : public Pass {
     prog.use();
     f.bind_shadow_maps();
     f.set_technique_uniforms(prog);
-    f.draw_scene(prog, true);
+    f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
     gl::check_errors("gbuffer pass");
   }
 };
@@ -445,7 +462,7 @@ class ShadingPass final : public Pass {
     prog.use();
     f.bind_shadow_maps();
     f.set_technique_uniforms(prog);
-    f.draw_scene(prog, true);
+    f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
     glDisable(GL_FRAMEBUFFER_SRGB);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);

@@ -12,6 +12,7 @@
 //                     (+ the per-pixel PCSS requirement image)
 //   pcss_requirement  requirement image → requirement buffer (read back one frame later)
 // Renderer::render runs, in this order, the passes its FramePlan lists.
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -21,6 +22,7 @@
 #include <penumbra/gl/objects.h>
 #include <penumbra/gl/shader_library.h>
 #include <penumbra/gl/timer.h>
+#include <penumbra/scene/culling.h>
 #include <penumbra/scene/gpu_mesh.h>
 #include <penumbra/scene/scene.h>
 #include <penumbra/shadows/frame_plan.h>
@@ -98,8 +100,12 @@ struct FrameContext {
   gl::PassTimer* timer = nullptr;
   bool show_cascades = false;
 
-  // Draws every mesh with `program`; `shading` also sets normal matrix and albedo.
-  void draw_scene(const gl::Program& program, bool shading) const;
+  // Draws the units of every mesh that may touch `volume` of `clip_from_world` (all of them with
+  // map.culling off) with `program`; `shading` also sets normal matrix and albedo. Returns the
+  // triangles drawn.
+  std::uint64_t draw_scene(const gl::Program& program, bool shading, const glm::mat4& clip_from_world, scene::CullVolume volume) const;
+  // The camera's clip-from-world matrix (as ShadowFrame's u_view_projection).
+  glm::mat4 camera_view_projection() const;
   // Fills the ShadowFrame block (cameras, light frame, cascades, biases, the fixed filter radius)
   // from the plan, uploads it and binds it for every program of the frame: once per frame.
   void upload_shadow_frame() const;

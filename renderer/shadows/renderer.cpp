@@ -80,6 +80,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   info.atlas_height = plan.atlas.height;
   info.filter_radius_texels = plan.filter_radius_texels;
   info.reallocated = res_->prepare(plan);
+  for (const auto& m : meshes_) info.scene_triangles += m->index_count() / 3;
 
   glDisable(GL_CULL_FACE);  // thin planes and open meshes cast from both sides
   glEnable(GL_DEPTH_TEST);

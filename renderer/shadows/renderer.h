@@ -7,6 +7,7 @@
 // far depth. `adaptive.storage = subrect` keeps an atlas sized for adaptive.max_texels per cascade
 // and renders into the part the frame needs (UVs scaled accordingly); `realloc` sizes the atlas
 // to the frame and reallocates it whenever a resolution changes.
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -39,6 +40,11 @@ struct FrameInfo {
   int atlas_width = 0, atlas_height = 0;
   bool reallocated = false;        // the atlas was (re)allocated this frame
   PcssRequirementInfo pcss_requirement;  // as used for this frame's resolution (measured one frame earlier)
+  // Triangles drawn this frame after culling: into each map or cascade (cascades order), by each
+  // camera pass together (G-buffer and shading), and the scene's total for one full draw.
+  std::vector<std::uint64_t> map_triangles;
+  std::uint64_t camera_triangles = 0;
+  std::uint64_t scene_triangles = 0;
 };
 
 struct FrameResources;

@@ -44,6 +44,9 @@ struct ShadowMapParams {
   float cascade_lambda = 0.75f;       // split scheme: 0 uniform, 1 logarithmic, between: practical
   float cascade_blend = 0.1f;         // blend band at a cascade's far end, fraction of its depth range
   bool cascade_stabilize = true;      // window size in quarter-octave steps, corner snapped to texels
+  // Skip draw units whose bounds miss a map's sides (casters, per map or cascade) or the camera's
+  // view (scene/culling.h). The image is the same either way; off draws every unit everywhere.
+  bool culling = true;
 };
 
 // Adaptive resolution: res = c / r_uv (Kreuzer 2017 eq. 5.3/5.6) per map or cascade, clamped,

@@ -2,7 +2,10 @@
 // under the sun (with cascades where a technique has them) and under the floodlight.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <string>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "gl_test_env.h"
 #include "scene/outdoor.h"
@@ -51,6 +54,88 @@ TEST(OutdoorGl, FloodlightRendersFiniteShadows) {
     EXPECT_GT(dark, 0.02);
     EXPECT_GT(lit, 0.05);
   }
+}
+
+// Culling (map.culling) drops what cannot reach a pixel: the same image, pixel for pixel, with
+// fewer triangles into every map and the camera.
+struct Frame {
+  io::Image8 color;
+  io::ImageF visibility;
+  shadows::FrameInfo info;
+};
+Frame render_frame(shadows::Renderer& r, ShadowSettings st, bool culling, int w, int h) {
+  st.map.culling = culling;
+  Frame f;
+  f.info = r.render(st, w, h);
+  f.color = r.read_color();
+  f.visibility = r.read_visibility();
+  return f;
+}
+
+void expect_culling_changes_no_pixel(const scene::Scene& s, const ShadowSettings& st, int w, int h) {
+  shadows::Renderer r;
+  r.set_scene(s);
+  const Frame all = render_frame(r, st, false, w, h);
+  const Frame culled = render_frame(r, st, true, w, h);
+  EXPECT_EQ(culled.color.pixels, all.color.pixels) << "the lit image differs with culling";
+  EXPECT_EQ(culled.visibility.pixels, all.visibility.pixels) << "the visibility differs with culling";
+  ASSERT_EQ(culled.info.map_triangles.size(), all.info.map_triangles.size());
+  for (std::size_t i = 0; i < all.info.map_triangles.size(); ++i) {
+    EXPECT_EQ(all.info.map_triangles[i], all.info.scene_triangles) << "without culling every map draws the scene";
+    EXPECT_LE(culled.info.map_triangles[i], all.info.map_triangles[i]) << "map " << i;
+  }
+  EXPECT_LE(culled.info.camera_triangles, all.info.camera_triangles);
+}
+
+TEST(OutdoorGl, CullingChangesNoPixelAndDrawsLess) {
+  scene::Scene s = scene::make_builtin_scene("outdoor");
+  s.camera = s.camera_path.at(s.camera, 120);
+  for (Technique t : {Technique::pcf, Technique::pcss, Technique::vsm}) {
+    SCOPED_TRACE(std::string(shadows::to_string(t)));
+    ShadowSettings st = test::settings(t, 1024, true);
+    st.map.cascades = 4;
+    expect_culling_changes_no_pixel(s, st, 192, 108);
+  }
+  // The near cascade of the street holds a small part of the town.
+  shadows::Renderer r;
+  r.set_scene(s);
+  ShadowSettings st = test::settings(Technique::pcf, 1024, true);
+  st.map.cascades = 4;
+  const Frame f = render_frame(r, st, true, 192, 108);
+  EXPECT_LT(f.info.map_triangles.front(), f.info.scene_triangles / 4);
+  EXPECT_LT(f.info.camera_triangles, f.info.scene_triangles / 2) << "the street sees a part of the town";
+}
+
+TEST(OutdoorGl, CullingChangesNoPixelOnTheDemoSceneAndUnderTheFloodlight) {
+  const scene::Scene demo = scene::make_builtin_scene("demo");
+  expect_culling_changes_no_pixel(demo, test::settings(Technique::pcss, 1024, true), 128, 96);
+  scene::Scene spot = scene::make_builtin_scene("outdoor-spot");
+  spot.camera = spot.camera_path.at(spot.camera, 120);
+  expect_culling_changes_no_pixel(spot, test::settings(Technique::pcf, 1024, true), 128, 72);
+}
+
+// A pillar outside the camera's view whose shadow falls into it: the camera drops it, its map
+// draws it, and the shadow is there.
+TEST(OutdoorGl, ACasterOutsideTheViewStillCasts) {
+  scene::Scene s;
+  s.objects.push_back({"ground", std::make_shared<const scene::MeshData>(scene::make_plane(40, 40)), glm::mat4(1), glm::vec3(0.8f)});
+  s.objects.push_back({"pillar", std::make_shared<const scene::MeshData>(scene::make_box({2, 10, 2})),
+                       glm::translate(glm::mat4(1), glm::vec3(0, 5, 0)), glm::vec3(0.8f)});
+  s.light.direction = glm::normalize(glm::vec3(0.5f, -1, 0));  // the shadow falls toward +x, to x = 6
+  s.light.size = 0;
+  test::look_down(s, {7, 0}, 5);  // sees x in [2, 12], nothing above y = 0.5
+  const ShadowSettings st = test::settings(Technique::pcf, 1024, true);
+  expect_culling_changes_no_pixel(s, st, 64, 64);
+
+  shadows::Renderer r;
+  r.set_scene(s);
+  const Frame f = render_frame(r, st, true, 64, 64);
+  const std::uint64_t ground = s.objects[0].mesh->indices.size() / 3;
+  EXPECT_EQ(f.info.camera_triangles, ground) << "the camera draws the ground only";
+  EXPECT_EQ(f.info.map_triangles.front(), f.info.scene_triangles) << "the map draws the pillar";
+  const auto [dark, lit] = shadow_and_lit(f.visibility);
+  EXPECT_GT(dark, 0.05) << "the pillar's shadow is in view (x in [2, 6], z in [-1, 1]: 8 % of it)";
+  EXPECT_GT(lit, 0.5);
 }
 
 }  // namespace

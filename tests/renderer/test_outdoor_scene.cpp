@@ -1,5 +1,6 @@
 // The procedural outdoor scene: deterministic for a seed, about a million triangles, quick to build
 // and to load back from its scene file, with the documented objects, light and camera path.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -130,7 +131,13 @@ TEST(OutdoorScene, WrittenSceneLoadsBackQuickly) {
   EXPECT_LT(load_s, 5.0) << "loading took " << load_s << " s of CPU time";
   EXPECT_EQ(triangles(back), triangles(s));
   ASSERT_EQ(back.objects.size(), s.objects.size());
-  for (std::size_t i = 0; i < s.objects.size(); ++i) EXPECT_EQ(back.objects[i].name, s.objects[i].name);
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    SCOPED_TRACE(s.objects[i].name);
+    EXPECT_EQ(back.objects[i].name, s.objects[i].name);
+    // Each glTF mesh loads as a draw unit: up to 16 runs of the written units per object.
+    const std::size_t units = s.objects[i].mesh->draw_units().size();
+    EXPECT_EQ(back.objects[i].mesh->draw_units().size(), std::min<std::size_t>(units, 16));
+  }
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(back.bounds().lo[c], s.bounds().lo[c], 1e-3f);
     EXPECT_NEAR(back.bounds().hi[c], s.bounds().hi[c], 1e-3f);

@@ -1,0 +1,34 @@
+#pragma once
+// Culling of draw units (scene/mesh.h) against what a pass rasterizes: the camera's view volume,
+// or a shadow map's. GL-free: the planner's tests and an engine's own loop can use it.
+#include <cstdint>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+
+#include <penumbra/scene/mesh.h>
+
+namespace penumbra::scene {
+
+enum class CullVolume {
+  view,    // the six planes of the clip volume: what the camera sees
+  caster,  // a shadow map's four sides only: its box extended without end along the light's rays,
+           // so that a caster in front of the fitted near plane (or behind the far one) that covers
+           // a texel is still drawn; anything dropped covers no texel of the map
+};
+
+// False only when all eight corners of `box` (in the space `clip_from_box` maps to clip space)
+// lie outside one plane of `volume` (x = ±w, y = ±w; for view also z = ±w): such a box cannot
+// produce a fragment, so dropping it changes no pixel. Conservative otherwise.
+bool may_touch(const glm::mat4& clip_from_box, const Aabb& box, CullVolume volume);
+
+// The index ranges of `units` that may touch `volume`, neighbouring units merged into one range,
+// and the triangles they hold: one multi-draw's arguments.
+struct DrawRanges {
+  std::vector<std::uint32_t> first_index;
+  std::vector<std::uint32_t> index_count;
+  std::uint64_t triangles = 0;
+};
+DrawRanges cull_units(const std::vector<DrawUnit>& units, const glm::mat4& clip_from_mesh, CullVolume volume);
+
+}  // namespace penumbra::scene

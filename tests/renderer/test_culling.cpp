@@ -1,0 +1,138 @@
+// Draw units and culling (scene/mesh.h, scene/culling.h), GL-free: what a unit covers, which
+// units a camera or a shadow map drops, and the outdoor town as units with bounds.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "scene/culling.h"
+#include "scene/outdoor.h"
+#include "scene/scene.h"
+
+namespace penumbra::scene {
+namespace {
+
+Aabb box_at(glm::vec3 centre, float half) { return {centre - glm::vec3(half), centre + glm::vec3(half)}; }
+
+TEST(DrawUnits, CoverEveryIndexOnceAndAnEmptyCloseAddsNothing) {
+  MeshData m;
+  EXPECT_TRUE(m.draw_units().empty()) << "an empty mesh has no unit";
+  m.append(make_box({1, 1, 1}), glm::mat4(1));
+  m.close_unit();
+  m.close_unit();  // nothing since the last: no unit
+  m.append(make_box({1, 1, 1}), glm::translate(glm::mat4(1), {10, 0, 0}));
+  m.append(make_box({2, 2, 2}), glm::translate(glm::mat4(1), {10, 0, 0}));
+  m.close_unit();
+  m.append(make_box({1, 1, 1}), glm::translate(glm::mat4(1), {0, 0, -20}));  // left open
+  ASSERT_EQ(m.units.size(), 2u);
+  const std::vector<DrawUnit> units = m.draw_units();
+  ASSERT_EQ(units.size(), 3u);
+  std::uint32_t next = 0;
+  for (const DrawUnit& u : units) {
+    EXPECT_EQ(u.first_index, next);
+    EXPECT_EQ(u.index_count % 3, 0u);
+    next += u.index_count;
+  }
+  EXPECT_EQ(next, m.indices.size());
+  EXPECT_EQ(units[0].bounds.lo, glm::vec3(-0.5f));
+  EXPECT_EQ(units[1].bounds.lo, glm::vec3(9, -1, -1)) << "the larger box of the second unit";
+  EXPECT_EQ(units[2].bounds.hi, glm::vec3(0.5f, 0.5f, -19.5f));
+
+  MeshData whole = make_sphere(1);
+  ASSERT_EQ(whole.draw_units().size(), 1u) << "a mesh without closed units is one unit";
+  EXPECT_EQ(whole.draw_units()[0].index_count, whole.indices.size());
+}
+
+TEST(Culling, AShadowMapKeepsCastersTowardTheLightAndDropsThoseBesideIt) {
+  // A map looking down -y over x, z in [-10, 10], depth range y in [0, 20].
+  const glm::mat4 map = glm::ortho(-10.0f, 10.0f, -10.0f, 10.0f, 0.0f, 20.0f) * glm::lookAt(glm::vec3(0, 20, 0), glm::vec3(0), glm::vec3(0, 0, -1));
+  EXPECT_TRUE(may_touch(map, box_at({0, 5, 0}, 1), CullVolume::caster));
+  EXPECT_TRUE(may_touch(map, box_at({0, 5, 0}, 1), CullVolume::view));
+  // Above the near plane (toward the light): still casts into the map; no camera would see it.
+  EXPECT_TRUE(may_touch(map, box_at({0, 100, 0}, 1), CullVolume::caster));
+  EXPECT_FALSE(may_touch(map, box_at({0, 100, 0}, 1), CullVolume::view));
+  // Beside the map's sides: no texel is covered.
+  EXPECT_FALSE(may_touch(map, box_at({12, 5, 0}, 1), CullVolume::caster));
+  EXPECT_FALSE(may_touch(map, box_at({0, 5, -11.5f}, 1), CullVolume::caster));
+  // Straddling a side, or larger than the map: kept.
+  EXPECT_TRUE(may_touch(map, box_at({10.5f, 5, 0}, 1), CullVolume::caster));
+  EXPECT_TRUE(may_touch(map, box_at({0, 5, 0}, 50), CullVolume::caster));
+  EXPECT_FALSE(may_touch(map, Aabb{}, CullVolume::caster)) << "an empty box covers nothing";
+}
+
+TEST(Culling, TheCameraDropsWhatIsBehindItOrBeyondItsFarPlane) {
+  Camera cam;
+  cam.position = {0, 2, 0};
+  cam.target = {0, 2, -1};
+  cam.far_ws = 50;
+  const glm::mat4 vp = cam.projection_matrix(16.0f / 9.0f) * cam.view();
+  EXPECT_TRUE(may_touch(vp, box_at({0, 2, -10}, 1), CullVolume::view));
+  EXPECT_FALSE(may_touch(vp, box_at({0, 2, 10}, 1), CullVolume::view)) << "behind the camera";
+  EXPECT_FALSE(may_touch(vp, box_at({0, 2, -60}, 1), CullVolume::view)) << "beyond the far plane";
+  EXPECT_FALSE(may_touch(vp, box_at({40, 2, -10}, 1), CullVolume::view)) << "far to the right";
+  EXPECT_TRUE(may_touch(vp, box_at({0, 2, 0}, 1), CullVolume::view)) << "around the eye";
+}
+
+TEST(Culling, KeptNeighboursBecomeOneRangeAndTrianglesAreCounted) {
+  MeshData m;
+  for (float x : {0.0f, 2.0f, 100.0f, 4.0f}) {
+    m.append(make_box({1, 1, 1}), glm::translate(glm::mat4(1), {x, 0, 0}));
+    m.close_unit();
+  }
+  const glm::mat4 map = glm::ortho(-10.0f, 10.0f, -10.0f, 10.0f, 0.0f, 20.0f) * glm::lookAt(glm::vec3(0, 10, 0), glm::vec3(0), glm::vec3(0, 0, -1));
+  const DrawRanges r = cull_units(m.draw_units(), map, CullVolume::caster);
+  const std::uint32_t box = static_cast<std::uint32_t>(make_box({1, 1, 1}).indices.size());
+  ASSERT_EQ(r.first_index.size(), 2u) << "boxes 0 and 1 merge; box 2 is dropped; box 3 alone";
+  EXPECT_EQ(r.first_index[0], 0u);
+  EXPECT_EQ(r.index_count[0], 2 * box);
+  EXPECT_EQ(r.first_index[1], 3 * box);
+  EXPECT_EQ(r.index_count[1], box);
+  EXPECT_EQ(r.triangles, 3u * box / 3);
+}
+
+std::vector<std::pair<std::string, std::vector<DrawUnit>>> units_of(const Scene& s) {
+  std::vector<std::pair<std::string, std::vector<DrawUnit>>> out;
+  for (const auto& o : s.objects) out.emplace_back(o.name, o.mesh->draw_units());
+  return out;
+}
+
+TEST(OutdoorUnits, TheTownIsAboutTwoThousandUnitsWithTheSameBoundsForASeed) {
+  const Scene a = make_outdoor_scene({});
+  const auto units = units_of(a);
+  std::size_t total = 0;
+  for (const auto& [name, list] : units) {
+    SCOPED_TRACE(name);
+    total += list.size();
+    for (const DrawUnit& u : list) EXPECT_FALSE(u.bounds.empty());
+  }
+  const auto count = [&](const std::string& name) {
+    return std::find_if(units.begin(), units.end(), [&](const auto& p) { return p.first == name; })->second.size();
+  };
+  EXPECT_EQ(count("ground"), 256u) << "16 × 16 tiles";
+  EXPECT_GT(count("buildings"), 300u) << "body, ledges, parapet, each rooftop unit and antenna of 108 buildings";
+  EXPECT_GT(count("trees"), 800u) << "the trunk and each main limb of 224 trees";
+  EXPECT_GT(count("wires"), 40u) << "one unit per span";
+  EXPECT_GT(count("fence"), 30u) << "one unit per panel";
+  EXPECT_GT(count("crane"), 50u) << "one unit per mast or jib panel";
+  EXPECT_GT(total, 1500u);
+
+  const auto again = units_of(make_outdoor_scene({}));
+  ASSERT_EQ(again.size(), units.size());
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    ASSERT_EQ(again[i].second.size(), units[i].second.size());
+    for (std::size_t k = 0; k < units[i].second.size(); ++k) {
+      EXPECT_EQ(again[i].second[k].first_index, units[i].second[k].first_index);
+      EXPECT_EQ(again[i].second[k].bounds.lo, units[i].second[k].bounds.lo);
+      EXPECT_EQ(again[i].second[k].bounds.hi, units[i].second[k].bounds.hi);
+    }
+  }
+  OutdoorOptions other;
+  other.seed = 7;
+  const auto trees = units_of(make_outdoor_scene(other));
+  EXPECT_NE(trees[5].second.front().bounds.hi, units[5].second.front().bounds.hi) << "another seed, other trees";
+}
+
+}  // namespace
+}  // namespace penumbra::scene
