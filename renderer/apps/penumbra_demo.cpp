@@ -507,6 +507,13 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       for (std::size_t k = 0; k < configs.size(); ++k) {
         Config& c = configs[k];
         c.renderer->scene().camera = camera;
+        if (!pf.continues && c.settings.adaptive.enabled) {
+          // A new station: the controller starts from this view, not from the last station's maps
+          // (which a 30-frame shrink delay would keep), and one untimed frame measures the view's
+          // PCSS requirement. Consecutive frames (a full path) keep the hysteresis.
+          c.renderer->reset_adaptive();
+          c.renderer->render(c.settings, opt.width, opt.height);
+        }
         const Timed t = timed_render(*c.renderer, c.settings, opt.width, opt.height, *c.timer);
         c.info = t.info;
         if (t.info.pcss_requirement.valid) c.pcss_clamped.push_back(t.info.pcss_requirement.clamped_fraction);
