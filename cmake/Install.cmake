@@ -67,8 +67,8 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DO
 # --- libraries, headers, CMake package, pkg-config -----------------------------------------------
 
 # component -> targets (export name = the target's name without "penumbra_")
-set(penumbra_export_core penumbra_published penumbra_random penumbra_psychometric_math penumbra_text penumbra_json_input
-    penumbra_staged_dir)
+set(penumbra_export_core penumbra_published penumbra_random penumbra_stats penumbra_psychometric_math penumbra_text
+    penumbra_json_input penumbra_staged_dir)
 set(penumbra_export_adaptive penumbra_adaptive)
 set(penumbra_export_psychometrics penumbra_psychometrics)
 set(penumbra_export_study_log penumbra_study_log)

@@ -17,7 +17,7 @@
 #include "fit/model_fit.h"
 #include "fit/study_fit.h"
 #include "report/outputs.h"
-#include "common/progress_bar.h"
+#include "cli/progress_bar.h"
 #include "cli/checks.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"

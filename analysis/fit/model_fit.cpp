@@ -9,6 +9,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "solver/solver_options.h"
+
 namespace penumbra::analysis {
 
 namespace psy = psychometric;
@@ -411,14 +413,7 @@ FitResult solve(const ModelSpec& spec, const Bounds& b, Parameters start, const 
     problem.SetParameterLowerBound(&blocks.lambda, 0, 0.0);
     problem.SetParameterUpperBound(&blocks.lambda, 0, spec.lapse.max);
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 200;
-  options.function_tolerance = 1e-12;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-10;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = solver::small_problem_options(1e-12);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   out.iterations = static_cast<int>(summary.iterations.size());

@@ -49,17 +49,6 @@ double chi2_survival(double x, double dof) {
   return z < a + 1.0 ? 1.0 - gamma_p_series(a, z) : gamma_q_fraction(a, z);
 }
 
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return NAN;
-  std::sort(values.begin(), values.end());
-  const double pos = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t j = std::min(i + 1, values.size() - 1);
-  return values[i] + (pos - static_cast<double>(i)) * (values[j] - values[i]);
-}
-
-double median(std::vector<double> values) { return percentile(std::move(values), 0.5); }
-
 double mad_sd(const std::vector<double>& values) {
   const double m = median(values);
   std::vector<double> deviations;

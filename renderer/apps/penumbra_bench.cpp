@@ -34,6 +34,7 @@
 #include "metrics/image_error.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
+#include "stats/summary.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
 
@@ -70,7 +71,7 @@ struct Variant {
 struct FrameTimes {
   std::vector<double> ms;
   gl::TimingMethod method = gl::TimingMethod::wall_finish;
-  double median() const { return gl::median(ms); }
+  double median() const { return stats::median(ms); }
   double min() const { return *std::min_element(ms.begin(), ms.end()); }
   double max() const { return *std::max_element(ms.begin(), ms.end()); }
 };

@@ -36,6 +36,7 @@
 
 #include "adaptive/resolution_rule.h"
 #include "cli/main.h"
+#include "cli/progress_bar.h"
 #include "io/atomic_file.h"
 #include "json/json_input.h"
 #include "apps/cli_options.h"
@@ -52,6 +53,7 @@
 #include "scene/scene.h"
 #include "shadows/frame_plan.h"
 #include "shadows/renderer.h"
+#include "stats/summary.h"
 
 #if PENUMBRA_DEMO_GUI
 #define GLFW_INCLUDE_NONE
@@ -100,17 +102,8 @@ scene::Camera path_camera(const scene::Camera& start, int i, int n) {
   return c;
 }
 
-struct Spread {
-  double median = 0, p10 = 0, p90 = 0, min = 0, max = 0;
-};
-Spread spread(std::vector<double> v) {
-  Spread s;
-  if (v.empty()) return s;
-  std::sort(v.begin(), v.end());
-  auto at = [&](double q) { return v[static_cast<std::size_t>(std::lround(q * static_cast<double>(v.size() - 1)))]; };
-  s.median = at(0.5), s.p10 = at(0.1), s.p90 = at(0.9), s.min = v.front(), s.max = v.back();
-  return s;
-}
+using stats::Spread;
+using stats::spread;
 nlohmann::json to_json(const Spread& s) {
   return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"max", s.max}};
 }
@@ -405,6 +398,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
               "max diff", ">1/255");
   const int total = static_cast<int>(opt.techniques.size() * plan.frames.size());
   int done = 0;
+  ProgressBar progress("penumbra-demo", true, " frames");
   metrics::SurfaceProbe probe(scene);
   // Thin casters, when the scene has them: the scene with and without them for the masks, which
   // every technique shares (one per reference frame).
@@ -498,9 +492,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     std::vector<std::string> crop_labels;
     for (std::size_t i = 0; i < plan.frames.size(); ++i) {
       const PathFrame& pf = plan.frames[i];
-      std::fprintf(stderr, "\r[%d/%d] %s frame %d (%zu/%zu)%s ", ++done, total, name.c_str(), pf.frame, i + 1, plan.frames.size(),
-                   pf.reference && opt.reference ? " + reference" : "");
-      std::fflush(stderr);
+      progress(++done, total, name + " frame " + std::to_string(pf.frame) + (pf.reference && opt.reference ? " + reference" : ""));
       const scene::Camera camera = camera_at(scene, plan, pf.frame);
       io::ImageF surface = probe.render(camera, opt.width, opt.height);
       const glm::mat4 view_projection = metrics::camera_view_projection(camera, opt.width, opt.height);
@@ -597,7 +589,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
       surface_previous = std::move(surface);
       view_projection_previous = view_projection;
     }
-    std::fprintf(stderr, "\r%70s\r", "");
+    progress.clear();  // the technique's tables follow on stdout
     for (auto& c : configs) c.timer->poll(true);
     io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"), side_by_side(shown_f, shown_a));
     if (!crops.empty())

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "stats/summary.h"
+
 namespace penumbra::gl {
 
 const char* to_string(TimingMethod m) { return m == TimingMethod::wall_finish ? "wall_finish" : "gpu_timer"; }
@@ -14,14 +16,6 @@ struct PassTimer::Pending {
 
 PassTimer::PassTimer(bool use_gpu_queries) : use_gpu_(use_gpu_queries) {}
 PassTimer::~PassTimer() = default;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (v.size() % 2 == 1) return *mid;
-  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
-}
 
 void PassTimer::begin(const std::string& pass) {
   if (!current_.empty()) throw std::logic_error("PassTimer: '" + pass + "' begun inside '" + current_ + "'");
@@ -83,7 +77,7 @@ std::vector<PassStats> PassTimer::stats() const {
   std::vector<PassStats> out;
   auto add = [&](const std::string& pass, TimingMethod method, const std::vector<double>& v) {
     if (v.empty()) return;
-    out.push_back({pass, method, median(v), *std::min_element(v.begin(), v.end()),
+    out.push_back({pass, method, stats::median(v), *std::min_element(v.begin(), v.end()),
                    *std::max_element(v.begin(), v.end()), static_cast<int>(v.size())});
   };
   for (const auto& pass : order_) {

@@ -55,6 +55,4 @@ class PassTimer {
   std::vector<std::unique_ptr<Query>> free_queries_;
 };
 
-double median(std::vector<double> v);
-
 }  // namespace penumbra::gl

@@ -31,20 +31,14 @@
 
 #include "json/json_input.h"
 #include "scene/scene.h"
+#include "text/printable.h"
 
 namespace penumbra::scene {
 namespace {
 
 using nlohmann::json;
 
-// Control characters (from a key, a token or an Assimp message) would break the one-line rule.
-std::string one_line(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
-  while (!out.empty() && out.back() == ' ') out.pop_back();
-  return out;
-}
+using text::one_line;
 
 // How a wrong value is shown after "got": short, one line.
 std::string describe(const json& v) {

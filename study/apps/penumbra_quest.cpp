@@ -17,11 +17,12 @@
 
 #include "cli/checks.h"
 #include "cli/main.h"
-#include "common/progress_bar.h"
+#include "cli/progress_bar.h"
 #include "observers/staircase_simulation.h"
 #include "published.h"
 #include "psychometric/psychometric.h"
 #include "quest/quest.h"
+#include "stats/summary.h"
 
 namespace {
 
@@ -169,12 +170,7 @@ int run_replay(const CLI::App& command, const QuestOptions& options, const std::
   return 0;
 }
 
-double median(std::vector<double> values) {
-  if (values.empty()) return NAN;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
+using penumbra::stats::median;
 
 Json summary(const std::vector<double>& values, double truth) {
   double total = 0.0, squares = 0.0;

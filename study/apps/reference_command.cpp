@@ -3,8 +3,8 @@
 #include "io/safe_path.h"
 #include "json/json_input.h"
 #include "cli/checks.h"
+#include "cli/progress_bar.h"
 
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 
@@ -70,20 +70,19 @@ int ReferenceCommand::run() const {
   gl::HeadlessContext context;
   stimuli::StimulusRenderer renderer;
   nlohmann::json entries = nlohmann::json::array();
-  const auto start = std::chrono::steady_clock::now();
+  ProgressBar bar("reference", !no_progress_, " seeds");
   for (std::size_t i = 0; i < specs.size(); ++i) {
+    char note[96];
+    std::snprintf(note, sizeof note, "stimulus %zu/%zu: %s a=%g contrast %g", i + 1, specs.size(),
+                  stimuli::to_string(specs[i].pattern).c_str(), specs[i].artifact_px, specs[i].lit_linear);
+    // Seeds done over every stimulus's seeds (each has the same count).
     const auto progress = [&](int done, int total) {
-      if (no_progress_) return;
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::fprintf(stderr, "\rreference %zu/%zu (%s a=%g contrast %g) seed %d/%d, %.0f s ", i + 1, specs.size(),
-                   stimuli::to_string(specs[i].pattern).c_str(), specs[i].artifact_px, specs[i].lit_linear, done,
-                   total, s);
-      std::fflush(stderr);
+      bar(static_cast<int>(i) * total + done, static_cast<int>(specs.size()) * total, note);
     };
     const stimuli::Reference ref = stimuli::find_reference(renderer, specs[i], search, progress);
     entries.push_back(stimuli::to_json(ref));
   }
-  if (!no_progress_) std::fputc('\n', stderr);
+  bar.clear();
   const nlohmann::json out = {
       {"what", "reference filter size: smallest filter radius (px) at which the 8-bit stimuli drawn from the jagged "
                "shadow map and from the straight original are pixel-identical, worst over the seeds; null when they "

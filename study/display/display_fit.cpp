@@ -10,6 +10,7 @@
 
 #include <ceres/ceres.h>
 
+#include "solver/solver_options.h"
 #include "text/printable.h"
 
 namespace penumbra::display {
@@ -175,14 +176,7 @@ DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
                              nullptr, &black, &white, &gamma);
   problem.SetParameterLowerBound(&gamma, 0, 0.5);
   problem.SetParameterUpperBound(&gamma, 0, 5.0);
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 200;
-  options.function_tolerance = 1e-14;
-  options.gradient_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-12;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = solver::small_problem_options(1e-14);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable() || !(white > black))

@@ -9,11 +9,13 @@
 #include <vector>
 
 #include "display/display_calibration.h"
+#include "shadows/settings_table.h"
 
 namespace penumbra::stimuli {
 
 enum class Pattern { stair, step };
-enum class Kernel { disk, grid, poisson };
+// The renderer's PCF kernels (one enum: a stimulus is drawn with the renderer's kernel of that name).
+using Kernel = shadows::Kernel;
 
 // The display's transfer function: an assumed standard one (srgb, gamma2.2, linear) or the
 // monitor's own, measured (display-calibration.json). stimulus.h's encode/decode apply it.
