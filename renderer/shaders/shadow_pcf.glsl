@@ -31,6 +31,23 @@ BoxFootprint box_footprint(vec2 p, float radius_texels) {
   return b;
 }
 
+// A box wider than `max_taps` texels per axis, strided: one test per stride^2 cell, weighted by
+// the part of the cell the box covers, added to `sum`. TEST is an expression of `cell_centre`
+// (texel coordinates). Shared by pcf_grid and RPCF (GLSL has no function parameters, hence the
+// macro).
+#define BOX_STRIDED_SUM(box, max_taps, sum, TEST)                                   \
+  {                                                                                \
+    int stride = (box.span + max_taps - 1) / max_taps;                             \
+    for (int j = box.first.y; j <= box.last.y; j += stride) {                      \
+      float wy = overlap(float(j), float(j + stride), box.lo.y, box.hi.y);         \
+      for (int i = box.first.x; i <= box.last.x; i += stride) {                    \
+        float wx = overlap(float(i), float(i + stride), box.lo.x, box.hi.x);       \
+        vec2 cell_centre = vec2(i, j) + 0.5 * float(stride);                       \
+        sum += wx * wy * (TEST);                                                   \
+      }                                                                            \
+    }                                                                              \
+  }
+
 // Box-filtered PCF: the mean of the nearest-texel shadow test over the square sc.xy +- r (texels),
 // each texel weighted by the area of it the square covers, so the result is exact for any
 // fractional radius. Whole 2x2 blocks are compared at once with textureGather. Kernels wider than
@@ -52,15 +69,9 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
     }
     return sum * box.norm;
   }
-  int stride = (box.span + max_taps - 1) / max_taps;
-  for (int j = box.first.y; j <= box.last.y; j += stride) {
-    float wy = overlap(float(j), float(j + stride), box.lo.y, box.hi.y);
-    for (int i = box.first.x; i <= box.last.x; i += stride) {
-      float wx = overlap(float(i), float(i + stride), box.lo.x, box.hi.x);
-      vec2 centre = (vec2(i, j) + 0.5 * float(stride)) / g_shadow_res;
-      sum += wx * wy * texture(u_shadow_cmp_nearest, vec3(atlas_uv(centre), reference_depth(sc, centre - sc.xy, gradient)));
-    }
-  }
+  BOX_STRIDED_SUM(box, max_taps, sum,
+                  texture(u_shadow_cmp_nearest, vec3(atlas_uv(cell_centre / g_shadow_res),
+                                                     reference_depth(sc, cell_centre / g_shadow_res - sc.xy, gradient))))
   return sum * box.norm;
 }
 

@@ -206,14 +206,7 @@ float shadow_rpcf(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
     }
     return sum * box.norm;
   }
-  int stride = (box.span + max_taps - 1) / max_taps;
-  for (int j = box.first.y; j <= box.last.y; j += stride) {
-    float wy = overlap(float(j), float(j + stride), box.lo.y, box.hi.y);
-    for (int i = box.first.x; i <= box.last.x; i += stride) {
-      float wx = overlap(float(i), float(i + stride), box.lo.x, box.hi.x);
-      sum += wx * wy * rbsm_visibility_at(sc, gradient, vec2(i, j) + 0.5 * float(stride));
-    }
-  }
+  BOX_STRIDED_SUM(box, max_taps, sum, rbsm_visibility_at(sc, gradient, cell_centre))
   return sum * box.norm;
 }
 
