@@ -122,4 +122,27 @@ GLint Program::location(std::string_view name) const {
   return it == locations_.end() ? -1 : it->second;
 }
 
+GLuint Program::binding(std::string_view name) const {
+  const GLint loc = location(name);
+  if (loc < 0) throw std::logic_error("program " + std::to_string(id()) + " has no sampler or image uniform '" + std::string(name) + "'");
+  GLint unit = -1;
+  glGetUniformiv(id(), loc, &unit);
+  if (unit < 0) throw std::logic_error("uniform '" + std::string(name) + "' has no binding");
+  return static_cast<GLuint>(unit);
+}
+
+glm::uvec3 Program::work_group_size() const {
+  GLint size[3] = {0, 0, 0};
+  glGetProgramiv(id(), GL_COMPUTE_WORK_GROUP_SIZE, size);
+  if (size[0] <= 0) throw std::logic_error("program " + std::to_string(id()) + " is not a compute program");
+  return {static_cast<unsigned>(size[0]), static_cast<unsigned>(size[1]), static_cast<unsigned>(size[2])};
+}
+
+void Program::dispatch_covering(int width, int height, int depth) const {
+  const glm::uvec3 group = work_group_size();
+  const auto groups = [](int n, unsigned g) { return (static_cast<GLuint>(std::max(n, 0)) + g - 1) / g; };
+  use();
+  glDispatchCompute(groups(width, group.x), groups(height, group.y), groups(depth, group.z));
+}
+
 }  // namespace penumbra::gl

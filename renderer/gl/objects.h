@@ -177,6 +177,14 @@ class Program {
     if (!v.empty()) glProgramUniform4iv(id(), location(name), static_cast<GLsizei>(v.size()), &v[0].x);
   }
 
+  // The unit the shader gave a sampler or image uniform (layout(binding = N)): C++ binds there
+  // instead of repeating the number. Throws std::logic_error when the program has no such uniform.
+  GLuint binding(std::string_view name) const;
+  // A compute program's work-group size, from its layout(local_size_x = ...).
+  glm::uvec3 work_group_size() const;
+  // Uses the program and dispatches as many work groups as cover width × height × depth invocations.
+  void dispatch_covering(int width, int height = 1, int depth = 1) const;
+
  private:
   Handle<detail::delete_program> handle_;
   std::unordered_map<std::string, GLint, StringHash, std::equal_to<>> locations_;

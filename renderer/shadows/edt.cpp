@@ -22,16 +22,16 @@ void Edt::compute(const gl::Texture& sites) {
     nearest_ = gl::Texture({GL_RG32I, in.width, in.height, 1}, "EDT nearest site");
     distance_sq_ = gl::Texture({GL_R32I, in.width, in.height, 1}, "EDT squared distance");
   }
-  constexpr GLuint kGroup = 64;  // local_size_x of both shaders
-  glBindImageTexture(0, sites.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R8UI);
-  glBindImageTexture(1, column_site_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32I);
-  glBindImageTexture(2, nearest_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RG32I);
-  glBindImageTexture(3, distance_sq_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32I);
-  columns_.use();
-  glDispatchCompute((static_cast<GLuint>(in.width) + kGroup - 1) / kGroup, 1, 1);
+  // Both passes see one image binding table: the column sites must sit where both shaders look.
+  const GLuint column_site = columns_.binding("u_column_site");
+  if (rows_.binding("u_column_site") != column_site) throw std::logic_error("EDT: edt_columns and edt_rows bind u_column_site differently");
+  glBindImageTexture(columns_.binding("u_sites"), sites.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R8UI);
+  glBindImageTexture(column_site, column_site_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32I);
+  glBindImageTexture(rows_.binding("u_nearest"), nearest_.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RG32I);
+  glBindImageTexture(rows_.binding("u_distance_sq"), distance_sq_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32I);
+  columns_.dispatch_covering(in.width);  // one invocation per column
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-  rows_.use();
-  glDispatchCompute((static_cast<GLuint>(in.height) + kGroup - 1) / kGroup, 1, 1);
+  rows_.dispatch_covering(in.height);  // one invocation per row
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   gl::check_errors("EDT");
 }

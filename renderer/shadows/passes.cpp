@@ -325,19 +325,19 @@ class MomentsBlurPass final : public Pass {
       blur.set("u_radius_texels", std::min(r_texels, static_cast<float>(c.resolution_texels)));
       blur.set("u_origin", glm::ivec2(c.atlas_x, c.atlas_y));
       blur.set("u_size", c.resolution_texels);
-      const GLuint groups = static_cast<GLuint>((c.resolution_texels + 63) / 64);
       // Sliding sums: one invocation per line (x); direct sums: one per texel, x along the line and
-      // y the line (vsm_blur.comp). The map is square, so both grids are `groups` x (1 or res).
-      const GLuint lines_y = moments.direct_sums ? static_cast<GLuint>(c.resolution_texels) : 1;
+      // y the line (vsm_blur.comp). The map is square, so both grids are res x (1 or res).
+      const int lines_y = moments.direct_sums ? c.resolution_texels : 1;
+      const GLuint source = blur.binding("u_source"), target = blur.binding("u_target");
       blur.set("u_axis", 0);
-      r.maps->moments_tex.bind(0);
-      glBindImageTexture(0, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
-      glDispatchCompute(groups, lines_y, 1);
+      r.maps->moments_tex.bind(source);
+      glBindImageTexture(target, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
+      blur.dispatch_covering(c.resolution_texels, lines_y);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
       blur.set("u_axis", 1);
-      r.maps->moments_tmp.bind(0);
-      glBindImageTexture(0, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
-      glDispatchCompute(groups, lines_y, 1);
+      r.maps->moments_tmp.bind(source);
+      glBindImageTexture(target, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
+      blur.dispatch_covering(c.resolution_texels, lines_y);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     gl::check_errors("vsm_blur pass");
@@ -367,10 +367,11 @@ class DepthMinmaxPass final : public Pass {
     }
     prog.set("u_regions", static_cast<int>(regions.size()));
     prog.set("u_region", std::span<const glm::ivec4>(regions));
-    r.maps->depth.bind(0);
-    glBindSampler(0, 0);
-    r.maps->depth_minmax.bind(1);
-    glBindSampler(1, 0);
+    const GLuint depth_unit = prog.binding("u_depth"), minmax_unit = prog.binding("u_minmax"), out_unit = prog.binding("u_out");
+    r.maps->depth.bind(depth_unit);
+    glBindSampler(depth_unit, 0);
+    r.maps->depth_minmax.bind(minmax_unit);
+    glBindSampler(minmax_unit, 0);
     GLint levels = 0;
     glGetTextureParameteriv(r.maps->depth_minmax.id(), GL_TEXTURE_IMMUTABLE_LEVELS, &levels);
     for (int level = 1; level <= levels; ++level) {
@@ -380,8 +381,8 @@ class DepthMinmaxPass final : public Pass {
       prog.set("u_level", level);
       prog.set("u_origin", first);
       prog.set("u_extent", extent);
-      glBindImageTexture(0, r.maps->depth_minmax.id(), level - 1, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-      glDispatchCompute(static_cast<GLuint>((extent.x + 7) / 8), static_cast<GLuint>((extent.y + 7) / 8), 1);
+      glBindImageTexture(out_unit, r.maps->depth_minmax.id(), level - 1, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      prog.dispatch_covering(extent.x, extent.y);
       glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
     gl::check_errors("depth_minmax pass");
@@ -482,11 +483,14 @@ class PcssRequirementPass final : public Pass {
     const std::uint32_t zero = 0;
     glClearNamedBufferData(q.buffer[slot].id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     r.requirement_program.use();
-    r.targets->requirement_tex.bind(0);
-    glBindSampler(0, 0);
+    const GLuint requirement_unit = r.requirement_program.binding("u_requirement");
+    r.targets->requirement_tex.bind(requirement_unit);
+    glBindSampler(requirement_unit, 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_PCSS_REQUIREMENT, q.buffer[slot].id());
     r.requirement_program.set("u_limit_inverse_uv", static_cast<float>(ap.max_texels) / ap.c);
-    constexpr int group = contract::PCSS_REQUIREMENT_GROUP_PIXELS;  // pixels per side of a work group
+    // A work group covers PCSS_REQUIREMENT_GROUP_PIXELS² pixels (its invocations reduce blocks of
+    // pixels each), so the dispatch covers pixels / that, not pixels / the work-group size.
+    constexpr int group = contract::PCSS_REQUIREMENT_GROUP_PIXELS;
     glDispatchCompute(static_cast<GLuint>((f.plan.width_px + group - 1) / group), static_cast<GLuint>((f.plan.height_px + group - 1) / group), 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     q.pending[slot] = true;

@@ -10,10 +10,6 @@
 
 namespace penumbra::shadows {
 
-void dispatch_pixels(int width, int height) {
-  glDispatchCompute(static_cast<GLuint>((width + 7) / 8), static_cast<GLuint>((height + 7) / 8), 1);
-}
-
 ScreenSpace::ScreenSpace(const gl::ShaderLibrary& shaders) : shaders_(shaders), edt_(shaders) {
   gl::SamplerDesc d;
   d.min_filter = d.mag_filter = GL_NEAREST;
@@ -84,9 +80,9 @@ void ScreenSpace::detect_sites(const SiteSearch& search, float depth_threshold, 
   bind_gbuffer(p, ctx.view, depth_threshold);
   glProgramUniform1i(p.id(), p.location("u_blocker_taps"), search.blocker_taps);
   glProgramUniform1f(p.id(), p.location("u_pcss_search_scale"), search.search_scale);
-  glBindImageTexture(0, sites_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R8UI);
-  glBindImageTexture(1, site_width_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-  dispatch_pixels(width_, height_);
+  glBindImageTexture(p.binding("u_sites"), sites_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R8UI);
+  glBindImageTexture(p.binding("u_site_width"), site_width_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  p.dispatch_covering(width_, height_);
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   gl::check_errors("screen-space sites");
 }
@@ -108,8 +104,8 @@ const gl::Texture& ScreenSpace::edt_penumbra(bool propagated_width, bool edge_be
   if (propagated_width) site_width_.bind(contract::UNIT_POST_INPUT_2);
   p.set("u_edge_between_pixels", edge_between_pixels);
   set_uniforms(p);
-  glBindImageTexture(0, scratch_[0].id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-  dispatch_pixels(width_, height_);
+  glBindImageTexture(p.binding("u_penumbra"), scratch_[0].id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+  p.dispatch_covering(width_, height_);
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   gl::check_errors("edt_penumbra pass");
   return scratch_[0];
@@ -130,8 +126,8 @@ const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float fil
   for (int axis = 0; axis < 2; ++axis) {
     glProgramUniform1i(p.id(), p.location("u_axis"), axis);
     in[axis]->bind(contract::UNIT_POST_INPUT);
-    glBindImageTexture(0, out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-    dispatch_pixels(width_, height_);
+    glBindImageTexture(p.binding("u_target"), out[axis]->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+    p.dispatch_covering(width_, height_);
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   }
   gl::check_errors("screen-space mean filter");

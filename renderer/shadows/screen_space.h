@@ -100,7 +100,4 @@ class ScreenSpace {
   gl::Texture edges_;
 };
 
-// Dispatch helper: one invocation per pixel in 8x8 groups.
-void dispatch_pixels(int width, int height);
-
 }  // namespace penumbra::shadows

@@ -40,9 +40,9 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     int w = ss.width(), h = ss.height();
     for (int level = 0; level < edges.desc().levels; ++level) {
       glProgramUniform1i(prog.id(), prog.location("u_level"), level);
-      glBindImageTexture(0, edges.id(), level > 0 ? level - 1 : 0, GL_FALSE, 0, GL_READ_ONLY, GL_RG32F);
-      glBindImageTexture(1, edges.id(), level, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-      dispatch_pixels(w, h);
+      glBindImageTexture(prog.binding("u_finer"), edges.id(), level > 0 ? level - 1 : 0, GL_FALSE, 0, GL_READ_ONLY, GL_RG32F);
+      glBindImageTexture(prog.binding("u_coarser"), edges.id(), level, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+      prog.dispatch_covering(w, h);
       glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
       w = std::max(1, w / 2);
       h = std::max(1, h / 2);
@@ -58,8 +58,8 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     edges.bind(contract::UNIT_POST_INPUT);
     glProgramUniform1f(prog.id(), prog.location("u_pcss_search_scale"), p.search_scale);
     glProgramUniform1f(prog.id(), prog.location("u_max_search_px"), static_cast<float>(p.max_search_px));
-    glBindImageTexture(0, ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
-    dispatch_pixels(ss.width(), ss.height());
+    glBindImageTexture(prog.binding("u_eroded"), ss.scratch(0).id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+    prog.dispatch_covering(ss.width(), ss.height());
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     gl::check_errors("erosion pass");
   }
