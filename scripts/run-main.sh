@@ -5,7 +5,7 @@
 # beside one fixed 2048² map, one 4096² map and four stabilized cascades of 2048² (the engine
 # baseline): frame time, texels, error against a high-quality reference, thin casters, flicker
 # into out/demo/ (report.json, frames.csv, crops, side-by-side images, plots), the tables on
-# stdout. About 3.5 min on 2 cores without a GPU; `--path full` walks all 360 frames.
+# stdout. About 5 min on 2 cores without a GPU; `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh

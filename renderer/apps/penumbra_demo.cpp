@@ -214,7 +214,9 @@ struct Options {
   bool baselines = true;       // also the engine baselines: a single map of twice the fixed size, four cascades of it
   bool auto_cascades = true;   // adaptive: as many cascades as the rule needs (unless --map.cascades is given)
   bool reference = true;       // error against a reference of the technique at the reference frames
-  int reference_samples = 16;  // area-light reference: point lights averaged
+  // Area-light reference: point lights averaged. 64 against 256 differ by RMSE 0.015 on the street,
+  // a sixth of the smallest PCSS error measured; 16 by 0.040 (AreaLightSlow.OutdoorReference...).
+  int reference_samples = 64;
   std::string screenshot;      // windowed: write the window here after screenshot_frames frames, then exit
   int screenshot_frames = 10;
 };
