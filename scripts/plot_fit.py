@@ -23,9 +23,11 @@ different units sit side by side:
   summary.txt                    what the figures leave out: each condition's c, intervals, tests
                                  and flags, staircases flagged, the unit conversion used
 
---units converts radii and artifact sizes with the session's display (session.json "display"):
-pixels per degree at the screen centre, ppd = 2 d tan(0.5 deg) * width_px / width_mm, exactly as
-penumbra-study display-check computes it (Display::pixels_per_degree); arcmin = px / ppd * 60.
+--units converts radii and artifact sizes with each participant's display: penumbra-fit writes
+their pixels per degree at the screen centre into report.json ("pixels_per_degree", computed by
+Display::pixels_per_degree from session.json "display", as penumbra-study display-check does);
+arcmin = px / ppd * 60. The fitted psychometric functions come sampled in report.json too
+(each staircase's "curve"): this script computes no model, it draws.
 """
 import argparse
 import csv
@@ -50,45 +52,14 @@ def fail(message):
     sys.exit("plot_fit.py: " + message)
 
 
-def core(family, x, alpha, beta):
-    """F(x) of quest/psychometric.h."""
-    if family == "weibull":
-        return 1.0 - math.exp(-((x / alpha) ** beta))
-    if family == "log-weibull":
-        return 1.0 - math.exp(-(10.0 ** (beta * (x - alpha))))
-    if family == "normal":
-        return 0.5 * math.erfc(-beta * (x - alpha) / math.sqrt(2.0))
-    if family == "logistic":
-        return 1.0 / (1.0 + math.exp(-beta * (x - alpha)))
-    raise ValueError("unknown family " + family)
-
-
-def psi(family, u, alpha, beta, gamma, lam):
-    """Probability correct at intensity u = log10(a / r)."""
-    x = 10.0 ** u if family == "weibull" else u
-    return gamma + (1.0 - gamma - lam) * core(family, x, alpha, beta)
-
-
-def pixels_per_degree(display):
-    """Pixels per degree at the screen centre: Display::pixels_per_degree (study/procedure/config.cpp)."""
-    mm = 2.0 * display["viewing_distance_mm"] * math.tan(0.5 * math.pi / 180.0)
-    return mm * display["width_px"] / display["width_mm"]
-
-
 def session_geometry(report):
-    """{participant: (pixels per degree, session.json path)} for the inputs that have a session.json."""
+    """{participant: (pixels per degree, where it came from)}: penumbra-fit writes each participant's
+    display conversion into report.json ("pixels_per_degree", from their session.json)."""
     out = {}
-    for given in report.get("inputs", []):
-        folder = given if os.path.isdir(given) else os.path.dirname(given)
-        path = os.path.join(folder, "session.json")
-        if not os.path.isfile(path):
-            continue
-        try:
-            with open(path) as f:
-                session = json.load(f)
-            out[session["participant"]] = (pixels_per_degree(session["display"]), path)
-        except (OSError, ValueError, KeyError, TypeError, ZeroDivisionError) as e:
-            fail("%s: cannot read the display geometry: %s" % (path, e))
+    for participant, ppd in report.get("pixels_per_degree", {}).items():
+        if not isinstance(ppd, (int, float)) or not ppd > 0:
+            fail("report.json: pixels_per_degree.%s: expected a positive number, got %r" % (participant, ppd))
+        out[participant] = (float(ppd), "report.json")
     return out
 
 
@@ -101,8 +72,8 @@ class Units:
         if unit != "px":
             missing = [p for p in participants if p not in geometry]
             if missing:
-                fail("--units %s: no session.json with the display for participant(s) %s (the fit's inputs "
-                     "are looked up relative to the current directory)" % (unit, ", ".join(missing)))
+                fail("--units %s: report.json has no display (pixels_per_degree) for participant(s) %s: their "
+                     "sessions had no session.json with the display" % (unit, ", ".join(missing)))
 
     def factor(self, participant):
         if self.unit == "px":
@@ -265,10 +236,7 @@ def plot_psychometric(report, participant, units, out_dir):
     for s in stairs:
         ax = axes[conditions.index(s["condition"])][sizes.index(s["artifact_px"])]
         f = s["fit"]
-        family = f["family"]
-        us = [-math.log10(lo_ratio) + (math.log10(lo_ratio) - math.log10(hi_ratio)) * i / 200.0 for i in range(201)]
-        ax.plot([10.0 ** -u for u in us], [psi(family, u, s["alpha"], f["beta"], f["guess"], f["lambda"]) for u in us],
-                color="tab:blue", label="fitted psychometric function")
+        ax.plot(s["curve"]["r_over_a"], s["curve"]["p_correct"], color="tab:blue", label="fitted psychometric function")
         for ratio, p, n in binned(s["track"]):
             ax.plot(ratio, p, "o", color="k", ms=3 + 1.0 * n, alpha=0.55, mec="none",
                     label="proportion correct (bins of equal count; size: trials)")
@@ -393,7 +361,7 @@ def write_summary(report, units, out_dir):
         for p in sorted(units.geometry):
             lines.append("  %-12s %.4f px/deg  (%s)" % (p, units.geometry[p][0], units.geometry[p][1]))
     else:
-        lines.append("no session.json found for the fit's inputs: threshold_arcmin is empty")
+        lines.append("report.json holds no display geometry (no session.json with the fit's inputs): threshold_arcmin is empty")
     lines.append("")
     lines.append("conditions (thresholds.png; the titles give c and its profile interval):")
     for cond in ordered_conditions(report):

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <mutex>
 #include <set>
@@ -10,6 +11,7 @@
 #include <thread>
 
 #include "fit/statistics.h"
+#include "procedure/config.h"
 #include "sampling/random.h"
 
 namespace penumbra::analysis {
@@ -409,6 +411,17 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   StudyFit out;
   out.options = options;
   out.sessions = static_cast<int>(data.sessions.size());
+  for (const SessionInfo& s : data.sessions) {
+    const auto field = [&](const char* key) {
+      const auto it = s.setup.find(std::string("display.") + key);
+      return it == s.setup.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
+    };
+    procedure::Display d;
+    d.width_px = static_cast<int>(field("width_px"));
+    d.width_mm = field("width_mm");
+    d.viewing_distance_mm = field("viewing_distance_mm");
+    if (d.width_px > 0 && d.width_mm > 0 && d.viewing_distance_mm > 0) out.pixels_per_degree[s.participant] = d.pixels_per_degree();
+  }
   out.trials = static_cast<int>(data.trials.size());
   out.practice_rows_excluded = data.practice_rows;
   out.inconsistencies = data.inconsistencies;

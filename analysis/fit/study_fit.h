@@ -175,6 +175,9 @@ struct StudyFit {
     double rate = NAN;  // the guess rate used
   };
   std::map<std::string, FalseAlarms> false_alarms;
+  // participant → pixels per degree at the screen centre of the display their session.json
+  // records (procedure::Display::pixels_per_degree), for converting radii to visual angle.
+  std::map<std::string, double> pixels_per_degree;
   int sessions = 0, trials = 0, practice_rows_excluded = 0;
   std::vector<std::string> notes;  // torn logs, missing session.json, ...
   std::vector<Inconsistency> inconsistencies;  // logs fitted although inconsistent (--accept-inconsistent)

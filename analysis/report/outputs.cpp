@@ -53,6 +53,22 @@ std::string join(const std::vector<std::string>& v, const char* sep = ",") {
 
 }  // namespace
 
+// The fitted psychometric function sampled for plotting (scripts/plot_fit.py draws it and computes
+// nothing): proportion correct at 121 filter radii per artifact size r / a from 0.05 to 50, evenly
+// in log, with the staircase's own lapse.
+Json psychometric_curve(const ModelSpec& spec, const StaircaseFit& s) {
+  const double beta = std::exp(s.fit.params.log_beta);
+  const psychometric::Params<double> p{alpha_of(spec, s.fit.params.u[0], beta), beta, spec.guess, s.fit.params.lambda};
+  Json ratio = Json::array(), correct = Json::array();
+  for (int i = 0; i <= 120; ++i) {
+    const double r_over_a = 0.05 * std::pow(10.0, 3.0 * i / 120.0);
+    const double u = -std::log10(r_over_a);  // intensity log10(a / r)
+    ratio.push_back(number(r_over_a));
+    correct.push_back(number(psychometric::probability(spec.family, spec.family == psychometric::Model::weibull ? std::pow(10.0, u) : u, p)));
+  }
+  return {{"r_over_a", ratio}, {"p_correct", correct}};
+}
+
 Json to_json(const FitResult& f, const ModelSpec& spec) {
   Json u = Json::array(), se_u = Json::array();
   for (std::size_t i = 0; i < f.params.u.size(); ++i) {
@@ -369,6 +385,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
               {"r_threshold_px", number(s.c * s.artifact_px)},
               {"alpha", number(alpha_of(spec, s.fit.params.u[0], std::exp(s.fit.params.log_beta)))},
               {"fit", to_json(s.fit, spec)},
+              {"curve", psychometric_curve(spec, s)},
               {"quest", {{"recomputed", s.quest_recomputed},
                          {"mean", number(s.quest_mean)},
                          {"sd", number(s.quest_sd)},
@@ -384,6 +401,9 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
   }
   Json reference_info = nullptr;
   if (reference) reference_info = {{"file", reference->file}, {"entries", reference->entries.size()}};
+  // participant → pixels per degree of the display their session recorded (radii in visual angle).
+  Json ppd = Json::object();
+  for (const auto& [participant, value] : fit.pixels_per_degree) ppd[participant] = number(value);
   Json inconsistent = Json::array();
   for (const Inconsistency& i : fit.inconsistencies)
     inconsistent.push_back({{"file", i.file}, {"line", i.line}, {"trial", i.trial}, {"problem", i.problem}});
@@ -407,6 +427,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                          {"participants", provenance.participants},
                          {"pooled_kinds", provenance.pooled_kinds}}},
           {"sessions", fit.sessions},
+          {"pixels_per_degree", ppd},
           {"trials", fit.trials},
           {"practice_rows_excluded", fit.practice_rows_excluded},
           {"notes", fit.notes},

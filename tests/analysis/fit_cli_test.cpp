@@ -799,15 +799,29 @@ TEST(FitCli, PlotFitWritesFiguresAndATidyThresholdTable) {
     EXPECT_LE(std::stod(f[7]), r) << line;
     EXPECT_GE(std::stod(f[8]), r) << line;
     EXPECT_EQ(std::stoi(f[9]), static_cast<int>(s["track"].size())) << line;
+    // The fitted function comes sampled (the script draws it): falling with the filter, through the
+    // criterion at r / a = c.
+    const auto& ratio = s["curve"]["r_over_a"];
+    const auto& correct = s["curve"]["p_correct"];
+    ASSERT_EQ(ratio.size(), 121u);
+    for (std::size_t i = 1; i < ratio.size(); ++i) EXPECT_LE(correct[i].get<double>(), correct[i - 1].get<double>() + 1e-12);
+    std::size_t nearest = 0;
+    for (std::size_t i = 0; i < ratio.size(); ++i)
+      if (std::abs(std::log(ratio[i].get<double>() / s["c"].get<double>())) < std::abs(std::log(ratio[nearest].get<double>() / s["c"].get<double>()))) nearest = i;
+    EXPECT_NEAR(correct[nearest].get<double>(), s["fit"]["p_threshold"].get<double>(), 0.05) << line;
   }
   EXPECT_EQ(seen.size(), 8u);
   EXPECT_NE(read(plots / "summary.txt").find("52.3904 px/deg"), std::string::npos) << read(plots / "summary.txt");
-  // Geometry that cannot be found refuses the visual-angle units in one line.
-  fs::remove(dir / "p1" / "session.json");
+  // The conversion comes from penumbra-fit (report.json), not from the script: without it the
+  // visual-angle units are refused in one line.
+  nlohmann::json edited = nlohmann::json::parse(read(dir / "fit" / "report.json"));
+  EXPECT_NEAR(edited.at("pixels_per_degree").at("p1").get<double>(), ppd, 1e-4);
+  edited["pixels_per_degree"].erase("p1");
+  std::ofstream(dir / "fit" / "report.json") << edited.dump(2);
   EXPECT_NE(std::system(("/usr/bin/python3 " + script + " " + (dir / "fit").string() + " --units deg > " +
                          (dir / "plot.txt").string() + " 2>&1").c_str()), 0);
-  EXPECT_EQ(read(dir / "plot.txt"), "plot_fit.py: --units deg: no session.json with the display for participant(s) p1 "
-                                    "(the fit's inputs are looked up relative to the current directory)\n");
+  EXPECT_EQ(read(dir / "plot.txt"), "plot_fit.py: --units deg: report.json has no display (pixels_per_degree) for participant(s) p1: "
+                                    "their sessions had no session.json with the display\n");
   fs::remove_all(dir);
 }
 
