@@ -257,12 +257,15 @@ double texels_of(const shadows::FrameInfo& info) {
 nlohmann::json reference_error_json(const std::vector<metrics::ImageError>& errors) {
   if (errors.empty()) return nullptr;
   double rmse = 0, mean_abs = 0, ssim = 0, ssim_min = 1;
+  std::vector<double> per_frame;
   for (const auto& e : errors) {
     const double n = static_cast<double>(errors.size());
     rmse += e.rmse / n, mean_abs += e.mean_abs / n, ssim += e.ssim / n;
     ssim_min = std::min(ssim_min, e.ssim);
+    per_frame.push_back(e.rmse);
   }
-  return {{"frames", errors.size()}, {"rmse_mean", rmse}, {"mean_abs_mean", mean_abs}, {"ssim_mean", ssim}, {"ssim_min", ssim_min}};
+  return {{"frames", errors.size()}, {"rmse_mean", rmse},          {"rmse_per_frame", per_frame}, {"mean_abs_mean", mean_abs},
+          {"ssim_mean", ssim},       {"ssim_min", ssim_min}};
 }
 
 // Visibility as grey, cropped to the rectangle [x0, x0 + w) × [y0, y0 + h), under a dark band of
