@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "json/json_input.h"
+#include "text/fields.h"
 
 namespace penumbra::analysis {
 
@@ -13,21 +14,12 @@ namespace {
 
 constexpr double kMaxCount = 2147483647.0;
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
+using text::trim;
 
 std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> f;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    f.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-    if (comma == std::string::npos) return f;
-    start = comma + 1;
-  }
+  std::vector<std::string> f = text::split_fields(line);
+  for (std::string& field : f) field = trim(field);
+  return f;
 }
 
 }  // namespace

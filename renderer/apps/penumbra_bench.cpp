@@ -22,6 +22,7 @@
 #include "cli_options.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
+#include "text/fields.h"
 #include "json/json_input.h"
 #include "run_python.h"
 #include "gl/context.h"
@@ -262,16 +263,7 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> out;
-  std::size_t pos = 0;
-  for (;;) {
-    const std::size_t comma = text.find(',', pos);
-    out.push_back(text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
-    if (comma == std::string::npos) return out;
-    pos = comma + 1;
-  }
-}
+std::vector<std::string> split(const std::string& text) { return text::split_fields(text); }
 
 }  // namespace
 

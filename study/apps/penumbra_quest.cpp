@@ -22,6 +22,7 @@
 #include "published.h"
 #include "psychometric/psychometric.h"
 #include "quest/quest.h"
+#include "text/fields.h"
 #include "stats/summary.h"
 
 namespace {
@@ -38,17 +39,11 @@ Json number(double value) { return std::isfinite(value) ? Json(value) : Json(nul
 
 std::vector<std::string> split_commas(const std::string& text, const std::string& option) {
   std::vector<std::string> items;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = text.find(',', start);
-    std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    item.erase(0, item.find_first_not_of(" \t"));
-    item.erase(item.find_last_not_of(" \t") + 1);
+  for (const std::string& field : penumbra::text::split_fields(text)) {
+    const std::string item = penumbra::text::trim(field);
     if (item.empty())
       throw UsageError(option + ": empty item " + std::to_string(items.size() + 1) + " in '" + penumbra::text::printable(text) + "'");
     items.push_back(item);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
   }
   return items;
 }

@@ -11,6 +11,7 @@
 #include <ceres/ceres.h>
 
 #include "solver/solver_options.h"
+#include "text/fields.h"
 #include "text/printable.h"
 
 namespace penumbra::display {
@@ -25,10 +26,7 @@ std::vector<int> calibration_levels(int count) {
 
 namespace {
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
-  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-}
+using text::trim;
 
 std::string fmt(double v) {
   char b[32];
@@ -97,10 +95,8 @@ std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const std::string where = file + ":" + std::to_string(number) + ": ";
     if (line.find('\0') != std::string::npos || !text::valid_utf8(line)) throw std::runtime_error(where + "not text");
-    std::vector<std::string> fields;
-    std::stringstream ss(line);
-    for (std::string f; std::getline(ss, f, ',');) fields.push_back(trim(f));
-    if (!line.empty() && line.back() == ',') fields.emplace_back();
+    std::vector<std::string> fields = text::split_fields(line);
+    for (std::string& f : fields) f = trim(f);
     if (!header) {
       if (fields != std::vector<std::string>{"level", "luminance_cd_m2"})
         throw std::runtime_error(where + "expected the header 'level,luminance_cd_m2', found '" + text::printable(line) + "'");

@@ -14,6 +14,7 @@
 
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
+#include "text/fields.h"
 #include "json/json_input.h"
 #include "text/printable.h"
 
@@ -119,14 +120,7 @@ std::string format_row(const TrialRow& r, Layout layout) {
 
 TrialRow parse_row(const std::string& line, const std::string& file, int line_number, Layout layout) {
   const std::vector<std::string>& names = columns(layout);
-  std::vector<std::string> f;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = line.find(',', start);
-    f.push_back(line.substr(start, comma - start));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
+  const std::vector<std::string> f = text::split_fields(line);
   const std::string where = file + ":" + std::to_string(line_number) + ": ";
   if (f.size() != names.size())
     throw std::runtime_error(where + "expected " + std::to_string(names.size()) + " columns, found " +
