@@ -416,11 +416,13 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       const auto it = s.setup.find(std::string("display.") + key);
       return it == s.setup.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
     };
+    const double width_px = field("width_px");  // NaN when session.json records no display
     procedure::Display d;
-    d.width_px = static_cast<int>(field("width_px"));
     d.width_mm = field("width_mm");
     d.viewing_distance_mm = field("viewing_distance_mm");
-    if (d.width_px > 0 && d.width_mm > 0 && d.viewing_distance_mm > 0) out.pixels_per_degree[s.participant] = d.pixels_per_degree();
+    if (!(width_px >= 1 && width_px <= 1e6 && d.width_mm > 0 && d.viewing_distance_mm > 0)) continue;
+    d.width_px = static_cast<int>(width_px);
+    out.pixels_per_degree[s.participant] = d.pixels_per_degree();
   }
   out.trials = static_cast<int>(data.trials.size());
   out.practice_rows_excluded = data.practice_rows;
