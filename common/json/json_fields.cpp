@@ -58,6 +58,7 @@ const char* plural(Type t) {
 std::string array_phrase(const Field& f) {
   const char* what = f.items ? plural(f.items->type) : "elements";
   const std::size_t lo = f.min_items.value_or(0);
+  if (lo == 0 && !f.max_items) return f.items ? std::string("an array of ") + what : "an array";
   if (f.max_items && lo == *f.max_items) return "an array of " + std::to_string(lo) + " " + what;
   std::string s = lo == 1 ? "a non-empty array of " : "an array of ";
   if (lo > 1) s += "at least " + std::to_string(lo) + (f.max_items ? " and " : " ");
@@ -81,6 +82,8 @@ std::string type_phrase(const Field& f) {
 }
 
 // The type with its range: "a number in [0, 1]", "a positive number", "an integer in [1, 10000]".
+}  // namespace
+
 std::string range_phrase(const Field& f) {
   const bool integer = f.type == Type::integer;
   const std::string noun = integer ? "integer" : "number";
@@ -100,6 +103,8 @@ std::string range_phrase(const Field& f) {
   if (!f.unit.empty()) s += " " + f.unit;
   return f.nullable ? s + " or null" : s;
 }
+
+namespace {
 
 bool has_type(const json& v, Type t) {
   switch (t) {
@@ -131,13 +136,13 @@ bool integer_in_range(const json& v, const Field& f) {
   return true;
 }
 
+}  // namespace
+
 bool number_in_range(double d, const Field& f) {
   if (f.min && !(f.exclusive_min ? d > *f.min : d >= *f.min)) return false;
   if (f.max && !(f.exclusive_max ? d < *f.max : d <= *f.max)) return false;
   return true;
 }
-
-}  // namespace
 
 std::string Reader::bad_choice(std::string_view noun, std::string_view value, std::span<const std::string> choices) {
   return std::string(noun) + " '" + printable(value, 60) + "': expected " + or_list(choices);
@@ -213,13 +218,17 @@ void Reader::check(const json& v, const std::string& path, const Field& f) const
 const json* Reader::get(const json& obj, const std::string& path, const ObjectSpec& spec, std::string_view name) const {
   const Field* f = spec.field(name);
   if (!f) throw std::logic_error("json_fields: no field '" + std::string(name) + "' in the table of " + (path.empty() ? "(top level)" : path));
-  const auto it = obj.find(name);
+  return get(obj, path, *f);
+}
+
+const json* Reader::get(const json& obj, const std::string& path, const Field& f) const {
+  const auto it = obj.find(f.name);
   if (it == obj.end()) {
-    if (f->required) fail(child(path, name), f->why.empty() ? "missing" : "missing (" + f->why + ")");
+    if (f.required) fail(child(path, f.name), f.why.empty() ? "missing" : "missing (" + f.why + ")");
     return nullptr;
   }
-  check(*it, child(path, name), *f);
-  return it->is_null() && f->nullable ? nullptr : &*it;
+  check(*it, child(path, f.name), f);
+  return it->is_null() && f.nullable ? nullptr : &*it;
 }
 
 double Reader::number(const json& obj, const std::string& path, const ObjectSpec& spec, std::string_view name, double fallback) const {

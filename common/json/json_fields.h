@@ -3,7 +3,7 @@
 // edited (scene files, study configs, session.json, calibration.json, display-calibration.json)
 // checks a value's type, range and choice, a required field and an unknown key. A reader declares
 // its objects as tables of Field; the same tables are compared with the shipped JSON schemas
-// (tests/common/test_json_fields.cpp, tests/common/test_schemas.cpp), so a schema and its reader
+// (tests/study/schema_test.cpp; the wordings: tests/common/test_json_fields.cpp, tests/study/json_readers_test.cpp), so a schema and its reader
 // cannot disagree.
 //
 // Every error is one line "FILE: field.path: what", `what` in one wording per kind:
@@ -75,6 +75,10 @@ class FieldError : public JsonError {
 // How a wrong value is shown after "got": short, one line ("an object", "an array of 2 elements",
 // "null", or the JSON text, shortened).
 std::string describe(const nlohmann::json& v);
+// A number field's type and range as its error says it ("a number in (0, 180)", "a positive number"),
+// and whether `d` lies in that range: for a reader that converts the value (a float) and checks again.
+std::string range_phrase(const Field& f);
+bool number_in_range(double d, const Field& f);
 // A bound as the errors show it: integers whole, others %g.
 std::string format_bound(double d);
 
@@ -93,6 +97,8 @@ class Reader {
   // where nullable. Arrays: each element checked against `items`.
   const nlohmann::json* get(const nlohmann::json& obj, const std::string& path, const ObjectSpec& spec,
                             std::string_view name) const;
+  // The same for a field that is not in a table (a reader that states each field where it reads it).
+  const nlohmann::json* get(const nlohmann::json& obj, const std::string& path, const Field& f) const;
   // One value against one field (type, range, choice, length, items; nested objects' keys).
   void check(const nlohmann::json& v, const std::string& path, const Field& f) const;
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "adaptive/detail/calibration_fields.h"
+#include "json/json_fields.h"
 #include "json/json_input.h"
 #include "psychometric/psychometric.h"
 
@@ -21,117 +23,136 @@ constexpr std::size_t kMaxText = 4096;
   throw CalibrationError(path.string() + ": " + field + ": " + what);
 }
 
-// A string field of `j`, at most kMaxText bytes; `at` prefixes its name in errors ("entries[2].").
-std::string text(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at, const char* field, bool required) {
-  if (!j.contains(field)) {
-    if (required) fail(path, at + field, "missing");
-    return {};
-  }
-  if (!j[field].is_string()) fail(path, at + field, "expected a string");
-  std::string s = j[field].get<std::string>();
-  if (s.size() > kMaxText) fail(path, at + field, "longer than " + std::to_string(kMaxText) + " bytes");
-  return s;
+using json_input::Field;
+using json_input::ObjectSpec;
+using json_input::Type;
+
+Field text_field(std::string name, bool required = false) {
+  return {.name = std::move(name), .type = Type::string, .required = required, .max_length = kMaxText};
+}
+Field c_field() { return {.name = "c", .type = Type::number, .required = true, .min = kMinC, .max = kMaxC, .unit = "texels"}; }
+// [lo, hi] around a value; that lo <= value <= hi is checked by the reader.
+Field interval_field(std::string name) {
+  return {.name = std::move(name), .type = Type::array, .min_items = 2, .max_items = 2,
+          .items = json_input::item({.type = Type::number, .min = 0, .max = kMaxC, .exclusive_min = true})};
+}
+Field names_field(std::string name) {
+  return {.name = std::move(name), .type = Type::array, .max_items = 64,
+          .items = json_input::item({.type = Type::string, .min_length = 1, .max_length = 128})};
+}
+Field count_field(std::string name) {
+  return {.name = std::move(name), .type = Type::integer, .nullable = true, .min = 0, .max = 2147483647};
 }
 
-// c and ci95 of an entry (or of a version-1 file); `at` prefixes the field names.
-void read_c(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at, CalibrationEntry& e) {
-  if (!j.contains("c")) fail(path, at + "c", "missing");
-  if (!j["c"].is_number()) fail(path, at + "c", "expected a number");
-  e.c = j["c"].get<double>();
-  if (!(e.c >= kMinC && e.c <= kMaxC))
-    fail(path, at + "c", "expected a positive number in [0.01, 1000] texels, got " + json_input::printable(j["c"].dump()));
+const std::shared_ptr<const ObjectSpec>& threshold_fields() {
+  static const auto spec = json_input::spec({{
+      // An empty task or family is the default (2afc, log-weibull): the choice is checked after.
+      text_field("task"),
+      {.name = "guess", .type = Type::number, .min = 0, .max = 0.99},
+      {.name = "criterion_f", .type = Type::number, .min = 1e-6, .max = 1 - 1e-6},
+      text_field("family"),
+      {.name = "beta", .type = Type::number, .min = 0.01, .max = 1000},
+      {.name = "beta_ci95", .type = Type::array, .min_items = 2, .max_items = 2,
+       .items = json_input::item({.type = Type::number, .min = 0, .max = 1000, .exclusive_min = true})},
+      {.name = "lapse", .type = Type::number, .min = 0, .max = 0.5},
+  }, false});
+  return spec;
+}
+
+const std::shared_ptr<const ObjectSpec>& entry_fields() {
+  static const auto spec = json_input::spec({{
+      {.name = "technique", .type = Type::string, .required = true, .min_length = 1, .max_length = kMaxText},
+      text_field("kernel"),
+      c_field(),
+      interval_field("ci95"),
+      text_field("condition"),
+      {.name = "obtained_by", .type = Type::string, .required = true,
+       .choices = {"study", "image-observer", "simulated", "mixed", "published"}, .noun = "obtained_by"},
+      {.name = "observers", .type = Type::string},
+      {.name = "pooled_observer_kinds", .type = Type::array, .items = json_input::item({.type = Type::string})},
+      {.name = "usable", .type = Type::boolean},
+      names_field("unusable_because"),
+      count_field("participants"),
+      count_field("trials"),
+      {.name = "per_condition", .type = Type::array},
+      names_field("flags"),
+      {.name = "threshold", .type = Type::object, .object = threshold_fields()},
+  }, false});
+  return spec;
+}
+
+// Version 1: one c at the top level.
+const ObjectSpec& version_1_fields() {
+  static const ObjectSpec spec{{c_field(), interval_field("ci95"), text_field("condition"), text_field("source")}, false};
+  return spec;
+}
+
+// c and ci95 of an entry (or of a version-1 file): lo <= c <= hi.
+void read_c(const json_input::Reader& r, const nlohmann::json& j, const std::string& at, const ObjectSpec& spec,
+            CalibrationEntry& e) {
+  e.c = r.number(j, at, spec, "c");
   e.ci95_lo = e.ci95_hi = e.c;
-  if (j.contains("ci95")) {
-    const auto& ci = j["ci95"];
-    if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) fail(path, at + "ci95", "expected [lo, hi]");
-    e.ci95_lo = ci[0].get<double>();
-    e.ci95_hi = ci[1].get<double>();
-    if (!(e.ci95_lo > 0 && e.ci95_lo <= e.c && e.c <= e.ci95_hi && e.ci95_hi <= kMaxC))
-      fail(path, at + "ci95", "expected 0 < lo <= c <= hi <= 1000, got " + json_input::printable(ci.dump()));
+  if (const auto* ci = r.get(j, at, spec, "ci95")) {
+    e.ci95_lo = (*ci)[0].get<double>();
+    e.ci95_hi = (*ci)[1].get<double>();
+    if (!(e.ci95_lo <= e.c && e.c <= e.ci95_hi))
+      r.fail(json_input::child(at, "ci95"), "expected 0 < lo <= c <= hi <= 1000, got " + json_input::printable(ci->dump()));
   }
-}
-
-long count(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at, const char* field) {
-  if (!j.contains(field) || j[field].is_null()) return 0;
-  const auto& v = j[field];
-  if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() >= (1LL << 31))
-    fail(path, at + field, "expected a whole number in [0, 2^31), got " + json_input::printable(v.dump()));
-  return static_cast<long>(v.get<long long>());
 }
 
 // An entry's "threshold": what its c is a threshold of (penumbra-fit writes it; default.json states
 // the published design's).
-ThresholdDefinition read_threshold(const std::filesystem::path& path, const nlohmann::json& j, const std::string& at) {
-  if (!j.is_object()) fail(path, at.substr(0, at.size() - 1), "expected an object");
+ThresholdDefinition read_threshold(const json_input::Reader& r, const nlohmann::json& j, const std::string& at) {
+  const ObjectSpec& spec = *threshold_fields();
   ThresholdDefinition t;
-  auto real = [&](const char* key, double lo, double hi, double fallback) {
-    if (!j.contains(key)) return fallback;
-    if (!j[key].is_number() || !(j[key].get<double>() >= lo && j[key].get<double>() <= hi))
-      fail(path, at + key, "expected a number in [" + json_input::printable(nlohmann::json(lo).dump()) + ", " +
-                               json_input::printable(nlohmann::json(hi).dump()) + "]");
-    return j[key].get<double>();
-  };
-  t.task = text(path, j, at, "task", false);
+  t.task = r.string(j, at, spec, "task");
   if (t.task.empty()) t.task = "2afc";
-  if (t.task != "2afc" && t.task != "yesno") fail(path, at + "task", "expected 2afc or yesno");
-  t.guess = real("guess", 0, 0.99, 0.5);
-  t.criterion_f = real("criterion_f", 1e-6, 1 - 1e-6, t.criterion_f);
-  t.family = text(path, j, at, "family", false);
+  static const std::vector<std::string> tasks = {"2afc", "yesno"};
+  if (t.task != "2afc" && t.task != "yesno") r.fail(json_input::child(at, "task"), json_input::Reader::bad_choice("task", t.task, tasks));
+  t.guess = r.number(j, at, spec, "guess", 0.5);
+  t.criterion_f = r.number(j, at, spec, "criterion_f", t.criterion_f);
+  t.family = r.string(j, at, spec, "family");
   if (t.family.empty()) t.family = "log-weibull";
-  if (!psychometric::parse_model(t.family)) fail(path, at + "family", "expected log-weibull, weibull, normal or logistic");
-  t.beta = real("beta", 0.01, 1000, 3.5);
-  t.beta_assumed = !j.contains("beta_ci95");
+  static const std::vector<std::string> families = {"log-weibull", "weibull", "normal", "logistic"};
+  if (!psychometric::parse_model(t.family)) r.fail(json_input::child(at, "family"), json_input::Reader::bad_choice("family", t.family, families));
+  t.beta = r.number(j, at, spec, "beta", 3.5);
+  const auto* ci = r.get(j, at, spec, "beta_ci95");
+  t.beta_assumed = !ci;
   t.beta_lo = t.beta_hi = t.beta;
-  if (j.contains("beta_ci95")) {
-    const auto& ci = j["beta_ci95"];
-    if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number() ||
-        !(ci[0].get<double>() > 0 && ci[0].get<double>() <= t.beta && t.beta <= ci[1].get<double>() && ci[1].get<double>() <= 1000))
-      fail(path, at + "beta_ci95", "expected [lo, hi] with 0 < lo <= beta <= hi <= 1000");
-    t.beta_lo = ci[0].get<double>();
-    t.beta_hi = ci[1].get<double>();
+  if (ci) {
+    t.beta_lo = (*ci)[0].get<double>();
+    t.beta_hi = (*ci)[1].get<double>();
+    if (!(t.beta_lo <= t.beta && t.beta <= t.beta_hi))
+      r.fail(json_input::child(at, "beta_ci95"), "expected [lo, hi] with 0 < lo <= beta <= hi <= 1000");
   }
-  t.lapse = real("lapse", 0, 0.5, 0);
+  t.lapse = r.number(j, at, spec, "lapse", 0);
   return t;
 }
 
-CalibrationEntry read_entry(const std::filesystem::path& path, const nlohmann::json& j, std::size_t index) {
-  const std::string at = "entries[" + std::to_string(index) + "].";
-  if (!j.is_object()) fail(path, "entries[" + std::to_string(index) + "]", "expected an object");
+CalibrationEntry read_entry(const json_input::Reader& r, const nlohmann::json& j, std::size_t index) {
+  const std::string at = json_input::element("entries", index);
+  const ObjectSpec& spec = *entry_fields();
+  r.object(j, at, spec);
   CalibrationEntry e;
-  auto field = [&](const char* name, bool required) { return text(path, j, at, name, required); };
-  e.technique = field("technique", true);
-  if (e.technique.empty()) fail(path, at + "technique", "expected a technique name, got an empty string");
-  e.kernel = field("kernel", false);
-  read_c(path, j, at, e);
-  e.condition = field("condition", false);
-  const std::string method = field("obtained_by", true);
-  const auto m = method_from_name(method);
-  if (!m)
-    fail(path, at + "obtained_by",
-         "expected study, image-observer, simulated, mixed or published, got '" + json_input::printable(method) + "'");
-  e.obtained_by = *m;
-  e.participants = static_cast<int>(count(path, j, at, "participants"));
-  e.trials = count(path, j, at, "trials");
+  e.technique = r.string(j, at, spec, "technique");
+  e.kernel = r.string(j, at, spec, "kernel");
+  read_c(r, j, at, spec, e);
+  e.condition = r.string(j, at, spec, "condition");
+  e.obtained_by = *method_from_name(r.string(j, at, spec, "obtained_by"));
+  e.participants = static_cast<int>(r.integer(j, at, spec, "participants"));
+  e.trials = static_cast<long>(r.integer(j, at, spec, "trials"));
+  for (const char* other : {"observers", "pooled_observer_kinds", "per_condition"}) r.get(j, at, spec, other);
   auto names = [&](const char* key) {
     std::vector<std::string> list;
-    if (!j.contains(key)) return list;
-    const auto& v = j[key];
-    if (!v.is_array() || v.size() > 64) fail(path, at + key, "expected an array of at most 64 names");
-    for (const auto& n : v) {
-      if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > 128)
-        fail(path, at + key, "expected names (strings of 1..128 bytes)");
-      list.push_back(n.get<std::string>());
-    }
+    if (const auto* v = r.get(j, at, spec, key))
+      for (const auto& n : *v) list.push_back(n.get<std::string>());
     return list;
   };
   e.flags = names("flags");
-  if (j.contains("usable")) {
-    if (!j["usable"].is_boolean()) fail(path, at + "usable", "expected true or false");
-    e.usable = j["usable"].get<bool>();
-  }
+  e.usable = r.boolean(j, at, spec, "usable", e.usable);
   e.unusable_because = names("unusable_because");
   if (!e.usable && e.unusable_because.empty()) e.unusable_because.push_back("marked usable: false");
-  if (j.contains("threshold")) e.threshold = read_threshold(path, j["threshold"], at + "threshold.");
+  if (r.get(j, at, spec, "threshold")) e.threshold = read_threshold(r, j["threshold"], json_input::child(at, "threshold"));
   return e;
 }
 
@@ -230,6 +251,18 @@ CalibrationChoice Calibration::choose(std::string_view technique, std::string_vi
   return {kPublishedC, kPublishedC, kPublishedC, std::nullopt, true, "published PCF value, not measured for " + wanted};
 }
 
+const json_input::ObjectSpec& calibration_fields() {
+  static const ObjectSpec spec{{
+      {.name = "schema_version", .type = Type::integer, .required = true, .constant = kCalibrationSchemaVersion,
+       .constant_note = "or no field: a version-1 file with one c"},
+      {.name = "created_utc", .type = Type::string},
+      {.name = "source", .type = Type::string},
+      {.name = "entries", .type = Type::array, .required = true, .min_items = 1, .max_items = kMaxEntries,
+       .items = json_input::item({.type = Type::object, .object = entry_fields()})},
+  }, false};
+  return spec;
+}
+
 Calibration load_calibration(const std::filesystem::path& path) {
   nlohmann::json j;
   try {
@@ -237,39 +270,42 @@ Calibration load_calibration(const std::filesystem::path& path) {
   } catch (const json_input::JsonError& e) {
     throw CalibrationError(e.what());
   }
-  if (!j.is_object()) fail(path, "(top level)", "expected an object");
-  Calibration cal;
-  cal.source = path.string();
-  if (!j.contains("schema_version")) {
-    // Version 1: one c, measured with the study's own filter before entries per technique.
-    cal.schema_version = 1;
-    CalibrationEntry e;
-    e.technique = "pcf";
-    read_c(path, j, "", e);
-    e.condition = text(path, j, "", "condition", false);
-    const std::string source = text(path, j, "", "source", false);
-    e.obtained_by = source.rfind("penumbra-fit", 0) == 0 ? CalibrationMethod::study : CalibrationMethod::published;
-    cal.entries.push_back(std::move(e));
+  const json_input::Reader r(path.string());
+  try {
+    Calibration cal;
+    cal.source = path.string();
+    if (!j.is_object() || !j.contains("schema_version")) {
+      // Version 1: one c, measured with the study's own filter before entries per technique.
+      r.object(j, "", version_1_fields());
+      cal.schema_version = 1;
+      CalibrationEntry e;
+      e.technique = "pcf";
+      read_c(r, j, "", version_1_fields(), e);
+      e.condition = r.string(j, "", version_1_fields(), "condition");
+      const std::string source = r.string(j, "", version_1_fields(), "source");
+      e.obtained_by = source.rfind("penumbra-fit", 0) == 0 ? CalibrationMethod::study : CalibrationMethod::published;
+      cal.entries.push_back(std::move(e));
+      return cal;
+    }
+    const ObjectSpec& spec = calibration_fields();
+    r.get(j, "", spec, "schema_version");
+    if (j.contains("c")) fail(path, "c", "a version-2 file has its c in entries[], not at the top level");
+    r.object(j, "", spec);
+    r.get(j, "", spec, "created_utc");
+    r.get(j, "", spec, "source");
+    const auto& list = j["entries"];
+    if (!list.is_array() || list.empty() || list.size() > kMaxEntries) r.get(j, "", spec, "entries");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      CalibrationEntry e = read_entry(r, list[i], i);
+      for (const CalibrationEntry& other : cal.entries)
+        if (other.technique == e.technique && other.kernel == e.kernel)
+          fail(path, json_input::element("entries", i), "a second entry for " + e.label());
+      cal.entries.push_back(std::move(e));
+    }
     return cal;
+  } catch (const json_input::FieldError& e) {
+    throw CalibrationError(e.what());
   }
-  const auto& v = j["schema_version"];
-  if (!v.is_number_integer() || v.get<long long>() != kCalibrationSchemaVersion)
-    fail(path, "schema_version",
-         "expected " + std::to_string(kCalibrationSchemaVersion) + " (or no field: a version-1 file with one c), got " +
-             json_input::printable(v.dump()));
-  if (j.contains("c")) fail(path, "c", "a version-2 file has its c in entries[], not at the top level");
-  if (!j.contains("entries")) fail(path, "entries", "missing");
-  const auto& list = j["entries"];
-  if (!list.is_array() || list.empty()) fail(path, "entries", "expected a non-empty array of entries");
-  if (list.size() > kMaxEntries) fail(path, "entries", "more than " + std::to_string(kMaxEntries) + " entries");
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    CalibrationEntry e = read_entry(path, list[i], i);
-    for (const CalibrationEntry& other : cal.entries)
-      if (other.technique == e.technique && other.kernel == e.kernel)
-        fail(path, "entries[" + std::to_string(i) + "]", "a second entry for " + e.label());
-    cal.entries.push_back(std::move(e));
-  }
-  return cal;
 }
 
 }  // namespace penumbra::adaptive

@@ -29,6 +29,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include "json/json_fields.h"
 #include "json/json_input.h"
 #include "scene/scene.h"
 #include "text/printable.h"
@@ -40,18 +41,7 @@ using nlohmann::json;
 
 using text::one_line;
 
-// How a wrong value is shown after "got": short, one line.
-std::string describe(const json& v) {
-  switch (v.type()) {
-    case json::value_t::object: return "an object";
-    case json::value_t::array: return "an array of " + std::to_string(v.size()) + " element" + (v.size() == 1 ? "" : "s");
-    case json::value_t::null: return "null";
-    default: break;
-  }
-  std::string s = v.dump(-1, ' ', false, json::error_handler_t::replace);
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
-}
+using json_input::describe;
 
 std::string fmt(float f) {
   std::ostringstream s;
@@ -61,28 +51,26 @@ std::string fmt(float f) {
 
 using json_input::child;
 using json_input::element;
+using json_input::Field;
+using json_input::Type;
 
-// Reads one parsed scene document; every accessor checks type, range and finiteness.
+// Reads one parsed scene document; every accessor checks type, range and finiteness through
+// json_input::Reader (its errors, json_input::FieldError, become SceneError in load_scene_file).
 class SceneReader {
  public:
-  explicit SceneReader(std::filesystem::path file) : file_(std::move(file)) {}
+  explicit SceneReader(std::filesystem::path file) : file_(std::move(file)), r_(file_.string()) {}
 
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
     throw SceneError(one_line(file_.string() + ": " + (path.empty() ? "(top level)" : path) + ": " + what));
   }
 
-  void require_object(const json& v, const std::string& path) const {
-    if (!v.is_object()) fail(path, "expected an object, got " + describe(v));
-  }
+  void require_object(const json& v, const std::string& path) const { r_.check(v, path, {.type = Type::object}); }
 
   void check_keys(const json& obj, const std::string& path, std::initializer_list<std::string_view> allowed,
-                  std::string_view where = {}) const {
-    for (const auto& [key, value] : obj.items()) {
-      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-      std::string list;
-      for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail(child(path, key), "unknown key" + std::string(where) + " (allowed: " + list + ")");
-    }
+                  std::string_view context = {}) const {
+    json_input::ObjectSpec spec;
+    for (auto a : allowed) spec.fields.push_back({.name = std::string(a)});
+    r_.object(obj, path, spec, context);
   }
 
   static const json* find(const json& obj, std::string_view key) {
@@ -91,22 +79,14 @@ class SceneReader {
   }
 
   const json& required(const json& obj, const std::string& path, std::string_view key, const std::string& why) const {
-    const json* v = find(obj, key);
-    if (!v) fail(child(path, key), "missing (" + why + ")");
-    return *v;
+    return *r_.get(obj, path, {.name = std::string(key), .required = true, .why = why});
   }
 
-  float number(const json& v, const std::string& path) const {
-    if (!v.is_number()) fail(path, "expected a number, got " + describe(v));
-    const auto f = v.get<float>();
-    if (!std::isfinite(f)) fail(path, "expected a finite number, got " + describe(v));
-    return f;
-  }
+  // A number that a float holds (the renderer's type): 1e39 is refused, not made infinite.
+  float number(const json& v, const std::string& path) const { return checked(v, path, {.type = Type::number}); }
 
   float positive(const json& v, const std::string& path) const {
-    const float f = number(v, path);
-    if (!(f > 0)) fail(path, "expected a positive number, got " + describe(v));
-    return f;
+    return checked(v, path, {.type = Type::number, .min = 0, .exclusive_min = true});
   }
 
   float non_zero(const json& v, const std::string& path) const {
@@ -117,45 +97,33 @@ class SceneReader {
 
   // Open interval (lo, hi).
   float open_range(const json& v, const std::string& path, float lo, float hi) const {
-    const float f = number(v, path);
-    if (!(f > lo && f < hi)) fail(path, "expected a number in (" + fmt(lo) + ", " + fmt(hi) + "), got " + describe(v));
-    return f;
+    return checked(v, path, {.type = Type::number, .min = lo, .max = hi, .exclusive_min = true, .exclusive_max = true});
   }
 
   float unit_interval(const json& v, const std::string& path) const {
-    const float f = number(v, path);
-    if (!(f >= 0 && f <= 1)) fail(path, "expected a number in [0, 1], got " + describe(v));
-    return f;
+    return checked(v, path, {.type = Type::number, .min = 0, .max = 1});
   }
 
   int integer(const json& v, const std::string& path, int lo, int hi) const {
-    const std::string expected = "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got ";
-    if (!v.is_number_integer()) fail(path, expected + describe(v));
-    if (v.is_number_unsigned() ? v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)
-                               : v.get<std::int64_t>() < lo || v.get<std::int64_t>() > hi)
-      fail(path, expected + describe(v));
+    r_.check(v, path, {.type = Type::integer, .min = lo, .max = hi});
     return static_cast<int>(v.get<std::int64_t>());
   }
 
   std::string string(const json& v, const std::string& path) const {
-    if (!v.is_string()) fail(path, "expected a string, got " + describe(v));
+    r_.check(v, path, {.type = Type::string});
     return v.get<std::string>();
   }
 
-  // One of `names`; returns its index.
+  // One of `names`; returns its index. The field's last name says what it is ("type 'point'").
   std::size_t choice(const json& v, const std::string& path, std::span<const std::string_view> names) const {
-    std::string list;
-    for (auto n : names) list += (list.empty() ? "\"" : ", \"") + std::string(n) + "\"";
-    if (v.is_string()) {
-      const auto it = std::find(names.begin(), names.end(), v.get<std::string>());
-      if (it != names.end()) return static_cast<std::size_t>(it - names.begin());
-    }
-    fail(path, "expected one of " + list + ", got " + describe(v));
+    Field f{.type = Type::string, .noun = path.substr(path.find_last_of(".]") + 1)};
+    for (auto n : names) f.choices.emplace_back(n);
+    r_.check(v, path, f);
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), v.get<std::string>()) - names.begin());
   }
 
   const json& array(const json& v, const std::string& path, std::size_t n) const {
-    if (!v.is_array() || v.size() != n)
-      fail(path, "expected an array of " + std::to_string(n) + " numbers, got " + describe(v));
+    r_.check(v, path, {.type = Type::array, .min_items = n, .max_items = n, .items = json_input::item({.type = Type::number})});
     return v;
   }
 
@@ -184,15 +152,25 @@ class SceneReader {
   }
 
   float colour_component(const json& v, const std::string& path) const {
-    const float f = number(v, path);
-    if (!(f >= 0)) fail(path, "expected a non-negative number, got " + describe(v));
-    return f;
+    return checked(v, path, {.type = Type::number, .min = 0});
   }
+
+  void check_field(const json& v, const std::string& path, const Field& f) const { r_.check(v, path, f); }
 
   const std::filesystem::path& file() const { return file_; }
 
  private:
+  float checked(const json& v, const std::string& path, const Field& f) const {
+    r_.check(v, path, f);
+    const auto out = v.get<float>();
+    if (!std::isfinite(out)) fail(path, "expected a finite number, got " + describe(v));
+    // Rounded to a float, 1e-50 is no longer positive and 179.9999999 no longer below 180.
+    if (!json_input::number_in_range(out, f)) fail(path, "expected " + json_input::range_phrase(f) + ", got " + describe(v));
+    return out;
+  }
+
   std::filesystem::path file_;
+  json_input::Reader r_;
 };
 
 constexpr std::array<std::string_view, 2> kProjections = {"perspective", "orthographic"};
@@ -242,7 +220,7 @@ CameraPath read_camera_path(const SceneReader& r, const json& j, const std::stri
   r.check_keys(j, path, {"keys"});
   const std::string keys_path = child(path, "keys");
   const json& keys = r.required(j, path, "keys", "a path needs its keys");
-  if (!keys.is_array() || keys.size() < 2) r.fail(keys_path, "expected an array of at least 2 keys, got " + describe(keys));
+  r.check_field(keys, keys_path, {.type = Type::array, .min_items = 2, .items = json_input::item({.type = Type::object})});
   CameraPath out;
   for (std::size_t i = 0; i < keys.size(); ++i) {
     const std::string at = element(keys_path, i);
@@ -450,7 +428,7 @@ class ObjectReader {
     r_.require_object(j, path);
     const std::size_t shape = r_.choice(r_.required(j, path, "shape", "every object needs a shape"), child(path, "shape"), kShapes);
     const std::string shape_name(kShapes[shape]);
-    const std::string where = " for shape '" + shape_name + "'";
+    const std::string where = "for shape '" + shape_name + "'";
     const std::string why = "required" + where;
 
     Object o;
@@ -625,6 +603,25 @@ std::string file_stem(std::size_t index, const std::string& name) {
   return out;
 }
 
+Scene read_scene(const std::filesystem::path& path, const json& doc) {
+  const SceneReader r(path);
+  r.require_object(doc, "");
+  r.check_keys(doc, "", {"name", "camera", "light", "camera_path", "objects"});
+
+  Scene scene;
+  scene.name = path.stem().string();
+  if (const json* v = r.find(doc, "name")) scene.name = r.string(*v, "name");
+  if (const json* v = r.find(doc, "camera")) scene.camera = read_camera(r, *v, "camera");
+  if (const json* v = r.find(doc, "light")) scene.light = read_light(r, *v, "light");
+  if (const json* v = r.find(doc, "camera_path")) scene.camera_path = read_camera_path(r, *v, "camera_path");
+  if (const json* v = r.find(doc, "objects")) {
+    r.check_field(*v, "objects", {.type = Type::array, .items = json_input::item({.type = Type::object})});
+    ObjectReader objects(r);
+    for (std::size_t i = 0; i < v->size(); ++i) scene.objects.push_back(objects.read((*v)[i], element("objects", i)));
+  }
+  return scene;
+}
+
 }  // namespace
 
 void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
@@ -678,23 +675,11 @@ void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
 }
 
 Scene load_scene_file(const std::filesystem::path& path) {
-  const json doc = parse(path, read_text(path));
-  const SceneReader r(path);
-  r.require_object(doc, "");
-  r.check_keys(doc, "", {"name", "camera", "light", "camera_path", "objects"});
-
-  Scene scene;
-  scene.name = path.stem().string();
-  if (const json* v = r.find(doc, "name")) scene.name = r.string(*v, "name");
-  if (const json* v = r.find(doc, "camera")) scene.camera = read_camera(r, *v, "camera");
-  if (const json* v = r.find(doc, "light")) scene.light = read_light(r, *v, "light");
-  if (const json* v = r.find(doc, "camera_path")) scene.camera_path = read_camera_path(r, *v, "camera_path");
-  if (const json* v = r.find(doc, "objects")) {
-    if (!v->is_array()) r.fail("objects", "expected an array of objects, got " + describe(*v));
-    ObjectReader objects(r);
-    for (std::size_t i = 0; i < v->size(); ++i) scene.objects.push_back(objects.read((*v)[i], element("objects", i)));
+  try {
+    return read_scene(path, parse(path, read_text(path)));
+  } catch (const json_input::FieldError& e) {
+    throw SceneError(one_line(e.what()));
   }
-  return scene;
 }
 
 }  // namespace penumbra::scene

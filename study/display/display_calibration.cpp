@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "json/json_fields.h"
 #include "json/json_input.h"
 #include "text/fingerprint.h"
 
@@ -130,63 +131,55 @@ nlohmann::json to_json(const DisplayCalibration& c) {
   return j;
 }
 
+const json_input::ObjectSpec& calibration_fields() {
+  using json_input::Type;
+  static const json_input::ObjectSpec spec{{
+      {.name = "schema_version", .type = Type::integer, .required = true, .constant = kSchemaVersion,
+       .constant_note = "a display-calibration.json of this version"},
+      {.name = "created_utc", .type = Type::string, .max_length = 64},
+      {.name = "model", .type = Type::string, .required = true, .choices = {"gamma", "table"}, .noun = "model"},
+      {.name = "method", .type = Type::string, .required = true, .choices = {"photometer", "checkerboard-match"}, .noun = "method"},
+      {.name = "gamma", .type = Type::number, .required = true, .min = 0.5, .max = 5},
+      {.name = "black_cd_m2", .type = Type::number, .nullable = true, .min = 0, .max = kMaxLuminanceCdM2},
+      {.name = "white_cd_m2", .type = Type::number, .nullable = true, .min = 0, .max = kMaxLuminanceCdM2},
+      {.name = "points", .type = Type::array, .required = true, .max_items = 256,
+       .items = json_input::item({.type = Type::object, .object = json_input::spec({{
+           {.name = "level", .type = Type::integer, .required = true, .min = 0, .max = 255},
+           {.name = "luminance_cd_m2", .type = Type::number, .required = true, .min = 0, .max = kMaxLuminanceCdM2}}})})},
+      {.name = "residual_rms_cd_m2", .type = Type::number, .nullable = true, .min = 0, .max = kMaxLuminanceCdM2},
+      {.name = "matched_level", .type = Type::integer, .min = 1, .max = 254},
+      {.name = "source", .type = Type::string, .max_length = 4096},
+      {.name = "monitor", .type = Type::object, .nullable = true},
+  }};
+  return spec;
+}
+
 DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string& file) {
-  auto fail = [&](const std::string& field, const std::string& what) -> void {
-    throw std::runtime_error(file + ": " + field + ": " + what);
+  const json_input::Reader r(file);
+  auto fail = [&](const std::string& field, const std::string& what) -> void { r.fail(field, what); };
+  const json_input::ObjectSpec& spec = calibration_fields();
+  r.object(j, "", spec);
+  auto optional = [&](const char* key) -> std::optional<double> {
+    if (const auto* v = r.get(j, "", spec, key)) return v->get<double>();
+    return std::nullopt;
   };
-  if (!j.is_object()) fail("(top level)", "expected an object");
-  static const std::set<std::string> known = {"schema_version", "created_utc", "model", "method", "gamma", "black_cd_m2",
-                                              "white_cd_m2", "points", "residual_rms_cd_m2", "matched_level", "source", "monitor"};
-  for (auto it = j.begin(); it != j.end(); ++it)
-    if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
-  for (const char* key : {"schema_version", "model", "method", "gamma", "points"})
-    if (!j.contains(key)) fail(key, "missing");
-  if (!j["schema_version"].is_number_integer() || j["schema_version"].get<long long>() != kSchemaVersion)
-    fail("schema_version", "expected " + std::to_string(kSchemaVersion) + " (a display-calibration.json of this version)");
-  auto text = [&](const char* key, std::size_t max) {
-    if (!j.contains(key)) return std::string();
-    if (!j[key].is_string() || j[key].get<std::string>().size() > max)
-      fail(key, "expected a string of at most " + std::to_string(max) + " bytes");
-    return j[key].get<std::string>();
-  };
-  auto number = [&](const char* key, double lo, double hi) -> std::optional<double> {
-    if (!j.contains(key) || j[key].is_null()) return std::nullopt;
-    if (!j[key].is_number() || !(j[key].get<double>() >= lo && j[key].get<double>() <= hi))
-      fail(key, "expected a number in [" + fmt(lo) + ", " + fmt(hi) + "] or null");
-    return j[key].get<double>();
-  };
+  r.get(j, "", spec, "schema_version");
   DisplayCalibration c;
-  c.created_utc = text("created_utc", 64);
-  c.source = text("source", 4096);
-  try {
-    c.model = parse_model(text("model", 16));
-  } catch (const std::invalid_argument& e) {
-    fail("model", e.what());
+  c.created_utc = r.string(j, "", spec, "created_utc");
+  c.source = r.string(j, "", spec, "source");
+  c.model = parse_model(r.string(j, "", spec, "model"));
+  c.method = r.string(j, "", spec, "method");
+  c.gamma = r.number(j, "", spec, "gamma");
+  c.black_cd_m2 = optional("black_cd_m2");
+  c.white_cd_m2 = optional("white_cd_m2");
+  c.residual_rms_cd_m2 = optional("residual_rms_cd_m2");
+  if (const auto* monitor = r.get(j, "", spec, "monitor")) {
+    if (json_input::dump(*monitor).size() > 4096) fail("monitor", "longer than 4096 bytes");
+    c.monitor = *monitor;
   }
-  c.method = text("method", 32);
-  if (c.method != "photometer" && c.method != "checkerboard-match") fail("method", "expected photometer or checkerboard-match");
-  if (!j["gamma"].is_number() || !(j["gamma"].get<double>() >= 0.5 && j["gamma"].get<double>() <= 5))
-    fail("gamma", "expected a number in [0.5, 5]");
-  c.gamma = j["gamma"].get<double>();
-  c.black_cd_m2 = number("black_cd_m2", 0, kMaxLuminanceCdM2);
-  c.white_cd_m2 = number("white_cd_m2", 0, kMaxLuminanceCdM2);
-  c.residual_rms_cd_m2 = number("residual_rms_cd_m2", 0, kMaxLuminanceCdM2);
-  if (j.contains("monitor")) {
-    if (!j["monitor"].is_object() && !j["monitor"].is_null()) fail("monitor", "expected an object or null");
-    if (json_input::dump(j["monitor"]).size() > 4096) fail("monitor", "longer than 4096 bytes");
-    c.monitor = j["monitor"];
-  }
-  const auto& points = j["points"];
-  if (!points.is_array() || points.size() > 256) fail("points", "expected an array of at most 256 readings");
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::string at = json_input::element("points", i);
-    const auto& p = points[i];
-    if (!p.is_object() || p.size() != 2 || !p.contains("level") || !p.contains("luminance_cd_m2") ||
-        !p["level"].is_number_integer() || !p["luminance_cd_m2"].is_number())
-      fail(at, "expected {\"level\": 0..255, \"luminance_cd_m2\": number}");
-    if (p["level"].get<long long>() < 0 || p["level"].get<long long>() > 255) fail(at + ".level", "expected 0..255");
+  for (const auto& p : *r.get(j, "", spec, "points"))
     c.points.push_back({p["level"].get<int>(), p["luminance_cd_m2"].get<double>()});
-  }
+  const auto* matched = r.get(j, "", spec, "matched_level");
   if (c.method == "photometer") {
     try {
       check_readings(c.points);  // in order, as written
@@ -201,9 +194,9 @@ DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string&
     // at least 2 % of the range (a table encodes with its readings alone).
     const double range = *c.white_cd_m2 - *c.black_cd_m2;
     double sum = 0;
-    for (const Reading& r : c.points) {
-      const double predicted = *c.black_cd_m2 + range * std::pow(r.level / 255.0, c.gamma);
-      sum += (predicted - r.luminance_cd_m2) * (predicted - r.luminance_cd_m2);
+    for (const Reading& p : c.points) {
+      const double predicted = *c.black_cd_m2 + range * std::pow(p.level / 255.0, c.gamma);
+      sum += (predicted - p.luminance_cd_m2) * (predicted - p.luminance_cd_m2);
     }
     const double rms = std::sqrt(sum / static_cast<double>(c.points.size()));
     const double allowed = std::max(2.0 * c.residual_rms_cd_m2.value_or(0.0), 0.02 * range);
@@ -212,14 +205,12 @@ DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string&
                         ") contradicts the points: the model misses them by " + fmt(rms) + " cd/m2 RMS, more than " +
                         fmt(allowed) + " (twice residual_rms_cd_m2, at least 2 % of the range)");
 
-    if (j.contains("matched_level")) fail("matched_level", "only for method checkerboard-match");
+    if (matched) fail("matched_level", "only for method checkerboard-match");
   } else {
     if (c.model != Model::gamma) fail("model", "a checkerboard match gives a gamma, not a table");
     if (!c.points.empty()) fail("points", "expected [] for a checkerboard match (no photometer readings)");
-    if (!j.contains("matched_level") || !j["matched_level"].is_number_integer() || j["matched_level"].get<long long>() < 1 ||
-        j["matched_level"].get<long long>() > 254)
-      fail("matched_level", "expected the matched grey level, 1..254");
-    c.matched_level = j["matched_level"].get<int>();
+    if (!matched) fail("matched_level", "missing (a checkerboard match records the grey level matched)");
+    c.matched_level = matched->get<int>();
     const double implied = std::log(0.5) / std::log(*c.matched_level / 255.0);
     if (std::abs(implied - c.gamma) > 1e-6 * implied)
       fail("gamma", "expected " + fmt(implied) + ", the gamma of matched_level " + std::to_string(*c.matched_level));

@@ -12,6 +12,10 @@
 
 #include <nlohmann/json.hpp>
 
+namespace penumbra::json_input {
+struct ObjectSpec;
+}
+
 namespace penumbra::display {
 
 inline constexpr int kSchemaVersion = 1;
@@ -59,6 +63,8 @@ void check_readings(const std::vector<Reading>& sorted_by_level);
 nlohmann::json to_json(const DisplayCalibration& c);
 // Throws std::runtime_error "<file>: <field>: <what>".
 DisplayCalibration parse_calibration(const nlohmann::json& j, const std::string& file);
+// The fields parse_calibration reads, as data/display/display-calibration.schema.json states them.
+const json_input::ObjectSpec& calibration_fields();
 DisplayCalibration load_calibration(const std::filesystem::path& path);
 // Writes atomically (a temporary in the same folder, then renamed over `path`).
 void write_calibration(const std::filesystem::path& path, const DisplayCalibration& c);

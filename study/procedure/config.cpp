@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "json/json_fields.h"
 #include "json/json_input.h"
 #include "text/printable.h"
 
@@ -129,51 +130,49 @@ std::string StudyConfig::text(const std::string& key, int round, int round_count
 
 namespace {
 
+// The config's fields are stated where they are read; json_input::Reader checks each and words its
+// errors. `path` is the object's field path with a trailing '.' ("quest."), or "" at the top level.
 class Reader {
  public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
-  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
-    throw std::runtime_error(file_ + ": " + field + ": " + what);
-  }
+  explicit Reader(std::string file) : r_(std::move(file)) {}
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const { r_.fail(field, what); }
   const nlohmann::json* find(const nlohmann::json& obj, const std::string& key) const {
     auto it = obj.find(key);
     return it == obj.end() ? nullptr : &*it;
   }
   double number(const nlohmann::json& obj, const std::string& path, const std::string& key, double fallback,
                 double lo, double hi) const {
-    const auto* v = find(obj, key);
-    if (!v) return fallback;
-    if (!v->is_number()) fail(path + key, "expected a number");
-    const double d = v->get<double>();
-    if (!(d >= lo && d <= hi)) fail(path + key, "expected a number in [" + fmt(lo) + ", " + fmt(hi) + "], found " + fmt(d));
-    return d;
+    const auto* v = r_.get(obj, at(path), {.name = key, .type = json_input::Type::number, .min = lo, .max = hi});
+    return v ? v->get<double>() : fallback;
   }
   long integer(const nlohmann::json& obj, const std::string& path, const std::string& key, long fallback, long lo,
                long hi) const {
-    const auto* v = find(obj, key);
-    if (!v) return fallback;
-    if (!v->is_number_integer()) fail(path + key, "expected an integer");
-    const long d = v->get<long>();
-    if (d < lo || d > hi) fail(path + key, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return d;
+    const auto* v = r_.get(obj, at(path),
+                           {.name = key, .type = json_input::Type::integer, .min = static_cast<double>(lo), .max = static_cast<double>(hi)});
+    return v ? v->get<long>() : fallback;
   }
   bool boolean(const nlohmann::json& obj, const std::string& path, const std::string& key, bool fallback) const {
-    const auto* v = find(obj, key);
-    if (!v) return fallback;
-    if (!v->is_boolean()) fail(path + key, "expected true or false");
-    return v->get<bool>();
+    const auto* v = r_.get(obj, at(path), {.name = key, .type = json_input::Type::boolean});
+    return v ? v->get<bool>() : fallback;
   }
   std::string text(const nlohmann::json& obj, const std::string& path, const std::string& key,
                    const std::string& fallback) const {
-    const auto* v = find(obj, key);
-    if (!v) return fallback;
-    if (!v->is_string()) fail(path + key, "expected a string");
-    return v->get<std::string>();
+    const auto* v = r_.get(obj, at(path), {.name = key, .type = json_input::Type::string});
+    return v ? v->get<std::string>() : fallback;
   }
-  void only(const nlohmann::json& obj, const std::string& path, const std::set<std::string>& keys) const {
-    if (!obj.is_object()) fail(path.empty() ? "(top level)" : path.substr(0, path.size() - 1), "expected an object");
-    for (auto it = obj.begin(); it != obj.end(); ++it)
-      if (!keys.count(it.key())) fail(path + text::printable(it.key()), "unknown field");  // a key may hold a newline
+  // A string of `choices`, named `key` in the error.
+  std::string choice(const nlohmann::json& obj, const std::string& path, const std::string& key, const std::string& fallback,
+                     std::vector<std::string> choices) const {
+    const auto* v = r_.get(obj, at(path), {.name = key, .type = json_input::Type::string, .choices = std::move(choices), .noun = key});
+    return v ? v->get<std::string>() : fallback;
+  }
+  const nlohmann::json* get(const nlohmann::json& obj, const std::string& path, const json_input::Field& f) const {
+    return r_.get(obj, at(path), f);
+  }
+  void only(const nlohmann::json& obj, const std::string& path, std::initializer_list<const char*> keys) const {
+    json_input::ObjectSpec spec;
+    for (const char* k : keys) spec.fields.push_back({.name = k});
+    r_.object(obj, at(path), spec);
   }
   template <class F>
   auto parse_enum(const std::string& field, const std::string& value, F parse) const {
@@ -190,7 +189,8 @@ class Reader {
   }
 
  private:
-  std::string file_;
+  static std::string at(const std::string& path) { return path.empty() ? path : path.substr(0, path.size() - 1); }
+  json_input::Reader r_;
 };
 
 }  // namespace
@@ -202,13 +202,10 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
                  "yesno_scoring", "readings"});
   StudyConfig c;
   c.name = r.text(j, "", "name", "study");
-  c.task = r.text(j, "", "task", "2afc");
-  if (c.task != "2afc" && c.task != "yesno") r.fail("task", "expected 2afc or yesno");
+  c.task = r.choice(j, "", "task", "2afc", {"2afc", "yesno"});
   if (r.find(j, "yesno_scoring")) {
     if (c.task != "yesno") r.fail("yesno_scoring", "only for task yesno (a 2afc trial is scored one way)");
-    c.yesno_scoring = r.text(j, "", "yesno_scoring", "jagged_only");
-    if (c.yesno_scoring != "jagged_only" && c.yesno_scoring != "balanced")
-      r.fail("yesno_scoring", "expected jagged_only or balanced, got '" + json_input::printable(c.yesno_scoring) + "'");
+    c.yesno_scoring = r.choice(j, "", "yesno_scoring", "jagged_only", {"jagged_only", "balanced"});
   }
   if (const auto* readings = r.find(j, "readings")) {
     if (!readings->is_object()) r.fail("readings", "expected an object of \"choice\": \"what was chosen and why\"");
@@ -232,8 +229,8 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
       c.artifact_px.push_back(v.get<double>());
     }
   }
-  const auto* rounds = r.find(j, "rounds");
-  if (!rounds || !rounds->is_array() || rounds->empty()) r.fail("rounds", "expected a non-empty array of {pattern, contrast}");
+  const auto* rounds = r.get(j, "", {.name = "rounds", .type = json_input::Type::array, .required = true,
+                                     .why = "a study needs its rounds: [{\"pattern\", \"contrast\"}]", .min_items = 1});
   for (std::size_t i = 0; i < rounds->size(); ++i) {
     const std::string p = "rounds[" + std::to_string(i) + "].";
     r.only((*rounds)[i], p, {"pattern", "contrast"});
@@ -298,11 +295,11 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     for (auto it = t->begin(); it != t->end(); ++it) {
       const std::string field = "texts." + text::printable(it.key());
       if (std::none_of(table.begin(), table.end(), [&](const TextEntry& e) { return it.key() == e.key; })) {
-        std::string known;
-        for (const TextEntry& e : table) known += (known.empty() ? "" : ", ") + std::string(e.key);
-        r.fail(field, "unknown text (known: " + known + ")");
+        std::vector<std::string> known;
+        for (const TextEntry& e : table) known.emplace_back(e.key);
+        r.fail(field, json_input::Reader::unknown_key(known));
       }
-      if (!it->is_string()) r.fail(field, "expected a string");
+      if (!it->is_string()) r.fail(field, "expected a string, got " + json_input::describe(*it));
       const std::string value = it->get<std::string>();
       if (!text::valid_utf8(value)) r.fail(field, "not valid UTF-8 (save the file as UTF-8)");
       if (value.size() > kMaxTextBytes) r.fail(field, "longer than " + std::to_string(kMaxTextBytes) + " bytes");
@@ -312,11 +309,9 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     }
   }
   c.break_every_trials = static_cast<int>(r.integer(j, "", "break_every_trials", 40, 0, 100000));
-  c.round_order = r.text(j, "", "round_order", "shuffled");
-  if (c.round_order != "shuffled" && c.round_order != "fixed" && c.round_order != "latin-square")
-    r.fail("round_order", "expected shuffled, fixed or latin-square, got '" + json_input::printable(c.round_order) + "'");
+  c.round_order = r.choice(j, "", "round_order", "shuffled", {"shuffled", "fixed", "latin-square"});
   if (const auto* s = r.find(j, "seed")) {
-    if (!s->is_number_unsigned()) r.fail("seed", "expected a non-negative integer");
+    if (!s->is_number_unsigned()) r.fail("seed", "expected a non-negative integer, got " + json_input::describe(*s));
     c.seed = s->get<std::uint64_t>();
   }
   if (const auto* s = r.find(j, "stimulus")) {

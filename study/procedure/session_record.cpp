@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <set>
 
+#include "json/json_fields.h"
 #include "json/json_input.h"
 #include "text/printable.h"
 
@@ -108,47 +109,56 @@ ObserverKind observer_kind(const nlohmann::json& j, const std::string& file) {
 // Every field checked for type, size and agreement with the config block, since each is carried
 // into the continued rows (or read by the fitter).
 SessionRecord check_session_json(const nlohmann::json& j, const std::string& file) {
-  auto fail = [&](const std::string& field, const std::string& what) -> void {
-    throw std::runtime_error(file + ": " + field + ": " + what);
-  };
-  if (!j.is_object()) fail("(top level)", "expected an object");
-  static const std::set<std::string> known = {"session_id", "participant", "created_utc", "software", "seed", "config",
-                                              "quest", "display", "log", "ended_rounds", "resumed_utc", "observer",
-                                              "observer_seed", "config_file", "randomization", "presentation",
-                                              "display_calibration", "observer_kind", "consent", "presentation_options"};
-  for (auto it = j.begin(); it != j.end(); ++it)
-    if (!known.count(it.key())) fail(json_input::printable(it.key()), "unknown field");
-  for (const char* key : {"session_id", "participant", "config", "seed", "quest", "display"})
-    if (!j.contains(key)) fail(key, "missing");
-  auto text = [&](const char* key, std::size_t max) {
-    if (!j.contains(key)) return std::string();
-    if (!j[key].is_string()) fail(key, "expected a string");
-    const std::string v = j[key].get<std::string>();
-    if (v.size() > max) fail(key, "longer than " + std::to_string(max) + " bytes");
-    return v;
+  const json_input::Reader reader(file);
+  auto fail = [&](const std::string& field, const std::string& what) -> void { reader.fail(field, what); };
+  using json_input::Type;
+  static const json_input::ObjectSpec spec{{
+      {.name = "session_id", .type = Type::string, .required = true, .max_length = 2 * kMaxName},
+      {.name = "participant", .type = Type::string, .required = true, .max_length = kMaxName},
+      {.name = "created_utc", .type = Type::string, .max_length = 64},
+      {.name = "software", .type = Type::object},
+      {.name = "seed", .type = Type::any, .required = true},
+      {.name = "config", .type = Type::any, .required = true},
+      {.name = "quest", .type = Type::object, .required = true},
+      {.name = "display", .type = Type::any, .required = true},
+      {.name = "log", .type = Type::string, .choices = {"trials.csv"}, .noun = "log"},
+      {.name = "ended_rounds", .type = Type::any},
+      {.name = "resumed_utc", .type = Type::any},
+      {.name = "observer", .type = Type::string, .max_length = 1000},
+      {.name = "observer_seed", .type = Type::any},
+      {.name = "config_file", .type = Type::string, .max_length = 4096},
+      {.name = "randomization", .type = Type::object,
+       .object = json_input::spec({{{.name = "seed", .type = Type::integer, .required = true, .min = 0},
+                                    {.name = "seed_from", .type = Type::string, .required = true,
+                                     .choices = {"participant", "--seed", "config"}, .noun = "seed_from"},
+                                    {.name = "round_order", .type = Type::array, .required = true}}})},
+      {.name = "presentation", .type = Type::any},
+      {.name = "display_calibration", .type = Type::any},
+      {.name = "observer_kind", .type = Type::any},
+      {.name = "consent", .type = Type::object, .nullable = true},
+      {.name = "presentation_options", .type = Type::object},
+  }};
+  reader.object(j, "", spec);
+  for (const json_input::Field& f : spec.fields) reader.get(j, "", spec, f.name);
+  auto text = [&](const char* key) {
+    const auto* v = reader.get(j, "", spec, key);
+    return v ? v->get<std::string>() : std::string();
   };
   SessionRecord r;
-  r.session_id = text("session_id", 2 * kMaxName);
+  r.session_id = text("session_id");
   if (const std::string bad = name_problem(r.session_id); !bad.empty()) fail("session_id", bad);
-  r.participant = text("participant", kMaxName);
+  r.participant = text("participant");
   if (const std::string bad = name_problem(r.participant); !bad.empty()) fail("participant", bad);
-  text("created_utc", 64);
-  text("observer", 1000);
   r.observer_kind = observer_kind(j, file);
-  if (j.contains("consent") && !j["consent"].is_object() && !j["consent"].is_null()) fail("consent", "expected an object");
-  if (j.contains("presentation_options") && !j["presentation_options"].is_object()) fail("presentation_options", "expected an object");
-  text("config_file", 4096);
-  if (j.contains("log") && j["log"] != "trials.csv") fail("log", "expected \"trials.csv\"");
   if (j.contains("observer_seed") && !j["observer_seed"].is_number_unsigned())
-    fail("observer_seed", "expected a non-negative integer");
-  if (j.contains("software") && !j["software"].is_object()) fail("software", "expected an object");
+    fail("observer_seed", "expected a non-negative integer, got " + json_input::describe(j["observer_seed"]));
   r.config = parse_config(j["config"], file + " (config)");
   if (!j["seed"].is_number_unsigned() || j["seed"].get<std::uint64_t>() != r.config.seed)
     fail("seed", "expected the config's seed (" + std::to_string(r.config.seed) + ")");
   const nlohmann::json quest = quest_block(r.config);
-  if (!j["quest"].is_object()) fail("quest", "expected an object");
-  for (auto it = j["quest"].begin(); it != j["quest"].end(); ++it)
-    if (!quest.contains(it.key())) fail("quest." + json_input::printable(it.key()), "unknown field");
+  json_input::ObjectSpec quest_fields{{}};
+  for (auto it = quest.begin(); it != quest.end(); ++it) quest_fields.fields.push_back({.name = it.key()});
+  reader.object(j["quest"], "quest", quest_fields);
   for (auto it = quest.begin(); it != quest.end(); ++it) {
     const auto found = j["quest"].find(it.key());
     const bool equal = found != j["quest"].end() &&
@@ -173,18 +183,10 @@ SessionRecord check_session_json(const nlohmann::json& j, const std::string& fil
   }
   r.randomization = config_randomization(r.config);
   if (j.contains("randomization")) {
-    const auto& z = j["randomization"];
-    if (!z.is_object()) fail("randomization", "expected an object");
-    for (auto it = z.begin(); it != z.end(); ++it)
-      if (it.key() != "seed" && it.key() != "seed_from" && it.key() != "round_order")
-        fail("randomization." + json_input::printable(it.key()), "unknown field");
-    if (!z.contains("seed") || !z["seed"].is_number_unsigned()) fail("randomization.seed", "expected a non-negative integer");
+    const auto& z = j["randomization"];  // its fields checked with the others above
     r.randomization.seed = z["seed"].get<std::uint64_t>();
-    if (!z.contains("seed_from") || !z["seed_from"].is_string() ||
-        (z["seed_from"] != "participant" && z["seed_from"] != "--seed" && z["seed_from"] != "config"))
-      fail("randomization.seed_from", "expected participant, --seed or config");
     r.randomization.seed_from = z["seed_from"].get<std::string>();
-    if (!z.contains("round_order") || !z["round_order"].is_array() || z["round_order"].size() != r.config.rounds.size())
+    if (z["round_order"].size() != r.config.rounds.size())
       fail("randomization.round_order", "expected an array of the " + std::to_string(r.config.rounds.size()) + " round indices");
     r.randomization.round_order.clear();
     for (const auto& v : z["round_order"]) {

@@ -36,6 +36,7 @@ const ji::ObjectSpec& table() {
                                                    {.name = "pcf", .type = ji::Type::object, .object = ji::spec({{
                                                        {.name = "kernel", .type = ji::Type::string, .choices = {"disk"}, .noun = "kernel"}}})}}})}}})})},
       {.name = "any", .type = ji::Type::any},
+      {.name = "anyarray", .type = ji::Type::array},
   }};
   return spec;
 }
@@ -80,6 +81,7 @@ TEST(JsonFields, WrongType) {
   EXPECT_EQ(with(R"("xyz": {"a": 1})"), "f.json: xyz: expected an array of 3 numbers, got an object");
   EXPECT_EQ(with(R"("xyz": [1, "2", 3])"), "f.json: xyz[1]: expected a number, got \"2\"");
   EXPECT_EQ(with(R"("list": [7])"), "f.json: list[0]: expected an object, got 7");
+  EXPECT_EQ(with(R"("any": 1, "anyarray": {})"), "f.json: anyarray: expected an array, got an object");
   EXPECT_EQ(error("[1, 2]"), "f.json: (top level): expected an object, got an array of 2 elements");
   EXPECT_EQ(error("\"x\""), "f.json: (top level): expected an object, got \"x\"");
 }
@@ -135,7 +137,7 @@ TEST(JsonFields, MissingRequired) {
 TEST(JsonFields, UnknownKey) {
   EXPECT_EQ(with(R"("list": [{"level": 1, "levle": 2}])"), "f.json: list[0].levle: unknown key (allowed: level, deep)");
   const std::string top = with(R"("colour": 1)");
-  EXPECT_EQ(top.rfind("f.json: colour: unknown key (allowed: n, open, pos, c, i, u, big, maybe, b, s, ne, k, v, req, xyz, list, any)", 0), 0u) << top;
+  EXPECT_EQ(top.rfind("f.json: colour: unknown key (allowed: n, open, pos, c, i, u, big, maybe, b, s, ne, k, v, req, xyz, list, any, anyarray)", 0), 0u) << top;
   // A key's control bytes are escaped: the error stays one line.
   EXPECT_EQ(with("\"a\\nb\": 1").find('\n'), std::string::npos);
   EXPECT_EQ(ji::Reader::unknown_key(std::vector<std::string>{"shape", "radius"}, "for shape 'sphere'"),

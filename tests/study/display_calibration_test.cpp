@@ -119,17 +119,18 @@ TEST(DisplayCalibration, JsonRoundTripAndRefusals) {
     std::string message;
   };
   const std::vector<Case> cases{
-      {[](nlohmann::json& x) { x["schema_version"] = 2; }, "x.json: schema_version: expected 1 (a display-calibration.json of this version)"},
-      {[](nlohmann::json& x) { x["gama"] = 2; }, "x.json: gama: unknown field"},
+      {[](nlohmann::json& x) { x["schema_version"] = 2; }, "x.json: schema_version: expected 1 (a display-calibration.json of this version), got 2"},
+      {[](nlohmann::json& x) { x["gama"] = 2; }, "x.json: gama: unknown key (allowed: schema_version, created_utc, model, method, gamma, black_cd_m2, white_cd_m2, points, "
+                                                      "residual_rms_cd_m2, matched_level, source, monitor)"},
       {[](nlohmann::json& x) { x["model"] = "spline"; }, "x.json: model: model 'spline': expected gamma or table"},
-      {[](nlohmann::json& x) { x["gamma"] = 9; }, "x.json: gamma: expected a number in [0.5, 5]"},
+      {[](nlohmann::json& x) { x["gamma"] = 9; }, "x.json: gamma: expected a number in [0.5, 5], got 9"},
       {[](nlohmann::json& x) { x["points"][3]["luminance_cd_m2"] = 1.0; },
        "x.json: points: level 96: 1 cd/m2, not above level 64's 4.84827 (luminance must rise with the level: remeasure)"},
-      {[](nlohmann::json& x) { x["points"][0]["level"] = 300; }, "x.json: points[0].level: expected 0..255"},
+      {[](nlohmann::json& x) { x["points"][0]["level"] = 300; }, "x.json: points[0].level: expected an integer in [0, 255], got 300"},
       {[](nlohmann::json& x) { x["white_cd_m2"] = nullptr; }, "x.json: white_cd_m2: expected black_cd_m2 and white_cd_m2 with white above black"},
       // Issue 27: a file took what the CSV refuses, and a gamma its readings contradict.
       {[](nlohmann::json& x) { x["points"][8]["luminance_cd_m2"] = 1e308; },
-       "x.json: points: level 255: 1e+308 is not a luminance in [0, 100000] cd/m2"},
+       "x.json: points[8].luminance_cd_m2: expected a number in [0, 100000], got 1e+308"},
       {[](nlohmann::json& x) { x["gamma"] = 1.8; },
        "x.json: gamma: 1.8 (black 0.5, white 120.5) contradicts the points: the model misses them by 8.16618 cd/m2 RMS, more than 2.4 "
        "(twice residual_rms_cd_m2, at least 2 % of the range)"},

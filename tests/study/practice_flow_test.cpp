@@ -137,22 +137,22 @@ TEST(PracticeFlow, PracticeBlockAndTextsRoundTripAndErrorsNameTheField) {
     k[key] = value;
     return config_error(k);
   };
-  EXPECT_EQ(with("practice", {{"every_round", "yes"}}), "study.json: practice.every_round: expected true or false");
-  EXPECT_EQ(with("practice", {{"trials", -1}}), "study.json: practice.trials: expected an integer in [0, 1000]");
-  EXPECT_EQ(with("practice", {{"feedback_ms", 1e6}}), "study.json: practice.feedback_ms: expected a number in [0, 10000], found 1e+06");
-  EXPECT_EQ(with("practice", {{"trails", 4}}), "study.json: practice.trails: unknown field");
+  EXPECT_EQ(with("practice", {{"every_round", "yes"}}), "study.json: practice.every_round: expected true or false, got \"yes\"");
+  EXPECT_EQ(with("practice", {{"trials", -1}}), "study.json: practice.trials: expected an integer in [0, 1000], got -1");
+  EXPECT_EQ(with("practice", {{"feedback_ms", 1e6}}), "study.json: practice.feedback_ms: expected a number in [0, 10000], got 1000000.0");
+  EXPECT_EQ(with("practice", {{"trails", 4}}), "study.json: practice.trails: unknown key (allowed: trials, intensity, every_round, feedback, feedback_ms)");
   nlohmann::json both = four_rounds({{"trials", 2}});
   both["practice_trials"] = 3;
   EXPECT_EQ(config_error(both), "study.json: practice_trials: not with practice (practice.trials and practice.intensity say it)");
   EXPECT_EQ(with("texts", "hello"), "study.json: texts: expected an object of \"name\": \"text\"");
-  EXPECT_EQ(with("texts", {{"welcome", 3}}), "study.json: texts.welcome: expected a string");
+  EXPECT_EQ(with("texts", {{"welcome", 3}}), "study.json: texts.welcome: expected a string, got 3");
   EXPECT_EQ(with("texts", {{"welcome", "caf\xe9"}}), "study.json: texts.welcome: not valid UTF-8 (save the file as UTF-8)");
   EXPECT_EQ(with("texts", {{"task", "a\tb"}}), "study.json: texts.task: a control character (U+0009); only a newline (\\n) is allowed");
   EXPECT_EQ(with("texts", {{"start", ""}}), "study.json: texts.start: expected a non-empty text");
   EXPECT_EQ(with("texts", {{"consent", ""}}), "no error");
   EXPECT_EQ(with("texts", {{"welcome", std::string(procedure::kMaxTextBytes + 1, 'x')}}),
             "study.json: texts.welcome: longer than 4000 bytes");
-  EXPECT_EQ(with("texts", {{"greeting", "hi"}}).rfind("study.json: texts.greeting: unknown text (known: welcome_title, ", 0), 0u)
+  EXPECT_EQ(with("texts", {{"greeting", "hi"}}).rfind("study.json: texts.greeting: unknown key (allowed: welcome_title, ", 0), 0u)
       << with("texts", {{"greeting", "hi"}});
 }
 

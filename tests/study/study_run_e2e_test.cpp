@@ -340,7 +340,7 @@ TEST(StudyRun, RefusesToOverwriteASessionAndBadConfigsInOneLine) {
   const fs::path bad = fresh("bad.json");
   std::ofstream(bad) << R"({"rounds": [{"pattern": "stair"}], "stopping": {"sd_below": "small"}})";
   EXPECT_EQ(run({"run", "--config", bad.string(), "--headless", "-o", fresh("never").string()}, &out), 1);
-  EXPECT_EQ(out, "penumbra-study: " + bad.string() + ": stopping.sd_below: expected a number\n");
+  EXPECT_EQ(out, "penumbra-study: " + bad.string() + ": stopping.sd_below: expected a number, got \"small\"\n");
   EXPECT_FALSE(fs::exists(fresh("never")));
   // round_order latin-square takes the row from the number the participant id ends in.
   std::ofstream(bad) << R"({"rounds": [{"pattern": "stair"}, {"pattern": "step"}], "round_order": "latin-square"})";
@@ -556,7 +556,7 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
        "column 'quest_mean'"},
       {edited([](nlohmann::json& e) { e["quest"]["beta"] = 2.5; }), "session.json: quest.beta: differs from the config's QUEST"},
       {edited([](nlohmann::json& e) { e["seed"] = 2; }), "session.json: seed: expected the config's seed (1)"},
-      {edited([](nlohmann::json& e) { e["participant"] = std::string(300, 'p'); }), "session.json: participant: longer than 200 bytes"},
+      {edited([](nlohmann::json& e) { e["participant"] = std::string(300, 'p'); }), "session.json: participant: expected a string of at most 200 bytes, got 300"},
       {edited([](nlohmann::json& e) { e["participant"] = std::string(10 << 20, 'p'); }), "session.json: larger than"},
       {edited([](nlohmann::json& e) { e["ended_rounds"] = {{{"round", 9}, {"after_trial", 3}}}; }), "ended_rounds[0]"},
       {edited([](nlohmann::json& e) { e.erase("config"); }), "session.json: config: missing"},

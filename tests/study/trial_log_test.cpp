@@ -291,14 +291,16 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
     j[key] = v;
     return config_error(j);
   };
-  EXPECT_EQ(with("stopping", {{"min_trials", 0}}), "study.json: stopping.min_trials: expected an integer in [1, 10000]");
+  EXPECT_EQ(with("stopping", {{"min_trials", 0}}), "study.json: stopping.min_trials: expected an integer in [1, 10000], got 0");
   EXPECT_EQ(with("stopping", {{"min_trials", 20}, {"max_trials", 10}}),
             "study.json: stopping.max_trials: expected >= stopping.min_trials");
   EXPECT_EQ(with("rounds", {{{"pattern", "zigzag"}}}),
             "study.json: rounds[0].pattern: pattern 'zigzag': expected stair or step");
-  EXPECT_EQ(with("quest", {{"beta", "steep"}}), "study.json: quest.beta: expected a number");
+  EXPECT_EQ(with("quest", {{"beta", "steep"}}), "study.json: quest.beta: expected a number, got \"steep\"");
   EXPECT_EQ(with("artifact_px", {5, 5}), "study.json: artifact_px[1]: duplicate artifact size");
-  EXPECT_EQ(with("colour", 1), "study.json: colour: unknown field");
+  EXPECT_EQ(with("colour", 1), "study.json: colour: unknown key (allowed: name, task, artifact_px, rounds, quest, intensity_bounds, stopping, "
+            "practice_trials, practice_intensity, practice, texts, break_every_trials, seed, round_order, stimulus, display, "
+            "description, yesno_scoring, readings)");
   // Issue 14.8: a duplicated key in the file was read as its last value.
   const fs::path dup = fs::temp_directory_path() / ("penumbra-dup-" + std::to_string(::getpid()) + ".json");
   std::ofstream(dup) << R"({"rounds": [{"pattern": "stair"}], "stopping": {"max_trials": 40, "max_trials": 4}})";
@@ -312,7 +314,7 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
   EXPECT_EQ(with("display", {{"transfer", "pq"}}),
             "study.json: display.transfer: transfer function 'pq': expected srgb, gamma2.2 or linear");
   EXPECT_EQ(config_error(nlohmann::json::object()),
-            "study.json: rounds: expected a non-empty array of {pattern, contrast}");
+            "study.json: rounds: missing (a study needs its rounds: [{\"pattern\", \"contrast\"}])");
 }
 
 // yesno_scoring (issue 29): what a yes/no QUEST is fed, with the guess rate each scoring implies;
@@ -325,7 +327,7 @@ TEST(StudyConfig, YesNoScoringAndDeclaredReadings) {
     return config_error(j);
   };
   EXPECT_EQ(error(yesno, "yesno_scoring", "jagged_only"), "no error");
-  EXPECT_EQ(error(yesno, "yesno_scoring", "both"), "study.json: yesno_scoring: expected jagged_only or balanced, got 'both'");
+  EXPECT_EQ(error(yesno, "yesno_scoring", "both"), "study.json: yesno_scoring: yesno_scoring 'both': expected jagged_only or balanced");
   nlohmann::json twoafc = yesno;
   twoafc["task"] = "2afc";
   EXPECT_EQ(error(twoafc, "yesno_scoring", "balanced"),
