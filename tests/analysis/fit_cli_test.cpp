@@ -643,7 +643,9 @@ TEST(FitCli, FitsLogsWrittenByPenumbraStudy) {
     const std::string config_file = "/studies/" + (published ? std::string("kreuzer2017") : name) + ".json";
     const std::string task = name == "default-yesno" || published ? "yesno" : "2afc";
     nlohmann::json config = nlohmann::json::parse(read(PENUMBRA_DATA_DIR + config_file));
-    if (published) EXPECT_EQ(config["yesno_scoring"], "balanced");  // the reading default.json's c takes
+    if (published) {
+      EXPECT_EQ(config["yesno_scoring"], "balanced");  // the reading default.json's c takes
+    }
     if (name == "kreuzer2017-jagged-only") config["yesno_scoring"] = "jagged_only";
     config["rounds"] = {{{"pattern", "stair"}, {"contrast", 1.0}}};
     config["artifact_px"] = {5, 20};
