@@ -14,6 +14,7 @@ packages=(
   libopenimageio-dev openimageio-tools
   libpng-dev libopenexr-dev  # the minimal image backend of the gpu-bundle preset (docs/gpu.md)
   libassimp-dev libcli11-dev nlohmann-json3-dev
+  libembree-dev  # the ray-traced area-light reference (renderer/metrics/ray_traced.h)
   python3-matplotlib
   xvfb xauth fonts-dejavu-core
   xdotool  # the study GUI test types keys and clicks into the participant window under Xvfb

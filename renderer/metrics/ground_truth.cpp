@@ -5,18 +5,22 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 
 #include <epoxy/gl.h>
 
 #include "sampling/random.h"
+#if PENUMBRA_HAS_RAY_TRACING
+#include "metrics/ray_traced.h"
+#endif
 
 namespace penumbra::metrics {
 namespace {
 
-// Shirley and Chiu's concentric map from [-1, 1]² to the unit disk (area-preserving).
-glm::vec2 concentric(glm::vec2 p) {
+glm::vec2 concentric_impl(glm::vec2 p) {
   if (p.x == 0 && p.y == 0) return {0, 0};
   constexpr float quarter_pi = std::numbers::pi_v<float> / 4;
   float r, phi;
@@ -80,6 +84,8 @@ ReferenceKind reference_kind(std::string_view technique_name) {
   return shadows::technique_entry(shadows::technique_from_string(technique_name)).reference;
 }
 
+glm::vec2 concentric_disk(glm::vec2 square) { return concentric_impl(square); }
+
 std::vector<glm::vec2> stratified_disk(int per_side) {
   if (per_side < 1) throw std::invalid_argument("stratified_disk: per_side must be at least 1, got " + std::to_string(per_side));
   sampling::Random random(0x5eed1e55u);
@@ -91,7 +97,7 @@ std::vector<glm::vec2> stratified_disk(int per_side) {
     for (int i = 0; i < per_side; ++i) {
       const float x = -1 + (static_cast<float>(i) + unit()) * cell;
       const float y = -1 + (static_cast<float>(j) + unit()) * cell;
-      points.push_back(concentric({x, y}));
+      points.push_back(concentric_disk({x, y}));
     }
   }
   return points;
@@ -149,15 +155,31 @@ Reference make_reference(shadows::Renderer& renderer, const shadows::ShadowSetti
     if (options.area_samples < 1) throw std::invalid_argument("reference: area_samples must be at least 1");
     const int per_side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(options.area_samples)) - 1e-9));
     ref.samples = per_side * per_side;
+    const scene::Light& light = renderer.scene().light;
+    char size[32];
+    std::snprintf(size, sizeof size, "%g", static_cast<double>(light.size));
+    const std::string emitter = light.type == scene::Light::Type::directional ? "sun disk of " + std::string(size) + " deg"
+                                                                              : "spot emitter of width " + std::string(size);
+#if PENUMBRA_HAS_RAY_TRACING
+    if (options.ray_traced && light.type == scene::Light::Type::directional) {
+      std::unique_ptr<RayTracedScene> built;
+      if (!options.traced) built = std::make_unique<RayTracedScene>(renderer.scene());
+      const RayTracedScene& traced = options.traced ? *options.traced : *built;
+      ref.visibility = traced.area_light_visibility(renderer.scene().camera, light, width_px, height_px, per_side);
+      ref.resolution_texels = 0;
+      ref.ray_traced = true;
+      ref.description = "ray-traced: " + std::to_string(ref.samples) + " shadow rays per pixel, stratified and jittered per pixel over the " +
+                        emitter + " (Embree, no shadow map)";
+      ref.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      return ref;
+    }
+#endif
     ref.resolution_texels = std::min(options.area_resolution_texels, max_texture_size());
     if (ref.resolution_texels < options.area_resolution_texels)
       ref.note = std::to_string(options.area_resolution_texels) + "² exceeds GL_MAX_TEXTURE_SIZE; maps at " +
                  std::to_string(ref.resolution_texels) + "². ";
     ref.visibility = area_light_visibility(renderer, width_px, height_px, per_side, ref.resolution_texels, settings.map);
-    const scene::Light& light = renderer.scene().light;
-    ref.description = "mean of " + std::to_string(ref.samples) + " hard shadows, point lights stratified over the " +
-                      (light.type == scene::Light::Type::directional ? "sun disk of " + std::to_string(light.size) + " deg"
-                                                                     : "spot emitter of width " + std::to_string(light.size)) +
+    ref.description = "mean of " + std::to_string(ref.samples) + " hard shadows, point lights stratified over the " + emitter +
                       ", fitted " + maps_of(settings.map, ref.resolution_texels);
   } else {
     shadows::ShadowSettings s = settings;

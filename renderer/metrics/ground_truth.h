@@ -3,7 +3,8 @@
 //
 // Two kinds of reference:
 //   area_light   For techniques that approximate an area light's soft shadow (PCSS, EDT soft
-//                shadows, erosion soft shadows): the mean of
+//                shadows, erosion soft shadows): ray-traced where asked (ReferenceOptions::
+//                ray_traced, a directional light, a build with Embree: ray_traced.h), else the mean of
 //                N hard shadows, each from a point light placed on a stratified sample of the
 //                emitter, every map fitted and high-resolution (4096² by default). The emitter
 //                follows the scene's light conventions (scene/scene.h):
@@ -36,11 +37,16 @@
 
 namespace penumbra::metrics {
 
+class RayTracedScene;
+
 using shadows::ReferenceKind;  // declared by each technique's registry entry (shadows/technique.h)
 std::string_view to_string(ReferenceKind k);
 
 // Which reference a technique is measured against: its registry entry's (TechniqueEntry::reference).
 ReferenceKind reference_kind(std::string_view technique_name);
+
+// Shirley and Chiu's concentric map from [-1, 1]² to the unit disk (area-preserving).
+glm::vec2 concentric_disk(glm::vec2 square);
 
 // per_side² points in the unit disk: one jittered point per cell of a per_side × per_side grid
 // of strata of the unit square, mapped by Shirley and Chiu's area-preserving concentric map so
@@ -55,12 +61,17 @@ struct ReferenceOptions {
   int area_samples = 64;                  // area light: point-light samples, rounded up to a square
   int area_resolution_texels = 4096;      // area light: each hard, fitted shadow map
   int filter_resolution_texels = 8192;    // same filter: the reference map
+  // Area light, directional, built with Embree (PENUMBRA_HAS_RAY_TRACING): ray-traced visibility
+  // (ray_traced.h: area_samples shadow rays per pixel, no map, no bias) instead of the maps' mean.
+  bool ray_traced = false;
+  const RayTracedScene* traced = nullptr;  // with ray_traced: this scene's structure (else one is built per call)
 };
 
 struct Reference {
   io::ImageF visibility;                  // one channel, the image size asked for
   ReferenceKind kind = ReferenceKind::same_filter;
-  int resolution_texels = 0;              // shadow-map size actually used
+  int resolution_texels = 0;              // shadow-map size actually used (0: ray-traced)
+  bool ray_traced = false;                // area light: ray-traced (ray_traced.h), not a mean of maps
   int samples = 1;                        // area light: point-light samples averaged
   std::string note;                       // why the resolution differs from the one asked for, if it does
   std::string description;                // one line: what was rendered

@@ -1,0 +1,238 @@
+#include "metrics/ray_traced.h"
+
+#if PENUMBRA_HAS_RAY_TRACING
+#include <embree3/rtcore.h>
+#endif
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "metrics/ground_truth.h"
+#include "metrics/surface_probe.h"
+
+namespace penumbra::metrics {
+
+#if PENUMBRA_HAS_RAY_TRACING
+
+struct RayTracedScene::Embree {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  // Per geometry (Embree's geomID): the world-space vertex normals and the triangles' indices.
+  std::vector<std::vector<glm::vec3>> normals;
+  std::vector<const std::vector<std::uint32_t>*> indices;
+  std::vector<std::shared_ptr<const scene::MeshData>> meshes;  // keeps `indices` alive
+  ~Embree() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+namespace {
+
+std::string device_error(RTCDevice device) {
+  switch (rtcGetDeviceError(device)) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+  }
+}
+
+// A uniform in [0, 1) from a pixel, a sample and a stream (a SplitMix64 finalizer over their
+// combination): the same on every run and platform.
+float hash_uniform(std::uint64_t pixel, std::uint64_t sample, std::uint64_t stream) {
+  std::uint64_t z = pixel * 0x9E3779B97F4A7C15ull ^ (sample + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^ stream * 0x94D049BB133111EBull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<float>(static_cast<double>(z >> 11) * 0x1.0p-53);
+}
+
+}  // namespace
+
+RayTracedScene::RayTracedScene(const scene::Scene& scene) : embree_(std::make_unique<Embree>()) {
+  embree_->device = rtcNewDevice(nullptr);
+  if (!embree_->device) throw std::runtime_error("ray tracing: cannot create the Embree device (" + device_error(nullptr) + ")");
+  embree_->scene = rtcNewScene(embree_->device);
+  rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  for (const scene::Object& o : scene.objects) {
+    if (!o.mesh || o.mesh->indices.size() < 3) continue;
+    const scene::MeshData& mesh = *o.mesh;
+    RTCGeometry g = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices.size()));
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const glm::vec4 p = o.model * glm::vec4(mesh.vertices[i].position, 1.0f);
+      v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
+    }
+    const std::size_t n = mesh.indices.size() / 3;
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
+    std::copy(mesh.indices.begin(), mesh.indices.begin() + static_cast<std::ptrdiff_t>(3 * n), idx);
+    rtcCommitGeometry(g);
+    const unsigned id = rtcAttachGeometry(embree_->scene, g);
+    if (id >= embree_->normals.size()) embree_->normals.resize(id + 1), embree_->indices.resize(id + 1), embree_->meshes.resize(id + 1);
+    const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(o.model));
+    for (const scene::Vertex& vertex : mesh.vertices) embree_->normals[id].push_back(normal_matrix * vertex.normal);
+    embree_->indices[id] = &mesh.indices;
+    embree_->meshes[id] = o.mesh;
+    rtcReleaseGeometry(g);
+    triangles_ += n;
+  }
+  rtcCommitScene(embree_->scene);
+  if (rtcGetDeviceError(embree_->device) != RTC_ERROR_NONE)
+    throw std::runtime_error("ray tracing: building the scene failed (" + device_error(embree_->device) + ")");
+}
+
+RayTracedScene::~RayTracedScene() = default;
+
+namespace {
+
+// The ray through the centre of pixel (x, y), rows top-down (NDC y = +1 at row 0).
+void pixel_ray(const glm::mat4& inverse_view_projection, int x, int y, int width_px, int height_px, glm::vec3& origin,
+               glm::vec3& direction) {
+  const float nx = (static_cast<float>(x) + 0.5f) / static_cast<float>(width_px) * 2 - 1;
+  const float ny = 1 - (static_cast<float>(y) + 0.5f) / static_cast<float>(height_px) * 2;
+  const glm::vec4 near = inverse_view_projection * glm::vec4(nx, ny, -1, 1), far = inverse_view_projection * glm::vec4(nx, ny, 1, 1);
+  origin = glm::vec3(near) / near.w;
+  direction = glm::normalize(glm::vec3(far) / far.w - origin);
+}
+
+// Runs work() on `threads` threads (0: one per hardware thread), this one included.
+template <class F>
+void on_threads(int threads, F work) {
+  const int n = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace
+
+bool RayTracedScene::primary(const glm::vec3& origin, const glm::vec3& direction, Hit& out) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit hit{};
+  hit.ray.org_x = origin.x, hit.ray.org_y = origin.y, hit.ray.org_z = origin.z;
+  hit.ray.dir_x = direction.x, hit.ray.dir_y = direction.y, hit.ray.dir_z = direction.z;
+  hit.ray.tnear = 0, hit.ray.tfar = std::numeric_limits<float>::infinity();
+  hit.ray.mask = 0xFFFFFFFFu, hit.ray.flags = 0, hit.ray.time = 0;
+  hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(embree_->scene, &context, &hit);
+  if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  out.position = origin + hit.ray.tfar * direction;
+  out.geometric = glm::normalize(glm::vec3(hit.hit.Ng_x, hit.hit.Ng_y, hit.hit.Ng_z));
+  const bool front = glm::dot(out.geometric, direction) < 0;
+  if (!front) out.geometric = -out.geometric;  // the side the camera sees
+  // The interpolated normal, turned like the shader's (n = -n where the camera sees the back).
+  const auto& idx = *embree_->indices[hit.hit.geomID];
+  const auto& normals = embree_->normals[hit.hit.geomID];
+  const std::size_t t = 3 * static_cast<std::size_t>(hit.hit.primID);
+  const glm::vec3 n = (1 - hit.hit.u - hit.hit.v) * normals[idx[t]] + hit.hit.u * normals[idx[t + 1]] + hit.hit.v * normals[idx[t + 2]];
+  out.shading = glm::length(n) > 0 ? glm::normalize(n) : out.geometric;
+  if (!front) out.shading = -out.shading;
+  return true;
+}
+
+io::Image8 RayTracedScene::facing_light(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px,
+                                        int threads) const {
+  if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced facing mask: empty image");
+  const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
+  io::Image8 out{width_px, height_px, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width_px) * height_px, 0)};
+  std::atomic<int> next_row{0};
+  on_threads(threads, [&] {
+    for (int y = next_row++; y < height_px; y = next_row++)
+      for (int x = 0; x < width_px; ++x) {
+        glm::vec3 origin, direction;
+        pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
+        Hit hit;
+        if (!primary(origin, direction, hit)) continue;
+        const glm::vec3 to_light = light.type == scene::Light::Type::directional ? -glm::normalize(light.direction)
+                                                                                  : glm::normalize(light.position - hit.position);
+        if (glm::dot(hit.shading, to_light) > 0) out.pixels[static_cast<std::size_t>(y) * width_px + x] = 255;
+      }
+  });
+  return out;
+}
+
+io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px,
+                                                 int per_side, int threads) const {
+  if (light.type != scene::Light::Type::directional)
+    throw std::invalid_argument("ray-traced visibility: only a directional light (a spot light's cone is the shadow map's)");
+  if (per_side < 1) throw std::invalid_argument("ray-traced visibility: per_side must be at least 1, got " + std::to_string(per_side));
+  if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced visibility: empty image");
+  const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
+  const glm::vec3 camera_position = camera.position;
+  // The sun's directions toward the light: -(light_sample's direction), light_sample's basis.
+  const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
+  const glm::vec3 axis = glm::normalize(light.direction);
+  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  const glm::vec3 e1 = glm::normalize(glm::cross(helper, axis)), e2 = glm::cross(axis, e1);
+  const int samples = per_side * per_side;
+  const float cell = 2.0f / static_cast<float>(per_side);
+
+  io::ImageF out{width_px, height_px, 1, std::vector<float>(static_cast<std::size_t>(width_px) * height_px, 1.0f)};
+  std::atomic<int> next_row{0};
+  auto work = [&] {
+    RTCIntersectContext context;
+    for (int y = next_row++; y < height_px; y = next_row++) {
+      for (int x = 0; x < width_px; ++x) {
+        glm::vec3 origin, direction;
+        pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
+        Hit hit;
+        if (!primary(origin, direction, hit)) continue;  // sky: lit
+        const glm::vec3 p = hit.position, n = hit.geometric;
+        const glm::vec3 start = p + n * std::max(1e-3f, 1e-4f * glm::length(p - camera_position));
+        const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width_px) + static_cast<std::uint64_t>(x);
+        int seen = 0;
+        for (int j = 0; j < per_side; ++j)
+          for (int i = 0; i < per_side; ++i) {
+            const std::uint64_t s = static_cast<std::uint64_t>(j * per_side + i);
+            const glm::vec2 uv = concentric_disk({-1 + (static_cast<float>(i) + hash_uniform(pixel, s, 0)) * cell,
+                                                  -1 + (static_cast<float>(j) + hash_uniform(pixel, s, 1)) * cell});
+            const glm::vec3 travel = glm::normalize(axis + tan_half * (uv.x * e1 + uv.y * e2));
+            RTCRay ray{};
+            ray.org_x = start.x, ray.org_y = start.y, ray.org_z = start.z;
+            ray.dir_x = -travel.x, ray.dir_y = -travel.y, ray.dir_z = -travel.z;
+            ray.tnear = 0, ray.tfar = std::numeric_limits<float>::infinity();
+            ray.mask = 0xFFFFFFFFu, ray.flags = 0, ray.time = 0;
+            rtcInitIntersectContext(&context);
+            rtcOccluded1(embree_->scene, &context, &ray);
+            if (ray.tfar >= 0) ++seen;  // tfar is set to -inf when occluded
+          }
+        out.pixels[pixel] = static_cast<float>(seen) / static_cast<float>(samples);
+      }
+    }
+  };
+  on_threads(threads, work);
+  return out;
+}
+
+#else
+
+// Built without Embree (PENUMBRA_RAY_TRACING=OFF, the gpu-bundle preset): the references fall
+// back to the shadow maps' mean (ground_truth.h) and nothing constructs this.
+struct RayTracedScene::Embree {};
+RayTracedScene::RayTracedScene(const scene::Scene&) {
+  throw std::runtime_error("ray tracing: this build has no Embree (configure with PENUMBRA_RAY_TRACING=ON)");
+}
+RayTracedScene::~RayTracedScene() = default;
+io::ImageF RayTracedScene::area_light_visibility(const scene::Camera&, const scene::Light&, int, int, int, int) const { return {}; }
+io::Image8 RayTracedScene::facing_light(const scene::Camera&, const scene::Light&, int, int, int) const { return {}; }
+bool RayTracedScene::primary(const glm::vec3&, const glm::vec3&, Hit&) const { return false; }
+
+#endif
+
+}  // namespace penumbra::metrics
