@@ -1,10 +1,12 @@
 #!/usr/bin/python3
-"""Bar chart of penumbra-demo's report.json: median frame time (with p10-p90 whiskers) of the
+"""The figures of penumbra-demo's report.json: front.png first (frame time and memory against the
+error to the reference for the engine family, its Pareto front and the adaptive rule at equal error),
+then a bar chart: median frame time (with p10-p90 whiskers) of the
 fixed and the adaptive resolution per technique, and of the engine baselines when the run has
 them, annotated with the speedup over the fixed map, the adaptive cascades most frames had and the worst
 SSIM; flicker along the path (flicker.png), error against the reference against frame time per
 configuration (error.png) and the texels each configuration draws along the path (path.png).
-Usage: plot_demo.py REPORT.json OUTDIR (writes demo, flicker, error and path .png/.svg)."""
+Usage: plot_demo.py REPORT.json OUTDIR (writes front, demo, flicker, error and path .png/.svg)."""
 import json
 import sys
 
@@ -22,14 +24,14 @@ def main():
     techniques = report.get("techniques", [])
     if not techniques:
         sys.exit(f"{sys.argv[1]}: techniques: empty")
-    bars = max(2 + len(t.get("baselines", [])) for t in techniques)
+    bars = max(2 + len(shown_baselines(t)) for t in techniques)
     fig, ax = plt.subplots(figsize=(1.8 + 0.95 * bars * len(techniques), 4.2))
     width = 0.76 / bars
     colours = ["#8c8c8c", "#2b7bba", "#d9a441", "#8e5ea2"]
     for i, t in enumerate(techniques):
         # fixed, adaptive, then the engine baselines (a larger single map, the cascades).
         series = [(f"fixed {t['fixed']['resolution_texels']}$^2$", t["fixed"]), ("adaptive", t["adaptive"])]
-        series += [(b["name"], b) for b in t.get("baselines", [])]
+        series += [(b["name"], b) for b in shown_baselines(t)]
         for j, (label, row) in enumerate(series):
             ms = row["frame_ms"]
             x = i + (j - (len(series) - 1) / 2) * width
@@ -51,12 +53,75 @@ def main():
     fig.tight_layout()
     for ext in ("png", "svg"):
         fig.savefig(f"{sys.argv[2]}/demo.{ext}", dpi=110)
+    plot_front(report, techniques, sys.argv[2])
     plot_flicker(report, techniques, sys.argv[2])
     plot_error(report, techniques, sys.argv[2])
     plot_path(report, techniques, sys.argv[2])
 
 
 MARKERS = ["o", "s", "^", "v", "D", "x", "P"]
+
+
+def shown_baselines(t):
+    """The engine configurations the bar chart and path.png show: the engine baseline and those on
+    the time front (a sweep measures a dozen; the rest are in report.json and front.png)."""
+    return [b for b in t.get("baselines", [])
+            if b["name"] == t.get("engine_baseline") or b.get("on_front", {}).get("time") or len(t["baselines"]) <= 4]
+
+
+def engine_points(t):
+    """(name, error, ms, texels allocated) of the engine family: the fixed map and every baseline."""
+    rows = [(f"fixed-{t['fixed']['resolution_texels']}", t["fixed"])] + [(b["name"], b) for b in t.get("baselines", [])]
+    return [(name, row["reference_error"]["rmse_mean"], row["frame_ms"]["median"], row["texels_allocated"])
+            for name, row in rows if row.get("reference_error")]
+
+
+def plot_front(report, techniques, outdir):
+    """front.png, the first figure: per technique, frame time and memory against the error to the
+    reference, every engine configuration (grey), the Pareto front through the undominated ones,
+    and the adaptive rule with the engine's cost at its error (the headline's ratios)."""
+    with_front = [t for t in techniques if "headline" in t.get("equal_error", {})]
+    if not with_front:
+        return
+    fig, axes = plt.subplots(len(with_front), 2, figsize=(10.5, 3.9 * len(with_front)), squeeze=False)
+    for row_axes, t in zip(axes, with_front):
+        eq = t["equal_error"]
+        points = {name: (err, ms, tex) for name, err, ms, tex in engine_points(t)}
+        adaptive_err = eq["adaptive_error"]
+        adaptive = t["adaptive"]
+        for ax, key, cost_index, adaptive_cost, unit, label in (
+                (row_axes[0], "time", 1, adaptive["frame_ms"]["median"], "ms", "frame time, ms (median over the path)"),
+                (row_axes[1], "memory", 2, adaptive["texels_allocated"] / 1e6, "texels", "Mtexels allocated")):
+            scale = 1.0 if key == "time" else 1e-6
+            front = eq[key]["front"]
+            for name, p in points.items():
+                on = name in front
+                ax.plot(p[0], p[cost_index] * scale, "o", color="#444444" if on else "#bbbbbb", ms=6 if on else 5)
+                ax.annotate(name.replace("-cascades", "c").replace("fixed-", ""), (p[0], p[cost_index] * scale), fontsize=6,
+                            xytext=(4, 3), textcoords="offset points", color="#444444" if on else "#999999")
+            fx = [points[n][0] for n in front]
+            fy = [points[n][cost_index] * scale for n in front]
+            ax.plot(fx, fy, "-", color="#444444", lw=1.2, label="engine Pareto front")
+            ratio = eq[key]["ratio"]
+            at = eq[key][f"front_{unit}"] * scale
+            ax.plot([adaptive_err, adaptive_err], [adaptive_cost, at], ":", color="#2b7bba", lw=1.2)
+            ax.plot(adaptive_err, at, "x", color="#444444", ms=7, label="engine at equal error")
+            bound = {"more_accurate_than_front": ">= ", "less_accurate_than_front": "<= "}.get(eq[key]["position"], "")
+            ax.plot(adaptive_err, adaptive_cost, "*", color="#2b7bba", ms=13,
+                    label=f"adaptive: {bound}{ratio['median']:.2f}x [{ratio['ci95'][0]:.2f}, {ratio['ci95'][1]:.2f}]"
+                          f" {'speedup' if key == 'time' else 'memory ratio'}")
+            ax.set_xlabel("visibility RMSE against the reference (mean over the reference frames)", fontsize=8)
+            ax.set_ylabel(label, fontsize=8)
+            ax.set_yscale("log")
+            ax.set_title(f"{t['technique']}: {'time' if key == 'time' else 'memory'} against error", fontsize=9)
+            ax.legend(fontsize=7, loc="upper right")
+    w, h = report.get("image_px", [0, 0])
+    fig.suptitle(f"{report.get('scene', '')} {w}x{h}, {report.get('path_frames', 0)} path frames, engine family "
+                 f"{report.get('engine_family', '')}: adaptive against the engine front at equal error (lower left is better)",
+                 fontsize=9)
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(f"{outdir}/front.{ext}", dpi=110)
 
 
 def consecutive_pairs(report):
@@ -148,7 +213,9 @@ def plot_path(report, techniques, outdir):
         return
     fig, axes = plt.subplots(1, len(with_path), figsize=(5.6 * len(with_path), 3.8), squeeze=False)
     for ax, t in zip(axes[0], with_path):
-        rows = [row for row in t["along_path"] if not row["configuration"].startswith("floor")]
+        shown = {"adaptive", "adaptive, no hysteresis", f"fixed-{t['fixed']['resolution_texels']}"}
+        shown |= {b["name"] for b in shown_baselines(t)}
+        rows = [row for row in t["along_path"] if row["configuration"] in shown]
         for k, row in enumerate(rows):
             style = "--" if "no hysteresis" in row["configuration"] else "-"
             # Distinct markers and thinning lines: equal series (4096² and 4 × 2048² both draw

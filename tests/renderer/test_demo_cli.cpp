@@ -38,6 +38,9 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   const auto r = demo({"--headless", "--scene", "demo", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss", "--no-plot",
                        "--reference-samples", "16", "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The adoption question comes first: adaptive against the engine front at equal error.
+  EXPECT_EQ(r.out.rfind("penumbra-demo: adaptive against the engine's Pareto front at equal error", 0), 0u) << r.out;
+  EXPECT_THAT(r.out.substr(0, r.out.find("\n\n")), HasSubstr("pcss   at RMSE"));
   EXPECT_THAT(r.out, HasSubstr("speedup"));
   const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
   ASSERT_EQ(report.at("techniques").size(), 2u);
@@ -52,10 +55,14 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_GE(t.at("image").at("ssim_min").get<double>(), 0.99);
     EXPECT_LE(t.at("image").at("max_abs_max").get<double>(), 0.25);
     EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png")));
-    // The engine baselines along the same path: one map of twice the fixed size, four cascades of
-    // it (the engine baseline, compared with itself), each with its texels and its SSIM.
+    // The engine family along the same path: one map of twice the fixed size, four cascades of it
+    // (the engine baseline, compared with itself), one map of half and four cascades of half and
+    // of twice the fixed size, each with its texels and its SSIM.
     const auto& baselines = t.at("baselines");
-    ASSERT_EQ(baselines.size(), 2u);
+    ASSERT_EQ(baselines.size(), 5u);
+    std::vector<std::string> family;
+    for (const auto& b : baselines) family.push_back(b.at("name"));
+    EXPECT_THAT(family, ::testing::ElementsAre("fixed-4096", "4x2048-cascades", "fixed-1024", "4x1024-cascades", "4x4096-cascades"));
     EXPECT_EQ(baselines[0].at("name"), "fixed-4096");
     EXPECT_EQ(baselines[0].at("texels_rendered").at("median").get<double>(), 4096.0 * 4096.0);
     EXPECT_EQ(baselines[1].at("name"), "4x2048-cascades");
@@ -73,7 +80,28 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_EQ(t.at("reference").at("frames").get<int>(), 1);
     // PCF: 8188² on llvmpipe (16384² textures), 8192² where larger textures fit.
     EXPECT_THAT(t.at("reference").at("description").get<std::string>(),
-                HasSubstr(t["technique"] == "pcf" ? "4 cascades of 81" : "4 cascades of 4096²"));
+                HasSubstr(t["technique"] == "pcf"      ? "4 cascades of 81"
+                          : PENUMBRA_HAS_RAY_TRACING ? "ray-traced: 16 shadow rays per pixel"
+                                                     : "4 cascades of 4096²"));
+    // Adaptive against the engine family's Pareto front at equal error: the front's members are
+    // marked, the ratios carry an interval around their median over the path's frames.
+    const auto& eq = t.at("equal_error");
+    for (const char* key : {"time", "memory"}) {
+      SCOPED_TRACE(key);
+      const auto& side = eq.at(key);
+      EXPECT_GE(side.at("front").size(), 1u);
+      const auto& ratio = side.at("ratio");
+      EXPECT_GT(ratio.at("median").get<double>(), 0);
+      EXPECT_LE(ratio.at("ci95")[0].get<double>(), ratio.at("median").get<double>());
+      EXPECT_GE(ratio.at("ci95")[1].get<double>(), ratio.at("median").get<double>());
+      EXPECT_EQ(ratio.at("frames").get<int>(), 3);
+      EXPECT_THAT(side.at("position").get<std::string>(), ::testing::AnyOf("on_front", "more_accurate_than_front", "less_accurate_than_front"));
+    }
+    EXPECT_EQ(eq.at("adaptive_error").get<double>(), t.at("adaptive").at("reference_error").at("rmse_mean").get<double>());
+    int on_time_front = t.at("fixed").at("on_front").at("time").get<bool>() ? 1 : 0;
+    for (const auto& b : baselines) on_time_front += b.at("on_front").at("time").get<bool>() ? 1 : 0;
+    EXPECT_EQ(on_time_front, static_cast<int>(eq.at("time").at("front").size()));
+    EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-crops-gain.png")));
     for (const auto* row : {&t.at("adaptive"), &t.at("fixed"), &baselines[0], &baselines[1]}) {
       const auto& err = row->at("reference_error");
       EXPECT_EQ(err.at("frames").get<int>(), 1);
@@ -84,7 +112,7 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     // Flicker along the path per configuration (3 frames: 2 frame pairs), beside the rule without
     // hysteresis and the floor of a world-fixed map; a fixed map never changes its resolution.
     const auto& flicker = t.at("flicker");
-    ASSERT_EQ(flicker.size(), 6u);
+    ASSERT_EQ(flicker.size(), 9u);
     std::vector<std::string> names;
     for (const auto& f : flicker) {
       SCOPED_TRACE(f.at("configuration").get<std::string>());
@@ -93,11 +121,11 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
       EXPECT_GE(f.at("mean_abs_mean").get<double>(), 0.0);
       EXPECT_LT(f.at("mean_abs_mean").get<double>(), 0.05);
     }
-    EXPECT_THAT(names, ::testing::ElementsAre("adaptive", "fixed-2048", "fixed-4096", "4x2048-cascades", "adaptive, no hysteresis",
-                                              "floor (world-fixed map)"));
+    EXPECT_THAT(names, ::testing::ElementsAre("adaptive", "fixed-2048", "fixed-4096", "4x2048-cascades", "fixed-1024", "4x1024-cascades",
+                                              "4x4096-cascades", "adaptive, no hysteresis", "floor (world-fixed map)"));
     EXPECT_EQ(flicker[1].at("resolution_changes").get<int>(), 0);
     // Texels per frame along the path for every configuration.
-    ASSERT_EQ(t.at("along_path").size(), 6u);
+    ASSERT_EQ(t.at("along_path").size(), 9u);
     for (const auto& row : t["along_path"]) EXPECT_EQ(row.at("texels").size(), 3u);
     EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-crops.png")));
   }
@@ -108,7 +136,7 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   std::string line;
   int rows = -1;
   while (std::getline(csv, line)) ++rows;
-  EXPECT_EQ(rows, 2 * 3 * 6);  // technique x frame x configuration
+  EXPECT_EQ(rows, 2 * 3 * 9);  // technique x frame x configuration
   EXPECT_EQ(report.at("path"), "orbit");
 }
 
@@ -225,7 +253,9 @@ TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
     EXPECT_THAT(r.err, HasSubstr(c.says));
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.says;
-    if (c.says.rfind("--", 0) == 0) EXPECT_EQ(r.exit_code, 2) << c.says << ": the command line must change";
+    if (c.says.rfind("--", 0) == 0) {
+      EXPECT_EQ(r.exit_code, 2) << c.says << ": the command line must change";
+    }
   }
 }
 

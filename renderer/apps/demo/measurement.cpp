@@ -1,0 +1,321 @@
+#include "apps/demo/measurement.h"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "metrics/temporal.h"
+#include "shadows/frame_plan.h"
+#include "stats/summary.h"
+
+namespace penumbra::demo {
+
+namespace {
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// One frame: wall clock from the first GL call to glFinish (the method on software GL; on a GPU
+// the per-pass GPU timer figures go to report.json beside it).
+double timed_render(Series& s, int width, int height) {
+  glFinish();
+  const double t0 = now_ms();
+  s.info = s.renderer->render(s.config.settings, width, height, s.timer.get());
+  glFinish();
+  return now_ms() - t0;
+}
+
+double texels_of(const shadows::FrameInfo& info) {
+  double t = 0;
+  for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
+  return t;
+}
+
+// The largest map side whose four cascades fit one atlas on this device (a 2 × 2 grid of cells
+// with guard bands), at most 8192.
+int four_cascade_reference_texels() {
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+  return std::min(8192, max_size / 2 - 2 * shadows::kGuardTexels);
+}
+
+// Visibility as grey, cropped to the rectangle [x0, x0 + w) × [y0, y0 + h), under a dark band of
+// `band` rows for the montage's (white) label.
+io::Image8 grey_crop(const io::ImageF& v, int x0, int y0, int w, int h, int band) {
+  io::Image8 out{w, h + band, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * (h + band) * 3, 48)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float value = std::clamp(v.pixels[static_cast<std::size_t>(y0 + y) * v.width + (x0 + x)], 0.0f, 1.0f);
+      for (int c = 0; c < 3; ++c) out.at(x, band + y, c) = static_cast<std::uint8_t>(std::lround(255 * value));
+    }
+  return out;
+}
+
+// sum over the mask of f(v): (1 - v) for the thin shadow, v for the gaps.
+template <class F>
+double masked_sum(const io::ImageF& v, const io::Image8& mask, F f) {
+  double sum = 0;
+  for (std::size_t p = 0; p < mask.pixels.size(); ++p)
+    if (mask.pixels[p]) sum += f(v.pixels[p]);
+  return sum;
+}
+
+}  // namespace
+
+const std::vector<std::string>& thin_casters() {
+  static const std::vector<std::string> names = {"crane", "wires"};
+  return names;
+}
+
+std::string cascade_resolutions(const shadows::FrameInfo& info) {
+  std::string res;
+  for (const auto& c : info.cascades) res += (res.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+  return res;
+}
+
+Window best_window(const std::vector<double>& score, int width, int height, int w, int h) {
+  w = std::clamp(w, 1, width), h = std::clamp(h, 1, height);
+  // Summed-area table, one row and column of zeros in front.
+  std::vector<double> sat(static_cast<std::size_t>(width + 1) * (height + 1), 0.0);
+  auto at = [&](int x, int y) -> double& { return sat[static_cast<std::size_t>(y) * (width + 1) + x]; };
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      at(x + 1, y + 1) = score[static_cast<std::size_t>(y) * width + x] + at(x, y + 1) + at(x + 1, y) - at(x, y);
+  Window best{(width - w) / 2, (height - h) / 2, -1e300};
+  for (int y0 = 0; y0 + h <= height; y0 += 8)
+    for (int x0 = 0; x0 + w <= width; x0 += 8) {
+      const double sum = at(x0 + w, y0 + h) - at(x0, y0 + h) - at(x0 + w, y0) + at(x0, y0);
+      if (sum > best.sum) best = {x0, y0, sum};
+    }
+  return best;
+}
+
+// Thin casters: their shadow is found with hard shadows from four fitted cascades of 4096² (about
+// 1 cm texels near the camera), once with every object and once without them: `shadow` marks the
+// pixels only they darken (umbra), `gaps` the lit pixels within two pixels of those (the holes
+// between lattice members and the sides of a wire's shadow). Each configuration keeps
+// thin_shadow = sum over `shadow` of (1 - V) relative to the reference's, and gaps = sum over
+// `gaps` of V relative to the reference's: a map too coarse for a caster drops its shadow
+// (thin_shadow < 1) or closes its gaps (gaps < 1).
+struct Walk::ThinMasks {
+  io::Image8 shadow, gaps;  // one channel, 255 where selected
+  std::int64_t shadow_pixels = 0, gap_pixels = 0;
+};
+
+Walk::Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::TimingMethod method)
+    : scene_(scene), plan_(std::move(plan)), options_(options), method_(method), probe_(scene) {
+  scene::Scene without = scene;
+  std::erase_if(without.objects, [](const scene::Object& o) {
+    return std::find(thin_casters().begin(), thin_casters().end(), o.name) != thin_casters().end();
+  });
+  thin_ = options_.reference && without.objects.size() < scene.objects.size();
+#if PENUMBRA_HAS_RAY_TRACING
+  if (options_.reference && scene.light.type == scene::Light::Type::directional) traced_ = std::make_unique<metrics::RayTracedScene>(scene);
+#endif
+  if (thin_) {
+    thin_with_ = std::make_unique<shadows::Renderer>(), thin_without_ = std::make_unique<shadows::Renderer>();
+    thin_with_->set_scene(scene), thin_without_->set_scene(without);
+  }
+}
+
+Walk::~Walk() = default;
+
+const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, const io::ImageF& surface) {
+  auto& cached = thin_cache_[frame];
+  if (cached) return *cached;
+  const int width = options_.width, height = options_.height;
+  shadows::ShadowSettings hard;
+  hard.technique = shadows::Technique::hard;
+  hard.map.resolution_texels = 4096;
+  hard.map.cascades = scene_.light.type == scene::Light::Type::directional ? 4 : 1;
+  thin_with_->scene().camera = thin_without_->scene().camera = camera;
+  thin_with_->render(hard, width, height);
+  thin_without_->render(hard, width, height);
+  const io::ImageF v = thin_with_->read_visibility(), v_free = thin_without_->read_visibility();
+  const std::size_t n = static_cast<std::size_t>(width) * height;
+  cached = std::make_unique<ThinMasks>();
+  ThinMasks& m = *cached;
+  m.shadow = {width, height, 1, std::vector<std::uint8_t>(n)};
+  m.gaps = {width, height, 1, std::vector<std::uint8_t>(n)};
+  for (std::size_t p = 0; p < n; ++p)
+    if (surface.pixels[4 * p + 3] > 0 && v.pixels[p] < 0.5f && v_free.pixels[p] >= 0.5f) m.shadow.pixels[p] = 255, ++m.shadow_pixels;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * width + x;
+      if (surface.pixels[4 * p + 3] <= 0 || v.pixels[p] < 0.5f || v_free.pixels[p] < 0.5f) continue;
+      bool near = false;
+      for (int dy = -2; dy <= 2 && !near; ++dy)
+        for (int dx = -2; dx <= 2 && !near; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          near = xx >= 0 && yy >= 0 && xx < width && yy < height && m.shadow.pixels[static_cast<std::size_t>(yy) * width + xx];
+        }
+      if (near) m.gaps.pixels[p] = 255, ++m.gap_pixels;
+    }
+  return m;
+}
+
+TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> configs, ProgressBar& progress, int& done, int total) {
+  const int width = options_.width, height = options_.height;
+  TechniqueRun run;
+  run.technique = name;
+  run.thin = thin_;
+  for (Configuration& config : configs) {
+    Series s;
+    s.config = std::move(config);
+    s.renderer = std::make_unique<shadows::Renderer>();
+    s.renderer->set_scene(scene_);
+    s.timer = std::make_unique<gl::PassTimer>(method_ == gl::TimingMethod::gpu_timer);
+    run.series.push_back(std::move(s));
+  }
+  std::vector<Configuration> order;
+  for (const Series& s : run.series) order.push_back(s.config);
+  run.engine = engine_baseline(order);
+  auto& series = run.series;
+
+  // The reference (metrics/ground_truth.h): four cascades of (up to) 8192² with the same
+  // world-space filter, or the mean of hard shadows over the light's area, each from four
+  // cascades of 4096².
+  shadows::ShadowSettings ref_settings = series[run.fixed].config.settings;
+  if (scene_.light.type == scene::Light::Type::directional) ref_settings.map.cascades = 4;
+  metrics::ReferenceOptions ref_options;
+  ref_options.filter_resolution_texels = four_cascade_reference_texels();
+  ref_options.area_samples = options_.reference_samples;
+  ref_options.ray_traced = traced_ != nullptr;
+  ref_options.traced = traced_.get();
+  shadows::Renderer ref_renderer;
+  if (options_.reference) ref_renderer.set_scene(scene_);
+
+  // Warm-up (shader compilation, allocation) at the path's first camera; not timed.
+  for (auto& s : series) {
+    s.renderer->scene().camera = camera_at(scene_, plan_, plan_.frames.front().frame);
+    s.renderer->render(s.config.settings, width, height);
+  }
+  io::ImageF surface_previous;
+  glm::mat4 view_projection_previous(1);
+  const int crop_w = std::max(8, width / 4), crop_h = std::max(8, height / 4);
+  const int band = crop_w >= 120 ? 20 : 0;  // room for the label (drawn 24 px high at twice the crop's size)
+  auto take_crops = [&](Crops& crops, const io::ImageF& reference, Window at, int frame, double score) {
+    crops = {{grey_crop(reference, at.x, at.y, crop_w, crop_h, band)}, {"reference (frame " + std::to_string(frame) + ")"}, frame, score};
+    for (std::size_t k : {run.adaptive, run.engine, run.fixed}) {
+      crops.tiles.push_back(grey_crop(series[k].visibility, at.x, at.y, crop_w, crop_h, band));
+      crops.labels.push_back(series[k].config.name);
+    }
+  };
+
+  for (std::size_t i = 0; i < plan_.frames.size(); ++i) {
+    const PathFrame& pf = plan_.frames[i];
+    progress(++done, total, name + " frame " + std::to_string(pf.frame) + (pf.reference && options_.reference ? " + reference" : ""));
+    const scene::Camera camera = camera_at(scene_, plan_, pf.frame);
+    io::ImageF surface = probe_.render(camera, width, height);
+    const glm::mat4 view_projection = metrics::camera_view_projection(camera, width, height);
+    for (Series& s : series) {
+      s.renderer->scene().camera = camera;
+      if (!pf.continues && s.config.settings.adaptive.enabled) {
+        // A new station: the controller starts from this view, not from the last station's maps
+        // (which a 30-frame shrink delay would keep), and one untimed frame measures the view's
+        // PCSS requirement. Consecutive frames (a full path) keep the hysteresis.
+        s.renderer->reset_adaptive();
+        s.renderer->render(s.config.settings, width, height);
+      }
+      std::vector<double> repeats;
+      for (int r = 0; r < std::max(options_.repeats, 1); ++r) repeats.push_back(timed_render(s, width, height));
+      s.ms.push_back(stats::median(repeats));
+      if (s.info.pcss_requirement.valid) s.pcss_clamped.push_back(s.info.pcss_requirement.clamped_fraction);
+      s.texels.push_back(texels_of(s.info));
+      double triangles = 0;
+      for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
+      s.map_triangles.push_back(triangles);
+      s.allocated.push_back(static_cast<double>(s.info.atlas_width) * s.info.atlas_height);
+      const std::string res = cascade_resolutions(s.info);
+      if (!s.resolution.empty() && s.resolution.back() != res) ++s.resolution_changes;
+      s.resolution.push_back(res);
+      if (s.config.timed()) s.color = s.renderer->read_color();  // the lit image: compared in the tables only
+      s.visibility = s.renderer->read_visibility();
+      // Flicker (metrics/temporal.h): visibility of this frame against the previous one at the
+      // pixels whose surface point stayed in view.
+      if (pf.continues) {
+        const metrics::Flicker fl =
+            metrics::flicker({&s.previous, &surface_previous, view_projection_previous}, {&s.visibility, &surface, view_projection});
+        s.flicker_mean_abs.push_back(fl.mean_abs);
+        s.flicker_share.push_back(fl.share_changed);
+      }
+    }
+    for (Series& s : series)
+      if (s.config.timed()) s.ssim_vs_engine.push_back(metrics::compare(series[run.engine].color, s.color).ssim);
+    const metrics::ImageError e = metrics::compare(series[run.fixed].color, series[run.adaptive].color);
+    run.ssim_fixed_adaptive.push_back(e.ssim), run.max_abs_fixed_adaptive.push_back(e.max_abs);
+    run.share_fixed_adaptive.push_back(e.share_above_threshold);
+
+    if (pf.reference && options_.reference) {
+      ref_renderer.scene().camera = camera;
+      const metrics::Reference ref = metrics::make_reference(ref_renderer, ref_settings, width, height, ref_options);
+      run.reference_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
+      run.reference_ms += ref.render_ms;
+      ++run.reference_frames;
+      // Compared where a surface is drawn (the sky is lit in every image) and, ray-traced, faces the
+      // light (on the other side max(n·l, 0) hides the visibility).
+      io::Image8 mask = traced_ ? traced_->facing_light(camera, scene_.light, width, height)
+                                : io::Image8{width, height, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height, 255)};
+      bool any = false;
+      for (std::size_t p = 0; p < mask.pixels.size(); ++p) {
+        if (surface.pixels[4 * p + 3] <= 0) mask.pixels[p] = 0;
+        any = any || mask.pixels[p];
+      }
+      run.mask_pixels += std::count_if(mask.pixels.begin(), mask.pixels.end(), [](std::uint8_t m) { return m != 0; });
+      run.mask_description = traced_ ? "surfaces facing the light" : "surfaces";
+      metrics::CompareOptions masked;
+      masked.mask = &mask;
+      if (any)
+        for (Series& s : series) s.vs_reference.push_back(metrics::compare(ref.visibility, s.visibility, masked));
+      // What the rule buys where the fixed map fails: per pixel, how much closer to the reference
+      // the adaptive visibility is than the fixed map's; the crop goes where that is largest.
+      std::vector<double> gain(mask.pixels.size(), 0.0);
+      const auto& va = series[run.adaptive].visibility.pixels;
+      const auto& vf = series[run.fixed].visibility.pixels;
+      for (std::size_t p = 0; p < gain.size(); ++p)
+        if (mask.pixels[p]) gain[p] = std::abs(vf[p] - ref.visibility.pixels[p]) - std::abs(va[p] - ref.visibility.pixels[p]);
+      const Window g = best_window(gain, width, height, crop_w, crop_h);
+      if (run.gain_crops.tiles.empty() || g.sum > run.gain_crops.score) take_crops(run.gain_crops, ref.visibility, g, pf.frame, g.sum);
+      // Side-by-side crops where the thin casters' shadows are densest, or the middle of the first
+      // reference frame.
+      if (thin_) {
+        const ThinMasks& m = thin_masks(pf.frame, camera, surface);
+        run.thin_pixels += m.shadow_pixels, run.gap_pixels += m.gap_pixels;
+        auto dark = [](float v) { return 1.0 - v; };
+        auto lit = [](float v) { return static_cast<double>(v); };
+        run.reference_thin_shadow += masked_sum(ref.visibility, m.shadow, dark);
+        run.reference_gaps += masked_sum(ref.visibility, m.gaps, lit);
+        for (Series& s : series) s.thin_shadow += masked_sum(s.visibility, m.shadow, dark), s.gaps += masked_sum(s.visibility, m.gaps, lit);
+        if (run.thin_crops.tiles.empty() || static_cast<double>(m.shadow_pixels) > run.thin_crops.score) {
+          const std::vector<double> shadow(m.shadow.pixels.begin(), m.shadow.pixels.end());
+          const Window at = m.shadow_pixels > 0 ? best_window(shadow, width, height, crop_w, crop_h)
+                                                : Window{(width - crop_w) / 2, (height - crop_h) / 2, 0};
+          take_crops(run.thin_crops, ref.visibility, at, pf.frame, static_cast<double>(m.shadow_pixels));
+        }
+      } else if (run.thin_crops.tiles.empty()) {
+        take_crops(run.thin_crops, ref.visibility, {(width - crop_w) / 2, (height - crop_h) / 2, 0}, pf.frame, 0);
+      }
+    }
+    for (std::size_t k = 0; k < series.size(); ++k) {
+      const Series& s = series[k];
+      char row[320];
+      std::snprintf(row, sizeof row, "%s,%s,%d,%.4f,%.0f,%s,%.6f,%.6f\n", name.c_str(), s.config.name.c_str(), pf.frame, s.ms.back(),
+                    s.texels.back(), s.resolution.back().c_str(), s.config.timed() ? s.ssim_vs_engine.back() : std::nan(""),
+                    pf.continues ? s.flicker_mean_abs.back() : std::nan(""));
+      run.csv += row;
+    }
+    if (i == plan_.frames.size() / 2) run.shown_fixed = series[run.fixed].color, run.shown_adaptive = series[run.adaptive].color;
+    for (Series& s : series) s.previous = std::move(s.visibility);
+    surface_previous = std::move(surface);
+    view_projection_previous = view_projection;
+  }
+  for (Series& s : series) s.timer->poll(true);
+  return run;
+}
+
+}  // namespace penumbra::demo

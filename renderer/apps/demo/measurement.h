@@ -1,0 +1,132 @@
+#pragma once
+// The walk along the path: every configuration of a technique (configurations.h) renders every
+// frame of the plan (path.h), timed with the wall clock around glFinish; per frame the texels
+// drawn and allocated, triangles drawn into the maps, SSIM against the engine baseline and
+// flicker from the frame before; at the reference frames the error against the reference of the
+// technique (metrics/ground_truth.h; ray-traced for an area light where Embree is built in),
+// the thin casters' shadow and gaps, and the crops. Errors are taken where a surface faces the
+// light (ray_traced.h's facing mask; without Embree, wherever a surface is drawn): elsewhere the
+// shading's max(n·l, 0) makes the visibility invisible.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "apps/demo/configurations.h"
+#include "apps/demo/path.h"
+#include "cli/progress_bar.h"
+#include "gl/timer.h"
+#include "io/image_io.h"
+#include "metrics/ground_truth.h"
+#include "metrics/image_error.h"
+#include "metrics/ray_traced.h"
+#include "metrics/surface_probe.h"
+#include "scene/scene.h"
+#include "shadows/renderer.h"
+
+namespace penumbra::demo {
+
+// One configuration along the path, with everything measured about it.
+struct Series {
+  Configuration config;
+  std::unique_ptr<shadows::Renderer> renderer;
+  std::unique_ptr<gl::PassTimer> timer;
+  // this frame
+  shadows::FrameInfo info;
+  io::Image8 color;
+  io::ImageF visibility, previous;
+  // per path frame
+  std::vector<double> ms;         // median over --repeats renders of the frame
+  std::vector<double> texels;     // drawn into its maps
+  std::vector<double> allocated;  // the atlas allocated for them
+  std::vector<double> map_triangles;  // drawn into all its maps after culling
+  std::vector<double> ssim_vs_engine;  // timed configurations only
+  std::vector<std::string> resolution;  // "928" or "1024+1024+512" (one per cascade)
+  std::vector<double> flicker_mean_abs, flicker_share;  // per pair of consecutive frames
+  std::vector<double> pcss_clamped;  // PCSS with the per-pixel requirement: share held at the minimum penumbra
+  int resolution_changes = 0;
+  // at the reference frames
+  std::vector<metrics::ImageError> vs_reference;
+  double thin_shadow = 0, gaps = 0;  // masked sums (thin casters)
+};
+
+// Side-by-side crops of the visibility (reference, adaptive, engine baseline, fixed) at one frame.
+struct Crops {
+  std::vector<io::Image8> tiles;
+  std::vector<std::string> labels;
+  int frame = -1;
+  double score = 0;  // what chose them: thin-shadow pixels, or the error the rule removes
+};
+
+struct TechniqueRun {
+  std::string technique;
+  std::vector<Series> series;  // in configurations() order
+  std::size_t adaptive = 0, fixed = 1, engine = 1;  // indices into series
+  // the reference
+  std::string reference_description;
+  std::string mask_description;  // where the errors are taken
+  std::int64_t mask_pixels = 0;  // over the reference frames
+  int reference_frames = 0;
+  double reference_ms = 0;
+  // thin casters (crane, wires) over the reference frames
+  bool thin = false;
+  std::int64_t thin_pixels = 0, gap_pixels = 0;
+  double reference_thin_shadow = 0, reference_gaps = 0;
+  // the fixed map's image against the adaptive one, per frame
+  std::vector<double> ssim_fixed_adaptive, max_abs_fixed_adaptive, share_fixed_adaptive;
+  io::Image8 shown_fixed, shown_adaptive;  // lit images at the path's middle frame
+  Crops thin_crops;  // where the thin casters' shadow is densest
+  Crops gain_crops;  // where the adaptive map is closest to the reference compared with the fixed map
+  std::string csv;   // frames.csv rows
+};
+
+struct WalkOptions {
+  int width = 960, height = 540;
+  int repeats = 1;  // renders per frame and configuration; the frame's time is their median
+  bool reference = true;
+  // Area-light reference: shadow rays per pixel when ray-traced (a directional light in a build
+  // with Embree), else point-light maps averaged.
+  int reference_samples = 256;
+};
+
+// Shared by every technique of a run: the scene, the surface probe, the thin casters' masks.
+class Walk {
+ public:
+  Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::TimingMethod method);
+  ~Walk();
+  const PathPlan& plan() const { return plan_; }
+  // Walks the path with `configs` of technique `name`. `progress` counts frames from `done` of `total`.
+  TechniqueRun run(const std::string& name, std::vector<Configuration> configs, ProgressBar& progress, int& done, int total);
+
+ private:
+  struct ThinMasks;
+  const ThinMasks& thin_masks(int frame, const scene::Camera& camera, const io::ImageF& surface);
+
+  const scene::Scene& scene_;
+  PathPlan plan_;
+  WalkOptions options_;
+  gl::TimingMethod method_;
+  metrics::SurfaceProbe probe_;
+  std::unique_ptr<metrics::RayTracedScene> traced_;  // the ray-traced reference and the facing mask
+  bool thin_ = false;
+  std::unique_ptr<shadows::Renderer> thin_with_, thin_without_;
+  std::map<int, std::unique_ptr<ThinMasks>> thin_cache_;
+};
+
+// The thin casters: the objects a coarse map loses first (the crane's lattice, Kreuzer 2017 Fig.
+// 6.1, and the wires between the poles).
+const std::vector<std::string>& thin_casters();
+
+// The frame's map resolutions, "928" or "1024+1024+512" (one per cascade).
+std::string cascade_resolutions(const shadows::FrameInfo& info);
+
+// The x, y of the w × h window (corners on an 8-pixel grid) with the largest sum of `score`
+// (width × height values, row by row), and that sum.
+struct Window {
+  int x = 0, y = 0;
+  double sum = 0;
+};
+Window best_window(const std::vector<double>& score, int width, int height, int w, int h);
+
+}  // namespace penumbra::demo

@@ -1,0 +1,295 @@
+#include "apps/demo/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "io/report.h"
+#include "shadows/settings.h"
+#include "stats/summary.h"
+
+namespace penumbra::demo {
+
+namespace {
+
+using stats::Spread;
+using stats::spread;
+
+nlohmann::json to_json(const Spread& s) {
+  return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"max", s.max}};
+}
+
+double mean_of(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+}
+
+nlohmann::json reference_error_json(const std::vector<metrics::ImageError>& errors) {
+  if (errors.empty()) return nullptr;
+  double rmse = 0, mean_abs = 0, ssim = 0, ssim_min = 1;
+  std::vector<double> per_frame;
+  for (const auto& e : errors) {
+    const double n = static_cast<double>(errors.size());
+    rmse += e.rmse / n, mean_abs += e.mean_abs / n, ssim += e.ssim / n;
+    ssim_min = std::min(ssim_min, e.ssim);
+    per_frame.push_back(e.rmse);
+  }
+  return {{"frames", errors.size()}, {"rmse_mean", rmse},          {"rmse_per_frame", per_frame}, {"mean_abs_mean", mean_abs},
+          {"ssim_mean", ssim},       {"ssim_min", ssim_min}};
+}
+
+// Every cascade of the adaptive maps, as most frames along the path had them ("2624+3904").
+std::string usual_resolution(const Series& s) {
+  std::map<std::string, int> seen;
+  for (const auto& r : s.resolution) ++seen[r];
+  if (seen.empty()) return "";
+  return std::max_element(seen.begin(), seen.end(), [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+}
+
+double min_of(const std::vector<double>& v) { return v.empty() ? NAN : *std::min_element(v.begin(), v.end()); }
+double max_of(const std::vector<double>& v) { return v.empty() ? NAN : *std::max_element(v.begin(), v.end()); }
+
+// The thin casters' shadow and gaps a configuration keeps, relative to the reference's.
+double shadow_kept(const TechniqueRun& run, const Series& s) { return s.thin_shadow / std::max(run.reference_thin_shadow, 1e-9); }
+double gaps_kept(const TechniqueRun& run, const Series& s) { return run.gap_pixels > 0 ? s.gaps / std::max(run.reference_gaps, 1e-9) : 1.0; }
+
+FrontComparison compare_on(const TechniqueRun& run, const std::vector<std::size_t>& family, double adaptive_error,
+                           const std::vector<double> Series::*per_frame, bool median_cost) {
+  std::vector<stats::Candidate> candidates;
+  for (const std::size_t k : family) {
+    const auto& v = run.series[k].*per_frame;
+    candidates.push_back({reference_rmse(run.series[k]), median_cost ? stats::median(v) : mean_of(v)});
+  }
+  FrontComparison out;
+  const std::vector<std::size_t> front = stats::pareto_front(candidates);
+  for (const std::size_t f : front) out.front.push_back(family[f]);
+  if (front.empty()) return out;
+  out.reading = stats::read_front(candidates, front, adaptive_error);
+  out.reading.lo = family[out.reading.lo], out.reading.hi = family[out.reading.hi];
+  out.ratio = stats::paired_ratio(run.series[out.reading.lo].*per_frame, run.series[out.reading.hi].*per_frame, out.reading.weight,
+                                  run.series[run.adaptive].*per_frame);
+  return out;
+}
+
+nlohmann::json comparison_json(const TechniqueRun& run, const FrontComparison& c, const std::string& unit) {
+  nlohmann::json front = nlohmann::json::array();
+  for (const std::size_t k : c.front) front.push_back(run.series[k].config.name);
+  return {{"front", front},
+          {"position", std::string(stats::to_string(c.reading.position))},
+          {"between", {run.series[c.reading.lo].config.name, run.series[c.reading.hi].config.name}},
+          {"weight", c.reading.weight},
+          {"front_" + unit, c.reading.cost},
+          {"ratio", {{"median", c.ratio.median}, {"ci95", {c.ratio.lo, c.ratio.hi}}, {"frames", c.ratio.n}}}};
+}
+
+// "1.19x [1.10, 1.25]", with "≥" / "≤" where the adaptive error lies beyond the front's ends.
+std::string ratio_text(const FrontComparison& c) {
+  const char* bound = c.reading.position == stats::FrontReading::Position::more_accurate   ? ">= "
+                      : c.reading.position == stats::FrontReading::Position::less_accurate ? "<= "
+                                                                                          : "";
+  char text[96];
+  std::snprintf(text, sizeof text, "%s%.2fx [%.2f, %.2f]", bound, c.ratio.median, c.ratio.lo, c.ratio.hi);
+  return text;
+}
+
+std::string where_text(const TechniqueRun& run, const FrontComparison& c) {
+  const std::string& lo = run.series[c.reading.lo].config.name;
+  const std::string& hi = run.series[c.reading.hi].config.name;
+  switch (c.reading.position) {
+    case stats::FrontReading::Position::more_accurate: return "more accurate than the front's best, " + lo;
+    case stats::FrontReading::Position::less_accurate: return "less accurate than the front's cheapest, " + lo;
+    case stats::FrontReading::Position::on_front: return lo == hi ? "on " + lo : "between " + lo + " and " + hi;
+  }
+  return "";
+}
+
+}  // namespace
+
+double reference_rmse(const Series& s) {
+  if (s.vs_reference.empty()) return NAN;
+  double sum = 0;
+  for (const auto& e : s.vs_reference) sum += e.rmse;
+  return sum / static_cast<double>(s.vs_reference.size());
+}
+
+EqualError equal_error(const TechniqueRun& run) {
+  EqualError eq;
+  for (std::size_t k = 0; k < run.series.size(); ++k)
+    if (run.series[k].config.engine_family()) eq.family.push_back(k);
+  eq.adaptive_error = reference_rmse(run.series[run.adaptive]);
+  if (std::isnan(eq.adaptive_error)) {
+    eq.why_not = "no reference (--no-reference): no error to compare at";
+    return eq;
+  }
+  if (eq.family.size() < 2) {
+    eq.why_not = "no engine family (--no-baselines): no front";
+    return eq;
+  }
+  eq.time = compare_on(run, eq.family, eq.adaptive_error, &Series::ms, true);
+  eq.memory = compare_on(run, eq.family, eq.adaptive_error, &Series::allocated, false);
+  eq.available = !eq.time.front.empty() && !eq.memory.front.empty();
+  if (!eq.available) eq.why_not = "no engine configuration was measured against the reference";
+  return eq;
+}
+
+std::string headline(const TechniqueRun& run, const EqualError& eq) {
+  char line[512];
+  if (!eq.available) {
+    std::snprintf(line, sizeof line, "%-6s %s", run.technique.c_str(), eq.why_not.c_str());
+    return line;
+  }
+  std::snprintf(line, sizeof line, "%-6s at RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
+                eq.adaptive_error, ratio_text(eq.time).c_str(), ratio_text(eq.memory).c_str(), where_text(run, eq.time).c_str(),
+                where_text(run, eq.memory).c_str());
+  return line;
+}
+
+nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
+  const Series& ca = run.series[run.adaptive];
+  const Series& cf = run.series[run.fixed];
+  std::vector<double> res_a;
+  for (const auto& r : ca.resolution) res_a.push_back(std::stod(r.substr(0, r.find('+'))));
+  const Spread sf = spread(cf.ms), sa = spread(ca.ms), sr = spread(res_a);
+  nlohmann::json t;
+  t["technique"] = run.technique;
+  t["fixed"] = {{"resolution_texels", cf.config.settings.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(cf.timer->stats())}};
+  t["adaptive"] = {{"resolution_texels", to_json(sr)},
+                   {"cascades_most_frames", usual_resolution(ca)},
+                   {"storage", ca.info.storage},
+                   {"resolution_source", ca.info.resolution_source},
+                   {"frame_ms", to_json(sa)},
+                   {"passes", io::to_json(ca.timer->stats())}};
+  if (ca.info.pcss_requirement.valid)
+    t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", ca.info.pcss_requirement.clamped_fraction},
+                                         {"clamped_fraction_mean", mean_of(ca.pcss_clamped)},
+                                         {"above_max_fraction", ca.info.pcss_requirement.above_max_fraction}};
+  t["speedup_median"] = sf.median / std::max(sa.median, 1e-9);
+  t["image"] = {{"ssim_min", min_of(run.ssim_fixed_adaptive)},
+                {"ssim_mean", mean_of(run.ssim_fixed_adaptive)},
+                {"max_abs_max", max_of(run.max_abs_fixed_adaptive)},
+                {"share_above_1_255_max", max_of(run.share_fixed_adaptive)}};
+  if (run.reference_frames > 0)
+    t["reference"] = {{"description", run.reference_description},
+                      {"frames", run.reference_frames},
+                      {"render_ms_mean", run.reference_ms / run.reference_frames},
+                      {"compared_at", run.mask_description},
+                      {"compared_pixels", run.mask_pixels}};
+  if (run.thin && run.reference_frames > 0)
+    t["thin_casters"] = {{"objects", thin_casters()},
+                         {"shadow_pixels", run.thin_pixels},
+                         {"gap_pixels", run.gap_pixels},
+                         {"reference_shadow_darkness_mean", run.thin_pixels > 0 ? run.reference_thin_shadow / static_cast<double>(run.thin_pixels) : 0.0},
+                         {"reference_gap_visibility_mean", run.gap_pixels > 0 ? run.reference_gaps / static_cast<double>(run.gap_pixels) : 0.0},
+                         {"crop_frame", run.thin_crops.frame}};
+  if (!run.gain_crops.tiles.empty()) t["gain_crop"] = {{"frame", run.gain_crops.frame}, {"error_removed_sum", run.gain_crops.score}};
+  for (const Series& s : run.series) {
+    t["flicker"].push_back({{"configuration", s.config.name},
+                            {"mean_abs_mean", mean_of(s.flicker_mean_abs)},
+                            {"share_changed_mean", mean_of(s.flicker_share)},
+                            {"mean_abs_per_frame", s.flicker_mean_abs},
+                            {"resolution_changes", s.resolution_changes}});
+    t["along_path"].push_back({{"configuration", s.config.name},
+                               {"frame_ms", s.ms},
+                               {"texels", s.texels},
+                               {"allocated", s.allocated},
+                               {"resolution", s.resolution}});
+  }
+  auto on = [](const FrontComparison& c, std::size_t k) { return std::find(c.front.begin(), c.front.end(), k) != c.front.end(); };
+  auto measured = [&](std::size_t k, nlohmann::json& j) {
+    const Series& s = run.series[k];
+    j["texels_rendered"] = to_json(spread(s.texels));
+    j["texels_allocated"] = mean_of(s.allocated);
+    j["map_triangles"] = to_json(spread(s.map_triangles));
+    j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
+    j["reference_error"] = reference_error_json(s.vs_reference);
+    if (run.thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(run, s)}, {"gaps_kept", gaps_kept(run, s)}};
+    if (eq.available && s.config.engine_family()) j["on_front"] = {{"time", on(eq.time, k)}, {"memory", on(eq.memory, k)}};
+  };
+  measured(run.fixed, t["fixed"]);
+  measured(run.adaptive, t["adaptive"]);
+  for (std::size_t k = 0; k < run.series.size(); ++k) {
+    const Series& s = run.series[k];
+    if (s.config.role == Role::no_hysteresis)
+      t["adaptive"]["without_hysteresis"] = {{"resolution_changes", s.resolution_changes},
+                                             {"texels_rendered", to_json(spread(s.texels))},
+                                             {"reference_error", reference_error_json(s.vs_reference)}};
+    if (s.config.role != Role::engine) continue;
+    nlohmann::json b = {{"name", s.config.name},
+                        {"settings", shadows::to_json(s.config.settings)},
+                        {"frame_ms", to_json(spread(s.ms))},
+                        {"passes", io::to_json(s.timer->stats())}};
+    measured(k, b);
+    t["baselines"].push_back(b);
+  }
+  t["engine_baseline"] = run.series[run.engine].config.name;
+  t["speedup_vs_engine_median"] = spread(run.series[run.engine].ms).median / std::max(sa.median, 1e-9);
+  if (eq.available) {
+    t["equal_error"] = {{"error", "rmse_mean against the reference"},
+                        {"adaptive_error", eq.adaptive_error},
+                        {"time", comparison_json(run, eq.time, "ms")},
+                        {"memory", comparison_json(run, eq.memory, "texels")},
+                        {"headline", headline(run, eq)}};
+  } else {
+    t["equal_error"] = {{"unavailable", eq.why_not}};
+  }
+  return t;
+}
+
+void print_single_map_row(const TechniqueRun& run) {
+  const Series& ca = run.series[run.adaptive];
+  const Series& cf = run.series[run.fixed];
+  const Spread sf = spread(cf.ms), sa = spread(ca.ms);
+  const double speedup = sf.median / std::max(sa.median, 1e-9);
+  std::printf("%-6s %10.4f %8.1f [%6.1f, %6.1f] %10.4f %8.1f [%6.1f, %6.1f] %7.2fx %20s %8.4f %9.4f %9.4f\n", run.technique.c_str(),
+              reference_rmse(cf), sf.median, sf.p10, sf.p90, reference_rmse(ca), sa.median, sa.p10, sa.p90, speedup,
+              (usual_resolution(ca) + "²").c_str(), min_of(run.ssim_fixed_adaptive), max_of(run.max_abs_fixed_adaptive),
+              max_of(run.share_fixed_adaptive));
+}
+
+void print_tables(const TechniqueRun& run, const EqualError& eq) {
+  const auto& series = run.series;
+  const double engine_median = spread(series[run.engine].ms).median;
+  std::printf("%s: every configuration against %s (the engine baseline) and the reference; * on the time front, + on the memory front\n",
+              run.technique.c_str(), series[run.engine].config.name.c_str());
+  std::printf("  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s\n", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
+              "Mtri maps", "SSIM eng", "RMSE ref", "SSIM ref", "thin", "gaps");
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    const Series& s = series[k];
+    if (!s.config.timed()) continue;
+    const Spread ms = spread(s.ms);
+    std::string name = s.config.name;
+    if (eq.available && std::find(eq.time.front.begin(), eq.time.front.end(), k) != eq.time.front.end()) name += " *";
+    if (eq.available && std::find(eq.memory.front.begin(), eq.memory.front.end(), k) != eq.memory.front.end()) name += " +";
+    std::printf("  %-26s %8.1f [%6.1f, %6.1f] %6.2fx %10.2f %9.2f %9.3f %8.4f", name.c_str(), ms.median, ms.p10, ms.p90,
+                engine_median / std::max(ms.median, 1e-9), spread(s.texels).median / 1e6, mean_of(s.allocated) / 1e6,
+                spread(s.map_triangles).median / 1e6, min_of(s.ssim_vs_engine));
+    if (!s.vs_reference.empty()) {
+      double ssim = 0;
+      for (const auto& e : s.vs_reference) ssim += e.ssim / static_cast<double>(s.vs_reference.size());
+      std::printf(" %9.5f %8.4f", reference_rmse(s), ssim);
+    }
+    if (run.thin_pixels > 0) std::printf(" %7.3f %7.3f", shadow_kept(run, s), gaps_kept(run, s));
+    std::printf("\n");
+  }
+  if (run.reference_frames > 0)
+    std::printf("  reference: %s; compared at %s (%lld pixels over %d frames)\n", run.reference_description.c_str(),
+                run.mask_description.c_str(), static_cast<long long>(run.mask_pixels), run.reference_frames);
+  if (run.thin && run.reference_frames > 0)
+    std::printf("  thin casters (crane, wires): %lld shadow and %lld gap pixels over %d frames; thin = their shadow kept, gaps = "
+                "their gaps kept, relative to the reference\n",
+                static_cast<long long>(run.thin_pixels), static_cast<long long>(run.gap_pixels), run.reference_frames);
+  const Series& ca = series[run.adaptive];
+  if (!ca.pcss_clamped.empty())
+    std::printf("  PCSS: %.1f %% of the filtered pixels held at the minimum penumbra (clamped; mean over the path, %.1f %% in its last "
+                "frame)\n",
+                100 * mean_of(ca.pcss_clamped), 100 * ca.pcss_clamped.back());
+  if (ca.flicker_mean_abs.empty()) return;
+  std::printf("  %-26s %16s %14s %12s\n", "flicker along the path", "mean |dV|", "share > 1/255", "res changes");
+  for (const Series& s : series)
+    std::printf("  %-26s %16.5f %14.4f %12d\n", s.config.name.c_str(), mean_of(s.flicker_mean_abs), mean_of(s.flicker_share),
+                s.resolution_changes);
+}
+
+}  // namespace penumbra::demo
