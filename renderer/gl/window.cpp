@@ -208,12 +208,6 @@ float Window::framebuffer_scale() const {
 image::Image8 Window::read_back() const {
   int w = 0, h = 0;
   framebuffer_size(w, h);
-  return read_back_buffer(w, h);
-}
-
-std::vector<Press> Window::take_presses() { return std::exchange(presses_, {}); }
-
-image::Image8 read_back_buffer(int w, int h) {
   image::Image8 shot{w, h, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(w) * h * 4)};
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
   glReadBuffer(GL_BACK);
@@ -222,5 +216,7 @@ image::Image8 read_back_buffer(int w, int h) {
   image::flip_vertical(shot);
   return shot;
 }
+
+std::vector<Press> Window::take_presses() { return std::exchange(presses_, {}); }
 
 }  // namespace penumbra::gl

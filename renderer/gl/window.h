@@ -24,10 +24,6 @@ inline constexpr bool kDebugBuild = false;
 inline constexpr bool kDebugBuild = true;
 #endif
 
-// The current context's default framebuffer's back buffer (width × height) as RGBA, top row
-// first: between drawing the UI and swapping, the frame as shown.
-image::Image8 read_back_buffer(int width, int height);
-
 // GLFW's lifetime: one per process, outliving every Window.
 class Glfw {
  public:
