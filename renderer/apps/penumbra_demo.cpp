@@ -64,6 +64,11 @@
 #include "gui/settings_panel.h"
 #endif
 
+namespace penumbra::stats {
+// {"median", "p10", "p90", "min", "max"}; here beside its one user, so that stats/summary.h stays free of JSON.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Spread, median, p10, p90, min, max)
+}  // namespace penumbra::stats
+
 using namespace penumbra;
 namespace fs = std::filesystem;
 
@@ -104,9 +109,6 @@ scene::Camera path_camera(const scene::Camera& start, int i, int n) {
 
 using stats::Spread;
 using stats::spread;
-nlohmann::json to_json(const Spread& s) {
-  return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"max", s.max}};
-}
 
 double now_ms() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -371,7 +373,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
 
   nlohmann::json report;
   report["scene"] = scene.name;
-  report["device"] = io::to_json(ctx.info());
+  report["device"] = ctx.info();
   report["image_px"] = {opt.width, opt.height};
   report["light"] = {{"type", directional ? "directional" : "spot"}, {"size", scene.light.size}, {"size_unit", directional ? "deg" : "world"}};
   report["path"] = plan.kind;
@@ -620,12 +622,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     t["settings_adaptive"] = shadows::to_json(adapt);
     t["calibration"] = apps::calibration_json(opt.calibration, adapt);
     t["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
-    t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(cf.timer->stats())}};
-    t["adaptive"] = {{"resolution_texels", to_json(sr)},
+    t["fixed"] = {{"resolution_texels", fixed.map.resolution_texels}, {"frame_ms", sf}, {"passes", io::to_json(cf.timer->stats())}};
+    t["adaptive"] = {{"resolution_texels", sr},
                      {"cascades_most_frames", usual},
                      {"storage", ca.info.storage},
                      {"resolution_source", ca.info.resolution_source},
-                     {"frame_ms", to_json(sa)},
+                     {"frame_ms", sa},
                      {"passes", io::to_json(ca.timer->stats())}};
     if (ca.info.pcss_requirement.valid)
       t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", ca.info.pcss_requirement.clamped_fraction},
@@ -654,9 +656,9 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     auto shadow_kept = [&](const Config& c) { return c.thin_shadow / std::max(ref_thin_shadow, 1e-9); };
     auto gaps_kept = [&](const Config& c) { return gap_pixels > 0 ? c.gaps / std::max(ref_gaps, 1e-9) : 1.0; };
     auto measured = [&](const Config& c, nlohmann::json& j) {
-      j["texels_rendered"] = to_json(spread(c.texels));
+      j["texels_rendered"] = spread(c.texels);
       j["texels_allocated"] = c.allocated;
-      j["map_triangles"] = to_json(spread(c.map_triangles));
+      j["map_triangles"] = spread(c.map_triangles);
       j["ssim_vs_engine_min"] = *std::min_element(c.ssim_vs_engine.begin(), c.ssim_vs_engine.end());
       j["reference_error"] = reference_error_json(c.vs_reference);
       if (thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(c)}, {"gaps_kept", gaps_kept(c)}};
@@ -664,14 +666,14 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     measured(cf, t["fixed"]);
     measured(ca, t["adaptive"]);
     t["adaptive"]["without_hysteresis"] = {{"resolution_changes", configs[n_timed].resolution_changes},
-                                           {"texels_rendered", to_json(spread(configs[n_timed].texels))},
+                                           {"texels_rendered", spread(configs[n_timed].texels)},
                                            {"reference_error", reference_error_json(configs[n_timed].vs_reference)}};
     t["engine_baseline"] = configs[engine].name;
     t["speedup_vs_engine_median"] = spread(configs[engine].ms).median / std::max(sa.median, 1e-9);
     for (std::size_t k = 2; k < n_timed; ++k) {
       nlohmann::json b = {{"name", configs[k].name},
                           {"settings", shadows::to_json(configs[k].settings)},
-                          {"frame_ms", to_json(spread(configs[k].ms))},
+                          {"frame_ms", spread(configs[k].ms)},
                           {"passes", io::to_json(configs[k].timer->stats())}};
       measured(configs[k], b);
       t["baselines"].push_back(b);
