@@ -69,6 +69,7 @@ Json psychometric_curve(const ModelSpec& spec, const StaircaseFit& s) {
   return {{"r_over_a", ratio}, {"p_correct", correct}};
 }
 
+// Hand-written: non-finite numbers as null, derived values (beta, standard errors) and the model spec's fields.
 Json to_json(const FitResult& f, const ModelSpec& spec) {
   Json u = Json::array(), se_u = Json::array();
   for (std::size_t i = 0; i < f.params.u.size(); ++i) {

@@ -488,7 +488,7 @@ int main(int argc, char** argv) {
     nlohmann::json report = {
         {"tool", "penumbra-bench"},
         {"command", command.str()},
-        {"device", io::to_json(ctx)},
+        {"device", ctx},
         {"timing_method", gpu ? "gpu_timer" : "wall_finish"},
         {"image_px", {opt.width, opt.height}},
         {"frames", opt.frames},

@@ -160,7 +160,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
 
   nlohmann::json report;
   report["scene"] = scene.name;
-  report["device"] = io::to_json(ctx.info());
+  report["device"] = ctx.info();
   report["image_px"] = {opt.width, opt.height};
   report["light"] = {{"type", directional ? "directional" : "spot"}, {"size", scene.light.size}, {"size_unit", directional ? "deg" : "world"}};
   report["path"] = plan.kind;
@@ -256,7 +256,9 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
 int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   scene::Scene scene = scene::load_scene(opt.scene);
   if (opt.light_size >= 0) scene.light.size = opt.light_size;
-  gl::WindowContext window(opt.width, opt.height, "Penumbra demo - " + scene.name);
+  gl::Glfw glfw;
+  gl::Window window(
+      {.title = "Penumbra demo - " + scene.name, .width = opt.width, .height = opt.height, .gl_errors_throw = gl::kDebugBuild});
   shadows::Renderer renderer;
   renderer.set_scene(scene);
   settings.adaptive.enabled = true;
@@ -267,6 +269,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   int frame = 0, path_i = 0;
   double fps = 0, last = now_ms();
   while (!window.should_close()) {
+    glfw.wait_events(0);
     window.begin_frame();
     if (animate)
       renderer.scene().camera = scene.camera_path.empty()
@@ -317,7 +320,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     }
     ImGui::PopItemWidth();
     ImGui::End();
-    window.render_ui();
+    window.end_frame();
     ++frame;
     if (!opt.screenshot.empty() && frame >= opt.screenshot_frames) {
       io::write_png(opt.screenshot, window.read_back());

@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
     shadows::Renderer renderer;
     renderer.set_scene(scene);
     nlohmann::json summary;
-    summary["device"] = io::to_json(ctx);
+    summary["device"] = nlohmann::json(ctx);
     summary["scene"] = scene.name;
     summary["image_px"] = {width, height};
     summary["frames"] = frames;
@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
         io::write_exr(dir / "visibility.exr", renderer.read_visibility());
         nlohmann::json report = shadows::frame_report(info, v.settings, stats);
         report["scene"] = scene.name;
-        report["device"] = io::to_json(ctx);
+        report["device"] = nlohmann::json(ctx);
         report["calibration"] = apps::calibration_json(calibration, v.settings);
         io::write_file_atomic(dir / "report.json", json_input::dump(report, 2) + "\n");
 

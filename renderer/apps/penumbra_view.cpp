@@ -63,7 +63,8 @@ int main(int argc, char** argv) {
     std::printf("%s\n", apps::calibration_line(calibration, settings).c_str());
     apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
     scene::Scene scene = scene::load_scene(scene_arg);
-    gl::WindowContext window(width, height, "Penumbra — " + scene.name);
+    gl::Glfw glfw;
+    gl::Window window({.title = "Penumbra — " + scene.name, .width = width, .height = height, .gl_errors_throw = gl::kDebugBuild});
     shadows::Renderer renderer;
     renderer.set_scene(scene);
     Orbit orbit;
@@ -73,6 +74,7 @@ int main(int argc, char** argv) {
     int frame = 0;
     double last_x = 0, last_y = 0;
     while (!window.should_close()) {
+      glfw.wait_events(0);
       window.begin_frame();
       ImGuiIO& io = ImGui::GetIO();
       if (!io.WantCaptureMouse) {
@@ -112,7 +114,7 @@ int main(int argc, char** argv) {
         ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200}, {0, 1}, {1, 0});
       ImGui::PopItemWidth();
       ImGui::End();
-      window.render_ui();
+      window.end_frame();
       ++frame;
       if (!screenshot.empty() && frame >= std::max(frames, 2)) {
         io::write_png(screenshot, window.read_back());

@@ -2,11 +2,7 @@
 
 namespace penumbra::io {
 
-nlohmann::json to_json(const gl::ContextInfo& info) {
-  return {{"vendor", info.vendor},   {"renderer", info.renderer}, {"version", info.version},
-          {"platform", info.platform}, {"software", info.software}, {"max_texture_size", info.max_texture_size}};
-}
-
+// Hand-written: the timing method is an enum, written as its name.
 nlohmann::json to_json(const std::vector<gl::PassStats>& stats) {
   nlohmann::json passes = nlohmann::json::array();
   for (const auto& s : stats)

@@ -8,9 +8,15 @@
 #include <penumbra/gl/context.h>
 #include <penumbra/gl/timer.h>
 
+namespace penumbra::gl {
+
+// {"vendor", "renderer", "version", "platform", "software", "max_texture_size"}: nlohmann::json(info).
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ContextInfo, vendor, renderer, version, platform, software, max_texture_size)
+
+}  // namespace penumbra::gl
+
 namespace penumbra::io {
 
-nlohmann::json to_json(const gl::ContextInfo& info);
 nlohmann::json to_json(const std::vector<gl::PassStats>& stats);
 
 }  // namespace penumbra::io

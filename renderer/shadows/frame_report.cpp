@@ -6,6 +6,7 @@
 
 namespace penumbra::shadows {
 
+// Hand-written: "projection" names the bool `perspective`.
 nlohmann::json to_json(const LightFrame& l) {
   return {{"projection", l.perspective ? "perspective" : "orthographic"},
           {"fitted", l.fitted},

@@ -140,6 +140,7 @@ std::string value_to_string(const Setting<P>& s, const P& params) {
   return {};
 }
 
+// Hand-written (from the settings table): choices as their names, integers and booleans by the row's type.
 template <SettingsSection P>
 nlohmann::json to_json(const P& p) {
   return table_json(p);
@@ -156,6 +157,7 @@ PENUMBRA_TECHNIQUES(PENUMBRA_INSTANTIATE_SECTION)
 #undef PENUMBRA_INSTANTIATE_SECTION
 #undef PENUMBRA_INSTANTIATE
 
+// Hand-written: the technique as its name, and the sections (map, adaptive, each technique's) by the table.
 nlohmann::json to_json(const ShadowSettings& s) {
   nlohmann::json j;
   j["technique"] = std::string(to_string(s.technique));

@@ -112,6 +112,7 @@ void check_readings(const std::vector<Reading>& r) {
   }
 }
 
+// Hand-written: schema_version added, the model as its name, optionals as null, matched_level only when set.
 nlohmann::json to_json(const DisplayCalibration& c) {
   auto optional = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
   nlohmann::json points = nlohmann::json::array();

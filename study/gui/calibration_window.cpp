@@ -14,9 +14,10 @@
 #include <stdexcept>
 
 #include "gl/objects.h"
-#include "gui/gui_window.h"
+#include "gl/window.h"
 #include "display/typed_readings.h"
 #include "gui/study_gui.h"
+#include "procedure/config.h"
 
 namespace penumbra::study_gui {
 
@@ -26,11 +27,11 @@ void say(const std::string& line) { std::cout << line << std::endl; }
 
 // The window on the monitor measured, and what is known about that monitor.
 struct Screen {
-  std::unique_ptr<GuiWindow> window;
+  std::unique_ptr<gl::Window> window;
   nlohmann::json monitor;
 };
 
-Screen open_screen(const Glfw& glfw, const CalibrationScreen& s, const std::string& title) {
+Screen open_screen(const gl::Glfw& glfw, const CalibrationScreen& s, const std::string& title) {
   int win_w = 0, win_h = 0;
   if (!s.windowed.empty()) parse_window_size(s.windowed, win_w, win_h);
   const auto monitors = glfw.monitors();
@@ -40,7 +41,7 @@ Screen open_screen(const Glfw& glfw, const CalibrationScreen& s, const std::stri
                                 " monitor(s) connected (0.." + std::to_string(monitors.size() - 1) + ")");
   GLFWmonitor* monitor = monitors[static_cast<std::size_t>(s.monitor)];
   const bool fullscreen = s.windowed.empty();
-  WindowSpec spec;
+  gl::WindowSpec spec;
   spec.title = title;
   spec.width = win_w;
   spec.height = win_h;
@@ -49,8 +50,9 @@ Screen open_screen(const Glfw& glfw, const CalibrationScreen& s, const std::stri
   spec.y = 0;
   spec.vsync = true;
   spec.font_px = 16;
+  spec.glyph_ranges = procedure::drawable_ranges();  // what a config's texts may hold
   Screen screen;
-  screen.window = std::make_unique<GuiWindow>(spec);
+  screen.window = std::make_unique<gl::Window>(spec);
   const GLFWvidmode* mode = glfwGetVideoMode(monitor);
   int fb_w = 0, fb_h = 0, mm_w = 0, mm_h = 0;
   screen.window->framebuffer_size(fb_w, fb_h);
@@ -78,17 +80,17 @@ void begin_corner_box(const char* id, ImVec2 pivot) {
 }  // namespace
 
 std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, display::Model model, const CalibrationScreen& s) {
-  Glfw glfw;
+  gl::Glfw glfw;
   Screen screen = open_screen(glfw, s, "Penumbra display calibration");
-  GuiWindow& window = *screen.window;
+  gl::Window& window = *screen.window;
   display::TypedReadings entry(levels, model);
   std::size_t shown = levels.size() + 1;
   bool review_said = false;
   for (;;) {
     glfw.wait_events(0.05);
-    if (window.close_requested()) return std::nullopt;
+    if (window.should_close()) return std::nullopt;
     bool write = false;
-    for (const Press& p : window.take_presses()) {
+    for (const gl::Press& p : window.take_presses()) {
       if (p.key == GLFW_KEY_ESCAPE) return std::nullopt;
       if (!entry.reviewing()) continue;  // the text box takes the keys while levels are read
       if (p.key == GLFW_KEY_BACKSPACE) {
@@ -188,9 +190,9 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, dis
 }
 
 std::optional<CheckerboardMatch> match_checkerboard(const CalibrationScreen& s, int start_level) {
-  Glfw glfw;
+  gl::Glfw glfw;
   Screen screen = open_screen(glfw, s, "Penumbra display calibration");
-  GuiWindow& window = *screen.window;
+  gl::Window& window = *screen.window;
   int w = 0, h = 0;
   window.framebuffer_size(w, h);
   // The whole frame as one texture copied 1:1 (a blit of equal sizes): left half the checkerboard,
@@ -199,15 +201,15 @@ std::optional<CheckerboardMatch> match_checkerboard(const CalibrationScreen& s, 
   const gl::Framebuffer::Attachment attachment{&texture, GL_COLOR_ATTACHMENT0};
   gl::Framebuffer framebuffer({&attachment, 1}, "checkerboard match");
   struct CurrentOnExit {
-    GuiWindow& window;
+    gl::Window& window;
     ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
   } current_on_exit{window};
   std::vector<std::uint8_t> rgba(static_cast<std::size_t>(w) * h * 4);
   int level = std::clamp(start_level, 1, 254), uploaded = -1;
   for (;;) {
     glfw.wait_events(0.05);
-    if (window.close_requested()) return std::nullopt;
-    for (const Press& p : window.take_presses()) {
+    if (window.should_close()) return std::nullopt;
+    for (const gl::Press& p : window.take_presses()) {
       if (p.key == GLFW_KEY_ESCAPE) return std::nullopt;
       if (p.key == GLFW_KEY_ENTER || p.key == GLFW_KEY_KP_ENTER) {
         say("matched grey level " + std::to_string(level));

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "gui/gui_window.h"
+#include "gl/window.h"
 
 namespace penumbra::study_gui {
 
@@ -170,7 +170,7 @@ void ParticipantView::set_examples(const io::Image8& jagged, const io::Image8& s
   upload_grey(examples_[1], straight);
 }
 
-void ParticipantView::clear(GuiWindow& window) {
+void ParticipantView::clear(gl::Window& window) {
   int w = 0, h = 0;
   window.framebuffer_size(w, h);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -181,7 +181,7 @@ void ParticipantView::clear(GuiWindow& window) {
   glClear(GL_COLOR_BUFFER_BIT);
 }
 
-void ParticipantView::begin_overlay(GuiWindow& window) {
+void ParticipantView::begin_overlay(gl::Window& window) {
   (void)window;
   ImGui::SetNextWindowPos({0, 0});
   ImGui::SetNextWindowSize(ImGui::GetIO().DisplaySize);
@@ -191,14 +191,14 @@ void ParticipantView::begin_overlay(GuiWindow& window) {
                    ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoFocusOnAppearing);
 }
 
-void ParticipantView::progress_line(GuiWindow& window, const std::string& progress) {
+void ParticipantView::progress_line(gl::Window& window, const std::string& progress) {
   ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
   const float scale = window.framebuffer_scale();
   centred_text(progress, ImGui::GetIO().DisplaySize.y - (kMarginPx / scale) - ImGui::GetTextLineHeight());
   ImGui::PopStyleColor();
 }
 
-Answer ParticipantView::draw_trial(GuiWindow& window, const TrialText& text, const std::string& progress) {
+Answer ParticipantView::draw_trial(gl::Window& window, const TrialText& text, const std::string& progress) {
   clear(window);
   int w = 0, h = 0;
   window.framebuffer_size(w, h);
@@ -249,7 +249,7 @@ Answer ParticipantView::draw_trial(GuiWindow& window, const TrialText& text, con
   return clicked;
 }
 
-bool ParticipantView::draw_message(GuiWindow& window, const std::string& title, const std::string& body,
+bool ParticipantView::draw_message(gl::Window& window, const std::string& title, const std::string& body,
                                    const std::string& button, const std::string& progress) {
   clear(window);
   begin_overlay(window);
@@ -270,7 +270,7 @@ bool ParticipantView::draw_message(GuiWindow& window, const std::string& title, 
   return clicked;
 }
 
-bool ParticipantView::draw_instructions(GuiWindow& window, const Instructions& in, const std::string& progress) {
+bool ParticipantView::draw_instructions(gl::Window& window, const Instructions& in, const std::string& progress) {
   clear(window);
   begin_overlay(window);
   const ImVec2 display = ImGui::GetIO().DisplaySize;
@@ -323,7 +323,7 @@ bool ParticipantView::draw_instructions(GuiWindow& window, const Instructions& i
   return clicked;
 }
 
-bool ParticipantView::draw_intake(GuiWindow& window, std::string& id, const std::string& study, const std::string& problem) {
+bool ParticipantView::draw_intake(gl::Window& window, std::string& id, const std::string& study, const std::string& problem) {
   clear(window);
   begin_overlay(window);
   const ImVec2 display = ImGui::GetIO().DisplaySize;
@@ -354,7 +354,7 @@ bool ParticipantView::draw_intake(GuiWindow& window, std::string& id, const std:
   return confirmed;
 }
 
-ConsentChoice ParticipantView::draw_consent(GuiWindow& window, const std::string& title, const std::string& text,
+ConsentChoice ParticipantView::draw_consent(gl::Window& window, const std::string& title, const std::string& text,
                                             const std::string& agree, const std::string& decline) {
   clear(window);
   begin_overlay(window);
@@ -380,7 +380,7 @@ ConsentChoice ParticipantView::draw_consent(GuiWindow& window, const std::string
   return choice;
 }
 
-void ParticipantView::draw_blank(GuiWindow& window, const std::string& progress) {
+void ParticipantView::draw_blank(gl::Window& window, const std::string& progress) {
   clear(window);
   begin_overlay(window);
   progress_line(window, progress);

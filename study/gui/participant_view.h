@@ -10,9 +10,11 @@
 #include "io/image_io.h"
 #include "procedure/session_flow.h"
 
-namespace penumbra::study_gui {
+namespace penumbra::gl {
+class Window;
+}
 
-class GuiWindow;
+namespace penumbra::study_gui {
 
 // Where the stimuli go, in framebuffer pixels (origin top-left): centred, side by side with a
 // gap of half a stimulus for 2afc, one in the middle for yesno.
@@ -59,30 +61,30 @@ class ParticipantView {
   // The instruction screens' examples (8-bit grey, square, the same size).
   void set_examples(const io::Image8& jagged, const io::Image8& straight);
 
-  // One frame's content (between GuiWindow::begin_frame and end_frame). The background is
+  // One frame's content (between gl::Window::begin_frame and end_frame). The background is
   // cleared by each. Returns the answer clicked with a button, if any.
-  Answer draw_trial(GuiWindow& window, const TrialText& text, const std::string& progress);
+  Answer draw_trial(gl::Window& window, const TrialText& text, const std::string& progress);
   // Title, body and one button (or none when `button` is empty); true when the button is clicked.
-  bool draw_message(GuiWindow& window, const std::string& title, const std::string& body, const std::string& button,
+  bool draw_message(gl::Window& window, const std::string& title, const std::string& body, const std::string& button,
                     const std::string& progress);
   // True when the button is clicked (an empty button: none). The examples shrink to fit the screen
   // (they are not measured; the trial's stimuli always show 1:1).
-  bool draw_instructions(GuiWindow& window, const Instructions& in, const std::string& progress);
+  bool draw_instructions(gl::Window& window, const Instructions& in, const std::string& progress);
   // The experimenter's start screen: the participant id typed into `id`; true when Enter or the
   // button confirms it. `problem` (red) says why the last id was refused.
-  bool draw_intake(GuiWindow& window, std::string& id, const std::string& study, const std::string& problem);
+  bool draw_intake(gl::Window& window, std::string& id, const std::string& study, const std::string& problem);
   // The consent text with its agree and decline buttons.
-  ConsentChoice draw_consent(GuiWindow& window, const std::string& title, const std::string& text, const std::string& agree,
+  ConsentChoice draw_consent(gl::Window& window, const std::string& title, const std::string& text, const std::string& agree,
                              const std::string& decline);
   // Only the background and the progress line (between trials).
-  void draw_blank(GuiWindow& window, const std::string& progress);
+  void draw_blank(gl::Window& window, const std::string& progress);
 
   const StimulusLayout& layout() const { return layout_; }
 
  private:
-  void clear(GuiWindow& window);
-  void begin_overlay(GuiWindow& window);
-  void progress_line(GuiWindow& window, const std::string& progress);
+  void clear(gl::Window& window);
+  void begin_overlay(gl::Window& window);
+  void progress_line(gl::Window& window, const std::string& progress);
 
   std::string task_;
   gl::Texture textures_[2];

@@ -20,8 +20,9 @@
 #include "cli/checks.h"
 #include "io/safe_path.h"
 #include "gui/admin_view.h"
-#include "gui/gui_window.h"
+#include "gl/window.h"
 #include "gui/participant_view.h"
+#include "procedure/config.h"
 #include "stimuli/stimulus.h"
 #include "text/printable.h"
 
@@ -125,7 +126,7 @@ struct Screens {
   bool fullscreen = true;
   int monitor = 0;  // the participant's (set once the config is known)
 
-  Screens(const Glfw& glfw, const GuiOptions& o) {
+  Screens(const gl::Glfw& glfw, const GuiOptions& o) {
     if (!o.windowed.empty()) parse_window_size(o.windowed, win_w, win_h);
     monitors = glfw.monitors();
     if (monitors.empty()) throw std::runtime_error("no monitor connected");
@@ -170,7 +171,7 @@ void check_screenshot_reachable(const GuiOptions& o, const procedure::StudyConfi
 // The display as the participant really sees it, beside the config's assumptions: session.json's
 // "presentation" (display-check says what the config assumes). Warns where they differ, since the
 // log's visual angles follow the config.
-nlohmann::json presentation_record(const Screens& screens, const GuiWindow& participant, const procedure::StudyConfig& config,
+nlohmann::json presentation_record(const Screens& screens, const gl::Window& participant, const procedure::StudyConfig& config,
                                    const GuiOptions& o, double refresh_hz) {
   GLFWmonitor* shown_on = screens.participant_monitor();
   const GLFWvidmode* mode = glfwGetVideoMode(shown_on);
@@ -214,8 +215,8 @@ nlohmann::json presentation_record(const Screens& screens, const GuiWindow& part
             {"dropped_over_ms", refresh_hz > 0 ? nlohmann::json(trial_log::kDroppedFramePeriods * 1000.0 / refresh_hz) : nlohmann::json()}}}};
 }
 
-std::unique_ptr<GuiWindow> open_admin_window(const Screens& screens, const GuiWindow& participant) {
-  WindowSpec as;
+std::unique_ptr<gl::Window> open_admin_window(const Screens& screens, const gl::Window& participant) {
+  gl::WindowSpec as;
   as.title = "Penumbra study - admin";
   as.width = 1120;
   as.height = 780;
@@ -237,8 +238,9 @@ std::unique_ptr<GuiWindow> open_admin_window(const Screens& screens, const GuiWi
     as.y = 0;
   }
   as.font_px = 16;
+  as.glyph_ranges = procedure::drawable_ranges();  // what a config's texts may hold
   as.focused = false;  // the keyboard belongs to the participant
-  auto admin = std::make_unique<GuiWindow>(as);
+  auto admin = std::make_unique<gl::Window>(as);
   glfwFocusWindow(participant.window());
   return admin;
 }
@@ -256,7 +258,7 @@ Instructions instructions_of(const procedure::ScreenText& t) {
 }
 
 // Draws the flow's screen into the participant window and passes on what the participant clicked.
-void draw_screen(procedure::SessionFlow& flow, ParticipantView& view, GuiWindow& window, std::string& typed_id, double last_mouse_s) {
+void draw_screen(procedure::SessionFlow& flow, ParticipantView& view, gl::Window& window, std::string& typed_id, double last_mouse_s) {
   const procedure::ScreenText t = flow.text();
   switch (flow.screen()) {
     case Screen::intake:
@@ -302,7 +304,7 @@ void apply_admin(procedure::SessionFlow& flow, const AdminActions& a) {
 int run_session(const SessionStart& start, const GuiOptions& o) {
   // Everything that can refuse comes before a session is created or resumed, so a refusal leaves
   // no new session directory behind and an old one as it was.
-  Glfw glfw;
+  gl::Glfw glfw;
   Screens screens(glfw, o);
   std::optional<procedure::Session> resumed;
   if (start.resume) {
@@ -317,7 +319,7 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
   }
   const procedure::StudyConfig config = resumed ? resumed->config() : start.config;
 
-  WindowSpec ps;
+  gl::WindowSpec ps;
   ps.title = "Penumbra study";
   ps.width = screens.win_w;
   ps.height = screens.win_h;
@@ -328,8 +330,9 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
   ps.font_px = 22;
   ps.large_font_px = 30;
   ps.small_font_px = o.admin_panel ? 16 : 0;
-  std::unique_ptr<GuiWindow> admin;  // destroyed last: the objects below need the participant's context
-  GuiWindow participant(ps);
+  ps.glyph_ranges = procedure::drawable_ranges();  // what a config's texts may hold
+  std::unique_ptr<gl::Window> admin;  // destroyed last: the objects below need the participant's context
+  gl::Window participant(ps);
   participant.make_current();
   // Stimulus onsets count from here on the steady clock: this run of the session (a resumed one
   // starts again at 0).
@@ -345,7 +348,7 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
   ParticipantView view(config.task);   // styles the participant's ImGui context
   stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
   struct CurrentOnExit {
-    GuiWindow& window;
+    gl::Window& window;
     ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
   } current_on_exit{participant};
 
@@ -401,20 +404,20 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
 
   while (!flow.done()) {
     const double frame_start = glfw.now_s();
-    if (participant.close_requested() || (admin && admin->close_requested())) {
+    if (participant.should_close() || (admin && admin->should_close())) {
       flow.escape();
       break;
     }
     if (shoot_trial && flow.screen() == Screen::welcome) flow.space();  // straight to the first trial
     // One keyboard: keys typed while the admin window has the focus (after a click there) count
     // as the participant's; the admin window itself takes only mouse input.
-    std::vector<Press> presses = participant.take_presses();
+    std::vector<gl::Press> presses = participant.take_presses();
     if (admin)
-      for (const Press& p : admin->take_presses())
+      for (const gl::Press& p : admin->take_presses())
         if (p.key >= 0) presses.push_back(p);
-    std::sort(presses.begin(), presses.end(), [](const Press& a, const Press& b) { return a.time_s < b.time_s; });
+    std::sort(presses.begin(), presses.end(), [](const gl::Press& a, const gl::Press& b) { return a.time_s < b.time_s; });
     flow.tick(frame_start);
-    for (const Press& p : presses) {
+    for (const gl::Press& p : presses) {
       if (p.mouse_button >= 0) last_mouse_s = p.time_s;
       else if (p.key == GLFW_KEY_ESCAPE) flow.escape();
       else if (p.key == GLFW_KEY_F12) flow.toggle_panel();

@@ -419,6 +419,7 @@ void load_display_calibration(StudyConfig& c, const std::filesystem::path& calib
   c.display.calibration_file = file.string();
 }
 
+// Hand-written: the config file's layout (nested sections, enums as names, fields only when set or not default).
 nlohmann::json to_json(const StudyConfig& c) {
   nlohmann::json rounds = nlohmann::json::array();
   for (const auto& r : c.rounds) rounds.push_back({{"pattern", stimuli::to_string(r.pattern)}, {"contrast", r.contrast}});

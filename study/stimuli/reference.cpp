@@ -138,6 +138,7 @@ Reference find_reference(StimulusRenderer& renderer, const StimulusSpec& spec_in
   return ref;
 }
 
+// Hand-written: optionals as null, enums as names, part of the spec and renamed keys (differs_at_px).
 nlohmann::json to_json(const Reference& r) {
   auto optional = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
   nlohmann::json seeds = nlohmann::json::array();

@@ -75,6 +75,7 @@ double decode(std::uint8_t value, const Transfer& transfer) {
   return e;
 }
 
+// Hand-written: two structs in one object, enums as names, renamed keys (contrast) and fixed explanations.
 nlohmann::json to_json(const StimulusSpec& spec, const Geometry& g) {
   return {{"pattern", to_string(spec.pattern)},
           {"artifact_px", spec.artifact_px},

@@ -9,16 +9,17 @@
 #include "shadows/settings.h"
 #include "stats/summary.h"
 
+namespace penumbra::stats {
+// {"median", "p10", "p90", "min", "max"}; here beside its one user, so that stats/summary.h stays free of JSON.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Spread, median, p10, p90, min, max)
+}  // namespace penumbra::stats
+
 namespace penumbra::demo {
 
 namespace {
 
 using stats::Spread;
 using stats::spread;
-
-nlohmann::json to_json(const Spread& s) {
-  return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"max", s.max}};
-}
 
 double mean_of(const std::vector<double>& v) {
   double sum = 0;
@@ -154,12 +155,12 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
   const Spread sf = spread(cf.ms), sa = spread(ca.ms), sr = spread(res_a);
   nlohmann::json t;
   t["technique"] = run.technique;
-  t["fixed"] = {{"resolution_texels", cf.config.settings.map.resolution_texels}, {"frame_ms", to_json(sf)}, {"passes", io::to_json(cf.timer->stats())}};
-  t["adaptive"] = {{"resolution_texels", to_json(sr)},
+  t["fixed"] = {{"resolution_texels", cf.config.settings.map.resolution_texels}, {"frame_ms", sf}, {"passes", io::to_json(cf.timer->stats())}};
+  t["adaptive"] = {{"resolution_texels", sr},
                    {"cascades_most_frames", usual_resolution(ca)},
                    {"storage", ca.info.storage},
                    {"resolution_source", ca.info.resolution_source},
-                   {"frame_ms", to_json(sa)},
+                   {"frame_ms", sa},
                    {"passes", io::to_json(ca.timer->stats())}};
   if (ca.info.pcss_requirement.valid)
     t["adaptive"]["pcss_requirement"] = {{"clamped_fraction", ca.info.pcss_requirement.clamped_fraction},
@@ -199,9 +200,9 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
   auto on = [](const FrontComparison& c, std::size_t k) { return std::find(c.front.begin(), c.front.end(), k) != c.front.end(); };
   auto measured = [&](std::size_t k, nlohmann::json& j) {
     const Series& s = run.series[k];
-    j["texels_rendered"] = to_json(spread(s.texels));
+    j["texels_rendered"] = spread(s.texels);
     j["texels_allocated"] = mean_of(s.allocated);
-    j["map_triangles"] = to_json(spread(s.map_triangles));
+    j["map_triangles"] = spread(s.map_triangles);
     j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
     j["reference_error"] = reference_error_json(s.vs_reference);
     if (run.thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(run, s)}, {"gaps_kept", gaps_kept(run, s)}};
@@ -213,12 +214,12 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
     const Series& s = run.series[k];
     if (s.config.role == Role::no_hysteresis)
       t["adaptive"]["without_hysteresis"] = {{"resolution_changes", s.resolution_changes},
-                                             {"texels_rendered", to_json(spread(s.texels))},
+                                             {"texels_rendered", spread(s.texels)},
                                              {"reference_error", reference_error_json(s.vs_reference)}};
     if (s.config.role != Role::engine) continue;
     nlohmann::json b = {{"name", s.config.name},
                         {"settings", shadows::to_json(s.config.settings)},
-                        {"frame_ms", to_json(spread(s.ms))},
+                        {"frame_ms", spread(s.ms)},
                         {"passes", io::to_json(s.timer->stats())}};
     measured(k, b);
     t["baselines"].push_back(b);
