@@ -1,11 +1,10 @@
 #include "data/level_data.h"
 
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
 
-#include "json/json_input.h"
+#include "text/csv_row.h"
 #include "text/fields.h"
 
 namespace penumbra::analysis {
@@ -40,24 +39,12 @@ std::vector<BinomialRow> read_level_data(const std::filesystem::path& path, Leve
   while (std::getline(in, line)) {
     ++number;
     if (trim(line).empty()) continue;
-    const std::vector<std::string> f = split(line);
-    const std::string where = path.string() + ":" + std::to_string(number) + ": ";
-    if (number == 1 && f == names) continue;
-    if (f.size() != names.size())
-      throw std::runtime_error(where + "expected " + std::to_string(names.size()) + " columns (" +
-                               (format == LevelFormat::counts ? "level,n_correct,n_total" : "level,correct") +
-                               "), found " + std::to_string(f.size()));
-    auto value = [&](std::size_t i) {
-      double v = 0;
-      const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
-      if (f[i].empty() || ec != std::errc() || p != f[i].data() + f[i].size() || !std::isfinite(v))
-        throw std::runtime_error(where + "column '" + names[i] + "': expected a finite number (found '" +
-                                 json_input::printable(f[i]) + "')");
-      return v;
-    };
-    auto fail = [&](std::size_t i, const std::string& what) {
-      throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
-    };
+    std::vector<std::string> fields = split(line);
+    if (number == 1 && fields == names) continue;
+    const text::CsvRow f(path.string(), number, names, std::move(fields),
+                         format == LevelFormat::counts ? "level,n_correct,n_total" : "level,correct");
+    auto value = [&](std::size_t i) { return f.real(i); };
+    auto fail = [&](std::size_t i, const std::string& what) { f.fail(i, what); };
     BinomialRow r;
     r.x = value(0);
     if (format == LevelFormat::counts) {

@@ -11,6 +11,7 @@
 #include <ceres/ceres.h>
 
 #include "solver/solver_options.h"
+#include "text/csv_row.h"
 #include "text/fields.h"
 #include "text/printable.h"
 
@@ -104,13 +105,13 @@ std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
       continue;
     }
     if (line.empty()) throw std::runtime_error(where + "empty line; expected 'level,luminance_cd_m2' values");
-    if (fields.size() != 2)
-      throw std::runtime_error(where + "expected 2 columns (level,luminance_cd_m2), found " + std::to_string(fields.size()));
-    const std::string& lv = fields[0];
+    static const std::vector<std::string> kColumns = {"level", "luminance_cd_m2"};
+    const text::CsvRow row(file, number, kColumns, std::move(fields), "level,luminance_cd_m2");
+    const std::string& lv = row[0];
     if (lv.empty() || lv.size() > 3 || lv.find_first_not_of("0123456789") != std::string::npos || std::stoi(lv) > 255)
       throw std::runtime_error(where + "column 'level': '" + text::printable(lv) + "' is not an 8-bit level (an integer 0..255)");
     const int level = std::stoi(lv);
-    const std::string& lum = fields[1];
+    const std::string& lum = row[1];
     double luminance = 0;
     try {
       luminance = parse_luminance(lum);

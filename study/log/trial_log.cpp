@@ -14,6 +14,7 @@
 
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
+#include "text/csv_row.h"
 #include "text/fields.h"
 #include "json/json_input.h"
 #include "text/printable.h"
@@ -119,36 +120,11 @@ std::string format_row(const TrialRow& r, Layout layout) {
 }
 
 TrialRow parse_row(const std::string& line, const std::string& file, int line_number, Layout layout) {
-  const std::vector<std::string>& names = columns(layout);
-  const std::vector<std::string> f = text::split_fields(line);
-  const std::string where = file + ":" + std::to_string(line_number) + ": ";
-  if (f.size() != names.size())
-    throw std::runtime_error(where + "expected " + std::to_string(names.size()) + " columns, found " +
-                             std::to_string(f.size()));
-  auto fail = [&](std::size_t i, const std::string& what) -> void {
-    throw std::runtime_error(where + "column '" + names[i] + "': " + what + " (found '" + json_input::printable(f[i]) + "')");
-  };
-  auto real = [&](std::size_t i) {
-    double v = 0;
-    const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
-    if (ec != std::errc() || p != f[i].data() + f[i].size() || !std::isfinite(v)) fail(i, "expected a finite number");
-    return v;
-  };
-  auto integer = [&](std::size_t i, long lo, long hi) {
-    long v = 0;
-    const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
-    if (ec != std::errc() || p != f[i].data() + f[i].size() || v < lo || v > hi)
-      fail(i, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return static_cast<int>(v);
-  };
-  auto one_of = [&](std::size_t i, std::initializer_list<const char*> allowed) {
-    for (const char* a : allowed)
-      if (f[i] == a) return f[i];
-    std::string list;
-    for (const char* a : allowed) list += (list.empty() ? "" : "|") + std::string(a);
-    fail(i, "expected " + list);
-    return std::string();
-  };
+  const text::CsvRow f(file, line_number, columns(layout), text::split_fields(line));
+  auto fail = [&](std::size_t i, const std::string& what) { f.fail(i, what); };
+  auto real = [&](std::size_t i) { return f.real(i); };
+  auto integer = [&](std::size_t i, long lo, long hi) { return static_cast<int>(f.integer(i, lo, hi)); };
+  auto one_of = [&](std::size_t i, std::initializer_list<const char*> allowed) { return f.one_of(i, allowed); };
   // Free text as the writer writes it: no quotes or control bytes (a '\r' of a CRLF file included),
   // valid UTF-8, short; so every accepted row is written back unchanged and is safe in a report.
   auto nonempty = [&](std::size_t i) {
@@ -201,12 +177,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
   r.clamped = integer(21 + k, 0, 1);
   r.artifact_arcmin = real(22 + k);
   r.filter_radius_arcmin = real(23 + k);
-  {
-    std::uint64_t v = 0;
-    const auto [p, ec] = std::from_chars(f[24 + k].data(), f[24 + k].data() + f[24 + k].size(), v);
-    if (ec != std::errc() || p != f[24 + k].data() + f[24 + k].size()) fail(24 + k, "expected an unsigned integer");
-    r.stimulus_seed = v;
-  }
+  r.stimulus_seed = f.unsigned_integer(24 + k);
   if (layout != Layout::without_timing) {
     // Either all five timing columns are empty (not measured) or all hold values, but for
     // dropped_frames, empty when the refresh rate was unknown.
