@@ -142,7 +142,9 @@ def plot_flicker(report, techniques, outdir):
     pairs = consecutive_pairs(report)
     fig, axes = plt.subplots(1, len(with_flicker), figsize=(5.6 * len(with_flicker), 3.8), squeeze=False)
     for ax, t in zip(axes[0], with_flicker):
-        for k, f in enumerate(c for c in t["flicker"] if not c["configuration"].startswith("floor")):
+        shown = {"adaptive", "adaptive, no hysteresis", f"fixed-{t['fixed']['resolution_texels']}"}
+        shown |= {b["name"] for b in shown_baselines(t)}
+        for k, f in enumerate(c for c in t["flicker"] if c["configuration"] in shown):
             ys = f["mean_abs_per_frame"]
             xs = pairs if len(pairs) == len(ys) else list(range(1, len(ys) + 1))
             # NaN between runs, so that a line never joins two stations.
@@ -153,7 +155,7 @@ def plot_flicker(report, techniques, outdir):
                     py.append(float("nan"))
                 px.append(x)
                 py.append(y)
-            ax.plot(px, py, "-", marker=MARKERS[k % len(MARKERS)], ms=4, alpha=0.85, lw=1.6 - 0.15 * k,
+            ax.plot(px, py, "-", marker=MARKERS[k % len(MARKERS)], ms=4, alpha=0.85, lw=max(1.6 - 0.15 * k, 0.6),
                     label=f"{f['configuration']} ({f['resolution_changes']} res. changes)")
         ax.set_title(t["technique"], fontsize=9)
         ax.set_xlabel("path frame t (pair t - 1, t)" if len(pairs) else "consecutive frame pair")
@@ -220,8 +222,8 @@ def plot_path(report, techniques, outdir):
             style = "--" if "no hysteresis" in row["configuration"] else "-"
             # Distinct markers and thinning lines: equal series (4096² and 4 × 2048² both draw
             # 16.8 Mtexels) stay visible one over the other.
-            ax.plot(frames, [v / 1e6 for v in row["texels"]], style, marker=MARKERS[k % len(MARKERS)], ms=7 - k, alpha=0.8,
-                    lw=2.2 - 0.25 * k, label=row["configuration"])
+            ax.plot(frames, [v / 1e6 for v in row["texels"]], style, marker=MARKERS[k % len(MARKERS)], ms=max(7 - k, 3), alpha=0.8,
+                    lw=max(2.2 - 0.25 * k, 0.6), label=row["configuration"])
         ax.set_yscale("log")
         if report.get("path") == "short":
             ax.set_xlabel(f"path frame\n({len(frames)} frames: stations of consecutive frames along the "

@@ -245,10 +245,24 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   std::fflush(stdout);
   io::write_file_atomic(out.path() / "frames.csv", csv);
   io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 2) + "\n");
-  if (opt.plot)
-    apps::run_python_script(opt.python, opt.plot_script, {(out.path() / "report.json").string(), out.path().string()}, "the chart");
+  // A plot that fails does not cost the measurements (minutes of them with --sweep): they are
+  // kept, and the error says how to draw them again.
+  std::string plot_error;
+  if (opt.plot) {
+    try {
+      apps::run_python_script(opt.python, opt.plot_script, {(out.path() / "report.json").string(), out.path().string()}, "the chart");
+    } catch (const std::exception& e) {
+      plot_error = e.what();
+    }
+  }
   out.commit();
   std::printf("wrote %s/\n", opt.output.c_str());
+  if (!plot_error.empty()) {
+    std::fprintf(stderr, "penumbra-demo: %s; the measurements are in %s/ (draw them again: %s %s %s/report.json %s)\n",
+                 plot_error.c_str(), opt.output.c_str(), opt.python.c_str(), opt.plot_script.c_str(), opt.output.c_str(),
+                 opt.output.c_str());
+    return 1;
+  }
   return 0;
 }
 
@@ -351,8 +365,8 @@ int main(int argc, char** argv) {
   app.add_option("--frames", opt.frames, "frames per technique: of the short path, or of the orbit of a scene without a camera path")
       ->check(CLI::Range(1, 100000));
   app.add_flag("--sweep", opt.sweep,
-               "the whole engine family: single maps of 1024²-8192² and 2-4 cascades of 1024²-4096² (default: one map of twice "
-               "--fixed-resolution and four cascades of half, once and twice it)");
+               "the whole engine family: single maps of 1024²-8192² and 2-4 cascades of 1024²-4096² (default: single maps of "
+               "half, twice and four times --fixed-resolution, two cascades of once and twice it, four cascades of it)");
   app.add_option("--repeats", opt.repeats, "renders per frame and configuration; a frame's time is their median")
       ->check(CLI::Range(1, 100));
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(16, 16384));

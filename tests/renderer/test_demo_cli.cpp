@@ -35,7 +35,7 @@ class DemoCli : public ::testing::Test {
 TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   const fs::path out = dir_ / "out";
   // 16 reference samples instead of the default 64: the report's shape is what is tested here.
-  const auto r = demo({"--headless", "--scene", "demo", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss", "--no-plot",
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss",
                        "--reference-samples", "16", "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The adoption question comes first: adaptive against the engine front at equal error.
@@ -56,13 +56,14 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_LE(t.at("image").at("max_abs_max").get<double>(), 0.25);
     EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png")));
     // The engine family along the same path: one map of twice the fixed size, four cascades of it
-    // (the engine baseline, compared with itself), one map of half and four cascades of half and
-    // of twice the fixed size, each with its texels and its SSIM.
+    // (the engine baseline, compared with itself), single maps of half and four times it, two
+    // cascades of once and twice it, each with its texels and its SSIM.
     const auto& baselines = t.at("baselines");
-    ASSERT_EQ(baselines.size(), 5u);
+    ASSERT_EQ(baselines.size(), 6u);
     std::vector<std::string> family;
     for (const auto& b : baselines) family.push_back(b.at("name"));
-    EXPECT_THAT(family, ::testing::ElementsAre("fixed-4096", "4x2048-cascades", "fixed-1024", "4x1024-cascades", "4x4096-cascades"));
+    EXPECT_THAT(family, ::testing::ElementsAre("fixed-4096", "4x2048-cascades", "fixed-1024", "fixed-8192", "2x2048-cascades",
+                                               "2x4096-cascades"));
     EXPECT_EQ(baselines[0].at("name"), "fixed-4096");
     EXPECT_EQ(baselines[0].at("texels_rendered").at("median").get<double>(), 4096.0 * 4096.0);
     EXPECT_EQ(baselines[1].at("name"), "4x2048-cascades");
@@ -112,7 +113,7 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     // Flicker along the path per configuration (3 frames: 2 frame pairs), beside the rule without
     // hysteresis and the floor of a world-fixed map; a fixed map never changes its resolution.
     const auto& flicker = t.at("flicker");
-    ASSERT_EQ(flicker.size(), 9u);
+    ASSERT_EQ(flicker.size(), 10u);
     std::vector<std::string> names;
     for (const auto& f : flicker) {
       SCOPED_TRACE(f.at("configuration").get<std::string>());
@@ -121,11 +122,11 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
       EXPECT_GE(f.at("mean_abs_mean").get<double>(), 0.0);
       EXPECT_LT(f.at("mean_abs_mean").get<double>(), 0.05);
     }
-    EXPECT_THAT(names, ::testing::ElementsAre("adaptive", "fixed-2048", "fixed-4096", "4x2048-cascades", "fixed-1024", "4x1024-cascades",
-                                              "4x4096-cascades", "adaptive, no hysteresis", "floor (world-fixed map)"));
+    EXPECT_THAT(names, ::testing::ElementsAre("adaptive", "fixed-2048", "fixed-4096", "4x2048-cascades", "fixed-1024", "fixed-8192",
+                                              "2x2048-cascades", "2x4096-cascades", "adaptive, no hysteresis", "floor (world-fixed map)"));
     EXPECT_EQ(flicker[1].at("resolution_changes").get<int>(), 0);
     // Texels per frame along the path for every configuration.
-    ASSERT_EQ(t.at("along_path").size(), 9u);
+    ASSERT_EQ(t.at("along_path").size(), 10u);
     for (const auto& row : t["along_path"]) EXPECT_EQ(row.at("texels").size(), 3u);
     EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-crops.png")));
   }
@@ -136,7 +137,8 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   std::string line;
   int rows = -1;
   while (std::getline(csv, line)) ++rows;
-  EXPECT_EQ(rows, 2 * 3 * 9);  // technique x frame x configuration
+  EXPECT_EQ(rows, 2 * 3 * 10);  // technique x frame x configuration
+  for (const char* plot : {"front.png", "demo.png", "error.png", "flicker.png", "path.png"}) EXPECT_TRUE(fs::exists(out / plot)) << plot;
   EXPECT_EQ(report.at("path"), "orbit");
 }
 
@@ -169,6 +171,27 @@ TEST_F(DemoCli, ShortPathVisitsStationsOfTheScenesCameraPath) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_THAT(bad.err, HasSubstr("--path"));
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
+// --sweep measures the whole engine family (4 single maps, 3 × 3 cascade configurations) and the
+// plots draw a dozen configurations.
+TEST_F(DemoCli, SweepMeasuresTheWholeEngineFamilyAndPlotsIt) {
+  const fs::path out = dir_ / "sweep";
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "2", "--width", "64", "--height", "36", "--techniques", "pcf",
+                       "--sweep", "--no-reference", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_EQ(report.at("engine_family"), "sweep");
+  const auto& t = report.at("techniques")[0];
+  std::vector<std::string> family;
+  for (const auto& b : t.at("baselines")) family.push_back(b.at("name"));
+  EXPECT_EQ(family.size(), 12u);  // 13 with fixed-2048, the fixed map; 4x2048 first (the engine baseline)
+  EXPECT_EQ(family.front(), "4x2048-cascades");
+  for (const char* name : {"fixed-1024", "fixed-8192", "2x1024-cascades", "3x4096-cascades", "4x4096-cascades"})
+    EXPECT_NE(std::find(family.begin(), family.end(), name), family.end()) << name;
+  EXPECT_EQ(t.at("equal_error").at("unavailable"), "no reference (--no-reference): no error to compare at");
+  EXPECT_THAT(r.out, HasSubstr("pcf    no reference (--no-reference)"));
+  for (const char* plot : {"demo.png", "flicker.png", "path.png"}) EXPECT_TRUE(fs::exists(out / plot)) << plot;
 }
 
 // --light-size reaches the renderer: a wider light widens PCSS's penumbrae, so fewer pixels are

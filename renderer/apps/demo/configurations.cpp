@@ -26,7 +26,7 @@ std::vector<Configuration> configurations(const shadows::ShadowSettings& fixed, 
   // The family as (cascades, texels), the fixed map left out (it is already there).
   std::vector<std::pair<int, int>> family;
   if (options.family == Family::default_) {
-    family = {{1, 2 * f}, {4, f}, {1, std::max(f / 2, 1)}, {4, std::max(f / 2, 1)}, {4, 2 * f}};
+    family = {{1, 2 * f}, {4, f}, {1, std::max(f / 2, 1)}, {1, 4 * f}, {2, f}, {2, 2 * f}};
   } else if (options.family == Family::sweep) {
     family.push_back({4, f});  // the engine baseline first, as in the default family
     for (const int r : {1024, 2048, 4096, 8192}) family.push_back({1, r});

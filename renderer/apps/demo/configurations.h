@@ -33,7 +33,8 @@ std::string engine_name(int cascades, int resolution_texels);
 
 enum class Family {
   none,     // --no-baselines: adaptive and fixed only
-  default_, // a few points around the fixed size F: one map of F/2 and 2F, four cascades of F/2, F and 2F
+  default_, // the points the sweep found on the outdoor town's fronts, relative to the fixed size F:
+            // single maps of F/2, 2F and 4F, two cascades of F and 2F, four cascades of F (the baseline)
   sweep,    // --sweep: single maps 1024²..8192², 2-4 cascades × 1024²..4096²
 };
 
