@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "adaptive/resolution_rule.h"
+#include "adaptive/virtual_pages.h"
 #include "apps/cli_options.h"
 #include "apps/demo/configurations.h"
 #include "apps/demo/measurement.h"
@@ -51,8 +52,10 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
+#include "metrics/surface_probe.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
+#include "stats/summary.h"
 
 #if PENUMBRA_DEMO_GUI
 #define GLFW_INCLUDE_NONE
@@ -266,6 +269,97 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   return 0;
 }
 
+// --pages: the first part of a virtual shadow map for the sun (adaptive/virtual_pages.h). Along
+// the same path, each pixel's surface asks for the coarsest clipmap level its filter allows (the
+// rule: texel <= max(r / c, pixel footprint)) or that its footprint alone allows (what engines'
+// virtual shadow maps use), plus the pages its filter reaches; the pages are counted per frame.
+// Nothing is drawn into pages yet: this measures how many pages (and how much of a page pool)
+// the rule's marking would need against the footprint's.
+int run_pages(const Options& opt, shadows::ShadowSettings base) {
+  io::StagedDirectory out(opt.output, "pages.json");
+  gl::HeadlessContext ctx;
+  scene::Scene scene = scene::load_scene(opt.scene);
+  if (opt.light_size >= 0) scene.light.size = opt.light_size;
+  if (scene.light.type != scene::Light::Type::directional)
+    throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
+  const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
+  metrics::SurfaceProbe probe(scene);
+  const glm::vec3 axis = glm::normalize(scene.light.direction);
+  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  const glm::vec3 e1 = glm::normalize(glm::cross(helper, axis)), e2 = glm::cross(axis, e1);
+  auto light_xy = [&](const glm::vec3& p) { return adaptive::LightXY{glm::dot(p, e1), glm::dot(p, e2)}; };
+  adaptive::VirtualMapLayout layout;
+  constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth
+  nlohmann::json report;
+  report["scene"] = scene.name;
+  report["image_px"] = {opt.width, opt.height};
+  report["layout"] = {{"levels", layout.levels}, {"texel0_ws", layout.texel0_ws}, {"page_texels", layout.page_texels},
+                      {"pages_per_side", layout.pages_per_side}};
+  std::printf("penumbra-demo --pages: %s at %dx%d, %zu frames; clipmap of %d levels, level 0 texel %g ws, pages of %d² texels, "
+              "%d² pages per level\n",
+              scene.name.c_str(), opt.width, opt.height, plan.frames.size(), layout.levels, layout.texel0_ws, layout.page_texels,
+              layout.pages_per_side);
+  std::printf("%-6s %6s %12s %12s %8s %12s %12s\n", "tech", "frame", "pages rule", "footprint", "ratio", "MB rule", "MB footprint");
+  for (const std::string& name : opt.techniques) {
+    shadows::ShadowSettings s = base;
+    s.technique = shadows::technique_from_string(name);
+    apps::apply_calibration_for(opt.calibration, s);
+    // The filter's world radius: PCF's radius; PCSS's minimum penumbra (the finest it can ask for).
+    double radius = 0;
+    if (s.technique == shadows::Technique::pcf && s.pcf.radius_unit == shadows::RadiusUnit::world) radius = s.pcf.radius;
+    else if (s.technique == shadows::Technique::pcss) radius = s.pcss.min_penumbra_ws;
+    else throw std::runtime_error("--pages: technique " + name + ": only pcf (radius_unit world) and pcss mark pages so far");
+    adaptive::MarkOptions rule;
+    rule.c_texels = s.adaptive.c;
+    rule.min_texel_px = s.adaptive.min_texel_px;
+    adaptive::MarkOptions footprint = rule;
+    footprint.marking = adaptive::Marking::footprint;
+    nlohmann::json t = {{"technique", name}, {"radius_ws", radius}, {"c", rule.c_texels}, {"min_texel_px", rule.min_texel_px}};
+    std::vector<double> ratios;
+    for (const demo::PathFrame& pf : plan.frames) {
+      const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
+      const io::ImageF surface = probe.render(camera, opt.width, opt.height);
+      const glm::vec3 forward = glm::normalize(camera.target - camera.position);
+      const double per_px = camera.projection == scene::Camera::Projection::perspective
+                                ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / opt.height
+                                : camera.ortho_height_ws / opt.height;
+      std::vector<adaptive::PixelRequest> requests;
+      for (std::size_t p = 0; p < surface.pixels.size() / 4; ++p) {
+        if (surface.pixels[4 * p + 3] <= 0) continue;
+        const glm::vec3 world(surface.pixels[4 * p], surface.pixels[4 * p + 1], surface.pixels[4 * p + 2]);
+        const double depth = camera.projection == scene::Camera::Projection::perspective ? glm::dot(world - camera.position, forward) : 1.0;
+        requests.push_back({light_xy(world), std::max(depth, 0.0) * per_px, radius});
+      }
+      const adaptive::MarkResult by_rule = adaptive::mark_pages(requests, light_xy(camera.position), layout, rule);
+      const adaptive::MarkResult by_footprint = adaptive::mark_pages(requests, light_xy(camera.position), layout, footprint);
+      const double ratio = by_rule.pages.empty() ? 0.0 : static_cast<double>(by_footprint.pages.size()) / static_cast<double>(by_rule.pages.size());
+      ratios.push_back(ratio);
+      std::printf("%-6s %6d %12zu %12zu %7.2fx %12.1f %12.1f\n", name.c_str(), pf.frame, by_rule.pages.size(), by_footprint.pages.size(),
+                  ratio, static_cast<double>(by_rule.pages.size()) * kPageBytes / 1048576.0,
+                  static_cast<double>(by_footprint.pages.size()) * kPageBytes / 1048576.0);
+      t["frames"].push_back({{"path_frame", pf.frame},
+                             {"pixels", requests.size()},
+                             {"pages_rule", by_rule.pages.size()},
+                             {"pages_footprint", by_footprint.pages.size()},
+                             {"pages_per_level_rule", by_rule.pages_per_level()},
+                             {"pages_per_level_footprint", by_footprint.pages_per_level()},
+                             {"pixels_per_level_rule", by_rule.pixels_per_level},
+                             {"pixels_per_level_footprint", by_footprint.pixels_per_level},
+                             {"unmarked_rule", by_rule.unmarked},
+                             {"unmarked_footprint", by_footprint.unmarked}});
+    }
+    const stats::Spread sr = stats::spread(ratios);
+    std::printf("%-6s median footprint / rule pages %.2fx [%.2f, %.2f] over %zu frames\n", name.c_str(), sr.median, sr.min, sr.max,
+                ratios.size());
+    t["pages_ratio_footprint_over_rule"] = {{"median", sr.median}, {"min", sr.min}, {"max", sr.max}};
+    report["techniques"].push_back(t);
+  }
+  io::write_file_atomic(out.path() / "pages.json", json_input::dump(report, 2) + "\n");
+  out.commit();
+  std::printf("wrote %s/pages.json\n", opt.output.c_str());
+  return 0;
+}
+
 #if PENUMBRA_DEMO_GUI
 int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   scene::Scene scene = scene::load_scene(opt.scene);
@@ -353,6 +447,7 @@ int main(int argc, char** argv) {
   cli::describe_tool(app, "penumbra-demo", "adaptive.md");
   Options opt;
   bool headless = false;
+  bool pages = false;
   shadows::ShadowSettings base = demo_defaults();
   app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
@@ -364,6 +459,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"short", "full"}));
   app.add_option("--frames", opt.frames, "frames per technique: of the short path, or of the orbit of a scene without a camera path")
       ->check(CLI::Range(1, 100000));
+  app.add_flag("--pages", pages,
+               "headless: count the pages a virtual shadow map of the sun would mark along the path, by the rule and by the pixel "
+               "footprint (adaptive/virtual_pages.h); writes pages.json");
   app.add_flag("--sweep", opt.sweep,
                "the whole engine family: single maps of 1024²-8192² and 2-4 cascades of 1024²-4096² (default: single maps of "
                "half, twice and four times --fixed-resolution, two cascades of once and twice it, four cascades of it)");
@@ -402,6 +500,7 @@ int main(int argc, char** argv) {
     (void)apps::setting_stands_for(app, "--map.resolution_texels", "--fixed-resolution");
     if (headless) apps::refuse_unused_technique_options(app, compared, "--techniques " + listed);
     apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
+    if (pages) return run_pages(opt, base);
     if (headless) return run_headless(opt, base);
 #if PENUMBRA_DEMO_GUI
     return run_windowed(opt, base);

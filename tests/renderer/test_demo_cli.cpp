@@ -194,6 +194,31 @@ TEST_F(DemoCli, SweepMeasuresTheWholeEngineFamilyAndPlotsIt) {
   for (const char* plot : {"demo.png", "flicker.png", "path.png"}) EXPECT_TRUE(fs::exists(out / plot)) << plot;
 }
 
+// --pages (issue 31's first part): the pages a virtual shadow map of the sun would mark, by the
+// rule and by the pixel footprint; the rule's texel is never finer than the footprint's, so it
+// never marks more pages. A spot light has no clipmap: refused in one line.
+TEST_F(DemoCli, PagesCountsTheRulesAndTheFootprintsPages) {
+  const fs::path out = dir_ / "pages";
+  const auto r = demo({"--pages", "--scene", "outdoor", "--frames", "3", "--width", "96", "--height", "54", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "pages.json"));
+  ASSERT_EQ(report.at("techniques").size(), 2u);
+  for (const auto& t : report.at("techniques")) {
+    ASSERT_EQ(t.at("frames").size(), 3u);
+    for (const auto& f : t.at("frames")) {
+      EXPECT_GT(f.at("pages_rule").get<int>(), 0);
+      EXPECT_LE(f.at("pages_rule").get<int>(), f.at("pages_footprint").get<int>());
+      EXPECT_EQ(f.at("unmarked_rule").get<int>(), 0);
+    }
+    EXPECT_GE(t.at("pages_ratio_footprint_over_rule").at("median").get<double>(), 1.0);
+  }
+  EXPECT_THAT(r.out, HasSubstr("median footprint / rule pages"));
+  const auto spot = demo({"--pages", "--scene", "two-planes", "-o", (dir_ / "spot").string()});
+  EXPECT_EQ(spot.exit_code, 2) << "the command line must change";
+  EXPECT_THAT(spot.err, HasSubstr("--pages: the virtual shadow map is the sun's"));
+  EXPECT_FALSE(fs::exists(dir_ / "spot"));
+}
+
 // --light-size reaches the renderer: a wider light widens PCSS's penumbrae, so fewer pixels are
 // held at the minimum penumbra.
 TEST_F(DemoCli, LightSizeOverridesTheScene) {

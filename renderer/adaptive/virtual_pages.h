@@ -1,0 +1,79 @@
+#pragma once
+// Page marking for a virtual shadow map of the sun (issue 31's first part, GL-free): clipmap
+// levels around the camera, level k's texel t0·2^k, each level a virtual texture of
+// pages_per_side² pages of page_texels² texels centred (page-snapped) on the camera in light
+// space. Each pixel asks for the coarsest level whose texel still satisfies its rule, and for
+// the pages of that level its filter reaches:
+//
+//   rule       texel <= max(r / c, s · min_texel_px): the filter-to-resolution rule with the
+//              pixel floor (r the filter's world radius at the pixel, s the pixel's world
+//              footprint, c in texels);
+//   footprint  texel <= s · min_texel_px: the pixel's footprint alone (what engines' virtual
+//              shadow maps use).
+//
+// A pixel whose level does not reach it (outside the level's extent) takes the next coarser one
+// that does; beyond the coarsest it is not marked (counted). Pages are counted once per frame.
+// What this does not do yet: the page pool, drawing, the page table in the shaders, caching.
+#include <cstdint>
+#include <set>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+namespace penumbra::adaptive {
+
+// A point in light space (orthographic: across the light), world units. No GLM here: adaptive/ stays
+// free of it (docs/architecture.md).
+struct LightXY {
+  double x = 0, y = 0;
+};
+
+struct VirtualMapLayout {
+  int levels = 12;            // clipmap levels
+  double texel0_ws = 0.005;   // level 0's texel, world units
+  int page_texels = 128;
+  int pages_per_side = 64;    // each level: (page_texels · pages_per_side)² virtual texels
+};
+
+enum class Marking { rule, footprint };
+std::string_view to_string(Marking m);
+
+// One pixel's request.
+struct PixelRequest {
+  LightXY light_xy;          // the surface point in light space
+  double footprint_ws = 0;   // the pixel's world footprint s
+  double radius_ws = 0;      // the filter's world radius r at the pixel (0: none)
+};
+
+struct MarkOptions {
+  Marking marking = Marking::rule;
+  double c_texels = 3.47;    // the rule's constant
+  double min_texel_px = 1;   // the pixel floor (texels no finer than this many footprints)
+};
+
+// The finest texel the pixel needs (rule or footprint), world units.
+double requested_texel_ws(const PixelRequest& p, const MarkOptions& options);
+// The coarsest level whose texel is at most `texel_ws` (0 when even level 0 is coarser), at most
+// layout.levels - 1.
+int level_for_texel(double texel_ws, const VirtualMapLayout& layout);
+
+struct Page {
+  int level = 0, x = 0, y = 0;
+  auto operator<=>(const Page&) const = default;
+};
+
+struct MarkResult {
+  std::set<Page> pages;               // every page some pixel asked for
+  std::vector<std::int64_t> pixels_per_level;  // pixels that sample each level
+  std::int64_t unmarked = 0;          // pixels beyond the coarsest level's extent
+  std::vector<std::int64_t> pages_per_level() const;
+};
+
+// The level-k window's lower corner in light space for a camera at `camera_xy` (page-snapped, the
+// camera at the window's centre).
+LightXY level_origin(int level, LightXY camera_xy, const VirtualMapLayout& layout);
+
+MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy, const VirtualMapLayout& layout,
+                      const MarkOptions& options);
+
+}  // namespace penumbra::adaptive
