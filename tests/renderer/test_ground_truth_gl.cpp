@@ -261,7 +261,9 @@ TEST(RayTraced, StraightEdgePenumbraMatchesTheDiskIntegral) {
 // smallest PCSS RMSE it is used to measure (docs/adaptive.md). The mean of hard shadows from four
 // fitted cascades per sample, the reference before, is further from it than that, even at 8188²
 // maps: the texel-sized biases decide the self-shadowing of thin receivers (branches, the fence,
-// the crane's lattice). About 60 s on llvmpipe: label `slow`.
+// the crane's lattice). Measured: 256 against 1024 rays 0.0057, 64 maps of 4096² against 1024
+// rays 0.075 (the smallest PCSS RMSE in the main job's table: 0.075, one 8192² map). About 85 s on
+// llvmpipe: label `slow`.
 TEST(AreaLightSlow, OutdoorRayTracedReferenceConvergesBelowTheErrorsItMeasures) {
   scene::Scene s = scene::make_builtin_scene("outdoor");
   s.camera = s.camera_path.at(s.camera, 120);
@@ -279,7 +281,7 @@ TEST(AreaLightSlow, OutdoorRayTracedReferenceConvergesBelowTheErrorsItMeasures) 
   const io::ImageF maps = area_light_visibility(r, w, h, 8, 4096, map);
   const double rmse_rays = compare(rays_1024, rays_256, masked).rmse, rmse_maps = compare(rays_1024, maps, masked).rmse;
   RecordProperty("rmse_256_vs_1024_rays_and_64_maps_4096", std::to_string(rmse_rays) + " " + std::to_string(rmse_maps));
-  constexpr double kSmallestMeasured = 0.05;
+  constexpr double kSmallestMeasured = 0.05;  // below the 0.075 measured, so the bound holds with room
   EXPECT_LT(rmse_rays, 0.2 * kSmallestMeasured) << "the default 256 rays per pixel";
   EXPECT_GT(rmse_maps, 0.2 * kSmallestMeasured) << "the maps' mean does not converge to it: the bound has teeth";
 }
