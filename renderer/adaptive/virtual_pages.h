@@ -59,7 +59,9 @@ int level_for_texel(double texel_ws, const VirtualMapLayout& layout);
 
 struct Page {
   int level = 0, x = 0, y = 0;
-  auto operator<=>(const Page&) const = default;
+  // Ordered by level, then x, then y (C++17: the installed headers compile there too).
+  bool operator<(const Page& o) const { return std::tie(level, x, y) < std::tie(o.level, o.x, o.y); }
+  bool operator==(const Page& o) const { return std::tie(level, x, y) == std::tie(o.level, o.x, o.y); }
 };
 
 struct MarkResult {
