@@ -2,8 +2,8 @@
 # README command 1: set up, build, and run the main job on its built-in default: along a short
 # path through the large outdoor town (12 frames: four stations of three consecutive frames from
 # the street walk to the overview), PCF and PCSS with the adaptive rule (rule-sized cascades)
-# beside the engine family (single maps of 1024², 2048², 4096², four stabilized cascades of
-# 1024², 2048², 4096²): first the adaptive rule against the family's Pareto front at equal error
+# beside the engine family (single maps of 1024²-8192², two stabilized cascades of 2048² and
+# 4096², four of 2048²): first the adaptive rule against the family's Pareto front at equal error
 # (speedup and memory ratio with intervals), then frame time, texels, error against the reference
 # (PCF: the same filter on 8188² cascades; PCSS: ray-traced), thin casters, flicker; into
 # out/demo/ (report.json, frames.csv, crops, side-by-side images, plots). About 4 min on 2 cores
