@@ -218,6 +218,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"), side_by_side(run.shown_fixed, run.shown_adaptive));
     write_crops(out.path() / (name + "-crops.png"), run.thin_crops);
     write_crops(out.path() / (name + "-crops-gain.png"), run.gain_crops);
+    // The tables need the numbers, not the renderers: their maps (up to 4 × 4096² each in a sweep)
+    // and images go before the next technique's.
+    for (demo::Series& s : runs.back().series) {
+      s.renderer.reset();
+      s.color = {}, s.visibility = {}, s.previous = {};
+    }
   }
   progress.clear();  // the tables follow on stdout
 
