@@ -52,6 +52,7 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
+#include "metrics/ground_truth.h"
 #include "metrics/surface_probe.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
@@ -290,9 +291,8 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
   metrics::SurfaceProbe probe(scene);
-  const glm::vec3 axis = glm::normalize(scene.light.direction);
-  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  const glm::vec3 e1 = glm::normalize(glm::cross(helper, axis)), e2 = glm::cross(axis, e1);
+  glm::vec3 e1, e2;  // light space across the sun, as the references sample it
+  metrics::light_basis(scene.light.direction, e1, e2);
   auto light_xy = [&](const glm::vec3& p) { return adaptive::LightXY{glm::dot(p, e1), glm::dot(p, e2)}; };
   adaptive::VirtualMapLayout layout;
   constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth

@@ -20,28 +20,6 @@
 namespace penumbra::metrics {
 namespace {
 
-glm::vec2 concentric_impl(glm::vec2 p) {
-  if (p.x == 0 && p.y == 0) return {0, 0};
-  constexpr float quarter_pi = std::numbers::pi_v<float> / 4;
-  float r, phi;
-  if (std::abs(p.x) > std::abs(p.y)) {
-    r = p.x;
-    phi = quarter_pi * (p.y / p.x);
-  } else {
-    r = p.y;
-    phi = 2 * quarter_pi - quarter_pi * (p.x / p.y);
-  }
-  return {r * std::cos(phi), r * std::sin(phi)};
-}
-
-// Two unit vectors perpendicular to `axis` and to each other.
-void basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2) {
-  axis = glm::normalize(axis);
-  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  e1 = glm::normalize(glm::cross(helper, axis));
-  e2 = glm::cross(axis, e1);
-}
-
 int max_texture_size() {
   GLint size = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &size);
@@ -84,7 +62,26 @@ ReferenceKind reference_kind(std::string_view technique_name) {
   return shadows::technique_entry(shadows::technique_from_string(technique_name)).reference;
 }
 
-glm::vec2 concentric_disk(glm::vec2 square) { return concentric_impl(square); }
+glm::vec2 concentric_disk(glm::vec2 p) {
+  if (p.x == 0 && p.y == 0) return {0, 0};
+  constexpr float quarter_pi = std::numbers::pi_v<float> / 4;
+  float r, phi;
+  if (std::abs(p.x) > std::abs(p.y)) {
+    r = p.x;
+    phi = quarter_pi * (p.y / p.x);
+  } else {
+    r = p.y;
+    phi = 2 * quarter_pi - quarter_pi * (p.x / p.y);
+  }
+  return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2) {
+  axis = glm::normalize(axis);
+  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  e1 = glm::normalize(glm::cross(helper, axis));
+  e2 = glm::cross(axis, e1);
+}
 
 std::vector<glm::vec2> stratified_disk(int per_side) {
   if (per_side < 1) throw std::invalid_argument("stratified_disk: per_side must be at least 1, got " + std::to_string(per_side));
@@ -106,7 +103,7 @@ std::vector<glm::vec2> stratified_disk(int per_side) {
 scene::Light light_sample(const scene::Light& light, glm::vec2 uv) {
   scene::Light out = light;
   glm::vec3 e1, e2;
-  basis(light.direction, e1, e2);
+  light_basis(light.direction, e1, e2);
   const glm::vec3 offset = uv.x * e1 + uv.y * e2;
   if (light.type == scene::Light::Type::directional) {
     const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);

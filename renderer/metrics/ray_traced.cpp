@@ -178,8 +178,8 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
   // The sun's directions toward the light: -(light_sample's direction), light_sample's basis.
   const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
   const glm::vec3 axis = glm::normalize(light.direction);
-  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  const glm::vec3 e1 = glm::normalize(glm::cross(helper, axis)), e2 = glm::cross(axis, e1);
+  glm::vec3 e1, e2;
+  light_basis(axis, e1, e2);
   const int samples = per_side * per_side;
   const float cell = 2.0f / static_cast<float>(per_side);
 

@@ -164,6 +164,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
   TechniqueRun run;
   run.technique = name;
   run.thin = thin_;
+  run.engine = engine_baseline(configs);
   for (Configuration& config : configs) {
     Series s;
     s.config = std::move(config);
@@ -172,9 +173,6 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     s.timer = std::make_unique<gl::PassTimer>(method_ == gl::TimingMethod::gpu_timer);
     run.series.push_back(std::move(s));
   }
-  std::vector<Configuration> order;
-  for (const Series& s : run.series) order.push_back(s.config);
-  run.engine = engine_baseline(order);
   auto& series = run.series;
 
   // The reference (metrics/ground_truth.h): four cascades of (up to) 8192² with the same
