@@ -142,17 +142,13 @@ class EventContext {
 Window& self(GLFWwindow* w) { return *static_cast<Window*>(glfwGetWindowUserPointer(w)); }
 }  // namespace
 
-void Window::on_key(GLFWwindow* w, int key, int scancode, int action, int mods) {
+void Window::on_key(GLFWwindow* w, int key, int /*scancode*/, int action, int /*mods*/) {
   Window& s = self(w);
   if (action == GLFW_PRESS) s.presses_.push_back({key, -1, glfwGetTime()});
-  EventContext c(s.imgui_);
-  ImGui_ImplGlfw_KeyCallback(w, key, scancode, action, mods);
+  if (action != GLFW_REPEAT) s.keyboard_.key(key, action == GLFW_PRESS);  // ImGui makes its own repeats
 }
 
-void Window::on_char(GLFWwindow* w, unsigned int ch) {
-  EventContext c(self(w).imgui_);
-  ImGui_ImplGlfw_CharCallback(w, ch);
-}
+void Window::on_char(GLFWwindow* w, unsigned int ch) { self(w).keyboard_.character(ch); }
 
 void Window::on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
   Window& s = self(w);
@@ -180,6 +176,10 @@ bool Window::should_close() const { return glfwWindowShouldClose(window_) != 0; 
 
 void Window::begin_frame() {
   make_current();
+  for (const InputTrickle::Event& e : keyboard_.frame_starting()) {
+    if (e.is_char) ImGui_ImplGlfw_CharCallback(window_, e.ch);
+    else ImGui_ImplGlfw_KeyCallback(window_, e.key, 0, e.pressed ? GLFW_PRESS : GLFW_RELEASE, 0);
+  }
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gl/context.h"
+#include "gl/input_trickle.h"
 #include "image/image.h"
 
 struct GLFWwindow;
@@ -110,6 +111,7 @@ class Window {
   ImFont* large_font_ = nullptr;
   ImFont* small_font_ = nullptr;
   std::vector<Press> presses_;
+  InputTrickle keyboard_;  // keys and text for ImGui, spread over frames so that none is lost
 };
 
 }  // namespace penumbra::gl

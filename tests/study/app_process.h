@@ -51,6 +51,10 @@ class App {
     std::filesystem::remove(capture_);
   }
   std::string output() const { return slurp(capture_); }
+  // Stops and continues the app (SIGSTOP, SIGCONT): input sent in between waits in the X server's
+  // queue and arrives in one glfwPollEvents, as it does when a loaded machine delays a frame.
+  void pause() { kill(pid_, SIGSTOP); }
+  void resume() { kill(pid_, SIGCONT); }
   bool running() {
     if (pid_ > 0 && waitpid(pid_, &status_, WNOHANG) == pid_) pid_ = -1;
     return pid_ > 0;

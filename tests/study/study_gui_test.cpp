@@ -434,6 +434,26 @@ TEST_F(StudyGuiFlow, IntakeRefusesADuplicateIdAndWritesNothing) {
   fs::remove(config);
 }
 
+// Keys that reach the app in one batch, as under load (CI lost an Enter this way: ImGui 1.86 saw
+// its press and release in one frame, and the field never confirmed): the app is stopped while the
+// id and Enter are typed, then continued; the id is accepted, and BackSpaces in a batch delete.
+TEST_F(StudyGuiFlow, KeysTypedDuringAStalledFrameAllArrive) {
+  const fs::path config = flow_config(""), root = fresh("stalled-root");
+  App app(windowed({"run", "--config", config.string(), "-o", root.string()}));
+  ASSERT_TRUE(app.wait_for("intake screen: waiting for the participant id")) << app.output();
+  app.pause();
+  const bool typed = xdo(app, "type P111") && xdo(app, "key BackSpace BackSpace") && xdo(app, "key Return");
+  app.resume();
+  ASSERT_TRUE(typed);
+  ASSERT_TRUE(app.wait_for("participant 'P1' accepted")) << app.output();
+  ASSERT_TRUE(app.wait_for("welcome screen")) << app.output();
+  xdo(app, "key Escape");
+  EXPECT_EQ(app.wait_exit(), 0) << app.output();
+  EXPECT_TRUE(fs::exists(root / "P1" / "session.json"));
+  fs::remove_all(root);
+  fs::remove(config);
+}
+
 // The config's consent text comes after the id: declining (Escape) ends the app with nothing
 // written; agreeing (Enter) starts the session.
 TEST_F(StudyGuiFlow, DecliningConsentWritesNothing) {
