@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <string>
 
 #include "apps/cli_options.h"
@@ -44,16 +45,33 @@ int main(int argc, char** argv) {
     }
     const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-    std::size_t triangles = 0, units = 0;
-    std::printf("scene %s: built or loaded in %.0f ms\n", s.name.c_str(), build_ms);
-    std::printf("%-16s %12s %12s %8s\n", "object", "triangles", "vertices", "units");  // units: what culling keeps or drops
+    // One row per run of objects with one name: its instances (objects), the distinct meshes they
+    // share, the triangles drawn (every instance) and the vertices stored (every distinct mesh once).
+    struct Row {
+      std::string name;
+      std::size_t objects = 0, triangles = 0, vertices = 0, units = 0;
+      std::set<const scene::MeshData*> meshes;
+    };
+    std::vector<Row> rows;
     for (const auto& o : s.objects) {
-      const std::size_t n = o.mesh->draw_units().size();
-      triangles += o.mesh->indices.size() / 3;
-      units += n;
-      std::printf("%-16s %12zu %12zu %8zu\n", o.name.c_str(), o.mesh->indices.size() / 3, o.mesh->vertices.size(), n);
+      if (rows.empty() || rows.back().name != o.name) rows.push_back({o.name});
+      Row& r = rows.back();
+      ++r.objects;
+      r.triangles += o.mesh->indices.size() / 3;
+      r.units += o.mesh->draw_units().size();
+      if (r.meshes.insert(o.mesh.get()).second) r.vertices += o.mesh->vertices.size();
     }
-    std::printf("%-16s %12zu %12s %8zu\n", "total", triangles, "", units);
+    std::printf("scene %s: built or loaded in %.0f ms\n", s.name.c_str(), build_ms);
+    // units: what culling keeps or drops; instances: objects sharing the row's meshes
+    std::printf("%-16s %9s %7s %12s %12s %8s\n", "object", "instances", "meshes", "triangles", "vertices", "units");
+    Row total{"total"};
+    for (const Row& r : rows) {
+      std::printf("%-16s %9zu %7zu %12zu %12zu %8zu\n", r.name.c_str(), r.objects, r.meshes.size(), r.triangles, r.vertices, r.units);
+      total.objects += r.objects, total.triangles += r.triangles, total.units += r.units;
+      total.meshes.insert(r.meshes.begin(), r.meshes.end());
+    }
+    for (const scene::MeshData* m : total.meshes) total.vertices += m->vertices.size();
+    std::printf("%-16s %9zu %7zu %12zu %12zu %8zu\n", "total", total.objects, total.meshes.size(), total.triangles, total.vertices, total.units);
     const scene::Aabb b = s.bounds();
     if (!b.empty())
       std::printf("bounds [%.2f, %.2f, %.2f] .. [%.2f, %.2f, %.2f]\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);

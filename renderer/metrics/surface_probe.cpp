@@ -43,7 +43,7 @@ glm::mat4 camera_view_projection(const scene::Camera& camera, int width_px, int 
 
 struct SurfaceProbe::Gpu {
   gl::Program program;
-  std::vector<std::unique_ptr<scene::GpuMesh>> meshes;
+  scene::GpuMeshes meshes;
   int width = 0, height = 0;
   gl::Texture surface, depth;
   gl::Framebuffer fbo;
@@ -52,10 +52,8 @@ struct SurfaceProbe::Gpu {
 SurfaceProbe::SurfaceProbe(const scene::Scene& scene) : gpu_(std::make_unique<Gpu>()) {
   const gl::ShaderLibrary library({{"probe.vert", kVertex}, {"probe.frag", kFragment}});
   gpu_->program = library.program({{GL_VERTEX_SHADER, "probe.vert"}, {GL_FRAGMENT_SHADER, "probe.frag"}});
-  for (const auto& o : scene.objects) {
-    gpu_->meshes.push_back(std::make_unique<scene::GpuMesh>(*o.mesh));
-    models_.push_back(o.model);
-  }
+  gpu_->meshes = scene::GpuMeshes(scene.objects);
+  for (const auto& o : scene.objects) models_.push_back(o.model);
   gl::check_errors("surface probe setup");
 }
 
@@ -89,7 +87,7 @@ io::ImageF SurfaceProbe::render(const scene::Camera& camera, int width_px, int h
   for (std::size_t i = 0; i < g.meshes.size(); ++i) {
     glProgramUniformMatrix4fv(g.program.id(), model, 1, GL_FALSE, glm::value_ptr(models_[i]));
     glProgramUniform1f(g.program.id(), object, static_cast<float>(i + 1));
-    g.meshes[i]->draw();
+    g.meshes[i].draw();
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 

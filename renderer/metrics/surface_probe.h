@@ -21,7 +21,7 @@ glm::mat4 camera_view_projection(const scene::Camera& camera, int width_px, int 
 
 class SurfaceProbe {
  public:
-  // Uploads the scene's meshes (its own copy; the scene's object order is kept).
+  // Uploads the scene's meshes (its own copy, one per distinct mesh; the scene's object order is kept).
   explicit SurfaceProbe(const scene::Scene& scene);
   ~SurfaceProbe();
   SurfaceProbe(const SurfaceProbe&) = delete;

@@ -1,6 +1,7 @@
 #include "scene/gpu_mesh.h"
 
 #include <cstdint>
+#include <unordered_map>
 
 namespace penumbra::scene {
 
@@ -36,6 +37,15 @@ void GpuMesh::draw(const DrawRanges& ranges) const {
   }
   vao_.bind();
   glMultiDrawElements(GL_TRIANGLES, counts.data(), GL_UNSIGNED_INT, offsets.data(), static_cast<GLsizei>(counts.size()));
+}
+
+GpuMeshes::GpuMeshes(const std::vector<Object>& objects) {
+  std::unordered_map<const MeshData*, const GpuMesh*> uploaded;
+  for (const Object& o : objects) {
+    const GpuMesh*& copy = uploaded[o.mesh.get()];
+    if (!copy) copy = copies_.emplace_back(std::make_unique<GpuMesh>(*o.mesh)).get();
+    of_object_.push_back(copy);
+  }
 }
 
 }  // namespace penumbra::scene

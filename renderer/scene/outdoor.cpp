@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -210,26 +211,49 @@ MeshData make_site() {
   return m;
 }
 
+// Repeating parts are instances: one mesh, placed by each instance's model matrix (an engine's
+// instanced draw; here one object per instance sharing the mesh, so that every consumer of
+// Scene::objects, the GPU upload included, sees them without a second path).
+struct Instanced {
+  std::string name;
+  std::shared_ptr<const MeshData> mesh;
+  std::vector<glm::mat4> at;
+};
+
+std::shared_ptr<const MeshData> share(MeshData m) { return std::make_shared<const MeshData>(std::move(m)); }
+
 // Tower crane: mast of square lattice panels, a triangular jib to the south (+z) and a flat
-// counter-jib to the north, all at the mast's top.
-MeshData make_crane() {
-  MeshData m;
+// counter-jib to the north, all at the mast's top. Each mast and jib panel (with its pieces of
+// the chords) is an instance of one of two panels, their diagonals zigzagging in turn; the rest
+// (slewing unit, cab, apex, counter-jib, pendants, trolley and hook) is one mesh.
+struct Crane {
+  MeshData body;
+  std::vector<Instanced> panels;
+};
+
+Crane make_crane() {
+  Crane crane;
+  MeshData& m = crane.body;
   const glm::vec3 b = kCraneBase + glm::vec3(0, 1, 0);  // on the footing
   const float half = 0.9f, panel = 1.8f, chord = 0.14f, member = 0.08f;
   const int panels = static_cast<int>(std::round(kMastHeight / panel));
   const float top = b.y + panel * static_cast<float>(panels);
   const std::array<glm::vec2, 4> corner = {glm::vec2(-half, -half), glm::vec2(half, -half), glm::vec2(half, half), glm::vec2(-half, half)};
-  const auto at = [&](int c, float y) { return glm::vec3(b.x + corner[static_cast<std::size_t>(c)].x, y, b.z + corner[static_cast<std::size_t>(c)].y); };
-  for (int c = 0; c < 4; ++c) add_beam(m, at(c, b.y), at(c, top), chord);
-  for (int p = 0; p < panels; ++p) {
-    const float y0 = b.y + panel * static_cast<float>(p), y1 = y0 + panel;
+  // A corner at height y, relative to the mast's axis (panels) or in the world (the body).
+  const auto local = [&](int c, float y) { return glm::vec3(corner[static_cast<std::size_t>(c)].x, y, corner[static_cast<std::size_t>(c)].y); };
+  const auto at = [&](int c, float y) { return glm::vec3(b.x, 0, b.z) + local(c, y); };
+  for (int parity = 0; parity < 2; ++parity) {
+    MeshData p;  // from y = 0 to y = panel about the mast's axis
     for (int c = 0; c < 4; ++c) {
       const int d = (c + 1) % 4;
-      add_beam(m, at(c, y1), at(d, y1), member);
-      if (p % 2 == 0) add_beam(m, at(c, y0), at(d, y1), member);  // zigzag diagonals on every face
-      else add_beam(m, at(d, y0), at(c, y1), member);
+      add_beam(p, local(c, 0), local(c, panel), chord);
+      add_beam(p, local(c, panel), local(d, panel), member);
+      if (parity == 0) add_beam(p, local(c, 0), local(d, panel), member);  // zigzag diagonals on every face
+      else add_beam(p, local(d, 0), local(c, panel), member);
     }
-    m.close_unit();  // the four chords with the first panel, then one unit per mast panel
+    Instanced mast{"crane", share(std::move(p)), {}};
+    for (int i = parity; i < panels; i += 2) mast.at.push_back(translate({b.x, b.y + panel * static_cast<float>(i), b.z}));
+    crane.panels.push_back(std::move(mast));
   }
   // Slewing unit, cab and apex.
   add_box(m, {b.x, top + 0.75f, b.z}, {2.4f, 1.5f, 2.4f});
@@ -242,25 +266,31 @@ MeshData make_crane() {
   // Jib: bottom chords at x = ±0.7, top chord 1.5 m above the middle, 1.25 m panels to 50 m.
   const float jib_length = 50, jib_panel = 1.25f, jib_half = 0.7f, jib_height = 1.5f, jib_member = 0.06f, jib_chord = 0.12f;
   const int jib_panels = static_cast<int>(jib_length / jib_panel);
-  const auto left = [&](float z) { return glm::vec3(b.x - jib_half, deck, b.z + half + z); };
-  const auto right = [&](float z) { return glm::vec3(b.x + jib_half, deck, b.z + half + z); };
-  const auto ridge = [&](float z) { return glm::vec3(b.x, deck + jib_height, b.z + half + z); };
-  add_beam(m, left(0), left(jib_length), jib_chord);
-  add_beam(m, right(0), right(jib_length), jib_chord);
-  add_beam(m, ridge(0), ridge(jib_length), jib_chord);
-  for (int p = 0; p <= jib_panels; ++p) {
-    const float z = jib_panel * static_cast<float>(p);
-    add_beam(m, left(z), right(z), jib_member);
-    add_beam(m, left(z), ridge(z), jib_member);
-    add_beam(m, right(z), ridge(z), jib_member);
-    if (p == jib_panels) break;
-    const float z1 = z + jib_panel;
-    add_beam(m, left(z), ridge(z1), jib_member);
-    add_beam(m, right(z), ridge(z1), jib_member);
-    if (p % 2 == 0) add_beam(m, left(z), right(z1), jib_member);
-    else add_beam(m, right(z), left(z1), jib_member);
-    m.close_unit();  // the three chords with the first panel, then one unit per jib panel
+  const auto left = [&](float z) { return glm::vec3(-jib_half, 0, z); };  // about the jib's root
+  const auto right = [&](float z) { return glm::vec3(jib_half, 0, z); };
+  const auto ridge = [&](float z) { return glm::vec3(0, jib_height, z); };
+  const glm::vec3 root(b.x, deck, b.z + half);
+  for (int parity = 0; parity < 2; ++parity) {
+    MeshData p;  // from z = 0 to z = jib_panel along the jib
+    const float z1 = jib_panel;
+    add_beam(p, left(0), left(z1), jib_chord);
+    add_beam(p, right(0), right(z1), jib_chord);
+    add_beam(p, ridge(0), ridge(z1), jib_chord);
+    add_beam(p, left(0), right(0), jib_member);
+    add_beam(p, left(0), ridge(0), jib_member);
+    add_beam(p, right(0), ridge(0), jib_member);
+    add_beam(p, left(0), ridge(z1), jib_member);
+    add_beam(p, right(0), ridge(z1), jib_member);
+    if (parity == 0) add_beam(p, left(0), right(z1), jib_member);
+    else add_beam(p, right(0), left(z1), jib_member);
+    Instanced jib{"crane", share(std::move(p)), {}};
+    for (int i = parity; i < jib_panels; i += 2) jib.at.push_back(translate(root + glm::vec3(0, 0, jib_panel * static_cast<float>(i))));
+    crane.panels.push_back(std::move(jib));
   }
+  const glm::vec3 tip = root + glm::vec3(0, 0, jib_length);  // the last panel's far end
+  add_beam(m, tip + left(0), tip + right(0), jib_member);
+  add_beam(m, tip + left(0), tip + ridge(0), jib_member);
+  add_beam(m, tip + right(0), tip + ridge(0), jib_member);
   m.close_unit();
   // Counter-jib: flat, 15 m to the north, with counterweights at its end.
   const float counter_length = 15, counter_half = 0.9f;
@@ -276,38 +306,38 @@ MeshData make_crane() {
   for (int i = 0; i < 3; ++i) add_box(m, {b.x, deck - 1.3f, b.z - half - 11.5f - 1.1f * static_cast<float>(i)}, {2.2f, 2.6f, 1.0f});
   m.close_unit();  // counter-jib and counterweights
   // Pendants from the apex to the jib and the counter-jib; the trolley's hook cable and block.
-  m.append(make_tube({apex, ridge(32)}, {0.03f, 0.03f}, 4), glm::mat4(1));
+  m.append(make_tube({apex, root + ridge(32)}, {0.03f, 0.03f}, 4), glm::mat4(1));
   m.append(make_tube({apex, glm::vec3(b.x, deck, b.z - half - counter_length)}, {0.03f, 0.03f}, 4), glm::mat4(1));
   const glm::vec3 trolley(b.x, deck - 0.3f, b.z + half + 28);
   add_box(m, trolley, {1.6f, 0.5f, 1.2f});
   m.append(make_tube({trolley, trolley - glm::vec3(0, 24, 0)}, {0.025f, 0.025f}, 4), glm::mat4(1));
   add_box(m, trolley - glm::vec3(0, 24.5f, 0), {0.6f, 1.0f, 0.4f});
   m.close_unit();  // pendants, trolley and hook
-  return m;
+  return crane;
 }
 
 // 2 m mesh fence along the site block's edges (vertical bars every ~0.17 m), with a gate gap on
-// the north side.
-MeshData make_fence() {
-  MeshData m;
+// the north side: instances of one panel (its lattice and the post at its -x end).
+Instanced make_fence() {
   const float edge = kBlockHalf - 0.5f, panel = 2.5f, height = 2.0f;
-  const MeshData lattice = make_lattice(panel, height, 16, 3, 0.035f);
+  MeshData p;
+  p.append(make_lattice(panel, height, 16, 3, 0.035f), translate({0, height / 2 + 0.05f, 0}));
+  add_box(p, {-panel / 2, 1.1f, 0}, {0.08f, 2.2f, 0.08f});
+  Instanced fence{"fence", share(std::move(p)), {}};
   const int panels = static_cast<int>(std::floor(2 * edge / panel));
   const float start = -panel * static_cast<float>(panels) / 2;
   for (int side = 0; side < 4; ++side) {
-    const float angle = side < 2 ? 0.0f : kPi / 2;
+    // Along x on the south and north sides, along z (the panel's -x end toward -z) on the others.
+    const float angle = side < 2 ? 0.0f : -kPi / 2;
     const float offset = side % 2 == 0 ? edge : -edge;
     for (int i = 0; i < panels; ++i) {
       const float u = start + panel * (static_cast<float>(i) + 0.5f);
       if (side == 1 && std::abs(u) < panel) continue;  // the gate, on the north (street) side
-      const glm::vec3 at = side < 2 ? glm::vec3(u, height / 2 + 0.05f, offset) : glm::vec3(offset, height / 2 + 0.05f, u);
-      m.append(lattice, glm::rotate(translate(at), angle, glm::vec3(0, 1, 0)));
-      const glm::vec3 post = side < 2 ? glm::vec3(u - panel / 2, 0, offset) : glm::vec3(offset, 0, u - panel / 2);
-      add_box(m, post + glm::vec3(0, 1.1f, 0), {0.08f, 2.2f, 0.08f});
-      m.close_unit();  // one panel and its post
+      const glm::vec3 at = side < 2 ? glm::vec3(u, 0, offset) : glm::vec3(offset, 0, u);
+      fence.at.push_back(glm::rotate(translate(at), angle, glm::vec3(0, 1, 0)));
     }
   }
-  return m;
+  return fence;
 }
 
 // --- trees ----------------------------------------------------------------------------------
@@ -430,8 +460,6 @@ void make_pole_lines(std::uint64_t seed, MeshData& poles, MeshData& wires) {
   }
 }
 
-std::shared_ptr<const MeshData> share(MeshData m) { return std::make_shared<const MeshData>(std::move(m)); }
-
 // The walk: east along the street at z = -20, past the fenced site and under the crane's jib,
 // then up over the town to look down on it from 140 m.
 CameraPath outdoor_path() {
@@ -460,8 +488,14 @@ Scene make_outdoor_scene(const OutdoorOptions& options) {
   s.objects.push_back({"ground", share(make_ground(stream(seed, 0))), glm::mat4(1), {0.72f, 0.7f, 0.64f}});
   s.objects.push_back({"buildings", share(make_buildings(seed)), glm::mat4(1), {0.82f, 0.8f, 0.75f}});
   s.objects.push_back({"site", share(make_site()), glm::mat4(1), {0.7f, 0.7f, 0.68f}});
-  s.objects.push_back({"crane", share(make_crane()), glm::mat4(1), {0.95f, 0.75f, 0.1f}});
-  s.objects.push_back({"fence", share(make_fence()), glm::mat4(1), {0.62f, 0.64f, 0.62f}});
+  const auto place = [&](const Instanced& parts, glm::vec3 albedo) {
+    for (const glm::mat4& at : parts.at) s.objects.push_back({parts.name, parts.mesh, at, albedo});
+  };
+  const glm::vec3 crane_yellow{0.95f, 0.75f, 0.1f}, fence_grey{0.62f, 0.64f, 0.62f};
+  Crane crane = make_crane();
+  s.objects.push_back({"crane", share(std::move(crane.body)), glm::mat4(1), crane_yellow});
+  for (const Instanced& panels : crane.panels) place(panels, crane_yellow);
+  place(make_fence(), fence_grey);
   s.objects.push_back({"trees", share(make_trees(seed)), glm::mat4(1), {0.45f, 0.36f, 0.28f}});
   s.objects.push_back({"poles", share(std::move(poles)), glm::mat4(1), {0.42f, 0.32f, 0.24f}});
   s.objects.push_back({"wires", share(std::move(wires)), glm::mat4(1), {0.15f, 0.15f, 0.15f}});

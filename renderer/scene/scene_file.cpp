@@ -27,6 +27,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <glm/gtc/matrix_transform.hpp>
+#define GLM_ENABLE_EXPERIMENTAL
+#include <glm/gtx/euler_angles.hpp>
 #include <nlohmann/json.hpp>
 
 #include "json/json_fields.h"
@@ -596,6 +598,47 @@ void write_glb(const MeshData& mesh, const glm::mat4& model, const std::filesyst
     throw SceneError(one_line(file.string() + ": cannot write model: " + exporter.GetErrorString()));
 }
 
+// An object's model matrix as the scene file's translate, rotate_deg (about X, then Y, then Z) and
+// scale, when it is one: object_transform gives the matrix back from the written numbers within
+// float rounding (no reflection, no shear). Instances are written so, sharing one model file.
+struct Placement {
+  glm::vec3 translate{0}, rotate_deg{0}, scale{1};
+};
+std::optional<Placement> placement_of(const glm::mat4& model) {
+  const glm::mat3 m(model);
+  if (model[0][3] != 0 || model[1][3] != 0 || model[2][3] != 0 || model[3][3] != 1) return std::nullopt;
+  const glm::vec3 scale{glm::length(m[0]), glm::length(m[1]), glm::length(m[2])};
+  if (!(scale.x > 0 && scale.y > 0 && scale.z > 0)) return std::nullopt;
+  const glm::mat3 rotation(m[0] / scale.x, m[1] / scale.y, m[2] / scale.z);
+  float size = 1;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) size = std::max(size, std::abs(model[c][r]));
+  // The candidate as the file will hold it, if it gives `model` back.
+  const auto exact = [&](glm::vec3 rotate_deg, glm::vec3 s, float per_deg, float per_unit) -> std::optional<Placement> {
+    Placement p{glm::vec3(model[3]), rotate_deg, s};
+    if (per_deg > 0) p.rotate_deg = glm::round(p.rotate_deg * per_deg) / per_deg;  // 90, not 89.99999
+    if (per_unit > 0) p.scale = glm::round(p.scale * per_unit) / per_unit;         // 1, not 0.99999994
+    for (glm::vec3* v : {&p.translate, &p.rotate_deg, &p.scale})
+      for (int k = 0; k < 3; ++k) (*v)[k] = std::strtof(number((*v)[k]).c_str(), nullptr);
+    const glm::mat4 back = object_transform(p.translate, p.rotate_deg, p.scale);
+    float error = 0;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) error = std::max(error, std::abs(back[c][r] - model[c][r]));
+    if (!(error <= 1e-5f * size)) return std::nullopt;
+    return p;
+  };
+  // A turn about the vertical alone (instances on the ground), else the general Z·Y·X angles;
+  // rounded where rounding changes nothing beyond float precision.
+  const glm::vec3 about_y(0, glm::degrees(std::atan2(-rotation[0][2], rotation[0][0])), 0);
+  float z = 0, y = 0, x = 0;
+  glm::extractEulerAngleZYX(glm::mat4(rotation), z, y, x);  // rotation = Rz(z) Ry(y) Rx(x)
+  const glm::vec3 general = glm::degrees(glm::vec3(x, y, z));
+  for (const glm::vec3& angles : {about_y, general})
+    for (const auto& [per_deg, per_unit] : {std::pair{1e3f, 1e6f}, std::pair{0.0f, 0.0f}})
+      if (auto p = exact(angles, scale, per_deg, per_unit)) return p;
+  return std::nullopt;
+}
+
 // A file name from an object's name: letters, digits, '-' and '_' kept, the rest '_'.
 std::string file_stem(std::size_t index, const std::string& name) {
   std::string out = std::to_string(index) + "-";
@@ -652,13 +695,38 @@ void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
     }
     o << "  ]},\n";
   }
+  // A mesh several objects share (instances) is written once in its own space when every one of
+  // them has a placement (translate, rotate_deg, scale); any other mesh is written in world space.
+  std::map<const MeshData*, std::vector<std::size_t>> users;
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) users[scene.objects[i].mesh.get()].push_back(i);
+  std::vector<std::optional<Placement>> placed(scene.objects.size());
+  for (const auto& [mesh, objects] : users) {
+    if (objects.size() < 2) continue;
+    std::vector<std::optional<Placement>> p;
+    for (std::size_t i : objects) p.push_back(placement_of(scene.objects[i].model));
+    if (std::all_of(p.begin(), p.end(), [](const auto& v) { return v.has_value(); }))
+      for (std::size_t k = 0; k < objects.size(); ++k) placed[objects[k]] = p[k];
+  }
+  std::map<const MeshData*, std::filesystem::path> written;
   o << "  \"objects\": [\n";
   for (std::size_t i = 0; i < scene.objects.size(); ++i) {
     const Object& obj = scene.objects[i];
-    const std::filesystem::path model = models / (file_stem(i, obj.name) + ".glb");
-    write_glb(*obj.mesh, obj.model, path.parent_path() / model);
-    o << "    {\"name\": " << quoted(obj.name) << ", \"shape\": \"model\", \"path\": " << quoted(model.generic_string())
-      << ", \"albedo\": " << vec3_text(obj.albedo) << "}" << (i + 1 < scene.objects.size() ? "," : "") << "\n";
+    std::filesystem::path model = models / (file_stem(i, obj.name) + ".glb");
+    if (!placed[i]) {
+      write_glb(*obj.mesh, obj.model, path.parent_path() / model);
+    } else if (const auto w = written.find(obj.mesh.get()); w != written.end()) {
+      model = w->second;
+    } else {
+      write_glb(*obj.mesh, glm::mat4(1), path.parent_path() / model);
+      written.emplace(obj.mesh.get(), model);
+    }
+    o << "    {\"name\": " << quoted(obj.name) << ", \"shape\": \"model\", \"path\": " << quoted(model.generic_string());
+    if (placed[i]) {
+      o << ", \"translate\": " << vec3_text(placed[i]->translate);
+      if (placed[i]->rotate_deg != glm::vec3(0)) o << ", \"rotate_deg\": " << vec3_text(placed[i]->rotate_deg);
+      if (placed[i]->scale != glm::vec3(1)) o << ", \"scale\": " << vec3_text(placed[i]->scale);
+    }
+    o << ", \"albedo\": " << vec3_text(obj.albedo) << "}" << (i + 1 < scene.objects.size() ? "," : "") << "\n";
   }
   o << "  ]\n}\n";
 

@@ -126,7 +126,7 @@ std::uint64_t FrameContext::draw_scene(const gl::Program& program, bool shading,
     const auto& o = scene.objects[i];
     std::optional<scene::DrawRanges> kept;
     if (settings.map.culling) {
-      kept = scene::cull_units(meshes[i]->units(), clip_from_world * o.model, volume);
+      kept = scene::cull_units(meshes[i].units(), clip_from_world * o.model, volume);
       if (kept->first_index.empty()) continue;
     }
     program.set("u_model", o.model);
@@ -135,11 +135,11 @@ std::uint64_t FrameContext::draw_scene(const gl::Program& program, bool shading,
       program.set("u_albedo", o.albedo);
     }
     if (kept) {
-      meshes[i]->draw(*kept);
+      meshes[i].draw(*kept);
       triangles += kept->triangles;
     } else {
-      meshes[i]->draw();
-      triangles += meshes[i]->index_count() / 3;
+      meshes[i].draw();
+      triangles += meshes[i].index_count() / 3;
     }
   }
   return triangles;

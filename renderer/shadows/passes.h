@@ -94,7 +94,7 @@ struct FrameContext {
   const ShadowSettings& settings;
   const FramePlan& plan;
   const scene::Scene& scene;
-  const std::vector<std::unique_ptr<scene::GpuMesh>>& meshes;
+  const scene::GpuMeshes& meshes;  // per object
   FrameResources& res;
   FrameInfo& info;
   gl::PassTimer* timer = nullptr;

@@ -19,8 +19,7 @@ Renderer::~Renderer() = default;
 
 void Renderer::set_scene(const scene::Scene& s) {
   scene_ = s;
-  meshes_.clear();
-  for (const auto& o : scene_.objects) meshes_.push_back(std::make_unique<scene::GpuMesh>(*o.mesh));
+  meshes_ = scene::GpuMeshes(scene_.objects);
   reset_adaptive();
   gl::check_errors("scene upload");
 }
@@ -80,7 +79,7 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   info.atlas_height = plan.atlas.height;
   info.filter_radius_texels = plan.filter_radius_texels;
   info.reallocated = res_->prepare(plan);
-  for (const auto& m : meshes_) info.scene_triangles += m->index_count() / 3;
+  for (std::size_t i = 0; i < meshes_.size(); ++i) info.scene_triangles += meshes_[i].index_count() / 3;  // instances each count
 
   glDisable(GL_CULL_FACE);  // thin planes and open meshes cast from both sides
   glEnable(GL_DEPTH_TEST);

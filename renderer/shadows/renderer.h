@@ -57,10 +57,11 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  // Uploads the scene's meshes; the scene is copied (camera and light may be edited later
-  // through `scene()` without re-uploading).
+  // Uploads the scene's meshes, once per distinct mesh (instances share it); the scene is copied
+  // (camera and light may be edited later through `scene()` without re-uploading).
   void set_scene(const scene::Scene& s);
   scene::Scene& scene() { return scene_; }
+  std::size_t uploaded_meshes() const { return meshes_.copies(); }
 
   // Renders one frame at width × height. Throws std::runtime_error on GL failure (e.g. a map too
   // large for the device), naming the pass.
@@ -91,7 +92,7 @@ class Renderer {
  private:
   gl::ShaderLibrary shaders_;
   scene::Scene scene_;
-  std::vector<std::unique_ptr<scene::GpuMesh>> meshes_;
+  scene::GpuMeshes meshes_;
   std::unique_ptr<FrameResources> res_;
   std::vector<std::unique_ptr<Pass>> passes_;
   AdaptiveState adaptive_;

@@ -114,6 +114,28 @@ TEST(OutdoorGl, CullingChangesNoPixelOnTheDemoSceneAndUnderTheFloodlight) {
   expect_culling_changes_no_pixel(spot, test::settings(Technique::pcf, 1024, true), 128, 72);
 }
 
+// Instances (the crane's and the fence's panels) share one mesh on the GPU: the town uploads 12
+// meshes for its 110 objects, and draws the same image, pixel for pixel, as a copy of the scene in
+// which every object has a mesh of its own.
+TEST(OutdoorGl, InstancesShareOneUploadAndDrawAsTheirOwnCopies) {
+  scene::Scene s = scene::make_builtin_scene("outdoor");
+  s.camera = s.camera_path.at(s.camera, 150);  // the site: fence and crane in view
+  scene::Scene own = s;
+  for (auto& o : own.objects) o.mesh = std::make_shared<const scene::MeshData>(*o.mesh);
+  shadows::Renderer shared_r, own_r;
+  shared_r.set_scene(s);
+  own_r.set_scene(own);
+  EXPECT_EQ(shared_r.uploaded_meshes(), 12u);
+  EXPECT_EQ(own_r.uploaded_meshes(), s.objects.size());
+  ShadowSettings st = test::settings(Technique::pcf, 1024, true);
+  st.map.cascades = 4;
+  const Frame a = render_frame(shared_r, st, true, 192, 108), b = render_frame(own_r, st, true, 192, 108);
+  EXPECT_EQ(a.color.pixels, b.color.pixels);
+  EXPECT_EQ(a.visibility.pixels, b.visibility.pixels);
+  EXPECT_EQ(a.info.map_triangles, b.info.map_triangles);
+  EXPECT_EQ(a.info.scene_triangles, b.info.scene_triangles) << "every instance counts";
+}
+
 // A pillar outside the camera's view whose shadow falls into it: the camera drops it, its map
 // draws it, and the shadow is there.
 TEST(OutdoorGl, ACasterOutsideTheViewStillCasts) {

@@ -5,7 +5,11 @@
 #include <cmath>
 #include <ctime>
 #include <filesystem>
+#include <map>
+#include <set>
+#include <tuple>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -29,7 +33,10 @@ double fingerprint(const Scene& s) {
   double sum = 0;
   std::size_t i = 0;
   for (const auto& o : s.objects)
-    for (const auto& v : o.mesh->vertices) sum += static_cast<double>(++i % 7 + 1) * (v.position.x + 2.0 * v.position.y + 3.0 * v.position.z);
+    for (const auto& v : o.mesh->vertices) {
+      const glm::vec3 p = glm::vec3(o.model * glm::vec4(v.position, 1));  // instances share vertices, not places
+      sum += static_cast<double>(++i % 7 + 1) * (p.x + 2.0 * p.y + 3.0 * p.z);
+    }
   return sum;
 }
 
@@ -80,9 +87,44 @@ TEST(OutdoorScene, AboutAMillionTrianglesOnSeveralHundredMetres) {
     EXPECT_GT(find(s, name).mesh->indices.size(), 0u);
   }
   // The crane stands over the site: a lattice mast about 45 m high.
-  const Aabb crane = find(s, "crane").mesh->bounds();
+  Aabb crane;
+  for (const auto& o : s.objects)
+    if (o.name == "crane") crane.extend(o.mesh->bounds().transformed(o.model));
   EXPECT_NEAR(crane.hi.y, 1 + 45 + 1.5f + 7, 1.0f);
   EXPECT_GT(crane.hi.z - crane.lo.z, 60.0f);  // jib plus counter-jib
+}
+
+// Repeating parts are instances of one mesh each: the crane's 25 mast and 40 jib panels (two
+// panels each, their diagonals alternating) and the fence's 38 panels; no two instances of a mesh
+// stand in one place, and the mast's panels stack from the footing to the slewing unit.
+TEST(OutdoorScene, RepeatingPartsAreInstancesOfOneMesh) {
+  const Scene s = make_outdoor_scene({});
+  std::map<std::string, std::set<const MeshData*>> meshes;
+  std::map<const MeshData*, std::vector<glm::vec3>> places;
+  std::map<std::string, std::size_t> objects;
+  for (const auto& o : s.objects) {
+    meshes[o.name].insert(o.mesh.get());
+    ++objects[o.name];
+    places[o.mesh.get()].push_back(glm::vec3(o.model[3]));
+  }
+  EXPECT_EQ(objects["crane"], 1u + 25u + 40u);
+  EXPECT_EQ(meshes["crane"].size(), 5u) << "the body, two mast panels, two jib panels";
+  EXPECT_EQ(objects["fence"], 38u);
+  EXPECT_EQ(meshes["fence"].size(), 1u);
+  EXPECT_EQ(s.objects.size(), 110u);
+  for (auto& [mesh, at] : places) {
+    std::sort(at.begin(), at.end(), [](glm::vec3 a, glm::vec3 b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+    EXPECT_EQ(std::adjacent_find(at.begin(), at.end()), at.end()) << "two instances in one place";
+  }
+  // The mast: 25 panels of 1.8 m, one above the other, from y = 1 (the footing's top) to 46.
+  std::vector<float> mast;
+  for (const auto& o : s.objects) {
+    const Aabb b = o.mesh->bounds().transformed(o.model);
+    if (o.name == "crane" && b.hi.y - b.lo.y > 1.75f && b.hi.y - b.lo.y < 2.5f) mast.push_back(o.model[3].y);  // jib panels: 1.6 m
+  }
+  ASSERT_EQ(mast.size(), 25u);
+  std::sort(mast.begin(), mast.end());
+  for (std::size_t i = 0; i < mast.size(); ++i) EXPECT_NEAR(mast[i], 1 + 1.8f * static_cast<float>(i), 1e-4f);
 }
 
 TEST(OutdoorScene, PathWalksThenRisesToAnOverview) {
@@ -134,10 +176,16 @@ TEST(OutdoorScene, WrittenSceneLoadsBackQuickly) {
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
     SCOPED_TRACE(s.objects[i].name);
     EXPECT_EQ(back.objects[i].name, s.objects[i].name);
+    for (int c = 0; c < 4; ++c)  // an instance is written with its placement, the rest in world space
+      for (int r = 0; r < 4; ++r) EXPECT_NEAR(back.objects[i].model[c][r], s.objects[i].model[c][r], 1e-5f);
     // Each glTF mesh loads as a draw unit: up to 16 runs of the written units per object.
     const std::size_t units = s.objects[i].mesh->draw_units().size();
     EXPECT_EQ(back.objects[i].mesh->draw_units().size(), std::min<std::size_t>(units, 16));
   }
+  std::set<const MeshData*> written, read;
+  for (std::size_t i = 0; i < s.objects.size(); ++i) written.insert(s.objects[i].mesh.get()), read.insert(back.objects[i].mesh.get());
+  EXPECT_EQ(read.size(), written.size()) << "instances share one model file and load as one mesh";
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "outdoor"), fs::directory_iterator()), 12);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(back.bounds().lo[c], s.bounds().lo[c], 1e-3f);
     EXPECT_NEAR(back.bounds().hi[c], s.bounds().hi[c], 1e-3f);

@@ -4,10 +4,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "scene/scene.h"
 
@@ -413,6 +416,49 @@ TEST(SceneFile, WrittenSceneReadsBack) {
   ASSERT_EQ(back.camera_path.keys.size(), 2u);
   EXPECT_EQ(back.camera_path.keys[1].frame, 30);
   expect_near(back.camera_path.keys[1].position, {5, 12, 9});
+}
+
+// Instances: objects sharing one mesh are written as one model file, each with its placement
+// (any rotation about X, Y and Z, a scale per axis); a mirrored instance cannot be placed so, and
+// its mesh's objects are written in world space, a file each. Both load back where they were.
+TEST(SceneFile, InstancesShareOneWrittenModelUnlessOneIsMirrored) {
+  const auto box = std::make_shared<const MeshData>(make_box({1, 2, 3}));
+  const auto ball = std::make_shared<const MeshData>(make_sphere(0.5f, 8, 6));
+  glm::mat4 turned = glm::translate(glm::mat4(1), {3, 1, -2});
+  turned = glm::rotate(turned, glm::radians(35.0f), glm::vec3(0, 0, 1));
+  turned = glm::rotate(turned, glm::radians(-70.0f), glm::vec3(0, 1, 0));
+  turned = glm::rotate(turned, glm::radians(20.0f), glm::vec3(1, 0, 0));
+  turned = glm::scale(turned, {2, 0.5f, 1.5f});
+  Scene s;
+  s.objects = {{"box", box, glm::mat4(1)},
+               {"box", box, glm::translate(glm::mat4(1), {5, 0, 0})},
+               {"box", box, turned},
+               {"ball", ball, glm::translate(glm::mat4(1), {0, 3, 0})},
+               {"ball", ball, glm::scale(glm::translate(glm::mat4(1), {0, -3, 0}), {-1, 1, 1})}};
+  TempDir dir;
+  write_scene_file(s, dir.path() / "inst.json");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path() / "inst"), fs::directory_iterator()), 3)
+      << "one file for the boxes, one per ball";
+  const Scene back = load_scene_file(dir.path() / "inst.json");
+  ASSERT_EQ(back.objects.size(), s.objects.size());
+  EXPECT_EQ(back.objects[0].mesh, back.objects[1].mesh);
+  EXPECT_EQ(back.objects[0].mesh, back.objects[2].mesh);
+  EXPECT_NE(back.objects[3].mesh, back.objects[4].mesh);
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    SCOPED_TRACE(i);
+    const Aabb want = s.objects[i].mesh->bounds().transformed(s.objects[i].model);
+    const Aabb got = back.objects[i].mesh->bounds().transformed(back.objects[i].model);
+    expect_near(got.lo, want.lo, 1e-4f);
+    expect_near(got.hi, want.hi, 1e-4f);
+    if (i < 3) {  // the box's 24 vertices come back in order: each corner where it was
+      MeshData placed_want, placed_got;
+      placed_want.append(*s.objects[i].mesh, s.objects[i].model);
+      placed_got.append(*back.objects[i].mesh, back.objects[i].model);
+      ASSERT_EQ(placed_got.vertices.size(), placed_want.vertices.size());
+      for (std::size_t v = 0; v < placed_want.vertices.size(); ++v)
+        expect_near(placed_got.vertices[v].position, placed_want.vertices[v].position, 1e-4f);
+    }
+  }
 }
 
 TEST(SceneFile, WritingRefusesANameWithoutJson) {
