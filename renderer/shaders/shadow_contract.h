@@ -52,6 +52,9 @@ PENUMBRA_CONSTANT(UNIT_GBUFFER_LIGHT, 5)       // post passes: map uv, reference
 PENUMBRA_CONSTANT(UNIT_DEPTH_MINMAX, 6)        // min-max depth pyramid of the atlas (PCSS bounds)
 PENUMBRA_CONSTANT(UNIT_POST_INPUT, 7)          // post passes: the previous post pass's output
 PENUMBRA_CONSTANT(UNIT_POST_INPUT_2, 8)        // post passes: a second input (site widths)
+PENUMBRA_CONSTANT(UNIT_VSM_POOL, 9)            // virtual shadow map: the page pool (raw depth, texelFetch)
+PENUMBRA_CONSTANT(UNIT_VSM_TABLE, 10)          // virtual shadow map: the page tables (slot per page, -1: none)
+PENUMBRA_CONSTANT(VSM_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
 
 // Uniform-block binding points.
 PENUMBRA_CONSTANT(BLOCK_SHADOW_FRAME, 0)

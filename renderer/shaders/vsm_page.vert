@@ -1,0 +1,8 @@
+// A virtual shadow map's page: positions into the page's orthographic light clip space
+// (shadows/virtual_shadow_map.cpp); the fragment shader is shadow_depth.frag's (depth only).
+layout(location = 0) in vec3 a_position;
+
+uniform mat4 u_model;
+uniform mat4 u_clip_from_world;
+
+void main() { gl_Position = u_clip_from_world * (u_model * vec4(a_position, 1.0)); }

@@ -1,0 +1,241 @@
+#include "shadows/virtual_shadow_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "gl/shader_library.h"
+#include "scene/culling.h"
+#include "shaders/shadow_contract.h"
+
+namespace penumbra::shadows {
+
+glm::mat4 sun_light_view(const glm::vec3& direction) {
+  // The references' basis (metrics::light_basis): e1 ⟂ the light and the helper axis, e2 = d × e1.
+  const glm::vec3 d = glm::normalize(direction);
+  const glm::vec3 helper = std::abs(d.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  const glm::vec3 e1 = glm::normalize(glm::cross(helper, d)), e2 = glm::cross(d, e1);
+  glm::mat4 v(1);  // rows e1, e2, -d (column-major: element [column][row])
+  for (int c = 0; c < 3; ++c) v[c][0] = e1[c], v[c][1] = e2[c], v[c][2] = -d[c];
+  return v;
+}
+
+void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, float& near_ws, float& far_ws) {
+  if (bounds.empty()) {
+    near_ws = 0, far_ws = 1;
+    return;
+  }
+  const scene::Aabb l = bounds.transformed(light_view);
+  const float margin = std::max(0.01f, 0.01f * (l.hi.z - l.lo.z));
+  near_ws = -l.hi.z - margin;  // distances along -z
+  far_ws = -l.lo.z + margin;
+}
+
+VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side)
+    : layout_(layout), pool_side_(pool_pages_per_side) {
+  if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
+      !(layout.texel0_ws > 0) || pool_pages_per_side < 1)
+    throw std::invalid_argument("virtual shadow map: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
+                                ", page_texels, pages_per_side, texel0_ws and the pool's pages per side positive");
+  const int side = pool_side_ * layout.page_texels;
+  pool_ = gl::Texture({GL_DEPTH_COMPONENT32F, side, side, 1}, "virtual shadow map page pool");
+  table_ = gl::Texture({GL_R32I, layout.pages_per_side, layout.pages_per_side * layout.levels, 1}, "virtual shadow map page tables");
+  glTextureParameteri(table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // an integer texture is complete only so
+  glTextureParameteri(table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  const gl::Framebuffer::Attachment depth{&pool_, GL_DEPTH_ATTACHMENT};
+  fbo_ = gl::Framebuffer(std::span(&depth, 1), "virtual shadow map page pool");
+  program_ = gl::ShaderLibrary().program({{GL_VERTEX_SHADER, "vsm_page.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
+  slots_.resize(static_cast<std::size_t>(pool_slots()));
+  origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
+  origin_pages_y_.assign(static_cast<std::size_t>(layout.levels), 0);
+  write_tables();
+}
+
+double VirtualShadowMap::page_ws(int level) const { return layout_.page_texels * layout_.texel0_ws * std::ldexp(1.0, level); }
+
+VirtualShadowMap::Key VirtualShadowMap::key_of(const adaptive::Page& page) const {
+  const auto k = static_cast<std::size_t>(page.level);
+  return {page.level, origin_pages_x_[k] + page.x, origin_pages_y_[k] + page.y};
+}
+
+adaptive::LightXY VirtualShadowMap::origin(int level) const {
+  const auto k = static_cast<std::size_t>(level);
+  return {static_cast<double>(origin_pages_x_[k]) * page_ws(level), static_cast<double>(origin_pages_y_[k]) * page_ws(level)};
+}
+
+void VirtualShadowMap::free_slot(int slot) {
+  Slot& s = slots_[static_cast<std::size_t>(slot)];
+  if (!s.used) return;
+  resident_.erase(s.key);
+  s = Slot{};
+}
+
+void VirtualShadowMap::invalidate_all() {
+  invalidated_ += static_cast<int>(resident_.size());
+  for (int i = 0; i < pool_slots(); ++i) free_slot(i);
+}
+
+void VirtualShadowMap::invalidate(const scene::Aabb& bounds) {
+  if (bounds.empty() || !has_view_) return;
+  const scene::Aabb l = bounds.transformed(view_.light_view);
+  for (int i = 0; i < pool_slots(); ++i) {
+    const Slot& s = slots_[static_cast<std::size_t>(i)];
+    if (!s.used) continue;
+    const double w = page_ws(s.key.level);
+    const double x0 = static_cast<double>(s.key.x) * w, y0 = static_cast<double>(s.key.y) * w;
+    if (x0 <= l.hi.x && l.lo.x <= x0 + w && y0 <= l.hi.y && l.lo.y <= y0 + w) {
+      free_slot(i);
+      ++invalidated_;
+    }
+  }
+}
+
+std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes) const {
+  const int n = layout_.page_texels;
+  const int sx = slot % pool_side_, sy = slot / pool_side_;
+  glViewport(sx * n, sy * n, n, n);
+  glScissor(sx * n, sy * n, n, n);
+  glClear(GL_DEPTH_BUFFER_BIT);  // the scissor keeps the other slots
+  const double w = page_ws(key.level);
+  const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
+  const auto wf = static_cast<float>(w);
+  const glm::mat4 clip_from_world = glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view;
+  program_.set("u_clip_from_world", clip_from_world);
+  std::uint64_t triangles = 0;
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const scene::Object& o = scene.objects[i];
+    const scene::DrawRanges kept = scene::cull_units(meshes[i].units(), clip_from_world * o.model, scene::CullVolume::caster);
+    if (kept.first_index.empty()) continue;
+    program_.set("u_model", o.model);
+    meshes[i].draw(kept);
+    triangles += kept.triangles;
+  }
+  return triangles;
+}
+
+VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
+                                         const scene::GpuMeshes& meshes) {
+  if (meshes.size() != scene.objects.size()) throw std::invalid_argument("virtual shadow map: the meshes are not the scene's");
+  for (const adaptive::Page& page : requested)  // before anything changes
+    if (page.level < 0 || page.level >= layout_.levels || page.x < 0 || page.y < 0 || page.x >= layout_.pages_per_side ||
+        page.y >= layout_.pages_per_side)
+      throw std::invalid_argument("virtual shadow map: page outside the layout (level " + std::to_string(page.level) + ", " +
+                                  std::to_string(page.x) + ", " + std::to_string(page.y) + ")");
+  if (has_view_ && (view.light_view != view_.light_view || view.near_ws != view_.near_ws || view.far_ws != view_.far_ws)) invalidate_all();
+  view_ = view;
+  has_view_ = true;
+  ++frame_;
+  for (int k = 0; k < layout_.levels; ++k) {
+    const adaptive::LightXY o = adaptive::level_origin(k, view.camera_xy, layout_);  // page-snapped: whole pages
+    origin_pages_x_[static_cast<std::size_t>(k)] = std::llround(o.x / page_ws(k));
+    origin_pages_y_[static_cast<std::size_t>(k)] = std::llround(o.y / page_ws(k));
+  }
+
+  VirtualMapStats stats;
+  stats.requested = static_cast<int>(requested.size());
+  stats.invalidated = std::exchange(invalidated_, 0);
+  // Coarse levels first, and within a level the pages nearest the camera: a full pool then leaves
+  // out fine pages far from the camera, and their pixels fall back to a coarser level that is there.
+  std::vector<adaptive::Page> order(requested.begin(), requested.end());
+  const auto from_centre = [c = layout_.pages_per_side - 1](const adaptive::Page& p) {
+    return (2 * p.x - c) * (2 * p.x - c) + (2 * p.y - c) * (2 * p.y - c);
+  };
+  std::stable_sort(order.begin(), order.end(), [&](const adaptive::Page& a, const adaptive::Page& b) {
+    return a.level != b.level ? a.level > b.level : from_centre(a) < from_centre(b);
+  });
+  // First what is cached, so that no page this frame asks for is evicted for another.
+  std::vector<Key> wanted;
+  for (const adaptive::Page& page : order) {
+    const Key key = key_of(page);
+    if (const auto it = resident_.find(key); it != resident_.end()) {
+      slots_[static_cast<std::size_t>(it->second)].last_frame = frame_;
+      ++stats.cached;
+    } else {
+      wanted.push_back(key);
+    }
+  }
+  std::vector<std::pair<int, Key>> to_draw;
+  for (const Key& key : wanted) {
+    // A free slot, else the least recently asked-for page that this frame does not ask for.
+    int chosen = -1;
+    for (int i = 0; i < pool_slots() && chosen < 0; ++i)
+      if (!slots_[static_cast<std::size_t>(i)].used) chosen = i;
+    if (chosen < 0) {
+      std::int64_t oldest = frame_;
+      for (int i = 0; i < pool_slots(); ++i)
+        if (slots_[static_cast<std::size_t>(i)].last_frame < oldest) oldest = slots_[static_cast<std::size_t>(i)].last_frame, chosen = i;
+      if (chosen >= 0) free_slot(chosen), ++stats.evicted;
+    }
+    if (chosen < 0) {
+      ++stats.missing;
+      continue;
+    }
+    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_};
+    resident_[key] = chosen;
+    to_draw.emplace_back(chosen, key);
+  }
+
+  if (!to_draw.empty()) {
+    fbo_.bind();
+    program_.use();
+    glEnable(GL_SCISSOR_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);  // thin planes and open meshes cast from both sides
+    glClearDepth(1.0);
+    for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes);
+    glDisable(GL_SCISSOR_TEST);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+  stats.drawn = static_cast<int>(to_draw.size());
+  stats.resident = static_cast<int>(resident_.size());
+  write_tables();
+  return stats;
+}
+
+void VirtualShadowMap::write_tables() {
+  const int pps = layout_.pages_per_side;
+  std::vector<std::int32_t> table(static_cast<std::size_t>(pps) * pps * layout_.levels, -1);
+  for (const auto& [key, slot] : resident_) {
+    const auto k = static_cast<std::size_t>(key.level);
+    const std::int64_t x = key.x - origin_pages_x_[k], y = key.y - origin_pages_y_[k];
+    if (x < 0 || y < 0 || x >= pps || y >= pps) continue;  // cached, outside this frame's window
+    table[(static_cast<std::size_t>(key.level) * pps + static_cast<std::size_t>(y)) * pps + static_cast<std::size_t>(x)] = slot;
+  }
+  glTextureSubImage2D(table_.id(), 0, 0, 0, pps, pps * layout_.levels, GL_RED_INTEGER, GL_INT, table.data());
+}
+
+int VirtualShadowMap::slot_of(const adaptive::Page& page) const {
+  if (page.level < 0 || page.level >= layout_.levels) return -1;
+  const auto it = resident_.find(key_of(page));
+  return it == resident_.end() ? -1 : it->second;
+}
+
+void VirtualShadowMap::bind(const gl::Program& program) const {
+  pool_.bind(contract::UNIT_VSM_POOL);
+  glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
+  table_.bind(contract::UNIT_VSM_TABLE);
+  glBindSampler(contract::UNIT_VSM_TABLE, 0);
+  program.set("u_vsm_light_view", view_.light_view);
+  std::vector<glm::vec2> origins;
+  for (int k = 0; k < layout_.levels; ++k) {
+    const adaptive::LightXY o = origin(k);
+    origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
+  }
+  program.set("u_vsm_origin", std::span<const glm::vec2>(origins));
+  program.set("u_vsm_texel0_ws", static_cast<float>(layout_.texel0_ws));
+  program.set("u_vsm_page_texels", layout_.page_texels);
+  program.set("u_vsm_pages_per_side", layout_.pages_per_side);
+  program.set("u_vsm_levels", layout_.levels);
+  program.set("u_vsm_pool_pages", pool_side_);
+  program.set("u_vsm_near_ws", view_.near_ws);
+  program.set("u_vsm_far_ws", view_.far_ws);
+}
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,118 @@
+#pragma once
+// The physical side of a virtual shadow map for the sun (issue 31's second part): one pool of
+// page slots (a 32-bit depth atlas), a page table per clipmap level, each page drawn with its own
+// caster culling, and a cache that keeps drawn pages across frames until the light, or a caster
+// over them, moves. Which pages a frame needs comes from adaptive/virtual_pages.h (by the rule or
+// by the footprint); shaders read depths through the tables with shaders/virtual_pages.glsl.
+//
+// Pages are cached by their place in light space (level, page column and row counted from the
+// light-space origin), so a page stays valid while the camera moves and the level windows scroll
+// over it. Within a frame, coarse levels are served first, and within a level the pages nearest
+// the camera: when the pool cannot hold every requested page, what is missing is fine pages far
+// from the camera, and a pixel falls back to the coarser level that covers it
+// (vsm_resident_level). Pages not asked for stay cached until their slot is needed (least recently
+// asked for first).
+#include <cstdint>
+#include <map>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <penumbra/adaptive/virtual_pages.h>
+#include <penumbra/gl/objects.h>
+#include <penumbra/scene/gpu_mesh.h>
+#include <penumbra/scene/scene.h>
+
+namespace penumbra::shadows {
+
+// Where the clipmap stands this frame.
+struct VirtualMapView {
+  glm::mat4 light_view{1};        // world -> light space: x, y across the light, -z along it
+  float near_ws = 0, far_ws = 1;  // the light-space depth range every page holds (distances along -z)
+  adaptive::LightXY camera_xy;    // the camera in light space: each level's window is centred on it
+};
+
+// A light view for a sun whose light travels along `direction`: light-space x and y span the plane
+// across it (the same basis as the references' light samples), z points back toward the sun.
+glm::mat4 sun_light_view(const glm::vec3& direction);
+// The light-space depth range (distances along -z) that holds the world box `bounds`, widened by
+// 1 % and at least 1 cm on each side.
+void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, float& near_ws, float& far_ws);
+
+struct VirtualMapStats {
+  int requested = 0;    // pages the frame asked for
+  int cached = 0;       // of those, already resident and valid: not drawn
+  int drawn = 0;        // pages drawn this frame
+  int missing = 0;      // asked for, but every slot held a page this frame also asked for
+  int evicted = 0;      // resident pages dropped to make room this frame
+  int invalidated = 0;  // resident pages dropped since the last update (light or caster moved)
+  int resident = 0;     // pages in the pool after the update (asked for or kept from earlier frames)
+  std::uint64_t triangles = 0;  // drawn into the pages
+};
+
+class VirtualShadowMap {
+ public:
+  // pool_pages_per_side² slots of layout.page_texels² texels. Throws std::invalid_argument for a
+  // layout with more than VSM_MAX_LEVELS levels or non-positive sizes, std::runtime_error (naming
+  // the pool) when GL cannot allocate it.
+  VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side);
+
+  const adaptive::VirtualMapLayout& layout() const { return layout_; }
+  int pool_pages_per_side() const { return pool_side_; }
+  int pool_slots() const { return pool_side_ * pool_side_; }
+
+  // Makes the `requested` pages (window-relative, as adaptive::mark_pages gives them for
+  // view.camera_xy) resident, coarse levels first, drawing those not cached, and writes the page
+  // tables. A view whose light_view or depth range differs from the last one invalidates every page.
+  // Leaves the pool's framebuffer unbound and the viewport and scissor test changed.
+  VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
+                         const scene::GpuMeshes& meshes);
+  // Drops every page (the light moved).
+  void invalidate_all();
+  // Drops the pages over the world box `bounds` (a caster moved: call with its old and its new
+  // bounds): those whose light-space square meets the box's light-space footprint, at any depth.
+  void invalidate(const scene::Aabb& bounds);
+
+  // Binds the pool and the tables to UNIT_VSM_POOL and UNIT_VSM_TABLE and sets virtual_pages.glsl's
+  // uniforms of `program` for the last update's view.
+  void bind(const gl::Program& program) const;
+  // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
+  int slot_of(const adaptive::Page& page) const;
+  // Lower corner of level `level`'s window in light space, for the last update's view.
+  adaptive::LightXY origin(int level) const;
+
+ private:
+  // A page by its place in light space: level, then column and row from the light-space origin.
+  struct Key {
+    int level = 0;
+    std::int64_t x = 0, y = 0;
+    bool operator<(const Key& o) const { return std::tie(level, x, y) < std::tie(o.level, o.x, o.y); }
+  };
+  struct Slot {
+    bool used = false;
+    Key key;
+    std::int64_t last_frame = -1;  // the last update that asked for it
+  };
+  Key key_of(const adaptive::Page& page) const;
+  double page_ws(int level) const;
+  void free_slot(int slot);
+  std::uint64_t draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes) const;
+  void write_tables();
+
+  adaptive::VirtualMapLayout layout_;
+  int pool_side_ = 0;
+  gl::Texture pool_, table_;
+  gl::Framebuffer fbo_;
+  gl::Program program_;
+  std::vector<Slot> slots_;
+  std::map<Key, int> resident_;
+  std::vector<std::int64_t> origin_pages_x_, origin_pages_y_;  // each level's window corner, in pages
+  VirtualMapView view_;
+  bool has_view_ = false;
+  std::int64_t frame_ = 0;
+  int invalidated_ = 0;
+};
+
+}  // namespace penumbra::shadows

@@ -1,0 +1,232 @@
+// The virtual shadow map's pool, page tables and cache (shadows/virtual_shadow_map.h) on the demo
+// scene: a depth read through the tables (virtual_pages.glsl) equals the same texel of a full map
+// of its level drawn directly, on every level and in slots at the pool's edges; a second frame
+// draws nothing; a moved camera draws only the pages its windows gained; a moved light or caster
+// redraws what it touched; a pool too small keeps the coarse levels and counts what is missing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "gl/embedded_files.h"
+#include "gl/shader_library.h"
+#include "gl_test_env.h"
+#include "shadows/virtual_shadow_map.h"
+#include "shaders/shadow_contract.h"
+
+namespace penumbra {
+namespace {
+
+using adaptive::Page;
+using adaptive::VirtualMapLayout;
+using shadows::VirtualShadowMap;
+
+// 3 levels of 8 × 8 pages of 32² texels, level 0's texel 1/32 m: windows of 8, 16 and 32 m (the
+// demo's 20 m ground lies in level 2's). Binary fractions: windows move by whole pages exactly.
+VirtualMapLayout small_layout() {
+  VirtualMapLayout l;
+  l.levels = 3;
+  l.texel0_ws = 1.0 / 32;
+  l.page_texels = 32;
+  l.pages_per_side = 8;
+  return l;
+}
+
+std::set<Page> every_page(const VirtualMapLayout& l) {
+  std::set<Page> pages;
+  for (int k = 0; k < l.levels; ++k)
+    for (int x = 0; x < l.pages_per_side; ++x)
+      for (int y = 0; y < l.pages_per_side; ++y) pages.insert({k, x, y});
+  return pages;
+}
+
+struct Fixture {
+  scene::Scene scene = scene::make_builtin_scene("demo");
+  scene::GpuMeshes meshes{scene.objects};
+  shadows::VirtualMapView view;
+  Fixture() {
+    view.light_view = shadows::sun_light_view(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)));
+    shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
+    view.camera_xy = {0, 0};
+  }
+};
+
+// What virtual_pages.glsl reads, texel by texel over level `level`'s window: the depth, or -1 where
+// vsm_fetch finds nothing; with `resident`, the level vsm_resident_level falls back to instead.
+std::vector<float> read_through_tables(const VirtualShadowMap& vsm, int level, bool resident = false) {
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& f : embedded::shaders()) files.emplace_back(std::string(f.name), std::string(f.text));
+  files.emplace_back("probe.comp", R"(
+#include "virtual_pages.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(binding = 0, r32f) uniform writeonly image2D u_out;
+uniform int u_level;
+uniform bool u_resident;
+void main() {
+  const ivec2 t = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(t, imageSize(u_out)))) return;
+  float depth;
+  float v = vsm_fetch(u_level, t, depth) ? depth : -1.0;
+  if (u_resident) {  // the texel's centre in light space, then the finest resident level there
+    const vec2 xy = u_vsm_origin[u_level] + (vec2(t) + 0.5) * vsm_texel_ws(u_level);
+    v = float(vsm_resident_level(u_level, xy));
+  }
+  imageStore(u_out, t, vec4(v));
+})");
+  const gl::Program p = gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, "probe.comp"}});
+  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
+  const gl::Texture out({GL_R32F, side, side, 1}, "probe output");
+  vsm.bind(p);
+  p.set("u_level", level);
+  p.set("u_resident", resident);
+  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  p.dispatch_covering(side, side);
+  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  std::vector<float> v(static_cast<std::size_t>(side) * side);
+  glGetTextureImage(out.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  return v;
+}
+
+// Level `level`'s whole window drawn directly into one map of its size (no pages, no culling).
+std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& vsm, int level) {
+  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
+  const gl::Texture depth({GL_DEPTH_COMPONENT32F, side, side, 1}, "full level map");
+  const gl::Framebuffer::Attachment a{&depth, GL_DEPTH_ATTACHMENT};
+  const gl::Framebuffer fbo(std::span(&a, 1), "full level map");
+  const gl::Program p = gl::ShaderLibrary().program({{GL_VERTEX_SHADER, "vsm_page.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
+  const adaptive::LightXY o = vsm.origin(level);
+  const auto extent = static_cast<float>(side * vsm.layout().texel0_ws * std::ldexp(1.0, level));
+  const auto x0 = static_cast<float>(o.x), y0 = static_cast<float>(o.y);
+  p.set("u_clip_from_world", glm::ortho(x0, x0 + extent, y0, y0 + extent, f.view.near_ws, f.view.far_ws) * f.view.light_view);
+  fbo.bind();
+  glViewport(0, 0, side, side);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_CULL_FACE);
+  glClearDepth(1.0);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  p.use();
+  for (std::size_t i = 0; i < f.meshes.size(); ++i) {
+    p.set("u_model", f.scene.objects[i].model);
+    f.meshes[i].draw();
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  std::vector<float> v(static_cast<std::size_t>(side) * side);
+  glGetTextureImage(depth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  return v;
+}
+
+TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 14);  // 196 slots for 192 pages: slots in the pool's last row and column are used
+  const auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.requested, 192);
+  EXPECT_EQ(stats.drawn, 192);
+  EXPECT_EQ(stats.missing, 0);
+  EXPECT_EQ(stats.resident, 192);
+  std::set<int> slots;
+  for (const Page& p : every_page(layout)) slots.insert(vsm.slot_of(p));
+  EXPECT_EQ(slots.size(), 192u);
+  EXPECT_TRUE(slots.count(13) && slots.count(14 * 13)) << "the pool's last column and last row";
+  for (int level = 0; level < layout.levels; ++level) {
+    SCOPED_TRACE(level);
+    const std::vector<float> paged = read_through_tables(vsm, level), direct = full_map(f, vsm, level);
+    ASSERT_EQ(paged.size(), direct.size());
+    std::size_t differ = 0, covered = 0;
+    for (std::size_t i = 0; i < paged.size(); ++i) {
+      ASSERT_GE(paged[i], 0.0f) << "texel " << i << " not found through the tables";
+      differ += std::abs(paged[i] - direct[i]) > 1e-5f;
+      covered += direct[i] < 1.0f;
+    }
+    EXPECT_GT(covered, paged.size() / 4) << "the scene is in the window";
+    // The same triangles at the same sample points; a page's matrix differs from the full map's by
+    // its offset, so a sample lying exactly on an edge may go either way.
+    EXPECT_LE(differ, paged.size() / 1000) << differ << " of " << paged.size() << " texels differ";
+  }
+}
+
+TEST(VirtualMap, PagesStayCachedAndOnlyWhatChangedIsDrawn) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 14);
+  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  // The same view again: nothing drawn.
+  auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.drawn, 0);
+  EXPECT_EQ(stats.cached, 192);
+  EXPECT_EQ(stats.triangles, 0u);
+  // The camera moves 4 m (a page of level 2): the windows scroll by 4, 2 and 1 pages, gaining
+  // 32 + 16 + 8 pages; the others are where they were, in light space, and stay.
+  f.view.camera_xy = {4, 0};
+  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.drawn, 56);
+  EXPECT_EQ(stats.cached, 136);
+  EXPECT_EQ(stats.evicted, 52) << "4 free slots, then the pages the windows left";
+  EXPECT_EQ(stats.missing, 0);
+  const std::vector<float> paged = read_through_tables(vsm, 1), direct = full_map(f, vsm, 1);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < paged.size(); ++i) differ += !(std::abs(paged[i] - direct[i]) <= 1e-5f);
+  EXPECT_LE(differ, paged.size() / 1000) << "after scrolling, the tables still point at the right depths";
+  // A caster moves: only the pages over its old (or new) bounds are redrawn.
+  const scene::Object& box = f.scene.objects[1];
+  vsm.invalidate(box.mesh->bounds().transformed(box.model));
+  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_GT(stats.invalidated, 0);
+  EXPECT_EQ(stats.drawn, stats.invalidated);
+  EXPECT_LT(stats.drawn, 192 / 4) << "a box touches a few pages per level";
+  // The light moves: every page is redrawn (and the 4 the windows left, still cached, dropped).
+  EXPECT_EQ(stats.resident, 196);
+  f.view.light_view = shadows::sun_light_view(glm::normalize(glm::vec3(0.3f, -1.0f, -0.4f)));
+  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.drawn, 192);
+  EXPECT_EQ(stats.invalidated, 196);
+  EXPECT_EQ(stats.resident, 192);
+}
+
+TEST(VirtualMap, APoolTooSmallKeepsTheCoarseLevelsAndCountsWhatIsMissing) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 3);  // 9 slots for 192 pages
+  const auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.drawn, 9);
+  EXPECT_EQ(stats.missing, 183);
+  EXPECT_EQ(stats.resident, 9);
+  std::set<std::pair<int, int>> coarse;
+  for (const Page& p : every_page(layout))
+    if (vsm.slot_of(p) >= 0) {
+      EXPECT_EQ(p.level, 2) << "the coarsest level is served first";
+      coarse.insert({p.x, p.y});
+    }
+  EXPECT_TRUE(coarse.count({3, 3}) && coarse.count({4, 4}) && coarse.count({3, 4}) && coarse.count({4, 3})) << "nearest the camera first";
+  // Level 1's texels (a 16 m window) fall back to level 2 where its pages are there, and find
+  // nothing elsewhere: never a depth from a slot the table does not give.
+  const std::vector<float> level = read_through_tables(vsm, 1, true);
+  std::size_t fallback = 0, none = 0;
+  for (float v : level) {
+    EXPECT_TRUE(v == 2.0f || v == -1.0f) << v;
+    fallback += v == 2.0f, none += v == -1.0f;
+  }
+  EXPECT_GT(fallback, level.size() / 4);
+  EXPECT_GT(none, 0u);
+}
+
+TEST(VirtualMap, BadLayoutsAreRefused) {
+  VirtualMapLayout l = small_layout();
+  l.levels = shadows::contract::VSM_MAX_LEVELS + 1;
+  EXPECT_THROW(VirtualShadowMap(l, 4), std::invalid_argument);
+  l = small_layout();
+  EXPECT_THROW(VirtualShadowMap(l, 0), std::invalid_argument);
+  Fixture f;
+  VirtualShadowMap vsm(small_layout(), 4);
+  EXPECT_THROW(vsm.update({{0, 8, 0}}, f.view, f.scene, f.meshes), std::invalid_argument) << "page outside the window";
+}
+
+}  // namespace
+}  // namespace penumbra
