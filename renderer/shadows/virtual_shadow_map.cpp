@@ -1,6 +1,7 @@
 #include "shadows/virtual_shadow_map.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <span>
 #include <stdexcept>
@@ -217,25 +218,75 @@ int VirtualShadowMap::slot_of(const adaptive::Page& page) const {
   return it == resident_.end() ? -1 : it->second;
 }
 
+void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view) {
+  program.set("u_vsm_light_view", view.light_view);
+  std::vector<glm::vec2> origins;
+  for (int k = 0; k < layout.levels; ++k) {
+    const adaptive::LightXY o = adaptive::level_origin(k, view.camera_xy, layout);
+    origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
+  }
+  program.set("u_vsm_origin", std::span<const glm::vec2>(origins));
+  program.set("u_vsm_texel0_ws", static_cast<float>(layout.texel0_ws));
+  program.set("u_vsm_page_texels", layout.page_texels);
+  program.set("u_vsm_pages_per_side", layout.pages_per_side);
+  program.set("u_vsm_levels", layout.levels);
+  program.set("u_vsm_near_ws", view.near_ws);
+  program.set("u_vsm_far_ws", view.far_ws);
+}
+
 void VirtualShadowMap::bind(const gl::Program& program) const {
   pool_.bind(contract::UNIT_VSM_POOL);
   glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
   table_.bind(contract::UNIT_VSM_TABLE);
   glBindSampler(contract::UNIT_VSM_TABLE, 0);
-  program.set("u_vsm_light_view", view_.light_view);
-  std::vector<glm::vec2> origins;
-  for (int k = 0; k < layout_.levels; ++k) {
-    const adaptive::LightXY o = origin(k);
-    origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
-  }
-  program.set("u_vsm_origin", std::span<const glm::vec2>(origins));
-  program.set("u_vsm_texel0_ws", static_cast<float>(layout_.texel0_ws));
-  program.set("u_vsm_page_texels", layout_.page_texels);
-  program.set("u_vsm_pages_per_side", layout_.pages_per_side);
-  program.set("u_vsm_levels", layout_.levels);
+  set_virtual_page_uniforms(program, layout_, view_);
   program.set("u_vsm_pool_pages", pool_side_);
-  program.set("u_vsm_near_ws", view_.near_ws);
-  program.set("u_vsm_far_ws", view_.far_ws);
+}
+
+PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layout) {
+  if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
+      !(layout.texel0_ws > 0))
+    throw std::invalid_argument("page marker: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
+                                ", page_texels, pages_per_side and texel0_ws positive");
+  program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "vsm_mark.comp"}});
+  const std::size_t bits = static_cast<std::size_t>(layout.levels) * layout.pages_per_side * layout.pages_per_side;
+  words_ = (bits + 31) / 32;
+  marks_ = gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+}
+
+adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                                      double radius_ws, const adaptive::MarkOptions& options) const {
+  if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
+  const bool perspective = camera.projection == scene::Camera::Projection::perspective;
+  set_virtual_page_uniforms(program_, layout_, view);
+  program_.set("u_mark_camera_position", camera.position);
+  program_.set("u_mark_camera_forward", glm::normalize(camera.target - camera.position));
+  program_.set("u_perspective", perspective);
+  program_.set("u_footprint_per_depth", perspective ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / static_cast<float>(height_px)
+                                                    : camera.ortho_height_ws / static_cast<float>(height_px));
+  program_.set("u_radius_ws", static_cast<float>(radius_ws));
+  program_.set("u_c_texels", static_cast<float>(options.c_texels));
+  program_.set("u_min_texel_px", static_cast<float>(options.min_texel_px));
+  program_.set("u_footprint_only", options.marking == adaptive::Marking::footprint);
+  const std::uint32_t zero = 0;
+  glClearNamedBufferData(marks_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks_.id());
+  glBindImageTexture(0, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  program_.dispatch_covering(surface.desc().width, surface.desc().height);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
+  glGetNamedBufferSubData(marks_.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
+
+  adaptive::MarkResult out;
+  for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(k)]);
+  out.unmarked = m[contract::VSM_MAX_LEVELS];
+  const int n = layout_.pages_per_side;
+  for (std::size_t w = 0; w < words_; ++w)
+    for (std::uint32_t word = m[contract::VSM_MAX_LEVELS + 1 + w]; word != 0; word &= word - 1) {
+      const auto bit = static_cast<int>(w * 32 + static_cast<std::size_t>(std::countr_zero(word)));
+      out.pages.insert({bit / (n * n), bit % n, (bit / n) % n});
+    }
+  return out;
 }
 
 }  // namespace penumbra::shadows

@@ -52,6 +52,28 @@ struct VirtualMapStats {
   std::uint64_t triangles = 0;  // drawn into the pages
 };
 
+// virtual_pages.glsl's uniforms for `layout` seen from `view` (the level windows around its camera).
+void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
+
+// Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
+// rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
+// float: a pixel exactly on a level's or a page's boundary may land on the other side).
+class PageMarker {
+ public:
+  explicit PageMarker(const adaptive::VirtualMapLayout& layout);
+  // `surface`: RGBA32F, world xyz and w > 0 where a surface is (metrics::SurfaceProbe's image, or a
+  // G-buffer's positions) of an image `height_px` rows high seen by `camera`; `radius_ws` the
+  // filter's world radius (0: none).
+  adaptive::MarkResult mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                            double radius_ws, const adaptive::MarkOptions& options) const;
+
+ private:
+  adaptive::VirtualMapLayout layout_;
+  gl::Program program_;
+  gl::Buffer marks_;
+  std::size_t words_ = 0;  // page bits, in 32-bit words
+};
+
 class VirtualShadowMap {
  public:
   // pool_pages_per_side² slots of layout.page_texels² texels. Throws std::invalid_argument for a

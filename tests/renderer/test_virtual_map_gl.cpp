@@ -5,7 +5,9 @@
 // redraws what it touched; a pool too small keeps the coarse levels and counts what is missing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <set>
 #include <string>
 #include <utility>
@@ -16,6 +18,7 @@
 #include "gl/embedded_files.h"
 #include "gl/shader_library.h"
 #include "gl_test_env.h"
+#include "metrics/surface_probe.h"
 #include "shadows/virtual_shadow_map.h"
 #include "shaders/shadow_contract.h"
 
@@ -215,6 +218,57 @@ TEST(VirtualMap, APoolTooSmallKeepsTheCoarseLevelsAndCountsWhatIsMissing) {
   }
   EXPECT_GT(fallback, level.size() / 4);
   EXPECT_GT(none, 0u);
+}
+
+// Marking on the GPU against adaptive::mark_pages on the CPU, by the rule and by the footprint,
+// on the town's street (frame 120) at 320 × 180: the same pages and the same pixels per level but
+// for pixels exactly on a boundary (float against double).
+TEST(VirtualMap, MarkingOnTheGpuEqualsTheCpuReference) {
+  scene::Scene s = scene::make_builtin_scene("outdoor");
+  const scene::Camera camera = s.camera_path.at(s.camera, 120);
+  const int w = 320, h = 180;
+  metrics::SurfaceProbe probe(s);
+  const io::ImageF surface = probe.render(camera, w, h);
+  gl::Texture texture({GL_RGBA32F, w, h, 1}, "surface");
+  glTextureSubImage2D(texture.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, surface.pixels.data());
+  shadows::VirtualMapView view;
+  view.light_view = shadows::sun_light_view(s.light.direction);
+  shadows::light_depth_range(view.light_view, s.bounds(), view.near_ws, view.far_ws);
+  const glm::vec3 c = glm::vec3(view.light_view * glm::vec4(camera.position, 1));
+  view.camera_xy = {c.x, c.y};
+  const adaptive::VirtualMapLayout layout;  // 12 levels from 5 mm, 64² pages of 128² texels
+  const double radius = 0.12;
+  const glm::vec3 forward = glm::normalize(camera.target - camera.position);
+  const double per_px = 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / h;
+  std::vector<adaptive::PixelRequest> requests;
+  for (std::size_t p = 0; p < surface.pixels.size() / 4; ++p) {
+    if (surface.pixels[4 * p + 3] <= 0) continue;
+    const glm::vec3 world(surface.pixels[4 * p], surface.pixels[4 * p + 1], surface.pixels[4 * p + 2]);
+    const glm::vec3 l = glm::vec3(view.light_view * glm::vec4(world, 1));
+    requests.push_back({{l.x, l.y}, std::max(0.0, static_cast<double>(glm::dot(world - camera.position, forward))) * per_px, radius});
+  }
+  ASSERT_GT(requests.size(), static_cast<std::size_t>(w * h / 2));
+  const shadows::PageMarker marker(layout);
+  for (const adaptive::Marking m : {adaptive::Marking::rule, adaptive::Marking::footprint}) {
+    SCOPED_TRACE(std::string(adaptive::to_string(m)));
+    adaptive::MarkOptions options;
+    options.marking = m;
+    const adaptive::MarkResult cpu = adaptive::mark_pages(requests, view.camera_xy, layout, options);
+    const adaptive::MarkResult gpu = marker.mark(texture, camera, h, view, radius, options);
+    std::vector<Page> only_one;
+    std::set_symmetric_difference(cpu.pages.begin(), cpu.pages.end(), gpu.pages.begin(), gpu.pages.end(), std::back_inserter(only_one));
+    EXPECT_GT(cpu.pages.size(), 50u);
+    EXPECT_LE(only_one.size(), cpu.pages.size() / 100) << only_one.size() << " of " << cpu.pages.size() << " pages differ";
+    ASSERT_EQ(gpu.pixels_per_level.size(), cpu.pixels_per_level.size());
+    std::int64_t moved = 0;
+    for (std::size_t k = 0; k < cpu.pixels_per_level.size(); ++k) moved += std::abs(gpu.pixels_per_level[k] - cpu.pixels_per_level[k]);
+    EXPECT_LE(moved, static_cast<std::int64_t>(requests.size() / 200)) << "pixels on another level";
+    const std::string name(adaptive::to_string(m));
+    ::testing::Test::RecordProperty(name + "_pages_cpu", static_cast<int>(cpu.pages.size()));
+    ::testing::Test::RecordProperty(name + "_pages_differ", static_cast<int>(only_one.size()));
+    ::testing::Test::RecordProperty(name + "_pixels_moved", static_cast<int>(moved));
+    EXPECT_EQ(gpu.unmarked, cpu.unmarked);
+  }
 }
 
 TEST(VirtualMap, BadLayoutsAreRefused) {
