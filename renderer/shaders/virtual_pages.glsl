@@ -52,3 +52,31 @@ int vsm_resident_level(int level, vec2 xy) {
     if (vsm_fetch(k, vsm_texel(k, xy), depth)) return k;
   return -1;
 }
+
+// Box-filtered PCF at `level` through the tables: the mean of the nearest-texel depth test
+// (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
+// part of it the square covers, as pcf_grid on a single map of the level, so a square across
+// page borders reads each texel from its own page: no seams. `found` is false (and the result 1)
+// when a texel under the square is not resident or lies outside the level's window.
+float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
+  found = true;
+  const float t = vsm_texel_ws(level);
+  const vec2 p = (xy - u_vsm_origin[level]) / t;  // texel coordinates in the level's window
+  const float r = max(radius_ws / t, 1e-4);
+  const vec2 lo = p - r, hi = p + r;
+  const ivec2 first = ivec2(floor(lo)), last = ivec2(ceil(hi)) - 1;
+  float sum = 0.0;
+  for (int j = first.y; j <= last.y; ++j) {
+    const float wy = max(0.0, min(float(j + 1), hi.y) - max(float(j), lo.y));
+    for (int i = first.x; i <= last.x; ++i) {
+      const float wx = max(0.0, min(float(i + 1), hi.x) - max(float(i), lo.x));
+      float d;
+      if (!vsm_fetch(level, ivec2(i, j), d)) {
+        found = false;
+        return 1.0;
+      }
+      sum += wx * wy * (depth <= d ? 1.0 : 0.0);
+    }
+  }
+  return sum / (4.0 * r * r);
+}

@@ -155,6 +155,85 @@ TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
   }
 }
 
+// PCF through the tables (vsm_pcf_box) against the same box filter on a single map of the level
+// (the full map drawn directly): squares of 2.5 texels' radius at 128 × 128 points over level 1's
+// window, a fifth of which cross a page border, with the receiver just behind the surface there.
+TEST(VirtualMap, PcfAcrossPageBordersEqualsASingleMapOfTheLevel) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 14);
+  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  const int level = 1, side = layout.page_texels * layout.pages_per_side;
+  const std::vector<float> direct = full_map(f, vsm, level);
+  const gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
+  glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& e : embedded::shaders()) files.emplace_back(std::string(e.name), std::string(e.text));
+  files.emplace_back("pcf.comp", R"(
+#include "virtual_pages.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(binding = 0, rg32f) uniform writeonly image2D u_out;  // paged, single
+layout(binding = 11) uniform sampler2D u_single;
+uniform int u_level;
+uniform float u_radius_texels;
+void main() {
+  const ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(q, imageSize(u_out)))) return;
+  const int side = u_vsm_page_texels * u_vsm_pages_per_side;
+  const float t = vsm_texel_ws(u_level);
+  const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));  // texel coordinates, off-centre
+  const float receiver = texelFetch(u_single, ivec2(p), 0).r + 0.002;     // just behind the surface there
+  bool found;
+  const float paged = vsm_pcf_box(u_level, u_vsm_origin[u_level] + p * t, receiver, u_radius_texels * t, found);
+  // The reference: the same square over the single map, texel by texel.
+  const float r = u_radius_texels;
+  const vec2 lo = p - r, hi = p + r;
+  float sum = 0.0;
+  for (int j = int(floor(lo.y)); j <= int(ceil(hi.y)) - 1; ++j)
+    for (int i = int(floor(lo.x)); i <= int(ceil(hi.x)) - 1; ++i) {
+      const float w = max(0.0, min(float(i + 1), hi.x) - max(float(i), lo.x)) * max(0.0, min(float(j + 1), hi.y) - max(float(j), lo.y));
+      const bool inside = i >= 0 && j >= 0 && i < side && j < side;
+      sum += w * (inside && receiver <= texelFetch(u_single, ivec2(i, j), 0).r ? 1.0 : 0.0);
+    }
+  const bool whole = all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(side)));
+  imageStore(u_out, q, vec4(found ? paged : -1.0, whole ? sum / (4.0 * r * r) : -1.0, 0.0, 0.0));
+})");
+  const gl::Program p = gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, "pcf.comp"}});
+  const int n = 128;
+  const gl::Texture out({GL_RG32F, n, n, 1}, "pcf output");
+  vsm.bind(p);
+  p.set("u_level", level);
+  p.set("u_radius_texels", 2.5f);
+  single.bind(11);
+  glBindSampler(11, 0);
+  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+  p.dispatch_covering(n, n);
+  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  std::vector<float> v(2 * static_cast<std::size_t>(n) * n);
+  glGetTextureImage(out.id(), 0, GL_RG, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  int compared = 0, across = 0, partial = 0;
+  float worst = 0;
+  for (int q = 0; q < n * n; ++q) {
+    const float paged = v[2 * q], single_map = v[2 * q + 1];
+    if (single_map < 0) {  // the square leaves the window: the tables say so instead of guessing
+      EXPECT_EQ(paged, -1.0f) << "point " << q;
+      continue;
+    }
+    ASSERT_GE(paged, 0.0f) << "point " << q << ": a texel under the square was not found";
+    ++compared;
+    worst = std::max(worst, std::abs(paged - single_map));
+    partial += single_map > 0.01f && single_map < 0.99f;
+    const float x = (static_cast<float>(q % n) + 0.37f) * static_cast<float>(side) / n, y = (static_cast<float>(q / n) + 0.37f) * static_cast<float>(side) / n;
+    const auto crosses = [&](float c) { return std::floor((c - 2.5f) / 32) != std::floor((c + 2.5f) / 32); };
+    across += crosses(x) || crosses(y);
+  }
+  EXPECT_GT(compared, n * n * 9 / 10);
+  EXPECT_GT(across, compared / 6) << "squares across a page border";
+  EXPECT_GT(partial, compared / 50) << "penumbrae, not only 0 and 1";
+  EXPECT_LE(worst, 1.0f / 255) << "largest difference " << worst;
+  ::testing::Test::RecordProperty("largest_difference_x1e6", static_cast<int>(worst * 1e6f));
+}
+
 TEST(VirtualMap, PagesStayCachedAndOnlyWhatChangedIsDrawn) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
