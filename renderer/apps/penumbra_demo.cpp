@@ -56,6 +56,7 @@
 #include "metrics/surface_probe.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
+#include "shadows/virtual_shadow_map.h"
 #include "stats/summary.h"
 
 #if PENUMBRA_DEMO_GUI
@@ -280,8 +281,9 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
 // the same path, each pixel's surface asks for the coarsest clipmap level its filter allows (the
 // rule: texel <= max(r / c, pixel footprint)) or that its footprint alone allows (what engines'
 // virtual shadow maps use), plus the pages its filter reaches; the pages are counted per frame.
-// Nothing is drawn into pages yet: this measures how many pages (and how much of a page pool)
-// the rule's marking would need against the footprint's.
+// Then the pages are drawn into a virtual shadow map's pool (shadows/virtual_shadow_map.h, 1024
+// slots: 64 MB), once per frame from nothing (the work of a frame without a cache) and once along
+// the path with the cache (what a walking camera redraws), each timed with glFinish around it.
 int run_pages(const Options& opt, shadows::ShadowSettings base) {
   io::StagedDirectory out(opt.output, "pages.json");
   gl::HeadlessContext ctx;
@@ -291,6 +293,11 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
   metrics::SurfaceProbe probe(scene);
+  const scene::GpuMeshes meshes(scene.objects);
+  shadows::VirtualMapView view;
+  view.light_view = shadows::sun_light_view(scene.light.direction);
+  shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
+  constexpr int kPoolSide = 32;
   glm::vec3 e1, e2;  // light space across the sun, as the references sample it
   metrics::light_basis(scene.light.direction, e1, e2);
   auto light_xy = [&](const glm::vec3& p) { return adaptive::LightXY{glm::dot(p, e1), glm::dot(p, e2)}; };
@@ -299,13 +306,16 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   nlohmann::json report;
   report["scene"] = scene.name;
   report["image_px"] = {opt.width, opt.height};
+  report["pool_slots"] = kPoolSide * kPoolSide;
+  report["timing"] = "wall clock around the update with glFinish";
   report["layout"] = {{"levels", layout.levels}, {"texel0_ws", layout.texel0_ws}, {"page_texels", layout.page_texels},
                       {"pages_per_side", layout.pages_per_side}};
   std::printf("penumbra-demo --pages: %s at %dx%d, %zu frames; clipmap of %d levels, level 0 texel %g ws, pages of %d² texels, "
               "%d² pages per level\n",
               scene.name.c_str(), opt.width, opt.height, plan.frames.size(), layout.levels, layout.texel0_ws, layout.page_texels,
               layout.pages_per_side);
-  std::printf("%-6s %6s %12s %12s %8s %12s %12s\n", "tech", "frame", "pages rule", "footprint", "ratio", "MB rule", "MB footprint");
+  std::printf("%-6s %6s %12s %12s %8s %12s %12s %16s %16s %14s\n", "tech", "frame", "pages rule", "footprint", "ratio", "MB rule",
+              "MB footprint", "ms draw rule", "ms draw fp", "cached drawn");
   for (const std::string& name : opt.techniques) {
     shadows::ShadowSettings s = base;
     s.technique = shadows::technique_from_string(name);
@@ -322,6 +332,21 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     footprint.marking = adaptive::Marking::footprint;
     nlohmann::json t = {{"technique", name}, {"radius_ws", radius}, {"c", rule.c_texels}, {"min_texel_px", rule.min_texel_px}};
     std::vector<double> ratios;
+    // Drawn from nothing each frame (uncached), and along the path keeping pages (cached), per marking.
+    shadows::VirtualShadowMap uncached(layout, kPoolSide), cached_rule(layout, kPoolSide), cached_footprint(layout, kPoolSide);
+    const auto timed_update = [&](shadows::VirtualShadowMap& vsm, const adaptive::MarkResult& marks, double& ms) {
+      glFinish();
+      const double t0 = now_ms();
+      const shadows::VirtualMapStats st = vsm.update(marks.pages, view, scene, meshes);
+      glFinish();
+      ms = now_ms() - t0;
+      return st;
+    };
+    const auto stats_json = [](const shadows::VirtualMapStats& st, double ms) {
+      return nlohmann::json{{"requested", st.requested}, {"cached", st.cached},     {"drawn", st.drawn},
+                            {"missing", st.missing},     {"evicted", st.evicted},   {"resident", st.resident},
+                            {"triangles", st.triangles}, {"update_ms", ms}};
+    };
     for (const demo::PathFrame& pf : plan.frames) {
       const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
       const io::ImageF surface = probe.render(camera, opt.width, opt.height);
@@ -340,9 +365,18 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
       const adaptive::MarkResult by_footprint = adaptive::mark_pages(requests, light_xy(camera.position), layout, footprint);
       const double ratio = by_rule.pages.empty() ? 0.0 : static_cast<double>(by_footprint.pages.size()) / static_cast<double>(by_rule.pages.size());
       ratios.push_back(ratio);
-      std::printf("%-6s %6d %12zu %12zu %7.2fx %12.1f %12.1f\n", name.c_str(), pf.frame, by_rule.pages.size(), by_footprint.pages.size(),
-                  ratio, static_cast<double>(by_rule.pages.size()) * kPageBytes / 1048576.0,
-                  static_cast<double>(by_footprint.pages.size()) * kPageBytes / 1048576.0);
+      view.camera_xy = light_xy(camera.position);
+      double ms_rule = 0, ms_footprint = 0, ms_cached_rule = 0, ms_cached_footprint = 0;
+      uncached.invalidate_all();
+      const shadows::VirtualMapStats draw_rule = timed_update(uncached, by_rule, ms_rule);
+      uncached.invalidate_all();
+      const shadows::VirtualMapStats draw_footprint = timed_update(uncached, by_footprint, ms_footprint);
+      const shadows::VirtualMapStats walk_rule = timed_update(cached_rule, by_rule, ms_cached_rule);
+      const shadows::VirtualMapStats walk_footprint = timed_update(cached_footprint, by_footprint, ms_cached_footprint);
+      std::printf("%-6s %6d %12zu %12zu %7.2fx %12.1f %12.1f %16.1f %16.1f %7d/%-6d\n", name.c_str(), pf.frame, by_rule.pages.size(),
+                  by_footprint.pages.size(), ratio, static_cast<double>(by_rule.pages.size()) * kPageBytes / 1048576.0,
+                  static_cast<double>(by_footprint.pages.size()) * kPageBytes / 1048576.0, ms_rule, ms_footprint, walk_rule.drawn,
+                  walk_rule.requested);
       t["frames"].push_back({{"path_frame", pf.frame},
                              {"pixels", requests.size()},
                              {"pages_rule", by_rule.pages.size()},
@@ -352,7 +386,11 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
                              {"pixels_per_level_rule", by_rule.pixels_per_level},
                              {"pixels_per_level_footprint", by_footprint.pixels_per_level},
                              {"unmarked_rule", by_rule.unmarked},
-                             {"unmarked_footprint", by_footprint.unmarked}});
+                             {"unmarked_footprint", by_footprint.unmarked},
+                             {"uncached_rule", stats_json(draw_rule, ms_rule)},
+                             {"uncached_footprint", stats_json(draw_footprint, ms_footprint)},
+                             {"cached_rule", stats_json(walk_rule, ms_cached_rule)},
+                             {"cached_footprint", stats_json(walk_footprint, ms_cached_footprint)}});
     }
     const stats::Spread sr = stats::spread(ratios);
     std::printf("%-6s median footprint / rule pages %.2fx [%.2f, %.2f] over %zu frames\n", name.c_str(), sr.median, sr.min, sr.max,

@@ -194,9 +194,10 @@ TEST_F(DemoCli, SweepMeasuresTheWholeEngineFamilyAndPlotsIt) {
   for (const char* plot : {"demo.png", "flicker.png", "path.png"}) EXPECT_TRUE(fs::exists(out / plot)) << plot;
 }
 
-// --pages (issue 31's first part): the pages a virtual shadow map of the sun would mark, by the
-// rule and by the pixel footprint; the rule's texel is never finer than the footprint's, so it
-// never marks more pages. A spot light has no clipmap: refused in one line.
+// --pages (issue 31): the pages a virtual shadow map of the sun marks, by the rule and by the pixel
+// footprint (the rule's texel is never finer than the footprint's, so it never marks more pages),
+// drawn into the pool from nothing and along the path with the cache. A spot light has no clipmap:
+// refused in one line.
 TEST_F(DemoCli, PagesCountsTheRulesAndTheFootprintsPages) {
   const fs::path out = dir_ / "pages";
   const auto r = demo({"--pages", "--scene", "outdoor", "--frames", "3", "--width", "96", "--height", "54", "-o", out.string()});
@@ -209,6 +210,20 @@ TEST_F(DemoCli, PagesCountsTheRulesAndTheFootprintsPages) {
       EXPECT_GT(f.at("pages_rule").get<int>(), 0);
       EXPECT_LE(f.at("pages_rule").get<int>(), f.at("pages_footprint").get<int>());
       EXPECT_EQ(f.at("unmarked_rule").get<int>(), 0);
+      // The pages drawn into the pool: all of them from nothing; along the path only what the
+      // cache lacks (the first frame: all).
+      for (const char* m : {"rule", "footprint"}) {
+        SCOPED_TRACE(m);
+        const auto& u = f.at(std::string("uncached_") + m);
+        EXPECT_EQ(u.at("drawn").get<int>(), f.at(std::string("pages_") + m).get<int>());
+        EXPECT_EQ(u.at("missing").get<int>(), 0);
+        EXPECT_GT(u.at("triangles").get<std::int64_t>(), 0);
+        const auto& c = f.at(std::string("cached_") + m);
+        EXPECT_EQ(c.at("drawn").get<int>() + c.at("cached").get<int>(), c.at("requested").get<int>());
+        if (&f == &t.at("frames").front()) {
+          EXPECT_EQ(c.at("cached").get<int>(), 0);
+        }
+      }
     }
     EXPECT_GE(t.at("pages_ratio_footprint_over_rule").at("median").get<double>(), 1.0);
   }
