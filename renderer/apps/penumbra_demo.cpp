@@ -504,8 +504,9 @@ int main(int argc, char** argv) {
   app.add_option("--frames", opt.frames, "frames per technique: of the short path, or of the orbit of a scene without a camera path")
       ->check(CLI::Range(1, 100000));
   app.add_flag("--pages", pages,
-               "headless: count the pages a virtual shadow map of the sun would mark along the path, by the rule and by the pixel "
-               "footprint (adaptive/virtual_pages.h); writes pages.json");
+               "headless: the pages a virtual shadow map of the sun marks along the path, by the rule and by the pixel footprint "
+               "(adaptive/virtual_pages.h), drawn into its page pool from nothing and with its cache (shadows/virtual_shadow_map.h); "
+               "writes pages.json");
   app.add_flag("--sweep", opt.sweep,
                "the whole engine family: single maps of 1024²-8192² and 2-4 cascades of 1024²-4096² (default: single maps of "
                "half, twice and four times --fixed-resolution, two cascades of once and twice it, four cascades of it)");
