@@ -80,3 +80,28 @@ float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool fou
   }
   return sum / (4.0 * r * r);
 }
+
+// PCSS's blocker search at `level` through the tables: the mean depth of the texels under the
+// square xy ± radius_ws nearer than `depth` (blockers), and their count. As vsm_pcf_box, every
+// texel is read from its own page; `found` is false (count 0) when one is not resident or lies
+// outside the level's window.
+float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out int blockers, out bool found) {
+  found = true;
+  blockers = 0;
+  const float t = vsm_texel_ws(level);
+  const vec2 p = (xy - u_vsm_origin[level]) / t;
+  const float r = max(radius_ws / t, 1e-4);
+  const ivec2 first = ivec2(floor(p - r)), last = ivec2(ceil(p + r)) - 1;
+  float sum = 0.0;
+  for (int j = first.y; j <= last.y; ++j)
+    for (int i = first.x; i <= last.x; ++i) {
+      float d;
+      if (!vsm_fetch(level, ivec2(i, j), d)) {
+        found = false;
+        blockers = 0;
+        return 1.0;
+      }
+      if (d < depth) sum += d, ++blockers;
+    }
+  return blockers > 0 ? sum / float(blockers) : 1.0;
+}

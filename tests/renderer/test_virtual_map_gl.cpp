@@ -157,8 +157,9 @@ TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
 
 // PCF through the tables (vsm_pcf_box) against the same box filter on a single map of the level
 // (the full map drawn directly): squares of 2.5 texels' radius at 128 × 128 points over level 1's
-// window, a fifth of which cross a page border, with the receiver just behind the surface there.
-TEST(VirtualMap, PcfAcrossPageBordersEqualsASingleMapOfTheLevel) {
+// window, a fifth of which cross a page border, with the receiver just behind the surface there;
+// and PCSS's blocker search (vsm_blocker_search) over squares twice as wide, likewise.
+TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
   VirtualShadowMap vsm(layout, 14);
@@ -172,7 +173,7 @@ TEST(VirtualMap, PcfAcrossPageBordersEqualsASingleMapOfTheLevel) {
   files.emplace_back("pcf.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(binding = 0, rg32f) uniform writeonly image2D u_out;  // paged, single
+layout(binding = 0, rgba32f) uniform writeonly image2D u_out;  // PCF paged, single; blockers paged, single
 layout(binding = 11) uniform sampler2D u_single;
 uniform int u_level;
 uniform float u_radius_texels;
@@ -196,25 +197,47 @@ void main() {
       sum += w * (inside && receiver <= texelFetch(u_single, ivec2(i, j), 0).r ? 1.0 : 0.0);
     }
   const bool whole = all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(side)));
-  imageStore(u_out, q, vec4(found ? paged : -1.0, whole ? sum / (4.0 * r * r) : -1.0, 0.0, 0.0));
+  // PCSS's blocker search over a square twice as wide, through the tables and on the single map.
+  int blockers;
+  bool searched;
+  const float mean = vsm_blocker_search(u_level, u_vsm_origin[u_level] + p * t, receiver, 2.0 * r * t, blockers, searched);
+  float ref_sum = 0.0;
+  int ref_count = 0;
+  for (int j = int(floor(p.y - 2.0 * r)); j <= int(ceil(p.y + 2.0 * r)) - 1; ++j)
+    for (int i = int(floor(p.x - 2.0 * r)); i <= int(ceil(p.x + 2.0 * r)) - 1; ++i) {
+      const float d = texelFetch(u_single, ivec2(i, j), 0).r;
+      if (d < receiver) ref_sum += d, ++ref_count;
+    }
+  const bool whole_search = all(greaterThanEqual(p - 2.0 * r, vec2(0.0))) && all(lessThanEqual(p + 2.0 * r, vec2(side)));
+  imageStore(u_out, q, vec4(found ? paged : -1.0, whole ? sum / (4.0 * r * r) : -1.0,
+                            searched ? mean + float(blockers) : -1.0,
+                            whole_search ? (ref_count > 0 ? ref_sum / float(ref_count) : 1.0) + float(ref_count) : -1.0));
 })");
   const gl::Program p = gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, "pcf.comp"}});
   const int n = 128;
-  const gl::Texture out({GL_RG32F, n, n, 1}, "pcf output");
+  const gl::Texture out({GL_RGBA32F, n, n, 1}, "pcf output");
   vsm.bind(p);
   p.set("u_level", level);
   p.set("u_radius_texels", 2.5f);
   single.bind(11);
   glBindSampler(11, 0);
-  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32F);
+  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   p.dispatch_covering(n, n);
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-  std::vector<float> v(2 * static_cast<std::size_t>(n) * n);
-  glGetTextureImage(out.id(), 0, GL_RG, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
-  int compared = 0, across = 0, partial = 0;
-  float worst = 0;
+  std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
+  glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  int compared = 0, across = 0, partial = 0, searched = 0, with_blockers = 0;
+  float worst = 0, worst_search = 0;
   for (int q = 0; q < n * n; ++q) {
-    const float paged = v[2 * q], single_map = v[2 * q + 1];
+    // The blocker search: mean blocker depth + blocker count, through the tables and on the map.
+    const float search_paged = v[4 * q + 2], search_single = v[4 * q + 3];
+    if (search_single >= 0) {
+      ASSERT_GE(search_paged, 0.0f) << "point " << q << ": a texel under the search was not found";
+      ++searched;
+      with_blockers += search_single >= 1.0f + 1.0f;  // one blocker or more (the mean is below 1)
+      worst_search = std::max(worst_search, std::abs(search_paged - search_single));
+    }
+    const float paged = v[4 * q], single_map = v[4 * q + 1];
     if (single_map < 0) {  // the square leaves the window: the tables say so instead of guessing
       EXPECT_EQ(paged, -1.0f) << "point " << q;
       continue;
@@ -231,6 +254,10 @@ void main() {
   EXPECT_GT(across, compared / 6) << "squares across a page border";
   EXPECT_GT(partial, compared / 50) << "penumbrae, not only 0 and 1";
   EXPECT_LE(worst, 1.0f / 255) << "largest difference " << worst;
+  EXPECT_GT(searched, n * n * 8 / 10);
+  EXPECT_GT(with_blockers, searched / 20) << "searches that find blockers";
+  // Count + mean in one float (up to ~100 + 1): a different count shows as 1 or more, rounding as 1e-5.
+  EXPECT_LE(worst_search, 1e-4f) << "the same blockers, the same mean depth";
   ::testing::Test::RecordProperty("largest_difference_x1e6", static_cast<int>(worst * 1e6f));
 }
 
