@@ -10,6 +10,8 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, rgba32f) uniform readonly image2D u_surface;  // world xyz; w > 0 where a surface is
+layout(binding = 1, r32f) uniform writeonly image2D u_levels;     // debug view: the level each pixel samples
+uniform bool u_write_levels;                                       // (-1: no surface, levels: beyond the coarsest)
 
 layout(std430, binding = 0) buffer Marks {
   uint u_pixels_per_level[VSM_MAX_LEVELS];
@@ -30,7 +32,10 @@ void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, imageSize(u_surface)))) return;
   const vec4 s = imageLoad(u_surface, p);
-  if (s.w <= 0.0) return;
+  if (s.w <= 0.0) {
+    if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
+    return;
+  }
   const vec3 world = s.xyz;
   const float depth = u_perspective ? dot(world - u_mark_camera_position, u_mark_camera_forward) : 1.0;
   const float floor_ws = max(depth, 0.0) * u_footprint_per_depth * u_min_texel_px;
@@ -52,7 +57,9 @@ void main() {
         atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
       }
     atomicAdd(u_pixels_per_level[level], 1u);
+    if (u_write_levels) imageStore(u_levels, p, vec4(float(level)));
     return;
   }
   atomicAdd(u_unmarked, 1u);
+  if (u_write_levels) imageStore(u_levels, p, vec4(float(u_vsm_levels)));
 }

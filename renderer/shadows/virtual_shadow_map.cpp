@@ -255,8 +255,13 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
 }
 
 adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                                      double radius_ws, const adaptive::MarkOptions& options) const {
+                                      double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
+  if (levels && (levels->desc().width != surface.desc().width || levels->desc().height != surface.desc().height ||
+                 levels->desc().format != GL_R32F))
+    throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
+  program_.set("u_write_levels", levels != nullptr);
+  if (levels) glBindImageTexture(1, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
   const bool perspective = camera.projection == scene::Camera::Projection::perspective;
   set_virtual_page_uniforms(program_, layout_, view);
   program_.set("u_mark_camera_position", camera.position);
@@ -273,7 +278,7 @@ adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::C
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks_.id());
   glBindImageTexture(0, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   program_.dispatch_covering(surface.desc().width, surface.desc().height);
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
   glGetNamedBufferSubData(marks_.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
 

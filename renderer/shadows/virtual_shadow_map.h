@@ -64,8 +64,10 @@ class PageMarker {
   // `surface`: RGBA32F, world xyz and w > 0 where a surface is (metrics::SurfaceProbe's image, or a
   // G-buffer's positions) of an image `height_px` rows high seen by `camera`; `radius_ws` the
   // filter's world radius (0: none).
+  // With `levels` (R32F, the surface's size), each pixel's level is written there too: the debug
+  // view of the marking (-1 where no surface is, layout.levels beyond the coarsest level).
   adaptive::MarkResult mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                            double radius_ws, const adaptive::MarkOptions& options) const;
+                            double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels = nullptr) const;
 
  private:
   adaptive::VirtualMapLayout layout_;

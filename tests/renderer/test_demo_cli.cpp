@@ -228,6 +228,16 @@ TEST_F(DemoCli, PagesCountsTheRulesAndTheFootprintsPages) {
     EXPECT_GE(t.at("pages_ratio_footprint_over_rule").at("median").get<double>(), 1.0);
   }
   EXPECT_THAT(r.out, HasSubstr("median footprint / rule pages"));
+  // The debug view: each station's levels, rule | footprint, two tiles of 96 px per row (PNG's IHDR).
+  const std::string png = test::read_file(out / "levels.png");
+  ASSERT_GT(png.size(), 24u);
+  const auto be32 = [&](std::size_t at) {
+    return (static_cast<unsigned>(static_cast<unsigned char>(png[at])) << 24) | (static_cast<unsigned>(static_cast<unsigned char>(png[at + 1])) << 16) |
+           (static_cast<unsigned>(static_cast<unsigned char>(png[at + 2])) << 8) | static_cast<unsigned>(static_cast<unsigned char>(png[at + 3]));
+  };
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  EXPECT_EQ(be32(16), 2u * 96u);
+  EXPECT_GE(be32(20), 2u * 54u) << "a station's row and the key's";
   const auto spot = demo({"--pages", "--scene", "two-planes", "-o", (dir_ / "spot").string()});
   EXPECT_EQ(spot.exit_code, 2) << "the command line must change";
   EXPECT_THAT(spot.err, HasSubstr("--pages: the virtual shadow map is the sun's"));
