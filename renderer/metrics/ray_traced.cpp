@@ -30,6 +30,11 @@ struct RayTracedScene::Embree {
   std::vector<std::vector<glm::vec3>> normals;
   std::vector<const std::vector<std::uint32_t>*> indices;
   std::vector<std::shared_ptr<const scene::MeshData>> meshes;  // keeps `indices` alive
+  // Per geometry: the object's name and its mask bit (one bit per distinct name in order of first
+  // appearance; names past the 32nd share the last bit).
+  std::vector<std::string> names;
+  std::vector<unsigned> masks;
+  bool ray_masks = false;  // whether the library honours ray.mask (EMBREE_RAY_MASK)
   ~Embree() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -65,8 +70,10 @@ float hash_uniform(std::uint64_t pixel, std::uint64_t sample, std::uint64_t stre
 RayTracedScene::RayTracedScene(const scene::Scene& scene) : embree_(std::make_unique<Embree>()) {
   embree_->device = rtcNewDevice(nullptr);
   if (!embree_->device) throw std::runtime_error("ray tracing: cannot create the Embree device (" + device_error(nullptr) + ")");
+  embree_->ray_masks = rtcGetDeviceProperty(embree_->device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
   embree_->scene = rtcNewScene(embree_->device);
   rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  std::vector<std::string> distinct;  // the names seen so far, in order: bit i for the i-th
   for (const scene::Object& o : scene.objects) {
     if (!o.mesh || o.mesh->indices.size() < 3) continue;
     const scene::MeshData& mesh = *o.mesh;
@@ -80,9 +87,18 @@ RayTracedScene::RayTracedScene(const scene::Scene& scene) : embree_(std::make_un
     const std::size_t n = mesh.indices.size() / 3;
     auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
     std::copy(mesh.indices.begin(), mesh.indices.begin() + static_cast<std::ptrdiff_t>(3 * n), idx);
+    const auto named = std::find(distinct.begin(), distinct.end(), o.name);
+    const std::size_t bit = std::min<std::size_t>(static_cast<std::size_t>(named - distinct.begin()), 31);
+    if (named == distinct.end()) distinct.push_back(o.name);
+    rtcSetGeometryMask(g, 1u << bit);
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(embree_->scene, g);
-    if (id >= embree_->normals.size()) embree_->normals.resize(id + 1), embree_->indices.resize(id + 1), embree_->meshes.resize(id + 1);
+    if (id >= embree_->normals.size()) {
+      embree_->normals.resize(id + 1), embree_->indices.resize(id + 1), embree_->meshes.resize(id + 1);
+      embree_->names.resize(id + 1), embree_->masks.resize(id + 1, 0);
+    }
+    embree_->names[id] = o.name;
+    embree_->masks[id] = 1u << bit;
     const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(o.model));
     for (const scene::Vertex& vertex : mesh.vertices) embree_->normals[id].push_back(normal_matrix * vertex.normal);
     embree_->indices[id] = &mesh.indices;
@@ -220,6 +236,77 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
   return out;
 }
 
+RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene::Camera& camera, const scene::Light& light, int width_px,
+                                                                    int height_px, const std::vector<std::string>& excluded_names,
+                                                                    int threads) const {
+  if (light.type != scene::Light::Type::directional)
+    throw std::invalid_argument("ray-traced hard shadows: only a directional light (a spot light's cone is the shadow map's)");
+  if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced hard shadows: empty image");
+  const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
+  const glm::vec3 camera_position = camera.position;
+  const glm::vec3 to_light = -glm::normalize(light.direction);
+  // Which geometries are left out, and whether their mask bits are theirs alone.
+  const std::size_t geometries = embree_->names.size();
+  std::vector<char> excluded(geometries, 0);
+  unsigned excluded_bits = 0, kept_bits = 0;
+  bool any_excluded = false;
+  for (std::size_t g = 0; g < geometries; ++g) {
+    if (!embree_->masks[g]) continue;  // no geometry under this id
+    excluded[g] = std::find(excluded_names.begin(), excluded_names.end(), embree_->names[g]) != excluded_names.end();
+    (excluded[g] ? excluded_bits : kept_bits) |= embree_->masks[g];
+    any_excluded = any_excluded || excluded[g];
+  }
+  const bool by_mask = embree_->ray_masks && (excluded_bits & kept_bits) == 0;
+
+  const std::size_t n = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
+  HardVisibility out{{width_px, height_px, 1, std::vector<float>(n, 1.0f)}, {width_px, height_px, 1, std::vector<float>(n, 1.0f)}};
+  std::atomic<int> next_row{0};
+  on_threads(threads, [&] {
+    RTCIntersectContext context;
+    auto occluded = [&](const glm::vec3& start, unsigned mask) {
+      RTCRay ray{};
+      ray.org_x = start.x, ray.org_y = start.y, ray.org_z = start.z;
+      ray.dir_x = to_light.x, ray.dir_y = to_light.y, ray.dir_z = to_light.z;
+      ray.tnear = 0, ray.tfar = std::numeric_limits<float>::infinity();
+      ray.mask = mask, ray.flags = 0, ray.time = 0;
+      rtcInitIntersectContext(&context);
+      rtcOccluded1(embree_->scene, &context, &ray);
+      return ray.tfar < 0;  // tfar is set to -inf when occluded
+    };
+    // Without ray masks: the nearest hits in turn, past the left-out geometries' ones.
+    auto occluded_by_kept = [&](const glm::vec3& start) {
+      float tnear = 0;
+      for (;;) {
+        RTCRayHit hit{};
+        hit.ray.org_x = start.x, hit.ray.org_y = start.y, hit.ray.org_z = start.z;
+        hit.ray.dir_x = to_light.x, hit.ray.dir_y = to_light.y, hit.ray.dir_z = to_light.z;
+        hit.ray.tnear = tnear, hit.ray.tfar = std::numeric_limits<float>::infinity();
+        hit.ray.mask = 0xFFFFFFFFu, hit.ray.flags = 0, hit.ray.time = 0;
+        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcInitIntersectContext(&context);
+        rtcIntersect1(embree_->scene, &context, &hit);
+        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+        if (!excluded[hit.hit.geomID]) return true;
+        tnear = std::nextafter(hit.ray.tfar, std::numeric_limits<float>::infinity());
+      }
+    };
+    for (int y = next_row++; y < height_px; y = next_row++)
+      for (int x = 0; x < width_px; ++x) {
+        glm::vec3 origin, direction;
+        pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
+        Hit hit;
+        if (!primary(origin, direction, hit)) continue;  // sky: lit
+        const glm::vec3 start = hit.position + hit.geometric * std::max(1e-3f, 1e-4f * glm::length(hit.position - camera_position));
+        if (!occluded(start, 0xFFFFFFFFu)) continue;
+        const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_px) + static_cast<std::size_t>(x);
+        out.all.pixels[p] = 0;
+        const bool blocked = !any_excluded || (by_mask ? occluded(start, ~excluded_bits) : occluded_by_kept(start));
+        if (blocked) out.without.pixels[p] = 0;
+      }
+  });
+  return out;
+}
+
 #else
 
 // Built without Embree (PENUMBRA_RAY_TRACING=OFF, the gpu-bundle preset): the references fall
@@ -231,6 +318,10 @@ RayTracedScene::RayTracedScene(const scene::Scene&) {
 RayTracedScene::~RayTracedScene() = default;
 io::ImageF RayTracedScene::area_light_visibility(const scene::Camera&, const scene::Light&, int, int, int, int) const { return {}; }
 io::Image8 RayTracedScene::facing_light(const scene::Camera&, const scene::Light&, int, int, int) const { return {}; }
+RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene::Camera&, const scene::Light&, int, int,
+                                                                    const std::vector<std::string>&, int) const {
+  return {};
+}
 bool RayTracedScene::primary(const glm::vec3&, const glm::vec3&, Hit&) const { return false; }
 
 #endif

@@ -13,7 +13,14 @@
 // converges per pixel instead of showing per_side² copies of a caster. Pixels without a surface
 // are 1 (the sky is lit, as in the renderer's visibility image). A shadow ray starts 1e-4 of the
 // camera distance (at least 1 mm) off the surface, on the side the camera sees.
+//
+// Also hard shadows toward the light's centre with and without some objects as blockers
+// (hard_visibility_split): where Embree is built in and the light is directional, the demo's
+// thin-caster masks (apps/demo/measurement.cpp) come from these, exact; without Embree, or for a
+// spot light, from hard shadows of four 4096² cascades rendered with and without those objects.
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -42,6 +49,23 @@ class RayTracedScene {
   // direction to the light's centre), 0 elsewhere and on the sky. Visibility matters only there:
   // on the other side the shading's max(n·l, 0) is 0 whatever a map says.
   io::Image8 facing_light(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px, int threads = 0) const;
+
+  // Hard shadows toward the centre of a directional light: one shadow ray per pixel from the
+  // pixel's surface (the camera rays and shadow-ray origins of area_light_visibility). `all` is 1
+  // where nothing blocks that ray and 0 where something does; `without` the same with the objects
+  // named in `excluded_names` left out as blockers (the camera still sees them, and they see the
+  // light past themselves: their self-shadowing counts in `all` only). One channel, rows top-down,
+  // the sky 1 in both. Names that no object has are ignored. Each distinct name has its own
+  // Embree geometry mask bit: a pixel lit in `all` costs one shadow ray, a shadowed one a second
+  // ray that skips the left-out bits. Where the library ignores ray masks (built without
+  // EMBREE_RAY_MASK) or a left-out name shares a bit (past the 32nd distinct name) the second
+  // ray steps past the left-out objects' hits instead, with the same result. Throws
+  // std::invalid_argument for a spot light or an empty image.
+  struct HardVisibility {
+    io::ImageF all, without;
+  };
+  HardVisibility hard_visibility_split(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px,
+                                       const std::vector<std::string>& excluded_names, int threads = 0) const;
 
   std::size_t triangles() const { return triangles_; }
 

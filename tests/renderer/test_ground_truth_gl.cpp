@@ -1,10 +1,12 @@
 // Ground-truth references (renderer/metrics/ground_truth.h, ray_traced.h): the sampling of the
 // emitter, the area-light average and the ray-traced visibility against the analytic soft shadow
-// of a straight edge (label `gl`).
+// of a straight edge, and the ray-traced hard shadows with and without named casters (label `gl`).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -253,6 +255,91 @@ TEST(RayTraced, StraightEdgePenumbraMatchesTheDiskIntegral) {
   spot.type = scene::Light::Type::spot;
   EXPECT_THROW(traced.area_light_visibility(camera, spot, w, h, 4), std::invalid_argument);
   EXPECT_THROW(traced.area_light_visibility(camera, s.light, w, h, 0), std::invalid_argument);
+}
+
+// The hard shadows with and without named objects (the demo's thin-caster masks): a ground plane
+// x in [-3, 3] (the sky beyond), a thin bar "bar" along x at height 0.5, z = 0, and a box "box" over
+// x in [1, 3], y in [1, 2], z in [-1.5, -0.5]; the sun travels along (0, -1, 1), so a ground point
+// (x, z) looks toward the light through (x, y, z - y). The bar's shadow falls on z in [0.4, 0.6]
+// (every x), the box's on x in [1, 3], z in [-0.5, 1.5]: where they meet, the shadow ray passes the
+// left-out bar before the box. Seen straight down, 0.05 m per pixel; pixels within 0.06 of an
+// edge are not checked. `fillers` objects of their own names first (out of view) push "bar" past
+// the 32 mask bits, so the left-out hits are stepped past instead of masked.
+scene::Scene split_scene(int fillers) {
+  scene::Scene s;
+  for (int i = 0; i < fillers; ++i)
+    s.objects.push_back({"filler" + std::to_string(i), std::make_shared<scene::MeshData>(scene::make_box({0.1f, 0.1f, 0.1f})),
+                         glm::translate(glm::mat4(1), glm::vec3(100 + i, 1, 100))});
+  s.objects.push_back({"ground", std::make_shared<scene::MeshData>(scene::make_plane(6, 20)), glm::mat4(1)});
+  s.objects.push_back({"bar", std::make_shared<scene::MeshData>(scene::make_box({20, 0.1f, 0.1f})),
+                       glm::translate(glm::mat4(1), glm::vec3(0, 0.5f, 0))});
+  s.objects.push_back({"box", std::make_shared<scene::MeshData>(scene::make_box({2, 1, 1})),
+                       glm::translate(glm::mat4(1), glm::vec3(2, 1.5f, -1))});
+  s.light.type = scene::Light::Type::directional;
+  s.light.direction = glm::normalize(glm::vec3(0, -1, 1));
+  test::look_down(s, {0, 0}, 4, 5, 2);  // x in [-4, 4], z in [-2, 2]
+  return s;
+}
+
+TEST(RayTraced, HardVisibilitySplitLeavesOutTheNamedCastersOnly) {
+  const int w = 160, h = 80;
+  std::vector<float> all_first, without_first;
+  for (int fillers : {0, 40}) {
+    SCOPED_TRACE("fillers " + std::to_string(fillers));
+    const scene::Scene s = split_scene(fillers);
+    const RayTracedScene traced(s);
+    const auto v = traced.hard_visibility_split(s.camera, s.light, w, h, {"bar", "no such object"});
+    ASSERT_EQ(v.all.width, w);
+    ASSERT_EQ(v.all.height, h);
+    ASSERT_EQ(v.without.pixels.size(), static_cast<std::size_t>(w * h));
+    auto near = [](float a, float edge) { return std::abs(a - edge) < 0.06f; };
+    auto in = [](float a, float lo, float hi) { return a > lo && a < hi; };
+    int bar_only = 0, box = 0, both = 0, lit = 0, sky = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float wx = test::pixel_to_world(x, w, 0, 4), wz = test::pixel_to_world(y, h, 0, 2);
+        bool skip = false;
+        for (float e : {-3.0f, 1.0f, 3.0f}) skip = skip || near(wx, e);
+        for (float e : {-1.5f, -0.5f, -0.05f, 0.05f, 0.4f, 0.6f, 1.5f}) skip = skip || near(wz, e);
+        if (skip) continue;
+        const std::size_t p = static_cast<std::size_t>(y) * w + x;
+        const float all = v.all.pixels[p], without = v.without.pixels[p];
+        const bool in_box_shadow = in(wx, 1, 3) && in(wz, -0.5f, 1.5f);
+        bool want_all = true, want_without = true;
+        if (in(wz, -0.05f, 0.05f)) {  // the bar's top: only the box above it
+          want_all = want_without = !in(wx, 1, 3);
+        } else if (in(wx, 1, 3) && in(wz, -1.5f, -0.5f)) {  // the box's top
+        } else if (!in(wx, -3, 3)) {  // the sky
+          ++sky;
+        } else {  // the ground
+          const bool under_bar = in(wz, 0.4f, 0.6f);
+          want_all = !under_bar && !in_box_shadow, want_without = !in_box_shadow;
+          bar_only += under_bar && !in_box_shadow, box += in_box_shadow && !under_bar, both += under_bar && in_box_shadow;
+          lit += want_all;
+        }
+        EXPECT_EQ(all, want_all ? 1.0f : 0.0f) << "x " << wx << " z " << wz;
+        EXPECT_EQ(without, want_without ? 1.0f : 0.0f) << "x " << wx << " z " << wz;
+      }
+    EXPECT_GT(bar_only, 100);
+    EXPECT_GT(box, 100);
+    EXPECT_GT(both, 20) << "the bar in front of the box on the shadow ray";
+    EXPECT_GT(lit, 1000);
+    EXPECT_GT(sky, 100);
+    if (fillers == 0) {
+      all_first = v.all.pixels, without_first = v.without.pixels;
+      // Nothing left out: the same image twice.
+      const auto none = traced.hard_visibility_split(s.camera, s.light, w, h, {}, 1);
+      EXPECT_EQ(none.all.pixels, v.all.pixels);
+      EXPECT_EQ(none.without.pixels, v.all.pixels);
+      scene::Light spot = s.light;
+      spot.type = scene::Light::Type::spot;
+      EXPECT_THROW(traced.hard_visibility_split(s.camera, spot, w, h, {"bar"}), std::invalid_argument);
+      EXPECT_THROW(traced.hard_visibility_split(s.camera, s.light, 0, h, {"bar"}), std::invalid_argument);
+    } else {
+      EXPECT_EQ(v.all.pixels, all_first) << "the same with the bar past the 32 mask bits";
+      EXPECT_EQ(v.without.pixels, without_first);
+    }
+  }
 }
 
 // The main job's PCSS reference on the outdoor town (the street, frame 120, 960×540; 1° sun):

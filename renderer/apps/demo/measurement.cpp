@@ -95,11 +95,14 @@ Window best_window(const std::vector<double>& score, int width, int height, int 
   return best;
 }
 
-// Thin casters: their shadow is found with hard shadows from four fitted cascades of 4096² (about
-// 1 cm texels near the camera), once with every object and once without them: `shadow` marks the
-// pixels only they darken (umbra), `gaps` the lit pixels within two pixels of those (the holes
-// between lattice members and the sides of a wire's shadow). Each configuration keeps
-// thin_shadow = sum over `shadow` of (1 - V) relative to the reference's, and gaps = sum over
+// Thin casters: their shadow is found with hard shadows toward the light's centre, once with every
+// object as a blocker and once without them. With traced_ (Embree built in, a directional light)
+// one shadow ray per pixel decides (RayTracedScene::hard_visibility_split: exact, no bias);
+// otherwise (no Embree, or a spot light) four fitted cascades of 4096² (about 1 cm texels near the
+// camera, with their biases) rendered with the scene and with the scene less those objects.
+// `shadow` marks the pixels only they darken (umbra), `gaps` the lit pixels within two pixels of
+// those (the holes between lattice members and the sides of a wire's shadow). Each configuration
+// keeps thin_shadow = sum over `shadow` of (1 - V) relative to the reference's, and gaps = sum over
 // `gaps` of V relative to the reference's: a map too coarse for a caster drops its shadow
 // (thin_shadow < 1) or closes its gaps (gaps < 1).
 struct Walk::ThinMasks {
@@ -109,15 +112,16 @@ struct Walk::ThinMasks {
 
 Walk::Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::TimingMethod method)
     : scene_(scene), plan_(std::move(plan)), options_(options), method_(method), probe_(scene) {
-  scene::Scene without = scene;
-  std::erase_if(without.objects, [](const scene::Object& o) {
+  const auto is_thin = [](const scene::Object& o) {
     return std::find(thin_casters().begin(), thin_casters().end(), o.name) != thin_casters().end();
-  });
-  thin_ = options_.reference && without.objects.size() < scene.objects.size();
+  };
+  thin_ = options_.reference && std::any_of(scene.objects.begin(), scene.objects.end(), is_thin);
 #if PENUMBRA_HAS_RAY_TRACING
   if (options_.reference && scene.light.type == scene::Light::Type::directional) traced_ = std::make_unique<metrics::RayTracedScene>(scene);
 #endif
-  if (thin_) {
+  if (thin_ && !traced_) {  // the maps' thin masks
+    scene::Scene without = scene;
+    std::erase_if(without.objects, is_thin);
     thin_with_ = std::make_unique<shadows::Renderer>(), thin_without_ = std::make_unique<shadows::Renderer>();
     thin_with_->set_scene(scene), thin_without_->set_scene(without);
   }
@@ -129,14 +133,20 @@ const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, 
   auto& cached = thin_cache_[frame];
   if (cached) return *cached;
   const int width = options_.width, height = options_.height;
-  shadows::ShadowSettings hard;
-  hard.technique = shadows::Technique::hard;
-  hard.map.resolution_texels = 4096;
-  hard.map.cascades = scene_.light.type == scene::Light::Type::directional ? 4 : 1;
-  thin_with_->scene().camera = thin_without_->scene().camera = camera;
-  thin_with_->render(hard, width, height);
-  thin_without_->render(hard, width, height);
-  const io::ImageF v = thin_with_->read_visibility(), v_free = thin_without_->read_visibility();
+  io::ImageF v, v_free;  // hard visibility with every object, and without the thin casters
+  if (traced_) {
+    metrics::RayTracedScene::HardVisibility hard = traced_->hard_visibility_split(camera, scene_.light, width, height, thin_casters());
+    v = std::move(hard.all), v_free = std::move(hard.without);
+  } else {
+    shadows::ShadowSettings hard;
+    hard.technique = shadows::Technique::hard;
+    hard.map.resolution_texels = 4096;
+    hard.map.cascades = scene_.light.type == scene::Light::Type::directional ? 4 : 1;
+    thin_with_->scene().camera = thin_without_->scene().camera = camera;
+    thin_with_->render(hard, width, height);
+    thin_without_->render(hard, width, height);
+    v = thin_with_->read_visibility(), v_free = thin_without_->read_visibility();
+  }
   const std::size_t n = static_cast<std::size_t>(width) * height;
   cached = std::make_unique<ThinMasks>();
   ThinMasks& m = *cached;

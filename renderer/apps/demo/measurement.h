@@ -108,9 +108,9 @@ class Walk {
   WalkOptions options_;
   gl::TimingMethod method_;
   metrics::SurfaceProbe probe_;
-  std::unique_ptr<metrics::RayTracedScene> traced_;  // the ray-traced reference and the facing mask
+  std::unique_ptr<metrics::RayTracedScene> traced_;  // the ray-traced reference, the facing mask and the thin masks
   bool thin_ = false;
-  std::unique_ptr<shadows::Renderer> thin_with_, thin_without_;
+  std::unique_ptr<shadows::Renderer> thin_with_, thin_without_;  // the thin masks' maps, only without traced_
   std::map<int, std::unique_ptr<ThinMasks>> thin_cache_;
 };
 
