@@ -101,7 +101,9 @@ Window best_window(const std::vector<double>& score, int width, int height, int 
 // otherwise (no Embree, or a spot light) four fitted cascades of 4096² (about 1 cm texels near the
 // camera, with their biases) rendered with the scene and with the scene less those objects.
 // `shadow` marks the pixels only they darken (umbra), `gaps` the lit pixels within two pixels of
-// those (the holes between lattice members and the sides of a wire's shadow). Each configuration
+// those (the holes between lattice members and the sides of a wire's shadow), both only where the
+// errors are compared (a surface; ray-traced, one facing the light: a lattice's back faces, dark
+// whatever the map says, are not its shadow). Each configuration
 // keeps thin_shadow = sum over `shadow` of (1 - V) relative to the reference's, and gaps = sum over
 // `gaps` of V relative to the reference's: a map too coarse for a caster drops its shadow
 // (thin_shadow < 1) or closes its gaps (gaps < 1).
@@ -129,7 +131,7 @@ Walk::Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::Ti
 
 Walk::~Walk() = default;
 
-const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, const io::ImageF& surface) {
+const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, const io::Image8& compared) {
   auto& cached = thin_cache_[frame];
   if (cached) return *cached;
   const int width = options_.width, height = options_.height;
@@ -153,11 +155,11 @@ const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, 
   m.shadow = {width, height, 1, std::vector<std::uint8_t>(n)};
   m.gaps = {width, height, 1, std::vector<std::uint8_t>(n)};
   for (std::size_t p = 0; p < n; ++p)
-    if (surface.pixels[4 * p + 3] > 0 && v.pixels[p] < 0.5f && v_free.pixels[p] >= 0.5f) m.shadow.pixels[p] = 255, ++m.shadow_pixels;
+    if (compared.pixels[p] && v.pixels[p] < 0.5f && v_free.pixels[p] >= 0.5f) m.shadow.pixels[p] = 255, ++m.shadow_pixels;
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const std::size_t p = static_cast<std::size_t>(y) * width + x;
-      if (surface.pixels[4 * p + 3] <= 0 || v.pixels[p] < 0.5f || v_free.pixels[p] < 0.5f) continue;
+      if (!compared.pixels[p] || v.pixels[p] < 0.5f || v_free.pixels[p] < 0.5f) continue;
       bool near = false;
       for (int dy = -2; dy <= 2 && !near; ++dy)
         for (int dx = -2; dx <= 2 && !near; ++dx) {
@@ -292,7 +294,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       // Side-by-side crops where the thin casters' shadows are densest, or the middle of the first
       // reference frame.
       if (thin_) {
-        const ThinMasks& m = thin_masks(pf.frame, camera, surface);
+        const ThinMasks& m = thin_masks(pf.frame, camera, mask);
         run.thin_pixels += m.shadow_pixels, run.gap_pixels += m.gap_pixels;
         auto dark = [](float v) { return 1.0 - v; };
         auto lit = [](float v) { return static_cast<double>(v); };

@@ -101,7 +101,7 @@ class Walk {
 
  private:
   struct ThinMasks;
-  const ThinMasks& thin_masks(int frame, const scene::Camera& camera, const io::ImageF& surface);
+  const ThinMasks& thin_masks(int frame, const scene::Camera& camera, const io::Image8& compared);
 
   const scene::Scene& scene_;
   PathPlan plan_;
