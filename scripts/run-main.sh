@@ -6,7 +6,7 @@
 # 4096², four of 2048²): first the adaptive rule against the family's Pareto front at equal error
 # (speedup and memory ratio with intervals), then frame time, texels, error against the reference
 # (PCF: the same filter on 8188² cascades; PCSS: ray-traced), thin casters, flicker; into
-# out/demo/ (report.json, frames.csv, crops, side-by-side images, plots). About 4 min on 2 cores
+# out/demo/ (report.json, frames.csv, crops, side-by-side images, plots). About 3.5 min on 2 cores
 # without a GPU; `--sweep` measures the whole engine family, `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
