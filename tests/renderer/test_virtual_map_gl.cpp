@@ -299,6 +299,40 @@ TEST(VirtualMap, PagesStayCachedAndOnlyWhatChangedIsDrawn) {
   EXPECT_EQ(stats.resident, 192);
 }
 
+// An object moves (the box, 2 m across the ground): invalidating its old and its new bounds
+// redraws those pages only, and every level read through the tables equals a full map of the moved
+// scene; a map that was not told keeps the box where it was.
+TEST(VirtualMap, AMovedObjectRedrawsItsPagesAndNoStaleDepthRemains) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap told(layout, 14), not_told(layout, 14);
+  told.update(every_page(layout), f.view, f.scene, f.meshes);
+  not_told.update(every_page(layout), f.view, f.scene, f.meshes);
+  scene::Object& box = f.scene.objects[1];
+  ASSERT_EQ(box.name, "box");
+  const scene::Aabb before = box.mesh->bounds().transformed(box.model);
+  box.model = glm::translate(glm::mat4(1), glm::vec3(2, 0, 1)) * box.model;
+  const scene::Aabb after = box.mesh->bounds().transformed(box.model);
+  told.invalidate(before);
+  told.invalidate(after);
+  const auto stats = told.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_GT(stats.drawn, 0);
+  EXPECT_LT(stats.drawn, 192 / 3) << "only the pages over the box's old and new places";
+  EXPECT_EQ(not_told.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 0);
+  for (int level = 0; level < layout.levels; ++level) {
+    SCOPED_TRACE(level);
+    const std::vector<float> direct = full_map(f, told, level), paged = read_through_tables(told, level),
+                             stale = read_through_tables(not_told, level);
+    std::size_t differ = 0, stale_differ = 0;
+    for (std::size_t i = 0; i < direct.size(); ++i) {
+      differ += !(std::abs(paged[i] - direct[i]) <= 1e-5f);
+      stale_differ += !(std::abs(stale[i] - direct[i]) <= 1e-5f);
+    }
+    EXPECT_LE(differ, direct.size() / 1000);
+    EXPECT_GT(stale_differ, direct.size() / 1000) << "the test sees a stale page";
+  }
+}
+
 TEST(VirtualMap, APoolTooSmallKeepsTheCoarseLevelsAndCountsWhatIsMissing) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
