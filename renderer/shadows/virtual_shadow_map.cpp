@@ -52,6 +52,7 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
   fbo_ = gl::Framebuffer(std::span(&depth, 1), "virtual shadow map page pool");
   program_ = gl::ShaderLibrary().program({{GL_VERTEX_SHADER, "vsm_page.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
   slots_.resize(static_cast<std::size_t>(pool_slots()));
+  for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
   origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
   origin_pages_y_.assign(static_cast<std::size_t>(layout.levels), 0);
   write_tables();
@@ -74,6 +75,7 @@ void VirtualShadowMap::free_slot(int slot) {
   if (!s.used) return;
   resident_.erase(s.key);
   s = Slot{};
+  free_.push_back(slot);
 }
 
 void VirtualShadowMap::invalidate_all() {
@@ -161,18 +163,30 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     }
   }
   std::vector<std::pair<int, Key>> to_draw;
+  bool full = false;
   for (const Key& key : wanted) {
-    // A free slot, else the least recently asked-for page that this frame does not ask for.
+    // A free slot, else the least recently asked-for page that this frame does not ask for; once
+    // every slot holds a page of this frame, the rest are missing.
     int chosen = -1;
-    for (int i = 0; i < pool_slots() && chosen < 0; ++i)
-      if (!slots_[static_cast<std::size_t>(i)].used) chosen = i;
-    if (chosen < 0) {
+    if (full) {
+      ++stats.missing;
+      continue;
+    }
+    if (!free_.empty()) {
+      chosen = free_.back();
+      free_.pop_back();
+    } else {
       std::int64_t oldest = frame_;
       for (int i = 0; i < pool_slots(); ++i)
         if (slots_[static_cast<std::size_t>(i)].last_frame < oldest) oldest = slots_[static_cast<std::size_t>(i)].last_frame, chosen = i;
-      if (chosen >= 0) free_slot(chosen), ++stats.evicted;
+      if (chosen >= 0) {
+        free_slot(chosen);  // back on the free list: take it again
+        free_.pop_back();
+        ++stats.evicted;
+      }
     }
     if (chosen < 0) {
+      full = true;
       ++stats.missing;
       continue;
     }

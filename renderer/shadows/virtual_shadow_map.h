@@ -131,6 +131,7 @@ class VirtualShadowMap {
   gl::Framebuffer fbo_;
   gl::Program program_;
   std::vector<Slot> slots_;
+  std::vector<int> free_;  // unused slots, a stack
   std::map<Key, int> resident_;
   std::vector<std::int64_t> origin_pages_x_, origin_pages_y_;  // each level's window corner, in pages
   VirtualMapView view_;
