@@ -43,6 +43,7 @@
 #include "apps/demo/path.h"
 #include "apps/demo/report.h"
 #include "apps/run_python.h"
+#include "apps/virtual_debug.h"
 #include "cli/main.h"
 #include "cli/progress_bar.h"
 #include "gl/context.h"
@@ -284,42 +285,6 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
 // Then the pages are drawn into a virtual shadow map's pool (shadows/virtual_shadow_map.h, 1024
 // slots: 64 MB), once per frame from nothing (the work of a frame without a cache) and once along
 // the path with the cache (what a walking camera redraws), each timed with glFinish around it.
-// The colour of clipmap level k in levels.png: a distinct colour per level (12 and beyond cycle),
-// no surface black, a pixel beyond the coarsest level white.
-glm::vec3 level_colour(float level, int levels) {
-  static const glm::vec3 kPalette[] = {{0.12f, 0.47f, 0.71f}, {1.0f, 0.5f, 0.05f},  {0.17f, 0.63f, 0.17f}, {0.84f, 0.15f, 0.16f},
-                                       {0.58f, 0.4f, 0.74f},  {0.55f, 0.34f, 0.29f}, {0.89f, 0.47f, 0.76f}, {0.5f, 0.5f, 0.5f},
-                                       {0.74f, 0.74f, 0.13f}, {0.09f, 0.75f, 0.81f}, {0.68f, 0.78f, 0.91f}, {1.0f, 0.73f, 0.47f}};
-  if (level < 0) return glm::vec3(0);
-  if (level >= static_cast<float>(levels)) return glm::vec3(1);
-  return kPalette[static_cast<std::size_t>(level) % std::size(kPalette)];
-}
-
-// A level image (R32F: the level per pixel, -1 no surface, `levels` beyond the coarsest) in colour.
-io::Image8 level_image(const gl::Texture& levels_tex, int levels) {
-  const int w = levels_tex.desc().width, h = levels_tex.desc().height;
-  std::vector<float> v(static_cast<std::size_t>(w) * h);
-  glGetTextureImage(levels_tex.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
-  io::Image8 img{w, h, 3, std::vector<std::uint8_t>(v.size() * 3)};
-  for (std::size_t p = 0; p < v.size(); ++p) {
-    const glm::vec3 c = level_colour(v[p], levels);
-    for (int k = 0; k < 3; ++k) img.pixels[3 * p + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(std::lround(255 * c[k]));
-  }
-  return img;
-}
-
-// levels.png's key: one band per level, finest on the left.
-io::Image8 level_key(int levels, int width, int height) {
-  io::Image8 img{width, height, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const glm::vec3 c = y < height / 2 ? level_colour(static_cast<float>(x * levels / width), levels) : glm::vec3(0.1f);
-      for (int k = 0; k < 3; ++k)
-        img.pixels[(static_cast<std::size_t>(y) * width + x) * 3 + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(std::lround(255 * c[k]));
-    }
-  return img;
-}
-
 int run_pages(const Options& opt, shadows::ShadowSettings base) {
   io::StagedDirectory out(opt.output, "pages.json");
   gl::HeadlessContext ctx;
@@ -398,7 +363,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
         glTextureSubImage2D(positions.id(), 0, 0, 0, opt.width, opt.height, GL_RGBA, GL_FLOAT, surface.pixels.data());
         for (const adaptive::MarkOptions& m : {rule, footprint}) {
           marker.mark(positions, camera, opt.height, view, radius, m, &levels);
-          level_views.push_back(level_image(levels, layout.levels));
+          level_views.push_back(apps::level_image(levels, layout.levels));
           level_labels.push_back("frame " + std::to_string(pf.frame) + ", " + std::string(adaptive::to_string(m.marking)));
         }
       }
@@ -450,7 +415,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     t["pages_ratio_footprint_over_rule"] = {{"median", sr.median}, {"min", sr.min}, {"max", sr.max}};
     report["techniques"].push_back(t);
   }
-  level_views.push_back(level_key(layout.levels, opt.width, opt.height / 4));
+  level_views.push_back(apps::level_key(layout.levels, opt.width, std::max(1, opt.height / 4)));
   level_labels.push_back("key: levels 0-" + std::to_string(layout.levels - 1) + ", fine to coarse");
   io::write_png(out.path() / "levels.png", io::montage(level_views, level_labels, 2, std::min(opt.width, 480)));
   io::write_file_atomic(out.path() / "pages.json", json_input::dump(report, 2) + "\n");

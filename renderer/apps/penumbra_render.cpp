@@ -23,6 +23,7 @@
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
+#include "apps/virtual_debug.h"
 #include "cli_options.h"
 
 namespace fs = std::filesystem;
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   int width = 1280, height = 720, frames = 5, warmup = 1;
   float light_size = -1;
   int path_frame = -1;
+  bool virtual_debug = false;
   shadows::ShadowSettings base;
   apps::CalibrationOption calibration;
 
@@ -72,6 +74,10 @@ int main(int argc, char** argv) {
   apps::add_light_size_option(app, light_size);
   app.add_option("--path-frame", path_frame, "view from this frame of the scene's camera path instead of its camera")
       ->check(CLI::Range(0, 10'000'000));
+  app.add_flag("--virtual-debug", virtual_debug,
+               "also write the sun's virtual shadow map for this view: virtual-levels.png (the level each pixel samples, by the "
+               "rule and by the footprint) and virtual-pool.png (the page pool: drawn for this view green, kept from the previous "
+               "path frame blue); pcf with a world radius or pcss, the pixel floor --adaptive.min_texel_px (0: 1 pixel)");
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")
       ->required()
       ->check(cli::path_given());
@@ -88,6 +94,13 @@ int main(int argc, char** argv) {
       apps::refuse_unused_technique_options(app, {shadows::technique_from_string(technique_arg)}, "--technique " + technique_arg);
     scene::Scene scene = scene::load_scene(scene_arg);
     if (light_size >= 0) scene.light.size = light_size;
+    if (virtual_debug && scene.light.type != scene::Light::Type::directional)
+      throw cli::UsageError("--virtual-debug: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
+    if (virtual_debug && technique_arg != "pcf" && technique_arg != "pcss")
+      throw cli::UsageError("--virtual-debug: pages are marked for pcf (world radius) or pcss, not --technique " + technique_arg);
+    scene::Camera previous_camera;
+    const bool has_previous = path_frame > 0 && !scene.camera_path.empty();
+    if (has_previous) previous_camera = scene.camera_path.at(scene.camera, path_frame - 1);
     if (path_frame >= 0) {
       if (scene.camera_path.empty()) throw std::runtime_error("--path-frame: scene '" + scene.name + "' has no camera path");
       if (path_frame >= scene.camera_path.frames())
@@ -128,6 +141,22 @@ int main(int argc, char** argv) {
       add_variants(shadows::technique_from_string(technique_arg), false);
     }
     for (auto& v : variants) apps::apply_calibration_for(calibration, v.settings);  // each technique's own c
+    // --virtual-debug marks pages for the filter's world radius: PCF's, or PCSS's minimum penumbra
+    // (the finest it can ask for).
+    double virtual_radius = 0;
+    adaptive::MarkOptions virtual_rule;
+    if (virtual_debug) {
+      const shadows::ShadowSettings& vs = variants.front().settings;
+      virtual_radius = vs.pcss.min_penumbra_ws;
+      if (vs.technique == shadows::Technique::pcf) {
+        if (vs.pcf.radius_unit != shadows::RadiusUnit::world)
+          throw cli::UsageError("--virtual-debug: pcf marks pages by a world radius (--pcf.radius_unit world)");
+        virtual_radius = vs.pcf.radius;
+      }
+      virtual_rule.c_texels = vs.adaptive.c;
+      // The footprint marking needs a pixel floor: penumbra-demo's 1 pixel where the settings have none.
+      virtual_rule.min_texel_px = vs.adaptive.min_texel_px > 0 ? vs.adaptive.min_texel_px : 1.0;
+    }
 
     gl::HeadlessContext context;
     const auto& ctx = context.info();
@@ -229,6 +258,14 @@ int main(int argc, char** argv) {
       }
     }
     if (progress) std::fprintf(stderr, "%*s\r", 60, "");
+    if (virtual_debug) {
+      const nlohmann::json v = apps::write_virtual_debug(scene, has_previous ? &previous_camera : nullptr, scene.camera, width, height,
+                                                         virtual_radius, virtual_rule, staging);
+      summary["virtual_debug"] = v;
+      std::printf("virtual shadow map: %d pages by the rule, %d by the footprint; %d drawn, %d kept from the previous frame "
+                  "(virtual-levels.png, virtual-pool.png)\n",
+                  v.at("pages_rule").get<int>(), v.at("pages_footprint").get<int>(), v.at("drawn").get<int>(), v.at("cached").get<int>());
+    }
     if (montage_images.size() > 1) {
       io::write_png(staging / "montage.png", io::montage(montage_images, labels, 3, 640));
     }

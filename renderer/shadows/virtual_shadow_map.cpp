@@ -190,7 +190,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       ++stats.missing;
       continue;
     }
-    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_};
+    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_};
     resident_[key] = chosen;
     to_draw.emplace_back(chosen, key);
   }
@@ -224,6 +224,12 @@ void VirtualShadowMap::write_tables() {
     table[(static_cast<std::size_t>(key.level) * pps + static_cast<std::size_t>(y)) * pps + static_cast<std::size_t>(x)] = slot;
   }
   glTextureSubImage2D(table_.id(), 0, 0, 0, pps, pps * layout_.levels, GL_RED_INTEGER, GL_INT, table.data());
+}
+
+std::vector<VirtualShadowMap::SlotState> VirtualShadowMap::slot_states() const {
+  std::vector<SlotState> states;
+  for (const Slot& s : slots_) states.push_back(!s.used ? SlotState::free : s.drawn_frame == frame_ ? SlotState::drawn : SlotState::cached);
+  return states;
 }
 
 int VirtualShadowMap::slot_of(const adaptive::Page& page) const {

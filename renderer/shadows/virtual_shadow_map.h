@@ -107,6 +107,13 @@ class VirtualShadowMap {
   // Lower corner of level `level`'s window in light space, for the last update's view.
   adaptive::LightXY origin(int level) const;
 
+  // The debug view of the pool: each slot free, holding a page drawn by the last update, or one
+  // kept from an earlier update (cached); the pool itself (32-bit depth, slot s at column
+  // s % pool_pages_per_side, row s / pool_pages_per_side).
+  enum class SlotState { free, drawn, cached };
+  std::vector<SlotState> slot_states() const;
+  const gl::Texture& pool() const { return pool_; }
+
  private:
   // A page by its place in light space: level, then column and row from the light-space origin.
   struct Key {
@@ -118,6 +125,7 @@ class VirtualShadowMap {
     bool used = false;
     Key key;
     std::int64_t last_frame = -1;  // the last update that asked for it
+    std::int64_t drawn_frame = -1;  // the update that drew it
   };
   Key key_of(const adaptive::Page& page) const;
   double page_ws(int level) const;

@@ -156,6 +156,42 @@ TEST_F(RenderCli, GoodRunWritesImagesAndReport) {
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
 }
 
+// --virtual-debug: the sun's virtual shadow map for the view, beside the render: the level per
+// pixel by the rule and by the footprint, the pool with the pages drawn for this view and those
+// kept from the previous path frame; the rule never asks for more pages than the footprint. A spot
+// light, or PCF with a radius in texels, is refused before anything is rendered.
+TEST_F(RenderCli, VirtualDebugWritesTheLevelsAndThePool) {
+  const fs::path out = work_ / "out";
+  const Result r = run_render({"--scene", "outdoor", "--path-frame", "120", "--width", "160", "--height", "90", "--resolution", "256",
+                               "--frames", "1", "--warmup", "0", "--virtual-debug", "--pcf.radius_unit", "world", "--pcf.radius", "0.12",
+                               "-o", out.string()},
+                              scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("virtual shadow map: "));
+  const auto levels = penumbra::io::read_image8(out / "virtual-levels.png");
+  EXPECT_EQ(levels.width, 2 * 160);
+  const auto pool = penumbra::io::read_image8(out / "virtual-pool.png");
+  EXPECT_EQ(pool.width, 1024);
+  const auto v = nlohmann::json::parse(read_file(out / "report.json")).at("virtual_debug");
+  EXPECT_GT(v.at("pages_rule").get<int>(), 0);
+  EXPECT_LE(v.at("pages_rule").get<int>(), v.at("pages_footprint").get<int>());
+  EXPECT_EQ(v.at("drawn").get<int>() + v.at("cached").get<int>() + v.at("missing").get<int>(), v.at("pages_rule").get<int>());
+  EXPECT_GT(v.at("cached").get<int>(), 0) << "the previous path frame's pages are kept";
+
+  for (const auto& [args, why] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--scene", "outdoor-spot", "--virtual-debug"}, "--virtual-debug: the virtual shadow map is the sun's"},
+           {{"--scene", "outdoor", "--virtual-debug", "--pcf.radius_unit", "texels"}, "--virtual-debug: pcf marks pages by a world radius"},
+           {{"--scene", "outdoor", "--virtual-debug", "--technique", "vsm"}, "--virtual-debug: pages are marked for pcf"}}) {
+    std::vector<std::string> with_output = args;
+    with_output.insert(with_output.end(), {"-o", (work_ / "refused").string()});
+    const Result bad = run_render(small_args(with_output), scratch_);
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+    EXPECT_THAT(bad.err, HasSubstr(why));
+    EXPECT_EQ(line_count(bad.err), 1) << bad.err;
+    EXPECT_FALSE(fs::exists(work_ / "refused"));
+  }
+}
+
 TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const fs::path out = work_ / "out";
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);

@@ -1,0 +1,134 @@
+#include "apps/virtual_debug.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iterator>
+#include <stdexcept>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "metrics/surface_probe.h"
+
+namespace penumbra::apps {
+
+namespace {
+
+glm::vec3 level_colour(float level, int levels) {
+  static const glm::vec3 kPalette[] = {{0.12f, 0.47f, 0.71f}, {1.0f, 0.5f, 0.05f},  {0.17f, 0.63f, 0.17f}, {0.84f, 0.15f, 0.16f},
+                                       {0.58f, 0.4f, 0.74f},  {0.55f, 0.34f, 0.29f}, {0.89f, 0.47f, 0.76f}, {0.5f, 0.5f, 0.5f},
+                                       {0.74f, 0.74f, 0.13f}, {0.09f, 0.75f, 0.81f}, {0.68f, 0.78f, 0.91f}, {1.0f, 0.73f, 0.47f}};
+  if (level < 0) return glm::vec3(0);
+  if (level >= static_cast<float>(levels)) return glm::vec3(1);
+  return kPalette[static_cast<std::size_t>(level) % std::size(kPalette)];
+}
+
+void put(io::Image8& img, std::size_t pixel, const glm::vec3& c) {
+  for (std::size_t k = 0; k < 3; ++k)
+    img.pixels[3 * pixel + k] = static_cast<std::uint8_t>(std::lround(255 * std::clamp(c[static_cast<int>(k)], 0.0f, 1.0f)));
+}
+
+}  // namespace
+
+io::Image8 level_image(const gl::Texture& levels_tex, int levels) {
+  const int w = levels_tex.desc().width, h = levels_tex.desc().height;
+  std::vector<float> v(static_cast<std::size_t>(w) * h);
+  glGetTextureImage(levels_tex.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  io::Image8 img{w, h, 3, std::vector<std::uint8_t>(v.size() * 3)};
+  for (std::size_t p = 0; p < v.size(); ++p) put(img, p, level_colour(v[p], levels));
+  return img;
+}
+
+io::Image8 level_key(int levels, int width, int height) {
+  io::Image8 img{width, height, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      put(img, static_cast<std::size_t>(y) * width + x, y < height / 2 ? level_colour(static_cast<float>(x * levels / width), levels) : glm::vec3(0.1f));
+  return img;
+}
+
+io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side) {
+  const int side = vsm.pool().desc().width;
+  std::vector<float> depth(static_cast<std::size_t>(side) * side);
+  glGetTextureImage(vsm.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
+  const int step = std::max(1, (side + max_side - 1) / std::max(max_side, 1));
+  const int out = side / step, page = vsm.layout().page_texels, per_side = vsm.pool_pages_per_side();
+  const auto states = vsm.slot_states();
+  // Depths stretched over the range the pages hold (the sun's depth range spans the whole town).
+  float lo = 1, hi = 0;
+  for (float d : depth)
+    if (d < 1) lo = std::min(lo, d), hi = std::max(hi, d);
+  const float range = hi > lo ? hi - lo : 1.0f;
+  io::Image8 img{out, out, 3, std::vector<std::uint8_t>(static_cast<std::size_t>(out) * out * 3)};
+  for (int y = 0; y < out; ++y)
+    for (int x = 0; x < out; ++x) {
+      const int tx = x * step, ty = y * step;  // the pool's texel; its row 0 is the image's bottom
+      const int slot = (ty / page) * per_side + tx / page;
+      const auto state = states[static_cast<std::size_t>(slot)];
+      const float d = depth[static_cast<std::size_t>(ty) * side + tx];
+      const float grey = 0.2f + 0.8f * (1.0f - std::clamp((d - lo) / range, 0.0f, 1.0f));  // near the sun: light
+      const glm::vec3 tint = state == shadows::VirtualShadowMap::SlotState::drawn    ? glm::vec3(0.55f, 1.0f, 0.55f)
+                             : state == shadows::VirtualShadowMap::SlotState::cached ? glm::vec3(0.55f, 0.7f, 1.0f)
+                                                                                     : glm::vec3(0.25f, 0.05f, 0.05f);
+      const bool border = tx % page < step || ty % page < step;  // slot outlines
+      put(img, static_cast<std::size_t>(out - 1 - y) * out + x, border ? glm::vec3(0.05f) : state == shadows::VirtualShadowMap::SlotState::free ? tint : grey * tint);
+    }
+  return img;
+}
+
+nlohmann::json write_virtual_debug(const scene::Scene& scene, const scene::Camera* previous, const scene::Camera& camera, int width,
+                                   int height, double radius_ws, const adaptive::MarkOptions& options,
+                                   const std::filesystem::path& dir) {
+  if (scene.light.type != scene::Light::Type::directional)
+    throw std::runtime_error("virtual shadow map: it is the sun's; scene " + scene.name + " has a spot light");
+  const adaptive::VirtualMapLayout layout;
+  const scene::GpuMeshes meshes(scene.objects);
+  metrics::SurfaceProbe probe(scene);
+  shadows::VirtualMapView view;
+  view.light_view = shadows::sun_light_view(scene.light.direction);
+  shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
+  const shadows::PageMarker marker(layout);
+  shadows::VirtualShadowMap vsm(layout, 32);
+  adaptive::MarkOptions footprint = options;
+  footprint.marking = adaptive::Marking::footprint;
+  const gl::Texture positions({GL_RGBA32F, width, height, 1}, "surface"), levels({GL_R32F, width, height, 1}, "levels");
+  const auto mark = [&](const scene::Camera& c, const adaptive::MarkOptions& m, bool image) {
+    const io::ImageF surface = probe.render(c, width, height);
+    glTextureSubImage2D(positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
+    const glm::vec3 l = glm::vec3(view.light_view * glm::vec4(c.position, 1));
+    view.camera_xy = {l.x, l.y};
+    return marker.mark(positions, c, height, view, radius_ws, m, image ? &levels : nullptr);
+  };
+  nlohmann::json out;
+  if (previous) {  // the pages the previous view drew: kept (cached) where this one asks for them too
+    const adaptive::MarkResult before = mark(*previous, options, false);
+    vsm.update(before.pages, view, scene, meshes);
+    out["pages_previous"] = before.pages.size();
+  }
+  std::vector<io::Image8> images;
+  const adaptive::MarkResult by_footprint = mark(camera, footprint, true);
+  const io::Image8 footprint_levels = level_image(levels, layout.levels);
+  const adaptive::MarkResult by_rule = mark(camera, options, true);
+  images.push_back(level_image(levels, layout.levels));
+  images.push_back(footprint_levels);
+  images.push_back(level_key(layout.levels, width, std::max(1, height / 4)));
+  const shadows::VirtualMapStats st = vsm.update(by_rule.pages, view, scene, meshes);
+  io::write_png(dir / "virtual-levels.png",
+                io::montage(images,
+                            {"rule: " + std::to_string(by_rule.pages.size()) + " pages",
+                             "footprint: " + std::to_string(by_footprint.pages.size()) + " pages",
+                             "key: levels 0-" + std::to_string(layout.levels - 1) + ", fine to coarse"},
+                            2, std::min(width, 640)));
+  io::write_png(dir / "virtual-pool.png", pool_image(vsm, 1024));
+  out["pages_rule"] = by_rule.pages.size();
+  out["pages_footprint"] = by_footprint.pages.size();
+  out["pages_per_level_rule"] = by_rule.pages_per_level();
+  out["drawn"] = st.drawn;
+  out["cached"] = st.cached;
+  out["missing"] = st.missing;
+  out["pool_slots"] = vsm.pool_slots();
+  return out;
+}
+
+}  // namespace penumbra::apps

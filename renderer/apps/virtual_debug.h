@@ -1,0 +1,37 @@
+#pragma once
+// Debug views of the sun's virtual shadow map (shadows/virtual_shadow_map.h) for the apps
+// (penumbra-render --virtual-debug, penumbra-demo --pages): the level each pixel samples, by the
+// rule and by the footprint, and the page pool with each slot's state.
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "adaptive/virtual_pages.h"
+#include "gl/objects.h"
+#include "io/image_io.h"
+#include "scene/scene.h"
+#include "shadows/virtual_shadow_map.h"
+
+namespace penumbra::apps {
+
+// A level image (R32F: the level per pixel, -1 no surface, `levels` beyond the coarsest) in
+// colour: a distinct colour per level, no surface black, beyond the coarsest white.
+io::Image8 level_image(const gl::Texture& levels_tex, int levels);
+// The key of those colours: one band per level, finest on the left, over `width` × `height`.
+io::Image8 level_key(int levels, int width, int height);
+// The pool as an image of at most `max_side` pixels a side: each slot's depths in grey (light: near
+// the sun; stretched over the depths the pages hold), tinted by its state (drawn by the last
+// update: green; cached from an earlier one: blue; free: dark red), slots outlined.
+io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side);
+
+// For `scene` (a directional light) seen by `camera` at width × height: marks the pages by the rule
+// (options) and by the footprint, draws the rule's into a pool of 32² slots, first as `previous`
+// sees them (when given) and then as `camera` does, and writes <dir>/virtual-levels.png (rule |
+// footprint | key) and <dir>/virtual-pool.png. Returns the counts (pages per marking, drawn, cached).
+// Throws std::runtime_error for a spot light.
+nlohmann::json write_virtual_debug(const scene::Scene& scene, const scene::Camera* previous, const scene::Camera& camera, int width,
+                                   int height, double radius_ws, const adaptive::MarkOptions& options,
+                                   const std::filesystem::path& dir);
+
+}  // namespace penumbra::apps
