@@ -1,6 +1,7 @@
 // penumbra-view: the renderer in a window. Orbit with the left mouse button, zoom with the wheel;
 // the panel edits the technique's parameters (from the same tables as the CLI) and shows the
-// fitted light frame, per-pass times and the shadow map.
+// fitted light frame, per-pass times and the shadow map, and (the sun) the virtual shadow map's
+// debug views: the level each pixel samples by the rule and by the footprint, and its page pool.
 #include <epoxy/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -12,10 +13,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <string>
 
 #include <glm/gtc/constants.hpp>
 
 #include "apps/cli_options.h"
+#include "apps/virtual_debug.h"
 #include "cli/main.h"
 #include "gl/timer.h"
 #include "gl/window.h"
@@ -42,6 +46,58 @@ struct Orbit {
   }
 };
 
+// The panel's view of the sun's virtual shadow map: refreshed every few frames (marking reads the
+// surface back; the pool image reads the pool), kept across frames so that the pool shows which
+// pages the camera's move drew (green) and which it kept (blue).
+struct VirtualPanel {
+  std::unique_ptr<apps::VirtualDebug> debug;
+  gl::Texture rule_tex, footprint_tex, pool_tex;
+  apps::VirtualDebug::View last;
+  std::string problem;
+
+  static void upload(gl::Texture& t, const io::Image8& img) {
+    if (t.id() == 0 || t.desc().width != img.width || t.desc().height != img.height)
+      t = gl::Texture({GL_RGB8, img.width, img.height, 1}, "virtual debug view");
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage2D(t.id(), 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, img.pixels.data());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  }
+  void refresh(const scene::Scene& scene, const shadows::ShadowSettings& s, int width, int height) {
+    problem.clear();
+    double radius = s.pcss.min_penumbra_ws;
+    if (s.technique == shadows::Technique::pcf && s.pcf.radius_unit == shadows::RadiusUnit::world) radius = s.pcf.radius;
+    else if (s.technique != shadows::Technique::pcss) problem = "pages are marked for pcf with a world radius, or pcss";
+    if (scene.light.type != scene::Light::Type::directional) problem = "the virtual map is the sun's; this scene has a spot light";
+    if (!problem.empty()) return;
+    if (!debug) debug = std::make_unique<apps::VirtualDebug>(scene);
+    adaptive::MarkOptions rule;
+    rule.c_texels = s.adaptive.c;
+    rule.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;  // the footprint needs a floor
+    last = debug->view(scene, scene.camera, width, height, radius, rule);
+    upload(rule_tex, last.rule_levels);
+    upload(footprint_tex, last.footprint_levels);
+    upload(pool_tex, apps::pool_image(debug->map(), 256));
+  }
+  void draw() const {
+    if (!problem.empty()) {
+      ImGui::TextWrapped("virtual map: %s", problem.c_str());
+      return;
+    }
+    if (!debug) return;
+    ImGui::Text("pages: %zu by the rule, %zu by the footprint", last.rule.pages.size(), last.footprint.pages.size());
+    ImGui::Text("pool: %d drawn, %d kept, %d missing, %d resident", last.stats.drawn, last.stats.cached, last.stats.missing,
+                last.stats.resident);
+    const auto id = [](const gl::Texture& t) { return reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(t.id())); };
+    const float w = 200, h = w * static_cast<float>(rule_tex.desc().height) / static_cast<float>(std::max(rule_tex.desc().width, 1));
+    ImGui::Image(id(rule_tex), {w, h});
+    ImGui::SameLine();
+    ImGui::Image(id(footprint_tex), {w, h});
+    ImGui::Text("level per pixel: rule | footprint");
+    ImGui::Image(id(pool_tex), {200, 200});
+    ImGui::Text("pool: green drawn, blue kept, dark red free");
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,10 +111,13 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "window height")->check(CLI::Range(64, 8192));
   app.add_option("--screenshot", screenshot, "write the window (with the panel) to this PNG after --frames frames, then exit");
   app.add_option("--frames", frames, "frames to run before --screenshot (0: run until closed)")->check(CLI::Range(0, 1000000));
+  bool virtual_debug = false;
+  app.add_flag("--virtual-debug", virtual_debug, "open with the virtual shadow map's debug views shown (the panel's checkbox)");
   apps::add_calibration_option(app, calibration);
+  shadows::ShadowSettings settings;  // the panel's starting values
+  apps::add_settings_options(app, settings);
   if (const auto status = cli::parse(app, argc, argv, "penumbra-view")) return *status;
   try {
-    shadows::ShadowSettings settings;
     apps::apply_calibration(app, calibration, settings);
     std::printf("%s\n", apps::calibration_line(calibration, settings).c_str());
     apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
@@ -71,6 +130,7 @@ int main(int argc, char** argv) {
     orbit.from_camera(scene.camera);
     gl::PassTimer timer(!window.info().software);
     bool show_map = true;
+    VirtualPanel virtual_panel;
     int frame = 0;
     double last_x = 0, last_y = 0;
     while (!window.should_close()) {
@@ -112,8 +172,18 @@ int main(int argc, char** argv) {
       ImGui::Checkbox("show shadow map", &show_map);
       if (show_map && renderer.shadow_map_texture())
         ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(renderer.shadow_map_texture())), {200, 200}, {0, 1}, {1, 0});
+      ImGui::Checkbox("virtual shadow map (sun)", &virtual_debug);
       ImGui::PopItemWidth();
       ImGui::End();
+      if (virtual_debug) {  // its own window, top right
+        if (frame % 10 == 0 || !virtual_panel.problem.empty() || virtual_panel.last.rule_levels.pixels.empty())
+          virtual_panel.refresh(renderer.scene(), settings, std::max(fb_w / 4, 16), std::max(fb_h / 4, 9));
+        ImGui::SetNextWindowPos({static_cast<float>(fb_w) / window.framebuffer_scale() - 440, 10}, ImGuiCond_FirstUseEver);
+        ImGui::SetNextWindowSize({430, 0}, ImGuiCond_FirstUseEver);
+        ImGui::Begin("Virtual shadow map");
+        virtual_panel.draw();
+        ImGui::End();
+      }
       window.end_frame();
       ++frame;
       if (!screenshot.empty() && frame >= std::max(frames, 2)) {

@@ -77,57 +77,79 @@ io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side) {
   return img;
 }
 
+struct VirtualDebug::State {
+  adaptive::VirtualMapLayout layout;
+  scene::GpuMeshes meshes;
+  metrics::SurfaceProbe probe;
+  shadows::VirtualMapView view;
+  shadows::PageMarker marker{layout};
+  shadows::VirtualShadowMap vsm{layout, 32};
+  gl::Texture positions, levels;
+  explicit State(const scene::Scene& scene) : meshes(scene.objects), probe(scene) {
+    view.light_view = shadows::sun_light_view(scene.light.direction);
+    shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
+  }
+};
+
+VirtualDebug::VirtualDebug(const scene::Scene& scene) {
+  if (scene.light.type != scene::Light::Type::directional)
+    throw std::runtime_error("virtual shadow map: it is the sun's; scene " + scene.name + " has a spot light");
+  state_ = std::make_unique<State>(scene);
+}
+
+VirtualDebug::~VirtualDebug() = default;
+
+const shadows::VirtualShadowMap& VirtualDebug::map() const { return state_->vsm; }
+const adaptive::VirtualMapLayout& VirtualDebug::layout() const { return state_->layout; }
+
+VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Camera& camera, int width, int height, double radius_ws,
+                                      const adaptive::MarkOptions& options, bool images) {
+  State& st = *state_;
+  if (st.positions.id() == 0 || st.positions.desc().width != width || st.positions.desc().height != height) {
+    st.positions = gl::Texture({GL_RGBA32F, width, height, 1}, "virtual debug surface");
+    st.levels = gl::Texture({GL_R32F, width, height, 1}, "virtual debug levels");
+  }
+  const io::ImageF surface = st.probe.render(camera, width, height);
+  glTextureSubImage2D(st.positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
+  // The light view follows the scene's light: a moved sun drops every page (update does).
+  st.view.light_view = shadows::sun_light_view(scene.light.direction);
+  const glm::vec3 l = glm::vec3(st.view.light_view * glm::vec4(camera.position, 1));
+  st.view.camera_xy = {l.x, l.y};
+  adaptive::MarkOptions footprint = options;
+  footprint.marking = adaptive::Marking::footprint;
+  View v;
+  v.footprint = st.marker.mark(st.positions, camera, height, st.view, radius_ws, footprint, images ? &st.levels : nullptr);
+  if (images) v.footprint_levels = level_image(st.levels, st.layout.levels);
+  v.rule = st.marker.mark(st.positions, camera, height, st.view, radius_ws, options, images ? &st.levels : nullptr);
+  if (images) v.rule_levels = level_image(st.levels, st.layout.levels);
+  v.stats = st.vsm.update(v.rule.pages, st.view, scene, st.meshes);
+  return v;
+}
+
 nlohmann::json write_virtual_debug(const scene::Scene& scene, const scene::Camera* previous, const scene::Camera& camera, int width,
                                    int height, double radius_ws, const adaptive::MarkOptions& options,
                                    const std::filesystem::path& dir) {
-  if (scene.light.type != scene::Light::Type::directional)
-    throw std::runtime_error("virtual shadow map: it is the sun's; scene " + scene.name + " has a spot light");
-  const adaptive::VirtualMapLayout layout;
-  const scene::GpuMeshes meshes(scene.objects);
-  metrics::SurfaceProbe probe(scene);
-  shadows::VirtualMapView view;
-  view.light_view = shadows::sun_light_view(scene.light.direction);
-  shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
-  const shadows::PageMarker marker(layout);
-  shadows::VirtualShadowMap vsm(layout, 32);
-  adaptive::MarkOptions footprint = options;
-  footprint.marking = adaptive::Marking::footprint;
-  const gl::Texture positions({GL_RGBA32F, width, height, 1}, "surface"), levels({GL_R32F, width, height, 1}, "levels");
-  const auto mark = [&](const scene::Camera& c, const adaptive::MarkOptions& m, bool image) {
-    const io::ImageF surface = probe.render(c, width, height);
-    glTextureSubImage2D(positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
-    const glm::vec3 l = glm::vec3(view.light_view * glm::vec4(c.position, 1));
-    view.camera_xy = {l.x, l.y};
-    return marker.mark(positions, c, height, view, radius_ws, m, image ? &levels : nullptr);
-  };
+  VirtualDebug debug(scene);
   nlohmann::json out;
-  if (previous) {  // the pages the previous view drew: kept (cached) where this one asks for them too
-    const adaptive::MarkResult before = mark(*previous, options, false);
-    vsm.update(before.pages, view, scene, meshes);
-    out["pages_previous"] = before.pages.size();
-  }
-  std::vector<io::Image8> images;
-  const adaptive::MarkResult by_footprint = mark(camera, footprint, true);
-  const io::Image8 footprint_levels = level_image(levels, layout.levels);
-  const adaptive::MarkResult by_rule = mark(camera, options, true);
-  images.push_back(level_image(levels, layout.levels));
-  images.push_back(footprint_levels);
-  images.push_back(level_key(layout.levels, width, std::max(1, height / 4)));
-  const shadows::VirtualMapStats st = vsm.update(by_rule.pages, view, scene, meshes);
+  if (previous)  // the pages the previous view drew: kept (cached) where this one asks for them too
+    out["pages_previous"] = debug.view(scene, *previous, width, height, radius_ws, options, false).rule.pages.size();
+  VirtualDebug::View v = debug.view(scene, camera, width, height, radius_ws, options);
+  const int levels = debug.layout().levels;
+  std::vector<io::Image8> images = {std::move(v.rule_levels), std::move(v.footprint_levels), level_key(levels, width, std::max(1, height / 4))};
   io::write_png(dir / "virtual-levels.png",
                 io::montage(images,
-                            {"rule: " + std::to_string(by_rule.pages.size()) + " pages",
-                             "footprint: " + std::to_string(by_footprint.pages.size()) + " pages",
-                             "key: levels 0-" + std::to_string(layout.levels - 1) + ", fine to coarse"},
+                            {"rule: " + std::to_string(v.rule.pages.size()) + " pages",
+                             "footprint: " + std::to_string(v.footprint.pages.size()) + " pages",
+                             "key: levels 0-" + std::to_string(levels - 1) + ", fine to coarse"},
                             2, std::min(width, 640)));
-  io::write_png(dir / "virtual-pool.png", pool_image(vsm, 1024));
-  out["pages_rule"] = by_rule.pages.size();
-  out["pages_footprint"] = by_footprint.pages.size();
-  out["pages_per_level_rule"] = by_rule.pages_per_level();
-  out["drawn"] = st.drawn;
-  out["cached"] = st.cached;
-  out["missing"] = st.missing;
-  out["pool_slots"] = vsm.pool_slots();
+  io::write_png(dir / "virtual-pool.png", pool_image(debug.map(), 1024));
+  out["pages_rule"] = v.rule.pages.size();
+  out["pages_footprint"] = v.footprint.pages.size();
+  out["pages_per_level_rule"] = v.rule.pages_per_level();
+  out["drawn"] = v.stats.drawn;
+  out["cached"] = v.stats.cached;
+  out["missing"] = v.stats.missing;
+  out["pool_slots"] = debug.map().pool_slots();
   return out;
 }
 

@@ -3,6 +3,7 @@
 // (penumbra-render --virtual-debug, penumbra-demo --pages): the level each pixel samples, by the
 // rule and by the footprint, and the page pool with each slot's state.
 #include <filesystem>
+#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -24,6 +25,31 @@ io::Image8 level_key(int levels, int width, int height);
 // the sun; stretched over the depths the pages hold), tinted by its state (drawn by the last
 // update: green; cached from an earlier one: blue; free: dark red), slots outlined.
 io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side);
+
+// The virtual map of one scene kept across views (a window's frames): each view() marks the pages
+// by the rule and by the footprint, draws the rule's into a pool of 32² slots (keeping what earlier
+// views drew), and gives the debug images.
+class VirtualDebug {
+ public:
+  // Throws std::runtime_error for a spot light (the virtual map is the sun's).
+  explicit VirtualDebug(const scene::Scene& scene);
+  ~VirtualDebug();
+  struct View {
+    adaptive::MarkResult rule, footprint;
+    shadows::VirtualMapStats stats;  // the rule's pages drawn into the pool
+    io::Image8 rule_levels, footprint_levels;  // level per pixel (level_image)
+  };
+  // `scene` must be the one given to the constructor (its objects may have moved: call
+  // invalidate with their bounds first).
+  View view(const scene::Scene& scene, const scene::Camera& camera, int width, int height, double radius_ws,
+            const adaptive::MarkOptions& options, bool images = true);
+  const shadows::VirtualShadowMap& map() const;
+  const adaptive::VirtualMapLayout& layout() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 // For `scene` (a directional light) seen by `camera` at width × height: marks the pages by the rule
 // (options) and by the footprint, draws the rule's into a pool of 32² slots, first as `previous`
