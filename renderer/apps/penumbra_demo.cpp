@@ -53,7 +53,6 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
-#include "metrics/ground_truth.h"
 #include "metrics/surface_probe.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
@@ -299,9 +298,10 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   view.light_view = shadows::sun_light_view(scene.light.direction);
   shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
   constexpr int kPoolSide = 32;
-  glm::vec3 e1, e2;  // light space across the sun, as the references sample it
-  metrics::light_basis(scene.light.direction, e1, e2);
-  auto light_xy = [&](const glm::vec3& p) { return adaptive::LightXY{glm::dot(p, e1), glm::dot(p, e2)}; };
+  auto light_xy = [&](const glm::vec3& p) {  // light space across the sun, as the pages are drawn
+    const glm::vec3 l = glm::vec3(view.light_view * glm::vec4(p, 1));
+    return adaptive::LightXY{l.x, l.y};
+  };
   adaptive::VirtualMapLayout layout;
   constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth
   const shadows::PageMarker marker(layout);

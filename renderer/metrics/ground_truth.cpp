@@ -76,13 +76,6 @@ glm::vec2 concentric_disk(glm::vec2 p) {
   return {r * std::cos(phi), r * std::sin(phi)};
 }
 
-void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2) {
-  axis = glm::normalize(axis);
-  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  e1 = glm::normalize(glm::cross(helper, axis));
-  e2 = glm::cross(axis, e1);
-}
-
 std::vector<glm::vec2> stratified_disk(int per_side) {
   if (per_side < 1) throw std::invalid_argument("stratified_disk: per_side must be at least 1, got " + std::to_string(per_side));
   sampling::Random random(0x5eed1e55u);
@@ -103,7 +96,7 @@ std::vector<glm::vec2> stratified_disk(int per_side) {
 scene::Light light_sample(const scene::Light& light, glm::vec2 uv) {
   scene::Light out = light;
   glm::vec3 e1, e2;
-  light_basis(light.direction, e1, e2);
+  scene::light_basis(light.direction, e1, e2);
   const glm::vec3 offset = uv.x * e1 + uv.y * e2;
   if (light.type == scene::Light::Type::directional) {
     const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);

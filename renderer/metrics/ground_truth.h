@@ -48,10 +48,6 @@ ReferenceKind reference_kind(std::string_view technique_name);
 // Shirley and Chiu's concentric map from [-1, 1]² to the unit disk (area-preserving).
 glm::vec2 concentric_disk(glm::vec2 square);
 
-// Two unit vectors perpendicular to `axis` and to each other: the plane light_sample (and the
-// ray-traced reference) offsets the light's samples in.
-void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2);
-
 // per_side² points in the unit disk: one jittered point per cell of a per_side × per_side grid
 // of strata of the unit square, mapped by Shirley and Chiu's area-preserving concentric map so
 // every stratum keeps its share of the disk. The jitter comes from a fixed-seed generator with

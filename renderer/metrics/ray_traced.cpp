@@ -125,6 +125,42 @@ void pixel_ray(const glm::mat4& inverse_view_projection, int x, int y, int width
   direction = glm::normalize(glm::vec3(far) / far.w - origin);
 }
 
+// A ray from `origin` along `direction`, from `tnear` on, tested against the geometries in `mask`.
+RTCRay ray_from(const glm::vec3& origin, const glm::vec3& direction, float tnear = 0, unsigned mask = 0xFFFFFFFFu) {
+  RTCRay ray{};
+  ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
+  ray.dir_x = direction.x, ray.dir_y = direction.y, ray.dir_z = direction.z;
+  ray.tnear = tnear, ray.tfar = std::numeric_limits<float>::infinity();
+  ray.mask = mask, ray.flags = 0, ray.time = 0;
+  return ray;
+}
+
+// The nearest hit of that ray (geomID RTC_INVALID_GEOMETRY_ID: none).
+RTCRayHit nearest_hit(RTCScene scene, const glm::vec3& origin, const glm::vec3& direction, float tnear = 0) {
+  RTCRayHit hit{};
+  hit.ray = ray_from(origin, direction, tnear);
+  hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcIntersect1(scene, &context, &hit);
+  return hit;
+}
+
+// Whether anything in `mask` lies on the ray from `start` along `direction`.
+bool occluded(RTCScene scene, const glm::vec3& start, const glm::vec3& direction, unsigned mask = 0xFFFFFFFFu) {
+  RTCRay ray = ray_from(start, direction, 0, mask);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded1(scene, &context, &ray);
+  return ray.tfar < 0;  // tfar is set to -inf when occluded
+}
+
+// Where a shadow ray leaves a surface seen at `position` (geometric normal `normal`, on the side
+// the camera sees): 1e-4 of the camera distance off it, at least 1 mm.
+glm::vec3 shadow_ray_start(const glm::vec3& position, const glm::vec3& normal, const glm::vec3& camera_position) {
+  return position + normal * std::max(1e-3f, 1e-4f * glm::length(position - camera_position));
+}
+
 // Runs work() on `threads` threads (0: one per hardware thread), this one included.
 template <class F>
 void on_threads(int threads, F work) {
@@ -138,15 +174,7 @@ void on_threads(int threads, F work) {
 }  // namespace
 
 bool RayTracedScene::primary(const glm::vec3& origin, const glm::vec3& direction, Hit& out) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit hit{};
-  hit.ray.org_x = origin.x, hit.ray.org_y = origin.y, hit.ray.org_z = origin.z;
-  hit.ray.dir_x = direction.x, hit.ray.dir_y = direction.y, hit.ray.dir_z = direction.z;
-  hit.ray.tnear = 0, hit.ray.tfar = std::numeric_limits<float>::infinity();
-  hit.ray.mask = 0xFFFFFFFFu, hit.ray.flags = 0, hit.ray.time = 0;
-  hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(embree_->scene, &context, &hit);
+  const RTCRayHit hit = nearest_hit(embree_->scene, origin, direction);
   if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   out.position = origin + hit.ray.tfar * direction;
   out.geometric = glm::normalize(glm::vec3(hit.hit.Ng_x, hit.hit.Ng_y, hit.hit.Ng_z));
@@ -195,22 +223,20 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
   const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
   const glm::vec3 axis = glm::normalize(light.direction);
   glm::vec3 e1, e2;
-  light_basis(axis, e1, e2);
+  scene::light_basis(axis, e1, e2);
   const int samples = per_side * per_side;
   const float cell = 2.0f / static_cast<float>(per_side);
 
   io::ImageF out{width_px, height_px, 1, std::vector<float>(static_cast<std::size_t>(width_px) * height_px, 1.0f)};
   std::atomic<int> next_row{0};
   auto work = [&] {
-    RTCIntersectContext context;
     for (int y = next_row++; y < height_px; y = next_row++) {
       for (int x = 0; x < width_px; ++x) {
         glm::vec3 origin, direction;
         pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
         Hit hit;
         if (!primary(origin, direction, hit)) continue;  // sky: lit
-        const glm::vec3 p = hit.position, n = hit.geometric;
-        const glm::vec3 start = p + n * std::max(1e-3f, 1e-4f * glm::length(p - camera_position));
+        const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
         const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width_px) + static_cast<std::uint64_t>(x);
         int seen = 0;
         for (int j = 0; j < per_side; ++j)
@@ -219,14 +245,7 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
             const glm::vec2 uv = concentric_disk({-1 + (static_cast<float>(i) + hash_uniform(pixel, s, 0)) * cell,
                                                   -1 + (static_cast<float>(j) + hash_uniform(pixel, s, 1)) * cell});
             const glm::vec3 travel = glm::normalize(axis + tan_half * (uv.x * e1 + uv.y * e2));
-            RTCRay ray{};
-            ray.org_x = start.x, ray.org_y = start.y, ray.org_z = start.z;
-            ray.dir_x = -travel.x, ray.dir_y = -travel.y, ray.dir_z = -travel.z;
-            ray.tnear = 0, ray.tfar = std::numeric_limits<float>::infinity();
-            ray.mask = 0xFFFFFFFFu, ray.flags = 0, ray.time = 0;
-            rtcInitIntersectContext(&context);
-            rtcOccluded1(embree_->scene, &context, &ray);
-            if (ray.tfar >= 0) ++seen;  // tfar is set to -inf when occluded
+            if (!occluded(embree_->scene, start, -travel)) ++seen;
           }
         out.pixels[pixel] = static_cast<float>(seen) / static_cast<float>(samples);
       }
@@ -262,29 +281,11 @@ RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene
   HardVisibility out{{width_px, height_px, 1, std::vector<float>(n, 1.0f)}, {width_px, height_px, 1, std::vector<float>(n, 1.0f)}};
   std::atomic<int> next_row{0};
   on_threads(threads, [&] {
-    RTCIntersectContext context;
-    auto occluded = [&](const glm::vec3& start, unsigned mask) {
-      RTCRay ray{};
-      ray.org_x = start.x, ray.org_y = start.y, ray.org_z = start.z;
-      ray.dir_x = to_light.x, ray.dir_y = to_light.y, ray.dir_z = to_light.z;
-      ray.tnear = 0, ray.tfar = std::numeric_limits<float>::infinity();
-      ray.mask = mask, ray.flags = 0, ray.time = 0;
-      rtcInitIntersectContext(&context);
-      rtcOccluded1(embree_->scene, &context, &ray);
-      return ray.tfar < 0;  // tfar is set to -inf when occluded
-    };
     // Without ray masks: the nearest hits in turn, past the left-out geometries' ones.
     auto occluded_by_kept = [&](const glm::vec3& start) {
       float tnear = 0;
       for (;;) {
-        RTCRayHit hit{};
-        hit.ray.org_x = start.x, hit.ray.org_y = start.y, hit.ray.org_z = start.z;
-        hit.ray.dir_x = to_light.x, hit.ray.dir_y = to_light.y, hit.ray.dir_z = to_light.z;
-        hit.ray.tnear = tnear, hit.ray.tfar = std::numeric_limits<float>::infinity();
-        hit.ray.mask = 0xFFFFFFFFu, hit.ray.flags = 0, hit.ray.time = 0;
-        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID, hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcInitIntersectContext(&context);
-        rtcIntersect1(embree_->scene, &context, &hit);
+        const RTCRayHit hit = nearest_hit(embree_->scene, start, to_light, tnear);
         if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
         if (!excluded[hit.hit.geomID]) return true;
         tnear = std::nextafter(hit.ray.tfar, std::numeric_limits<float>::infinity());
@@ -296,11 +297,11 @@ RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene
         pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
         Hit hit;
         if (!primary(origin, direction, hit)) continue;  // sky: lit
-        const glm::vec3 start = hit.position + hit.geometric * std::max(1e-3f, 1e-4f * glm::length(hit.position - camera_position));
-        if (!occluded(start, 0xFFFFFFFFu)) continue;
+        const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
+        if (!occluded(embree_->scene, start, to_light)) continue;
         const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_px) + static_cast<std::size_t>(x);
         out.all.pixels[p] = 0;
-        const bool blocked = !any_excluded || (by_mask ? occluded(start, ~excluded_bits) : occluded_by_kept(start));
+        const bool blocked = !any_excluded || (by_mask ? occluded(embree_->scene, start, to_light, ~excluded_bits) : occluded_by_kept(start));
         if (blocked) out.without.pixels[p] = 0;
       }
   });

@@ -64,6 +64,13 @@ Camera CameraPath::at(const Camera& base, double frame) const {
   return c;
 }
 
+void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2) {
+  axis = glm::normalize(axis);
+  const glm::vec3 helper = std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  e1 = glm::normalize(glm::cross(helper, axis));
+  e2 = glm::cross(axis, e1);
+}
+
 Aabb Scene::bounds() const {
   Aabb b;
   for (const auto& o : objects) b.extend(o.mesh->bounds().transformed(o.model));

@@ -63,6 +63,11 @@ struct Light {
   float ambient = 0.2f;  // fraction of light that reaches shadowed surfaces
 };
 
+// Two unit vectors across the light's `axis` (perpendicular to it and to each other): the plane
+// the references offset an area light's samples in, and the light-space x and y of the sun's
+// virtual shadow map.
+void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2);
+
 struct Object {
   std::string name;
   std::shared_ptr<const MeshData> mesh;

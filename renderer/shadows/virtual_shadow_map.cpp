@@ -17,10 +17,9 @@
 namespace penumbra::shadows {
 
 glm::mat4 sun_light_view(const glm::vec3& direction) {
-  // The references' basis (metrics::light_basis): e1 ⟂ the light and the helper axis, e2 = d × e1.
   const glm::vec3 d = glm::normalize(direction);
-  const glm::vec3 helper = std::abs(d.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  const glm::vec3 e1 = glm::normalize(glm::cross(helper, d)), e2 = glm::cross(d, e1);
+  glm::vec3 e1, e2;
+  scene::light_basis(d, e1, e2);  // the references' basis
   glm::mat4 v(1);  // rows e1, e2, -d (column-major: element [column][row])
   for (int c = 0; c < 3; ++c) v[c][0] = e1[c], v[c][1] = e2[c], v[c][2] = -d[c];
   return v;
