@@ -141,22 +141,8 @@ int main(int argc, char** argv) {
       add_variants(shadows::technique_from_string(technique_arg), false);
     }
     for (auto& v : variants) apps::apply_calibration_for(calibration, v.settings);  // each technique's own c
-    // --virtual-debug marks pages for the filter's world radius: PCF's, or PCSS's minimum penumbra
-    // (the finest it can ask for).
-    double virtual_radius = 0;
-    adaptive::MarkOptions virtual_rule;
-    if (virtual_debug) {
-      const shadows::ShadowSettings& vs = variants.front().settings;
-      virtual_radius = vs.pcss.min_penumbra_ws;
-      if (vs.technique == shadows::Technique::pcf) {
-        if (vs.pcf.radius_unit != shadows::RadiusUnit::world)
-          throw cli::UsageError("--virtual-debug: pcf marks pages by a world radius (--pcf.radius_unit world)");
-        virtual_radius = vs.pcf.radius;
-      }
-      virtual_rule.c_texels = vs.adaptive.c;
-      // The footprint marking needs a pixel floor: penumbra-demo's 1 pixel where the settings have none.
-      virtual_rule.min_texel_px = vs.adaptive.min_texel_px > 0 ? vs.adaptive.min_texel_px : 1.0;
-    }
+    const apps::VirtualMarking virtual_mark = apps::virtual_marking(variants.front().settings);
+    if (virtual_debug && !virtual_mark.problem.empty()) throw cli::UsageError("--virtual-debug: " + virtual_mark.problem);
 
     gl::HeadlessContext context;
     const auto& ctx = context.info();
@@ -260,7 +246,7 @@ int main(int argc, char** argv) {
     if (progress) std::fprintf(stderr, "%*s\r", 60, "");
     if (virtual_debug) {
       const nlohmann::json v = apps::write_virtual_debug(scene, has_previous ? &previous_camera : nullptr, scene.camera, width, height,
-                                                         virtual_radius, virtual_rule, staging);
+                                                         virtual_mark.radius_ws, virtual_mark.options, staging);
       summary["virtual_debug"] = v;
       std::printf("virtual shadow map: %d pages by the rule, %d by the footprint; %d drawn, %d kept from the previous frame "
                   "(virtual-levels.png, virtual-pool.png)\n",

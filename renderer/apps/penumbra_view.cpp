@@ -63,17 +63,12 @@ struct VirtualPanel {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   }
   void refresh(const scene::Scene& scene, const shadows::ShadowSettings& s, int width, int height) {
-    problem.clear();
-    double radius = s.pcss.min_penumbra_ws;
-    if (s.technique == shadows::Technique::pcf && s.pcf.radius_unit == shadows::RadiusUnit::world) radius = s.pcf.radius;
-    else if (s.technique != shadows::Technique::pcss) problem = "pages are marked for pcf with a world radius, or pcss";
-    if (scene.light.type != scene::Light::Type::directional) problem = "the virtual map is the sun's; this scene has a spot light";
+    const apps::VirtualMarking marking = apps::virtual_marking(s);
+    problem = scene.light.type != scene::Light::Type::directional ? "the virtual map is the sun's; this scene has a spot light"
+                                                                    : marking.problem;
     if (!problem.empty()) return;
     if (!debug) debug = std::make_unique<apps::VirtualDebug>(scene);
-    adaptive::MarkOptions rule;
-    rule.c_texels = s.adaptive.c;
-    rule.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;  // the footprint needs a floor
-    last = debug->view(scene, scene.camera, width, height, radius, rule);
+    last = debug->view(scene, scene.camera, width, height, marking.radius_ws, marking.options);
     upload(rule_tex, last.rule_levels);
     upload(footprint_tex, last.footprint_levels);
     upload(pool_tex, apps::pool_image(debug->map(), 256));

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <iterator>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -30,6 +31,20 @@ void put(io::Image8& img, std::size_t pixel, const glm::vec3& c) {
 }
 
 }  // namespace
+
+VirtualMarking virtual_marking(const shadows::ShadowSettings& s) {
+  VirtualMarking m;
+  m.radius_ws = s.pcss.min_penumbra_ws;
+  if (s.technique == shadows::Technique::pcf) {
+    m.radius_ws = s.pcf.radius;
+    if (s.pcf.radius_unit != shadows::RadiusUnit::world) m.problem = "pcf marks pages by a world radius (--pcf.radius_unit world)";
+  } else if (s.technique != shadows::Technique::pcss) {
+    m.problem = "pages are marked for pcf (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
+  }
+  m.options.c_texels = s.adaptive.c;
+  m.options.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+  return m;
+}
 
 io::Image8 level_image(const gl::Texture& levels_tex, int levels) {
   const int w = levels_tex.desc().width, h = levels_tex.desc().height;

@@ -12,9 +12,21 @@
 #include "gl/objects.h"
 #include "io/image_io.h"
 #include "scene/scene.h"
+#include "shadows/settings.h"
 #include "shadows/virtual_shadow_map.h"
 
 namespace penumbra::apps {
+
+// How the debug views mark pages for a technique's settings: the filter's world radius (PCF's, or
+// PCSS's minimum penumbra: the finest it can ask for), its c, and the pixel floor (1 pixel where the
+// settings have none: the footprint marking needs one). `problem`: empty, or why these settings
+// mark no pages.
+struct VirtualMarking {
+  double radius_ws = 0;
+  adaptive::MarkOptions options;
+  std::string problem;
+};
+VirtualMarking virtual_marking(const shadows::ShadowSettings& s);
 
 // A level image (R32F: the level per pixel, -1 no surface, `levels` beyond the coarsest) in
 // colour: a distinct colour per level, no surface black, beyond the coarsest white.
