@@ -59,12 +59,18 @@ struct Fixture {
   }
 };
 
+// A test's compute shader `name` (it may include the project's shaders, virtual_pages.glsl).
+gl::Program compute_program(const std::string& name, const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& f : embedded::shaders()) files.emplace_back(std::string(f.name), std::string(f.text));
+  files.emplace_back(name, text);
+  return gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, name}});
+}
+
 // What virtual_pages.glsl reads, texel by texel over level `level`'s window: the depth, or -1 where
 // vsm_fetch finds nothing; with `resident`, the level vsm_resident_level falls back to instead.
 std::vector<float> read_through_tables(const VirtualShadowMap& vsm, int level, bool resident = false) {
-  std::vector<std::pair<std::string, std::string>> files;
-  for (const auto& f : embedded::shaders()) files.emplace_back(std::string(f.name), std::string(f.text));
-  files.emplace_back("probe.comp", R"(
+  const gl::Program p = compute_program("probe.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, r32f) uniform writeonly image2D u_out;
@@ -81,7 +87,6 @@ void main() {
   }
   imageStore(u_out, t, vec4(v));
 })");
-  const gl::Program p = gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, "probe.comp"}});
   const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
   const gl::Texture out({GL_R32F, side, side, 1}, "probe output");
   vsm.bind(p);
@@ -168,9 +173,7 @@ TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) 
   const std::vector<float> direct = full_map(f, vsm, level);
   const gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
   glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
-  std::vector<std::pair<std::string, std::string>> files;
-  for (const auto& e : embedded::shaders()) files.emplace_back(std::string(e.name), std::string(e.text));
-  files.emplace_back("pcf.comp", R"(
+  const gl::Program p = compute_program("pcf.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, rgba32f) uniform writeonly image2D u_out;  // PCF paged, single; blockers paged, single
@@ -213,7 +216,6 @@ void main() {
                             searched ? mean + float(blockers) : -1.0,
                             whole_search ? (ref_count > 0 ? ref_sum / float(ref_count) : 1.0) + float(ref_count) : -1.0));
 })");
-  const gl::Program p = gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, "pcf.comp"}});
   const int n = 128;
   const gl::Texture out({GL_RGBA32F, n, n, 1}, "pcf output");
   vsm.bind(p);
