@@ -6,15 +6,14 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
-#include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "adaptive/resolution_rule.h"
 #include "cli/checks.h"
+#include "cli/list_option.h"
 #include "json/json_input.h"
 #include "shadows/settings.h"
 #include "tool/tool.h"
@@ -50,40 +49,6 @@ inline void add_settings_options(CLI::App& app, shadows::ShadowSettings& s) {
   shadows::for_each_technique_section(s, [&](std::string_view section, auto& params) {
     add_table_options(app, std::string(section), params);
   });
-}
-
-// The most values a comma list of the renderer's apps takes: each value is a whole render, so a
-// longer list is a mistake (a 1000-entry --resolution ran for minutes), not a request.
-inline constexpr std::size_t kMaxListValues = 64;
-
-// "a,b,c" → numbers in [lo, hi]; integers only when T is integral; at most kMaxListValues of
-// them. Throws CLI::ValidationError naming `option` and the accepted form.
-template <class T>
-std::vector<T> parse_list(const std::string& option, const std::string& text, T lo, T hi) {
-  std::ostringstream expected;
-  expected << "at most " << kMaxListValues << " " << (std::is_integral_v<T> ? "integers" : "numbers") << " in [" << lo << ", " << hi
-           << "] separated by commas, got '" << json_input::printable(text.size() > 80 ? text.substr(0, 77) + "..." : text) << "'";
-  std::vector<T> out;
-  std::size_t pos = 0;
-  for (;;) {
-    if (out.size() == kMaxListValues) throw CLI::ValidationError(option, "expected " + expected.str());
-    const std::size_t comma = text.find(',', pos);
-    const std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-    std::size_t used = 0;
-    double v = NAN;
-    try {
-      v = std::stod(item, &used);
-    } catch (...) {
-      used = 0;
-    }
-    if (item.empty() || used != item.size() || !std::isfinite(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi) ||
-        (std::is_integral_v<T> && v != std::floor(v)))
-      throw CLI::ValidationError(option, "expected " + expected.str());
-    out.push_back(static_cast<T>(v));
-    if (comma == std::string::npos) break;
-    pos = comma + 1;
-  }
-  return out;
 }
 
 // A settings option the tool sets itself from its own option (penumbra-render's --resolution sets

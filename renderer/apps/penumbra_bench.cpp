@@ -22,7 +22,6 @@
 #include "cli_options.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
-#include "text/fields.h"
 #include "json/json_input.h"
 #include "run_python.h"
 #include "gl/context.h"
@@ -263,8 +262,6 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
-std::vector<std::string> split(const std::string& text) { return text::split_fields(text); }
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -273,17 +270,20 @@ int main(int argc, char** argv) {
   cli::describe_tool(app, "penumbra-bench", "bench.md");
   app.option_defaults()->always_capture_default();
   Options opt;
-  std::string scenes_arg = join(opt.scenes), techniques_arg = "all", resolutions_arg = "128,256,512,1024,2048,4096",
-              radii_arg = "0.05";
+  std::vector<std::string> techniques_arg{"all"};
   bool quick = false, no_plot = false;
-  app.add_option("--scenes", scenes_arg, "built-in scene names or scene files (.json), comma-separated");
-  app.add_option("--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all");
-  app.add_option("--resolutions", resolutions_arg, "shadow-map texels per side, comma-separated");
+  cli::add_list_option(app, "--scenes", opt.scenes, "built-in scene names or scene files (.json), comma-separated",
+                       cli::names("a built-in scene name or a scene file"));
+  cli::add_list_option(app, "--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all",
+                       cli::names("a technique or all"));
+  cli::add_list_option(app, "--resolutions", opt.resolutions, "shadow-map texels per side, comma-separated", cli::integers_in(1, 65536));
   std::vector<std::string> fixed_radius;  // the techniques --radii applies to, from the registry
   for (const auto name : shadows::technique_names())
     if (shadows::technique_entry(shadows::technique_from_string(name)).radius == shadows::RadiusReading::fixed_filter)
       fixed_radius.emplace_back(name);
-  app.add_option("--radii", radii_arg, "filter radii of the fixed-radius filters (" + join(fixed_radius) + "), world units, comma-separated");
+  cli::add_list_option(app, "--radii", opt.radii_ws,
+                       "filter radii of the fixed-radius filters (" + join(fixed_radius) + "), world units, comma-separated",
+                       cli::numbers_in(1e-6, 1e6));
   app.add_option("--width", opt.width, "image width in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--height", opt.height, "image height in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--frames", opt.frames, "timed frames per configuration (median and min/max reported)")->check(CLI::Range(1, 1000));
@@ -320,9 +320,9 @@ int main(int argc, char** argv) {
       auto preset = [&](const char* option, auto& target, auto value) {
         if (app.count(option) == 0) target = value;
       };
-      preset("--scenes", scenes_arg, std::string("demo,two-planes"));
-      preset("--resolutions", resolutions_arg, std::string("256,1024,4096"));
-      preset("--radii", radii_arg, std::string("0.05"));
+      preset("--scenes", opt.scenes, std::vector<std::string>{"demo", "two-planes"});
+      preset("--resolutions", opt.resolutions, std::vector<int>{256, 1024, 4096});
+      preset("--radii", opt.radii_ws, std::vector<double>{0.05});
       preset("--width", opt.width, 320);
       preset("--height", opt.height, 180);
       preset("--frames", opt.frames, 3);
@@ -330,11 +330,9 @@ int main(int argc, char** argv) {
     }
     opt.plot = !no_plot;
     opt.adaptive = !no_adaptive;
-    opt.scenes = split(scenes_arg);
-    for (const auto& s : opt.scenes)
-      if (s.empty()) throw CLI::ValidationError("--scenes", "expected scene names or files separated by commas, got '" + json_input::printable(scenes_arg) + "'");
-    if (techniques_arg != "all") {
-      opt.techniques = split(techniques_arg);
+    const bool all_techniques = techniques_arg == std::vector<std::string>{"all"};
+    if (!all_techniques) {
+      opt.techniques = techniques_arg;
       for (const auto& t : opt.techniques) {
         try {
           shadows::technique_from_string(t);
@@ -343,15 +341,12 @@ int main(int argc, char** argv) {
         }
       }
     }
-    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolutions"))
-      resolutions_arg = std::to_string(opt.base.map.resolution_texels);
-    opt.resolutions = apps::parse_list<int>("--resolutions", resolutions_arg, 1, 65536);
-    if (techniques_arg != "all") {
+    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolutions")) opt.resolutions = {opt.base.map.resolution_texels};
+    if (!all_techniques) {
       std::vector<shadows::Technique> rendered;
       for (const auto& t : opt.techniques) rendered.push_back(shadows::technique_from_string(t));
-      apps::refuse_unused_technique_options(app, rendered, "--techniques " + techniques_arg);
+      apps::refuse_unused_technique_options(app, rendered, "--techniques " + join(opt.techniques));
     }
-    opt.radii_ws = apps::parse_list<double>("--radii", radii_arg, 1e-6, 1e6);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     return cli::fail("penumbra-bench", e.what(), cli::kExitUsage);

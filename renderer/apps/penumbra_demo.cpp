@@ -44,6 +44,7 @@
 #include "apps/demo/report.h"
 #include "apps/run_python.h"
 #include "apps/virtual_debug.h"
+#include "cli/list_option.h"
 #include "cli/main.h"
 #include "cli/progress_bar.h"
 #include "gl/context.h"
@@ -516,7 +517,7 @@ int main(int argc, char** argv) {
   app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
   apps::add_light_size_option(app, opt.light_size);
-  app.add_option("--techniques", opt.techniques, "techniques to compare (comma separated)")->delimiter(',');
+  cli::add_list_option(app, "--techniques", opt.techniques, "techniques to compare (comma separated)", cli::names("a technique"));
   app.add_option("--path", opt.path,
                  "scenes with a camera path: short (--frames frames, as stations of 3 consecutive frames spread over the path) "
                  "or full (every frame)")

@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   app.option_defaults()->always_capture_default();
   std::string scene_arg = "demo";
   std::string technique_arg = "pcf";
-  std::string resolution_arg = "2048";
+  std::vector<int> resolutions{2048};
   std::string output;
   int width = 1280, height = 720, frames = 5, warmup = 1;
   float light_size = -1;
@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   for (const auto& t : technique_choices) technique_help += (technique_help.empty() ? "" : ", ") + t;
   app.add_option("--technique", technique_arg, technique_help + " (all: every technique and PCF kernel)")
       ->check(CLI::IsMember(technique_choices));
-  app.add_option("--resolution", resolution_arg, "shadow-map texels per side; a comma list renders each");
+  cli::add_list_option(app, "--resolution", resolutions, "shadow-map texels per side; a comma list renders each", cli::integers_in(1, 65536));
   app.add_option("--width", width, "image width in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--height", height, "image height in pixels")->check(CLI::Range(1, 16384));
   app.add_option("--frames", frames, "timed frames per render (median reported)")->check(CLI::Range(1, 1000));
@@ -88,8 +88,7 @@ int main(int argc, char** argv) {
 
   try {
     apps::apply_calibration(app, calibration, base);
-    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolution")) resolution_arg = std::to_string(base.map.resolution_texels);
-    const std::vector<int> resolutions = apps::parse_list<int>("--resolution", resolution_arg, 1, 65536);
+    if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolution")) resolutions = {base.map.resolution_texels};
     if (technique_arg != "all")
       apps::refuse_unused_technique_options(app, {shadows::technique_from_string(technique_arg)}, "--technique " + technique_arg);
     scene::Scene scene = scene::load_scene(scene_arg);

@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/list_option.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
@@ -117,9 +118,9 @@ int main(int argc, char** argv) {
   observers::ImageObserverParams params;
   params.blur_sigma_arcmin = 1.0;
   params.pixels_per_degree = 38.2;  // data/studies/default.json's display: 1.57 arcmin per pixel
-  app.add_option("--pattern", patterns, "stair and/or step")->delimiter(',')->capture_default_str();
-  app.add_option("--artifact-px", artifacts, "artifact sizes")->delimiter(',')->capture_default_str();
-  app.add_option("--contrast", contrasts, "lit levels, linear light")->delimiter(',')->capture_default_str();
+  cli::add_list_option(app, "--pattern", patterns, "stair and/or step", cli::names("a pattern (stair or step)"));
+  cli::add_list_option(app, "--artifact-px", artifacts, "artifact sizes", cli::numbers_in(1, 1000));
+  cli::add_list_option(app, "--contrast", contrasts, "lit levels, linear light", cli::numbers_in(0, 1));
   app.add_option("--technique", technique, "the renderer's technique that draws the stimuli (pcf, rpcf, vsm, ...; default pcf with pcf.kernel=disk)");
   app.add_option("--set", settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   app.add_option("--json", json_out, "write the implied c per condition as a calibration.json (schema 2) image-observer entry");

@@ -3,6 +3,7 @@
 #include "io/safe_path.h"
 #include "json/json_input.h"
 #include "cli/checks.h"
+#include "cli/list_option.h"
 #include "cli/progress_bar.h"
 
 #include <cstdio>
@@ -18,9 +19,9 @@ namespace fs = std::filesystem;
 ReferenceCommand::ReferenceCommand(CLI::App& app) {
   command_ = app.add_subcommand(
       "reference", "reference filter size: the smallest radius at which jagged and straight 8-bit stimuli are identical");
-  command_->add_option("--pattern", patterns_, "stair and/or step")->delimiter(',')->capture_default_str();
-  command_->add_option("--contrast", contrasts_, "lit levels in linear light")->delimiter(',')->capture_default_str();
-  command_->add_option("--artifact-px", artifact_px_, "artifact sizes (px)")->delimiter(',')->capture_default_str();
+  cli::add_list_option(*command_, "--pattern", patterns_, "stair and/or step", cli::names("a pattern (stair or step)"));
+  cli::add_list_option(*command_, "--contrast", contrasts_, "lit levels in linear light", cli::numbers_in(0, 1));
+  cli::add_list_option(*command_, "--artifact-px", artifact_px_, "artifact sizes (px)", cli::numbers_in(1, 1000));
   command_->add_option("--partner", partner_,
                        "straight partner: original (the study's), mean-line (through the staircase's mean; stair only) or bresenham (the edge drawn at 1 px and filtered the same way: sec. 4.4)")
       ->capture_default_str();
@@ -28,10 +29,8 @@ ReferenceCommand::ReferenceCommand(CLI::App& app) {
   command_->add_option("--taps", poisson_taps_, "Poisson taps")->capture_default_str();
   command_->add_option("--size-px", size_px_, "stimulus side (px)")->capture_default_str();
   command_->add_option("--transfer", transfer_, "display transfer function: srgb, gamma2.2, linear")->capture_default_str();
-  command_->add_option("--seeds", search_.seeds, "edge phases/orientations to check (the result is the worst)")
-      ->delimiter(',')
-      ->capture_default_str()
-      ->check(cli::non_negative_integer());  // each item: `--seeds ""` ran with seed 0
+  cli::add_list_option(*command_, "--seeds", search_.seeds, "edge phases/orientations to check (the result is the worst)",
+                       cli::non_negative_integers());  // each item: `--seeds ""` ran with seed 0
   command_->add_option("--r-min", search_.r_min_px, "smallest radius scanned (px)")->capture_default_str();
   command_->add_option("--r-max", search_.r_max_px, "largest radius scanned (px); 0 = size/2")->capture_default_str();
   command_->add_option("--growth", search_.growth, "ratio between scanned radii")->capture_default_str();

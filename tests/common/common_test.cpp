@@ -12,6 +12,7 @@
 #include <string>
 
 #include "cli/checks.h"
+#include "cli/list_option.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
@@ -91,6 +92,69 @@ TEST(Cli, ParseErrorsAreOneLineAndExit2) {
   std::cerr.rdbuf(old);
   EXPECT_EQ(empty, 2);
   EXPECT_NE(captured.str().find("expected a path, got ''"), std::string::npos) << captured.str();
+}
+
+// The one comma list: every refusal in one wording naming the option and the text as given.
+template <class T>
+std::string list_error(std::vector<T>& values, cli::ListItem<T> item, std::vector<std::string> args) {
+  CLI::App app;
+  cli::add_list_option(app, "-l,--list", values, "a list", std::move(item));
+  args.insert(args.begin(), "tool");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  try {
+    app.parse(static_cast<int>(argv.size()), argv.data());
+  } catch (const CLI::ParseError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+TEST(Cli, CommaListsReadEveryItemOrRefuseTheWholeList) {
+  std::vector<int> ints{7, 8};
+  EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {}), "");
+  EXPECT_EQ(ints, (std::vector<int>{7, 8})) << "not given: the defaults stay";
+  EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {"--list", "1,100"}), "");
+  EXPECT_EQ(ints, (std::vector<int>{1, 100}));
+  EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {"--list", "3", "-l", "4,5"}), "");
+  EXPECT_EQ(ints, (std::vector<int>{3, 4, 5})) << "a repeated option adds to the list";
+  const std::string wording = "--list: expected an integer in [1, 100], or at most 64 separated by commas, got '";
+  for (const std::string bad : {"", "1,,2", "1,", ",1", "0", "101", "2.5", "1e2", "abc", " 1", "+1", "-0x1", "99999999999999999999"}) {
+    std::vector<int> v{7};
+    EXPECT_EQ(list_error(v, cli::integers_in(1, 100), {"--list", bad}), wording + bad + "'") << bad;
+    EXPECT_EQ(v, std::vector<int>{7}) << bad << ": nothing is half-read";
+  }
+  std::string sixty_five;
+  for (int i = 0; i < 65; ++i) sixty_five += (i ? "," : "") + std::to_string(i % 9 + 1);
+  EXPECT_NE(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_five}).find("at most 64"), std::string::npos);
+  std::string sixty_four = sixty_five.substr(0, sixty_five.size() - 2);
+  EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_four}), "");
+  EXPECT_EQ(ints.size(), 64u);
+  EXPECT_NE(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_four, "--list", "1"}).find("at most 64"), std::string::npos)
+      << "the cap counts every occurrence";
+}
+
+TEST(Cli, CommaListsOfNumbersNamesAndSeeds) {
+  std::vector<double> numbers;
+  EXPECT_EQ(list_error(numbers, cli::numbers_in(1e-6, 1e6), {"--list", "0.05,1e6,1e-6"}), "");
+  EXPECT_EQ(numbers, (std::vector<double>{0.05, 1e6, 1e-6}));
+  for (const std::string bad : {"nan", "inf", "-1", "1e7", "0.05x", "0,05;"})
+    EXPECT_EQ(list_error(numbers, cli::numbers_in(1e-6, 1e6), {"--list", bad}),
+              "--list: expected a finite number in [1e-06, 1e+06], or at most 64 separated by commas, got '" + bad + "'");
+  std::vector<std::uint64_t> seeds;
+  EXPECT_EQ(list_error(seeds, cli::non_negative_integers(), {"--list", "0,18446744073709551615"}), "");
+  EXPECT_EQ(seeds, (std::vector<std::uint64_t>{0, 18446744073709551615u}));
+  for (const std::string bad : {"-1", "18446744073709551616", "1.0", ""})
+    EXPECT_NE(list_error(seeds, cli::non_negative_integers(), {"--list", bad}).find("expected a non-negative integer"), std::string::npos)
+        << bad << ": never wraps or saturates";
+  std::vector<std::string> names;
+  EXPECT_EQ(list_error(names, cli::names("a pattern"), {"--list", "stair,step"}), "");
+  EXPECT_EQ(names, (std::vector<std::string>{"stair", "step"}));
+  EXPECT_EQ(list_error(names, cli::names("a pattern"), {"--list", "stair,"}),
+            "--list: expected a pattern, or at most 64 separated by commas, got 'stair,'");
+  const std::string control = std::string("a") + '\x01';
+  EXPECT_NE(list_error(names, cli::names("a pattern"), {"--list", control + ",,"}).find("\\x01"), std::string::npos)
+      << "a control byte is escaped in the error line";
 }
 
 TEST(AtomicFile, WritesWholeAndReplaces) {
