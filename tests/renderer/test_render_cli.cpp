@@ -20,6 +20,8 @@
 #include <gtest/gtest.h>
 
 #include "adaptive/calibration.h"
+#include "shadows/settings.h"
+#include "shadows/technique.h"
 #include <nlohmann/json.hpp>
 
 #include "io/image_io.h"
@@ -196,21 +198,45 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
   const fs::path out = work_ / "out";
   const Result r = run_render(small_args({"--technique", "all", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::set<std::string> renders = {"hard", "pcf-grid", "pcf-poisson", "pcf-disk", "pcss", "vsm", "edtsm", "edtssm", "erosion",
-                                         "rbsm", "rpcf", "msm", "evsm", "esm"};
-  std::set<std::string> expected = renders;
-  expected.insert({"montage.png", "report.json"});
-  EXPECT_EQ(listing(out), expected);
-  const std::map<std::string, std::vector<std::string>> special = {
-      {"vsm", {"shadow_map", "vsm_blur", "shading"}},
-      {"msm", {"shadow_map", "vsm_blur", "shading"}},
-      {"evsm", {"shadow_map", "vsm_blur", "shading"}},
-      {"esm", {"shadow_map", "vsm_blur", "shading"}},
+  // What `--technique all` renders, from the registry (a new technique needs no edit here): one
+  // render per technique, one per choice of its variant setting (pcf-grid, pcf-poisson, pcf-disk);
+  // the passes a filtered-moments technique runs include the blur; a screen-space technique's post
+  // passes are its own, listed here.
+  const std::map<std::string, std::vector<std::string>> screen_space = {
       {"edtsm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"edtssm", {"shadow_map", "gbuffer", "sites", "edt", "edt_penumbra", "mean_filter", "shading"}},
       {"erosion", {"shadow_map", "gbuffer", "edges", "erosion_minmax", "erosion", "shading"}}};
-  for (const auto& name : renders)
-    expect_render_files(out / name, special.contains(name) ? special.at(name) : std::vector<std::string>{"shadow_map", "shading"});
+  std::set<std::string> renders;
+  std::map<std::string, std::vector<std::string>> passes;
+  for (const std::string_view name : penumbra::shadows::technique_names()) {
+    const penumbra::shadows::Technique t = penumbra::shadows::technique_from_string(name);
+    const auto& entry = penumbra::shadows::technique_entry(t);
+    penumbra::shadows::ShadowSettings settings;
+    settings.technique = t;
+    std::vector<std::string> run = {"shadow_map", "shading"};
+    if (entry.post) {
+      ASSERT_TRUE(screen_space.contains(std::string(name))) << name << ": a screen-space technique; list its passes above";
+      run = screen_space.at(std::string(name));
+    } else if (entry.moments && entry.moments(settings)) {
+      run = {"shadow_map", "vsm_blur", "shading"};
+    }
+    std::vector<std::string> names;
+    penumbra::shadows::visit_technique_section(settings, [&](std::string_view, auto& params) {
+      for (const auto& row : penumbra::shadows::settings_table(&params))
+        if (row.key == entry.variant_setting && row.type == penumbra::shadows::SettingType::choice)
+          for (const auto choice : row.choices) names.push_back(std::string(name) + "-" + std::string(choice));
+    });
+    if (names.empty()) names.emplace_back(name);
+    for (const auto& n : names) {
+      renders.insert(n);
+      passes[n] = run;
+    }
+  }
+  EXPECT_GE(renders.size(), 14u) << "every technique of the registry, PCF once per kernel";
+  std::set<std::string> expected = renders;
+  expected.insert({"montage.png", "report.json"});
+  EXPECT_EQ(listing(out), expected);
+  for (const auto& name : renders) expect_render_files(out / name, passes.at(name));
   const auto montage = penumbra::io::read_image8(out / "montage.png");
   EXPECT_GT(montage.width, 0);
   EXPECT_GT(montage.height, 0);
