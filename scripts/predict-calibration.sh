@@ -6,18 +6,20 @@
 # radius of the grid twice per condition; the filtered-moments techniques draw their partner on a
 # map of up to 4096² texels (docs/study.md).
 #   scripts/predict-calibration.sh [OUTPUT] [TECHNIQUE-SPEC...]
-# A TECHNIQUE-SPEC is "pcf:pcf.kernel=grid" or "vsm"; without any, all of them. Entries of other
+# A TECHNIQUE-SPEC is "pcf:pcf.kernel=grid" or "vsm"; without any, all of them
+# (penumbra-observer-curve --list-techniques). Entries of other
 # techniques already in OUTPUT are kept, so one technique can be re-predicted alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-data/calibration/predicted.json}"
 shift || true
 specs=("$@")
-if [[ ${#specs[@]} -eq 0 ]]; then
-  specs=("pcf:pcf.kernel=disk" "pcf:pcf.kernel=grid" "pcf:pcf.kernel=poisson" "rpcf" "vsm" "msm" "evsm" "esm")
-fi
 curve="${PENUMBRA_OBSERVER_CURVE:-build/study/penumbra-observer-curve}"
 [[ -x "$curve" ]] || { echo "predict-calibration: $curve not built (scripts/build.sh)" >&2; exit 1; }
+if [[ ${#specs[@]} -eq 0 ]]; then
+  mapfile -t specs < <("$curve" --list-techniques)  # the registry's techniques the study can draw
+  [[ ${#specs[@]} -gt 0 ]] || { echo "predict-calibration: $curve --list-techniques listed nothing" >&2; exit 1; }
+fi
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 grid=(--pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20 --ratio-min 0.7 --ratio-max 6 --ratio-step 1.15 --seeds 3)

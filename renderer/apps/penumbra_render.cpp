@@ -114,23 +114,14 @@ int main(int argc, char** argv) {
     auto add_variants = [&](shadows::Technique t, bool every_choice) {
       Variant v{std::string(shadows::to_string(t)), base};
       v.settings.technique = t;
-      const std::string_view key = shadows::technique_entry(t).variant_setting;
-      auto for_variant_row = [&](shadows::ShadowSettings& s, auto&& f) {
-        shadows::visit_technique_section(s, [&](std::string_view, auto& params) {
-          for (const auto& row : shadows::settings_table(&params))
-            if (row.key == key && row.type == shadows::SettingType::choice) f(row, params);
-        });
-      };
-      std::vector<std::pair<double, std::string>> choices;  // (index, name)
-      for_variant_row(v.settings, [&](const auto& row, const auto& params) {
-        for (std::size_t i = 0; i < row.choices.size(); ++i)
-          if (every_choice || static_cast<double>(i) == row.get(params)) choices.emplace_back(static_cast<double>(i), row.choices[i]);
-      });
-      if (choices.empty()) variants.push_back(v);
-      for (const auto& [index, choice_name] : choices) {
+      if (shadows::variant_choices(t).empty()) {
+        variants.push_back(v);
+        return;
+      }
+      for (const std::string& choice : every_choice ? shadows::variant_choices(t) : std::vector{shadows::variant_choice(v.settings)}) {
         Variant c = v;
-        c.name += "-" + choice_name;
-        for_variant_row(c.settings, [&](const auto& row, auto& params) { row.set(params, index); });
+        c.name += "-" + choice;
+        shadows::set_variant_choice(c.settings, choice);
         variants.push_back(c);
       }
     };

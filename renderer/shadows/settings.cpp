@@ -200,4 +200,17 @@ std::vector<std::string> variant_choices(Technique t) {
   return out;
 }
 
+void set_variant_choice(ShadowSettings& s, std::string_view choice) {
+  const std::string_view key = technique_entry(s.technique).variant_setting;
+  bool set = false;
+  visit_technique_section(s, [&](std::string_view, auto& params) {
+    for (const auto& row : settings_table(&params))
+      if (!key.empty() && row.key == key && row.type == SettingType::choice) {
+        set_from_string(row, params, std::string(choice));
+        set = true;
+      }
+  });
+  if (!set) throw std::invalid_argument(std::string(to_string(s.technique)) + " has no variant setting to set to '" + std::string(choice) + "'");
+}
+
 }  // namespace penumbra::shadows

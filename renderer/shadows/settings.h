@@ -142,5 +142,8 @@ std::string variant_choice(const ShadowSettings& s);
 // Every value the technique's variant setting can take (PCF: disk, grid, poisson); empty for a
 // technique without one.
 std::vector<std::string> variant_choices(Technique t);
+// Sets the technique's variant setting to `choice` (one of variant_choices); throws
+// std::invalid_argument for another value or a technique without one.
+void set_variant_choice(ShadowSettings& s, std::string_view choice);
 
 }  // namespace penumbra::shadows

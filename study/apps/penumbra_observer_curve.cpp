@@ -28,6 +28,7 @@
 #include "gl/context.h"
 #include "observers/image_observer.h"
 #include "psychometric/psychometric.h"
+#include "stats/summary.h"
 #include "sampling/random.h"
 #include "stimuli/stimulus.h"
 
@@ -91,17 +92,32 @@ double condition_c(const std::vector<std::vector<Point>>& per_artifact, const st
   return count ? std::exp(log_sum / count) : NAN;
 }
 
-// The q-quantile of `values` (linear between order statistics); NAN when empty.
-double quantile(std::vector<double> values, double q) {
-  if (values.empty()) return NAN;
-  std::sort(values.begin(), values.end());
-  const double at = q * static_cast<double>(values.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(at);
-  const std::size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (at - static_cast<double>(lo)) * (values[hi] - values[lo]);
-}
-
 constexpr int kResamples = 400;  // bootstrap over the stimuli per radius
+
+// Every technique of the registry that the study can draw (its settings are accepted and it has an
+// artifact-free partner), one per choice of its variant setting: "pcf:pcf.kernel=grid", "vsm".
+std::vector<std::string> drawable_techniques() {
+  std::vector<std::string> out;
+  for (const std::string_view name : shadows::technique_names()) {
+    const shadows::Technique t = shadows::technique_from_string(name);
+    std::vector<std::string> settings;  // one "section.key=choice" per variant, or none
+    for (const std::string& choice : shadows::variant_choices(t))
+      settings.push_back(std::string(name) + "." + std::string(shadows::technique_entry(t).variant_setting) + "=" + choice);
+    if (settings.empty()) settings.emplace_back();
+    for (const std::string& setting : settings) {
+      stimuli::StimulusSpec spec;
+      spec.technique = name;
+      try {
+        stimuli::set_technique_settings(spec, setting.empty() ? std::vector<std::string>{} : std::vector{setting});
+        if (!stimuli::partner_unavailable(stimuli::stimulus_settings(spec, 15)).empty()) continue;
+      } catch (const std::invalid_argument&) {
+        continue;  // a technique the study cannot draw (hard, the screen-space ones)
+      }
+      out.push_back(setting.empty() ? std::string(name) : std::string(name) + ":" + setting);
+    }
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -134,7 +150,16 @@ int main(int argc, char** argv) {
   app.add_option("--ppd", params.pixels_per_degree, "display pixels per degree")->capture_default_str();
   app.add_option("--window", params.window_r, "local window, filter radii")->capture_default_str();
   app.add_option("--weber", params.weber, "decision noise sd (relative deviation)")->capture_default_str();
+  bool list_techniques = false;
+  app.add_flag("--list-techniques", list_techniques,
+               "print the techniques the study can draw, one a line as --technique and --set take them (TECHNIQUE or "
+               "TECHNIQUE:SECTION.KEY=CHOICE, one per choice of a variant setting such as pcf's kernel), from the renderer's "
+               "registry, and exit");
   if (const auto status = cli::parse(app, argc, argv, "penumbra-observer-curve")) return *status;
+  if (list_techniques) {
+    for (const std::string& spec : drawable_techniques()) std::printf("%s\n", spec.c_str());
+    return 0;
+  }
   try {
     if (!json_out.empty()) io::check_output(json_out, io::OutputKind::file);  // before the curves: every output's rule
     stimuli::StimulusSpec base;
@@ -237,7 +262,7 @@ int main(int argc, char** argv) {
     }
     auto interval = [&](const std::vector<double>& draws, double c) {
       if (draws.empty()) return nlohmann::json::array({c, c});
-      return nlohmann::json::array({std::min(c, quantile(draws, 0.025)), std::max(c, quantile(draws, 0.975))});
+      return nlohmann::json::array({std::min(c, stats::percentile(draws, 0.025)), std::max(c, stats::percentile(draws, 0.975))});
     };
     for (std::size_t k = 0; k < data.size(); ++k) {
       const nlohmann::json& c = per_condition[k]["c"];

@@ -221,11 +221,7 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
       run = {"shadow_map", "vsm_blur", "shading"};
     }
     std::vector<std::string> names;
-    penumbra::shadows::visit_technique_section(settings, [&](std::string_view, auto& params) {
-      for (const auto& row : penumbra::shadows::settings_table(&params))
-        if (row.key == entry.variant_setting && row.type == penumbra::shadows::SettingType::choice)
-          for (const auto choice : row.choices) names.push_back(std::string(name) + "-" + std::string(choice));
-    });
+    for (const std::string& choice : penumbra::shadows::variant_choices(t)) names.push_back(std::string(name) + "-" + choice);
     if (names.empty()) names.emplace_back(name);
     for (const auto& n : names) {
       renders.insert(n);

@@ -15,6 +15,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -405,6 +406,20 @@ INSTANTIATE_TEST_SUITE_P(Techniques, RendererDrawnStimuli, ::testing::Values("pc
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
+
+// What scripts/predict-calibration.sh predicts by default comes from the registry: every PCF
+// kernel, RPCF and the filtered-moments techniques, never a technique without a partner (hard,
+// PCSS, the screen-space ones).
+TEST(ObserverCurve, ListsTheTechniquesTheStudyCanDraw) {
+  const fs::path out = fresh("list.txt");
+  ASSERT_EQ(std::system((std::string(PENUMBRA_OBSERVER_CURVE_EXE) + " --list-techniques > " + out.string()).c_str()), 0);
+  std::istringstream lines(bytes_of(out));
+  std::set<std::string> listed;
+  for (std::string line; std::getline(lines, line);) EXPECT_TRUE(listed.insert(line).second) << line << " twice";
+  for (const char* drawn : {"pcf:pcf.kernel=grid", "pcf:pcf.kernel=poisson", "pcf:pcf.kernel=disk", "rpcf", "vsm", "msm", "evsm", "esm"})
+    EXPECT_TRUE(listed.contains(drawn)) << drawn;
+  for (const char* not_drawn : {"hard", "pcss", "edtsm", "edtssm", "erosion", "rbsm", "pcf"}) EXPECT_FALSE(listed.contains(not_drawn)) << not_drawn;
+}
 
 // The published orderings with the image observer on stimuli the renderer's PCF grid draws (issue
 // 15), never tuned for: at every artifact size the step needs a larger filter than the stair. The
