@@ -190,11 +190,9 @@ bool RayTracedScene::primary(const glm::vec3& origin, const glm::vec3& direction
   return true;
 }
 
-io::Image8 RayTracedScene::facing_light(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px,
-                                        int threads) const {
-  if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced facing mask: empty image");
+template <class F>
+void RayTracedScene::for_each_seen_pixel(const scene::Camera& camera, int width_px, int height_px, int threads, F seen) const {
   const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
-  io::Image8 out{width_px, height_px, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width_px) * height_px, 0)};
   std::atomic<int> next_row{0};
   on_threads(threads, [&] {
     for (int y = next_row++; y < height_px; y = next_row++)
@@ -202,11 +200,19 @@ io::Image8 RayTracedScene::facing_light(const scene::Camera& camera, const scene
         glm::vec3 origin, direction;
         pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
         Hit hit;
-        if (!primary(origin, direction, hit)) continue;
-        const glm::vec3 to_light = light.type == scene::Light::Type::directional ? -glm::normalize(light.direction)
-                                                                                  : glm::normalize(light.position - hit.position);
-        if (glm::dot(hit.shading, to_light) > 0) out.pixels[static_cast<std::size_t>(y) * width_px + x] = 255;
+        if (primary(origin, direction, hit)) seen(static_cast<std::size_t>(y) * static_cast<std::size_t>(width_px) + static_cast<std::size_t>(x), hit);
       }
+  });
+}
+
+io::Image8 RayTracedScene::facing_light(const scene::Camera& camera, const scene::Light& light, int width_px, int height_px,
+                                        int threads) const {
+  if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced facing mask: empty image");
+  io::Image8 out{width_px, height_px, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width_px) * height_px, 0)};
+  for_each_seen_pixel(camera, width_px, height_px, threads, [&](std::size_t pixel, const Hit& hit) {
+    const glm::vec3 to_light = light.type == scene::Light::Type::directional ? -glm::normalize(light.direction)
+                                                                              : glm::normalize(light.position - hit.position);
+    if (glm::dot(hit.shading, to_light) > 0) out.pixels[pixel] = 255;
   });
   return out;
 }
@@ -217,7 +223,6 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
     throw std::invalid_argument("ray-traced visibility: only a directional light (a spot light's cone is the shadow map's)");
   if (per_side < 1) throw std::invalid_argument("ray-traced visibility: per_side must be at least 1, got " + std::to_string(per_side));
   if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced visibility: empty image");
-  const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
   const glm::vec3 camera_position = camera.position;
   // The sun's directions toward the light: -(light_sample's direction), light_sample's basis.
   const float tan_half = std::tan(glm::radians(std::max(light.size, 0.0f)) / 2);
@@ -228,30 +233,19 @@ io::ImageF RayTracedScene::area_light_visibility(const scene::Camera& camera, co
   const float cell = 2.0f / static_cast<float>(per_side);
 
   io::ImageF out{width_px, height_px, 1, std::vector<float>(static_cast<std::size_t>(width_px) * height_px, 1.0f)};
-  std::atomic<int> next_row{0};
-  auto work = [&] {
-    for (int y = next_row++; y < height_px; y = next_row++) {
-      for (int x = 0; x < width_px; ++x) {
-        glm::vec3 origin, direction;
-        pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
-        Hit hit;
-        if (!primary(origin, direction, hit)) continue;  // sky: lit
-        const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
-        const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width_px) + static_cast<std::uint64_t>(x);
-        int seen = 0;
-        for (int j = 0; j < per_side; ++j)
-          for (int i = 0; i < per_side; ++i) {
-            const std::uint64_t s = static_cast<std::uint64_t>(j * per_side + i);
-            const glm::vec2 uv = concentric_disk({-1 + (static_cast<float>(i) + hash_uniform(pixel, s, 0)) * cell,
-                                                  -1 + (static_cast<float>(j) + hash_uniform(pixel, s, 1)) * cell});
-            const glm::vec3 travel = glm::normalize(axis + tan_half * (uv.x * e1 + uv.y * e2));
-            if (!occluded(embree_->scene, start, -travel)) ++seen;
-          }
-        out.pixels[pixel] = static_cast<float>(seen) / static_cast<float>(samples);
+  for_each_seen_pixel(camera, width_px, height_px, threads, [&](std::size_t pixel, const Hit& hit) {
+    const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
+    int seen = 0;
+    for (int j = 0; j < per_side; ++j)
+      for (int i = 0; i < per_side; ++i) {
+        const std::uint64_t s = static_cast<std::uint64_t>(j * per_side + i);
+        const glm::vec2 uv = concentric_disk({-1 + (static_cast<float>(i) + hash_uniform(pixel, s, 0)) * cell,
+                                              -1 + (static_cast<float>(j) + hash_uniform(pixel, s, 1)) * cell});
+        const glm::vec3 travel = glm::normalize(axis + tan_half * (uv.x * e1 + uv.y * e2));
+        if (!occluded(embree_->scene, start, -travel)) ++seen;
       }
-    }
-  };
-  on_threads(threads, work);
+    out.pixels[pixel] = static_cast<float>(seen) / static_cast<float>(samples);
+  });
   return out;
 }
 
@@ -261,7 +255,6 @@ RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene
   if (light.type != scene::Light::Type::directional)
     throw std::invalid_argument("ray-traced hard shadows: only a directional light (a spot light's cone is the shadow map's)");
   if (width_px < 1 || height_px < 1) throw std::invalid_argument("ray-traced hard shadows: empty image");
-  const glm::mat4 inverse = glm::inverse(camera_view_projection(camera, width_px, height_px));
   const glm::vec3 camera_position = camera.position;
   const glm::vec3 to_light = -glm::normalize(light.direction);
   // Which geometries are left out, and whether their mask bits are theirs alone.
@@ -279,31 +272,22 @@ RayTracedScene::HardVisibility RayTracedScene::hard_visibility_split(const scene
 
   const std::size_t n = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
   HardVisibility out{{width_px, height_px, 1, std::vector<float>(n, 1.0f)}, {width_px, height_px, 1, std::vector<float>(n, 1.0f)}};
-  std::atomic<int> next_row{0};
-  on_threads(threads, [&] {
-    // Without ray masks: the nearest hits in turn, past the left-out geometries' ones.
-    auto occluded_by_kept = [&](const glm::vec3& start) {
-      float tnear = 0;
-      for (;;) {
-        const RTCRayHit hit = nearest_hit(embree_->scene, start, to_light, tnear);
-        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-        if (!excluded[hit.hit.geomID]) return true;
-        tnear = std::nextafter(hit.ray.tfar, std::numeric_limits<float>::infinity());
-      }
-    };
-    for (int y = next_row++; y < height_px; y = next_row++)
-      for (int x = 0; x < width_px; ++x) {
-        glm::vec3 origin, direction;
-        pixel_ray(inverse, x, y, width_px, height_px, origin, direction);
-        Hit hit;
-        if (!primary(origin, direction, hit)) continue;  // sky: lit
-        const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
-        if (!occluded(embree_->scene, start, to_light)) continue;
-        const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_px) + static_cast<std::size_t>(x);
-        out.all.pixels[p] = 0;
-        const bool blocked = !any_excluded || (by_mask ? occluded(embree_->scene, start, to_light, ~excluded_bits) : occluded_by_kept(start));
-        if (blocked) out.without.pixels[p] = 0;
-      }
+  // Without ray masks: the nearest hits in turn, past the left-out geometries' ones.
+  auto occluded_by_kept = [&](const glm::vec3& start) {
+    float tnear = 0;
+    for (;;) {
+      const RTCRayHit hit = nearest_hit(embree_->scene, start, to_light, tnear);
+      if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+      if (!excluded[hit.hit.geomID]) return true;
+      tnear = std::nextafter(hit.ray.tfar, std::numeric_limits<float>::infinity());
+    }
+  };
+  for_each_seen_pixel(camera, width_px, height_px, threads, [&](std::size_t p, const Hit& hit) {
+    const glm::vec3 start = shadow_ray_start(hit.position, hit.geometric, camera_position);
+    if (!occluded(embree_->scene, start, to_light)) return;
+    out.all.pixels[p] = 0;
+    const bool blocked = !any_excluded || (by_mask ? occluded(embree_->scene, start, to_light, ~excluded_bits) : occluded_by_kept(start));
+    if (blocked) out.without.pixels[p] = 0;
   });
   return out;
 }

@@ -74,6 +74,10 @@ class RayTracedScene {
     glm::vec3 position, geometric, shading;  // normals on the side the camera sees
   };
   bool primary(const glm::vec3& origin, const glm::vec3& direction, Hit& out) const;
+  // Calls seen(pixel, hit) for every pixel (y * width + x) whose camera ray hits the scene, rows
+  // spread over `threads` (0: one per hardware thread); defined and used in ray_traced.cpp.
+  template <class F>
+  void for_each_seen_pixel(const scene::Camera& camera, int width_px, int height_px, int threads, F seen) const;
 
   struct Embree;
   std::unique_ptr<Embree> embree_;
