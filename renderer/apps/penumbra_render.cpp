@@ -208,7 +208,7 @@ int main(int argc, char** argv) {
         for (const auto& st : stats) {
           if (st.method != shown) continue;
           total += st.median_ms;
-          if (st.pass == "shadow_map") shadow_map = st.median_ms;
+          if (st.pass == "shadow_map" || st.pass == "virtual_pages") shadow_map = st.median_ms;
           else if (st.pass == "vsm_blur") vsm_blur = st.median_ms;
           else if (st.pass == "shading") shading = st.median_ms;
           else screen += st.median_ms;
@@ -217,6 +217,7 @@ int main(int argc, char** argv) {
         // The resolution used: the rule's with adaptive.enabled, one entry per cascade.
         std::string used;
         for (const auto& c : info.cascades) used += (used.empty() ? "" : "+") + std::to_string(c.resolution_texels);
+        if (info.virtual_map) used = std::to_string(info.virtual_map->pages.requested) + "p";  // pages, not a map
         std::printf("%-12s %6s %s %s %s %s %s\n", v.name.c_str(), used.c_str(), fmt_ms(shadow_map).c_str(),
                     std::find(info.passes.begin(), info.passes.end(), "vsm_blur") != info.passes.end()
                         ? fmt_ms(vsm_blur).c_str()

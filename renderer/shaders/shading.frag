@@ -30,8 +30,56 @@ layout(location = 1) out float o_visibility;
 #if defined(PCSS_REQUIREMENT)
 layout(location = 2) out vec2 o_requirement;  // (1 / filter radius in map uv, cascade + 0.5 if clamped)
 #endif
+#if defined(VIRTUAL_SHADOW_MAP)
+// Where the pixel found its pages (vsm_status.comp counts them): 1 on the level it marked, 2 on a
+// coarser resident one, 3 none (lit); 0 (the clear) where no surface is.
+layout(location = 2) out uint o_vsm_status;
+#endif
 
 vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (G-buffer pass)
+
+#if defined(VIRTUAL_SHADOW_MAP)
+#include "virtual_pages.glsl"
+
+// PCF through the sun's virtual shadow map: on the level this pixel's pages were marked on (the
+// request of vsm_mark.comp, the first level at or above it whose window holds the point), with
+// the normal offset and constant bias in that level's texels and the receiver plane `gradient`
+// (normalized depth per world unit across the light). Where the pool could not hold a page, the
+// next coarser resident level answers; where none does, the pixel is lit (o_vsm_status says which).
+float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
+  const float radius_ws = u_filter_radius;  // world units: the plan refuses texels
+  const vec2 xy = vsm_light_point(v_world).xy;
+  int marked = vsm_level_for_texel(vsm_requested_texel_ws(v_world, radius_ws));
+  while (marked < u_vsm_levels - 1 && !vsm_in_window(marked, xy)) ++marked;
+  for (int k = marked; k < u_vsm_levels; ++k) {
+    const float texel = vsm_texel_ws(k);
+    const vec3 lp = vsm_light_point(v_world + n * (u_normal_offset_texels * texel * sin_angle));
+    const float bias = u_depth_bias_texels * texel / (u_vsm_far_ws - u_vsm_near_ws);
+    bool found;
+    const float v = vsm_pcf_box(k, lp.xy, lp.z - bias, gradient, radius_ws, found);
+    if (found) {
+      o_vsm_status = k == marked ? 1u : 2u;
+      return v;
+    }
+  }
+  o_vsm_status = 3u;
+  return 1.0;
+}
+
+// The receiver plane in the virtual map's light space: d(normalized depth) / d(light xy), from
+// screen-space derivatives (uniform control flow), clamped to slopes within 85° of the light.
+vec2 virtual_receiver_gradient() {
+  if (!u_receiver_plane_bias) return vec2(0.0);
+  const vec3 l = vsm_light_point(v_world);
+  const vec3 dx = dFdx(l), dy = dFdy(l);
+  const float det = dx.x * dy.y - dx.y * dy.x;
+  if (abs(det) < 1e-20) return vec2(0.0);
+  const vec2 g = vec2(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+  const float limit = tan(radians(85.0)) / (u_vsm_far_ws - u_vsm_near_ws);
+  const float len = length(g);
+  return len > limit ? g * (limit / len) : g;
+}
+#endif
 
 // Visibility from cascade i. `gradient0` is the receiver-plane gradient in cascade 0's uv; the
 // cascades' uv differ by a scale only (same light view), so it carries over.
@@ -63,6 +111,10 @@ void main() {
   float sin_angle = sqrt(clamp(1.0 - n_dot_l * n_dot_l, 0.0, 1.0));
   float depth_ws = -(u_light_view * vec4(v_world, 1.0)).z;
 
+#if defined(VIRTUAL_SHADOW_MAP)
+  float visibility = clamp(virtual_visibility(n, sin_angle, virtual_receiver_gradient()), 0.0, 1.0);
+  const int cascade = 0;
+#else
   // Receiver-plane gradient in cascade 0's uv, in uniform control flow (derivatives are valid).
   use_cascade(0);
   float texel0_ws = 1.0 / (uv_per_ws(depth_ws) * g_shadow_res);
@@ -87,6 +139,7 @@ void main() {
       visibility = mix(visibility, next, clamp(t, 0.0, 1.0));
     }
   }
+#endif
 
 #if defined(SCREEN_SPACE_GBUFFER)
   float eye_z = max(dot(v_world - u_camera_position, u_camera_forward), 1e-6);

@@ -111,8 +111,23 @@ PENUMBRA_STORAGE_BUFFER(PcssRequirementResult, BUFFER_PCSS_REQUIREMENT) {
 };
 #endif
 
+// The shading pass through a virtual shadow map (VIRTUAL_SHADOW_MAP) marks each pixel by where it
+// found its pages: on the level it marked, on a coarser resident one (the pool could not hold
+// its), or nowhere (lit); vsm_status.comp counts them into this buffer, read back after the pass
+// (FrameInfo::virtual_map). A work group covers VSM_STATUS_GROUP_PIXELS² pixels.
+PENUMBRA_CONSTANT(BUFFER_VSM_SHADING, 1)
+PENUMBRA_CONSTANT(VSM_STATUS_GROUP_PIXELS, 64)
+#if defined(__cplusplus) || defined(PENUMBRA_VSM_SHADING_RESULT)
+PENUMBRA_STORAGE_BUFFER(VsmShadingResult, BUFFER_VSM_SHADING) {
+  uint at_level;
+  uint coarser;
+  uint none;
+};
+#endif
+
 #ifdef __cplusplus
 static_assert(sizeof(PcssRequirementResult) == 4 * MAX_CASCADES * sizeof(std::uint32_t), "std430: four uint arrays, no padding");
+static_assert(sizeof(VsmShadingResult) == 3 * sizeof(std::uint32_t), "std430: three uints");
 static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_cascade_res, ...)");
 }  // namespace penumbra::shadows::contract
 #else

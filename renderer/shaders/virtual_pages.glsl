@@ -18,6 +18,31 @@ uniform float u_vsm_far_ws;
 layout(binding = UNIT_VSM_POOL) uniform sampler2D u_vsm_pool;
 layout(binding = UNIT_VSM_TABLE) uniform isampler2D u_vsm_table;
 
+// Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
+// (vsm_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
+// were marked on.
+uniform vec3 u_mark_camera_position;
+uniform vec3 u_mark_camera_forward;
+uniform bool u_mark_perspective;
+uniform float u_mark_footprint_per_depth;  // perspective: a pixel's world size per unit of depth; orthographic: its size
+uniform float u_mark_c_texels;
+uniform float u_mark_min_texel_px;
+uniform bool u_mark_footprint_only;
+
+// The finest texel `world` needs, with a filter of world radius `radius_ws` (0: none):
+//   rule       max(r / c, s · min_texel_px)   (s the pixel's world footprint)
+//   footprint  s · min_texel_px
+float vsm_requested_texel_ws(vec3 world, float radius_ws) {
+  const float depth = u_mark_perspective ? dot(world - u_mark_camera_position, u_mark_camera_forward) : 1.0;
+  const float floor_ws = max(depth, 0.0) * u_mark_footprint_per_depth * u_mark_min_texel_px;
+  return u_mark_footprint_only || radius_ws <= 0.0 ? floor_ws : max(radius_ws / u_mark_c_texels, floor_ws);
+}
+
+// The coarsest level whose texel is at most `texel_ws` (0 when even level 0 is coarser).
+int vsm_level_for_texel(float texel_ws) {
+  return texel_ws > 0.0 ? int(clamp(floor(log2(texel_ws / u_vsm_texel0_ws) + 1e-6), 0.0, float(u_vsm_levels - 1))) : 0;
+}
+
 // A world point in light space: xy across the light, z the depth as the pages hold it.
 vec3 vsm_light_point(vec3 world) {
   vec3 l = (u_vsm_light_view * vec4(world, 1.0)).xyz;
@@ -28,6 +53,12 @@ float vsm_texel_ws(int level) { return u_vsm_texel0_ws * exp2(float(level)); }
 
 // The texel of `level`'s window that holds light-space `xy` (it may lie outside the window).
 ivec2 vsm_texel(int level, vec2 xy) { return ivec2(floor((xy - u_vsm_origin[level]) / vsm_texel_ws(level))); }
+
+// Whether level `level`'s window holds light-space `xy`.
+bool vsm_in_window(int level, vec2 xy) {
+  const vec2 local = (xy - u_vsm_origin[level]) / (float(u_vsm_page_texels) * vsm_texel_ws(level));
+  return all(greaterThanEqual(local, vec2(0.0))) && all(lessThan(local, vec2(u_vsm_pages_per_side)));
+}
 
 // The depth of texel `texel` of `level` through the page table: false when the texel lies outside
 // the level's window or its page is not resident.
@@ -56,29 +87,70 @@ int vsm_resident_level(int level, vec2 xy) {
 // Box-filtered PCF at `level` through the tables: the mean of the nearest-texel depth test
 // (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
 // part of it the square covers, as pcf_grid on a single map of the level, so a square across
-// page borders reads each texel from its own page: no seams. `found` is false (and the result 1)
-// when a texel under the square is not resident or lies outside the level's window.
-float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
+// page borders reads each texel from its own page: no seams. `gradient`: the receiver's depth
+// change per world unit across the light (receiver-plane bias: each texel is tested against the
+// receiver's depth at its centre; zero: one depth for the whole square). `found` is false (and the
+// result 1) when a texel under the square is not resident or lies outside the level's window.
+float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out bool found) {
   found = true;
   const float t = vsm_texel_ws(level);
   const vec2 p = (xy - u_vsm_origin[level]) / t;  // texel coordinates in the level's window
   const float r = max(radius_ws / t, 1e-4);
   const vec2 lo = p - r, hi = p + r;
-  const ivec2 first = ivec2(floor(lo)), last = ivec2(ceil(hi)) - 1;
+  // In 2×2 blocks from an even texel: a page's side is even, so no block straddles a page border,
+  // and one gather serves four texels (a texel beyond the square weighs 0).
+  const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
+  const int n = u_vsm_page_texels;
+  if (any(lessThan(first, ivec2(0))) || any(greaterThanEqual(last / n, ivec2(u_vsm_pages_per_side)))) {
+    found = false;
+    return 1.0;
+  }
+  // The pages under the square, read from the table once: at most two per axis here (a square
+  // under a page wide); a wider one reads the table per block.
+  const ivec2 page0 = first / n, pages = last / n - page0 + 1;
+  const bool few = all(lessThanEqual(pages, ivec2(2)));
+  ivec2 shift[4];  // pool texel of window texel (i, j) = (i, j) + shift, per page of the 2 × 2
+  for (int k = 0; k < 4; ++k) {
+    const ivec2 page = page0 + ivec2(k & 1, k >> 1);
+    if (!few || any(greaterThanEqual(page - page0, pages))) continue;
+    const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
+    if (slot < 0) {
+      found = false;
+      return 1.0;
+    }
+    shift[k] = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n - page * n;
+  }
+  const ivec2 split = (page0 + 1) * n;  // the first texel of the second page, per axis
+  const vec2 pool_texels = vec2(u_vsm_pool_pages * n);
+  const float gx = t * gradient.x, gy = t * gradient.y;
   float sum = 0.0;
-  for (int j = first.y; j <= last.y; ++j) {
-    const float wy = max(0.0, min(float(j + 1), hi.y) - max(float(j), lo.y));
-    for (int i = first.x; i <= last.x; ++i) {
-      const float wx = max(0.0, min(float(i + 1), hi.x) - max(float(i), lo.x));
-      float d;
-      if (!vsm_fetch(level, ivec2(i, j), d)) {
-        found = false;
-        return 1.0;
+  for (int j = first.y; j <= last.y; j += 2) {
+    const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
+    for (int i = first.x; i <= last.x; i += 2) {
+      const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
+      ivec2 corner;
+      if (few) {
+        corner = ivec2(i, j) + shift[(i >= split.x ? 1 : 0) + (j >= split.y ? 2 : 0)];
+      } else {
+        const ivec2 page = ivec2(i, j) / n;
+        const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
+        if (slot < 0) {
+          found = false;
+          return 1.0;
+        }
+        corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n + ivec2(i, j) - page * n;
       }
-      sum += wx * wy * (depth <= d ? 1.0 : 0.0);
+      // Gather order: w (i, j), z (i + 1, j), x (i, j + 1), y (i + 1, j + 1).
+      const vec4 d = textureGather(u_vsm_pool, (vec2(corner) + 1.0) / pool_texels, 0);
+      const float r00 = depth + dot((vec2(i, j) + 0.5 - p) * t, gradient);
+      sum += wx.x * wy.x * step(r00, d.w) + wx.y * wy.x * step(r00 + gx, d.z) + wx.x * wy.y * step(r00 + gy, d.x) +
+             wx.y * wy.y * step(r00 + gx + gy, d.y);
     }
   }
   return sum / (4.0 * r * r);
+}
+float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
+  return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
 }
 
 // PCSS's blocker search at `level` through the tables: the mean depth of the texels under the

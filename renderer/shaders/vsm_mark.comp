@@ -19,14 +19,7 @@ layout(std430, binding = 0) buffer Marks {
   uint u_page_bits[];  // bit (level · pages_per_side + y) · pages_per_side + x
 };
 
-uniform vec3 u_mark_camera_position;
-uniform vec3 u_mark_camera_forward;
-uniform bool u_perspective;
-uniform float u_footprint_per_depth;  // perspective: a pixel's world size per unit of depth; orthographic: its size
-uniform float u_radius_ws;
-uniform float u_c_texels;
-uniform float u_min_texel_px;
-uniform bool u_footprint_only;
+uniform float u_radius_ws;  // the filter's world radius (0: none)
 
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -37,17 +30,14 @@ void main() {
     return;
   }
   const vec3 world = s.xyz;
-  const float depth = u_perspective ? dot(world - u_mark_camera_position, u_mark_camera_forward) : 1.0;
-  const float floor_ws = max(depth, 0.0) * u_footprint_per_depth * u_min_texel_px;
-  const float texel = u_footprint_only || u_radius_ws <= 0.0 ? floor_ws : max(u_radius_ws / u_c_texels, floor_ws);
-  int level = texel > 0.0 ? int(clamp(floor(log2(texel / u_vsm_texel0_ws) + 1e-6), 0.0, float(u_vsm_levels - 1))) : 0;
+  int level = vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws));
   const vec2 xy = vsm_light_point(world).xy;
   const float r = max(u_radius_ws, 0.0);
   const int n = u_vsm_pages_per_side;
   for (; level < u_vsm_levels; ++level) {
+    if (!vsm_in_window(level, xy)) continue;
     const float page_ws = float(u_vsm_page_texels) * vsm_texel_ws(level);
     const vec2 local = (xy - u_vsm_origin[level]) / page_ws;
-    if (any(lessThan(local, vec2(0.0))) || any(greaterThanEqual(local, vec2(n)))) continue;
     const float reach = r / page_ws;  // the filter's square [xy - r, xy + r], in pages
     const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
     const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));

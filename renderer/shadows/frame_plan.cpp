@@ -65,14 +65,16 @@ bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.e
 PassIo pass_io(PassId pass, const FramePlan& plan) {
   const bool moments = plan.moments.has_value();
   const bool screen = plan.technique && plan.technique->screen_space();
+  const bool virtual_pages = plan.virtual_pages != VirtualPages::off;
   switch (pass) {
+    case PassId::virtual_pages: return {kSceneMeshes, kVirtualPages};
     case PassId::shadow_map: return {kSceneMeshes, kDepthAtlas | (moments ? kMoments : 0u)};
     case PassId::moments_blur: return {kMoments, kMoments};
     case PassId::depth_minmax: return {kDepthAtlas, kDepthMinmax};
     case PassId::gbuffer: return {kSceneMeshes | kDepthAtlas, kGbuffer};
     case PassId::post: return {kGbuffer | kDepthAtlas, kScreenVisibility};
     case PassId::shading:
-      return {kSceneMeshes | kDepthAtlas | (moments ? kMoments : 0u) | (screen ? kScreenVisibility : 0u) |
+      return {kSceneMeshes | (virtual_pages ? kVirtualPages : kDepthAtlas) | (moments ? kMoments : 0u) | (screen ? kScreenVisibility : 0u) |
                   (plan.runs(PassId::depth_minmax) ? kDepthMinmax : 0u),
               kColor | kVisibility | (plan.pcss_requirement ? kRequirementImage : 0u)};
     case PassId::pcss_requirement: return {kRequirementImage, kRequirementBuffer};
@@ -82,6 +84,7 @@ PassIo pass_io(PassId pass, const FramePlan& plan) {
 
 std::string_view pass_name(PassId pass) {
   switch (pass) {
+    case PassId::virtual_pages: return "virtual_pages";
     case PassId::shadow_map: return "shadow_map";
     case PassId::moments_blur: return "vsm_blur";
     case PassId::depth_minmax: return "depth_minmax";
@@ -98,7 +101,7 @@ std::string resource_names(unsigned resources) {
       {kSceneMeshes, "scene meshes"}, {kDepthAtlas, "depth atlas"},   {kMoments, "moments"},
       {kGbuffer, "G-buffer"},         {kScreenVisibility, "screen visibility"}, {kColor, "colour"},
       {kVisibility, "visibility"},    {kRequirementImage, "requirement image"}, {kRequirementBuffer, "requirement buffer"},
-      {kDepthMinmax, "depth min-max pyramid"}};
+      {kDepthMinmax, "depth min-max pyramid"}, {kVirtualPages, "virtual pages"}};
   std::string out;
   for (const auto& [bit, name] : kNames)
     if (resources & bit) out += (out.empty() ? "" : ", ") + std::string(name);
@@ -167,6 +170,25 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
 
   // --- cascades and the rule ---
   const LightFrame single = compute_light_frame(scene, fit);
+  if (s.map.virtual_pages != VirtualPages::off) {
+    // The sun's virtual shadow map: pages instead of maps (virtual_shadow_map.h). The single fitted
+    // frame stands for the light in the frame's uniforms; no map is drawn, the atlas is one texel.
+    if (!directional) throw std::runtime_error("render: map.virtual_pages: the virtual shadow map is the sun's; this scene has a spot light");
+    if (s.technique != Technique::pcf || s.pcf.kernel != Kernel::grid || !plan.filter_radius ||
+        plan.filter_radius->unit != RadiusUnit::world)
+      throw std::runtime_error("render: map.virtual_pages: pages are read by box pcf with a world radius (--technique pcf "
+                               "--pcf.kernel grid --pcf.radius_unit world), not " + describe(s));
+    plan.virtual_pages = s.map.virtual_pages;
+    plan.resolution_source = s.map.virtual_pages == VirtualPages::rule ? "virtual_rule" : "virtual_footprint";
+    CascadeInfo ci;
+    ci.light = single;
+    ci.resolution_texels = 1;
+    ci.split_far_ws = std::numeric_limits<float>::max();
+    plan.cascades.push_back(ci);
+    plan.atlas = layout_atlas({1}, 0);
+    plan.passes = {PassId::virtual_pages, PassId::shading};
+    return plan;
+  }
   const float radius_ws = rule_radius_ws(s, single, 0.5f * (single.near_ws + single.far_ws));
   const int fixed_res = s.map.resolution_texels;
   const int largest = ap.enabled ? ap.max_texels : fixed_res;

@@ -41,7 +41,7 @@ struct PcssRequirementInfo {
 };
 
 // The passes a frame can run, in execution order.
-enum class PassId { shadow_map, moments_blur, depth_minmax, gbuffer, post, shading, pcss_requirement };
+enum class PassId { virtual_pages, shadow_map, moments_blur, depth_minmax, gbuffer, post, shading, pcss_requirement };
 
 // Region corners per cascade: one row of up to two cells, then a second row. `guard` texels of
 // far depth surround every region.
@@ -81,6 +81,10 @@ struct FramePlan {
   bool pcss_requirement = false;              // the frame measures its per-pixel PCSS requirement
   PcssRequirementInfo used_requirement;       // the measurement this frame's resolution used
   float filter_radius_texels = 0;             // fixed filter, in texels of cascade 0 at mid depth
+  // The sun's virtual shadow map (map.virtual_pages): the frame marks and draws pages instead of
+  // maps; `cascades` then holds the fitted single map's light frame (its view and depth range
+  // describe the frame) and no map is drawn.
+  VirtualPages virtual_pages = VirtualPages::off;
   std::vector<PassId> passes;
 
   bool runs(PassId p) const;
@@ -100,6 +104,7 @@ enum Resource : unsigned {
   kRequirementImage = 1u << 7,
   kRequirementBuffer = 1u << 8,
   kDepthMinmax = 1u << 9,
+  kVirtualPages = 1u << 10,  // the virtual shadow map's page pool and tables
 };
 
 // The resources a pass reads and writes in the frame `plan` describes (the shading pass reads the

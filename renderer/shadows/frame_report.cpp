@@ -49,6 +49,22 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                              {"clamped_fraction", r.clamped_fraction},
                              {"above_max_fraction", r.above_max_fraction}};
   }
+  if (frame.virtual_map) {
+    const FrameInfo::Virtual& v = *frame.virtual_map;
+    j["virtual_map"] = {{"pages",
+                         {{"requested", v.pages.requested},
+                          {"cached", v.pages.cached},
+                          {"drawn", v.pages.drawn},
+                          {"missing", v.pages.missing},
+                          {"evicted", v.pages.evicted},
+                          {"invalidated", v.pages.invalidated},
+                          {"resident", v.pages.resident},
+                          {"triangles", v.pages.triangles}}},
+                        {"pixels_per_level", v.pixels_per_level},
+                        {"unmarked_pixels", v.unmarked},
+                        {"bytes", {{"resident_pages", v.resident_bytes}, {"tables", v.table_bytes}, {"pool_allocated", v.pool_bytes}}},
+                        {"shaded_pixels", {{"at_level", v.at_level}, {"coarser", v.coarser}, {"none", v.none}}}};
+  }
   return j;
 }
 

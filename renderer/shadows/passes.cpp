@@ -97,12 +97,15 @@ bool FrameResources::prepare(const FramePlan& plan) {
     maps->depth_minmax = gl::Texture({GL_RG32F, w, h, levels}, "min-max depth pyramid");
   }
   const int w = plan.width_px, h = plan.height_px;
-  if (!targets || targets->width != w || targets->height != h || targets->requirement != plan.pcss_requirement) {
+  const bool virtual_status = plan.virtual_pages != VirtualPages::off;
+  if (!targets || targets->width != w || targets->height != h || targets->requirement != plan.pcss_requirement ||
+      targets->virtual_status != virtual_status) {
     targets.reset();
     auto t = std::make_unique<Targets>();
     t->width = w;
     t->height = h;
     t->requirement = plan.pcss_requirement;
+    t->virtual_status = virtual_status;
     t->color = gl::Texture({GL_SRGB8_ALPHA8, w, h, 1}, "lit colour");
     t->visibility = gl::Texture({GL_R32F, w, h, 1}, "visibility");
     t->depth = gl::Texture({GL_DEPTH_COMPONENT32F, w, h, 1}, "camera depth");
@@ -110,6 +113,10 @@ bool FrameResources::prepare(const FramePlan& plan) {
     if (plan.pcss_requirement) {
       t->requirement_tex = gl::Texture({GL_RG32F, w, h, 1}, "PCSS requirement");
       att.push_back({&t->requirement_tex, GL_COLOR_ATTACHMENT2});
+    }
+    if (virtual_status) {  // a plan has one or the other: both are fragment output 2
+      t->virtual_status_tex = gl::Texture({GL_R8UI, w, h, 1}, "virtual map page status");
+      att.push_back({&t->virtual_status_tex, GL_COLOR_ATTACHMENT2});
     }
     att.push_back({&t->depth, GL_DEPTH_ATTACHMENT});
     t->fbo = gl::Framebuffer(att, "camera framebuffer");
@@ -160,6 +167,7 @@ const gl::Program& FrameContext::shading_program(bool gbuffer) const {
     if (entry.variant_defines) entry.variant_defines(settings, defines);
   }
   if (plan.pcss_requirement) defines.push_back({"PCSS_REQUIREMENT", "1"});
+  if (plan.virtual_pages != VirtualPages::off && !gbuffer) defines.push_back({"VIRTUAL_SHADOW_MAP", "1"});
   std::string key = "shading:";
   for (const auto& d : defines) key += d.name + ";";
   return res.programs.get(res.shaders, key, {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shading.frag"}}, defines);
@@ -256,6 +264,70 @@ void FrameContext::set_technique_uniforms(const gl::Program& prog) const {
 }
 
 namespace {
+
+// The sun's virtual shadow map for this frame: the camera's world positions (into the camera
+// targets' depth, which the shading pass reuses), the pages they mark by the rule or the footprint,
+// and those not cached drawn into the pool with their own caster culling.
+class VirtualPagesPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::virtual_pages; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    const ShadowSettings& s = f.settings;
+    auto& v = r.virtual_map;
+    if (!v || v->pool_pages != s.map.virtual_pool_pages) {
+      v = std::make_unique<FrameResources::Virtual>();
+      const adaptive::VirtualMapLayout layout;
+      v->pool_pages = s.map.virtual_pool_pages;
+      v->map = std::make_unique<VirtualShadowMap>(layout, s.map.virtual_pool_pages);
+      v->marker = std::make_unique<PageMarker>(layout);
+      v->shading_counts = gl::Buffer(sizeof(contract::VsmShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    }
+    v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
+    const int w = f.plan.width_px, h = f.plan.height_px;
+    if (v->width != w || v->height != h) {
+      v->width = w, v->height = h;
+      v->positions = gl::Texture({GL_RGBA32F, w, h, 1}, "virtual map: camera world positions");
+      const gl::Framebuffer::Attachment att[] = {{&v->positions, GL_COLOR_ATTACHMENT0}, {&r.targets->depth, GL_DEPTH_ATTACHMENT}};
+      v->fbo = gl::Framebuffer(att, "virtual map: position pass");
+    }
+    // The camera's surfaces: world xyz, w = 1 (0 where nothing is).
+    const gl::Program& prog = r.programs.get(r.shaders, "virtual_positions",
+                                             {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "vsm_positions.frag"}});
+    v->fbo.bind();
+    glViewport(0, 0, w, h);
+    const float nothing[4] = {0, 0, 0, 0}, far_depth = 1;
+    glClearBufferfv(GL_COLOR, 0, nothing);
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    prog.use();
+    f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
+
+    // Mark, then make the marked pages resident.
+    VirtualMapView view;
+    view.light_view = sun_light_view(f.scene.light.direction);
+    light_depth_range(view.light_view, f.scene.bounds(), view.near_ws, view.far_ws);
+    const glm::vec4 camera_light = view.light_view * glm::vec4(f.scene.camera.position, 1.0f);
+    view.camera_xy = {camera_light.x, camera_light.y};
+    v->options.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
+    v->options.c_texels = s.adaptive.c;
+    v->options.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+    v->radius_ws = f.plan.filter_radius->radius;
+    const adaptive::MarkResult marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
+    if (!s.map.virtual_cache) v->map->invalidate_all();
+    FrameInfo::Virtual out;
+    out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
+    out.pixels_per_level = marked.pixels_per_level;
+    out.unmarked = marked.unmarked;
+    const std::uint64_t page_bytes = static_cast<std::uint64_t>(v->map->layout().page_texels) * v->map->layout().page_texels * 4;
+    out.resident_bytes = static_cast<std::uint64_t>(out.pages.resident) * page_bytes;
+    out.pool_bytes = static_cast<std::uint64_t>(v->map->pool_slots()) * page_bytes;
+    out.table_bytes = static_cast<std::uint64_t>(v->map->layout().pages_per_side) * v->map->layout().pages_per_side *
+                      static_cast<std::uint64_t>(v->map->layout().levels) * 4;
+    f.info.virtual_map = out;
+    f.info.map_triangles.push_back(out.pages.triangles);
+    gl::check_errors("virtual_pages pass");
+  }
+};
 
 class ShadowMapPass final : public Pass {
  public:
@@ -429,6 +501,29 @@ class PostPass final : public Pass {
   }
 };
 
+// The shading's pixels by where they found their virtual-map pages (vsm_status.comp), read at
+// once (a wait for the pass): the counts belong to this frame's report.
+void count_virtual_status(FrameContext& f) {
+  FrameResources& r = f.res;
+  const gl::Buffer& counts = r.virtual_map->shading_counts;
+  const std::uint32_t zero = 0;
+  glClearNamedBufferData(counts.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  const gl::Program& prog = r.programs.get(r.shaders, "vsm_status", {{GL_COMPUTE_SHADER, "vsm_status.comp"}});
+  prog.use();
+  glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+  glBindImageTexture(prog.binding("u_status"), r.targets->virtual_status_tex.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R8UI);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_VSM_SHADING, counts.id());
+  constexpr int group = contract::VSM_STATUS_GROUP_PIXELS;
+  glDispatchCompute(static_cast<GLuint>((f.plan.width_px + group - 1) / group), static_cast<GLuint>((f.plan.height_px + group - 1) / group), 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  contract::VsmShadingResult c{};
+  glGetNamedBufferSubData(counts.id(), 0, sizeof c, &c);
+  f.info.virtual_map->at_level = c.at_level;
+  f.info.virtual_map->coarser = c.coarser;
+  f.info.virtual_map->none = c.none;
+  gl::check_errors("virtual map status count");
+}
+
 class ShadingPass final : public Pass {
  public:
   PassId id() const override { return PassId::shading; }
@@ -437,7 +532,8 @@ class ShadingPass final : public Pass {
     const bool requirement = f.plan.pcss_requirement;
     const gl::Program& prog = f.shading_program(false);
     r.targets->fbo.bind();
-    if (requirement) {
+    const bool virtual_pages = f.plan.virtual_pages != VirtualPages::off;
+    if (requirement || virtual_pages) {
       const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
       glNamedFramebufferDrawBuffers(r.targets->fbo.id(), 3, bufs);
     }
@@ -451,19 +547,32 @@ class ShadingPass final : public Pass {
       const float none[4] = {0, 0, 0, 0};
       glClearBufferfv(GL_COLOR, 2, none);
     }
-    if (r.screen_result) {
-      // The G-buffer pass left the depth: shade exactly the fragments it kept.
+    if (virtual_pages) {
+      const GLuint none[4] = {0, 0, 0, 0};
+      glClearBufferuiv(GL_COLOR, 2, none);
+    }
+    if (r.screen_result || virtual_pages) {
+      // The G-buffer (or the virtual map's position) pass left the depth: shade exactly the
+      // fragments it kept.
       glDepthFunc(GL_LEQUAL);
       glDepthMask(GL_FALSE);
-      glBindSampler(contract::UNIT_SCREEN_VISIBILITY, 0);
-      r.screen_result->bind(contract::UNIT_SCREEN_VISIBILITY);
+      if (r.screen_result) {
+        glBindSampler(contract::UNIT_SCREEN_VISIBILITY, 0);
+        r.screen_result->bind(contract::UNIT_SCREEN_VISIBILITY);
+      }
     } else {
       glClearBufferfv(GL_DEPTH, 0, &far_depth);
     }
     prog.use();
     f.bind_shadow_maps();
     f.set_technique_uniforms(prog);
+    if (virtual_pages) {
+      const FrameResources::Virtual& v = *r.virtual_map;
+      v.map->bind(prog);
+      set_virtual_mark_uniforms(prog, f.scene.camera, f.plan.height_px, v.options);
+    }
     f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
+    if (virtual_pages) count_virtual_status(f);
     glDisable(GL_FRAMEBUFFER_SRGB);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
@@ -504,6 +613,7 @@ class PcssRequirementPass final : public Pass {
 
 std::vector<std::unique_ptr<Pass>> make_passes() {
   std::vector<std::unique_ptr<Pass>> passes;
+  passes.push_back(std::make_unique<VirtualPagesPass>());
   passes.push_back(std::make_unique<ShadowMapPass>());
   passes.push_back(std::make_unique<MomentsBlurPass>());
   passes.push_back(std::make_unique<DepthMinmaxPass>());

@@ -2,6 +2,8 @@
 // The passes of a frame and what they share. Each pass states its name (as reported in
 // FrameInfo.passes and timed), whether a plan needs it, the resources it reads and writes, and
 // executes against the frame's resources:
+//   virtual_pages     scene → virtual pages: the camera's world positions (and its depth), the
+//                     pages they mark, those not cached drawn into the pool (map.virtual_pages)
 //   shadow_map        scene → depth atlas (+ the moments of a filtered-moments technique)
 //   vsm_blur          moments → moments (box blur in place, through a temporary)
 //   depth_minmax      depth atlas → min-max depth pyramid (PCSS's bounds)
@@ -27,6 +29,7 @@
 #include <penumbra/scene/scene.h>
 #include <penumbra/shadows/frame_plan.h>
 #include <penumbra/shadows/screen_space.h>
+#include <penumbra/shadows/virtual_shadow_map.h>
 
 namespace penumbra::shadows {
 
@@ -58,7 +61,8 @@ struct FrameResources {
   struct Targets {
     int width = 0, height = 0;
     bool requirement = false;
-    gl::Texture color, visibility, requirement_tex, depth;
+    bool virtual_status = false;  // the virtual map's per-pixel page status (R8UI, attachment 2)
+    gl::Texture color, visibility, requirement_tex, virtual_status_tex, depth;
     gl::Framebuffer fbo;
   };
   // Two requirement buffers, so that a frame reads the one written a frame earlier and never
@@ -69,6 +73,21 @@ struct FrameResources {
     int cascades[2] = {0, 0};
     float c[2] = {0, 0};
     int frame = 0;
+  };
+
+  // The sun's virtual shadow map, made on its first frame and kept (its pages are the cache): the
+  // pool and tables, the marker, and the camera's world positions the marking reads, drawn with
+  // the camera targets' depth, which the shading pass then tests with LEQUAL (one fragment a pixel).
+  struct Virtual {
+    int pool_pages = 0;
+    std::unique_ptr<VirtualShadowMap> map;
+    std::unique_ptr<PageMarker> marker;
+    adaptive::MarkOptions options;
+    double radius_ws = 0;
+    int width = 0, height = 0;
+    gl::Texture positions;
+    gl::Framebuffer fbo;
+    gl::Buffer shading_counts;  // contract::VsmShadingResult
   };
 
   explicit FrameResources(const gl::ShaderLibrary& library);
@@ -87,6 +106,7 @@ struct FrameResources {
   const gl::Texture* screen_result = nullptr;  // this frame's post-pass output
   Requirement requirement;
   std::map<int, std::vector<glm::vec2>> poisson;  // Poisson disks by tap count
+  std::unique_ptr<Virtual> virtual_map;  // made on the first virtual frame
 };
 
 // One frame being executed.

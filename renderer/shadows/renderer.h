@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include <penumbra/shadows/fitting.h>
 #include <penumbra/shadows/frame_plan.h>
 #include <penumbra/shadows/settings.h>
+#include <penumbra/shadows/virtual_shadow_map.h>
 
 namespace penumbra::shadows {
 
@@ -45,6 +47,17 @@ struct FrameInfo {
   std::vector<std::uint64_t> map_triangles;
   std::uint64_t camera_triangles = 0;
   std::uint64_t scene_triangles = 0;
+  // The sun's virtual shadow map (map.virtual_pages): what the frame marked and drew, the memory it
+  // holds (the pool's resident pages and every level's table; the pool is allocated whole), and
+  // the shading's pixels by where they found their pages.
+  struct Virtual {
+    VirtualMapStats pages;                       // marked (requested), cached, drawn, missing, evicted, resident
+    std::vector<std::int64_t> pixels_per_level;  // the marking's pixels on each level
+    std::int64_t unmarked = 0;                   // pixels beyond the coarsest level
+    std::uint64_t resident_bytes = 0, table_bytes = 0, pool_bytes = 0;
+    std::uint64_t at_level = 0, coarser = 0, none = 0;  // shaded pixels: on their level, a coarser one, none (lit)
+  };
+  std::optional<Virtual> virtual_map;
 };
 
 struct FrameResources;

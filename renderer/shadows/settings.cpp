@@ -18,6 +18,7 @@ namespace {
 constexpr auto kTechniques = std::to_array<std::string_view>({PENUMBRA_TECHNIQUES(PENUMBRA_NAME)});
 #undef PENUMBRA_NAME
 constexpr std::array<std::string_view, 2> kStorage = {"subrect", "realloc"};
+constexpr std::array<std::string_view, 3> kVirtualPages = {"off", "rule", "footprint"};
 constexpr std::array<std::string_view, 2> kPcssRequirement = {"per_pixel", "min_penumbra"};
 
 const Setting<ShadowMapParams> kMapTable[] = {
@@ -33,6 +34,10 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_REAL(ShadowMapParams, cascade_blend, "", 0, 0.5, "blend band at each cascade's far end (fraction of its depth range)"),
     PENUMBRA_BOOL(ShadowMapParams, cascade_stabilize, "cascade windows in quarter-octave sizes snapped to whole texels (no crawling)"),
     PENUMBRA_BOOL(ShadowMapParams, culling, "draw only the units whose bounds touch a map (casters) or the camera's view; the image is the same"),
+    PENUMBRA_CHOICE(ShadowMapParams, virtual_pages, VirtualPages, kVirtualPages,
+                    "sun: a virtual shadow map whose pages each pixel marks by its filter (rule: r / c) or its footprint; off: maps"),
+    PENUMBRA_INT(ShadowMapParams, virtual_pool_pages, "pages", 1, 128, "virtual shadow map: page slots per side of the pool (128² texels each)"),
+    PENUMBRA_BOOL(ShadowMapParams, virtual_cache, "virtual shadow map: keep drawn pages across frames until the light or a caster moves"),
 };
 
 const Setting<AdaptiveParams> kAdaptiveTable[] = {

@@ -23,6 +23,9 @@ namespace penumbra::shadows {
 enum class Technique : int { PENUMBRA_TECHNIQUES(PENUMBRA_ENUM) };
 #undef PENUMBRA_ENUM
 enum class Storage { subrect, realloc };
+// How a frame's sun shadow is stored: maps or cascades (off), or a virtual shadow map whose pages
+// each pixel marks on the level its filter asks for (rule) or its footprint alone (footprint).
+enum class VirtualPages { off, rule, footprint };
 enum class PcssRequirement { per_pixel, min_penumbra };
 
 std::span<const std::string_view> technique_names();  // "hard", "pcf", ... (Technique order)
@@ -47,6 +50,13 @@ struct ShadowMapParams {
   // Skip draw units whose bounds miss a map's sides (casters, per map or cascade) or the camera's
   // view (scene/culling.h). The image is the same either way; off draws every unit everywhere.
   bool culling = true;
+  // A virtual shadow map of the sun (shadows/virtual_shadow_map.h) instead of maps or cascades:
+  // each pixel marks the pages of the coarsest clipmap level whose texel is at most
+  // max(r / c, adaptive.min_texel_px pixels) (rule, c = adaptive.c) or at most its footprint
+  // (footprint); only marked pages are drawn and stored. PCF with a world radius.
+  VirtualPages virtual_pages = VirtualPages::off;
+  int virtual_pool_pages = 32;  // page slots per side of the pool (32² slots of 128² texels: 64 MiB)
+  bool virtual_cache = true;    // keep drawn pages across frames (off: every marked page drawn every frame)
 };
 
 // Adaptive resolution: res = c / r_uv (Kreuzer 2017 eq. 5.3/5.6) per map or cascade, clamped,

@@ -44,6 +44,8 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
                                 ", page_texels, pages_per_side, texel0_ws and the pool's pages per side positive");
   const int side = pool_side_ * layout.page_texels;
   pool_ = gl::Texture({GL_DEPTH_COMPONENT32F, side, side, 1}, "virtual shadow map page pool");
+  glTextureParameteri(pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // complete with one level: textureGather reads it
+  glTextureParameteri(pool_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   table_ = gl::Texture({GL_R32I, layout.pages_per_side, layout.pages_per_side * layout.levels, 1}, "virtual shadow map page tables");
   glTextureParameteri(table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // an integer texture is complete only so
   glTextureParameteri(table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -75,6 +77,12 @@ void VirtualShadowMap::free_slot(int slot) {
   resident_.erase(s.key);
   s = Slot{};
   free_.push_back(slot);
+}
+
+void VirtualShadowMap::set_raster_bias(float slope, float offset) {
+  if (slope == slope_bias_ && offset == offset_bias_) return;
+  slope_bias_ = slope, offset_bias_ = offset;
+  invalidate_all();  // pages drawn with the old offsets would disagree with new ones
 }
 
 void VirtualShadowMap::invalidate_all() {
@@ -203,7 +211,12 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);  // thin planes and open meshes cast from both sides
     glClearDepth(1.0);
+    if (slope_bias_ != 0 || offset_bias_ != 0) {
+      glEnable(GL_POLYGON_OFFSET_FILL);
+      glPolygonOffset(slope_bias_, offset_bias_);
+    }
     for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes);
+    glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
   }
@@ -253,6 +266,18 @@ void set_virtual_page_uniforms(const gl::Program& program, const adaptive::Virtu
   program.set("u_vsm_far_ws", view.far_ws);
 }
 
+void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options) {
+  const bool perspective = camera.projection == scene::Camera::Projection::perspective;
+  program.set("u_mark_camera_position", camera.position);
+  program.set("u_mark_camera_forward", glm::normalize(camera.target - camera.position));
+  program.set("u_mark_perspective", perspective);
+  program.set("u_mark_footprint_per_depth", perspective ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / static_cast<float>(height_px)
+                                                        : camera.ortho_height_ws / static_cast<float>(height_px));
+  program.set("u_mark_c_texels", static_cast<float>(options.c_texels));
+  program.set("u_mark_min_texel_px", static_cast<float>(options.min_texel_px));
+  program.set("u_mark_footprint_only", options.marking == adaptive::Marking::footprint);
+}
+
 void VirtualShadowMap::bind(const gl::Program& program) const {
   pool_.bind(contract::UNIT_VSM_POOL);
   glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
@@ -281,17 +306,9 @@ adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::C
     throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
   program_.set("u_write_levels", levels != nullptr);
   if (levels) glBindImageTexture(1, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-  const bool perspective = camera.projection == scene::Camera::Projection::perspective;
   set_virtual_page_uniforms(program_, layout_, view);
-  program_.set("u_mark_camera_position", camera.position);
-  program_.set("u_mark_camera_forward", glm::normalize(camera.target - camera.position));
-  program_.set("u_perspective", perspective);
-  program_.set("u_footprint_per_depth", perspective ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / static_cast<float>(height_px)
-                                                    : camera.ortho_height_ws / static_cast<float>(height_px));
+  set_virtual_mark_uniforms(program_, camera, height_px, options);
   program_.set("u_radius_ws", static_cast<float>(radius_ws));
-  program_.set("u_c_texels", static_cast<float>(options.c_texels));
-  program_.set("u_min_texel_px", static_cast<float>(options.min_texel_px));
-  program_.set("u_footprint_only", options.marking == adaptive::Marking::footprint);
   const std::uint32_t zero = 0;
   glClearNamedBufferData(marks_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks_.id());

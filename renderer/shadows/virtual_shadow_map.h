@@ -55,6 +55,10 @@ struct VirtualMapStats {
 // virtual_pages.glsl's uniforms for `layout` seen from `view` (the level windows around its camera).
 void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
 
+// virtual_pages.glsl's marking uniforms: which level a surface point asks for, seen by `camera` in
+// an image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
+void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options);
+
 // Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
 // float: a pixel exactly on a level's or a page's boundary may land on the other side).
@@ -93,6 +97,9 @@ class VirtualShadowMap {
   // Leaves the pool's framebuffer unbound and the viewport and scissor test changed.
   VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
                          const scene::GpuMeshes& meshes);
+  // The raster depth offset pages are drawn with (glPolygonOffset factor and units, as the maps'
+  // map.slope_bias and map.offset_bias; none by default). A change drops every page.
+  void set_raster_bias(float slope, float offset);
   // Drops every page (the light moved).
   void invalidate_all();
   // Drops the pages over the world box `bounds` (a caster moved: call with its old and its new
@@ -144,6 +151,7 @@ class VirtualShadowMap {
   std::vector<std::int64_t> origin_pages_x_, origin_pages_y_;  // each level's window corner, in pages
   VirtualMapView view_;
   bool has_view_ = false;
+  float slope_bias_ = 0, offset_bias_ = 0;
   std::int64_t frame_ = 0;
   int invalidated_ = 0;
 };

@@ -87,6 +87,50 @@ TEST(FramePlan, EveryPlanIsAFrameWhosePassesReadWhatEarlierOnesWrote) {
   EXPECT_EQ(plan_problem(measured), "pass pcss_requirement reads requirement image, which no earlier pass of the frame writes");
 }
 
+// The sun's virtual shadow map: pages instead of maps, read by box PCF with a world radius; a spot
+// light, another kernel or technique, or a radius in texels is refused in one line naming it.
+TEST(FramePlan, VirtualPagesReplaceTheMapsForBoxPcfInWorldUnits) {
+  ShadowSettings s = with(Technique::pcf);
+  s.pcf.kernel = Kernel::grid;
+  s.pcf.radius_unit = RadiusUnit::world;
+  s.pcf.radius = 0.12f;
+  s.map.virtual_pages = VirtualPages::rule;
+  s.map.cascades = 4;  // ignored: the pages cover the view
+  const FramePlan p = plan(s);
+  EXPECT_EQ(p.passes, (std::vector<PassId>{PassId::virtual_pages, PassId::shading}));
+  EXPECT_EQ(plan_problem(p), "");
+  EXPECT_EQ(resource_names(pass_io(PassId::shading, p).reads), "scene meshes, virtual pages");
+  EXPECT_EQ(p.resolution_source, "virtual_rule");
+  ASSERT_EQ(p.cascades.size(), 1u);
+  EXPECT_EQ(p.atlas.width * p.atlas.height, 1) << "no map is drawn";
+  s.map.virtual_pages = VirtualPages::footprint;
+  EXPECT_EQ(plan(s).resolution_source, "virtual_footprint");
+
+  auto refused = [&](const ShadowSettings& bad, const scene::Scene& scene, const std::string& says) {
+    try {
+      plan(bad, scene);
+      ADD_FAILURE() << "accepted: " << says;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("map.virtual_pages"), std::string::npos) << e.what();
+    }
+  };
+  const scene::Scene demo = scene::make_builtin_scene("demo");
+  scene::Scene spot = demo;
+  spot.light.type = scene::Light::Type::spot;
+  spot.light.position = {0, 12, 0};
+  refused(s, spot, "spot light");
+  ShadowSettings poisson = s;
+  poisson.pcf.kernel = Kernel::poisson;
+  refused(poisson, demo, "kernel=poisson");
+  ShadowSettings texels = s;
+  texels.pcf.radius_unit = RadiusUnit::texels;
+  refused(texels, demo, "radius_unit=texels");
+  ShadowSettings vsm = with(Technique::vsm);
+  vsm.map.virtual_pages = VirtualPages::rule;
+  refused(vsm, demo, "not vsm");
+}
+
 TEST(FramePlan, FixedSingleMapFillsItsTextureWithoutGuardBand) {
   ShadowSettings s = with(Technique::pcf);
   s.map.resolution_texels = 777;
