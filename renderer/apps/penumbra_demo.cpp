@@ -133,6 +133,7 @@ struct Options {
   bool baselines = true;       // the engine family (one map of twice the fixed size, cascades)
   bool sweep = false;          // the whole engine family instead of a few points
   bool auto_cascades = true;   // adaptive: as many cascades as the rule needs (unless --map.cascades is given)
+  bool virtual_pages = true;   // the sun's virtual map beside the maps (a directional light; box PCF in world units)
   bool reference = true;       // error against a reference of the technique at the reference frames
   // Area-light reference: shadow rays per pixel, ray-traced (256 against 1024 differ by RMSE
   // 0.005 on the street: AreaLightSlow.OutdoorRayTracedReference...); in a build without Embree,
@@ -184,6 +185,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   demo::ConfigurationOptions config_options;
   config_options.family = !opt.baselines ? demo::Family::none : opt.sweep ? demo::Family::sweep : demo::Family::default_;
   config_options.auto_cascades = opt.auto_cascades;
+  config_options.virtual_pages = opt.virtual_pages && directional;
   std::vector<std::vector<demo::Configuration>> per_technique;
   for (const std::string& name : opt.techniques) {
     shadows::ShadowSettings fixed = base;
@@ -233,7 +235,10 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   // The adoption question first.
   std::printf("penumbra-demo: adaptive against the engine's Pareto front at equal error to the reference (engine at equal error / "
               "adaptive, per frame along the path: median [95 %% bootstrap interval]; > 1 favours adaptive)\n");
-  for (std::size_t i = 0; i < runs.size(); ++i) std::printf("%s\n", demo::headline(runs[i], equal[i]).c_str());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    std::printf("%s\n", demo::headline(runs[i], equal[i]).c_str());
+    for (const demo::VirtualReading& v : equal[i].virtual_maps) std::printf("%s\n", demo::virtual_headline(runs[i], v).c_str());
+  }
   std::printf("\n%s at %dx%d on %s; %zu frames of a %d-frame %s path; engine family %s; calibration %s\n", scene.name.c_str(), opt.width,
               opt.height, ctx.info().renderer.c_str(), plan.frames.size(), plan.length, plan.kind.c_str(),
               report["engine_family"].get<std::string>().c_str(), opt.calibration.loaded.source.c_str());
@@ -545,6 +550,9 @@ int main(int argc, char** argv) {
   app.add_flag("!--no-plot", opt.plot, "skip the bar chart");
   app.add_flag("!--no-baselines", opt.baselines,
                "skip the engine family (and with it the equal-error comparison): adaptive and the fixed map only");
+  app.add_flag("!--no-virtual", opt.virtual_pages,
+               "headless: without the sun's virtual shadow map (virtual rule / footprint, drawn every frame, and the rule cached; "
+               "box PCF in world units only)");
   app.add_flag("!--no-reference", opt.reference,
                "skip the error against the reference (four cascades of 8192² with the same filter, or the area-light mean)");
   app.add_option("--reference-samples", opt.reference_samples,

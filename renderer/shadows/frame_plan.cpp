@@ -60,6 +60,11 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
 
 }  // namespace
 
+std::string virtual_pages_unsupported(const ShadowSettings& s) {
+  if (s.technique == Technique::pcf && s.pcf.kernel == Kernel::grid && s.pcf.radius_unit == RadiusUnit::world) return "";
+  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world), not " + describe(s);
+}
+
 bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }
 
 PassIo pass_io(PassId pass, const FramePlan& plan) {
@@ -174,10 +179,7 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
     // The sun's virtual shadow map: pages instead of maps (virtual_shadow_map.h). The single fitted
     // frame stands for the light in the frame's uniforms; no map is drawn, the atlas is one texel.
     if (!directional) throw std::runtime_error("render: map.virtual_pages: the virtual shadow map is the sun's; this scene has a spot light");
-    if (s.technique != Technique::pcf || s.pcf.kernel != Kernel::grid || !plan.filter_radius ||
-        plan.filter_radius->unit != RadiusUnit::world)
-      throw std::runtime_error("render: map.virtual_pages: pages are read by box pcf with a world radius (--technique pcf "
-                               "--pcf.kernel grid --pcf.radius_unit world), not " + describe(s));
+    if (const std::string why = virtual_pages_unsupported(s); !why.empty()) throw std::runtime_error("render: map.virtual_pages: " + why);
     plan.virtual_pages = s.map.virtual_pages;
     plan.resolution_source = s.map.virtual_pages == VirtualPages::rule ? "virtual_rule" : "virtual_footprint";
     CascadeInfo ci;

@@ -121,6 +121,10 @@ std::string resource_names(unsigned resources);  // "depth atlas, moments"
 // the pass and what it lacks. Renderer::render refuses a plan that is not a frame.
 std::string plan_problem(const FramePlan& plan);
 
+// "" when `s` can be drawn through the sun's virtual shadow map (box PCF with a world radius), else
+// why not ("pcf ... kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
+std::string virtual_pages_unsupported(const ShadowSettings& s);
+
 // Plans one frame of `scene` at width × height. Updates the hysteresis in `state`. Throws
 // std::runtime_error for an empty image, a map below one texel or inconsistent adaptive limits.
 FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int width_px, int height_px, AdaptiveState& state);

@@ -315,6 +315,7 @@ class VirtualPagesPass final : public Pass {
     const adaptive::MarkResult marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
     if (!s.map.virtual_cache) v->map->invalidate_all();
     FrameInfo::Virtual out;
+    out.page_texels = v->map->layout().page_texels;
     out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
     out.pixels_per_level = marked.pixels_per_level;
     out.unmarked = marked.unmarked;

@@ -51,6 +51,7 @@ struct FrameInfo {
   // holds (the pool's resident pages and every level's table; the pool is allocated whole), and
   // the shading's pixels by where they found their pages.
   struct Virtual {
+    int page_texels = 0;                         // texels per page side
     VirtualMapStats pages;                       // marked (requested), cached, drawn, missing, evicted, resident
     std::vector<std::int64_t> pixels_per_level;  // the marking's pixels on each level
     std::int64_t unmarked = 0;                   // pixels beyond the coarsest level

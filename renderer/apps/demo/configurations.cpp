@@ -1,5 +1,7 @@
 #include "apps/demo/configurations.h"
 
+#include "shadows/frame_plan.h"
+
 #include <algorithm>
 #include <utility>
 
@@ -52,6 +54,19 @@ std::vector<Configuration> configurations(const shadows::ShadowSettings& fixed, 
     shadows::ShadowSettings world_fixed = one;
     world_fixed.map.fit = false;
     out.push_back({"floor (world-fixed map)", Role::floor, world_fixed});
+  }
+  if (options.virtual_pages && shadows::virtual_pages_unsupported(fixed).empty()) {
+    const std::pair<const char*, shadows::VirtualPages> kinds[] = {{"virtual rule", shadows::VirtualPages::rule},
+                                                                    {"virtual footprint", shadows::VirtualPages::footprint}};
+    for (const auto& [name, marking] : kinds) {
+      shadows::ShadowSettings v = one;
+      v.map.virtual_pages = marking;
+      v.map.virtual_cache = false;  // every marked page drawn every frame: the frame's whole work
+      out.push_back({name, Role::virtual_pages, v});
+    }
+    shadows::ShadowSettings cached = one;
+    cached.map.virtual_pages = shadows::VirtualPages::rule;
+    out.push_back({"virtual rule, cached", Role::virtual_pages, cached});
   }
   return out;
 }

@@ -16,6 +16,7 @@ enum class Role {
   engine,         // a member of the engine family (the fixed map is one too)
   no_hysteresis,  // the rule's exact answer every frame (flicker only)
   floor,          // one map fixed in the world, not fitted (flicker only)
+  virtual_pages,  // the sun's virtual shadow map (map.virtual_pages): by the rule or the footprint, cached or not
 };
 
 struct Configuration {
@@ -23,7 +24,7 @@ struct Configuration {
   Role role = Role::engine;
   shadows::ShadowSettings settings;
   // In the tables and on the front: the adaptive rule, the fixed map and the engine family.
-  bool timed() const { return role == Role::adaptive || role == Role::fixed || role == Role::engine; }
+  bool timed() const { return role == Role::adaptive || role == Role::fixed || role == Role::engine || role == Role::virtual_pages; }
   // A point of the engine family (the fixed map included).
   bool engine_family() const { return role == Role::fixed || role == Role::engine; }
 };
@@ -42,11 +43,15 @@ struct ConfigurationOptions {
   Family family = Family::default_;
   bool auto_cascades = true;  // adaptive: as many cascades as the rule needs
   bool flicker_only = true;   // add the rule without hysteresis and the world-fixed floor
+  // The sun's virtual shadow map, where the technique reads it (shadows::virtual_pages_unsupported):
+  // by the rule and by the footprint, each page drawn every frame (the per-frame work), and the
+  // rule with its cache. Only for a directional light.
+  bool virtual_pages = false;
 };
 
 // `fixed`: the technique's settings (calibrated, adaptive off) with map.resolution_texels = F.
 // Order: adaptive, fixed, the engine family (four cascades of F, the engine baseline, second when
-// the family has it), then the flicker-only configurations.
+// the family has it), then the flicker-only configurations, then the virtual maps.
 std::vector<Configuration> configurations(const shadows::ShadowSettings& fixed, const ConfigurationOptions& options);
 
 // The index of the engine baseline (four cascades of F) in `configs`, or of the fixed map when

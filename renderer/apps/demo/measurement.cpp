@@ -31,6 +31,10 @@ double timed_render(Series& s, int width, int height) {
 }
 
 double texels_of(const shadows::FrameInfo& info) {
+  if (info.virtual_map) {  // the pages drawn
+    const double page = info.virtual_map->page_texels;
+    return static_cast<double>(info.virtual_map->pages.drawn) * page * page;
+  }
   double t = 0;
   for (const auto& c : info.cascades) t += static_cast<double>(c.resolution_texels) * c.resolution_texels;
   return t;
@@ -73,6 +77,7 @@ const std::vector<std::string>& thin_casters() {
 }
 
 std::string cascade_resolutions(const shadows::FrameInfo& info) {
+  if (info.virtual_map) return std::to_string(info.virtual_map->pages.requested) + "p";  // pages marked
   std::string res;
   for (const auto& c : info.cascades) res += (res.empty() ? "" : "+") + std::to_string(c.resolution_texels);
   return res;
@@ -240,7 +245,10 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       double triangles = 0;
       for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
       s.map_triangles.push_back(triangles);
-      s.allocated.push_back(static_cast<double>(s.info.atlas_width) * s.info.atlas_height);
+      // Memory in 4-byte texels: the atlas, or the virtual map's resident pages and its tables.
+      s.allocated.push_back(s.info.virtual_map
+                                ? static_cast<double>(s.info.virtual_map->resident_bytes + s.info.virtual_map->table_bytes) / 4
+                                : static_cast<double>(s.info.atlas_width) * s.info.atlas_height);
       const std::string res = cascade_resolutions(s.info);
       if (!s.resolution.empty() && s.resolution.back() != res) ++s.resolution_changes;
       s.resolution.push_back(res);

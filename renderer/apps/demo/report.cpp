@@ -52,7 +52,8 @@ std::string usual_resolution(const Series& s) {
 double shadow_kept(const TechniqueRun& run, const Series& s) { return s.thin_shadow / std::max(run.reference_thin_shadow, 1e-9); }
 double gaps_kept(const TechniqueRun& run, const Series& s) { return run.gap_pixels > 0 ? s.gaps / std::max(run.reference_gaps, 1e-9) : 1.0; }
 
-FrontComparison compare_on(const TechniqueRun& run, const std::vector<std::size_t>& family, double adaptive_error,
+// `subject` (a series index) read against the family's front at its error `subject_error`.
+FrontComparison compare_on(const TechniqueRun& run, const std::vector<std::size_t>& family, std::size_t subject, double subject_error,
                            const std::vector<double> Series::*per_frame, bool median_cost) {
   std::vector<stats::Candidate> candidates;
   for (const std::size_t k : family) {
@@ -63,10 +64,10 @@ FrontComparison compare_on(const TechniqueRun& run, const std::vector<std::size_
   const std::vector<std::size_t> front = stats::pareto_front(candidates);
   for (const std::size_t f : front) out.front.push_back(family[f]);
   if (front.empty()) return out;
-  out.reading = stats::read_front(candidates, front, adaptive_error);
+  out.reading = stats::read_front(candidates, front, subject_error);
   out.reading.lo = family[out.reading.lo], out.reading.hi = family[out.reading.hi];
   out.ratio = stats::paired_ratio(run.series[out.reading.lo].*per_frame, run.series[out.reading.hi].*per_frame, out.reading.weight,
-                                  run.series[run.adaptive].*per_frame);
+                                  run.series[subject].*per_frame);
   return out;
 }
 
@@ -124,11 +125,28 @@ EqualError equal_error(const TechniqueRun& run) {
     eq.why_not = "no engine family (--no-baselines): no front";
     return eq;
   }
-  eq.time = compare_on(run, eq.family, eq.adaptive_error, &Series::ms, true);
-  eq.memory = compare_on(run, eq.family, eq.adaptive_error, &Series::allocated, false);
+  eq.time = compare_on(run, eq.family, run.adaptive, eq.adaptive_error, &Series::ms, true);
+  eq.memory = compare_on(run, eq.family, run.adaptive, eq.adaptive_error, &Series::allocated, false);
   eq.available = !eq.time.front.empty() && !eq.memory.front.empty();
   if (!eq.available) eq.why_not = "no engine configuration was measured against the reference";
+  for (std::size_t k = 0; k < run.series.size() && eq.available; ++k) {
+    if (run.series[k].config.role != Role::virtual_pages) continue;
+    VirtualReading v;
+    v.series = k;
+    v.error = reference_rmse(run.series[k]);
+    v.time = compare_on(run, eq.family, k, v.error, &Series::ms, true);
+    v.memory = compare_on(run, eq.family, k, v.error, &Series::allocated, false);
+    eq.virtual_maps.push_back(v);
+  }
   return eq;
+}
+
+std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v) {
+  char line[512];
+  std::snprintf(line, sizeof line, "%-6s %s at RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
+                run.series[v.series].config.name.c_str(), v.error, ratio_text(v.time).c_str(), ratio_text(v.memory).c_str(),
+                where_text(run, v.time).c_str(), where_text(run, v.memory).c_str());
+  return line;
 }
 
 std::string headline(const TechniqueRun& run, const EqualError& eq) {
@@ -219,6 +237,28 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
                         {"passes", io::to_json(s.timer->stats())}};
     measured(k, b);
     t["baselines"].push_back(b);
+  }
+  for (const VirtualReading& v : eq.virtual_maps) {
+    const Series& s = run.series[v.series];
+    nlohmann::json j = {{"name", s.config.name},
+                        {"settings", shadows::to_json(s.config.settings)},
+                        {"frame_ms", spread(s.ms)},
+                        {"passes", io::to_json(s.timer->stats())},
+                        {"pages_marked", s.resolution},
+                        {"equal_error",
+                         {{"error", v.error},
+                          {"time", comparison_json(run, v.time, "ms")},
+                          {"memory", comparison_json(run, v.memory, "texels")},
+                          {"headline", virtual_headline(run, v)}}}};
+    if (s.info.virtual_map) {
+      const auto& last = *s.info.virtual_map;
+      j["last_frame"] = {{"pages", {{"requested", last.pages.requested}, {"drawn", last.pages.drawn}, {"cached", last.pages.cached},
+                                    {"missing", last.pages.missing}, {"resident", last.pages.resident}}},
+                         {"shaded_pixels", {{"at_level", last.at_level}, {"coarser", last.coarser}, {"none", last.none}}},
+                         {"bytes", {{"resident_pages", last.resident_bytes}, {"tables", last.table_bytes}, {"pool_allocated", last.pool_bytes}}}};
+    }
+    measured(v.series, j);
+    t["virtual"].push_back(j);
   }
   t["engine_baseline"] = run.series[run.engine].config.name;
   t["speedup_vs_engine_median"] = spread(run.series[run.engine].ms).median / std::max(sa.median, 1e-9);

@@ -20,14 +20,23 @@ struct FrontComparison {
   stats::FrontReading reading;     // indices into the series
   stats::RatioInterval ratio;      // engine at equal error / adaptive, per frame
 };
+// A virtual map's configuration read against the same front at its own error.
+struct VirtualReading {
+  std::size_t series = 0;
+  double error = 0;
+  FrontComparison time, memory;
+};
 struct EqualError {
   bool available = false;
   std::string why_not;             // when not available
   double adaptive_error = 0;
   std::vector<std::size_t> family;  // series indices of the engine family (the fixed map included)
   FrontComparison time, memory;
+  std::vector<VirtualReading> virtual_maps;  // each virtual configuration (Role::virtual_pages)
 };
 EqualError equal_error(const TechniqueRun& run);
+// "pcf    virtual rule at RMSE 0.0402: speedup ..., memory ratio ...", as headline() for the adaptive maps.
+std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v);
 
 // Mean RMSE against the reference over the reference frames (NaN without a reference).
 double reference_rmse(const Series& s);
