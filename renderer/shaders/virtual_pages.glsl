@@ -17,6 +17,7 @@ uniform float u_vsm_near_ws;
 uniform float u_vsm_far_ws;
 layout(binding = UNIT_VSM_POOL) uniform sampler2D u_vsm_pool;
 layout(binding = UNIT_VSM_TABLE) uniform isampler2D u_vsm_table;
+layout(binding = UNIT_VSM_POOL_CMP) uniform sampler2DShadow u_vsm_pool_cmp;  // the pool, LEQUAL comparison (lit)
 
 // Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
 // (vsm_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
@@ -88,8 +89,8 @@ int vsm_resident_level(int level, vec2 xy) {
 // (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
 // part of it the square covers, as pcf_grid on a single map of the level, so a square across
 // page borders reads each texel from its own page: no seams. `gradient`: the receiver's depth
-// change per world unit across the light (receiver-plane bias: each texel is tested against the
-// receiver's depth at its centre; zero: one depth for the whole square). `found` is false (and the
+// change per world unit across the light (receiver-plane bias: each 2 × 2 block is tested against
+// the receiver's depth at its shared corner, as pcf_grid on a map; zero: one depth for the square). `found` is false (and the
 // result 1) when a texel under the square is not resident or lies outside the level's window.
 float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out bool found) {
   found = true;
@@ -122,7 +123,6 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   }
   const ivec2 split = (page0 + 1) * n;  // the first texel of the second page, per axis
   const vec2 pool_texels = vec2(u_vsm_pool_pages * n);
-  const float gx = t * gradient.x, gy = t * gradient.y;
   float sum = 0.0;
   for (int j = first.y; j <= last.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
@@ -140,11 +140,11 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
         }
         corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n + ivec2(i, j) - page * n;
       }
-      // Gather order: w (i, j), z (i + 1, j), x (i, j + 1), y (i + 1, j + 1).
-      const vec4 d = textureGather(u_vsm_pool, (vec2(corner) + 1.0) / pool_texels, 0);
-      const float r00 = depth + dot((vec2(i, j) + 0.5 - p) * t, gradient);
-      sum += wx.x * wy.x * step(r00, d.w) + wx.y * wy.x * step(r00 + gx, d.z) + wx.x * wy.y * step(r00 + gy, d.x) +
-             wx.y * wy.y * step(r00 + gx + gy, d.y);
+      // Four comparisons in one gather, against the receiver's depth at the block's shared corner
+      // (as pcf_grid does on a map). Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
+      const float reference = depth + dot((vec2(i, j) + 1.0 - p) * t, gradient);
+      const vec4 lit = textureGather(u_vsm_pool_cmp, (vec2(corner) + 1.0) / pool_texels, reference);
+      sum += dot(lit, vec4(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x));
     }
   }
   return sum / (4.0 * r * r);

@@ -46,6 +46,10 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
   pool_ = gl::Texture({GL_DEPTH_COMPONENT32F, side, side, 1}, "virtual shadow map page pool");
   glTextureParameteri(pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // complete with one level: textureGather reads it
   glTextureParameteri(pool_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  gl::SamplerDesc compare;
+  compare.min_filter = compare.mag_filter = GL_NEAREST;
+  compare.depth_compare = true;
+  compare_ = gl::Sampler(compare);
   table_ = gl::Texture({GL_R32I, layout.pages_per_side, layout.pages_per_side * layout.levels, 1}, "virtual shadow map page tables");
   glTextureParameteri(table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // an integer texture is complete only so
   glTextureParameteri(table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -283,6 +287,8 @@ void VirtualShadowMap::bind(const gl::Program& program) const {
   glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
   table_.bind(contract::UNIT_VSM_TABLE);
   glBindSampler(contract::UNIT_VSM_TABLE, 0);
+  pool_.bind(contract::UNIT_VSM_POOL_CMP);
+  compare_.bind(contract::UNIT_VSM_POOL_CMP);
   set_virtual_page_uniforms(program, layout_, view_);
   program.set("u_vsm_pool_pages", pool_side_);
 }

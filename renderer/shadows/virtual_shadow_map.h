@@ -106,8 +106,8 @@ class VirtualShadowMap {
   // bounds): those whose light-space square meets the box's light-space footprint, at any depth.
   void invalidate(const scene::Aabb& bounds);
 
-  // Binds the pool and the tables to UNIT_VSM_POOL and UNIT_VSM_TABLE and sets virtual_pages.glsl's
-  // uniforms of `program` for the last update's view.
+  // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the tables to
+  // UNIT_VSM_TABLE, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const;
@@ -143,6 +143,7 @@ class VirtualShadowMap {
   adaptive::VirtualMapLayout layout_;
   int pool_side_ = 0;
   gl::Texture pool_, table_;
+  gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (vsm_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;
   std::vector<Slot> slots_;

@@ -178,7 +178,7 @@ TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) 
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, rgba32f) uniform writeonly image2D u_out;  // PCF paged, single; blockers paged, single
-layout(binding = 11) uniform sampler2D u_single;
+layout(binding = 13) uniform sampler2D u_single;
 uniform int u_level;
 uniform float u_radius_texels;
 void main() {
@@ -222,8 +222,8 @@ void main() {
   vsm.bind(p);
   p.set("u_level", level);
   p.set("u_radius_texels", 2.5f);
-  single.bind(11);
-  glBindSampler(11, 0);
+  single.bind(13);
+  glBindSampler(13, 0);
   glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   p.dispatch_covering(n, n);
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
