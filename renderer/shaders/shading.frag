@@ -41,13 +41,12 @@ vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (
 #if defined(VIRTUAL_SHADOW_MAP)
 #include "virtual_pages.glsl"
 
-// PCF through the sun's virtual shadow map: on the level this pixel's pages were marked on (the
-// request of vsm_mark.comp, the first level at or above it whose window holds the point), with
-// the normal offset and constant bias in that level's texels and the receiver plane `gradient`
-// (normalized depth per world unit across the light). Where the pool could not hold a page, the
+// Box PCF of world radius `radius_ws` through the sun's virtual shadow map: on the level this
+// pixel's pages were marked on (the request of vsm_mark.comp, the first level at or above it whose
+// window holds the point), with the normal offset and constant bias in that level's texels and the
+// receiver plane `gradient` (normalized depth per world unit across the light). Where the pool could not hold a page, the
 // next coarser resident level answers; where none does, the pixel is lit (o_vsm_status says which).
-float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
-  const float radius_ws = u_filter_radius;  // world units: the plan refuses texels
+float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
   const vec2 xy = vsm_light_point(v_world).xy;
   int marked = vsm_level_for_texel(vsm_requested_texel_ws(v_world, radius_ws));
   while (marked < u_vsm_levels - 1 && !vsm_in_window(marked, xy)) ++marked;
@@ -64,6 +63,26 @@ float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
   }
   o_vsm_status = 3u;
   return 1.0;
+}
+
+// The technique's visibility through the pages: box PCF of the fixed world radius, or PCSS's
+// blocker search and box filter of the penumbra it finds (vsm_pcss_radius, as the marking ran it).
+float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
+#if defined(TECHNIQUE_PCSS)
+  float radius_ws;
+  int blockers;
+  if (!vsm_pcss_radius(v_world, radius_ws, blockers)) {
+    o_vsm_status = 3u;  // no level held the search
+    return 1.0;
+  }
+  if (blockers == 0) {
+    o_vsm_status = 1u;  // nothing in front: lit, as the search says
+    return 1.0;
+  }
+  return virtual_filter(n, sin_angle, gradient, radius_ws);
+#else
+  return virtual_filter(n, sin_angle, gradient, u_filter_radius);  // world units: the plan refuses texels
+#endif
 }
 
 // The receiver plane in the virtual map's light space: d(normalized depth) / d(light xy), from

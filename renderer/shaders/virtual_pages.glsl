@@ -85,60 +85,78 @@ int vsm_resident_level(int level, vec2 xy) {
   return -1;
 }
 
+// The pages under a square of texels of `level` from `first` (even) to `last`, in 2 × 2 blocks:
+// a page's side is even, so no block straddles a page border. With at most two pages per axis
+// (a square under a page wide) the table is read once per page, not per block.
+struct VsmSquare {
+  int level;
+  ivec2 page0, split;  // the first page; the first texel of the second page, per axis
+  bool few;
+  ivec2 shift[4];      // pool texel = window texel + shift, per page page0 + (k & 1, k >> 1)
+};
+
+// false when a page under the square is not resident or the square leaves the level's window.
+bool vsm_square(int level, ivec2 first, ivec2 last, out VsmSquare sq) {
+  const int n = u_vsm_page_texels;
+  sq.level = level;
+  sq.page0 = first / n;
+  sq.split = (sq.page0 + 1) * n;
+  sq.few = false;
+  if (any(lessThan(first, ivec2(0))) || any(greaterThanEqual(last / n, ivec2(u_vsm_pages_per_side)))) return false;
+  const ivec2 pages = last / n - sq.page0 + 1;
+  sq.few = all(lessThanEqual(pages, ivec2(2)));
+  for (int k = 0; k < 4; ++k) {
+    sq.shift[k] = ivec2(0);
+    const ivec2 page = sq.page0 + ivec2(k & 1, k >> 1);
+    if (!sq.few || any(greaterThanEqual(page - sq.page0, pages))) continue;
+    const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
+    if (slot < 0) return false;
+    sq.shift[k] = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n - page * n;
+  }
+  return true;
+}
+
+// The pool texel of the block whose lower corner is window texel (i, j); false when its page is
+// not resident (only asked of squares wider than two pages).
+bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
+  if (sq.few) {
+    corner = ivec2(i, j) + sq.shift[(i >= sq.split.x ? 1 : 0) + (j >= sq.split.y ? 2 : 0)];
+    return true;
+  }
+  const int n = u_vsm_page_texels;
+  const ivec2 page = ivec2(i, j) / n;
+  const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + sq.level * u_vsm_pages_per_side), 0).r;
+  corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n + ivec2(i, j) - page * n;
+  return slot >= 0;
+}
+
 // Box-filtered PCF at `level` through the tables: the mean of the nearest-texel depth test
 // (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
 // part of it the square covers, as pcf_grid on a single map of the level, so a square across
 // page borders reads each texel from its own page: no seams. `gradient`: the receiver's depth
 // change per world unit across the light (receiver-plane bias: each 2 × 2 block is tested against
-// the receiver's depth at its shared corner, as pcf_grid on a map; zero: one depth for the square). `found` is false (and the
-// result 1) when a texel under the square is not resident or lies outside the level's window.
+// the receiver's depth at its shared corner, as pcf_grid on a map; zero: one depth for the square).
+// `found` is false (and the result 1) when a texel under the square is not resident or lies
+// outside the level's window.
 float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out bool found) {
-  found = true;
   const float t = vsm_texel_ws(level);
   const vec2 p = (xy - u_vsm_origin[level]) / t;  // texel coordinates in the level's window
   const float r = max(radius_ws / t, 1e-4);
   const vec2 lo = p - r, hi = p + r;
-  // In 2×2 blocks from an even texel: a page's side is even, so no block straddles a page border,
-  // and one gather serves four texels (a texel beyond the square weighs 0).
-  const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
-  const int n = u_vsm_page_texels;
-  if (any(lessThan(first, ivec2(0))) || any(greaterThanEqual(last / n, ivec2(u_vsm_pages_per_side)))) {
-    found = false;
-    return 1.0;
-  }
-  // The pages under the square, read from the table once: at most two per axis here (a square
-  // under a page wide); a wider one reads the table per block.
-  const ivec2 page0 = first / n, pages = last / n - page0 + 1;
-  const bool few = all(lessThanEqual(pages, ivec2(2)));
-  ivec2 shift[4];  // pool texel of window texel (i, j) = (i, j) + shift, per page of the 2 × 2
-  for (int k = 0; k < 4; ++k) {
-    const ivec2 page = page0 + ivec2(k & 1, k >> 1);
-    if (!few || any(greaterThanEqual(page - page0, pages))) continue;
-    const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
-    if (slot < 0) {
-      found = false;
-      return 1.0;
-    }
-    shift[k] = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n - page * n;
-  }
-  const ivec2 split = (page0 + 1) * n;  // the first texel of the second page, per axis
-  const vec2 pool_texels = vec2(u_vsm_pool_pages * n);
+  const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;  // blocks from an even texel
+  VsmSquare sq;
+  found = vsm_square(level, first, last, sq);
+  if (!found) return 1.0;
+  const vec2 pool_texels = vec2(u_vsm_pool_pages * u_vsm_page_texels);
   float sum = 0.0;
   for (int j = first.y; j <= last.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
     for (int i = first.x; i <= last.x; i += 2) {
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       ivec2 corner;
-      if (few) {
-        corner = ivec2(i, j) + shift[(i >= split.x ? 1 : 0) + (j >= split.y ? 2 : 0)];
-      } else {
-        const ivec2 page = ivec2(i, j) / n;
-        const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
-        if (slot < 0) {
-          found = false;
-          return 1.0;
-        }
-        corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n + ivec2(i, j) - page * n;
+      if (!vsm_block(sq, i, j, corner)) {
+        found = false;
+        return 1.0;
       }
       // Four comparisons in one gather, against the receiver's depth at the block's shared corner
       // (as pcf_grid does on a map). Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
@@ -155,25 +173,83 @@ float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool fou
 
 // PCSS's blocker search at `level` through the tables: the mean depth of the texels under the
 // square xy ± radius_ws nearer than `depth` (blockers), and their count. As vsm_pcf_box, every
-// texel is read from its own page; `found` is false (count 0) when one is not resident or lies
-// outside the level's window.
+// texel is read from its own page (four a gather); `found` is false (count 0) when one is not
+// resident or lies outside the level's window.
 float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out int blockers, out bool found) {
-  found = true;
   blockers = 0;
   const float t = vsm_texel_ws(level);
   const vec2 p = (xy - u_vsm_origin[level]) / t;
   const float r = max(radius_ws / t, 1e-4);
-  const ivec2 first = ivec2(floor(p - r)), last = ivec2(ceil(p + r)) - 1;
+  const ivec2 inside = ivec2(floor(p - r)), last = ivec2(ceil(p + r)) - 1;
+  const ivec2 first = inside & ~1;  // blocks from an even texel; texels before `inside` are not the square's
+  VsmSquare sq;
+  found = all(greaterThanEqual(inside, ivec2(0))) && vsm_square(level, first, last, sq);
+  if (!found) return 1.0;
+  const vec2 pool_texels = vec2(u_vsm_pool_pages * u_vsm_page_texels);
   float sum = 0.0;
-  for (int j = first.y; j <= last.y; ++j)
-    for (int i = first.x; i <= last.x; ++i) {
-      float d;
-      if (!vsm_fetch(level, ivec2(i, j), d)) {
+  for (int j = first.y; j <= last.y; j += 2)
+    for (int i = first.x; i <= last.x; i += 2) {
+      ivec2 corner;
+      if (!vsm_block(sq, i, j, corner)) {
         found = false;
         blockers = 0;
         return 1.0;
       }
-      if (d < depth) sum += d, ++blockers;
+      // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j); texels outside the square weigh 0.
+      const vec4 d = textureGather(u_vsm_pool, (vec2(corner) + 1.0) / pool_texels, 0);
+      const bvec4 in_x = bvec4(i >= inside.x, i + 1 <= last.x, i + 1 <= last.x, i >= inside.x);
+      const bvec4 in_y = bvec4(j + 1 <= last.y, j + 1 <= last.y, j >= inside.y, j >= inside.y);
+      for (int c = 0; c < 4; ++c)
+        if (in_x[c] && in_y[c] && d[c] < depth) sum += d[c], ++blockers;
     }
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
+
+// PCSS through the pages, for a sun of angular radius atan(u_vsm_tan_half_angle)
+// (set_virtual_pcss_uniforms). The marking (vsm_mark.comp) and the shading pass run the same
+// blocker search on the same level from the same surface point, so the penumbra the shading
+// filters with is the one whose pages were marked. The search reads the unbiased-by-normal point
+// with a constant bias of u_vsm_search_bias_texels of its level.
+uniform float u_vsm_tan_half_angle;
+uniform float u_vsm_search_scale;
+uniform float u_vsm_min_penumbra_ws;
+uniform float u_vsm_search_bias_texels;
+// The blocker search's square spans this many texels of its level per radius: a mean blocker depth
+// needs no finer texels than that (its level is far coarser than a contact shadow's filter).
+const float VSM_SEARCH_TEXELS = 4.0;
+
+// Light-space distance (world units) of a depth as the pages hold it.
+float vsm_depth_ws(float d) { return mix(u_vsm_near_ws, u_vsm_far_ws, d); }
+
+// The blocker search's world radius for a receiver at light distance z_r.
+float vsm_search_ws(float z_r) { return u_vsm_tan_half_angle * max(z_r - u_vsm_near_ws, 0.0) * u_vsm_search_scale; }
+
+// The level the search of `world` runs on: texels of search / VSM_SEARCH_TEXELS, never finer
+// than the pixel floor, the first at or above it whose window holds the point.
+int vsm_search_level(vec3 world, float search_ws, vec2 xy) {
+  int k = vsm_level_for_texel(max(search_ws / VSM_SEARCH_TEXELS, vsm_requested_texel_ws(world, 0.0)));
+  while (k < u_vsm_levels - 1 && !vsm_in_window(k, xy)) ++k;
+  return k;
+}
+
+// PCSS's penumbra at `world` through the pages: the blocker search on the search level (or the
+// next coarser resident one), then the filter's world radius tan(half angle) · (z_r - z_b), at
+// least u_vsm_min_penumbra_ws. Returns false when no level holds the search (`radius_ws` 0);
+// `blockers` 0: nothing in front, lit.
+bool vsm_pcss_radius(vec3 world, out float radius_ws, out int blockers) {
+  radius_ws = 0.0;
+  blockers = 0;
+  const vec3 l = vsm_light_point(world);
+  const float z_r = vsm_depth_ws(l.z);
+  const float search = vsm_search_ws(z_r);
+  for (int k = vsm_search_level(world, search, l.xy); k < u_vsm_levels; ++k) {
+    const float bias = u_vsm_search_bias_texels * vsm_texel_ws(k) / (u_vsm_far_ws - u_vsm_near_ws);
+    bool found;
+    const float mean = vsm_blocker_search(k, l.xy, l.z - bias, search, blockers, found);
+    if (!found) continue;
+    radius_ws = blockers > 0 ? max(u_vsm_tan_half_angle * (z_r - vsm_depth_ws(mean)), u_vsm_min_penumbra_ws) : 0.0;
+    return true;
+  }
+  return false;
+}
+

@@ -20,6 +20,30 @@ layout(std430, binding = 0) buffer Marks {
 };
 
 uniform float u_radius_ws;  // the filter's world radius (0: none)
+// 0: the pages of a filter of u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the
+// search's pages resident) the pages of the penumbra that search finds.
+uniform int u_mark_pass;
+
+// Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
+// xy ± r; returns the level, or u_vsm_levels when none holds xy.
+int mark_square(int level, vec2 xy, float r) {
+  const int n = u_vsm_pages_per_side;
+  for (; level < u_vsm_levels; ++level) {
+    if (!vsm_in_window(level, xy)) continue;
+    const float page_ws = float(u_vsm_page_texels) * vsm_texel_ws(level);
+    const vec2 local = (xy - u_vsm_origin[level]) / page_ws;
+    const float reach = r / page_ws;  // the square [xy - r, xy + r], in pages
+    const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
+    const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
+    for (int y = lo.y; y <= hi.y; ++y)
+      for (int x = lo.x; x <= hi.x; ++x) {
+        const uint bit = uint((level * n + y) * n + x);
+        atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
+      }
+    return level;
+  }
+  return u_vsm_levels;
+}
 
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -30,26 +54,27 @@ void main() {
     return;
   }
   const vec3 world = s.xyz;
-  int level = vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws));
   const vec2 xy = vsm_light_point(world).xy;
-  const float r = max(u_radius_ws, 0.0);
-  const int n = u_vsm_pages_per_side;
-  for (; level < u_vsm_levels; ++level) {
-    if (!vsm_in_window(level, xy)) continue;
-    const float page_ws = float(u_vsm_page_texels) * vsm_texel_ws(level);
-    const vec2 local = (xy - u_vsm_origin[level]) / page_ws;
-    const float reach = r / page_ws;  // the filter's square [xy - r, xy + r], in pages
-    const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
-    const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
-    for (int y = lo.y; y <= hi.y; ++y)
-      for (int x = lo.x; x <= hi.x; ++x) {
-        const uint bit = uint((level * n + y) * n + x);
-        atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
-      }
-    atomicAdd(u_pixels_per_level[level], 1u);
-    if (u_write_levels) imageStore(u_levels, p, vec4(float(level)));
-    return;
+  int level;
+  if (u_mark_pass == 1) {
+    const float search = vsm_search_ws(vsm_depth_ws(vsm_light_point(world).z));
+    level = mark_square(vsm_search_level(world, search, xy), xy, search);
+  } else if (u_mark_pass == 2) {
+    float radius;
+    int blockers;
+    if (!vsm_pcss_radius(world, radius, blockers) || blockers == 0) {
+      // No search (the pool held none of its levels) or nothing in front: no filter pages.
+      if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
+      return;
+    }
+    level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, radius)), xy, radius);
+  } else {
+    level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
   }
-  atomicAdd(u_unmarked, 1u);
-  if (u_write_levels) imageStore(u_levels, p, vec4(float(u_vsm_levels)));
+  if (level < u_vsm_levels) {
+    atomicAdd(u_pixels_per_level[level], 1u);
+  } else {
+    atomicAdd(u_unmarked, 1u);
+  }
+  if (u_write_levels) imageStore(u_levels, p, vec4(float(level)));
 }

@@ -62,7 +62,9 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
 
 std::string virtual_pages_unsupported(const ShadowSettings& s) {
   if (s.technique == Technique::pcf && s.pcf.kernel == Kernel::grid && s.pcf.radius_unit == RadiusUnit::world) return "";
-  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world), not " + describe(s);
+  if (s.technique == Technique::pcss && s.pcss.kernel == Kernel::grid) return "";
+  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world) or pcss with a "
+         "box filter (--pcss.kernel grid), not " + describe(s);
 }
 
 bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }

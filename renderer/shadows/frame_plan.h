@@ -121,7 +121,8 @@ std::string resource_names(unsigned resources);  // "depth atlas, moments"
 // the pass and what it lacks. Renderer::render refuses a plan that is not a frame.
 std::string plan_problem(const FramePlan& plan);
 
-// "" when `s` can be drawn through the sun's virtual shadow map (box PCF with a world radius), else
+// "" when `s` can be drawn through the sun's virtual shadow map (box PCF with a world radius, or
+// PCSS with a box filter), else
 // why not ("pcf ... kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
 std::string virtual_pages_unsupported(const ShadowSettings& s);
 

@@ -59,6 +59,7 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                           {"evicted", v.pages.evicted},
                           {"invalidated", v.pages.invalidated},
                           {"resident", v.pages.resident},
+                          {"search", v.search_pages},
                           {"triangles", v.pages.triangles}}},
                         {"pixels_per_level", v.pixels_per_level},
                         {"unmarked_pixels", v.unmarked},

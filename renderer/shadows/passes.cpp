@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <set>
 #include <span>
 #include <stdexcept>
 
@@ -269,6 +270,11 @@ namespace {
 // targets' depth, which the shading pass reuses), the pages they mark by the rule or the footprint,
 // and those not cached drawn into the pool with their own caster culling.
 class VirtualPagesPass final : public Pass {
+  // PCSS's blocker search through the pages: its constant depth bias, in texels of its level (the
+  // search reads the surface point itself, without the normal offset, so marking and shading
+  // find the same blockers).
+  static constexpr float kSearchBiasTexels = 2;
+
  public:
   PassId id() const override { return PassId::virtual_pages; }
   void execute(FrameContext& f) override {
@@ -311,12 +317,34 @@ class VirtualPagesPass final : public Pass {
     v->options.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
     v->options.c_texels = s.adaptive.c;
     v->options.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
-    v->radius_ws = f.plan.filter_radius->radius;
-    const adaptive::MarkResult marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
-    if (!s.map.virtual_cache) v->map->invalidate_all();
     FrameInfo::Virtual out;
     out.page_texels = v->map->layout().page_texels;
-    out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
+    adaptive::MarkResult marked;
+    if (s.technique == Technique::pcss) {
+      // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
+      v->radius_ws = 0;
+      v->pcss = VirtualPcss{f.plan.tan_half_angle, s.pcss.search_scale, s.pcss.min_penumbra_ws, kSearchBiasTexels};
+      const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
+      if (!s.map.virtual_cache) v->map->invalidate_all();
+      const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes);
+      marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options);
+      std::set<adaptive::Page> all = search.pages;
+      all.insert(marked.pages.begin(), marked.pages.end());
+      const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes);
+      out.pages = second;
+      out.pages.drawn = first.drawn + second.drawn;
+      out.pages.cached = second.cached - first.drawn;  // the search's pages drawn this frame are not cached ones
+      out.pages.evicted = first.evicted + second.evicted;
+      out.pages.invalidated = first.invalidated + second.invalidated;
+      out.pages.triangles = first.triangles + second.triangles;
+      out.search_pages = static_cast<int>(search.pages.size());
+    } else {
+      v->radius_ws = f.plan.filter_radius->radius;
+      v->pcss.reset();
+      marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
+      if (!s.map.virtual_cache) v->map->invalidate_all();
+      out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
+    }
     out.pixels_per_level = marked.pixels_per_level;
     out.unmarked = marked.unmarked;
     const std::uint64_t page_bytes = static_cast<std::uint64_t>(v->map->layout().page_texels) * v->map->layout().page_texels * 4;
@@ -571,6 +599,7 @@ class ShadingPass final : public Pass {
       const FrameResources::Virtual& v = *r.virtual_map;
       v.map->bind(prog);
       set_virtual_mark_uniforms(prog, f.scene.camera, f.plan.height_px, v.options);
+      if (v.pcss) set_virtual_pcss_uniforms(prog, *v.pcss);
     }
     f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
     if (virtual_pages) count_virtual_status(f);

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -83,7 +84,8 @@ struct FrameResources {
     std::unique_ptr<VirtualShadowMap> map;
     std::unique_ptr<PageMarker> marker;
     adaptive::MarkOptions options;
-    double radius_ws = 0;
+    double radius_ws = 0;         // PCF's world radius
+    std::optional<VirtualPcss> pcss;  // PCSS: its search and penumbra
     int width = 0, height = 0;
     gl::Texture positions;
     gl::Framebuffer fbo;

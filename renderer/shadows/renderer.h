@@ -53,7 +53,8 @@ struct FrameInfo {
   struct Virtual {
     int page_texels = 0;                         // texels per page side
     VirtualMapStats pages;                       // marked (requested), cached, drawn, missing, evicted, resident
-    std::vector<std::int64_t> pixels_per_level;  // the marking's pixels on each level
+    int search_pages = 0;                        // PCSS: of those, the blocker searches' (marked first)
+    std::vector<std::int64_t> pixels_per_level;  // the marking's pixels on each level (PCSS: its filter's; lit pixels none)
     std::int64_t unmarked = 0;                   // pixels beyond the coarsest level
     std::uint64_t resident_bytes = 0, table_bytes = 0, pool_bytes = 0;
     std::uint64_t at_level = 0, coarser = 0, none = 0;  // shaded pixels: on their level, a coarser one, none (lit)

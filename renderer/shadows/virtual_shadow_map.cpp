@@ -282,6 +282,13 @@ void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& 
   program.set("u_mark_footprint_only", options.marking == adaptive::Marking::footprint);
 }
 
+void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss) {
+  program.set("u_vsm_tan_half_angle", pcss.tan_half_angle);
+  program.set("u_vsm_search_scale", pcss.search_scale);
+  program.set("u_vsm_min_penumbra_ws", pcss.min_penumbra_ws);
+  program.set("u_vsm_search_bias_texels", pcss.search_bias_texels);
+}
+
 void VirtualShadowMap::bind(const gl::Program& program) const {
   pool_.bind(contract::UNIT_VSM_POOL);
   glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
@@ -306,6 +313,28 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
 
 adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                       double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
+  program_.set("u_mark_pass", 0);
+  return run(surface, camera, height_px, view, radius_ws, options, levels);
+}
+
+adaptive::MarkResult PageMarker::mark_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px,
+                                                  const VirtualMapView& view, const VirtualPcss& pcss, const adaptive::MarkOptions& options) const {
+  program_.set("u_mark_pass", 1);
+  set_virtual_pcss_uniforms(program_, pcss);
+  return run(surface, camera, height_px, view, 0, options, nullptr);
+}
+
+adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px,
+                                                  const VirtualShadowMap& map, const VirtualPcss& pcss, const adaptive::MarkOptions& options,
+                                                  const gl::Texture* levels) const {
+  program_.set("u_mark_pass", 2);
+  set_virtual_pcss_uniforms(program_, pcss);
+  map.bind(program_);  // the search reads the pages the first pass marked
+  return run(surface, camera, height_px, map.view(), 0, options, levels);
+}
+
+adaptive::MarkResult PageMarker::run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                                     double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
   if (levels && (levels->desc().width != surface.desc().width || levels->desc().height != surface.desc().height ||
                  levels->desc().format != GL_R32F))

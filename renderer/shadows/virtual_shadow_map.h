@@ -59,6 +59,19 @@ void set_virtual_page_uniforms(const gl::Program& program, const adaptive::Virtu
 // an image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
 void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options);
 
+// PCSS through the pages (virtual_pages.glsl's vsm_pcss_radius): a sun of angular radius
+// atan(tan_half_angle), the blocker search's radius over its geometric bound, the smallest
+// penumbra (world radius), and the search's constant depth bias in texels of its level.
+struct VirtualPcss {
+  float tan_half_angle = 0;
+  float search_scale = 1;
+  float min_penumbra_ws = 0;
+  float search_bias_texels = 1;
+};
+void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss);
+
+class VirtualShadowMap;
+
 // Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
 // float: a pixel exactly on a level's or a page's boundary may land on the other side).
@@ -72,8 +85,19 @@ class PageMarker {
   // view of the marking (-1 where no surface is, layout.levels beyond the coarsest level).
   adaptive::MarkResult mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                             double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels = nullptr) const;
+  // PCSS in two passes: first the pages of each pixel's blocker search (its own level, coarser than
+  // the filter's); then, with `map` holding those (after its update), the pages of the penumbra
+  // each pixel's search finds, on the level the rule (or the footprint) gives that penumbra. A
+  // pixel with nothing in front marks no filter pages (lit). pixels_per_level: the filter's levels.
+  adaptive::MarkResult mark_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                                        const VirtualPcss& pcss, const adaptive::MarkOptions& options) const;
+  adaptive::MarkResult mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
+                                        const VirtualPcss& pcss, const adaptive::MarkOptions& options,
+                                        const gl::Texture* levels = nullptr) const;
 
  private:
+  adaptive::MarkResult run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const;
   adaptive::VirtualMapLayout layout_;
   gl::Program program_;
   gl::Buffer marks_;
@@ -111,6 +135,8 @@ class VirtualShadowMap {
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const;
+  // The last update's view.
+  const VirtualMapView& view() const { return view_; }
   // Lower corner of level `level`'s window in light space, for the last update's view.
   adaptive::LightXY origin(int level) const;
 

@@ -87,8 +87,9 @@ TEST(FramePlan, EveryPlanIsAFrameWhosePassesReadWhatEarlierOnesWrote) {
   EXPECT_EQ(plan_problem(measured), "pass pcss_requirement reads requirement image, which no earlier pass of the frame writes");
 }
 
-// The sun's virtual shadow map: pages instead of maps, read by box PCF with a world radius; a spot
-// light, another kernel or technique, or a radius in texels is refused in one line naming it.
+// The sun's virtual shadow map: pages instead of maps, read by box PCF with a world radius or PCSS
+// with a box filter; a spot light, another kernel or technique, or a radius in texels is refused
+// in one line naming it.
 TEST(FramePlan, VirtualPagesReplaceTheMapsForBoxPcfInWorldUnits) {
   ShadowSettings s = with(Technique::pcf);
   s.pcf.kernel = Kernel::grid;
@@ -129,6 +130,11 @@ TEST(FramePlan, VirtualPagesReplaceTheMapsForBoxPcfInWorldUnits) {
   ShadowSettings vsm = with(Technique::vsm);
   vsm.map.virtual_pages = VirtualPages::rule;
   refused(vsm, demo, "not vsm");
+  ShadowSettings pcss = with(Technique::pcss);
+  pcss.map.virtual_pages = VirtualPages::rule;
+  refused(pcss, demo, "kernel=poisson");
+  pcss.pcss.kernel = Kernel::grid;  // PCSS with a box filter reads pages: its search, then its penumbra's
+  EXPECT_EQ(plan(pcss).passes, (std::vector<PassId>{PassId::virtual_pages, PassId::shading}));
 }
 
 TEST(FramePlan, FixedSingleMapFillsItsTextureWithoutGuardBand) {

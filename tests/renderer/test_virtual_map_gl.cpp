@@ -472,6 +472,47 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
   EXPECT_GT(footprint_pages, rule_pages);
 }
 
+// PCSS through the pages on the demo scene: the pages of each pixel's blocker search are marked
+// and drawn first, then those of the penumbra it finds; every pixel finds its pages, and the image
+// agrees with PCSS's box filter on one fine fitted map (whose search is a Poisson disk: the
+// penumbrae differ a little; mean difference 0.0043 at 320 × 180).
+TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  const int w = 320, h = 180;
+  shadows::ShadowSettings s;
+  s.technique = shadows::Technique::pcss;
+  s.pcss.kernel = shadows::Kernel::grid;
+  s.adaptive.min_texel_px = 1;
+  s.map.virtual_pages = shadows::VirtualPages::rule;
+  const shadows::FrameInfo info = r.render(s, w, h);
+  const io::ImageF paged = r.read_visibility();
+  ASSERT_TRUE(info.virtual_map.has_value());
+  const auto& v = *info.virtual_map;
+  EXPECT_GT(v.search_pages, 0);
+  EXPECT_GT(v.pages.requested, v.search_pages) << "the penumbrae's pages beside the searches'";
+  EXPECT_EQ(v.pages.drawn, v.pages.requested);
+  EXPECT_EQ(v.coarser, 0u);
+  EXPECT_EQ(v.none, 0u);
+  EXPECT_GT(v.at_level, static_cast<std::uint64_t>(w * h / 2));
+
+  s.map.virtual_pages = shadows::VirtualPages::off;
+  s.map.resolution_texels = 4096;
+  r.render(s, w, h);
+  const io::ImageF single = r.read_visibility();
+  double sum = 0;
+  int shadowed = 0;
+  for (std::size_t p = 0; p < paged.pixels.size(); ++p) {
+    ASSERT_TRUE(std::isfinite(paged.pixels[p]) && paged.pixels[p] >= 0 && paged.pixels[p] <= 1) << p;
+    sum += std::abs(static_cast<double>(paged.pixels[p]) - single.pixels[p]);
+    shadowed += paged.pixels[p] < 0.5f;
+  }
+  const double mean = sum / static_cast<double>(paged.pixels.size());
+  RecordProperty("mean_abs_vs_fine_map", std::to_string(mean));
+  EXPECT_GT(shadowed, w * h / 50) << "the demo's casters shadow the ground";
+  EXPECT_LT(mean, 0.02);
+}
+
 // The cache across frames: a second frame of the same view draws nothing, uncached it draws every
 // page again; a pool of one slot cannot hold the view: pixels fall back to a coarser level or are
 // lit, counted, and the image stays finite.
