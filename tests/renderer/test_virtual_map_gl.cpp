@@ -514,9 +514,10 @@ TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
 }
 
 // The cache across frames: a second frame of the same view draws nothing, uncached it draws every
-// page again; a pool of one slot cannot hold the view: pixels fall back to a coarser level or are
+// page again; a caster moved between frames redraws only the pages over its two places, with no
+// stale depth left; a pool of one slot cannot hold the view: pixels fall back to a coarser level or are
 // lit, counted, and the image stays finite.
-TEST(VirtualMap, RendererCachesPagesAndCountsWhatAFullPoolCannotHold) {
+TEST(VirtualMap, RendererCachesPagesRedrawsAMovedCasterAndCountsWhatAFullPoolCannotHold) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
   const int w = 160, h = 90;
@@ -529,6 +530,27 @@ TEST(VirtualMap, RendererCachesPagesAndCountsWhatAFullPoolCannotHold) {
   const auto uncached = r.render(s, w, h).virtual_map->pages;
   EXPECT_EQ(uncached.drawn, uncached.requested);
   s.map.virtual_cache = true;
+  r.render(s, w, h);
+
+  // A caster moves between frames (the box, 1.5 m along x): the renderer drops the pages over its
+  // old and its new place and redraws only those; the image equals one drawn with no cache at all.
+  auto& objects = r.scene().objects;
+  const auto box = std::find_if(objects.begin(), objects.end(), [](const scene::Object& o) { return o.name == "box"; });
+  ASSERT_NE(box, objects.end());
+  box->model = glm::translate(glm::mat4(1), glm::vec3(1.5f, 0, 0)) * box->model;
+  const auto moved = r.render(s, w, h).virtual_map->pages;
+  const io::ImageF cached_image = r.read_visibility();
+  EXPECT_GT(moved.invalidated, 0);
+  EXPECT_GT(moved.drawn, 0);
+  EXPECT_LT(moved.drawn, moved.requested) << "pages away from the box stay";
+  s.map.virtual_cache = false;
+  r.render(s, w, h);
+  const io::ImageF fresh = r.read_visibility();
+  float worst = 0;
+  for (std::size_t p = 0; p < fresh.pixels.size(); ++p) worst = std::max(worst, std::abs(fresh.pixels[p] - cached_image.pixels[p]));
+  EXPECT_EQ(worst, 0.0f) << "no stale page under the moved box";
+  s.map.virtual_cache = true;
+
   s.map.virtual_pool_pages = 1;
   const shadows::FrameInfo small = r.render(s, w, h);
   const auto& v = *small.virtual_map;
