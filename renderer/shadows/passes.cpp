@@ -122,6 +122,7 @@ bool FrameResources::prepare(const FramePlan& plan) {
     att.push_back({&t->depth, GL_DEPTH_ATTACHMENT});
     t->fbo = gl::Framebuffer(att, "camera framebuffer");
     targets = std::move(t);
+    ++targets_generation;
   }
   screen_result = nullptr;
   return reallocated;
@@ -315,8 +316,8 @@ class VirtualPagesPass final : public Pass {
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
     const scene::Aabb bounds = invalidate_moved_casters(*v, f.scene);
     const int w = f.plan.width_px, h = f.plan.height_px;
-    if (v->width != w || v->height != h) {
-      v->width = w, v->height = h;
+    if (v->targets_generation != r.targets_generation) {  // new camera targets: their depth is attached anew
+      v->targets_generation = r.targets_generation;
       v->positions = gl::Texture({GL_RGBA32F, w, h, 1}, "virtual map: camera world positions");
       const gl::Framebuffer::Attachment att[] = {{&v->positions, GL_COLOR_ATTACHMENT0}, {&r.targets->depth, GL_DEPTH_ATTACHMENT}};
       v->fbo = gl::Framebuffer(att, "virtual map: position pass");

@@ -86,7 +86,7 @@ struct FrameResources {
     adaptive::MarkOptions options;
     double radius_ws = 0;         // PCF's world radius
     std::optional<VirtualPcss> pcss;  // PCSS: its search and penumbra
-    int width = 0, height = 0;
+    int targets_generation = -1;  // of the camera targets whose depth `fbo` holds
     gl::Texture positions;
     gl::Framebuffer fbo;
     gl::Buffer shading_counts;  // contract::VsmShadingResult
@@ -112,6 +112,7 @@ struct FrameResources {
   gl::Buffer shadow_frame;  // the ShadowFrame uniform block (shaders/shadow_contract.h)
   std::unique_ptr<Maps> maps;
   std::unique_ptr<Targets> targets;
+  int targets_generation = 0;  // counts the targets' allocations (a framebuffer holding their depth must follow)
   std::unique_ptr<ScreenSpace> screen_space;  // made on the first screen-space frame
   const gl::Texture* screen_result = nullptr;  // this frame's post-pass output
   Requirement requirement;

@@ -464,6 +464,12 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
   EXPECT_GT(partial, w * h / 100) << "penumbrae, not only lit and shadowed";
   EXPECT_LT(mean, 0.01) << "the same filter on a finer texel grid";
 
+  // Back to the pages after a frame of maps (the camera targets were made anew twice): the same
+  // image and the same pixels, each shaded once.
+  const shadows::FrameInfo again = r.render(virtual_pcf(shadows::VirtualPages::rule), w, h);
+  EXPECT_EQ(again.virtual_map->at_level, v.at_level);
+  EXPECT_EQ(r.read_visibility().pixels, paged.pixels);
+
   // At 960 × 540 a pixel's footprint is finer than r / c near the camera: the footprint's marking
   // asks for finer levels there, so more pages; the rule's floor is the same footprint, so never fewer.
   const int rule_pages = r.render(virtual_pcf(shadows::VirtualPages::rule), 960, 540).virtual_map->pages.requested;
