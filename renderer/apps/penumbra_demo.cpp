@@ -458,7 +458,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     if (frame % 30 == 0) timer.clear();
     renderer.set_show_cascades(show_cascades);
     follower.update(opt.calibration, settings);
-    const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+    const shadows::FrameInfo info = renderer.render(gui::drawable_settings(settings, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
     renderer.present(0, fb_w, fb_h);
     const double t = now_ms();
     fps = 0.9 * fps + 0.1 * 1000.0 / std::max(t - last, 1e-3);
@@ -473,6 +473,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
     ImGui::Text("%s", apps::calibration_line(opt.calibration, settings).c_str());
     gui::shadow_settings_panel(settings);
+    gui::virtual_pages_line(settings, renderer.scene(), info);
     gui::light_size_control(renderer.scene().light);
     ImGui::Separator();
     ImGui::Text("resolution (%s, %s storage, atlas %dx%d)", info.resolution_source.c_str(), info.storage.c_str(), info.atlas_width,

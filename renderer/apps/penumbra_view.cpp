@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
       window.framebuffer_size(fb_w, fb_h);
       if (frame % 30 == 0) timer.clear();
       follower.update(calibration, settings);
-      const shadows::FrameInfo info = renderer.render(settings, std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+      const shadows::FrameInfo info = renderer.render(gui::drawable_settings(settings, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
       renderer.present(0, fb_w, fb_h);
 
       ImGui::SetNextWindowPos({10, 10}, ImGuiCond_FirstUseEver);
@@ -158,10 +158,12 @@ int main(int argc, char** argv) {
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
       ImGui::Text("%s", apps::calibration_line(calibration, settings).c_str());
       gui::shadow_settings_panel(settings);
+    gui::virtual_pages_line(settings, renderer.scene(), info);
       gui::light_size_control(renderer.scene().light);
       ImGui::Separator();
-      ImGui::Text("map %d^2, %s, s_xy %.2f, extent %.2f ws", info.resolution_texels, info.light.fitted ? "fitted" : "unfitted",
-                  info.light.s_xy, info.light.extent_ws);
+      if (!info.virtual_map)  // the pages have their own line above
+        ImGui::Text("map %d^2, %s, s_xy %.2f, extent %.2f ws", info.resolution_texels, info.light.fitted ? "fitted" : "unfitted",
+                    info.light.s_xy, info.light.extent_ws);
       for (const auto& st : timer.stats())
         ImGui::Text("%-10s %7.2f ms (%s)", st.pass.c_str(), st.median_ms, gl::to_string(st.method));
       ImGui::Checkbox("show shadow map", &show_map);

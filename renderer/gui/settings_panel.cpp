@@ -4,6 +4,8 @@
 
 #include <imgui.h>
 
+#include "shadows/frame_plan.h"
+
 namespace penumbra::gui {
 
 template <class P>
@@ -79,6 +81,27 @@ bool shadow_settings_panel(shadows::ShadowSettings& s) {
   if (ImGui::CollapsingHeader("shadow map and bias", ImGuiTreeNodeFlags_DefaultOpen)) changed |= settings_panel("map", s.map);
   if (ImGui::CollapsingHeader("adaptive resolution")) changed |= settings_panel("adaptive", s.adaptive);
   return changed;
+}
+
+shadows::ShadowSettings drawable_settings(const shadows::ShadowSettings& settings, const scene::Scene& scene) {
+  shadows::ShadowSettings s = settings;
+  if (s.map.virtual_pages != shadows::VirtualPages::off && !shadows::virtual_pages_refusal(s, scene).empty())
+    s.map.virtual_pages = shadows::VirtualPages::off;
+  return s;
+}
+
+void virtual_pages_line(const shadows::ShadowSettings& settings, const scene::Scene& scene, const shadows::FrameInfo& info) {
+  if (settings.map.virtual_pages == shadows::VirtualPages::off) return;
+  if (const std::string why = shadows::virtual_pages_refusal(settings, scene); !why.empty()) {
+    ImGui::TextWrapped("virtual pages: %s; drawing maps", why.c_str());
+  } else if (info.virtual_map) {
+    const auto& v = *info.virtual_map;
+    ImGui::Text("virtual pages: %d marked, %d drawn, %d resident (%.1f MB)", v.pages.requested, v.pages.drawn, v.pages.resident,
+                static_cast<double>(v.resident_bytes + v.table_bytes) / (1 << 20));
+    if (v.coarser + v.none > 0)
+      ImGui::Text("pool full: %llu pixels on a coarser level, %llu without a page", static_cast<unsigned long long>(v.coarser),
+                  static_cast<unsigned long long>(v.none));
+  }
 }
 
 bool light_size_control(scene::Light& light) {

@@ -67,6 +67,11 @@ std::string virtual_pages_unsupported(const ShadowSettings& s) {
          "box filter (--pcss.kernel grid), not " + describe(s);
 }
 
+std::string virtual_pages_refusal(const ShadowSettings& s, const scene::Scene& scene) {
+  if (scene.light.type != scene::Light::Type::directional) return "the virtual shadow map is the sun's; this scene has a spot light";
+  return virtual_pages_unsupported(s);
+}
+
 bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }
 
 PassIo pass_io(PassId pass, const FramePlan& plan) {
@@ -180,8 +185,7 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
   if (s.map.virtual_pages != VirtualPages::off) {
     // The sun's virtual shadow map: pages instead of maps (virtual_shadow_map.h). The single fitted
     // frame stands for the light in the frame's uniforms; no map is drawn, the atlas is one texel.
-    if (!directional) throw std::runtime_error("render: map.virtual_pages: the virtual shadow map is the sun's; this scene has a spot light");
-    if (const std::string why = virtual_pages_unsupported(s); !why.empty()) throw std::runtime_error("render: map.virtual_pages: " + why);
+    if (const std::string why = virtual_pages_refusal(s, scene); !why.empty()) throw std::runtime_error("render: map.virtual_pages: " + why);
     plan.virtual_pages = s.map.virtual_pages;
     plan.resolution_source = s.map.virtual_pages == VirtualPages::rule ? "virtual_rule" : "virtual_footprint";
     CascadeInfo ci;

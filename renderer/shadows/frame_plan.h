@@ -125,6 +125,9 @@ std::string plan_problem(const FramePlan& plan);
 // PCSS with a box filter), else
 // why not ("pcf ... kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
 std::string virtual_pages_unsupported(const ShadowSettings& s);
+// "" when a frame of `scene` can draw `s` through the virtual shadow map (a sun, and a technique
+// virtual_pages_unsupported accepts), else why not: plan_frame refuses map.virtual_pages with it.
+std::string virtual_pages_refusal(const ShadowSettings& s, const scene::Scene& scene);
 
 // Plans one frame of `scene` at width × height. Updates the hysteresis in `state`. Throws
 // std::runtime_error for an empty image, a map below one texel or inconsistent adaptive limits.
