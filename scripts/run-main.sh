@@ -3,11 +3,13 @@
 # path through the large outdoor town (12 frames: four stations of three consecutive frames from
 # the street walk to the overview), PCF and PCSS with the adaptive rule (rule-sized cascades)
 # beside the engine family (single maps of 1024²-8192², two stabilized cascades of 2048² and
-# 4096², four of 2048²): first the adaptive rule against the family's Pareto front at equal error
-# (speedup and memory ratio with intervals), then frame time, texels, error against the reference
-# (PCF: the same filter on 8188² cascades; PCSS: ray-traced), thin casters, flicker; into
-# out/demo/ (report.json, frames.csv, crops, side-by-side images, plots). About 3.5 min on 2 cores
-# without a GPU; `--sweep` measures the whole engine family, `--path full` walks all 360 frames.
+# 4096², four of 2048²) and the sun's virtual shadow map (by the rule and the footprint, drawn
+# every frame, and the rule cached): first the adaptive rule and each virtual map against the
+# family's Pareto front at equal error (speedup and memory ratio with intervals), then frame time,
+# texels, error against the reference (PCF: the same filter on 8188² cascades; PCSS: ray-traced),
+# thin casters, flicker; into out/demo/ (report.json, frames.csv, crops, side-by-side images,
+# plots). About 5.5 min on 2 cores without a GPU (3.5 with `--no-virtual`); `--sweep` measures the
+# whole engine family, `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
