@@ -19,6 +19,7 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "scene/scene.h"
+#include "shadows/frame_plan.h"
 #include "shadows/frame_report.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
@@ -133,6 +134,10 @@ int main(int argc, char** argv) {
     for (auto& v : variants) apps::apply_calibration_for(calibration, v.settings);  // each technique's own c
     const apps::VirtualMarking virtual_mark = apps::virtual_marking(variants.front().settings);
     if (virtual_debug && !virtual_mark.problem.empty()) throw cli::UsageError("--virtual-debug: " + virtual_mark.problem);
+    for (const auto& v : variants)  // before anything renders: the plan would refuse it at the first frame
+      if (v.settings.map.virtual_pages != shadows::VirtualPages::off)
+        if (const std::string why = shadows::virtual_pages_refusal(v.settings, scene); !why.empty())
+          throw cli::UsageError("--map.virtual_pages: " + why);
 
     gl::HeadlessContext context;
     const auto& ctx = context.info();

@@ -377,6 +377,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"map_resolution_above_device_limit", {"--resolution", "64", "--map.resolution_texels", "65536"}, {"--map.resolution_texels"}},
         BadCase{"option_of_a_technique_not_rendered", {"--technique", "hard", "--vsm.radius", "3"}, {"--vsm.radius", "--technique hard"}},
         BadCase{"resolution_list_too_long", {"--resolution", sixty_five_resolutions()}, {"--resolution", "at most 64"}},
+        // Issue 31: a technique that reads no pages is refused before anything renders.
+        BadCase{"virtual_pages_for_poisson_pcf", {"--technique", "pcf", "--map.virtual_pages", "rule"}, {"--map.virtual_pages", "kernel=poisson"}},
         BadCase{"missing_output", {"--technique", "hard"}, {"--output"}, false}),
     [](const ::testing::TestParamInfo<BadCase>& param_info) { return param_info.param.name; });
 
