@@ -44,8 +44,9 @@ vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (
 // Box PCF of world radius `radius_ws` through the sun's virtual shadow map: on the level this
 // pixel's pages were marked on (the request of vsm_mark.comp, the first level at or above it whose
 // window holds the point), with the normal offset and constant bias in that level's texels and the
-// receiver plane `gradient` (normalized depth per world unit across the light). Where the pool could not hold a page, the
-// next coarser resident level answers; where none does, the pixel is lit (o_vsm_status says which).
+// receiver plane `gradient` (normalized depth per world unit across the light). Where the pool
+// could not hold a page, the next coarser resident level answers; where none does, the pixel is
+// lit (o_vsm_status says which).
 float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
   const vec2 xy = vsm_light_point(v_world).xy;
   int marked = vsm_level_for_texel(vsm_requested_texel_ws(v_world, radius_ws));

@@ -61,6 +61,13 @@ bool vsm_in_window(int level, vec2 xy) {
   return all(greaterThanEqual(local, vec2(0.0))) && all(lessThan(local, vec2(u_vsm_pages_per_side)));
 }
 
+// The slot holding page `page` of `level` (-1: not resident), and the pool texel of window texel
+// (0, 0) of that page: window texel t of the page lies at vsm_slot_shift(...) + t.
+int vsm_slot(int level, ivec2 page) { return texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r; }
+ivec2 vsm_slot_shift(int slot, ivec2 page) {
+  return (ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) - page) * u_vsm_page_texels;
+}
+
 // The depth of texel `texel` of `level` through the page table: false when the texel lies outside
 // the level's window or its page is not resident.
 bool vsm_fetch(int level, ivec2 texel, out float depth) {
@@ -69,10 +76,9 @@ bool vsm_fetch(int level, ivec2 texel, out float depth) {
   if (level < 0 || level >= u_vsm_levels || texel.x < 0 || texel.y < 0) return false;
   const ivec2 page = texel / n;
   if (page.x >= u_vsm_pages_per_side || page.y >= u_vsm_pages_per_side) return false;
-  const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
+  const int slot = vsm_slot(level, page);
   if (slot < 0) return false;
-  const ivec2 origin = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n;
-  depth = texelFetch(u_vsm_pool, origin + texel - page * n, 0).r;
+  depth = texelFetch(u_vsm_pool, vsm_slot_shift(slot, page) + texel, 0).r;
   return true;
 }
 
@@ -109,9 +115,9 @@ bool vsm_square(int level, ivec2 first, ivec2 last, out VsmSquare sq) {
     sq.shift[k] = ivec2(0);
     const ivec2 page = sq.page0 + ivec2(k & 1, k >> 1);
     if (!sq.few || any(greaterThanEqual(page - sq.page0, pages))) continue;
-    const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + level * u_vsm_pages_per_side), 0).r;
+    const int slot = vsm_slot(level, page);
     if (slot < 0) return false;
-    sq.shift[k] = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n - page * n;
+    sq.shift[k] = vsm_slot_shift(slot, page);
   }
   return true;
 }
@@ -125,8 +131,8 @@ bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
   }
   const int n = u_vsm_page_texels;
   const ivec2 page = ivec2(i, j) / n;
-  const int slot = texelFetch(u_vsm_table, ivec2(page.x, page.y + sq.level * u_vsm_pages_per_side), 0).r;
-  corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * n + ivec2(i, j) - page * n;
+  const int slot = vsm_slot(sq.level, page);
+  corner = vsm_slot_shift(slot, page) + ivec2(i, j);
   return slot >= 0;
 }
 

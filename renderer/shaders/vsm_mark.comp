@@ -54,10 +54,11 @@ void main() {
     return;
   }
   const vec3 world = s.xyz;
-  const vec2 xy = vsm_light_point(world).xy;
+  const vec3 light = vsm_light_point(world);
+  const vec2 xy = light.xy;
   int level;
   if (u_mark_pass == 1) {
-    const float search = vsm_search_ws(vsm_depth_ws(vsm_light_point(world).z));
+    const float search = vsm_search_ws(vsm_depth_ws(light.z));
     level = mark_square(vsm_search_level(world, search, xy), xy, search);
   } else if (u_mark_pass == 2) {
     float radius;

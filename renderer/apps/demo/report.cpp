@@ -141,12 +141,20 @@ EqualError equal_error(const TechniqueRun& run) {
   return eq;
 }
 
-std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v) {
+namespace {
+// One configuration read against the front: "pcf    [LABEL ]at RMSE ...: speedup ..., memory ratio ...".
+std::string reading_line(const TechniqueRun& run, const std::string& label, double error, const FrontComparison& time,
+                         const FrontComparison& memory) {
   char line[512];
-  std::snprintf(line, sizeof line, "%-6s %s at RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
-                run.series[v.series].config.name.c_str(), v.error, ratio_text(v.time).c_str(), ratio_text(v.memory).c_str(),
-                where_text(run, v.time).c_str(), where_text(run, v.memory).c_str());
+  std::snprintf(line, sizeof line, "%-6s %sat RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
+                label.empty() ? "" : (label + " ").c_str(), error, ratio_text(time).c_str(), ratio_text(memory).c_str(),
+                where_text(run, time).c_str(), where_text(run, memory).c_str());
   return line;
+}
+}  // namespace
+
+std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v) {
+  return reading_line(run, run.series[v.series].config.name, v.error, v.time, v.memory);
 }
 
 std::string headline(const TechniqueRun& run, const EqualError& eq) {
@@ -155,10 +163,7 @@ std::string headline(const TechniqueRun& run, const EqualError& eq) {
     std::snprintf(line, sizeof line, "%-6s %s", run.technique.c_str(), eq.why_not.c_str());
     return line;
   }
-  std::snprintf(line, sizeof line, "%-6s at RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
-                eq.adaptive_error, ratio_text(eq.time).c_str(), ratio_text(eq.memory).c_str(), where_text(run, eq.time).c_str(),
-                where_text(run, eq.memory).c_str());
-  return line;
+  return reading_line(run, "", eq.adaptive_error, eq.time, eq.memory);
 }
 
 nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
