@@ -41,8 +41,8 @@ VirtualMarking virtual_marking(const shadows::ShadowSettings& s) {
   } else if (s.technique != shadows::Technique::pcss) {
     m.problem = "pages are marked for pcf (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
   }
-  m.options.c_texels = s.adaptive.c;
-  m.options.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+  m.options = shadows::virtual_mark_options(s);
+  m.options.marking = adaptive::Marking::rule;  // the views show the rule beside the footprint themselves
   return m;
 }
 

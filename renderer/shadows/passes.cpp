@@ -339,9 +339,7 @@ class VirtualPagesPass final : public Pass {
     light_depth_range(view.light_view, bounds, view.near_ws, view.far_ws);
     const glm::vec4 camera_light = view.light_view * glm::vec4(f.scene.camera.position, 1.0f);
     view.camera_xy = {camera_light.x, camera_light.y};
-    v->options.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
-    v->options.c_texels = s.adaptive.c;
-    v->options.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+    v->options = virtual_mark_options(s);
     FrameInfo::Virtual out;
     out.page_texels = v->map->layout().page_texels;
     adaptive::MarkResult marked;

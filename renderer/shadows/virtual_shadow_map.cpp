@@ -270,6 +270,14 @@ void set_virtual_page_uniforms(const gl::Program& program, const adaptive::Virtu
   program.set("u_vsm_far_ws", view.far_ws);
 }
 
+adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
+  adaptive::MarkOptions o;
+  o.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
+  o.c_texels = s.adaptive.c;
+  o.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+  return o;
+}
+
 void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options) {
   const bool perspective = camera.projection == scene::Camera::Projection::perspective;
   program.set("u_mark_camera_position", camera.position);

@@ -24,6 +24,7 @@
 #include <penumbra/gl/objects.h>
 #include <penumbra/scene/gpu_mesh.h>
 #include <penumbra/scene/scene.h>
+#include <penumbra/shadows/settings.h>
 
 namespace penumbra::shadows {
 
@@ -54,6 +55,10 @@ struct VirtualMapStats {
 
 // virtual_pages.glsl's uniforms for `layout` seen from `view` (the level windows around its camera).
 void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
+
+// How `s` marks pages: by the rule (or map.virtual_pages = footprint: the footprint), with
+// adaptive.c and the pixel floor adaptive.min_texel_px (0: one pixel; the footprint needs a floor).
+adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s);
 
 // virtual_pages.glsl's marking uniforms: which level a surface point asks for, seen by `camera` in
 // an image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
