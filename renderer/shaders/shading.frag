@@ -66,17 +66,24 @@ float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
   return 1.0;
 }
 
-// The technique's visibility through the pages: box PCF of the fixed world radius, or PCSS's
-// blocker search and box filter of the penumbra it finds (vsm_pcss_radius, as the marking ran it).
+#if defined(TECHNIQUE_PCSS)
+// PCSS: the penumbra of this pixel's surface as the marking's blocker search found it (vsm_mark.comp,
+// the same pixel of the position pass whose depth this pass reuses), so the search runs once a
+// frame and the filter reads the pages that penumbra marked. 0: nothing in front; -1: no level
+// held the search.
+layout(binding = UNIT_VSM_PCSS_RADII) uniform sampler2D u_vsm_pcss_radii;
+#endif
+
+// The technique's visibility through the pages: box PCF of the fixed world radius, or PCSS's box
+// filter of the penumbra its blocker search found.
 float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #if defined(TECHNIQUE_PCSS)
-  float radius_ws;
-  int blockers;
-  if (!vsm_pcss_radius(v_world, radius_ws, blockers)) {
+  const float radius_ws = texelFetch(u_vsm_pcss_radii, ivec2(gl_FragCoord.xy), 0).r;
+  if (radius_ws < 0.0) {
     o_vsm_status = 3u;  // no level held the search
     return 1.0;
   }
-  if (blockers == 0) {
+  if (radius_ws == 0.0) {
     o_vsm_status = 1u;  // nothing in front: lit, as the search says
     return 1.0;
   }

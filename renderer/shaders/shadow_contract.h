@@ -55,6 +55,7 @@ PENUMBRA_CONSTANT(UNIT_POST_INPUT_2, 8)        // post passes: a second input (s
 PENUMBRA_CONSTANT(UNIT_VSM_POOL, 9)            // virtual shadow map: the page pool (raw depth, texelFetch)
 PENUMBRA_CONSTANT(UNIT_VSM_TABLE, 10)          // virtual shadow map: the page tables (slot per page, -1: none)
 PENUMBRA_CONSTANT(UNIT_VSM_POOL_CMP, 11)       // virtual shadow map: the page pool, nearest depth comparison (gathers)
+PENUMBRA_CONSTANT(UNIT_VSM_PCSS_RADII, 12)     // virtual shadow map, PCSS: each pixel's penumbra as the marking found it
 PENUMBRA_CONSTANT(VSM_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
 
 // Uniform-block binding points.

@@ -136,6 +136,29 @@ bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
   return slot >= 0;
 }
 
+// The weighted depth tests of the 2 × 2 blocks from window texel `from` (even) to `to` of one
+// page, whose pool texel is window texel + `shift` (vsm_pcf_box's inner loop): each texel weighs
+// the part of it the square [lo, hi] covers, and each block is tested against the receiver's depth
+// at its shared corner, `depth` at window texel coordinates `p` plus `step` per texel.
+float vsm_pcf_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi, vec2 p, float depth, vec2 step) {
+  const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
+  float sum = 0.0;
+  for (int j = from.y; j <= to.y; j += 2) {
+    const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
+    const float row_reference = depth + (float(j + 1) - p.y) * step.y;
+    float upper = 0.0, lower = 0.0;  // rows j + 1 and j
+    for (int i = from.x; i <= to.x; i += 2) {
+      const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
+      // Four comparisons in one gather, order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
+      const vec4 lit = textureGather(u_vsm_pool_cmp, vec2(ivec2(i, j) + shift + 1) * inv_pool, row_reference + (float(i + 1) - p.x) * step.x);
+      upper += dot(lit.xy, wx);
+      lower += dot(lit.wz, wx);
+    }
+    sum += upper * wy.y + lower * wy.x;
+  }
+  return sum;
+}
+
 // Box-filtered PCF at `level` through the tables: the mean of the nearest-texel depth test
 // (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
 // part of it the square covers, as pcf_grid on a single map of the level, so a square across
@@ -153,28 +176,54 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   VsmSquare sq;
   found = vsm_square(level, first, last, sq);
   if (!found) return 1.0;
-  const vec2 pool_texels = vec2(u_vsm_pool_pages * u_vsm_page_texels);
+  const vec2 step = t * gradient;  // the receiver's depth change per texel
   float sum = 0.0;
-  for (int j = first.y; j <= last.y; j += 2) {
-    const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
-    for (int i = first.x; i <= last.x; i += 2) {
-      const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
-      ivec2 corner;
-      if (!vsm_block(sq, i, j, corner)) {
-        found = false;
-        return 1.0;
-      }
-      // Four comparisons in one gather, against the receiver's depth at the block's shared corner
-      // (as pcf_grid does on a map). Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
-      const float reference = depth + dot((vec2(i, j) + 1.0 - p) * t, gradient);
-      const vec4 lit = textureGather(u_vsm_pool_cmp, (vec2(corner) + 1.0) / pool_texels, reference);
-      sum += dot(lit, vec4(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x));
+  if (sq.few) {
+    // At most 2 × 2 pages: each page's blocks with its own pool shift (a page's side is even, so
+    // the split falls between blocks).
+    for (int k = 0; k < 4; ++k) {
+      const bvec2 second = bvec2(k & 1, k >> 1);
+      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
+      if (all(lessThanEqual(from, to))) sum += vsm_pcf_blocks(from, to, sq.shift[k], lo, hi, p, depth, step);
     }
+  } else {
+    // Wider than two pages a side (a radius of more than half a page): the blocks one by one.
+    for (int j = first.y; j <= last.y; j += 2)
+      for (int i = first.x; i <= last.x; i += 2) {
+        ivec2 corner;
+        if (!vsm_block(sq, i, j, corner)) {
+          found = false;
+          return 1.0;
+        }
+        sum += vsm_pcf_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), lo, hi, p, depth, step);
+      }
   }
   return sum / (4.0 * r * r);
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
+}
+
+// The blocker search's blocks from window texel `from` (even) to `to` of one page, whose pool
+// texel is window texel + `shift`: adds the depths nearer than `depth` of the square's texels
+// (`inside` to `last`; a block may reach one texel past either) to `sum`, and their count to
+// `blockers`.
+void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 last, float depth, inout float sum, inout int blockers) {
+  const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
+  for (int j = from.y; j <= to.y; j += 2) {
+    // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j); a texel outside the square
+    // is compared against -1 (never a blocker).
+    const vec4 row_depth = vec4(j + 1 <= last.y ? depth : -1.0, j + 1 <= last.y ? depth : -1.0, j >= inside.y ? depth : -1.0,
+                                j >= inside.y ? depth : -1.0);
+    for (int i = from.x; i <= to.x; i += 2) {
+      const vec4 d = textureGather(u_vsm_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0);
+      const vec4 tested = vec4(i >= inside.x ? row_depth.x : -1.0, i + 1 <= last.x ? row_depth.y : -1.0,
+                               i + 1 <= last.x ? row_depth.z : -1.0, i >= inside.x ? row_depth.w : -1.0);
+      const vec4 is_blocker = vec4(lessThan(d, tested));
+      sum += dot(d, is_blocker);
+      blockers += int(dot(is_blocker, vec4(1.0)));
+    }
+  }
 }
 
 // PCSS's blocker search at `level` through the tables: the mean depth of the texels under the
@@ -191,23 +240,25 @@ float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out i
   VsmSquare sq;
   found = all(greaterThanEqual(inside, ivec2(0))) && vsm_square(level, first, last, sq);
   if (!found) return 1.0;
-  const vec2 pool_texels = vec2(u_vsm_pool_pages * u_vsm_page_texels);
   float sum = 0.0;
-  for (int j = first.y; j <= last.y; j += 2)
-    for (int i = first.x; i <= last.x; i += 2) {
-      ivec2 corner;
-      if (!vsm_block(sq, i, j, corner)) {
-        found = false;
-        blockers = 0;
-        return 1.0;
-      }
-      // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j); texels outside the square weigh 0.
-      const vec4 d = textureGather(u_vsm_pool, (vec2(corner) + 1.0) / pool_texels, 0);
-      const bvec4 in_x = bvec4(i >= inside.x, i + 1 <= last.x, i + 1 <= last.x, i >= inside.x);
-      const bvec4 in_y = bvec4(j + 1 <= last.y, j + 1 <= last.y, j >= inside.y, j >= inside.y);
-      for (int c = 0; c < 4; ++c)
-        if (in_x[c] && in_y[c] && d[c] < depth) sum += d[c], ++blockers;
+  if (sq.few) {
+    for (int k = 0; k < 4; ++k) {  // at most 2 × 2 pages, each with its own pool shift
+      const bvec2 second = bvec2(k & 1, k >> 1);
+      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
+      if (all(lessThanEqual(from, to))) vsm_blocker_blocks(from, to, sq.shift[k], inside, last, depth, sum, blockers);
     }
+  } else {
+    for (int j = first.y; j <= last.y; j += 2)
+      for (int i = first.x; i <= last.x; i += 2) {
+        ivec2 corner;
+        if (!vsm_block(sq, i, j, corner)) {
+          found = false;
+          blockers = 0;
+          return 1.0;
+        }
+        vsm_blocker_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), inside, last, depth, sum, blockers);
+      }
+  }
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
 

@@ -12,6 +12,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, rgba32f) uniform readonly image2D u_surface;  // world xyz; w > 0 where a surface is
 layout(binding = 1, r32f) uniform writeonly image2D u_levels;     // debug view: the level each pixel samples
 uniform bool u_write_levels;                                       // (-1: no surface, levels: beyond the coarsest)
+// PCSS (u_mark_pass 2): each pixel's penumbra, the world radius its search found (0: nothing in
+// front, lit; -1: no surface, or no level held its search), which the shading filters with.
+layout(binding = 2, r32f) uniform writeonly image2D u_radii;
+uniform bool u_write_radii;
 
 layout(std430, binding = 0) buffer Marks {
   uint u_pixels_per_level[VSM_MAX_LEVELS];
@@ -51,6 +55,7 @@ void main() {
   const vec4 s = imageLoad(u_surface, p);
   if (s.w <= 0.0) {
     if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
+    if (u_write_radii) imageStore(u_radii, p, vec4(-1.0));
     return;
   }
   const vec3 world = s.xyz;
@@ -63,7 +68,9 @@ void main() {
   } else if (u_mark_pass == 2) {
     float radius;
     int blockers;
-    if (!vsm_pcss_radius(world, radius, blockers) || blockers == 0) {
+    const bool searched = vsm_pcss_radius(world, radius, blockers);
+    if (u_write_radii) imageStore(u_radii, p, vec4(searched ? radius : -1.0));
+    if (!searched || blockers == 0) {
       // No search (the pool held none of its levels) or nothing in front: no filter pages.
       if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
       return;

@@ -319,6 +319,7 @@ class VirtualPagesPass final : public Pass {
     if (v->targets_generation != r.targets_generation) {  // new camera targets: their depth is attached anew
       v->targets_generation = r.targets_generation;
       v->positions = gl::Texture({GL_RGBA32F, w, h, 1}, "virtual map: camera world positions");
+      v->pcss_radii = gl::Texture({GL_R32F, w, h, 1}, "virtual map: PCSS penumbra per pixel");
       const gl::Framebuffer::Attachment att[] = {{&v->positions, GL_COLOR_ATTACHMENT0}, {&r.targets->depth, GL_DEPTH_ATTACHMENT}};
       v->fbo = gl::Framebuffer(att, "virtual map: position pass");
     }
@@ -350,7 +351,7 @@ class VirtualPagesPass final : public Pass {
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes);
-      marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options);
+      marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, nullptr, &v->pcss_radii);
       std::set<adaptive::Page> all = search.pages;
       all.insert(marked.pages.begin(), marked.pages.end());
       const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes);
@@ -622,7 +623,11 @@ class ShadingPass final : public Pass {
       const FrameResources::Virtual& v = *r.virtual_map;
       v.map->bind(prog);
       set_virtual_mark_uniforms(prog, f.scene.camera, f.plan.height_px, v.options);
-      if (v.pcss) set_virtual_pcss_uniforms(prog, *v.pcss);
+      if (v.pcss) {
+        v.pcss_radii.bind(contract::UNIT_VSM_PCSS_RADII);
+        glBindSampler(contract::UNIT_VSM_PCSS_RADII, 0);
+        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);  // the marker's image stores
+      }
     }
     f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
     if (virtual_pages) count_virtual_status(f);

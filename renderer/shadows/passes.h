@@ -88,6 +88,7 @@ struct FrameResources {
     std::optional<VirtualPcss> pcss;  // PCSS: its search and penumbra
     int targets_generation = -1;  // of the camera targets whose depth `fbo` holds
     gl::Texture positions;
+    gl::Texture pcss_radii;  // PCSS: each pixel's penumbra as the marking's search found it (R32F)
     gl::Framebuffer fbo;
     gl::Buffer shading_counts;  // contract::VsmShadingResult
     // Each object's mesh and placement when the pages were last updated: a caster that moved (or

@@ -334,21 +334,26 @@ adaptive::MarkResult PageMarker::mark_pcss_search(const gl::Texture& surface, co
 
 adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px,
                                                   const VirtualShadowMap& map, const VirtualPcss& pcss, const adaptive::MarkOptions& options,
-                                                  const gl::Texture* levels) const {
+                                                  const gl::Texture* levels, const gl::Texture* radii) const {
   program_.set("u_mark_pass", 2);
   set_virtual_pcss_uniforms(program_, pcss);
   map.bind(program_);  // the search reads the pages the first pass marked
-  return run(surface, camera, height_px, map.view(), 0, options, levels);
+  return run(surface, camera, height_px, map.view(), 0, options, levels, radii);
 }
 
 adaptive::MarkResult PageMarker::run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                                     double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
+                                     double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
+                                     const gl::Texture* radii) const {
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
-  if (levels && (levels->desc().width != surface.desc().width || levels->desc().height != surface.desc().height ||
-                 levels->desc().format != GL_R32F))
-    throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
+  const auto same_size_r32f = [&](const gl::Texture* t) {
+    return !t || (t->desc().width == surface.desc().width && t->desc().height == surface.desc().height && t->desc().format == GL_R32F);
+  };
+  if (!same_size_r32f(levels)) throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
+  if (!same_size_r32f(radii)) throw std::invalid_argument("page marker: the radii image must be R32F of the surface's size");
   program_.set("u_write_levels", levels != nullptr);
   if (levels) glBindImageTexture(1, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  program_.set("u_write_radii", radii != nullptr);
+  if (radii) glBindImageTexture(2, radii->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
   set_virtual_page_uniforms(program_, layout_, view);
   set_virtual_mark_uniforms(program_, camera, height_px, options);
   program_.set("u_radius_ws", static_cast<float>(radius_ws));

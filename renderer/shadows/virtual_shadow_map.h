@@ -94,15 +94,18 @@ class PageMarker {
   // the filter's); then, with `map` holding those (after its update), the pages of the penumbra
   // each pixel's search finds, on the level the rule (or the footprint) gives that penumbra. A
   // pixel with nothing in front marks no filter pages (lit). pixels_per_level: the filter's levels.
+  // With `radii` (R32F, the surface's size), each pixel's penumbra is written there (world radius;
+  // 0 nothing in front; -1 no surface, or no level held its search): the shading filters with it.
   adaptive::MarkResult mark_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                         const VirtualPcss& pcss, const adaptive::MarkOptions& options) const;
   adaptive::MarkResult mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
                                         const VirtualPcss& pcss, const adaptive::MarkOptions& options,
-                                        const gl::Texture* levels = nullptr) const;
+                                        const gl::Texture* levels = nullptr, const gl::Texture* radii = nullptr) const;
 
  private:
   adaptive::MarkResult run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const;
+                           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
+                           const gl::Texture* radii = nullptr) const;
   adaptive::VirtualMapLayout layout_;
   gl::Program program_;
   gl::Buffer marks_;
