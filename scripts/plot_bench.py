@@ -6,7 +6,9 @@ usage: plot_bench.py BENCH_CSV OUT_DIR   (writes OUT_DIR/pareto-<scene>.png and 
 One panel per technique; one line per variant (filter radius), its points labelled with the
 shadow-map resolution. Filled markers lie on the variant's Pareto front (no other row of the
 same variant is both faster and more accurate, the `pareto` column); hollow ones do not.
-Adaptive rows are drawn as stars. The dashed line is the scene's unshadowed frame time.
+Adaptive rows are drawn as stars, the sun's virtual shadow map as diamonds (pages marked by
+the rule) and squares (by the footprint), labelled with their resident pages. The dashed line is
+the scene's unshadowed frame time.
 Error bars span the fastest to the slowest frame.
 """
 import csv
@@ -35,6 +37,7 @@ def read_rows(path):
         r["resolution_texels"] = int(r["resolution_texels"])
         r["pareto"] = r["pareto"] == "1"
         r["adaptive"] = r["adaptive"] == "1"
+        r["virtual_pages"] = r.get("virtual_pages", "")  # older runs have no virtual rows
     return rows
 
 
@@ -54,19 +57,23 @@ def plot_scene(scene, rows, out_dir):
         variants = list(OrderedDict.fromkeys(r["variant"] for r in t_rows))
         for i, variant in enumerate(variants):
             color = plt.cm.viridis(i / max(len(variants) - 1, 1)) if len(variants) > 1 else "tab:blue"
-            v_rows = sorted((r for r in t_rows if r["variant"] == variant and not r["adaptive"]),
+            v_rows = sorted((r for r in t_rows if r["variant"] == variant and not r["adaptive"] and not r["virtual_pages"]),
                             key=lambda r: r["resolution_texels"])
+            extra = [r for r in t_rows if r["variant"] == variant and (r["adaptive"] or r["virtual_pages"])]
             xs = [r["frame_ms_median"] for r in v_rows]
             ys = [max(r["mean_abs"], ERROR_FLOOR) for r in v_rows]
             ax.plot(xs, ys, "-", color=color, lw=1, alpha=0.6, label=variant)
-            for r in v_rows + [r for r in t_rows if r["variant"] == variant and r["adaptive"]]:
+            for r in v_rows + extra:
                 x, y = r["frame_ms_median"], max(r["mean_abs"], ERROR_FLOOR)
                 ax.errorbar(x, y, xerr=[[x - r["frame_ms_min"]], [r["frame_ms_max"] - x]], fmt="none",
                             ecolor=color, elinewidth=0.6, alpha=0.6)
-                marker = "*" if r["adaptive"] else "o"
-                size = 11 if r["adaptive"] else 6
+                marker = {"rule": "D", "footprint": "s"}.get(r["virtual_pages"], "*" if r["adaptive"] else "o")
+                size = 11 if r["adaptive"] else 7 if r["virtual_pages"] else 6
                 ax.plot(x, y, marker, ms=size, color=color, mfc=color if r["pareto"] else "white", mew=1.2)
-                label = f"adaptive {r['resolution_texels']}" if r["adaptive"] else str(r["resolution_texels"])
+                if r["virtual_pages"]:
+                    label = f"virtual {r['virtual_pages']} {r['pages_resident']}p"
+                else:
+                    label = f"adaptive {r['resolution_texels']}" if r["adaptive"] else str(r["resolution_texels"])
                 ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6.5, color="0.25")
         ax.axvline(floor, color="0.4", ls="--", lw=0.8)
         ax.text(floor, 0.02, " unshadowed", transform=ax.get_xaxis_transform(), fontsize=6.5, color="0.4", va="bottom")

@@ -2,6 +2,10 @@
 // table, filter radius and shadow-map resolution it renders K timed frames and compares the
 // visibility with a ground truth (renderer/metrics/ground_truth.h): the area-light average for
 // techniques that stand for an area light (PCSS), the same filter on an 8192² map otherwise.
+// Beside the fixed resolutions, each variant gets an adaptive row (the rule sizes the map) and,
+// under a sun for the filters that read pages (box PCF with a world radius, PCSS with a box
+// filter), two rows of the sun's virtual shadow map, its pages marked by the rule and by the
+// footprint and drawn every frame.
 // Writes DIR/bench.csv (one row per configuration, `pareto` marks the error/time front among
 // the rows measured against the same reference), DIR/report.json, and one plot per scene
 // (DIR/pareto-<scene>.png/.svg, drawn by scripts/plot_bench.py). Progress goes to stderr.
@@ -33,6 +37,7 @@
 #include "metrics/ground_truth.h"
 #include "metrics/image_error.h"
 #include "scene/scene.h"
+#include "shadows/frame_plan.h"
 #include "shadows/renderer.h"
 #include "stats/summary.h"
 #include "shadows/settings.h"
@@ -53,6 +58,7 @@ struct Options {
   shadows::ShadowSettings base;
   apps::CalibrationOption calibration;
   bool adaptive = true;  // one adaptive row per variant the rule applies to
+  bool virtual_map = true;  // virtual map rows (rule, footprint) per variant that reads pages, under a sun
   bool plot = true;
   std::string python = "/usr/bin/python3";
   std::string plot_script = tool::script_file("plot_bench.py").string();
@@ -79,8 +85,11 @@ struct FrameTimes {
 struct Row {
   std::string scene, technique, variant;
   double radius_ws = NAN;
-  int resolution_texels = 0;
+  int resolution_texels = 0;  // 0 for a virtual map's row: it has pages, not one resolution
   bool adaptive = false;
+  std::string virtual_pages;  // a virtual map's row: how its pages were marked (rule, footprint); else empty
+  int pages_resident = 0;     // a virtual map's pages in the pool after the frame
+  double memory_texels = 0;   // shadow memory in 4-byte texels: the atlas, or the resident pages and the page tables
   FrameTimes times;
   double floor_ms = 0;
   const metrics::Reference* reference = nullptr;
@@ -141,6 +150,9 @@ std::vector<Variant> make_variants(const Options& opt) {
 bool has_rule_radius(const Variant& v) {
   return !std::isnan(v.radius_ws) || shadows::technique_entry(v.settings.technique).rule_radius_ws != nullptr;
 }
+
+// Whether the variant's filter reads the sun's virtual shadow map in `scene` (shadows/frame_plan.h).
+bool reads_pages(const Variant& v, const scene::Scene& scene) { return shadows::virtual_pages_refusal(v.settings, scene).empty(); }
 
 // K frames after `warmup` untimed ones (which absorb allocation and shader compilation). Each
 // frame is bracketed by glFinish and timed with the wall clock; on a GPU a GL_TIME_ELAPSED query
@@ -214,7 +226,7 @@ const char* kCsvHeader =
     "scene,technique,variant,filter_radius_ws,resolution_texels,adaptive,width_px,height_px,frames,timing_method,"
     "frame_ms_median,frame_ms_min,frame_ms_max,floor_ms,reference_kind,reference_resolution_texels,reference_samples,"
     "mean_abs,rmse,max_abs,ssim,psnr_db,share_above_1_255,pareto,pareto_spread,s_xy,filter_radius_texels,resolution_source,required_texels,"
-    "cascades,settings";
+    "cascades,virtual_pages,pages_resident,memory_texels,settings";
 
 std::string csv_row(const Row& r, const Options& opt) {
   std::ostringstream o;
@@ -227,7 +239,8 @@ std::string csv_row(const Row& r, const Options& opt) {
     << csv_number(r.error.psnr_db) << ',' << csv_number(r.error.share_above_threshold) << ',' << (r.pareto ? 1 : 0) << ','
     << (r.pareto_spread ? 1 : 0) << ','
     << csv_number(r.s_xy) << ',' << csv_number(r.filter_radius_texels) << ',' << r.resolution_source << ','
-    << csv_number(r.required_texels) << ',' << r.cascades << ",\"" << r.settings << "\"";
+    << csv_number(r.required_texels) << ',' << r.cascades << ',' << r.virtual_pages << ',' << r.pages_resident << ','
+    << csv_number(r.memory_texels) << ",\"" << r.settings << "\"";
   return o.str();
 }
 
@@ -250,6 +263,9 @@ nlohmann::json row_json(const Row& r) {
                       {"resolution_source", r.resolution_source},
                       {"required_texels", std::isfinite(r.required_texels) ? nlohmann::json(r.required_texels) : nlohmann::json(nullptr)},
                       {"cascades", r.cascades},
+                      {"virtual_pages", r.virtual_pages.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.virtual_pages)},
+                      {"pages_resident", r.pages_resident},
+                      {"memory_texels", r.memory_texels},
                       {"c", r.c},
                       {"c_from", r.c_from},
                       {"settings", r.settings}};
@@ -305,6 +321,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "wall_finish"}));
   bool no_adaptive = false;
   app.add_flag("--no-adaptive", no_adaptive, "skip the adaptive rows (one per fixed-filter radius and for PCSS; --adaptive.* sets the rule)");
+  bool no_virtual = false;
+  app.add_flag("--no-virtual", no_virtual,
+               "skip the virtual shadow map rows (pages marked by the rule and by the footprint, drawn every frame), which a scene "
+               "lit by the sun gets for box pcf with a world radius (--pcf.kernel grid) and pcss with --pcss.kernel grid");
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
@@ -330,6 +350,7 @@ int main(int argc, char** argv) {
     }
     opt.plot = !no_plot;
     opt.adaptive = !no_adaptive;
+    opt.virtual_map = !no_virtual;
     const bool all_techniques = techniques_arg == std::vector<std::string>{"all"};
     if (!all_techniques) {
       opt.techniques = techniques_arg;
@@ -381,14 +402,18 @@ int main(int argc, char** argv) {
           std::printf("%s\n", line.c_str());
         }
     }
-    int adaptive_variants = 0;
+    int adaptive_variants = 0, virtual_rows = 0;
     for (const auto& v : variants) adaptive_variants += opt.adaptive && has_rule_radius(v);
-    const int total_rows = static_cast<int>(scenes.size() * (variants.size() * opt.resolutions.size() + static_cast<std::size_t>(adaptive_variants)));
+    for (const auto& scene : scenes)
+      for (const auto& v : variants) virtual_rows += opt.virtual_map && reads_pages(v, scene) ? 2 : 0;
+    const int total_rows =
+        static_cast<int>(scenes.size() * (variants.size() * opt.resolutions.size() + static_cast<std::size_t>(adaptive_variants))) +
+        virtual_rows;
     std::fprintf(stderr,
-                 "penumbra-bench: %zu scenes x (%zu variants x %zu resolutions + %d adaptive) = %d rows at %dx%d, %d frames each, "
-                 "on %s (%s)\n",
-                 scenes.size(), variants.size(), opt.resolutions.size(), adaptive_variants, total_rows, opt.width, opt.height,
-                 opt.frames, ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
+                 "penumbra-bench: %zu scenes x (%zu variants x %zu resolutions + %d adaptive) + %d virtual = %d rows at %dx%d, "
+                 "%d frames each, on %s (%s)\n",
+                 scenes.size(), variants.size(), opt.resolutions.size(), adaptive_variants, virtual_rows, total_rows, opt.width,
+                 opt.height, opt.frames, ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
 
     std::vector<Row> rows;
     std::vector<std::unique_ptr<metrics::Reference>> references;  // rows point into these
@@ -439,13 +464,22 @@ int main(int argc, char** argv) {
           row.resolution_source = info.resolution_source;
           row.cascades = static_cast<int>(info.cascades.size());
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
+          row.memory_texels = shadows::shadow_memory_texels(info);
+          if (info.virtual_map) {
+            row.virtual_pages = info.resolution_source.substr(info.resolution_source.find('_') + 1);  // virtual_rule: rule
+            row.resolution_texels = 0;
+            row.cascades = 0;
+            row.pages_resident = info.virtual_map->pages.resident;
+          }
           row.settings = shadows::describe(s);
           row.c = s.adaptive.c;
           row.c_from = opt.calibration.source_of_c(s);
           ++done;
-          std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %s%d^2: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
-                       total_rows, scene.name.c_str(), v.label.c_str(), row.adaptive ? "adaptive " : "", row.resolution_texels,
-                       row.times.median(), row.error.mean_abs, row.error.max_abs, row.error.ssim);
+          const std::string size = row.virtual_pages.empty() ? (row.adaptive ? "adaptive " : "") + std::to_string(row.resolution_texels) + "^2"
+                                                             : "virtual " + row.virtual_pages + " " + std::to_string(row.pages_resident) + "p";
+          std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %s: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
+                       total_rows, scene.name.c_str(), v.label.c_str(), size.c_str(), row.times.median(), row.error.mean_abs,
+                       row.error.max_abs, row.error.ssim);
           return row;
         };
         for (int res : opt.resolutions) {
@@ -462,6 +496,15 @@ int main(int argc, char** argv) {
           renderer.reset_adaptive();
           rows.push_back(measure(s, std::max(opt.warmup, s.adaptive.shrink_delay_frames + 2)));
         }
+        if (opt.virtual_map && reads_pages(v, scene))
+          for (const shadows::VirtualPages marking : {shadows::VirtualPages::rule, shadows::VirtualPages::footprint}) {
+            // Every page drawn each frame: the work of a frame whose view is new (a cache would
+            // draw nothing in a still view).
+            shadows::ShadowSettings s = v.settings;
+            s.map.virtual_pages = marking;
+            s.map.virtual_cache = false;
+            rows.push_back(measure(s, opt.warmup));
+          }
       }
       scene_reports.push_back(scene_report);
     }
@@ -469,6 +512,9 @@ int main(int argc, char** argv) {
     int adaptive_rows = 0, on_front = 0, on_spread_front = 0;
     for (const auto& r : rows)
       if (r.adaptive) ++adaptive_rows, on_front += r.pareto, on_spread_front += r.pareto_spread;
+    int virtual_on_front = 0, virtual_on_spread_front = 0;
+    for (const auto& r : rows)
+      if (!r.virtual_pages.empty()) virtual_on_front += r.pareto, virtual_on_spread_front += r.pareto_spread;
 
     const fs::path& dir = out.path();
     std::string csv = std::string(kCsvHeader) + "\n";
@@ -497,6 +543,7 @@ int main(int argc, char** argv) {
                        {"filter_resolution_texels", opt.reference.filter_resolution_texels}}},
         {"error_metric_for_pareto", "mean_abs (visibility, whole image)"},
         {"adaptive_on_front", {{"rows", adaptive_rows}, {"pareto", on_front}, {"pareto_spread", on_spread_front}}},
+        {"virtual_on_front", {{"rows", virtual_rows}, {"pareto", virtual_on_front}, {"pareto_spread", virtual_on_spread_front}}},
         {"scenes", scene_reports},
         {"rows", nlohmann::json::array()}};
     for (const auto& r : rows) report["rows"].push_back(row_json(r));
@@ -511,6 +558,9 @@ int main(int argc, char** argv) {
     if (adaptive_rows > 0)
       std::cout << "adaptive rows on their variant's Pareto front: " << on_front << " of " << adaptive_rows << " (medians), "
                 << on_spread_front << " of " << adaptive_rows << " (frame-time spreads that overlap are ties)\n";
+    if (virtual_rows > 0)
+      std::cout << "virtual map rows on their variant's Pareto front: " << virtual_on_front << " of " << virtual_rows << " (medians), "
+                << virtual_on_spread_front << " of " << virtual_rows << " (spreads as ties)\n";
     std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
     return 0;
   } catch (const std::exception& e) {

@@ -60,6 +60,11 @@ void read_back_requirement(FrameResources::Requirement& q, AdaptiveState& state)
 
 }  // namespace
 
+double shadow_memory_texels(const FrameInfo& info) {
+  if (info.virtual_map) return static_cast<double>(info.virtual_map->resident_bytes + info.virtual_map->table_bytes) / 4;
+  return static_cast<double>(info.atlas_width) * info.atlas_height;
+}
+
 FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px, gl::PassTimer* timer) {
   read_back_requirement(res_->requirement, adaptive_);
   const FramePlan plan = plan_frame(s, scene_, width_px, height_px, adaptive_);

@@ -62,6 +62,10 @@ struct FrameInfo {
   std::optional<Virtual> virtual_map;
 };
 
+// The frame's shadow memory in 4-byte texels: the atlas, or the virtual map's resident pages and
+// its page tables (the pool is allocated whole; what the view holds is what the frame needs).
+double shadow_memory_texels(const FrameInfo& info);
+
 struct FrameResources;
 class Pass;
 

@@ -20,6 +20,7 @@
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace penumbra {
 namespace {
@@ -28,7 +29,8 @@ const std::vector<std::string> kColumns = {
     "scene", "technique", "variant", "filter_radius_ws", "resolution_texels", "adaptive", "width_px", "height_px", "frames",
     "timing_method", "frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "reference_kind",
     "reference_resolution_texels", "reference_samples", "mean_abs", "rmse", "max_abs", "ssim", "psnr_db",
-    "share_above_1_255", "pareto", "pareto_spread", "s_xy", "filter_radius_texels", "resolution_source", "required_texels", "cascades", "settings"};
+    "share_above_1_255", "pareto", "pareto_spread", "s_xy", "filter_radius_texels", "resolution_source", "required_texels", "cascades",
+    "virtual_pages", "pages_resident", "memory_texels", "settings"};
 
 // Fields of one CSV line; a field in double quotes may hold commas.
 std::vector<std::string> csv_fields(const std::string& line) {
@@ -241,6 +243,65 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
   EXPECT_TRUE(report.contains("device"));
   const auto png = fs::file_size(out / "pareto-two-planes.png");
   EXPECT_GT(png, 10000u) << "a real plot";
+}
+
+// The sun's virtual shadow map: under a sun (demo), the filters that read pages (box PCF with a
+// world radius, PCSS with a box filter) get a row with pages marked by the rule and one by the
+// footprint, measured against the variant's reference and ranked on its front; a spot-lit scene
+// (two-planes) gets none, and --no-virtual leaves them out.
+TEST_F(BenchCli, VirtualMapRowsForTheFiltersThatReadPagesUnderASun) {
+  const fs::path out = work() / "out";
+  const std::vector<std::string> args = {"--scenes", "demo,two-planes", "--techniques", "pcf,pcss", "--pcf.kernel", "grid",
+                                         "--pcss.kernel", "grid", "--resolutions", "64", "--no-adaptive", "--no-plot"};
+  std::vector<std::string> a = args;
+  a.insert(a.end(), {"-o", out.string()});
+  const test::Result r = bench(a);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> header;
+  const auto rows = read_csv(out / "bench.csv", header);
+  // Per scene: pcf r=0.05 and pcss at 64²; demo adds two virtual rows to each.
+  ASSERT_EQ(rows.size(), 2u + 2u + 4u);
+  EXPECT_THAT(r.err, HasSubstr("+ 4 virtual = 8 rows"));
+  std::map<std::string, std::set<std::string>> markings;  // variant -> rule, footprint
+  std::map<std::string, std::string> map_reference;       // variant -> the 64² row's reference
+  for (const auto& row : rows)
+    if (row.at("virtual_pages").empty()) {
+      EXPECT_EQ(row.at("resolution_source"), "fixed");
+      EXPECT_EQ(row.at("pages_resident"), "0");
+      EXPECT_EQ(std::stod(row.at("memory_texels")), 64.0 * 64.0) << "a 64² atlas";
+      map_reference[row.at("scene") + row.at("variant")] = row.at("reference_kind") + row.at("reference_resolution_texels");
+    }
+  for (const auto& row : rows) {
+    if (row.at("virtual_pages").empty()) continue;
+    EXPECT_EQ(row.at("scene"), "demo") << "two-planes is lit by a spot";
+    markings[row.at("variant")].insert(row.at("virtual_pages"));
+    EXPECT_EQ(row.at("resolution_source"), "virtual_" + row.at("virtual_pages"));
+    EXPECT_EQ(row.at("resolution_texels"), "0");
+    EXPECT_EQ(row.at("cascades"), "0");
+    EXPECT_EQ(row.at("adaptive"), "0");
+    const int pages = std::stoi(row.at("pages_resident"));
+    EXPECT_GT(pages, 0);
+    // The resident pages (128² texels of 4 bytes) and the tables: more than the pages alone.
+    EXPECT_GT(std::stod(row.at("memory_texels")), pages * 128.0 * 128.0);
+    EXPECT_EQ(row.at("reference_kind") + row.at("reference_resolution_texels"), map_reference.at(row.at("scene") + row.at("variant")))
+        << "the variant's own reference";
+    const double mean_abs = std::stod(row.at("mean_abs"));
+    EXPECT_TRUE(mean_abs >= 0 && mean_abs < 0.1) << row.at("variant") << " " << row.at("virtual_pages") << ": " << mean_abs;
+  }
+  EXPECT_EQ(markings, (std::map<std::string, std::set<std::string>>{{"pcf r=0.05", {"rule", "footprint"}}, {"pcss", {"rule", "footprint"}}}));
+  const nlohmann::json report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  EXPECT_EQ(report.at("virtual_on_front").at("rows"), 4);
+  int on_front = 0;
+  for (const auto& row : rows) on_front += !row.at("virtual_pages").empty() && row.at("pareto") == "1";
+  EXPECT_EQ(report.at("virtual_on_front").at("pareto"), on_front);
+  EXPECT_THAT(r.out, HasSubstr("virtual map rows on their variant's Pareto front: " + std::to_string(on_front) + " of 4"));
+
+  a = args;
+  a.insert(a.end(), {"--no-virtual", "-o", (work() / "none").string()});
+  const test::Result none = bench(a);
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_EQ(read_csv(work() / "none" / "bench.csv", header).size(), 4u) << "no virtual rows";
+  EXPECT_THAT(none.out, Not(HasSubstr("virtual map rows")));
 }
 
 TEST_F(BenchCli, NoPlotAndNoAdaptiveWriteNeither) {

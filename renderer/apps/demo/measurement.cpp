@@ -245,10 +245,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       double triangles = 0;
       for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
       s.map_triangles.push_back(triangles);
-      // Memory in 4-byte texels: the atlas, or the virtual map's resident pages and its tables.
-      s.allocated.push_back(s.info.virtual_map
-                                ? static_cast<double>(s.info.virtual_map->resident_bytes + s.info.virtual_map->table_bytes) / 4
-                                : static_cast<double>(s.info.atlas_width) * s.info.atlas_height);
+      s.allocated.push_back(shadows::shadow_memory_texels(s.info));
       const std::string res = cascade_resolutions(s.info);
       if (!s.resolution.empty() && s.resolution.back() != res) ++s.resolution_changes;
       s.resolution.push_back(res);
