@@ -74,7 +74,8 @@ def plot_scene(scene, rows, out_dir):
                     label = f"virtual {r['virtual_pages']} {r['pages_resident']}p"
                 else:
                     label = f"adaptive {r['resolution_texels']}" if r["adaptive"] else str(r["resolution_texels"])
-                ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6.5, color="0.25")
+                below = r["virtual_pages"] == "footprint"  # apart from the rule's label when the two coincide
+                ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, -9 if below else 3), fontsize=6.5, color="0.25")
         ax.axvline(floor, color="0.4", ls="--", lw=0.8)
         ax.text(floor, 0.02, " unshadowed", transform=ax.get_xaxis_transform(), fontsize=6.5, color="0.4", va="bottom")
         ax.set_xscale("log")
