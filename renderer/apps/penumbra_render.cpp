@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
       add_variants(shadows::technique_from_string(technique_arg), false);
     }
     for (auto& v : variants) apps::apply_calibration_for(calibration, v.settings);  // each technique's own c
-    const apps::VirtualMarking virtual_mark = apps::virtual_marking(variants.front().settings);
+    const apps::VirtualMarking virtual_mark = apps::virtual_marking(variants.front().settings, scene.light);
     if (virtual_debug && !virtual_mark.problem.empty()) throw cli::UsageError("--virtual-debug: " + virtual_mark.problem);
     for (const auto& v : variants)  // before anything renders: the plan would refuse it at the first frame
       if (v.settings.map.virtual_pages != shadows::VirtualPages::off)
@@ -242,7 +242,7 @@ int main(int argc, char** argv) {
     if (progress) std::fprintf(stderr, "%*s\r", 60, "");
     if (virtual_debug) {
       const nlohmann::json v = apps::write_virtual_debug(scene, has_previous ? &previous_camera : nullptr, scene.camera, width, height,
-                                                         virtual_mark.radius_ws, virtual_mark.options, staging);
+                                                         virtual_mark, staging);
       summary["virtual_debug"] = v;
       std::printf("virtual shadow map: %d pages by the rule, %d by the footprint; %d drawn, %d kept from the previous frame "
                   "(virtual-levels.png, virtual-pool.png)\n",

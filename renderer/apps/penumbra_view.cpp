@@ -63,12 +63,12 @@ struct VirtualPanel {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   }
   void refresh(const scene::Scene& scene, const shadows::ShadowSettings& s, int width, int height) {
-    const apps::VirtualMarking marking = apps::virtual_marking(s);
+    const apps::VirtualMarking marking = apps::virtual_marking(s, scene.light);
     problem = scene.light.type != scene::Light::Type::directional ? "the virtual map is the sun's; this scene has a spot light"
                                                                     : marking.problem;
     if (!problem.empty()) return;
     if (!debug) debug = std::make_unique<apps::VirtualDebug>(scene);
-    last = debug->view(scene, scene.camera, width, height, marking.radius_ws, marking.options);
+    last = debug->view(scene, scene.camera, width, height, marking);
     upload(rule_tex, last.rule_levels);
     upload(footprint_tex, last.footprint_levels);
     upload(pool_tex, apps::pool_image(debug->map(), 256));

@@ -32,13 +32,14 @@ void put(io::Image8& img, std::size_t pixel, const glm::vec3& c) {
 
 }  // namespace
 
-VirtualMarking virtual_marking(const shadows::ShadowSettings& s) {
+VirtualMarking virtual_marking(const shadows::ShadowSettings& s, const scene::Light& light) {
   VirtualMarking m;
-  m.radius_ws = s.pcss.min_penumbra_ws;
   if (s.technique == shadows::Technique::pcf) {
     m.radius_ws = s.pcf.radius;
     if (s.pcf.radius_unit != shadows::RadiusUnit::world) m.problem = "pcf marks pages by a world radius (--pcf.radius_unit world)";
-  } else if (s.technique != shadows::Technique::pcss) {
+  } else if (s.technique == shadows::Technique::pcss) {
+    m.pcss = shadows::virtual_pcss(s, light.size);
+  } else {
     m.problem = "pages are marked for pcf (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
   }
   m.options = shadows::virtual_mark_options(s);
@@ -117,8 +118,8 @@ VirtualDebug::~VirtualDebug() = default;
 const shadows::VirtualShadowMap& VirtualDebug::map() const { return state_->vsm; }
 const adaptive::VirtualMapLayout& VirtualDebug::layout() const { return state_->layout; }
 
-VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Camera& camera, int width, int height, double radius_ws,
-                                      const adaptive::MarkOptions& options, bool images) {
+VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Camera& camera, int width, int height,
+                                      const VirtualMarking& marking, bool images) {
   State& st = *state_;
   if (st.positions.id() == 0 || st.positions.desc().width != width || st.positions.desc().height != height) {
     st.positions = gl::Texture({GL_RGBA32F, width, height, 1}, "virtual debug surface");
@@ -130,25 +131,42 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
   st.view.light_view = shadows::sun_light_view(scene.light.direction);
   const glm::vec3 l = glm::vec3(st.view.light_view * glm::vec4(camera.position, 1));
   st.view.camera_xy = {l.x, l.y};
-  adaptive::MarkOptions footprint = options;
+  adaptive::MarkOptions footprint = marking.options;
   footprint.marking = adaptive::Marking::footprint;
+  const gl::Texture* levels = images ? &st.levels : nullptr;
   View v;
-  v.footprint = st.marker.mark(st.positions, camera, height, st.view, radius_ws, footprint, images ? &st.levels : nullptr);
+  if (marking.pcss) {
+    // The renderer's two rounds: the searches' pages (one set for both markings: a search's level
+    // is set by its radius and the pixel floor), then each marking's penumbra pages.
+    const adaptive::MarkResult search = st.marker.mark_pcss_search(st.positions, camera, height, st.view, *marking.pcss, marking.options);
+    const shadows::VirtualMapStats first = st.vsm.update(search.pages, st.view, scene, st.meshes);
+    v.footprint = st.marker.mark_pcss_filter(st.positions, camera, height, st.vsm, *marking.pcss, footprint, levels);
+    if (images) v.footprint_levels = level_image(st.levels, st.layout.levels);
+    v.rule = st.marker.mark_pcss_filter(st.positions, camera, height, st.vsm, *marking.pcss, marking.options, levels);
+    if (images) v.rule_levels = level_image(st.levels, st.layout.levels);
+    v.rule.pages.insert(search.pages.begin(), search.pages.end());
+    v.footprint.pages.insert(search.pages.begin(), search.pages.end());
+    v.stats = st.vsm.update(v.rule.pages, st.view, scene, st.meshes);
+    v.stats.drawn += first.drawn;  // the searches' pages drawn by the first round are this view's too
+    v.stats.cached -= first.drawn;
+    v.stats.evicted += first.evicted;
+    return v;
+  }
+  v.footprint = st.marker.mark(st.positions, camera, height, st.view, marking.radius_ws, footprint, levels);
   if (images) v.footprint_levels = level_image(st.levels, st.layout.levels);
-  v.rule = st.marker.mark(st.positions, camera, height, st.view, radius_ws, options, images ? &st.levels : nullptr);
+  v.rule = st.marker.mark(st.positions, camera, height, st.view, marking.radius_ws, marking.options, levels);
   if (images) v.rule_levels = level_image(st.levels, st.layout.levels);
   v.stats = st.vsm.update(v.rule.pages, st.view, scene, st.meshes);
   return v;
 }
 
 nlohmann::json write_virtual_debug(const scene::Scene& scene, const scene::Camera* previous, const scene::Camera& camera, int width,
-                                   int height, double radius_ws, const adaptive::MarkOptions& options,
-                                   const std::filesystem::path& dir) {
+                                   int height, const VirtualMarking& marking, const std::filesystem::path& dir) {
   VirtualDebug debug(scene);
   nlohmann::json out;
   if (previous)  // the pages the previous view drew: kept (cached) where this one asks for them too
-    out["pages_previous"] = debug.view(scene, *previous, width, height, radius_ws, options, false).rule.pages.size();
-  VirtualDebug::View v = debug.view(scene, camera, width, height, radius_ws, options);
+    out["pages_previous"] = debug.view(scene, *previous, width, height, marking, false).rule.pages.size();
+  VirtualDebug::View v = debug.view(scene, camera, width, height, marking);
   const int levels = debug.layout().levels;
   std::vector<io::Image8> images = {std::move(v.rule_levels), std::move(v.footprint_levels), level_key(levels, width, std::max(1, height / 4))};
   io::write_png(dir / "virtual-levels.png",

@@ -294,11 +294,6 @@ scene::Aabb invalidate_moved_casters(FrameResources::Virtual& v, const scene::Sc
 // targets' depth, which the shading pass reuses), the pages they mark by the rule or the footprint,
 // and those not cached drawn into the pool with their own caster culling.
 class VirtualPagesPass final : public Pass {
-  // PCSS's blocker search through the pages: its constant depth bias, in texels of its level (the
-  // search reads the surface point itself, without the normal offset, so marking and shading
-  // find the same blockers).
-  static constexpr float kSearchBiasTexels = 2;
-
  public:
   PassId id() const override { return PassId::virtual_pages; }
   void execute(FrameContext& f) override {
@@ -347,7 +342,7 @@ class VirtualPagesPass final : public Pass {
     if (s.technique == Technique::pcss) {
       // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
       v->radius_ws = 0;
-      v->pcss = VirtualPcss{f.plan.tan_half_angle, s.pcss.search_scale, s.pcss.min_penumbra_ws, kSearchBiasTexels};
+      v->pcss = virtual_pcss(s, f.scene.light.size);
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes);

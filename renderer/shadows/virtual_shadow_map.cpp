@@ -297,6 +297,10 @@ void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pc
   program.set("u_vsm_search_bias_texels", pcss.search_bias_texels);
 }
 
+VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg) {
+  return {std::tan(glm::radians(std::max(light_size_deg, 0.0f)) / 2), s.pcss.search_scale, s.pcss.min_penumbra_ws, 2.0f};
+}
+
 void VirtualShadowMap::bind(const gl::Program& program) const {
   pool_.bind(contract::UNIT_VSM_POOL);
   glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed

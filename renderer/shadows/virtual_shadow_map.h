@@ -74,6 +74,11 @@ struct VirtualPcss {
   float search_bias_texels = 1;
 };
 void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss);
+// PCSS's parameters through the pages for settings `s` and a sun of angular diameter
+// `light_size_deg` (scene::Light::size): the search reads the surface point itself, without the
+// normal offset, with a constant bias of 2 texels of its level, so that marking and shading find
+// the same blockers.
+VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
 
 class VirtualShadowMap;
 

@@ -180,6 +180,23 @@ TEST_F(RenderCli, VirtualDebugWritesTheLevelsAndThePool) {
   EXPECT_EQ(v.at("drawn").get<int>() + v.at("cached").get<int>() + v.at("missing").get<int>(), v.at("pages_rule").get<int>());
   EXPECT_GT(v.at("cached").get<int>(), 0) << "the previous path frame's pages are kept";
 
+  // PCSS: the debug view marks in the renderer's two rounds (each pixel's search, then the
+  // penumbra it finds), so its rule asks for the pages the renderer's frame asked for (the surface
+  // comes from another pass: a few pixels may differ), and fewer than the footprint; marking every
+  // pixel at the minimum penumbra (the views' first way) asked for as many as the footprint, 117.
+  const fs::path pcss = work_ / "pcss";
+  const Result rp = run_render({"--scene", "outdoor", "--path-frame", "120", "--width", "480", "--height", "270", "--technique", "pcss",
+                                "--pcss.kernel", "grid", "--map.virtual_pages", "rule", "--frames", "1", "--warmup", "0",
+                                "--virtual-debug", "-o", pcss.string()},
+                               scratch_);
+  ASSERT_EQ(rp.exit_code, 0) << rp.err;
+  const auto debug = nlohmann::json::parse(read_file(pcss / "report.json")).at("virtual_debug");
+  const int asked = nlohmann::json::parse(read_file(pcss / "pcss" / "report.json")).at("virtual_map").at("pages").at("requested");
+  const int rule = debug.at("pages_rule");
+  EXPECT_GT(asked, 50);
+  EXPECT_NEAR(rule, asked, 0.1 * asked) << "the debug view marks as the renderer does";
+  EXPECT_LT(rule, debug.at("pages_footprint").get<int>());
+
   for (const auto& [args, why] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{"--scene", "outdoor-spot", "--virtual-debug"}, "--virtual-debug: the virtual shadow map is the sun's"},
            {{"--scene", "outdoor", "--virtual-debug", "--pcf.radius_unit", "texels"}, "--virtual-debug: pcf marks pages by a world radius"},
