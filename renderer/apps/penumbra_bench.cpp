@@ -3,8 +3,8 @@
 // visibility with a ground truth (renderer/metrics/ground_truth.h): the area-light average for
 // techniques that stand for an area light (PCSS), the same filter on an 8192² map otherwise.
 // Beside the fixed resolutions, each variant gets an adaptive row (the rule sizes the map) and,
-// under a sun for the filters that read pages (box PCF with a world radius, PCSS with a box
-// filter), two rows of the sun's virtual shadow map, its pages marked by the rule and by the
+// under a sun for the filters that read pages (box PCF and VSM with a world radius, PCSS with a
+// box filter), two rows of the sun's virtual shadow map, its pages marked by the rule and by the
 // footprint and drawn every frame.
 // Writes DIR/bench.csv (one row per configuration, `pareto` marks the error/time front among
 // the rows measured against the same reference), DIR/report.json, and one plot per scene
@@ -324,7 +324,7 @@ int main(int argc, char** argv) {
   bool no_virtual = false;
   app.add_flag("--no-virtual", no_virtual,
                "skip the virtual shadow map rows (pages marked by the rule and by the footprint, drawn every frame), which a scene "
-               "lit by the sun gets for box pcf with a world radius (--pcf.kernel grid) and pcss with --pcss.kernel grid");
+               "lit by the sun gets for vsm, box pcf (--pcf.kernel grid) and pcss with --pcss.kernel grid");
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");

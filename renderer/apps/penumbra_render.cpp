@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
   app.add_flag("--virtual-debug", virtual_debug,
                "also write the sun's virtual shadow map for this view: virtual-levels.png (the level each pixel samples, by the "
                "rule and by the footprint) and virtual-pool.png (the page pool: drawn for this view green, kept from the previous "
-               "path frame blue); pcf with a world radius or pcss, the pixel floor --adaptive.min_texel_px (0: 1 pixel)");
+               "path frame blue); pcf or vsm with a world radius, or pcss, the pixel floor --adaptive.min_texel_px (0: 1 pixel)");
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")
       ->required()
       ->check(cli::path_given());
@@ -96,8 +96,6 @@ int main(int argc, char** argv) {
     if (light_size >= 0) scene.light.size = light_size;
     if (virtual_debug && scene.light.type != scene::Light::Type::directional)
       throw cli::UsageError("--virtual-debug: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
-    if (virtual_debug && technique_arg != "pcf" && technique_arg != "pcss")
-      throw cli::UsageError("--virtual-debug: pages are marked for pcf (world radius) or pcss, not --technique " + technique_arg);
     scene::Camera previous_camera;
     const bool has_previous = path_frame > 0 && !scene.camera_path.empty();
     if (has_previous) previous_camera = scene.camera_path.at(scene.camera, path_frame - 1);

@@ -37,10 +37,13 @@ VirtualMarking virtual_marking(const shadows::ShadowSettings& s, const scene::Li
   if (s.technique == shadows::Technique::pcf) {
     m.radius_ws = s.pcf.radius;
     if (s.pcf.radius_unit != shadows::RadiusUnit::world) m.problem = "pcf marks pages by a world radius (--pcf.radius_unit world)";
+  } else if (s.technique == shadows::Technique::vsm) {
+    m.radius_ws = s.vsm.radius;
+    if (s.vsm.radius_unit != shadows::RadiusUnit::world) m.problem = "vsm marks pages by a world radius (--vsm.radius_unit world)";
   } else if (s.technique == shadows::Technique::pcss) {
     m.pcss = shadows::virtual_pcss(s, light.size);
   } else {
-    m.problem = "pages are marked for pcf (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
+    m.problem = "pages are marked for pcf or vsm (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
   }
   m.options = shadows::virtual_mark_options(s);
   m.options.marking = adaptive::Marking::rule;  // the views show the rule beside the footprint themselves

@@ -18,8 +18,8 @@
 
 namespace penumbra::apps {
 
-// How the debug views mark pages for a technique's settings, as the renderer does: PCF by its
-// world radius; PCSS in the renderer's two rounds (the pages of each pixel's blocker search, then
+// How the debug views mark pages for a technique's settings, as the renderer does: PCF and VSM by
+// their world radius; PCSS in the renderer's two rounds (the pages of each pixel's blocker search, then
 // those of the penumbra it finds, `pcss`); its c and the pixel floor (1 pixel where the settings
 // have none: the footprint marking needs one). `problem`: empty, or why these settings mark no
 // pages.

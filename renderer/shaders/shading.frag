@@ -46,9 +46,12 @@ vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (
 // window holds the point), with the normal offset and constant bias in that level's texels and the
 // receiver plane `gradient` (normalized depth per world unit across the light). Where the pool
 // could not hold a page, the next coarser resident level answers; where none does, the pixel is
-// lit (o_vsm_status says which).
+// lit (o_vsm_status says which). VSM: the box-filtered moments of the same square and
+// Chebyshev's bound for the receiver's own depth (as the maps' VSM: no bias, the normal offset
+// moves the lookup only).
 float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
-  const vec2 xy = vsm_light_point(v_world).xy;
+  const vec3 receiver = vsm_light_point(v_world);
+  const vec2 xy = receiver.xy;
   int marked = vsm_level_for_texel(vsm_requested_texel_ws(v_world, radius_ws));
   while (marked < u_vsm_levels - 1 && !vsm_in_window(marked, xy)) ++marked;
   for (int k = marked; k < u_vsm_levels; ++k) {
@@ -56,7 +59,11 @@ float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
     const vec3 lp = vsm_light_point(v_world + n * (u_normal_offset_texels * texel * sin_angle));
     const float bias = u_depth_bias_texels * texel / (u_vsm_far_ws - u_vsm_near_ws);
     bool found;
+#if defined(TECHNIQUE_VSM)
+    const float v = vsm_visibility(vsm_moments_box(k, lp.xy, radius_ws, found), receiver.z);
+#else
     const float v = vsm_pcf_box(k, lp.xy, lp.z - bias, gradient, radius_ws, found);
+#endif
     if (found) {
       o_vsm_status = k == marked ? 1u : 2u;
       return v;
@@ -74,8 +81,8 @@ float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
 layout(binding = UNIT_VSM_PCSS_RADII) uniform sampler2D u_vsm_pcss_radii;
 #endif
 
-// The technique's visibility through the pages: box PCF of the fixed world radius, or PCSS's box
-// filter of the penumbra its blocker search found.
+// The technique's visibility through the pages: box PCF (or VSM's box-filtered moments) of the
+// fixed world radius, or PCSS's box filter of the penumbra its blocker search found.
 float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #if defined(TECHNIQUE_PCSS)
   const float radius_ws = texelFetch(u_vsm_pcss_radii, ivec2(gl_FragCoord.xy), 0).r;

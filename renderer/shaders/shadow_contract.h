@@ -56,6 +56,7 @@ PENUMBRA_CONSTANT(UNIT_VSM_POOL, 9)            // virtual shadow map: the page p
 PENUMBRA_CONSTANT(UNIT_VSM_TABLE, 10)          // virtual shadow map: the page tables (slot per page, -1: none)
 PENUMBRA_CONSTANT(UNIT_VSM_POOL_CMP, 11)       // virtual shadow map: the page pool, nearest depth comparison (gathers)
 PENUMBRA_CONSTANT(UNIT_VSM_PCSS_RADII, 12)     // virtual shadow map, PCSS: each pixel's penumbra as the marking found it
+PENUMBRA_CONSTANT(UNIT_VSM_MOMENTS, 13)        // virtual shadow map, VSM: the moments pool (t, t² + texel variance)
 PENUMBRA_CONSTANT(VSM_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
 
 // Uniform-block binding points.

@@ -13,12 +13,15 @@ float chebyshev_upper_bound(vec2 moments, float t, float min_variance) {
   return variance / (variance + d * d);
 }
 
-// Visibility for a receiver at normalized linear depth t.
-float shadow_vsm(vec2 uv, float t) {
-  vec2 moments = textureLod(u_moments, atlas_uv(uv), 0.0).rg;
+// Visibility for a receiver at normalized linear depth t behind filtered `moments`: Chebyshev's
+// bound with the variance floor, then the light-bleeding reduction.
+float vsm_visibility(vec2 moments, float t) {
   float p = chebyshev_upper_bound(moments, t, max(u_vsm_min_variance, 1e-12));
   return clamp((p - u_vsm_bleed_reduction) / (1.0 - u_vsm_bleed_reduction), 0.0, 1.0);
 }
+
+// Visibility for a receiver at normalized linear depth t.
+float shadow_vsm(vec2 uv, float t) { return vsm_visibility(textureLod(u_moments, atlas_uv(uv), 0.0).rg, t); }
 
 #if defined(TECHNIQUE_VSM) && !defined(PENUMBRA_COMPUTE)
 // Moments of one depth (moments pass): t and t^2 plus the variance of t over the texel, estimated

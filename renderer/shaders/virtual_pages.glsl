@@ -18,6 +18,7 @@ uniform float u_vsm_far_ws;
 layout(binding = UNIT_VSM_POOL) uniform sampler2D u_vsm_pool;
 layout(binding = UNIT_VSM_TABLE) uniform isampler2D u_vsm_table;
 layout(binding = UNIT_VSM_POOL_CMP) uniform sampler2DShadow u_vsm_pool_cmp;  // the pool, LEQUAL comparison (lit)
+layout(binding = UNIT_VSM_MOMENTS) uniform sampler2D u_vsm_moments;  // variance shadow maps: (t, t² + texel variance)
 
 // Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
 // (vsm_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
@@ -202,6 +203,62 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
+}
+
+// The moments of the blocks from window texel `from` (even) to `to` of one page (pool texel =
+// window texel + `shift`), each texel weighted by the part of it the square [lo, hi] covers.
+vec2 vsm_moments_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi) {
+  const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
+  vec2 sum = vec2(0.0);
+  for (int j = from.y; j <= to.y; j += 2) {
+    const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
+    vec2 upper = vec2(0.0), lower = vec2(0.0);  // rows j + 1 and j: (first, second moment)
+    for (int i = from.x; i <= to.x; i += 2) {
+      const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
+      // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
+      const vec2 uv = vec2(ivec2(i, j) + shift + 1) * inv_pool;
+      const vec4 m1 = textureGather(u_vsm_moments, uv, 0), m2 = textureGather(u_vsm_moments, uv, 1);
+      upper += vec2(dot(m1.xy, wx), dot(m2.xy, wx));
+      lower += vec2(dot(m1.wz, wx), dot(m2.wz, wx));
+    }
+    sum += upper * wy.y + lower * wy.x;
+  }
+  return sum;
+}
+
+// Variance shadow maps through the tables: the mean moments (t, t² + texel variance) over the
+// square xy ± radius_ws of `level`, each texel weighted by the part of it the square covers (a box
+// filter at lookup: the pages hold unfiltered moments, so a square across page borders reads each
+// texel from its own page, as vsm_pcf_box). `found` false (and the far plane's moments) when a
+// texel under the square is not resident or lies outside the level's window.
+vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
+  const float t = vsm_texel_ws(level);
+  const vec2 p = (xy - u_vsm_origin[level]) / t;
+  const float r = max(radius_ws / t, 1e-4);
+  const vec2 lo = p - r, hi = p + r;
+  const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
+  VsmSquare sq;
+  found = vsm_square(level, first, last, sq);
+  if (!found) return vec2(1.0);
+  vec2 sum = vec2(0.0);
+  if (sq.few) {
+    for (int k = 0; k < 4; ++k) {
+      const bvec2 second = bvec2(k & 1, k >> 1);
+      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
+      if (all(lessThanEqual(from, to))) sum += vsm_moments_blocks(from, to, sq.shift[k], lo, hi);
+    }
+  } else {
+    for (int j = first.y; j <= last.y; j += 2)
+      for (int i = first.x; i <= last.x; i += 2) {
+        ivec2 corner;
+        if (!vsm_block(sq, i, j, corner)) {
+          found = false;
+          return vec2(1.0);
+        }
+        sum += vsm_moments_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), lo, hi);
+      }
+  }
+  return sum / (4.0 * r * r);
 }
 
 // The blocker search's blocks from window texel `from` (even) to `to` of one page, whose pool

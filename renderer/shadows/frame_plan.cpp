@@ -62,9 +62,10 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
 
 std::string virtual_pages_unsupported(const ShadowSettings& s) {
   if (s.technique == Technique::pcf && s.pcf.kernel == Kernel::grid && s.pcf.radius_unit == RadiusUnit::world) return "";
+  if (s.technique == Technique::vsm && s.vsm.radius_unit == RadiusUnit::world) return "";
   if (s.technique == Technique::pcss && s.pcss.kernel == Kernel::grid) return "";
-  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world) or pcss with a "
-         "box filter (--pcss.kernel grid), not " + describe(s);
+  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world), vsm with a world "
+         "radius (--technique vsm --vsm.radius_unit world) or pcss with a box filter (--pcss.kernel grid), not " + describe(s);
 }
 
 std::string virtual_pages_refusal(const ShadowSettings& s, const scene::Scene& scene) {
@@ -187,6 +188,7 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
     // frame stands for the light in the frame's uniforms; no map is drawn, the atlas is one texel.
     if (const std::string why = virtual_pages_refusal(s, scene); !why.empty()) throw std::runtime_error("render: map.virtual_pages: " + why);
     plan.virtual_pages = s.map.virtual_pages;
+    plan.moments.reset();  // VSM's moments are the pages' (kVirtualPages), not a moments atlas's
     plan.resolution_source = s.map.virtual_pages == VirtualPages::rule ? "virtual_rule" : "virtual_footprint";
     CascadeInfo ci;
     ci.light = single;

@@ -121,8 +121,8 @@ std::string resource_names(unsigned resources);  // "depth atlas, moments"
 // the pass and what it lacks. Renderer::render refuses a plan that is not a frame.
 std::string plan_problem(const FramePlan& plan);
 
-// "" when `s` can be drawn through the sun's virtual shadow map (box PCF with a world radius, or
-// PCSS with a box filter), else
+// "" when `s` can be drawn through the sun's virtual shadow map (box PCF or VSM with a world
+// radius, or PCSS with a box filter), else
 // why not ("pcf ... kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
 std::string virtual_pages_unsupported(const ShadowSettings& s);
 // "" when a frame of `scene` can draw `s` through the virtual shadow map (a sun, and a technique

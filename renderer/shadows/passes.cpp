@@ -300,11 +300,13 @@ class VirtualPagesPass final : public Pass {
     FrameResources& r = f.res;
     const ShadowSettings& s = f.settings;
     auto& v = r.virtual_map;
-    if (!v || v->pool_pages != s.map.virtual_pool_pages) {
+    // VSM (the one moments technique the pages hold, virtual_pages_unsupported) draws its moments too.
+    const auto content = s.technique == Technique::vsm ? VirtualShadowMap::Content::depth_and_moments : VirtualShadowMap::Content::depth;
+    if (!v || v->pool_pages != s.map.virtual_pool_pages || v->map->content() != content) {
       v = std::make_unique<FrameResources::Virtual>();
       const adaptive::VirtualMapLayout layout;
       v->pool_pages = s.map.virtual_pool_pages;
-      v->map = std::make_unique<VirtualShadowMap>(layout, s.map.virtual_pool_pages);
+      v->map = std::make_unique<VirtualShadowMap>(layout, s.map.virtual_pool_pages, content);
       v->marker = std::make_unique<PageMarker>(layout);
       v->shading_counts = gl::Buffer(sizeof(contract::VsmShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
     }

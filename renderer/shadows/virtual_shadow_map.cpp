@@ -36,8 +36,8 @@ void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, f
   far_ws = -l.lo.z + margin;
 }
 
-VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side)
-    : layout_(layout), pool_side_(pool_pages_per_side) {
+VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content)
+    : layout_(layout), pool_side_(pool_pages_per_side), content_(content) {
   if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
       !(layout.texel0_ws > 0) || pool_pages_per_side < 1)
     throw std::invalid_argument("virtual shadow map: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
@@ -53,9 +53,17 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
   table_ = gl::Texture({GL_R32I, layout.pages_per_side, layout.pages_per_side * layout.levels, 1}, "virtual shadow map page tables");
   glTextureParameteri(table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // an integer texture is complete only so
   glTextureParameteri(table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  const gl::Framebuffer::Attachment depth{&pool_, GL_DEPTH_ATTACHMENT};
-  fbo_ = gl::Framebuffer(std::span(&depth, 1), "virtual shadow map page pool");
-  program_ = gl::ShaderLibrary().program({{GL_VERTEX_SHADER, "vsm_page.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
+  std::vector<gl::Framebuffer::Attachment> attachments = {{&pool_, GL_DEPTH_ATTACHMENT}};
+  if (content == Content::depth_and_moments) {
+    moments_ = gl::Texture({GL_RG32F, side, side, 1}, "virtual shadow map moments pool");
+    glTextureParameteri(moments_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(moments_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    attachments.push_back({&moments_, GL_COLOR_ATTACHMENT0});
+  }
+  fbo_ = gl::Framebuffer(attachments, "virtual shadow map page pool");
+  program_ = gl::ShaderLibrary().program(
+      {{GL_VERTEX_SHADER, "vsm_page.vert"},
+       {GL_FRAGMENT_SHADER, content == Content::depth_and_moments ? "vsm_page_moments.frag" : "shadow_depth.frag"}});
   slots_.resize(static_cast<std::size_t>(pool_slots()));
   for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
   origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
@@ -115,6 +123,10 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene:
   glViewport(sx * n, sy * n, n, n);
   glScissor(sx * n, sy * n, n, n);
   glClear(GL_DEPTH_BUFFER_BIT);  // the scissor keeps the other slots
+  if (content_ == Content::depth_and_moments) {
+    const float far_moments[4] = {1, 1, 0, 0};  // the far plane, t = 1: nothing in front
+    glClearBufferfv(GL_COLOR, 0, far_moments);
+  }
   const double w = page_ws(key.level);
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
@@ -308,6 +320,10 @@ void VirtualShadowMap::bind(const gl::Program& program) const {
   glBindSampler(contract::UNIT_VSM_TABLE, 0);
   pool_.bind(contract::UNIT_VSM_POOL_CMP);
   compare_.bind(contract::UNIT_VSM_POOL_CMP);
+  if (content_ == Content::depth_and_moments) {
+    moments_.bind(contract::UNIT_VSM_MOMENTS);
+    glBindSampler(contract::UNIT_VSM_MOMENTS, 0);
+  }
   set_virtual_page_uniforms(program, layout_, view_);
   program.set("u_vsm_pool_pages", pool_side_);
 }

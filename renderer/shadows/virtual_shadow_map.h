@@ -119,14 +119,18 @@ class PageMarker {
 
 class VirtualShadowMap {
  public:
+  // Which pools the pages are drawn into: depth (PCF, PCSS), or depth and the moments of variance
+  // shadow maps (t, t² + the texel's variance, of the depth t as the pages hold it).
+  enum class Content { depth, depth_and_moments };
   // pool_pages_per_side² slots of layout.page_texels² texels. Throws std::invalid_argument for a
   // layout with more than VSM_MAX_LEVELS levels or non-positive sizes, std::runtime_error (naming
   // the pool) when GL cannot allocate it.
-  VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side);
+  VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content = Content::depth);
 
   const adaptive::VirtualMapLayout& layout() const { return layout_; }
   int pool_pages_per_side() const { return pool_side_; }
   int pool_slots() const { return pool_side_ * pool_side_; }
+  Content content() const { return content_; }
 
   // Makes the `requested` pages (window-relative, as adaptive::mark_pages gives them for
   // view.camera_xy) resident, coarse levels first, drawing those not cached, and writes the page
@@ -143,8 +147,9 @@ class VirtualShadowMap {
   // bounds): those whose light-space square meets the box's light-space footprint, at any depth.
   void invalidate(const scene::Aabb& bounds);
 
-  // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the tables to
-  // UNIT_VSM_TABLE, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
+  // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the moments
+  // pool (if any) to UNIT_VSM_MOMENTS, the tables to UNIT_VSM_TABLE, and sets virtual_pages.glsl's
+  // uniforms of `program` for the last update's view.
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const;
@@ -159,6 +164,7 @@ class VirtualShadowMap {
   enum class SlotState { free, drawn, cached };
   std::vector<SlotState> slot_states() const;
   const gl::Texture& pool() const { return pool_; }
+  const gl::Texture& moments_pool() const { return moments_; }  // Content::depth_and_moments: RG32F, the pool's layout
 
  private:
   // A page by its place in light space: level, then column and row from the light-space origin.
@@ -181,7 +187,8 @@ class VirtualShadowMap {
 
   adaptive::VirtualMapLayout layout_;
   int pool_side_ = 0;
-  gl::Texture pool_, table_;
+  Content content_ = Content::depth;
+  gl::Texture pool_, moments_, table_;
   gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (vsm_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;

@@ -200,7 +200,8 @@ TEST_F(RenderCli, VirtualDebugWritesTheLevelsAndThePool) {
   for (const auto& [args, why] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{"--scene", "outdoor-spot", "--virtual-debug"}, "--virtual-debug: the virtual shadow map is the sun's"},
            {{"--scene", "outdoor", "--virtual-debug", "--pcf.radius_unit", "texels"}, "--virtual-debug: pcf marks pages by a world radius"},
-           {{"--scene", "outdoor", "--virtual-debug", "--technique", "vsm"}, "--virtual-debug: pages are marked for pcf"}}) {
+           {{"--scene", "outdoor", "--virtual-debug", "--technique", "vsm"}, "--virtual-debug: vsm marks pages by a world radius"},
+           {{"--scene", "outdoor", "--virtual-debug", "--technique", "msm"}, "--virtual-debug: pages are marked for pcf or vsm"}}) {
     std::vector<std::string> with_output = args;
     with_output.insert(with_output.end(), {"-o", (work_ / "refused").string()});
     const Result bad = run_render(small_args(with_output), scratch_);
