@@ -8,7 +8,7 @@
 # family's Pareto front at equal error (speedup and memory ratio with intervals), then frame time,
 # texels, error against the reference (PCF: the same filter on 8188² cascades; PCSS: ray-traced),
 # thin casters, flicker; into out/demo/ (report.json, frames.csv, crops, side-by-side images,
-# plots). About 5.5 min on 2 cores without a GPU (3.5 with `--no-virtual`); `--sweep` measures the
+# plots). About 5 min on 2 cores without a GPU (3.5 with `--no-virtual`); `--sweep` measures the
 # whole engine family, `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
