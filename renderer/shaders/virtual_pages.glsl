@@ -160,6 +160,30 @@ float vsm_pcf_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi, vec2 p
   return sum;
 }
 
+// Runs the statement BLOCKS over the pages under square `sq` (vsm_square's, its blocks from window
+// texel `first` to `last`), with `from`, `to` (its blocks' first and last window texel on that
+// page) and `shift` (pool texel = window texel + shift) in scope: page by page when the square
+// spans at most 2 × 2 pages (a page's side is even, so the split falls between blocks), else block
+// by block, where `found` turns false, and the walk ends, at a block whose page is not resident.
+// (GLSL has no function parameters, hence the macro.)
+#define VSM_FOR_EACH_PAGE(sq, first, last, found, BLOCKS)                                                  \
+  if (sq.few) {                                                                                            \
+    for (int page_k = 0; page_k < 4; ++page_k) {                                                           \
+      const bvec2 second = bvec2(page_k & 1, page_k >> 1);                                                 \
+      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);    \
+      const ivec2 shift = sq.shift[page_k];                                                                \
+      if (all(lessThanEqual(from, to))) { BLOCKS; }                                                        \
+    }                                                                                                      \
+  } else {                                                                                                 \
+    for (int block_j = first.y; found && block_j <= last.y; block_j += 2)                                  \
+      for (int block_i = first.x; found && block_i <= last.x; block_i += 2) {                              \
+        ivec2 corner;                                                                                      \
+        found = vsm_block(sq, block_i, block_j, corner);                                                   \
+        const ivec2 from = ivec2(block_i, block_j), to = from, shift = corner - from;                      \
+        if (found) { BLOCKS; }                                                                             \
+      }                                                                                                    \
+  }
+
 // Box-filtered PCF at `level` through the tables: the mean of the nearest-texel depth test
 // (`depth` <= the texel's depth: lit) over the square xy ± radius_ws, each texel weighted by the
 // part of it the square covers, as pcf_grid on a single map of the level, so a square across
@@ -179,27 +203,8 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   if (!found) return 1.0;
   const vec2 step = t * gradient;  // the receiver's depth change per texel
   float sum = 0.0;
-  if (sq.few) {
-    // At most 2 × 2 pages: each page's blocks with its own pool shift (a page's side is even, so
-    // the split falls between blocks).
-    for (int k = 0; k < 4; ++k) {
-      const bvec2 second = bvec2(k & 1, k >> 1);
-      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
-      if (all(lessThanEqual(from, to))) sum += vsm_pcf_blocks(from, to, sq.shift[k], lo, hi, p, depth, step);
-    }
-  } else {
-    // Wider than two pages a side (a radius of more than half a page): the blocks one by one.
-    for (int j = first.y; j <= last.y; j += 2)
-      for (int i = first.x; i <= last.x; i += 2) {
-        ivec2 corner;
-        if (!vsm_block(sq, i, j, corner)) {
-          found = false;
-          return 1.0;
-        }
-        sum += vsm_pcf_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), lo, hi, p, depth, step);
-      }
-  }
-  return sum / (4.0 * r * r);
+  VSM_FOR_EACH_PAGE(sq, first, last, found, sum += vsm_pcf_blocks(from, to, shift, lo, hi, p, depth, step))
+  return found ? sum / (4.0 * r * r) : 1.0;
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
@@ -241,24 +246,8 @@ vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
   found = vsm_square(level, first, last, sq);
   if (!found) return vec2(1.0);
   vec2 sum = vec2(0.0);
-  if (sq.few) {
-    for (int k = 0; k < 4; ++k) {
-      const bvec2 second = bvec2(k & 1, k >> 1);
-      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
-      if (all(lessThanEqual(from, to))) sum += vsm_moments_blocks(from, to, sq.shift[k], lo, hi);
-    }
-  } else {
-    for (int j = first.y; j <= last.y; j += 2)
-      for (int i = first.x; i <= last.x; i += 2) {
-        ivec2 corner;
-        if (!vsm_block(sq, i, j, corner)) {
-          found = false;
-          return vec2(1.0);
-        }
-        sum += vsm_moments_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), lo, hi);
-      }
-  }
-  return sum / (4.0 * r * r);
+  VSM_FOR_EACH_PAGE(sq, first, last, found, sum += vsm_moments_blocks(from, to, shift, lo, hi))
+  return found ? sum / (4.0 * r * r) : vec2(1.0);
 }
 
 // The blocker search's blocks from window texel `from` (even) to `to` of one page, whose pool
@@ -298,24 +287,8 @@ float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out i
   found = all(greaterThanEqual(inside, ivec2(0))) && vsm_square(level, first, last, sq);
   if (!found) return 1.0;
   float sum = 0.0;
-  if (sq.few) {
-    for (int k = 0; k < 4; ++k) {  // at most 2 × 2 pages, each with its own pool shift
-      const bvec2 second = bvec2(k & 1, k >> 1);
-      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);
-      if (all(lessThanEqual(from, to))) vsm_blocker_blocks(from, to, sq.shift[k], inside, last, depth, sum, blockers);
-    }
-  } else {
-    for (int j = first.y; j <= last.y; j += 2)
-      for (int i = first.x; i <= last.x; i += 2) {
-        ivec2 corner;
-        if (!vsm_block(sq, i, j, corner)) {
-          found = false;
-          blockers = 0;
-          return 1.0;
-        }
-        vsm_blocker_blocks(ivec2(i, j), ivec2(i, j), corner - ivec2(i, j), inside, last, depth, sum, blockers);
-      }
-  }
+  VSM_FOR_EACH_PAGE(sq, first, last, found, vsm_blocker_blocks(from, to, shift, inside, last, depth, sum, blockers))
+  if (!found) blockers = 0;
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
 
