@@ -344,10 +344,11 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     std::vector<double> ratios;
     // Drawn from nothing each frame (uncached), and along the path keeping pages (cached), per marking.
     shadows::VirtualShadowMap uncached(layout, kPoolSide), cached_rule(layout, kPoolSide), cached_footprint(layout, kPoolSide);
+    scene::Scene posed = scene;  // the moving objects (scene::ObjectPath) where the frame drawn has them
     const auto timed_update = [&](shadows::VirtualShadowMap& vsm, const adaptive::MarkResult& marks, double& ms) {
       glFinish();
       const double t0 = now_ms();
-      const shadows::VirtualMapStats st = vsm.update(marks.pages, view, scene, meshes);
+      const shadows::VirtualMapStats st = vsm.update(marks.pages, view, posed, meshes);
       glFinish();
       ms = now_ms() - t0;
       return st;
@@ -360,6 +361,15 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     for (std::size_t fi = 0; fi < plan.frames.size(); ++fi) {
       const demo::PathFrame& pf = plan.frames[fi];
       const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
+      scene::Scene next = scene::posed_at(scene, pf.frame);
+      for (const scene::ObjectPath& path : scene.object_paths) {  // a moved caster: the pages of its old and new place
+        const std::size_t i = scene::path_object(scene, path);
+        if (next.objects[i].model == posed.objects[i].model) continue;
+        for (shadows::VirtualShadowMap* vsm : {&cached_rule, &cached_footprint})
+          for (const scene::Scene* at : {&posed, &next}) vsm->invalidate(at->objects[i].mesh->bounds().transformed(at->objects[i].model));
+      }
+      posed = std::move(next);
+      probe.set_models(posed);
       const io::ImageF surface = probe.render(camera, opt.width, opt.height);
       // The debug view (the first technique, each station's first frame): the level each pixel
       // samples, by the rule and by the footprint, as the GPU marks them.
@@ -449,10 +459,13 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   while (!window.should_close()) {
     glfw.wait_events(0);
     window.begin_frame();
-    if (animate)
-      renderer.scene().camera = scene.camera_path.empty()
-                                    ? demo::orbit_camera(scene.camera, path_i++ % (4 * opt.frames), 4 * opt.frames)
-                                    : scene.camera_path.at(scene.camera, path_i++ % scene.camera_path.frames());
+    if (animate && scene.camera_path.empty()) {
+      renderer.scene().camera = demo::orbit_camera(scene.camera, path_i++ % (4 * opt.frames), 4 * opt.frames);
+    } else if (animate) {
+      const int path_frame = path_i++ % scene.camera_path.frames();
+      renderer.scene().camera = scene.camera_path.at(scene.camera, path_frame);
+      scene::pose_objects(scene, path_frame, renderer.scene());  // the moving objects with it
+    }
     int fb_w = 0, fb_h = 0;
     window.framebuffer_size(fb_w, fb_h);
     if (frame % 30 == 0) timer.clear();

@@ -105,6 +105,7 @@ int main(int argc, char** argv) {
         throw std::runtime_error("--path-frame: " + std::to_string(path_frame) + " is beyond the path's last frame " +
                                  std::to_string(scene.camera_path.frames() - 1));
       scene.camera = scene.camera_path.at(scene.camera, path_frame);
+      scene = scene::posed_at(scene, path_frame);  // moving objects where they are at that frame
     }
 
     // One variant per technique; a technique with a variant setting (PCF's kernel) gets one per

@@ -59,6 +59,13 @@ SurfaceProbe::SurfaceProbe(const scene::Scene& scene) : gpu_(std::make_unique<Gp
 
 SurfaceProbe::~SurfaceProbe() = default;
 
+void SurfaceProbe::set_models(const scene::Scene& scene) {
+  if (scene.objects.size() != models_.size())
+    throw std::invalid_argument("surface probe: " + std::to_string(scene.objects.size()) + " objects, it has " +
+                                std::to_string(models_.size()));
+  for (std::size_t i = 0; i < models_.size(); ++i) models_[i] = scene.objects[i].model;
+}
+
 io::ImageF SurfaceProbe::render(const scene::Camera& camera, int width_px, int height_px) {
   if (width_px < 1 || height_px < 1) throw std::invalid_argument("surface probe: image size must be positive");
   Gpu& g = *gpu_;

@@ -30,6 +30,9 @@ class SurfaceProbe {
   // Four channels, rows top-down like Renderer::read_visibility: world x, y, z of the nearest
   // surface and its object's index + 1 (0 where no surface was drawn).
   io::ImageF render(const scene::Camera& camera, int width_px, int height_px);
+  // Takes the placements of `scene`'s objects (moved objects: the constructor's scene posed,
+  // scene::pose_objects). Throws std::invalid_argument when it has another number of objects.
+  void set_models(const scene::Scene& scene);
 
  private:
   struct Gpu;

@@ -71,6 +71,39 @@ void light_basis(glm::vec3 axis, glm::vec3& e1, glm::vec3& e2) {
   e2 = glm::cross(axis, e1);
 }
 
+glm::vec3 ObjectPath::translate_at(double frame) const {
+  if (keys.empty()) return glm::vec3(0);
+  if (frame <= keys.front().frame) return keys.front().translate;
+  if (frame >= keys.back().frame) return keys.back().translate;
+  std::size_t k = 0;
+  while (frame >= keys[k + 1].frame) ++k;
+  const double t = (frame - keys[k].frame) / static_cast<double>(keys[k + 1].frame - keys[k].frame);
+  return glm::vec3(glm::mix(glm::dvec3(keys[k].translate), glm::dvec3(keys[k + 1].translate), t));
+}
+
+std::size_t path_object(const Scene& scene, const ObjectPath& path) {
+  std::size_t found = scene.objects.size(), count = 0;
+  for (std::size_t i = 0; i < scene.objects.size(); ++i)
+    if (scene.objects[i].name == path.object) found = i, ++count;
+  if (count != 1)
+    throw SceneError("scene " + scene.name + ": object path '" + path.object + "' names " +
+                     (count == 0 ? std::string("no object") : std::to_string(count) + " objects") + ", not exactly one");
+  return found;
+}
+
+void pose_objects(const Scene& base, double frame, Scene& posed) {
+  for (const ObjectPath& path : base.object_paths) {
+    const glm::mat4 model = glm::translate(glm::mat4(1), path.translate_at(frame)) * base.objects[path_object(base, path)].model;
+    posed.objects[path_object(posed, path)].model = model;
+  }
+}
+
+Scene posed_at(const Scene& base, double frame) {
+  Scene posed = base;
+  pose_objects(base, frame, posed);
+  return posed;
+}
+
 Aabb Scene::bounds() const {
   Aabb b;
   for (const auto& o : objects) b.extend(o.mesh->bounds().transformed(o.model));

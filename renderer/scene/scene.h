@@ -75,12 +75,29 @@ struct Object {
   glm::vec3 albedo{0.8f, 0.8f, 0.8f};
 };
 
+// A key of an object's path: at `frame`, the object moved by `translate` (world units) from its
+// placement in the scene.
+struct ObjectKey {
+  int frame = 0;
+  glm::vec3 translate{0};
+};
+
+// An object moving along keys (straight between them, held before the first and after the last):
+// a caster that moves from frame to frame, which shadow maps redraw whole and the virtual shadow
+// map only where it was and is.
+struct ObjectPath {
+  std::string object;  // the name of exactly one of the scene's objects
+  std::vector<ObjectKey> keys;  // frames increasing from 0
+  glm::vec3 translate_at(double frame) const;
+};
+
 struct Scene {
   std::string name;
   std::vector<Object> objects;
   Camera camera;
   Light light;
   CameraPath camera_path;  // empty unless the scene defines one
+  std::vector<ObjectPath> object_paths;  // the objects that move along the camera path's frames
 
   // World-space bounds of all objects (empty for an empty scene).
   Aabb bounds() const;
@@ -91,6 +108,18 @@ class SceneError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// The index of the one object of `scene` named `path.object`; throws SceneError when no object,
+// or more than one, has that name.
+std::size_t path_object(const Scene& scene, const ObjectPath& path);
+// Moves each of `base`'s moving objects (object_paths) to its place at `frame` in `posed`, a copy
+// of `base` or of some of its objects (a renderer's scene, the scene less some casters) that holds
+// each moving object once: its model becomes translate(path.translate_at(frame)) · its model in
+// `base`. Other objects are left as they are. Throws SceneError when a moving object is not
+// exactly once in either scene.
+void pose_objects(const Scene& base, double frame, Scene& posed);
+// `base` with its moving objects at their places at `frame`.
+Scene posed_at(const Scene& base, double frame);
 
 // Built-in procedural scenes: "demo" (the default: box, sphere, fence, tilted panel on a ground
 // plane), "box", "sphere", "fence", "tilted" (grazing receiver for acne/bias), "square" (analytic

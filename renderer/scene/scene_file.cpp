@@ -243,6 +243,43 @@ CameraPath read_camera_path(const SceneReader& r, const json& j, const std::stri
   return out;
 }
 
+// `object_paths`: each names exactly one of `scene`'s objects (read before), keys as a camera
+// path's (at least 2, from frame 0, frames increasing) with a finite `translate` each.
+std::vector<ObjectPath> read_object_paths(const SceneReader& r, const json& j, const std::string& path, const Scene& scene) {
+  r.check_field(j, path, {.type = Type::array, .items = json_input::item({.type = Type::object})});
+  std::vector<ObjectPath> out;
+  for (std::size_t p = 0; p < j.size(); ++p) {
+    const std::string at = element(path, p);
+    const json& o = j[p];
+    r.require_object(o, at);
+    r.check_keys(o, at, {"object", "keys"});
+    ObjectPath op;
+    op.object = r.string(r.required(o, at, "object", "a path needs the name of the object it moves"), child(at, "object"));
+    std::size_t named = 0;
+    for (const Object& obj : scene.objects) named += obj.name == op.object;
+    if (named != 1)
+      r.fail(child(at, "object"), "must name exactly one object, '" + op.object + "' names " + std::to_string(named));
+    const std::string keys_path = child(at, "keys");
+    const json& keys = r.required(o, at, "keys", "a path needs its keys");
+    r.check_field(keys, keys_path, {.type = Type::array, .min_items = 2, .items = json_input::item({.type = Type::object})});
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const std::string k_at = element(keys_path, i);
+      r.require_object(keys[i], k_at);
+      r.check_keys(keys[i], k_at, {"frame", "translate"});
+      ObjectKey key;
+      key.frame = r.integer(r.required(keys[i], k_at, "frame", "every key needs its frame"), child(k_at, "frame"), 0, 10'000'000);
+      key.translate = r.vec3(r.required(keys[i], k_at, "translate", "every key needs a translate"), child(k_at, "translate"));
+      if (i == 0 && key.frame != 0) r.fail(child(k_at, "frame"), "the first key must be at frame 0, got " + std::to_string(key.frame));
+      if (i > 0 && key.frame <= op.keys.back().frame)
+        r.fail(child(k_at, "frame"), "frames must increase from key to key, got " + std::to_string(key.frame) + " after " +
+                                         std::to_string(op.keys.back().frame));
+      op.keys.push_back(key);
+    }
+    out.push_back(std::move(op));
+  }
+  return out;
+}
+
 // Normals Assimp could not make (a vertex used only by degenerate triangles, a file's own bad
 // normals) are rebuilt from the area-weighted normals of the triangles around the vertex.
 void repair_normals(MeshData& m) {
@@ -649,7 +686,7 @@ std::string file_stem(std::size_t index, const std::string& name) {
 Scene read_scene(const std::filesystem::path& path, const json& doc) {
   const SceneReader r(path);
   r.require_object(doc, "");
-  r.check_keys(doc, "", {"name", "camera", "light", "camera_path", "objects"});
+  r.check_keys(doc, "", {"name", "camera", "light", "camera_path", "object_paths", "objects"});
 
   Scene scene;
   scene.name = path.stem().string();
@@ -662,6 +699,7 @@ Scene read_scene(const std::filesystem::path& path, const json& doc) {
     ObjectReader objects(r);
     for (std::size_t i = 0; i < v->size(); ++i) scene.objects.push_back(objects.read((*v)[i], element("objects", i)));
   }
+  if (const json* v = r.find(doc, "object_paths")) scene.object_paths = read_object_paths(r, *v, "object_paths", scene);
   return scene;
 }
 
@@ -694,6 +732,18 @@ void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
         << (i + 1 < scene.camera_path.keys.size() ? "," : "") << "\n";
     }
     o << "  ]},\n";
+  }
+  if (!scene.object_paths.empty()) {
+    o << "  \"object_paths\": [\n";
+    for (std::size_t p = 0; p < scene.object_paths.size(); ++p) {
+      const ObjectPath& op = scene.object_paths[p];
+      path_object(scene, op);  // exactly one object has the name, or the file would not load
+      o << "    {\"object\": " << quoted(op.object) << ", \"keys\": [";
+      for (std::size_t i = 0; i < op.keys.size(); ++i)
+        o << (i ? ", " : "") << "{\"frame\": " << op.keys[i].frame << ", \"translate\": " << vec3_text(op.keys[i].translate) << "}";
+      o << "]}" << (p + 1 < scene.object_paths.size() ? "," : "") << "\n";
+    }
+    o << "  ],\n";
   }
   // A mesh several objects share (instances) is written once in its own space when every one of
   // them has a placement (translate, rotate_deg, scale); any other mesh is written in world space.

@@ -187,6 +187,19 @@ TEST_F(DemoCli, ShortPathVisitsStationsOfTheScenesCameraPath) {
   ASSERT_NE(raw, along.end());
   const auto& texels = raw->at("texels");
   EXPECT_NE(texels[0].get<double>(), texels[5].get<double>());
+  // The van drives up the street (scene::ObjectPath): the cached virtual map redraws the pages
+  // over its old and new place in a station's later frames, fewer than a frame drawn whole.
+  const auto row = [&](const std::string& name) {
+    const auto it = std::find_if(along.begin(), along.end(), [&](const auto& c) { return c.at("configuration") == name; });
+    EXPECT_NE(it, along.end()) << name;
+    return *it;
+  };
+  const auto cached = row("virtual rule, cached"), whole = row("virtual rule");
+  EXPECT_FALSE(whole.contains("pages_invalidated")) << "uncached: every page is dropped anyway";
+  for (const int k : {1, 2, 4, 5}) {  // a station's second and third frames
+    EXPECT_GT(cached.at("pages_invalidated")[k].get<double>(), 0) << "frame index " << k;
+    EXPECT_LT(cached.at("pages_drawn")[k].get<double>(), whole.at("pages_drawn")[k].get<double>()) << "frame index " << k;
+  }
   EXPECT_THAT(r.err, HasSubstr("frame 359"));  // progress names the path frame (the last one at least)
 
   const auto bad = demo({"--headless", "--scene", "outdoor", "--path", "half", "--no-plot", "-o", (dir_ / "bad").string()});

@@ -111,7 +111,7 @@ TEST(OutdoorScene, RepeatingPartsAreInstancesOfOneMesh) {
   EXPECT_EQ(meshes["crane"].size(), 5u) << "the body, two mast panels, two jib panels";
   EXPECT_EQ(objects["fence"], 38u);
   EXPECT_EQ(meshes["fence"].size(), 1u);
-  EXPECT_EQ(s.objects.size(), 110u);
+  EXPECT_EQ(s.objects.size(), 111u) << "and the van";
   for (auto& [mesh, at] : places) {
     std::sort(at.begin(), at.end(), [](glm::vec3 a, glm::vec3 b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
     EXPECT_EQ(std::adjacent_find(at.begin(), at.end()), at.end()) << "two instances in one place";
@@ -146,6 +146,39 @@ TEST(OutdoorScene, PathWalksThenRisesToAnOverview) {
   const Aabb b = s.bounds();
   const Camera top = s.camera_path.at(s.camera, 359);
   for (int i = 0; i < 8; ++i) EXPECT_LT(glm::distance(top.position, b.corner(i)), top.far_ws);
+}
+
+// The van drives up the street and back along the camera path's frames (straight between its
+// keys, held past the last): posing moves it, and nothing else, by its path's translation.
+TEST(OutdoorScene, TheVanDrivesAlongItsPathAndPosingMovesOnlyIt) {
+  const Scene s = make_outdoor_scene({});
+  ASSERT_EQ(s.object_paths.size(), 1u);
+  const ObjectPath& path = s.object_paths[0];
+  const std::size_t van = path_object(s, path);
+  EXPECT_EQ(s.objects[van].name, "van");
+  EXPECT_EQ(path.translate_at(0), glm::vec3(0));
+  EXPECT_EQ(path.translate_at(75), glm::vec3(45, 0, 0));   // halfway to the first turn
+  EXPECT_EQ(path.translate_at(150), glm::vec3(90, 0, 0));  // the turn
+  EXPECT_EQ(path.translate_at(-5), glm::vec3(0)) << "held before the first key";
+  EXPECT_EQ(path.translate_at(1000), glm::vec3(0)) << "held after the last key";
+  const float step = glm::distance(path.translate_at(1), path.translate_at(0));
+  EXPECT_NEAR(step, 0.6f, 1e-5f) << "it moves every frame: a moving caster in each station";
+  const Scene at = posed_at(s, 100);
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    if (i == van) continue;
+    EXPECT_EQ(at.objects[i].model, s.objects[i].model) << s.objects[i].name;
+  }
+  EXPECT_EQ(glm::vec3(at.objects[van].model[3]), glm::vec3(60, 0, 0));
+  // A scene holding some of the objects (the thin casters left out) is posed by name.
+  Scene some;
+  some.objects.push_back(s.objects[van]);
+  pose_objects(s, 100, some);
+  EXPECT_EQ(some.objects[0].model, at.objects[van].model);
+  Scene none;
+  EXPECT_THROW(pose_objects(s, 100, none), SceneError) << "the van is not in it";
+  Scene twice = s;
+  twice.objects.push_back(s.objects[van]);
+  EXPECT_THROW(path_object(twice, path), SceneError) << "two objects named van";
 }
 
 TEST(OutdoorScene, SunAndFloodlight) {
@@ -185,12 +218,16 @@ TEST(OutdoorScene, WrittenSceneLoadsBackQuickly) {
   std::set<const MeshData*> written, read;
   for (std::size_t i = 0; i < s.objects.size(); ++i) written.insert(s.objects[i].mesh.get()), read.insert(back.objects[i].mesh.get());
   EXPECT_EQ(read.size(), written.size()) << "instances share one model file and load as one mesh";
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "outdoor"), fs::directory_iterator()), 12);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "outdoor"), fs::directory_iterator()), 13);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(back.bounds().lo[c], s.bounds().lo[c], 1e-3f);
     EXPECT_NEAR(back.bounds().hi[c], s.bounds().hi[c], 1e-3f);
   }
   EXPECT_EQ(back.camera_path.frames(), s.camera_path.frames());
   EXPECT_EQ(glm::distance(back.camera_path.at(back.camera, 200).position, s.camera_path.at(s.camera, 200).position), 0.0f);
+  ASSERT_EQ(back.object_paths.size(), 1u) << "the van's path";
+  EXPECT_EQ(back.object_paths[0].object, "van");
+  for (const double f : {0.0, 77.5, 150.0, 359.0})
+    EXPECT_EQ(back.object_paths[0].translate_at(f), s.object_paths[0].translate_at(f)) << "frame " << f;
   fs::remove_all(dir);
 }

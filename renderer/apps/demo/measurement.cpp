@@ -136,13 +136,25 @@ Walk::Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::Ti
 
 Walk::~Walk() = default;
 
+const metrics::RayTracedScene* Walk::traced_at(int frame) {
+#if PENUMBRA_HAS_RAY_TRACING
+  if (traced_ && !scene_.object_paths.empty() && traced_frame_ != frame) {
+    traced_ = std::make_unique<metrics::RayTracedScene>(scene::posed_at(scene_, frame));
+    traced_frame_ = frame;
+  }
+#else
+  (void)frame;
+#endif
+  return traced_.get();
+}
+
 const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, const io::Image8& compared) {
   auto& cached = thin_cache_[frame];
   if (cached) return *cached;
   const int width = options_.width, height = options_.height;
   io::ImageF v, v_free;  // hard visibility with every object, and without the thin casters
-  if (traced_) {
-    metrics::RayTracedScene::HardVisibility hard = traced_->hard_visibility_split(camera, scene_.light, width, height, thin_casters());
+  if (const metrics::RayTracedScene* traced = traced_at(frame)) {
+    metrics::RayTracedScene::HardVisibility hard = traced->hard_visibility_split(camera, scene_.light, width, height, thin_casters());
     v = std::move(hard.all), v_free = std::move(hard.without);
   } else {
     shadows::ShadowSettings hard;
@@ -150,6 +162,8 @@ const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, 
     hard.map.resolution_texels = 4096;
     hard.map.cascades = scene_.light.type == scene::Light::Type::directional ? 4 : 1;
     thin_with_->scene().camera = thin_without_->scene().camera = camera;
+    scene::pose_objects(scene_, frame, thin_with_->scene());
+    scene::pose_objects(scene_, frame, thin_without_->scene());
     thin_with_->render(hard, width, height);
     thin_without_->render(hard, width, height);
     v = thin_with_->read_visibility(), v_free = thin_without_->read_visibility();
@@ -204,8 +218,16 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
   ref_options.traced = traced_.get();
   shadows::Renderer ref_renderer;
   if (options_.reference) ref_renderer.set_scene(scene_);
+  // The moving objects (scene::ObjectPath) where they are at `frame`, in every scene drawn.
+  const auto pose = [&](int frame) {
+    if (scene_.object_paths.empty()) return;
+    for (Series& s : series) scene::pose_objects(scene_, frame, s.renderer->scene());
+    if (options_.reference) scene::pose_objects(scene_, frame, ref_renderer.scene());
+    probe_.set_models(scene::posed_at(scene_, frame));
+  };
 
   // Warm-up (shader compilation, allocation) at the path's first camera; not timed.
+  pose(plan_.frames.front().frame);
   for (auto& s : series) {
     s.renderer->scene().camera = camera_at(scene_, plan_, plan_.frames.front().frame);
     s.renderer->render(s.config.settings, width, height);
@@ -226,6 +248,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     const PathFrame& pf = plan_.frames[i];
     progress(++done, total, name + " frame " + std::to_string(pf.frame) + (pf.reference && options_.reference ? " + reference" : ""));
     const scene::Camera camera = camera_at(scene_, plan_, pf.frame);
+    pose(pf.frame);
     io::ImageF surface = probe_.render(camera, width, height);
     const glm::mat4 view_projection = metrics::camera_view_projection(camera, width, height);
     for (Series& s : series) {
@@ -241,6 +264,10 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       for (int r = 0; r < std::max(options_.repeats, 1); ++r) repeats.push_back(timed_render(s, width, height));
       s.ms.push_back(stats::median(repeats));
       if (s.info.pcss_requirement.valid) s.pcss_clamped.push_back(s.info.pcss_requirement.clamped_fraction);
+      if (s.info.virtual_map) {
+        s.pages_drawn.push_back(s.info.virtual_map->pages.drawn);
+        s.pages_invalidated.push_back(s.info.virtual_map->pages.invalidated);
+      }
       s.texels.push_back(texels_of(s.info));
       double triangles = 0;
       for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
@@ -268,13 +295,14 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
 
     if (pf.reference && options_.reference) {
       ref_renderer.scene().camera = camera;
+      ref_options.traced = traced_at(pf.frame);
       const metrics::Reference ref = metrics::make_reference(ref_renderer, ref_settings, width, height, ref_options);
       run.reference_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
       run.reference_ms += ref.render_ms;
       ++run.reference_frames;
       // Compared where a surface is drawn (the sky is lit in every image) and, ray-traced, faces the
       // light (on the other side max(n·l, 0) hides the visibility).
-      io::Image8 mask = traced_ ? traced_->facing_light(camera, scene_.light, width, height)
+      io::Image8 mask = traced_ ? traced_at(pf.frame)->facing_light(camera, scene_.light, width, height)
                                 : io::Image8{width, height, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height, 255)};
       bool any = false;
       for (std::size_t p = 0; p < mask.pixels.size(); ++p) {

@@ -45,6 +45,7 @@ struct Series {
   std::vector<std::string> resolution;  // "928" or "1024+1024+512" (one per cascade)
   std::vector<double> flicker_mean_abs, flicker_share;  // per pair of consecutive frames
   std::vector<double> pcss_clamped;  // PCSS with the per-pixel requirement: share held at the minimum penumbra
+  std::vector<double> pages_drawn, pages_invalidated;  // virtual map, per frame: pages drawn; dropped as the van moved
   int resolution_changes = 0;
   // at the reference frames
   std::vector<metrics::ImageError> vs_reference;
@@ -102,6 +103,9 @@ class Walk {
  private:
   struct ThinMasks;
   const ThinMasks& thin_masks(int frame, const scene::Camera& camera, const io::Image8& compared);
+  // The ray-traced scene with the moving objects (scene::ObjectPath) where they are at `frame`,
+  // rebuilt when they moved since it was last built; null without ray tracing.
+  const metrics::RayTracedScene* traced_at(int frame);
 
   const scene::Scene& scene_;
   PathPlan plan_;
@@ -109,6 +113,7 @@ class Walk {
   gl::TimingMethod method_;
   metrics::SurfaceProbe probe_;
   std::unique_ptr<metrics::RayTracedScene> traced_;  // the ray-traced reference, the facing mask and the thin masks
+  int traced_frame_ = -1;                            // the frame whose poses traced_ holds (-1: the scene as built)
   bool thin_ = false;
   std::unique_ptr<shadows::Renderer> thin_with_, thin_without_;  // the thin masks' maps, only without traced_
   std::map<int, std::unique_ptr<ThinMasks>> thin_cache_;

@@ -210,11 +210,15 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
                             {"share_changed_mean", mean_of(s.flicker_share)},
                             {"mean_abs_per_frame", s.flicker_mean_abs},
                             {"resolution_changes", s.resolution_changes}});
-    t["along_path"].push_back({{"configuration", s.config.name},
-                               {"frame_ms", s.ms},
-                               {"texels", s.texels},
-                               {"allocated", s.allocated},
-                               {"resolution", s.resolution}});
+    nlohmann::json row = {{"configuration", s.config.name},
+                          {"frame_ms", s.ms},
+                          {"texels", s.texels},
+                          {"allocated", s.allocated},
+                          {"resolution", s.resolution}};
+    if (!s.pages_drawn.empty()) row["pages_drawn"] = s.pages_drawn;  // a virtual map's
+    if (!s.pages_drawn.empty() && s.config.settings.map.virtual_cache)
+      row["pages_invalidated"] = s.pages_invalidated;  // cached: the pages a moved caster (the van) dropped
+    t["along_path"].push_back(row);
   }
   auto on = [](const FrontComparison& c, std::size_t k) { return std::find(c.front.begin(), c.front.end(), k) != c.front.end(); };
   auto measured = [&](std::size_t k, nlohmann::json& j) {
