@@ -68,6 +68,16 @@ gl::Program compute_program(const std::string& name, const std::string& text) {
   return gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, name}});
 }
 
+// Runs `p` over an n × n RGBA32F image `out` (image unit 0) and reads it back, four floats a point.
+std::vector<float> dispatch_rgba(const gl::Program& p, const gl::Texture& out, int n) {
+  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  p.dispatch_covering(n, n);
+  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
+  glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+  return v;
+}
+
 // What virtual_pages.glsl reads, texel by texel over level `level`'s window: the depth, or -1 where
 // vsm_fetch finds nothing; with `resident`, the level vsm_resident_level falls back to instead.
 std::vector<float> read_through_tables(const VirtualShadowMap& vsm, int level, bool resident = false) {
@@ -242,11 +252,7 @@ void main() {
   for (const float r : {2.5f, 20.0f}) {
     SCOPED_TRACE("radius " + std::to_string(r) + " texels");
     p.set("u_radius_texels", r);
-    glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    p.dispatch_covering(n, n);
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-    std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
-    glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+    const std::vector<float> v = dispatch_rgba(p, out, n);
     int compared = 0, across = 0, partial = 0, searched = 0, with_blockers = 0;
     float worst = 0, worst_search = 0;
     for (int q = 0; q < n * n; ++q) {
@@ -335,11 +341,7 @@ void main() {
   for (const float r : {2.5f, 20.0f}) {
     SCOPED_TRACE("radius " + std::to_string(r) + " texels");
     p.set("u_radius_texels", r);
-    glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    p.dispatch_covering(n, n);
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-    std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
-    glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+    const std::vector<float> v = dispatch_rgba(p, out, n);
     int compared = 0, differ = 0, below_far = 0;
     float worst = 0;
     for (int q = 0; q < n * n; ++q) {
