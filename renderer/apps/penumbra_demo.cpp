@@ -361,14 +361,8 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     for (std::size_t fi = 0; fi < plan.frames.size(); ++fi) {
       const demo::PathFrame& pf = plan.frames[fi];
       const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
-      scene::Scene next = scene::posed_at(scene, pf.frame);
-      for (const scene::ObjectPath& path : scene.object_paths) {  // a moved caster: the pages of its old and new place
-        const std::size_t i = scene::path_object(scene, path);
-        if (next.objects[i].model == posed.objects[i].model) continue;
-        for (shadows::VirtualShadowMap* vsm : {&cached_rule, &cached_footprint})
-          for (const scene::Scene* at : {&posed, &next}) vsm->invalidate(at->objects[i].mesh->bounds().transformed(at->objects[i].model));
-      }
-      posed = std::move(next);
+      posed = scene::posed_at(scene, pf.frame);
+      for (shadows::VirtualShadowMap* vsm : {&cached_rule, &cached_footprint}) vsm->invalidate_moved_casters(posed);  // the van's pages
       probe.set_models(posed);
       const io::ImageF surface = probe.render(camera, opt.width, opt.height);
       // The debug view (the first technique, each station's first frame): the level each pixel

@@ -128,10 +128,12 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
     st.positions = gl::Texture({GL_RGBA32F, width, height, 1}, "virtual debug surface");
     st.levels = gl::Texture({GL_R32F, width, height, 1}, "virtual debug levels");
   }
+  st.probe.set_models(scene);
   const io::ImageF surface = st.probe.render(camera, width, height);
   glTextureSubImage2D(st.positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
   // The light view follows the scene's light: a moved sun drops every page (update does).
   st.view.light_view = shadows::sun_light_view(scene.light.direction);
+  st.vsm.invalidate_moved_casters(scene);
   const glm::vec3 l = glm::vec3(st.view.light_view * glm::vec4(camera.position, 1));
   st.view.camera_xy = {l.x, l.y};
   adaptive::MarkOptions footprint = marking.options;

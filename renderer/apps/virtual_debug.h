@@ -56,8 +56,8 @@ class VirtualDebug {
     shadows::VirtualMapStats stats;  // the rule's pages drawn into the pool
     io::Image8 rule_levels, footprint_levels;  // level per pixel (level_image)
   };
-  // `scene` must be the one given to the constructor (its objects may have moved: call
-  // invalidate with their bounds first).
+  // `scene` must be the one given to the constructor, its objects perhaps moved since (the pages
+  // over a moved object's old and new place are drawn again).
   View view(const scene::Scene& scene, const scene::Camera& camera, int width, int height, const VirtualMarking& marking,
             bool images = true);
   const shadows::VirtualShadowMap& map() const;

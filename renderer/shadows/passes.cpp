@@ -267,29 +267,6 @@ void FrameContext::set_technique_uniforms(const gl::Program& prog) const {
 
 namespace {
 
-// The pages over every caster that moved (or was replaced) since the last frame: its old and its
-// new bounds; a scene with other objects than last time drops every page. Returns the scene's
-// world bounds (each object's taken again only when it moved: a mesh's bounds walk its vertices).
-scene::Aabb invalidate_moved_casters(FrameResources::Virtual& v, const scene::Scene& scene) {
-  const std::vector<scene::Object>& objects = scene.objects;
-  const bool same_objects = v.casters.size() == objects.size();
-  if (!same_objects && !v.casters.empty()) v.map->invalidate_all();
-  std::vector<FrameResources::Virtual::Caster> now;
-  scene::Aabb all;
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    const scene::Object& o = objects[i];
-    const bool kept = same_objects && v.casters[i].mesh == o.mesh.get() && v.casters[i].model == o.model;
-    now.push_back({o.mesh.get(), o.model, kept ? v.casters[i].bounds : o.mesh->bounds().transformed(o.model)});
-    if (same_objects && !kept) {
-      v.map->invalidate(v.casters[i].bounds);
-      v.map->invalidate(now.back().bounds);
-    }
-    all.extend(now.back().bounds);
-  }
-  v.casters = std::move(now);
-  return all;
-}
-
 // The sun's virtual shadow map for this frame: the camera's world positions (into the camera
 // targets' depth, which the shading pass reuses), the pages they mark by the rule or the footprint,
 // and those not cached drawn into the pool with their own caster culling.
@@ -311,7 +288,7 @@ class VirtualPagesPass final : public Pass {
       v->shading_counts = gl::Buffer(sizeof(contract::VsmShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
     }
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
-    const scene::Aabb bounds = invalidate_moved_casters(*v, f.scene);
+    const scene::Aabb bounds = v->map->invalidate_moved_casters(f.scene);
     const int w = f.plan.width_px, h = f.plan.height_px;
     if (v->targets_generation != r.targets_generation) {  // new camera targets: their depth is attached anew
       v->targets_generation = r.targets_generation;

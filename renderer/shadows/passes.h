@@ -91,14 +91,6 @@ struct FrameResources {
     gl::Texture pcss_radii;  // PCSS: each pixel's penumbra as the marking's search found it (R32F)
     gl::Framebuffer fbo;
     gl::Buffer shading_counts;  // contract::VsmShadingResult
-    // Each object's mesh and placement when the pages were last updated: a caster that moved (or
-    // changed its mesh) since drops the pages over its old and its new bounds.
-    struct Caster {
-      const scene::MeshData* mesh = nullptr;  // compared, never read: it may be gone
-      glm::mat4 model{1};
-      scene::Aabb bounds;  // world
-    };
-    std::vector<Caster> casters;
   };
 
   explicit FrameResources(const gl::ShaderLibrary& library);

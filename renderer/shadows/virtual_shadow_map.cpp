@@ -117,6 +117,26 @@ void VirtualShadowMap::invalidate(const scene::Aabb& bounds) {
   }
 }
 
+scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene) {
+  const std::vector<scene::Object>& objects = scene.objects;
+  const bool same_objects = casters_.size() == objects.size();
+  if (!same_objects && !casters_.empty()) invalidate_all();
+  std::vector<Caster> now;
+  scene::Aabb all;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const scene::Object& o = objects[i];
+    const bool kept = same_objects && casters_[i].mesh == o.mesh.get() && casters_[i].model == o.model;
+    now.push_back({o.mesh.get(), o.model, kept ? casters_[i].bounds : o.mesh->bounds().transformed(o.model)});
+    if (same_objects && !kept) {
+      invalidate(casters_[i].bounds);
+      invalidate(now.back().bounds);
+    }
+    all.extend(now.back().bounds);
+  }
+  casters_ = std::move(now);
+  return all;
+}
+
 std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;

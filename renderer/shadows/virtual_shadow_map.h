@@ -146,6 +146,11 @@ class VirtualShadowMap {
   // Drops the pages over the world box `bounds` (a caster moved: call with its old and its new
   // bounds): those whose light-space square meets the box's light-space footprint, at any depth.
   void invalidate(const scene::Aabb& bounds);
+  // Drops the pages over every object of `scene` that moved (or changed its mesh) since the last
+  // call, over its old and its new bounds; a scene with other objects than last time drops every
+  // page. Returns the scene's world bounds (an object's taken again only when it moved: a mesh's
+  // bounds walk its vertices). Call it with each frame's scene before its updates.
+  scene::Aabb invalidate_moved_casters(const scene::Scene& scene);
 
   // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the moments
   // pool (if any) to UNIT_VSM_MOMENTS, the tables to UNIT_VSM_TABLE, and sets virtual_pages.glsl's
@@ -199,6 +204,13 @@ class VirtualShadowMap {
   VirtualMapView view_;
   bool has_view_ = false;
   float slope_bias_ = 0, offset_bias_ = 0;
+  // Each object's mesh and placement at the last invalidate_moved_casters.
+  struct Caster {
+    const scene::MeshData* mesh = nullptr;  // compared, never read: it may be gone
+    glm::mat4 model{1};
+    scene::Aabb bounds;  // world
+  };
+  std::vector<Caster> casters_;
   std::int64_t frame_ = 0;
   int invalidated_ = 0;
 };
