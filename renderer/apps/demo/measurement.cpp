@@ -214,8 +214,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
   metrics::ReferenceOptions ref_options;
   ref_options.filter_resolution_texels = four_cascade_reference_texels();
   ref_options.area_samples = options_.reference_samples;
-  ref_options.ray_traced = traced_ != nullptr;
-  ref_options.traced = traced_.get();
+  ref_options.ray_traced = traced_ != nullptr;  // ref_options.traced: at each reference frame (traced_at)
   shadows::Renderer ref_renderer;
   if (options_.reference) ref_renderer.set_scene(scene_);
   // The moving objects (scene::ObjectPath) where they are at `frame`, in every scene drawn.
@@ -295,14 +294,15 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
 
     if (pf.reference && options_.reference) {
       ref_renderer.scene().camera = camera;
-      ref_options.traced = traced_at(pf.frame);
+      const metrics::RayTracedScene* traced = traced_at(pf.frame);
+      ref_options.traced = traced;
       const metrics::Reference ref = metrics::make_reference(ref_renderer, ref_settings, width, height, ref_options);
       run.reference_description = ref.description + (ref.note.empty() ? "" : " (" + ref.note + ")");
       run.reference_ms += ref.render_ms;
       ++run.reference_frames;
       // Compared where a surface is drawn (the sky is lit in every image) and, ray-traced, faces the
       // light (on the other side max(n·l, 0) hides the visibility).
-      io::Image8 mask = traced_ ? traced_at(pf.frame)->facing_light(camera, scene_.light, width, height)
+      io::Image8 mask = traced ? traced->facing_light(camera, scene_.light, width, height)
                                 : io::Image8{width, height, 1, std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height, 255)};
       bool any = false;
       for (std::size_t p = 0; p < mask.pixels.size(); ++p) {
