@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <set>
 #include <string>
@@ -68,14 +69,27 @@ gl::Program compute_program(const std::string& name, const std::string& text) {
   return gl::ShaderLibrary(files).program({{GL_COMPUTE_SHADER, name}});
 }
 
-// Runs `p` over an n × n RGBA32F image `out` (image unit 0) and reads it back, four floats a point.
-std::vector<float> dispatch_rgba(const gl::Program& p, const gl::Texture& out, int n) {
-  glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-  p.dispatch_covering(n, n);
-  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-  std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
-  glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
-  return v;
+// Runs a comparison shader `p` (uniforms u_level and u_radius_texels, the single map of the level
+// at texture unit `unit`, its output an n × n RGBA32F image at image unit 0) over level `level` of
+// `vsm` for squares of 2.5 texels' radius and of 20 (wider than a page of small_layout), handing
+// `check` each radius and the output read back, four floats a point.
+void for_each_radius(const gl::Program& p, const VirtualShadowMap& vsm, int level, const gl::Texture& single, int unit, int n,
+                     const std::function<void(float, const std::vector<float>&)>& check) {
+  const gl::Texture out({GL_RGBA32F, n, n, 1}, "comparison output");
+  vsm.bind(p);
+  p.set("u_level", level);
+  single.bind(unit);
+  glBindSampler(unit, 0);
+  for (const float r : {2.5f, 20.0f}) {
+    SCOPED_TRACE("radius " + std::to_string(r) + " texels");
+    p.set("u_radius_texels", r);
+    glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    p.dispatch_covering(n, n);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
+    glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+    check(r, v);
+  }
 }
 
 // What virtual_pages.glsl reads, texel by texel over level `level`'s window: the depth, or -1 where
@@ -244,15 +258,7 @@ void main() {
                             whole_search ? (ref_count > 0 ? ref_sum / float(ref_count) : 1.0) + float(ref_count) : -1.0));
 })");
   const int n = 128;
-  const gl::Texture out({GL_RGBA32F, n, n, 1}, "pcf output");
-  vsm.bind(p);
-  p.set("u_level", level);
-  single.bind(13);
-  glBindSampler(13, 0);
-  for (const float r : {2.5f, 20.0f}) {
-    SCOPED_TRACE("radius " + std::to_string(r) + " texels");
-    p.set("u_radius_texels", r);
-    const std::vector<float> v = dispatch_rgba(p, out, n);
+  for_each_radius(p, vsm, level, single, 13, n, [&](float r, const std::vector<float>& v) {
     int compared = 0, across = 0, partial = 0, searched = 0, with_blockers = 0;
     float worst = 0, worst_search = 0;
     for (int q = 0; q < n * n; ++q) {
@@ -290,7 +296,7 @@ void main() {
     // Relative: rounding of the sum shows as ~1e-6, a different count as 1 / count or more.
     EXPECT_LE(worst_search, 2e-5f) << "the same blockers, the same mean depth";
     ::testing::Test::RecordProperty("largest_difference_x1e6_radius_" + std::to_string(static_cast<int>(r)), static_cast<int>(worst * 1e6f));
-  }
+  });
 }
 
 // VSM through the tables (vsm_moments_box) against the same box over a single map of the level's
@@ -333,15 +339,7 @@ void main() {
   imageStore(u_out, q, vec4(found ? paged : vec2(-1.0), whole ? sum / (4.0 * r * r) : vec2(-1.0)));
 })");
   const int n = 128;
-  const gl::Texture out({GL_RGBA32F, n, n, 1}, "moments output");
-  vsm.bind(p);
-  p.set("u_level", level);
-  single.bind(14);
-  glBindSampler(14, 0);
-  for (const float r : {2.5f, 20.0f}) {
-    SCOPED_TRACE("radius " + std::to_string(r) + " texels");
-    p.set("u_radius_texels", r);
-    const std::vector<float> v = dispatch_rgba(p, out, n);
+  for_each_radius(p, vsm, level, single, 14, n, [&](float r, const std::vector<float>& v) {
     int compared = 0, differ = 0, below_far = 0;
     float worst = 0;
     for (int q = 0; q < n * n; ++q) {
@@ -363,7 +361,7 @@ void main() {
     // triangle's edge may be drawn on the other side in a page, as in the depth test above.
     EXPECT_LE(differ, compared / 200) << differ << " points differ by more than 1e-5; worst " << worst;
     ::testing::Test::RecordProperty("worst_moment_difference_x1e6_radius_" + std::to_string(static_cast<int>(r)), static_cast<int>(worst * 1e6f));
-  }
+  });
 }
 
 TEST(VirtualMap, PagesStayCachedAndOnlyWhatChangedIsDrawn) {
