@@ -1,5 +1,7 @@
 #include "scene/culling.h"
 
+#include <limits>
+
 #include <glm/vec4.hpp>
 
 namespace penumbra::scene {
@@ -17,17 +19,49 @@ bool may_touch(const glm::mat4& clip_from_box, const Aabb& box, CullVolume volum
   return outside_all == 0;
 }
 
+namespace {
+// Adds `u` to `r`, merged with the last range when it follows it.
+void keep(DrawRanges& r, const DrawUnit& u) {
+  if (!r.first_index.empty() && r.first_index.back() + r.index_count.back() == u.first_index) {
+    r.index_count.back() += u.index_count;
+  } else {
+    r.first_index.push_back(u.first_index);
+    r.index_count.push_back(u.index_count);
+  }
+  r.triangles += u.index_count / 3;
+}
+}  // namespace
+
 DrawRanges cull_units(const std::vector<DrawUnit>& units, const glm::mat4& clip_from_mesh, CullVolume volume) {
   DrawRanges r;
-  for (const DrawUnit& u : units) {
-    if (u.index_count == 0 || !may_touch(clip_from_mesh, u.bounds, volume)) continue;
-    if (!r.first_index.empty() && r.first_index.back() + r.index_count.back() == u.first_index) {
-      r.index_count.back() += u.index_count;
-    } else {
-      r.first_index.push_back(u.first_index);
-      r.index_count.push_back(u.index_count);
+  for (const DrawUnit& u : units)
+    if (u.index_count != 0 && may_touch(clip_from_mesh, u.bounds, volume)) keep(r, u);
+  return r;
+}
+
+std::vector<Footprint> unit_footprints(const std::vector<DrawUnit>& units, const glm::mat4& light_from_mesh) {
+  std::vector<Footprint> out(units.size());
+  for (std::size_t k = 0; k < units.size(); ++k) {
+    if (units[k].bounds.empty()) continue;  // stays empty: never kept
+    Footprint& f = out[k];
+    f.lo = glm::vec2(std::numeric_limits<float>::infinity());
+    f.hi = -f.lo;
+    for (int i = 0; i < 8; ++i) {
+      const glm::vec4 p = light_from_mesh * glm::vec4(units[k].bounds.corner(i), 1.0f);
+      f.lo = glm::min(f.lo, glm::vec2(p) / p.w);
+      f.hi = glm::max(f.hi, glm::vec2(p) / p.w);
     }
-    r.triangles += u.index_count / 3;
+  }
+  return out;
+}
+
+DrawRanges cull_units(const std::vector<DrawUnit>& units, const std::vector<Footprint>& footprints, const Footprint& window) {
+  DrawRanges r;
+  for (std::size_t k = 0; k < units.size() && k < footprints.size(); ++k) {
+    const Footprint& f = footprints[k];
+    if (units[k].index_count != 0 && f.lo.x <= f.hi.x && f.hi.x >= window.lo.x && f.lo.x <= window.hi.x && f.hi.y >= window.lo.y &&
+        f.lo.y <= window.hi.y)
+      keep(r, units[k]);
   }
   return r;
 }

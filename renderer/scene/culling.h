@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 
 #include <penumbra/scene/mesh.h>
 
@@ -30,5 +31,17 @@ struct DrawRanges {
   std::uint64_t triangles = 0;
 };
 DrawRanges cull_units(const std::vector<DrawUnit>& units, const glm::mat4& clip_from_mesh, CullVolume volume);
+
+// Culling against many orthographic windows of one light view (a virtual shadow map's pages):
+// each unit's footprint across the light, the x, y bounds of its box's corners in light space,
+// taken once; then a window is a rectangle test. A unit whose footprint misses the window
+// [lo, hi] is one that may_touch(ortho(lo.x, hi.x, lo.y, hi.y, near, far) · light_from_mesh,
+// bounds, CullVolume::caster) drops (that volume's four sides are the window's edges; the two differ
+// only by rounding at an edge), without transforming eight corners per unit and window.
+struct Footprint {
+  glm::vec2 lo{0}, hi{-1};  // empty by default
+};
+std::vector<Footprint> unit_footprints(const std::vector<DrawUnit>& units, const glm::mat4& light_from_mesh);
+DrawRanges cull_units(const std::vector<DrawUnit>& units, const std::vector<Footprint>& footprints, const Footprint& window);
 
 }  // namespace penumbra::scene

@@ -137,7 +137,8 @@ scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene
   return all;
 }
 
-std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes) const {
+std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+                                         const std::vector<std::vector<scene::Footprint>>& footprints) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
   glViewport(sx * n, sy * n, n, n);
@@ -150,14 +151,16 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene:
   const double w = page_ws(key.level);
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
-  const glm::mat4 clip_from_world = glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view;
-  program_.set("u_clip_from_world", clip_from_world);
+  program_.set("u_clip_from_world", glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view);
+  // The square widened by a texel: the raster's float matrix may reach a texel into a caster the
+  // exact square just misses.
+  const float texel = wf / static_cast<float>(n);
+  const scene::Footprint window{{x0 - texel, y0 - texel}, {x0 + wf + texel, y0 + wf + texel}};
   std::uint64_t triangles = 0;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
-    const scene::Object& o = scene.objects[i];
-    const scene::DrawRanges kept = scene::cull_units(meshes[i].units(), clip_from_world * o.model, scene::CullVolume::caster);
+    const scene::DrawRanges kept = scene::cull_units(meshes[i].units(), footprints[i], window);
     if (kept.first_index.empty()) continue;
-    program_.set("u_model", o.model);
+    program_.set("u_model", scene.objects[i].model);
     meshes[i].draw(kept);
     triangles += kept.triangles;
   }
@@ -251,7 +254,11 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       glEnable(GL_POLYGON_OFFSET_FILL);
       glPolygonOffset(slope_bias_, offset_bias_);
     }
-    for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes);
+    // Each unit's footprint across the light once; each page then keeps the units over its square.
+    std::vector<std::vector<scene::Footprint>> footprints;
+    for (std::size_t i = 0; i < meshes.size(); ++i)
+      footprints.push_back(scene::unit_footprints(meshes[i].units(), view_.light_view * scene.objects[i].model));
+    for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes, footprints);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -187,7 +187,9 @@ class VirtualShadowMap {
   Key key_of(const adaptive::Page& page) const;
   double page_ws(int level) const;
   void free_slot(int slot);
-  std::uint64_t draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes) const;
+  // Draws page `key` into `slot`, each object's units kept by their footprints across the light.
+  std::uint64_t draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+                          const std::vector<std::vector<scene::Footprint>>& footprints) const;
   void write_tables();
 
   adaptive::VirtualMapLayout layout_;

@@ -92,6 +92,28 @@ TEST(Culling, KeptNeighboursBecomeOneRangeAndTrianglesAreCounted) {
   EXPECT_EQ(r.triangles, 3u * box / 3);
 }
 
+TEST(Culling, FootprintsKeepWhatAPagesCasterVolumeKeeps) {
+  MeshData m;
+  for (float x : {0.0f, 2.0f, 100.0f, 4.0f}) {
+    m.append(make_box({1, 1, 1}), glm::translate(glm::mat4(1), {x, 0, 0}));
+    m.close_unit();
+  }
+  std::vector<DrawUnit> units = m.draw_units();
+  units.push_back({0, 36, Aabb{}});  // empty bounds: never kept
+  // A light looking down -y: light-space x is world x, light-space y is world -z.
+  const glm::mat4 light = glm::lookAt(glm::vec3(0, 10, 0), glm::vec3(0), glm::vec3(0, 0, -1));
+  const std::vector<Footprint> f = unit_footprints(units, light);
+  ASSERT_EQ(f.size(), units.size());
+  EXPECT_FLOAT_EQ(f[1].lo.x, 1.5f);
+  EXPECT_FLOAT_EQ(f[1].hi.y, 0.5f);
+  const DrawRanges r = cull_units(units, f, Footprint{{-1, -1}, {3, 1}});
+  const std::uint32_t box = static_cast<std::uint32_t>(make_box({1, 1, 1}).indices.size());
+  ASSERT_EQ(r.first_index.size(), 1u) << "boxes 0 and 1 merge; 2 and 3 lie beside the window, 4 is empty";
+  EXPECT_EQ(r.index_count[0], 2 * box);
+  EXPECT_TRUE(cull_units(units, f, Footprint{{3.6f, -1}, {3.7f, 1}}).triangles > 0) << "a window inside box 3";
+  EXPECT_EQ(cull_units(units, f, Footprint{{5, -1}, {99, 1}}).triangles, 0u) << "between boxes 3 and 2";
+}
+
 // The draw units of each run of objects with one name (an object and its instances), bounds in
 // world space: what culling tests.
 std::vector<std::pair<std::string, std::vector<DrawUnit>>> units_of(const Scene& s) {
@@ -141,6 +163,37 @@ TEST(OutdoorUnits, TheTownIsAboutTwoThousandUnitsWithTheSameBoundsForASeed) {
   const auto trees = units_of(make_outdoor_scene(other));
   ASSERT_EQ(trees[5].first, "trees");
   EXPECT_NE(trees[5].second.front().bounds.hi, units[5].second.front().bounds.hi) << "another seed, other trees";
+}
+
+TEST(OutdoorUnits, FootprintCullingOfPagesAgreesWithTheCasterVolumeUpToRounding) {
+  // A virtual shadow map's pages of a low sun over the town: each window's units by their
+  // footprints equal those may_touch keeps for the window's orthographic volume, but for units
+  // whose footprint ends within rounding of the window's edge.
+  const Scene town = make_outdoor_scene({});
+  const glm::mat4 light = glm::lookAt(glm::vec3(0), glm::normalize(glm::vec3(0.5f, -0.6f, 0.3f)), glm::vec3(0, 1, 0));
+  std::size_t kept = 0, compared = 0;
+  for (const auto& [name, list] : units_of(town)) {
+    SCOPED_TRACE(name);
+    const std::vector<Footprint> f = unit_footprints(list, light);
+    for (float side : {2.56f, 10.24f, 40.96f})
+      for (float x = -160; x < 160; x += 37.3f)
+        for (float y = -160; y < 160; y += 41.9f) {
+          const Footprint window{{x, y}, {x + side, y + side}};
+          const glm::mat4 clip = glm::ortho(x, x + side, y, y + side, -500.0f, 500.0f) * light;
+          for (std::size_t k = 0; k < list.size(); ++k) {
+            const bool by_volume = may_touch(clip, list[k].bounds, CullVolume::caster);
+            const bool by_footprint = cull_units({list[k]}, {f[k]}, window).triangles > 0;
+            ++compared;
+            kept += by_footprint ? 1 : 0;
+            if (by_volume == by_footprint) continue;
+            const float gap = std::min({std::abs(f[k].hi.x - x), std::abs(f[k].lo.x - x - side), std::abs(f[k].hi.y - y),
+                                        std::abs(f[k].lo.y - y - side)});
+            EXPECT_LT(gap, 1e-3f) << "unit " << k << " at window (" << x << ", " << y << ") side " << side;
+          }
+        }
+  }
+  EXPECT_GT(kept, 1000u) << "of " << compared;
+  EXPECT_LT(kept, compared / 4);
 }
 
 }  // namespace
