@@ -100,18 +100,12 @@ float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #endif
 }
 
-// The receiver plane in the virtual map's light space: d(normalized depth) / d(light xy), from
-// screen-space derivatives (uniform control flow), clamped to slopes within 85° of the light.
+// The receiver plane in the virtual map's light space (vsm_plane_gradient) from screen-space
+// derivatives (uniform control flow).
 vec2 virtual_receiver_gradient() {
   if (!u_receiver_plane_bias) return vec2(0.0);
   const vec3 l = vsm_light_point(v_world);
-  const vec3 dx = dFdx(l), dy = dFdy(l);
-  const float det = dx.x * dy.y - dx.y * dy.x;
-  if (abs(det) < 1e-20) return vec2(0.0);
-  const vec2 g = vec2(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
-  const float limit = tan(radians(85.0)) / (u_vsm_far_ws - u_vsm_near_ws);
-  const float len = length(g);
-  return len > limit ? g * (limit / len) : g;
+  return vsm_plane_gradient(dFdx(l), dFdy(l));
 }
 #endif
 

@@ -251,20 +251,24 @@ vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
 }
 
 // The blocker search's blocks from window texel `from` (even) to `to` of one page, whose pool
-// texel is window texel + `shift`: adds the depths nearer than `depth` of the square's texels
+// texel is window texel + `shift`: adds the depths nearer than the receiver of the square's texels
 // (`inside` to `last`; a block may reach one texel past either) to `sum`, and their count to
-// `blockers`.
-void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 last, float depth, inout float sum, inout int blockers) {
+// `blockers`. The receiver at a texel is its plane there: `depth` at window texel coordinates `p`
+// plus `step` per texel, taken at the texel's centre.
+void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 last, vec2 p, float depth, vec2 step, inout float sum,
+                        inout int blockers) {
   const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
   for (int j = from.y; j <= to.y; j += 2) {
     // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j); a texel outside the square
     // is compared against -1 (never a blocker).
-    const vec4 row_depth = vec4(j + 1 <= last.y ? depth : -1.0, j + 1 <= last.y ? depth : -1.0, j >= inside.y ? depth : -1.0,
-                                j >= inside.y ? depth : -1.0);
+    const float upper = depth + (float(j) + 1.5 - p.y) * step.y, lower = depth + (float(j) + 0.5 - p.y) * step.y;  // rows j + 1, j
+    const vec4 row_depth = vec4(j + 1 <= last.y ? upper : -1.0, j + 1 <= last.y ? upper : -1.0, j >= inside.y ? lower : -1.0,
+                                j >= inside.y ? lower : -1.0);
     for (int i = from.x; i <= to.x; i += 2) {
       const vec4 d = textureGather(u_vsm_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0);
-      const vec4 tested = vec4(i >= inside.x ? row_depth.x : -1.0, i + 1 <= last.x ? row_depth.y : -1.0,
-                               i + 1 <= last.x ? row_depth.z : -1.0, i >= inside.x ? row_depth.w : -1.0);
+      const float left = (float(i) + 0.5 - p.x) * step.x, right = (float(i) + 1.5 - p.x) * step.x;  // columns i, i + 1
+      const vec4 tested = vec4(i >= inside.x ? row_depth.x + left : -1.0, i + 1 <= last.x ? row_depth.y + right : -1.0,
+                               i + 1 <= last.x ? row_depth.z + right : -1.0, i >= inside.x ? row_depth.w + left : -1.0);
       const vec4 is_blocker = vec4(lessThan(d, tested));
       sum += dot(d, is_blocker);
       blockers += int(dot(is_blocker, vec4(1.0)));
@@ -273,10 +277,11 @@ void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 l
 }
 
 // PCSS's blocker search at `level` through the tables: the mean depth of the texels under the
-// square xy ± radius_ws nearer than `depth` (blockers), and their count. As vsm_pcf_box, every
-// texel is read from its own page (four a gather); `found` is false (count 0) when one is not
-// resident or lies outside the level's window.
-float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out int blockers, out bool found) {
+// square xy ± radius_ws nearer than the receiver (blockers), and their count. The receiver is
+// `depth` at xy, on its plane of `gradient` (normalized depth per world unit across the light; zero:
+// one depth for the square). As vsm_pcf_box, every texel is read from its own page (four a
+// gather); `found` is false (count 0) when one is not resident or lies outside the level's window.
+float vsm_blocker_search(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out int blockers, out bool found) {
   blockers = 0;
   const float t = vsm_texel_ws(level);
   const vec2 p = (xy - u_vsm_origin[level]) / t;
@@ -286,17 +291,34 @@ float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out i
   VsmSquare sq;
   found = all(greaterThanEqual(inside, ivec2(0))) && vsm_square(level, first, last, sq);
   if (!found) return 1.0;
+  const vec2 step = t * gradient;
   float sum = 0.0;
-  VSM_FOR_EACH_PAGE(sq, first, last, found, vsm_blocker_blocks(from, to, shift, inside, last, depth, sum, blockers))
+  VSM_FOR_EACH_PAGE(sq, first, last, found, vsm_blocker_blocks(from, to, shift, inside, last, p, depth, step, sum, blockers))
   if (!found) blockers = 0;
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
+float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out int blockers, out bool found) {
+  return vsm_blocker_search(level, xy, depth, vec2(0.0), radius_ws, blockers, found);
+}
+
+// The receiver plane in the map's light space, d(normalized depth) / d(light xy), from the light-
+// space steps `dx`, `dy` (xy world, z normalized depth) of two neighbouring image samples of the
+// surface: the shading's screen derivatives, or the marker's neighbouring pixels. Clamped to
+// slopes within 85° of the light; zero when the two steps do not span the plane.
+vec2 vsm_plane_gradient(vec3 dx, vec3 dy) {
+  const float det = dx.x * dy.y - dx.y * dy.x;
+  if (abs(det) < 1e-20) return vec2(0.0);
+  const vec2 g = vec2(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+  const float limit = tan(radians(85.0)) / (u_vsm_far_ws - u_vsm_near_ws);
+  const float len = length(g);
+  return len > limit ? g * (limit / len) : g;
+}
 
 // PCSS through the pages, for a sun of angular radius atan(u_vsm_tan_half_angle)
-// (set_virtual_pcss_uniforms). The marking (vsm_mark.comp) and the shading pass run the same
-// blocker search on the same level from the same surface point, so the penumbra the shading
-// filters with is the one whose pages were marked. The search reads the unbiased-by-normal point
-// with a constant bias of u_vsm_search_bias_texels of its level.
+// (set_virtual_pcss_uniforms). The marking (vsm_mark.comp) runs the blocker search once a frame
+// and writes the penumbra it finds, which the shading filters with. The search reads the surface
+// point itself (no normal offset), each texel against the receiver's plane there (the marker's
+// gradient) less a constant bias of u_vsm_search_bias_texels of its level.
 uniform float u_vsm_tan_half_angle;
 uniform float u_vsm_search_scale;
 uniform float u_vsm_min_penumbra_ws;
@@ -320,10 +342,10 @@ int vsm_search_level(vec3 world, float search_ws, vec2 xy) {
 }
 
 // PCSS's penumbra at `world` through the pages: the blocker search on the search level (or the
-// next coarser resident one), then the filter's world radius tan(half angle) · (z_r - z_b), at
-// least u_vsm_min_penumbra_ws. Returns false when no level holds the search (`radius_ws` 0);
-// `blockers` 0: nothing in front, lit.
-bool vsm_pcss_radius(vec3 world, out float radius_ws, out int blockers) {
+// next coarser resident one) against the receiver plane of `gradient` (vsm_plane_gradient's), then
+// the filter's world radius tan(half angle) · (z_r - z_b), at least u_vsm_min_penumbra_ws. Returns
+// false when no level holds the search (`radius_ws` 0); `blockers` 0: nothing in front, lit.
+bool vsm_pcss_radius(vec3 world, vec2 gradient, out float radius_ws, out int blockers) {
   radius_ws = 0.0;
   blockers = 0;
   const vec3 l = vsm_light_point(world);
@@ -332,7 +354,7 @@ bool vsm_pcss_radius(vec3 world, out float radius_ws, out int blockers) {
   for (int k = vsm_search_level(world, search, l.xy); k < u_vsm_levels; ++k) {
     const float bias = u_vsm_search_bias_texels * vsm_texel_ws(k) / (u_vsm_far_ws - u_vsm_near_ws);
     bool found;
-    const float mean = vsm_blocker_search(k, l.xy, l.z - bias, search, blockers, found);
+    const float mean = vsm_blocker_search(k, l.xy, l.z - bias, gradient, search, blockers, found);
     if (!found) continue;
     radius_ws = blockers > 0 ? max(u_vsm_tan_half_angle * (z_r - vsm_depth_ws(mean)), u_vsm_min_penumbra_ws) : 0.0;
     return true;

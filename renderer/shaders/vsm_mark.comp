@@ -24,6 +24,7 @@ layout(std430, binding = 0) buffer Marks {
 };
 
 uniform float u_radius_ws;  // the filter's world radius (0: none)
+uniform bool u_search_receiver_plane;  // PCSS: the blocker search tests against the receiver's plane
 // 0: the pages of a filter of u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the
 // search's pages resident) the pages of the penumbra that search finds.
 uniform int u_mark_pass;
@@ -49,6 +50,28 @@ int mark_square(int level, vec2 xy, float r) {
   return u_vsm_levels;
 }
 
+// The receiver plane at pixel `p` (light-space point `l`) from its neighbours' surface points, the
+// compute shader's dFdx and dFdy: per axis the neighbour whose light depth differs least (the side
+// that does not cross an edge); zero where an axis has no neighbouring surface.
+vec2 receiver_gradient(ivec2 p, vec3 l) {
+  vec3 steps[2];
+  for (int axis = 0; axis < 2; ++axis) {
+    const ivec2 e = axis == 0 ? ivec2(1, 0) : ivec2(0, 1);
+    bool have = false;
+    for (int side = -1; side <= 1; side += 2) {
+      const ivec2 q = p + side * e;
+      if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, imageSize(u_surface)))) continue;
+      const vec4 s = imageLoad(u_surface, q);
+      if (s.w <= 0.0) continue;
+      const vec3 d = (vsm_light_point(s.xyz) - l) * float(side);
+      if (!have || abs(d.z) < abs(steps[axis].z)) steps[axis] = d;
+      have = true;
+    }
+    if (!have) return vec2(0.0);
+  }
+  return vsm_plane_gradient(steps[0], steps[1]);
+}
+
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(p, imageSize(u_surface)))) return;
@@ -68,7 +91,8 @@ void main() {
   } else if (u_mark_pass == 2) {
     float radius;
     int blockers;
-    const bool searched = vsm_pcss_radius(world, radius, blockers);
+    const vec2 gradient = u_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
+    const bool searched = vsm_pcss_radius(world, gradient, radius, blockers);
     if (u_write_radii) imageStore(u_radii, p, vec4(searched ? radius : -1.0));
     if (!searched || blockers == 0) {
       // No search (the pool held none of its levels) or nothing in front: no filter pages.

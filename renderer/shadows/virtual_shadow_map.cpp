@@ -334,10 +334,13 @@ void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pc
   program.set("u_vsm_search_scale", pcss.search_scale);
   program.set("u_vsm_min_penumbra_ws", pcss.min_penumbra_ws);
   program.set("u_vsm_search_bias_texels", pcss.search_bias_texels);
+  program.set("u_search_receiver_plane", pcss.receiver_plane);
 }
 
 VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg) {
-  return {std::tan(glm::radians(std::max(light_size_deg, 0.0f)) / 2), s.pcss.search_scale, s.pcss.min_penumbra_ws, 2.0f};
+  const bool plane = s.map.receiver_plane_bias;
+  return {std::tan(glm::radians(std::max(light_size_deg, 0.0f)) / 2), s.pcss.search_scale, s.pcss.min_penumbra_ws,
+          plane ? s.map.depth_bias_texels : 2.0f, plane};
 }
 
 void VirtualShadowMap::bind(const gl::Program& program) const {

@@ -66,18 +66,21 @@ void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& 
 
 // PCSS through the pages (virtual_pages.glsl's vsm_pcss_radius): a sun of angular radius
 // atan(tan_half_angle), the blocker search's radius over its geometric bound, the smallest
-// penumbra (world radius), and the search's constant depth bias in texels of its level.
+// penumbra (world radius), the search's constant depth bias in texels of its level, and whether
+// the search tests each texel against the receiver's plane (else against one depth).
 struct VirtualPcss {
   float tan_half_angle = 0;
   float search_scale = 1;
   float min_penumbra_ws = 0;
   float search_bias_texels = 1;
+  bool receiver_plane = true;
 };
 void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss);
 // PCSS's parameters through the pages for settings `s` and a sun of angular diameter
 // `light_size_deg` (scene::Light::size): the search reads the surface point itself, without the
-// normal offset, with a constant bias of 2 texels of its level, so that marking and shading find
-// the same blockers.
+// normal offset; with map.receiver_plane_bias each texel is tested against the receiver's plane
+// less map.depth_bias_texels of the search's level (as the maps' search), else against the
+// receiver's depth less 2 texels (a coarse level's texel spans a sloped receiver's depths).
 VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
 
 class VirtualShadowMap;

@@ -204,7 +204,8 @@ TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
 // (the full map drawn directly): squares of 2.5 texels' radius at 128 × 128 points over level 1's
 // window, a fifth of which cross a page border, with the receiver just behind the surface there,
 // and of 20 texels (wider than a 32-texel page: up to three pages a side, the blocks read one by
-// one); and PCSS's blocker search (vsm_blocker_search) over squares twice as wide, likewise.
+// one); and PCSS's blocker search (vsm_blocker_search) over squares twice as wide, likewise, at
+// every other point against a sloped receiver plane (each texel tested at its centre).
 TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
@@ -241,16 +242,20 @@ void main() {
       sum += w * (inside && receiver <= texelFetch(u_single, ivec2(i, j), 0).r ? 1.0 : 0.0);
     }
   const bool whole = all(greaterThanEqual(lo, vec2(0.0))) && all(lessThanEqual(hi, vec2(side)));
-  // PCSS's blocker search over a square twice as wide, through the tables and on the single map.
+  // PCSS's blocker search over a square twice as wide, through the tables and on the single map;
+  // at odd columns of points the receiver is a plane rising 7e-4 a texel along x, falling 4e-4 along y.
+  const vec2 gradient = (q.x & 1) == 1 ? vec2(7e-4, -4e-4) / t : vec2(0.0);
+  const vec2 step = gradient * t;
   int blockers;
   bool searched;
-  const float mean = vsm_blocker_search(u_level, u_vsm_origin[u_level] + p * t, receiver, 2.0 * r * t, blockers, searched);
+  const float mean = vsm_blocker_search(u_level, u_vsm_origin[u_level] + p * t, receiver, gradient, 2.0 * r * t, blockers, searched);
   float ref_sum = 0.0;
   int ref_count = 0;
   for (int j = int(floor(p.y - 2.0 * r)); j <= int(ceil(p.y + 2.0 * r)) - 1; ++j)
     for (int i = int(floor(p.x - 2.0 * r)); i <= int(ceil(p.x + 2.0 * r)) - 1; ++i) {
       const float d = texelFetch(u_single, ivec2(i, j), 0).r;
-      if (d < receiver) ref_sum += d, ++ref_count;
+      const float row = receiver + (float(j) + 0.5 - p.y) * step.y;
+      if (d < row + (float(i) + 0.5 - p.x) * step.x) ref_sum += d, ++ref_count;
     }
   const bool whole_search = all(greaterThanEqual(p - 2.0 * r, vec2(0.0))) && all(lessThanEqual(p + 2.0 * r, vec2(side)));
   imageStore(u_out, q, vec4(found ? paged : -1.0, whole ? sum / (4.0 * r * r) : -1.0,
@@ -260,7 +265,8 @@ void main() {
   const int n = 128;
   for_each_radius(p, vsm, level, single, 13, n, [&](float r, const std::vector<float>& v) {
     int compared = 0, across = 0, partial = 0, searched = 0, with_blockers = 0;
-    float worst = 0, worst_search = 0;
+    float worst = 0, worst_search = 0, worst_sloped = 0;
+    double sloped_blockers = 0, sloped_flips = 0;
     for (int q = 0; q < n * n; ++q) {
       // The blocker search: mean blocker depth + blocker count, through the tables and on the map.
       const float search_paged = v[4 * q + 2], search_single = v[4 * q + 3];
@@ -269,7 +275,14 @@ void main() {
         ++searched;
         with_blockers += search_single >= 1.0f + 1.0f;  // one blocker or more (the mean is below 1)
         // Count + mean in one float (up to ~6,600 + 1): a different count shows as 1 or more.
-        worst_search = std::max(worst_search, std::abs(search_paged - search_single) / std::max(1.0f, search_single));
+        const float difference = std::abs(search_paged - search_single);
+        if (q % 2 == 0) {
+          worst_search = std::max(worst_search, difference / std::max(1.0f, search_single));
+        } else {  // against the plane: a texel where it meets a surface may fall either side by rounding
+          worst_sloped = std::max(worst_sloped, difference);
+          sloped_blockers += std::floor(search_single);
+          sloped_flips += std::round(difference);
+        }
       }
       const float paged = v[4 * q], single_map = v[4 * q + 1];
       if (single_map < 0) {  // the square leaves the window: the tables say so instead of guessing
@@ -295,6 +308,9 @@ void main() {
     EXPECT_GT(with_blockers, searched / 20) << "searches that find blockers";
     // Relative: rounding of the sum shows as ~1e-6, a different count as 1 / count or more.
     EXPECT_LE(worst_search, 2e-5f) << "the same blockers, the same mean depth";
+    // Against the sloped plane: the same blockers but for a texel or two on the plane itself.
+    EXPECT_LE(worst_sloped, 2.5f) << "blocker counts differ by more than rounding";
+    EXPECT_LE(sloped_flips, 1e-4 * sloped_blockers) << "of " << sloped_blockers << " blockers";
     ::testing::Test::RecordProperty("largest_difference_x1e6_radius_" + std::to_string(static_cast<int>(r)), static_cast<int>(worst * 1e6f));
   });
 }
@@ -512,6 +528,76 @@ TEST(VirtualMap, MarkingOnTheGpuEqualsTheCpuReference) {
     ::testing::Test::RecordProperty(name + "_pixels_moved", static_cast<int>(moved));
     EXPECT_EQ(gpu.unmarked, cpu.unmarked);
   }
+}
+
+// PCSS's blocker search through the pages tests each texel against the receiver's plane (the
+// marker takes it from neighbouring pixels): a receiver tilted 70° from the light, with nothing
+// in front of it, finds no blocker on its own surface; tested against one depth less the same
+// bias, most of it shadows itself. A box over the plane is still found.
+TEST(VirtualMap, PcssSearchTestsAgainstTheReceiverPlaneAndFindsOnlyRealBlockers) {
+  const glm::vec3 light_dir = glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f));
+  const glm::vec3 across = glm::normalize(glm::cross(light_dir, glm::vec3(1, 0, 0)));
+  const float tilt = glm::radians(70.0f);
+  const glm::vec3 normal = std::cos(tilt) * -light_dir + std::sin(tilt) * across;  // 70° from the light
+  const glm::vec3 e1 = glm::normalize(glm::cross(normal, glm::vec3(0, 0, 1))), e2 = glm::cross(e1, normal);
+  glm::mat4 model(1);  // the plane's +y along `normal`
+  model[0] = glm::vec4(e1, 0), model[1] = glm::vec4(normal, 0), model[2] = glm::vec4(e2, 0);
+  scene::Scene plane_scene;
+  plane_scene.objects.push_back({"slope", std::make_shared<scene::MeshData>(scene::make_plane(30, 30)), model, glm::vec3(0.7f)});
+  plane_scene.light.direction = light_dir;
+  scene::Scene with_box = plane_scene;  // a 2 m box 3 m in front of the slope, toward the light
+  with_box.objects.push_back({"box", std::make_shared<scene::MeshData>(scene::make_box(glm::vec3(2))),
+                              glm::translate(glm::mat4(1), -light_dir * 3.0f), glm::vec3(0.7f)});
+
+  // The slope as a camera above it sees it: 128 × 128 points over its middle 16 m.
+  const int w = 128, h = 128;
+  std::vector<float> points(4 * static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const glm::vec3 p = (static_cast<float>(x) / (w - 1) - 0.5f) * 16.0f * e1 + (static_cast<float>(y) / (h - 1) - 0.5f) * 16.0f * e2;
+      const std::size_t i = 4 * (static_cast<std::size_t>(y) * w + x);
+      points[i] = p.x, points[i + 1] = p.y, points[i + 2] = p.z, points[i + 3] = 1;
+    }
+  const gl::Texture surface({GL_RGBA32F, w, h, 1}, "slope points");
+  glTextureSubImage2D(surface.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, points.data());
+  scene::Camera camera;
+  camera.position = normal * 20.0f;
+  camera.target = glm::vec3(0);
+  const VirtualMapLayout layout;
+  const shadows::PageMarker marker(layout);
+  adaptive::MarkOptions options;
+  const gl::Texture radii({GL_R32F, w, h, 1}, "penumbrae");
+
+  // Pixels whose search found blockers (penumbra > 0), for a scene and a search.
+  const auto blocked = [&](const scene::Scene& sc, bool receiver_plane) {
+    const scene::GpuMeshes meshes(sc.objects);
+    shadows::VirtualMapView view;
+    view.light_view = shadows::sun_light_view(light_dir);
+    shadows::light_depth_range(view.light_view, sc.bounds(), view.near_ws, view.far_ws);
+    view.camera_xy = {0, 0};
+    shadows::VirtualPcss pcss;
+    pcss.tan_half_angle = std::tan(glm::radians(0.5f));
+    pcss.min_penumbra_ws = 0.01f;
+    pcss.search_bias_texels = 0.5f;
+    pcss.receiver_plane = receiver_plane;
+    VirtualShadowMap vsm(layout, 32);
+    const adaptive::MarkResult search = marker.mark_pcss_search(surface, camera, h, view, pcss, options);
+    vsm.update(search.pages, view, sc, meshes);
+    marker.mark_pcss_filter(surface, camera, h, vsm, pcss, options, nullptr, &radii);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    std::vector<float> r(static_cast<std::size_t>(w) * h);
+    glGetTextureImage(radii.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(r.size() * sizeof(float)), r.data());
+    EXPECT_EQ(std::count(r.begin(), r.end(), -1.0f), 0) << "every search found its pages";
+    return std::count_if(r.begin(), r.end(), [](float v) { return v > 0; });
+  };
+  EXPECT_EQ(blocked(plane_scene, true), 0) << "the slope is not its own blocker";
+  const auto flat = blocked(plane_scene, false);
+  EXPECT_GT(flat, w * h / 2) << "against one depth, the slope shadows itself";
+  const auto under_box = blocked(with_box, true);
+  RecordProperty("self_blocked_without_the_plane", static_cast<int>(flat));
+  RecordProperty("blocked_by_the_box", static_cast<int>(under_box));
+  EXPECT_GT(under_box, 50) << "the box's shadow on the slope";
+  EXPECT_LT(under_box, w * h / 4);
 }
 
 // The renderer's box PCF through the virtual map (map.virtual_pages) on the demo scene: every
