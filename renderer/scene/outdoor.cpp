@@ -461,7 +461,8 @@ void make_pole_lines(std::uint64_t seed, MeshData& poles, MeshData& wires) {
 }
 
 // The walk: east along the street at z = -20, past the fenced site and under the crane's jib,
-// then up over the town to look down on it from 140 m.
+// then up over the street, looking back at the site, and on over the crossing at (60, -60) to look
+// down on the town from 140 m; never through a building.
 CameraPath outdoor_path() {
   CameraPath p;
   p.keys = {
@@ -469,8 +470,8 @@ CameraPath outdoor_path() {
       {60, {-45, 1.7f, -22}, {-15, 3.0f, -14}},
       {120, {-15, 1.7f, -22.5f}, {10, 5.0f, -6}},
       {180, {15, 1.7f, -22}, {40, 4.0f, -17}},
-      {230, {35, 12, -32}, {15, 4, -8}},
-      {290, {55, 55, -75}, {5, 0, -5}},
+      {230, {30, 26, -20}, {10, 4, -8}},
+      {290, {60, 60, -60}, {5, 0, -5}},
       {359, {70, 140, -150}, {0, 0, 0}},
   };
   return p;

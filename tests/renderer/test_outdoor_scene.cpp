@@ -148,6 +148,27 @@ TEST(OutdoorScene, PathWalksThenRisesToAnOverview) {
   for (int i = 0; i < 8; ++i) EXPECT_LT(glm::distance(top.position, b.corner(i)), top.far_ws);
 }
 
+// The camera walks and climbs in the open: at no frame of the path is it inside a building's,
+// the site's or the crane's draw unit (a camera inside a building sees its walls from within, all
+// in shadow: a station of the main job would measure nothing).
+TEST(OutdoorScene, PathNeverEntersABuilding) {
+  const Scene s = make_outdoor_scene({});
+  std::vector<std::pair<std::string, Aabb>> solids;
+  for (const auto& o : s.objects)
+    if (o.name == "buildings" || o.name == "site" || o.name == "crane")
+      for (const DrawUnit& u : o.mesh->draw_units()) solids.emplace_back(o.name, u.bounds.transformed(o.model));
+  ASSERT_GT(solids.size(), 100u);
+  for (int f = 0; f < s.camera_path.frames(); ++f) {
+    const glm::vec3 p = s.camera_path.at(s.camera, f).position;
+    for (const auto& [name, b] : solids) {
+      const bool inside = glm::all(glm::greaterThan(p, b.lo - 0.3f)) && glm::all(glm::lessThan(p, b.hi + 0.3f));
+      EXPECT_FALSE(inside) << "frame " << f << ": the camera at (" << p.x << ", " << p.y << ", " << p.z << ") is within 0.3 m of a "
+                           << name << " unit [" << b.lo.x << ", " << b.lo.y << ", " << b.lo.z << "] - [" << b.hi.x << ", " << b.hi.y
+                           << ", " << b.hi.z << "]";
+    }
+  }
+}
+
 // The van drives up the street and back along the camera path's frames (straight between its
 // keys, held past the last): posing moves it, and nothing else, by its path's translation.
 TEST(OutdoorScene, TheVanDrivesAlongItsPathAndPosingMovesOnlyIt) {
