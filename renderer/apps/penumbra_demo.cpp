@@ -54,7 +54,6 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
-#include "metrics/surface_probe.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/virtual_shadow_map.h"
@@ -283,13 +282,14 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   return 0;
 }
 
-// --pages: the first part of a virtual shadow map for the sun (adaptive/virtual_pages.h). Along
-// the same path, each pixel's surface asks for the coarsest clipmap level its filter allows (the
-// rule: texel <= max(r / c, pixel footprint)) or that its footprint alone allows (what engines'
-// virtual shadow maps use), plus the pages its filter reaches; the pages are counted per frame.
-// Then the pages are drawn into a virtual shadow map's pool (shadows/virtual_shadow_map.h, 1024
-// slots: 64 MB), once per frame from nothing (the work of a frame without a cache) and once along
-// the path with the cache (what a walking camera redraws), each timed with glFinish around it.
+// --pages: the pages of a virtual shadow map for the sun along the path. Each pixel's surface asks
+// for the coarsest clipmap level its filter allows (the rule: texel <= max(r / c, pixel
+// footprint)) or that its footprint alone allows (what engines' virtual shadow maps use), plus the
+// pages its filter reaches, marked on the GPU as the renderer marks them (apps::VirtualDebug: PCSS
+// in its two rounds, the searches' pages and then each pixel's penumbra's); the pages are counted
+// per frame. Then they are drawn into a virtual shadow map's pool (shadows/virtual_shadow_map.h,
+// 1024 slots: 64 MB), once per frame from nothing (the work of a frame without a cache) and once
+// along the path with the cache (what a walking camera redraws), each timed with glFinish around it.
 int run_pages(const Options& opt, shadows::ShadowSettings base) {
   io::StagedDirectory out(opt.output, "pages.json");
   gl::HeadlessContext ctx;
@@ -298,19 +298,13 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   if (scene.light.type != scene::Light::Type::directional)
     throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
-  metrics::SurfaceProbe probe(scene);
   const scene::GpuMeshes meshes(scene.objects);
   shadows::VirtualMapView view;
   view.light_view = shadows::sun_light_view(scene.light.direction);
   shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
   constexpr int kPoolSide = 32;
-  auto light_xy = [&](const glm::vec3& p) {  // light space across the sun, as the pages are drawn
-    const glm::vec3 l = glm::vec3(view.light_view * glm::vec4(p, 1));
-    return adaptive::LightXY{l.x, l.y};
-  };
   adaptive::VirtualMapLayout layout;
   constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth
-  const shadows::PageMarker marker(layout);
   std::vector<io::Image8> level_views;  // levels.png
   std::vector<std::string> level_labels;
   nlohmann::json report;
@@ -318,6 +312,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   report["image_px"] = {opt.width, opt.height};
   report["pool_slots"] = kPoolSide * kPoolSide;
   report["timing"] = "wall clock around the update with glFinish";
+  report["marking"] = "on the GPU, as the renderer marks (PCSS: the searches' pages, then each pixel's penumbra's)";
   report["layout"] = {{"levels", layout.levels}, {"texel0_ws", layout.texel0_ws}, {"page_texels", layout.page_texels},
                       {"pages_per_side", layout.pages_per_side}};
   std::printf("penumbra-demo --pages: %s at %dx%d, %zu frames; clipmap of %d levels, level 0 texel %g ws, pages of %d² texels, "
@@ -330,18 +325,13 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     shadows::ShadowSettings s = base;
     s.technique = shadows::technique_from_string(name);
     apps::apply_calibration_for(opt.calibration, s);
-    // The filter's world radius: PCF's radius; PCSS's minimum penumbra (the finest it can ask for).
-    double radius = 0;
-    if (s.technique == shadows::Technique::pcf && s.pcf.radius_unit == shadows::RadiusUnit::world) radius = s.pcf.radius;
-    else if (s.technique == shadows::Technique::pcss) radius = s.pcss.min_penumbra_ws;
-    else throw std::runtime_error("--pages: technique " + name + ": only pcf (radius_unit world) and pcss mark pages so far");
-    adaptive::MarkOptions rule;
-    rule.c_texels = s.adaptive.c;
-    rule.min_texel_px = s.adaptive.min_texel_px;
-    adaptive::MarkOptions footprint = rule;
-    footprint.marking = adaptive::Marking::footprint;
-    nlohmann::json t = {{"technique", name}, {"radius_ws", radius}, {"c", rule.c_texels}, {"min_texel_px", rule.min_texel_px}};
+    const apps::VirtualMarking marking = apps::virtual_marking(s, scene.light);
+    if (!marking.problem.empty()) throw std::runtime_error("--pages: technique " + name + ": " + marking.problem);
+    nlohmann::json t = {{"technique", name}, {"c", marking.options.c_texels}, {"min_texel_px", marking.options.min_texel_px}};
+    if (marking.pcss) t["min_penumbra_ws"] = marking.pcss->min_penumbra_ws;
+    else t["radius_ws"] = marking.radius_ws;
     std::vector<double> ratios;
+    apps::VirtualDebug marker(scene);  // the marking, with the pool its searches read (PCSS)
     // Drawn from nothing each frame (uncached), and along the path keeping pages (cached), per marking.
     shadows::VirtualShadowMap uncached(layout, kPoolSide), cached_rule(layout, kPoolSide), cached_footprint(layout, kPoolSide);
     scene::Scene posed = scene;  // the moving objects (scene::ObjectPath) where the frame drawn has them
@@ -358,41 +348,32 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
                             {"missing", st.missing},     {"evicted", st.evicted},   {"resident", st.resident},
                             {"triangles", st.triangles}, {"update_ms", ms}};
     };
+    const auto marked_pixels = [](const adaptive::MarkResult& m) {
+      std::int64_t n = m.unmarked;
+      for (const std::int64_t k : m.pixels_per_level) n += k;
+      return n;
+    };
     for (std::size_t fi = 0; fi < plan.frames.size(); ++fi) {
       const demo::PathFrame& pf = plan.frames[fi];
       const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
       posed = scene::posed_at(scene, pf.frame);
       for (shadows::VirtualShadowMap* vsm : {&cached_rule, &cached_footprint}) vsm->invalidate_moved_casters(posed);  // the van's pages
-      probe.set_models(posed);
-      const io::ImageF surface = probe.render(camera, opt.width, opt.height);
       // The debug view (the first technique, each station's first frame): the level each pixel
-      // samples, by the rule and by the footprint, as the GPU marks them.
-      if (&name == &opt.techniques.front() && (fi == 0 || pf.frame != plan.frames[fi - 1].frame + 1)) {
-        view.camera_xy = light_xy(camera.position);
-        const gl::Texture positions({GL_RGBA32F, opt.width, opt.height, 1}, "surface"), levels({GL_R32F, opt.width, opt.height, 1}, "levels");
-        glTextureSubImage2D(positions.id(), 0, 0, 0, opt.width, opt.height, GL_RGBA, GL_FLOAT, surface.pixels.data());
-        for (const adaptive::MarkOptions& m : {rule, footprint}) {
-          marker.mark(positions, camera, opt.height, view, radius, m, &levels);
-          level_views.push_back(apps::level_image(levels, layout.levels));
-          level_labels.push_back("frame " + std::to_string(pf.frame) + ", " + std::string(adaptive::to_string(m.marking)));
+      // samples, by the rule and by the footprint.
+      const bool images = &name == &opt.techniques.front() && (fi == 0 || pf.frame != plan.frames[fi - 1].frame + 1);
+      apps::VirtualDebug::View marked = marker.view(posed, camera, opt.width, opt.height, marking, images);
+      if (images) {
+        for (const auto& [levels, m] : {std::pair{&marked.rule_levels, "rule"}, std::pair{&marked.footprint_levels, "footprint"}}) {
+          level_views.push_back(std::move(*levels));
+          level_labels.push_back("frame " + std::to_string(pf.frame) + ", " + m);
         }
       }
-      const glm::vec3 forward = glm::normalize(camera.target - camera.position);
-      const double per_px = camera.projection == scene::Camera::Projection::perspective
-                                ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / opt.height
-                                : camera.ortho_height_ws / opt.height;
-      std::vector<adaptive::PixelRequest> requests;
-      for (std::size_t p = 0; p < surface.pixels.size() / 4; ++p) {
-        if (surface.pixels[4 * p + 3] <= 0) continue;
-        const glm::vec3 world(surface.pixels[4 * p], surface.pixels[4 * p + 1], surface.pixels[4 * p + 2]);
-        const double depth = camera.projection == scene::Camera::Projection::perspective ? glm::dot(world - camera.position, forward) : 1.0;
-        requests.push_back({light_xy(world), std::max(depth, 0.0) * per_px, radius});
-      }
-      const adaptive::MarkResult by_rule = adaptive::mark_pages(requests, light_xy(camera.position), layout, rule);
-      const adaptive::MarkResult by_footprint = adaptive::mark_pages(requests, light_xy(camera.position), layout, footprint);
+      const adaptive::MarkResult& by_rule = marked.rule;
+      const adaptive::MarkResult& by_footprint = marked.footprint;
       const double ratio = by_rule.pages.empty() ? 0.0 : static_cast<double>(by_footprint.pages.size()) / static_cast<double>(by_rule.pages.size());
       ratios.push_back(ratio);
-      view.camera_xy = light_xy(camera.position);
+      const glm::vec3 camera_light = glm::vec3(view.light_view * glm::vec4(camera.position, 1));
+      view.camera_xy = {camera_light.x, camera_light.y};
       double ms_rule = 0, ms_footprint = 0, ms_cached_rule = 0, ms_cached_footprint = 0;
       uncached.invalidate_all();
       const shadows::VirtualMapStats draw_rule = timed_update(uncached, by_rule, ms_rule);
@@ -405,7 +386,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
                   static_cast<double>(by_footprint.pages.size()) * kPageBytes / 1048576.0, ms_rule, ms_footprint, walk_rule.drawn,
                   walk_rule.requested);
       t["frames"].push_back({{"path_frame", pf.frame},
-                             {"pixels", requests.size()},
+                             {"pixels", marked_pixels(by_rule)},  // that marked filter pages (PCSS: those with a blocker in front)
                              {"pages_rule", by_rule.pages.size()},
                              {"pages_footprint", by_footprint.pages.size()},
                              {"pages_per_level_rule", by_rule.pages_per_level()},
@@ -538,9 +519,9 @@ int main(int argc, char** argv) {
   app.add_option("--frames", opt.frames, "frames per technique: of the short path, or of the orbit of a scene without a camera path")
       ->check(CLI::Range(1, 100000));
   app.add_flag("--pages", pages,
-               "headless: the pages a virtual shadow map of the sun marks along the path, by the rule and by the pixel footprint "
-               "(adaptive/virtual_pages.h), drawn into its page pool from nothing and with its cache (shadows/virtual_shadow_map.h); "
-               "writes pages.json");
+               "headless: the pages a virtual shadow map of the sun marks along the path, by the rule and by the pixel footprint, "
+               "marked on the GPU as the renderer marks them (PCSS: its searches' pages, then each pixel's penumbra's), drawn into its "
+               "page pool from nothing and with its cache (shadows/virtual_shadow_map.h); writes pages.json");
   app.add_flag("--sweep", opt.sweep,
                "the whole engine family: single maps of 1024²-8192² and 2-4 cascades of 1024²-4096² (default: single maps of "
                "half, twice and four times --fixed-resolution, two cascades of once and twice it, four cascades of it)");
