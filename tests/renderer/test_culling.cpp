@@ -112,6 +112,21 @@ TEST(Culling, FootprintsKeepWhatAPagesCasterVolumeKeeps) {
   EXPECT_EQ(r.index_count[0], 2 * box);
   EXPECT_TRUE(cull_units(units, f, Footprint{{3.6f, -1}, {3.7f, 1}}).triangles > 0) << "a window inside box 3";
   EXPECT_EQ(cull_units(units, f, Footprint{{5, -1}, {99, 1}}).triangles, 0u) << "between boxes 3 and 2";
+  // Degenerate windows: one touching box 1's side exactly keeps it (conservative); a point inside
+  // box 0 keeps it; an empty (inverted) window keeps nothing.
+  EXPECT_EQ(cull_units(units, f, Footprint{{2.5f, -1}, {3.0f, 1}}).triangles, static_cast<std::uint64_t>(box / 3)) << "touches box 1 only";
+  EXPECT_EQ(cull_units(units, f, Footprint{{0.1f, 0.1f}, {0.1f, 0.1f}}).triangles, static_cast<std::uint64_t>(box / 3)) << "a point in box 0";
+  EXPECT_EQ(cull_units(units, f, Footprint{{1, 1}, {-1, -1}}).triangles, 0u) << "an inverted window";
+  // Far from the origin (10 km), a page-sized window still tells apart boxes 2 cm beyond its edge.
+  MeshData far;
+  for (float x : {10000.0f, 10002.57f}) {
+    far.append(make_box({0.5f, 0.5f, 0.5f}), glm::translate(glm::mat4(1), {x, 0, 0}));
+    far.close_unit();
+  }
+  const std::vector<DrawUnit> far_units = far.draw_units();
+  const std::vector<Footprint> ff = unit_footprints(far_units, light);
+  EXPECT_EQ(cull_units(far_units, ff, Footprint{{9999.0f, -1}, {10002.3f, 1}}).index_count.size(), 1u);
+  EXPECT_EQ(cull_units(far_units, ff, Footprint{{9999.0f, -1}, {10002.3f, 1}}).first_index.front(), 0u) << "the first box only";
 }
 
 // The draw units of each run of objects with one name (an object and its instances), bounds in
