@@ -297,9 +297,6 @@ float vsm_blocker_search(int level, vec2 xy, float depth, vec2 gradient, float r
   if (!found) blockers = 0;
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
-float vsm_blocker_search(int level, vec2 xy, float depth, float radius_ws, out int blockers, out bool found) {
-  return vsm_blocker_search(level, xy, depth, vec2(0.0), radius_ws, blockers, found);
-}
 
 // The receiver plane in the map's light space, d(normalized depth) / d(light xy), from the light-
 // space steps `dx`, `dy` (xy world, z normalized depth) of two neighbouring image samples of the
