@@ -320,6 +320,25 @@ TEST_F(DemoCli, ExplicitAdaptiveCWinsOverTheCalibrationFile) {
   }
 }
 
+// Without the engine family there is no front to read the virtual maps against, but they are
+// still measured: report.json lists them with their error against the reference and says why
+// there is no equal-error reading.
+TEST_F(DemoCli, WithoutBaselinesTheVirtualMapsStillReportTheirError) {
+  const fs::path out = dir_ / "virtual-alone";
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf",
+                       "--fixed-resolution", "256", "--no-plot", "--no-baselines", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  const auto& t = report.at("techniques")[0];
+  ASSERT_EQ(t.at("virtual").size(), 3u);
+  for (const auto& v : t.at("virtual")) {
+    SCOPED_TRACE(v.at("name").get<std::string>());
+    EXPECT_GT(v.at("reference_error").at("rmse_mean").get<double>(), 0);
+    EXPECT_THAT(v.at("equal_error").at("why_not").get<std::string>(), HasSubstr("--no-baselines"));
+    EXPECT_FALSE(v.at("equal_error").contains("time"));
+  }
+}
+
 // Issue 29: the demo takes --adaptive.visibility too, says it, and records the c it gives.
 TEST_F(DemoCli, AChosenVisibilityGivesItsC) {
   const fs::path out = dir_ / "visibility";

@@ -247,18 +247,26 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
     measured(k, b);
     t["baselines"].push_back(b);
   }
-  for (const VirtualReading& v : eq.virtual_maps) {
-    const Series& s = run.series[v.series];
+  // Every virtual configuration, read against the front where there is one (its equal_error),
+  // else with the reason there is none.
+  for (std::size_t k = 0; k < run.series.size(); ++k) {
+    const Series& s = run.series[k];
+    if (s.config.role != Role::virtual_pages) continue;
     nlohmann::json j = {{"name", s.config.name},
                         {"settings", shadows::to_json(s.config.settings)},
                         {"frame_ms", spread(s.ms)},
                         {"passes", io::to_json(s.timer->stats())},
-                        {"pages_marked", s.resolution},
-                        {"equal_error",
-                         {{"error", v.error},
+                        {"pages_marked", s.resolution}};
+    const auto reading = std::find_if(eq.virtual_maps.begin(), eq.virtual_maps.end(), [&](const VirtualReading& v) { return v.series == k; });
+    if (reading != eq.virtual_maps.end()) {
+      const VirtualReading& v = *reading;
+      j["equal_error"] = {{"error", v.error},
                           {"time", comparison_json(run, v.time, "ms")},
                           {"memory", comparison_json(run, v.memory, "texels")},
-                          {"headline", virtual_headline(run, v)}}}};
+                          {"headline", virtual_headline(run, v)}};
+    } else {
+      j["equal_error"] = {{"why_not", eq.why_not}};
+    }
     if (s.info.virtual_map) {
       const auto& last = *s.info.virtual_map;
       j["last_frame"] = {{"pages", {{"requested", last.pages.requested}, {"drawn", last.pages.drawn}, {"cached", last.pages.cached},
@@ -266,7 +274,7 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
                          {"shaded_pixels", {{"at_level", last.at_level}, {"coarser", last.coarser}, {"none", last.none}}},
                          {"bytes", {{"resident_pages", last.resident_bytes}, {"tables", last.table_bytes}, {"pool_allocated", last.pool_bytes}}}};
     }
-    measured(v.series, j);
+    measured(k, j);
     t["virtual"].push_back(j);
   }
   t["engine_baseline"] = run.series[run.engine].config.name;
