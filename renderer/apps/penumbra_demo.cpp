@@ -372,8 +372,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
       const adaptive::MarkResult& by_footprint = marked.footprint;
       const double ratio = by_rule.pages.empty() ? 0.0 : static_cast<double>(by_footprint.pages.size()) / static_cast<double>(by_rule.pages.size());
       ratios.push_back(ratio);
-      const glm::vec3 camera_light = glm::vec3(view.light_view * glm::vec4(camera.position, 1));
-      view.camera_xy = {camera_light.x, camera_light.y};
+      view.camera_xy = shadows::light_xy(view.light_view, camera.position);
       double ms_rule = 0, ms_footprint = 0, ms_cached_rule = 0, ms_cached_footprint = 0;
       uncached.invalidate_all();
       const shadows::VirtualMapStats draw_rule = timed_update(uncached, by_rule, ms_rule);

@@ -134,8 +134,7 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
   // The light view follows the scene's light: a moved sun drops every page (update does).
   st.view.light_view = shadows::sun_light_view(scene.light.direction);
   st.vsm.invalidate_moved_casters(scene);
-  const glm::vec3 l = glm::vec3(st.view.light_view * glm::vec4(camera.position, 1));
-  st.view.camera_xy = {l.x, l.y};
+  st.view.camera_xy = shadows::light_xy(st.view.light_view, camera.position);
   adaptive::MarkOptions footprint = marking.options;
   footprint.marking = adaptive::Marking::footprint;
   const gl::Texture* levels = images ? &st.levels : nullptr;

@@ -312,8 +312,7 @@ class VirtualPagesPass final : public Pass {
     VirtualMapView view;
     view.light_view = sun_light_view(f.scene.light.direction);
     light_depth_range(view.light_view, bounds, view.near_ws, view.far_ws);
-    const glm::vec4 camera_light = view.light_view * glm::vec4(f.scene.camera.position, 1.0f);
-    view.camera_xy = {camera_light.x, camera_light.y};
+    view.camera_xy = light_xy(view.light_view, f.scene.camera.position);
     v->options = virtual_mark_options(s);
     FrameInfo::Virtual out;
     out.page_texels = v->map->layout().page_texels;

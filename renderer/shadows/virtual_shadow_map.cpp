@@ -25,6 +25,11 @@ glm::mat4 sun_light_view(const glm::vec3& direction) {
   return v;
 }
 
+adaptive::LightXY light_xy(const glm::mat4& light_view, const glm::vec3& p) {
+  const glm::vec4 l = light_view * glm::vec4(p, 1.0f);
+  return {l.x, l.y};
+}
+
 void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, float& near_ws, float& far_ws) {
   if (bounds.empty()) {
     near_ws = 0, far_ws = 1;

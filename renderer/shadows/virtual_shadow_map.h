@@ -38,6 +38,9 @@ struct VirtualMapView {
 // A light view for a sun whose light travels along `direction`: light-space x and y span the plane
 // across it (the same basis as the references' light samples), z points back toward the sun.
 glm::mat4 sun_light_view(const glm::vec3& direction);
+// World point `p` across the light of `light_view` (its light-space x and y): where a clipmap
+// centred on a camera at `p` puts its windows (VirtualMapView::camera_xy).
+adaptive::LightXY light_xy(const glm::mat4& light_view, const glm::vec3& p);
 // The light-space depth range (distances along -z) that holds the world box `bounds`, widened by
 // 1 % and at least 1 cm on each side.
 void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, float& near_ws, float& far_ws);
