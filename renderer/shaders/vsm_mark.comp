@@ -12,7 +12,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, rgba32f) uniform readonly image2D u_surface;  // world xyz; w > 0 where a surface is
 layout(binding = 1, r32f) uniform writeonly image2D u_levels;     // debug view: the level each pixel samples
 uniform bool u_write_levels;                                       // (-1: no surface, levels: beyond the coarsest)
-// PCSS (u_mark_pass 2): each pixel's penumbra, the world radius its search found (0: nothing in
+// PCSS (VSM_MARK_PASS 2): each pixel's penumbra, the world radius its search found (0: nothing in
 // front, lit; -1: no surface, or no level held its search), which the shading filters with.
 layout(binding = 2, r32f) uniform writeonly image2D u_radii;
 uniform bool u_write_radii;
@@ -25,9 +25,13 @@ layout(std430, binding = 0) buffer Marks {
 
 uniform float u_radius_ws;  // the filter's world radius (0: none)
 uniform bool u_search_receiver_plane;  // PCSS: the blocker search tests against the receiver's plane
-// 0: the pages of a filter of u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the
-// search's pages resident) the pages of the penumbra that search finds.
-uniform int u_mark_pass;
+// VSM_MARK_PASS (a define: one program per pass, PageMarker) 0: the pages of a filter of
+// u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the search's pages resident) the
+// pages of the penumbra that search finds. Not a uniform: llvmpipe runs both sides of a branch on a
+// uniform under an execution mask, and pass 2's search cost pass 0 two thirds of its time.
+#if !defined(VSM_MARK_PASS) || VSM_MARK_PASS < 0 || VSM_MARK_PASS > 2
+#error "vsm_mark.comp needs VSM_MARK_PASS 0, 1 or 2"
+#endif
 
 // Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
 // xy ± r; returns the level, or u_vsm_levels when none holds xy.
@@ -85,10 +89,13 @@ void main() {
   const vec3 light = vsm_light_point(world);
   const vec2 xy = light.xy;
   int level;
-  if (u_mark_pass == 1) {
+#if VSM_MARK_PASS == 1
+  {
     const float search = vsm_search_ws(vsm_depth_ws(light.z));
     level = mark_square(vsm_search_level(world, search, xy), xy, search);
-  } else if (u_mark_pass == 2) {
+  }
+#elif VSM_MARK_PASS == 2
+  {
     float radius;
     int blockers;
     const vec2 gradient = u_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
@@ -100,9 +107,10 @@ void main() {
       return;
     }
     level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, radius)), xy, radius);
-  } else {
-    level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
   }
+#else
+  level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
+#endif
   if (level < u_vsm_levels) {
     atomicAdd(u_pixels_per_level[level], 1u);
   } else {

@@ -368,7 +368,9 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
       !(layout.texel0_ws > 0))
     throw std::invalid_argument("page marker: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
                                 ", page_texels, pages_per_side and texel0_ws positive");
-  program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "vsm_mark.comp"}});
+  const gl::ShaderLibrary shaders;
+  for (int pass = 0; pass < 3; ++pass)
+    programs_[pass] = shaders.program({{GL_COMPUTE_SHADER, "vsm_mark.comp"}}, {{"VSM_MARK_PASS", std::to_string(pass)}});
   const std::size_t bits = static_cast<std::size_t>(layout.levels) * layout.pages_per_side * layout.pages_per_side;
   words_ = (bits + 31) / 32;
   marks_ = gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -376,47 +378,45 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
 
 adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                       double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
-  program_.set("u_mark_pass", 0);
-  return run(surface, camera, height_px, view, radius_ws, options, levels);
+  return run(Pass::filter, surface, camera, height_px, view, radius_ws, options, levels);
 }
 
 adaptive::MarkResult PageMarker::mark_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px,
                                                   const VirtualMapView& view, const VirtualPcss& pcss, const adaptive::MarkOptions& options) const {
-  program_.set("u_mark_pass", 1);
-  set_virtual_pcss_uniforms(program_, pcss);
-  return run(surface, camera, height_px, view, 0, options, nullptr);
+  set_virtual_pcss_uniforms(program(Pass::pcss_search), pcss);
+  return run(Pass::pcss_search, surface, camera, height_px, view, 0, options, nullptr);
 }
 
 adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px,
                                                   const VirtualShadowMap& map, const VirtualPcss& pcss, const adaptive::MarkOptions& options,
                                                   const gl::Texture* levels, const gl::Texture* radii) const {
-  program_.set("u_mark_pass", 2);
-  set_virtual_pcss_uniforms(program_, pcss);
-  map.bind(program_);  // the search reads the pages the first pass marked
-  return run(surface, camera, height_px, map.view(), 0, options, levels, radii);
+  set_virtual_pcss_uniforms(program(Pass::pcss_penumbra), pcss);
+  map.bind(program(Pass::pcss_penumbra));  // the search reads the pages the first pass marked
+  return run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, levels, radii);
 }
 
-adaptive::MarkResult PageMarker::run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+adaptive::MarkResult PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                      double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
                                      const gl::Texture* radii) const {
+  const gl::Program& prog = program(pass);
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
   const auto same_size_r32f = [&](const gl::Texture* t) {
     return !t || (t->desc().width == surface.desc().width && t->desc().height == surface.desc().height && t->desc().format == GL_R32F);
   };
   if (!same_size_r32f(levels)) throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
   if (!same_size_r32f(radii)) throw std::invalid_argument("page marker: the radii image must be R32F of the surface's size");
-  program_.set("u_write_levels", levels != nullptr);
+  prog.set("u_write_levels", levels != nullptr);
   if (levels) glBindImageTexture(1, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-  program_.set("u_write_radii", radii != nullptr);
+  prog.set("u_write_radii", radii != nullptr);
   if (radii) glBindImageTexture(2, radii->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-  set_virtual_page_uniforms(program_, layout_, view);
-  set_virtual_mark_uniforms(program_, camera, height_px, options);
-  program_.set("u_radius_ws", static_cast<float>(radius_ws));
+  set_virtual_page_uniforms(prog, layout_, view);
+  set_virtual_mark_uniforms(prog, camera, height_px, options);
+  prog.set("u_radius_ws", static_cast<float>(radius_ws));
   const std::uint32_t zero = 0;
   glClearNamedBufferData(marks_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks_.id());
   glBindImageTexture(0, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  program_.dispatch_covering(surface.desc().width, surface.desc().height);
+  prog.dispatch_covering(surface.desc().width, surface.desc().height);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
   glGetNamedBufferSubData(marks_.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());

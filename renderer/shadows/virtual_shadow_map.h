@@ -114,11 +114,15 @@ class PageMarker {
                                         const gl::Texture* levels = nullptr, const gl::Texture* radii = nullptr) const;
 
  private:
-  adaptive::MarkResult run(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+  // The marking's three passes (vsm_mark.comp's VSM_MARK_PASS): a filter's pages, PCSS's searches',
+  // PCSS's penumbrae'.
+  enum class Pass { filter = 0, pcss_search = 1, pcss_penumbra = 2 };
+  adaptive::MarkResult run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                            double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
                            const gl::Texture* radii = nullptr) const;
+  const gl::Program& program(Pass pass) const { return programs_[static_cast<int>(pass)]; }
   adaptive::VirtualMapLayout layout_;
-  gl::Program program_;
+  gl::Program programs_[3];  // one per Pass: a pass chosen by a uniform costs the others' code on llvmpipe
   gl::Buffer marks_;
   std::size_t words_ = 0;  // page bits, in 32-bit words
 };
