@@ -123,13 +123,28 @@ bool vsm_square(int level, ivec2 first, ivec2 last, out VsmSquare sq) {
   return true;
 }
 
+// Where the blocks of a region of window texels lie in the pool: pool texel = window texel +
+// shift[(x >= split.x) + 2 (y >= split.y)], the region spanning at most 2 × 2 pages split at
+// window texel `split` (vsm_square's). The walks below choose a block's shift with two selects
+// instead of walking page by page: on llvmpipe, where each pixel's square splits elsewhere, four
+// page walks cost about 8 % more of the shading than one walk of the square.
+struct VsmShifts {
+  ivec2 split;
+  ivec2 shift[4];
+};
+// One block's (or one page's) shift: a split no texel reaches.
+VsmShifts vsm_one_shift(ivec2 shift) { return VsmShifts(ivec2(0x3fffffff), ivec2[4](shift, shift, shift, shift)); }
+
+// The shifts of the blocks in row `j` left of the split (x) and right of it (y).
+void vsm_row_shifts(const VsmShifts sh, int j, out ivec2 left, out ivec2 right) {
+  const bool upper = j >= sh.split.y;
+  left = upper ? sh.shift[2] : sh.shift[0];
+  right = upper ? sh.shift[3] : sh.shift[1];
+}
+
 // The pool texel of the block whose lower corner is window texel (i, j); false when its page is
 // not resident (only asked of squares wider than two pages).
 bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
-  if (sq.few) {
-    corner = ivec2(i, j) + sq.shift[(i >= sq.split.x ? 1 : 0) + (j >= sq.split.y ? 2 : 0)];
-    return true;
-  }
   const int n = u_vsm_page_texels;
   const ivec2 page = ivec2(i, j) / n;
   const int slot = vsm_slot(sq.level, page);
@@ -137,18 +152,21 @@ bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
   return slot >= 0;
 }
 
-// The weighted depth tests of the 2 × 2 blocks from window texel `from` (even) to `to` of one
-// page, whose pool texel is window texel + `shift` (vsm_pcf_box's inner loop): each texel weighs
+// The weighted depth tests of the 2 × 2 blocks from window texel `from` (even) to `to`, whose pool
+// texels `sh` gives (vsm_pcf_box's inner loop): each texel weighs
 // the part of it the square [lo, hi] covers, and each block is tested against the receiver's depth
 // at its shared corner, `depth` at window texel coordinates `p` plus `step` per texel.
-float vsm_pcf_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi, vec2 p, float depth, vec2 step) {
+float vsm_pcf_blocks(ivec2 from, ivec2 to, const VsmShifts sh, vec2 lo, vec2 hi, vec2 p, float depth, vec2 step) {
   const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
   float sum = 0.0;
   for (int j = from.y; j <= to.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
     const float row_reference = depth + (float(j + 1) - p.y) * step.y;
+    ivec2 left, right;
+    vsm_row_shifts(sh, j, left, right);
     float upper = 0.0, lower = 0.0;  // rows j + 1 and j
     for (int i = from.x; i <= to.x; i += 2) {
+      const ivec2 shift = i >= sh.split.x ? right : left;
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Four comparisons in one gather, order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
       const vec4 lit = textureGather(u_vsm_pool_cmp, vec2(ivec2(i, j) + shift + 1) * inv_pool, row_reference + (float(i + 1) - p.x) * step.x);
@@ -160,26 +178,24 @@ float vsm_pcf_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi, vec2 p
   return sum;
 }
 
-// Runs the statement BLOCKS over the pages under square `sq` (vsm_square's, its blocks from window
-// texel `first` to `last`), with `from`, `to` (its blocks' first and last window texel on that
-// page) and `shift` (pool texel = window texel + shift) in scope: page by page when the square
+// Runs the statement BLOCKS over square `sq` (vsm_square's, its blocks from window texel `first`
+// to `last`), with `from`, `to` (the first and last window texel of the region its blocks cover)
+// and `shifts` (where the region lies in the pool) in scope: once over the whole square when it
 // spans at most 2 × 2 pages (a page's side is even, so the split falls between blocks), else block
 // by block, where `found` turns false, and the walk ends, at a block whose page is not resident.
 // (GLSL has no function parameters, hence the macro.)
-#define VSM_FOR_EACH_PAGE(sq, first, last, found, BLOCKS)                                                  \
+#define VSM_FOR_EACH_REGION(sq, first, last, found, BLOCKS)                                                \
   if (sq.few) {                                                                                            \
-    for (int page_k = 0; page_k < 4; ++page_k) {                                                           \
-      const bvec2 second = bvec2(page_k & 1, page_k >> 1);                                                 \
-      const ivec2 from = mix(first, sq.split, second), to = mix(min(last, sq.split - 1), last, second);    \
-      const ivec2 shift = sq.shift[page_k];                                                                \
-      if (all(lessThanEqual(from, to))) { BLOCKS; }                                                        \
-    }                                                                                                      \
+    const ivec2 from = first, to = last;                                                                   \
+    const VsmShifts shifts = VsmShifts(sq.split, sq.shift);                                                \
+    BLOCKS;                                                                                                \
   } else {                                                                                                 \
     for (int block_j = first.y; found && block_j <= last.y; block_j += 2)                                  \
       for (int block_i = first.x; found && block_i <= last.x; block_i += 2) {                              \
         ivec2 corner;                                                                                      \
         found = vsm_block(sq, block_i, block_j, corner);                                                   \
-        const ivec2 from = ivec2(block_i, block_j), to = from, shift = corner - from;                      \
+        const ivec2 from = ivec2(block_i, block_j), to = from;                                             \
+        const VsmShifts shifts = vsm_one_shift(corner - from);                                             \
         if (found) { BLOCKS; }                                                                             \
       }                                                                                                    \
   }
@@ -203,22 +219,25 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   if (!found) return 1.0;
   const vec2 step = t * gradient;  // the receiver's depth change per texel
   float sum = 0.0;
-  VSM_FOR_EACH_PAGE(sq, first, last, found, sum += vsm_pcf_blocks(from, to, shift, lo, hi, p, depth, step))
+  VSM_FOR_EACH_REGION(sq, first, last, found, sum += vsm_pcf_blocks(from, to, shifts, lo, hi, p, depth, step))
   return found ? sum / (4.0 * r * r) : 1.0;
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
 }
 
-// The moments of the blocks from window texel `from` (even) to `to` of one page (pool texel =
-// window texel + `shift`), each texel weighted by the part of it the square [lo, hi] covers.
-vec2 vsm_moments_blocks(ivec2 from, ivec2 to, ivec2 shift, vec2 lo, vec2 hi) {
+// The moments of the blocks from window texel `from` (even) to `to` (pool texels: `sh`), each
+// texel weighted by the part of it the square [lo, hi] covers.
+vec2 vsm_moments_blocks(ivec2 from, ivec2 to, const VsmShifts sh, vec2 lo, vec2 hi) {
   const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
   vec2 sum = vec2(0.0);
   for (int j = from.y; j <= to.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
+    ivec2 left, right;
+    vsm_row_shifts(sh, j, left, right);
     vec2 upper = vec2(0.0), lower = vec2(0.0);  // rows j + 1 and j: (first, second moment)
     for (int i = from.x; i <= to.x; i += 2) {
+      const ivec2 shift = i >= sh.split.x ? right : left;
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
       const vec2 uv = vec2(ivec2(i, j) + shift + 1) * inv_pool;
@@ -246,16 +265,15 @@ vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
   found = vsm_square(level, first, last, sq);
   if (!found) return vec2(1.0);
   vec2 sum = vec2(0.0);
-  VSM_FOR_EACH_PAGE(sq, first, last, found, sum += vsm_moments_blocks(from, to, shift, lo, hi))
+  VSM_FOR_EACH_REGION(sq, first, last, found, sum += vsm_moments_blocks(from, to, shifts, lo, hi))
   return found ? sum / (4.0 * r * r) : vec2(1.0);
 }
 
-// The blocker search's blocks from window texel `from` (even) to `to` of one page, whose pool
-// texel is window texel + `shift`: adds the depths nearer than the receiver of the square's texels
+// The blocker search's blocks from window texel `from` (even) to `to` (pool texels: `sh`): adds the depths nearer than the receiver of the square's texels
 // (`inside` to `last`; a block may reach one texel past either) to `sum`, and their count to
 // `blockers`. The receiver at a texel is its plane there: `depth` at window texel coordinates `p`
 // plus `step` per texel, taken at the texel's centre.
-void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 last, vec2 p, float depth, vec2 step, inout float sum,
+void vsm_blocker_blocks(ivec2 from, ivec2 to, const VsmShifts sh, ivec2 inside, ivec2 last, vec2 p, float depth, vec2 step, inout float sum,
                         inout int blockers) {
   const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
   for (int j = from.y; j <= to.y; j += 2) {
@@ -264,7 +282,10 @@ void vsm_blocker_blocks(ivec2 from, ivec2 to, ivec2 shift, ivec2 inside, ivec2 l
     const float upper = depth + (float(j) + 1.5 - p.y) * step.y, lower = depth + (float(j) + 0.5 - p.y) * step.y;  // rows j + 1, j
     const vec4 row_depth = vec4(j + 1 <= last.y ? upper : -1.0, j + 1 <= last.y ? upper : -1.0, j >= inside.y ? lower : -1.0,
                                 j >= inside.y ? lower : -1.0);
+    ivec2 left, right;
+    vsm_row_shifts(sh, j, left, right);
     for (int i = from.x; i <= to.x; i += 2) {
+      const ivec2 shift = i >= sh.split.x ? right : left;
       const vec4 d = textureGather(u_vsm_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0);
       const float left = (float(i) + 0.5 - p.x) * step.x, right = (float(i) + 1.5 - p.x) * step.x;  // columns i, i + 1
       const vec4 tested = vec4(i >= inside.x ? row_depth.x + left : -1.0, i + 1 <= last.x ? row_depth.y + right : -1.0,
@@ -293,7 +314,7 @@ float vsm_blocker_search(int level, vec2 xy, float depth, vec2 gradient, float r
   if (!found) return 1.0;
   const vec2 step = t * gradient;
   float sum = 0.0;
-  VSM_FOR_EACH_PAGE(sq, first, last, found, vsm_blocker_blocks(from, to, shift, inside, last, p, depth, step, sum, blockers))
+  VSM_FOR_EACH_REGION(sq, first, last, found, vsm_blocker_blocks(from, to, shifts, inside, last, p, depth, step, sum, blockers))
   if (!found) blockers = 0;
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }
