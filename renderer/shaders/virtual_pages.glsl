@@ -135,11 +135,11 @@ struct VsmShifts {
 // One block's (or one page's) shift: a split no texel reaches.
 VsmShifts vsm_one_shift(ivec2 shift) { return VsmShifts(ivec2(0x3fffffff), ivec2[4](shift, shift, shift, shift)); }
 
-// The shifts of the blocks in row `j` left of the split (x) and right of it (y).
-void vsm_row_shifts(const VsmShifts sh, int j, out ivec2 left, out ivec2 right) {
+// The shifts of the blocks in row `j` left of the split and right of it.
+void vsm_row_shifts(const VsmShifts sh, int j, out ivec2 left_shift, out ivec2 right_shift) {
   const bool upper = j >= sh.split.y;
-  left = upper ? sh.shift[2] : sh.shift[0];
-  right = upper ? sh.shift[3] : sh.shift[1];
+  left_shift = upper ? sh.shift[2] : sh.shift[0];
+  right_shift = upper ? sh.shift[3] : sh.shift[1];
 }
 
 // The pool texel of the block whose lower corner is window texel (i, j); false when its page is
@@ -153,20 +153,20 @@ bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
 }
 
 // The weighted depth tests of the 2 × 2 blocks from window texel `from` (even) to `to`, whose pool
-// texels `sh` gives (vsm_pcf_box's inner loop): each texel weighs
-// the part of it the square [lo, hi] covers, and each block is tested against the receiver's depth
-// at its shared corner, `depth` at window texel coordinates `p` plus `step` per texel.
+// texels `sh` gives (vsm_pcf_box's inner loop): each texel weighs the part of it the square
+// [lo, hi] covers, and each block is tested against the receiver's depth at its shared corner,
+// `depth` at window texel coordinates `p` plus `step` per texel.
 float vsm_pcf_blocks(ivec2 from, ivec2 to, const VsmShifts sh, vec2 lo, vec2 hi, vec2 p, float depth, vec2 step) {
   const vec2 inv_pool = 1.0 / vec2(u_vsm_pool_pages * u_vsm_page_texels);
   float sum = 0.0;
   for (int j = from.y; j <= to.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
     const float row_reference = depth + (float(j + 1) - p.y) * step.y;
-    ivec2 left, right;
-    vsm_row_shifts(sh, j, left, right);
+    ivec2 left_shift, right_shift;
+    vsm_row_shifts(sh, j, left_shift, right_shift);
     float upper = 0.0, lower = 0.0;  // rows j + 1 and j
     for (int i = from.x; i <= to.x; i += 2) {
-      const ivec2 shift = i >= sh.split.x ? right : left;
+      const ivec2 shift = i >= sh.split.x ? right_shift : left_shift;
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Four comparisons in one gather, order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
       const vec4 lit = textureGather(u_vsm_pool_cmp, vec2(ivec2(i, j) + shift + 1) * inv_pool, row_reference + (float(i + 1) - p.x) * step.x);
@@ -233,11 +233,11 @@ vec2 vsm_moments_blocks(ivec2 from, ivec2 to, const VsmShifts sh, vec2 lo, vec2 
   vec2 sum = vec2(0.0);
   for (int j = from.y; j <= to.y; j += 2) {
     const vec2 wy = max(vec2(0.0), min(vec2(j + 1, j + 2), vec2(hi.y)) - max(vec2(j, j + 1), vec2(lo.y)));
-    ivec2 left, right;
-    vsm_row_shifts(sh, j, left, right);
+    ivec2 left_shift, right_shift;
+    vsm_row_shifts(sh, j, left_shift, right_shift);
     vec2 upper = vec2(0.0), lower = vec2(0.0);  // rows j + 1 and j: (first, second moment)
     for (int i = from.x; i <= to.x; i += 2) {
-      const ivec2 shift = i >= sh.split.x ? right : left;
+      const ivec2 shift = i >= sh.split.x ? right_shift : left_shift;
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
       const vec2 uv = vec2(ivec2(i, j) + shift + 1) * inv_pool;
@@ -269,9 +269,9 @@ vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
   return found ? sum / (4.0 * r * r) : vec2(1.0);
 }
 
-// The blocker search's blocks from window texel `from` (even) to `to` (pool texels: `sh`): adds the depths nearer than the receiver of the square's texels
-// (`inside` to `last`; a block may reach one texel past either) to `sum`, and their count to
-// `blockers`. The receiver at a texel is its plane there: `depth` at window texel coordinates `p`
+// The blocker search's blocks from window texel `from` (even) to `to` (pool texels: `sh`): adds
+// the depths nearer than the receiver of the square's texels (`inside` to `last`; a block may
+// reach one texel past either) to `sum`, and their count to `blockers`. The receiver at a texel is its plane there: `depth` at window texel coordinates `p`
 // plus `step` per texel, taken at the texel's centre.
 void vsm_blocker_blocks(ivec2 from, ivec2 to, const VsmShifts sh, ivec2 inside, ivec2 last, vec2 p, float depth, vec2 step, inout float sum,
                         inout int blockers) {
@@ -282,10 +282,10 @@ void vsm_blocker_blocks(ivec2 from, ivec2 to, const VsmShifts sh, ivec2 inside, 
     const float upper = depth + (float(j) + 1.5 - p.y) * step.y, lower = depth + (float(j) + 0.5 - p.y) * step.y;  // rows j + 1, j
     const vec4 row_depth = vec4(j + 1 <= last.y ? upper : -1.0, j + 1 <= last.y ? upper : -1.0, j >= inside.y ? lower : -1.0,
                                 j >= inside.y ? lower : -1.0);
-    ivec2 left, right;
-    vsm_row_shifts(sh, j, left, right);
+    ivec2 left_shift, right_shift;
+    vsm_row_shifts(sh, j, left_shift, right_shift);
     for (int i = from.x; i <= to.x; i += 2) {
-      const ivec2 shift = i >= sh.split.x ? right : left;
+      const ivec2 shift = i >= sh.split.x ? right_shift : left_shift;
       const vec4 d = textureGather(u_vsm_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0);
       const float left = (float(i) + 0.5 - p.x) * step.x, right = (float(i) + 1.5 - p.x) * step.x;  // columns i, i + 1
       const vec4 tested = vec4(i >= inside.x ? row_depth.x + left : -1.0, i + 1 <= last.x ? row_depth.y + right : -1.0,
