@@ -220,7 +220,10 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   const vec2 step = t * gradient;  // the receiver's depth change per texel
   float sum = 0.0;
   VSM_FOR_EACH_REGION(sq, first, last, found, sum += vsm_pcf_blocks(from, to, shifts, lo, hi, p, depth, step))
-  return found ? sum / (4.0 * r * r) : 1.0;
+  // The weights sum to the square's area as lo and hi hold it: far from a window's origin they
+  // round (a texel coordinate near 8192 to 1e-3 texels), and 4 r² would miss a lit square's 1 by
+  // as much as 1e-3 for a square of two texels.
+  return found ? sum / ((hi.x - lo.x) * (hi.y - lo.y)) : 1.0;
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
@@ -266,7 +269,7 @@ vec2 vsm_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
   if (!found) return vec2(1.0);
   vec2 sum = vec2(0.0);
   VSM_FOR_EACH_REGION(sq, first, last, found, sum += vsm_moments_blocks(from, to, shifts, lo, hi))
-  return found ? sum / (4.0 * r * r) : vec2(1.0);
+  return found ? sum / ((hi.x - lo.x) * (hi.y - lo.y)) : vec2(1.0);  // the weights' sum (vsm_pcf_box)
 }
 
 // The blocker search's blocks from window texel `from` (even) to `to` (pool texels: `sh`): adds
