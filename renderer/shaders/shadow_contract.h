@@ -58,6 +58,8 @@ PENUMBRA_CONSTANT(UNIT_VSM_POOL_CMP, 11)       // virtual shadow map: the page p
 PENUMBRA_CONSTANT(UNIT_VSM_PCSS_RADII, 12)     // virtual shadow map, PCSS: each pixel's penumbra as the marking found it
 PENUMBRA_CONSTANT(UNIT_VSM_MOMENTS, 13)        // virtual shadow map, VSM: the moments pool (t, t² + texel variance)
 PENUMBRA_CONSTANT(VSM_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
+PENUMBRA_CONSTANT(UNIT_VSM_BOUNDS, 14)         // virtual shadow map: each pool tile's depth bounds (vsm_bounds.comp)
+PENUMBRA_CONSTANT(VSM_BOUNDS_TILE, 16)         // virtual shadow map: texels per side of a bounds tile (divides a page's side)
 
 // Uniform-block binding points.
 PENUMBRA_CONSTANT(BLOCK_SHADOW_FRAME, 0)

@@ -19,6 +19,10 @@ layout(binding = UNIT_VSM_POOL) uniform sampler2D u_vsm_pool;
 layout(binding = UNIT_VSM_TABLE) uniform isampler2D u_vsm_table;
 layout(binding = UNIT_VSM_POOL_CMP) uniform sampler2DShadow u_vsm_pool_cmp;  // the pool, LEQUAL comparison (lit)
 layout(binding = UNIT_VSM_MOMENTS) uniform sampler2D u_vsm_moments;  // variance shadow maps: (t, t² + texel variance)
+// Per tile of VSM_BOUNDS_TILE² pool texels: (lower, upper, a, b), planes around its depths
+// (vsm_bounds.comp); read only when u_vsm_bounds.
+layout(binding = UNIT_VSM_BOUNDS) uniform sampler2D u_vsm_tile_bounds;
+uniform bool u_vsm_bounds;
 
 // Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
 // (vsm_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
@@ -142,6 +146,36 @@ void vsm_row_shifts(const VsmShifts sh, int j, out ivec2 left_shift, out ivec2 r
   right_shift = upper ? sh.shift[3] : sh.shift[1];
 }
 
+// Bounds of (texel depth - receiver) over the texel centres of window texels `first` to `last` of
+// square `sq`, the receiver `depth` at window texel coordinates `p` plus `step` per texel: x no
+// more than the least difference, y no less than the greatest, from the tiles' planes
+// (vsm_bounds.comp). Without bounds (u_vsm_bounds false, or a square over more than 2 × 2 pages or
+// tiles): (-inf, +inf), which decides nothing.
+vec2 vsm_tile_gap(const VsmSquare sq, ivec2 first, ivec2 last, vec2 p, float depth, vec2 step) {
+  const ivec2 t0 = first / VSM_BOUNDS_TILE, t1 = last / VSM_BOUNDS_TILE;
+  const bool bounded = u_vsm_bounds && sq.few && all(lessThanEqual(t1 - t0, ivec2(1)));
+  vec2 gap = bounded ? vec2(1e30, -1e30) : vec2(-1e30, 1e30);
+  // A loop, not a branch, so that llvmpipe skips it where no pixel is bounded (it runs both sides
+  // of a branch under a mask).
+  for (int k = 0; k < (bounded ? 4 : 0); ++k) {
+    const ivec2 tile = t0 + ivec2(k & 1, k >> 1);
+    if (any(greaterThan(tile, t1))) continue;
+    const ivec2 corner = tile * VSM_BOUNDS_TILE;  // window texel; a tile lies in one page
+    const ivec2 shift = sq.shift[int(corner.x >= sq.split.x) + 2 * int(corner.y >= sq.split.y)];
+    const vec4 b = texelFetch(u_vsm_tile_bounds, (corner + shift) / VSM_BOUNDS_TILE, 0);
+    // plane - receiver = offset + g · (x - centre) over the centres x of the tile's part of the square
+    const vec2 centre = vec2(corner) + 0.5 * float(VSM_BOUNDS_TILE);
+    const vec2 lo = vec2(max(first, corner)) + 0.5, hi = vec2(min(last, corner + VSM_BOUNDS_TILE - 1)) + 0.5;
+    const vec2 g = b.zw - step;
+    const float offset = dot(g, 0.5 * (lo + hi) - centre) - (depth + dot(centre - p, step));
+    const float spread = dot(abs(g), 0.5 * (hi - lo));
+    gap = vec2(min(gap.x, b.x + offset - spread), max(gap.y, b.y + offset + spread));
+  }
+  return gap;
+}
+// Slack for the float arithmetic of the bounds against that of the texel tests (depths in [0, 1]).
+const float VSM_GAP_EPSILON = 1e-6;
+
 // The pool texel of the block whose lower corner is window texel (i, j); false when its page is
 // not resident (only asked of squares wider than two pages).
 bool vsm_block(const VsmSquare sq, int i, int j, out ivec2 corner) {
@@ -218,12 +252,19 @@ float vsm_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_w
   found = vsm_square(level, first, last, sq);
   if (!found) return 1.0;
   const vec2 step = t * gradient;  // the receiver's depth change per texel
+  // Surely lit or surely in umbra: each block is tested at its centre, half a texel per axis from
+  // its texels' centres, so the receiver there differs from the plane at a texel's centre by at
+  // most `corner`. The walk then runs over no block (a loop llvmpipe skips, not a branch).
+  const vec2 gap = vsm_tile_gap(sq, first, last, p, depth, step);
+  const float corner = 0.5 * (abs(step.x) + abs(step.y)) + VSM_GAP_EPSILON;
+  const float decided = gap.x >= corner ? 1.0 : gap.y < -corner ? 0.0 : -1.0;
+  const ivec2 walk_last = decided >= 0.0 ? first - 2 : last;
   float sum = 0.0;
-  VSM_FOR_EACH_REGION(sq, first, last, found, sum += vsm_pcf_blocks(from, to, shifts, lo, hi, p, depth, step))
+  VSM_FOR_EACH_REGION(sq, first, walk_last, found, sum += vsm_pcf_blocks(from, to, shifts, lo, hi, p, depth, step))
   // The weights sum to the square's area as lo and hi hold it: far from a window's origin they
   // round (a texel coordinate near 8192 to 1e-3 texels), and 4 r² would miss a lit square's 1 by
   // as much as 1e-3 for a square of two texels.
-  return found ? sum / ((hi.x - lo.x) * (hi.y - lo.y)) : 1.0;
+  return decided >= 0.0 ? decided : found ? sum / ((hi.x - lo.x) * (hi.y - lo.y)) : 1.0;
 }
 float vsm_pcf_box(int level, vec2 xy, float depth, float radius_ws, out bool found) {
   return vsm_pcf_box(level, xy, depth, vec2(0.0), radius_ws, found);
@@ -316,8 +357,12 @@ float vsm_blocker_search(int level, vec2 xy, float depth, vec2 gradient, float r
   found = all(greaterThanEqual(inside, ivec2(0))) && vsm_square(level, first, last, sq);
   if (!found) return 1.0;
   const vec2 step = t * gradient;
+  // No texel nearer than the receiver (the search compares at texel centres): no blocker, and the
+  // walk runs over no block.
+  const bool clear = vsm_tile_gap(sq, inside, last, p, depth, step).x >= VSM_GAP_EPSILON;
+  const ivec2 walk_last = clear ? first - 2 : last;
   float sum = 0.0;
-  VSM_FOR_EACH_REGION(sq, first, last, found, vsm_blocker_blocks(from, to, shifts, inside, last, p, depth, step, sum, blockers))
+  VSM_FOR_EACH_REGION(sq, first, walk_last, found, vsm_blocker_blocks(from, to, shifts, inside, last, p, depth, step, sum, blockers))
   if (!found) blockers = 0;
   return blockers > 0 ? sum / float(blockers) : 1.0;
 }

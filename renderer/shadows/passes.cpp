@@ -288,6 +288,7 @@ class VirtualPagesPass final : public Pass {
       v->shading_counts = gl::Buffer(sizeof(contract::VsmShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
     }
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
+    v->map->set_bounds(s.map.virtual_bounds);
     const scene::Aabb bounds = v->map->invalidate_moved_casters(f.scene);
     const int w = f.plan.width_px, h = f.plan.height_px;
     if (v->targets_generation != r.targets_generation) {  // new camera targets: their depth is attached anew
@@ -344,9 +345,8 @@ class VirtualPagesPass final : public Pass {
     }
     out.pixels_per_level = marked.pixels_per_level;
     out.unmarked = marked.unmarked;
-    const std::uint64_t page_bytes = static_cast<std::uint64_t>(v->map->layout().page_texels) * v->map->layout().page_texels * 4;
-    out.resident_bytes = static_cast<std::uint64_t>(out.pages.resident) * page_bytes;
-    out.pool_bytes = static_cast<std::uint64_t>(v->map->pool_slots()) * page_bytes;
+    out.resident_bytes = static_cast<std::uint64_t>(out.pages.resident) * v->map->page_bytes();
+    out.pool_bytes = static_cast<std::uint64_t>(v->map->pool_slots()) * v->map->page_bytes();
     out.table_bytes = static_cast<std::uint64_t>(v->map->layout().pages_per_side) * v->map->layout().pages_per_side *
                       static_cast<std::uint64_t>(v->map->layout().levels) * 4;
     f.info.virtual_map = out;

@@ -38,6 +38,8 @@ const Setting<ShadowMapParams> kMapTable[] = {
                     "sun: a virtual shadow map whose pages each pixel marks by its filter (rule: r / c) or its footprint; off: maps"),
     PENUMBRA_INT(ShadowMapParams, virtual_pool_pages, "pages", 1, 128, "virtual shadow map: page slots per side of the pool (128² texels each)"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_cache, "virtual shadow map: keep drawn pages across frames until the light or a caster moves"),
+    PENUMBRA_BOOL(ShadowMapParams, virtual_bounds,
+                  "virtual shadow map: depth bounds per tile of each page, to skip filters surely lit or in umbra; the image is the same"),
 };
 
 const Setting<AdaptiveParams> kAdaptiveTable[] = {

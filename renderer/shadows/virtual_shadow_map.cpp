@@ -69,6 +69,15 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
   program_ = gl::ShaderLibrary().program(
       {{GL_VERTEX_SHADER, "vsm_page.vert"},
        {GL_FRAGMENT_SHADER, content == Content::depth_and_moments ? "vsm_page_moments.frag" : "shadow_depth.frag"}});
+  if (content == Content::depth && layout.page_texels % contract::VSM_BOUNDS_TILE == 0) {
+    const int tiles = side / contract::VSM_BOUNDS_TILE;
+    bounds_pool_ = gl::Texture({GL_RGBA32F, tiles, tiles, 1}, "virtual shadow map tile bounds");
+    glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    bounds_program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "vsm_bounds.comp"}});
+    bounds_slots_ = gl::Buffer(static_cast<std::size_t>(pool_slots()) * sizeof(std::int32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    bounds_ = true;
+  }
   slots_.resize(static_cast<std::size_t>(pool_slots()));
   for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
   origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
@@ -100,6 +109,34 @@ void VirtualShadowMap::set_raster_bias(float slope, float offset) {
   if (slope == slope_bias_ && offset == offset_bias_) return;
   slope_bias_ = slope, offset_bias_ = offset;
   invalidate_all();  // pages drawn with the old offsets would disagree with new ones
+}
+
+void VirtualShadowMap::set_bounds(bool on) {
+  const bool now = on && bounds_pool_.id() != 0;
+  if (now == bounds_) return;
+  bounds_ = now;
+  if (now) invalidate_all();  // the pages drawn without bounds have none
+}
+
+std::uint64_t VirtualShadowMap::page_bytes() const {
+  const auto texels = static_cast<std::uint64_t>(layout_.page_texels) * static_cast<std::uint64_t>(layout_.page_texels);
+  const std::uint64_t tiles = texels / (contract::VSM_BOUNDS_TILE * contract::VSM_BOUNDS_TILE);
+  return texels * (content_ == Content::depth_and_moments ? 4 + 8 : 4) + (bounds_ ? tiles * 16 : 0);
+}
+
+void VirtualShadowMap::write_bounds(const std::vector<int>& slots) {
+  if (slots.empty()) return;
+  glNamedBufferSubData(bounds_slots_.id(), 0, static_cast<GLsizeiptr>(slots.size() * sizeof(int)), slots.data());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bounds_slots_.id());
+  pool_.bind(contract::UNIT_VSM_POOL);
+  glBindSampler(contract::UNIT_VSM_POOL, 0);
+  glBindImageTexture(0, bounds_pool_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  bounds_program_.use();
+  bounds_program_.set("u_vsm_pool_pages", pool_side_);
+  bounds_program_.set("u_vsm_page_texels", layout_.page_texels);
+  const int groups = (layout_.page_texels / contract::VSM_BOUNDS_TILE + 7) / 8;  // 8 × 8 tiles a workgroup
+  glDispatchCompute(static_cast<GLuint>(groups), static_cast<GLuint>(groups), static_cast<GLuint>(slots.size()));
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
 }
 
 void VirtualShadowMap::invalidate_all() {
@@ -267,6 +304,11 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (bounds_) {
+      std::vector<int> drawn;
+      for (const auto& [slot, key] : to_draw) drawn.push_back(slot);
+      write_bounds(drawn);
+    }
   }
   stats.drawn = static_cast<int>(to_draw.size());
   stats.resident = static_cast<int>(resident_.size());
@@ -359,6 +401,11 @@ void VirtualShadowMap::bind(const gl::Program& program) const {
     moments_.bind(contract::UNIT_VSM_MOMENTS);
     glBindSampler(contract::UNIT_VSM_MOMENTS, 0);
   }
+  if (bounds_) {
+    bounds_pool_.bind(contract::UNIT_VSM_BOUNDS);
+    glBindSampler(contract::UNIT_VSM_BOUNDS, 0);
+  }
+  program.set("u_vsm_bounds", bounds_);
   set_virtual_page_uniforms(program, layout_, view_);
   program.set("u_vsm_pool_pages", pool_side_);
 }

@@ -151,6 +151,13 @@ class VirtualShadowMap {
   // The raster depth offset pages are drawn with (glPolygonOffset factor and units, as the maps'
   // map.slope_bias and map.offset_bias; none by default). A change drops every page.
   void set_raster_bias(float slope, float offset);
+  // Whether update() also takes the depth bounds of each tile of the pages it draws
+  // (vsm_bounds.comp) and bind() lets the filters use them (on by default; depth pools whose page
+  // side VSM_BOUNDS_TILE divides). Turning them on drops every page, whose tiles have none.
+  void set_bounds(bool on);
+  bool bounds() const { return bounds_; }
+  // Bytes one resident page holds: its depths (and moments), and its tiles' bounds when they are on.
+  std::uint64_t page_bytes() const;
   // Drops every page (the light moved).
   void invalidate_all();
   // Drops the pages over the world box `bounds` (a caster moved: call with its old and its new
@@ -163,8 +170,8 @@ class VirtualShadowMap {
   scene::Aabb invalidate_moved_casters(const scene::Scene& scene);
 
   // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the moments
-  // pool (if any) to UNIT_VSM_MOMENTS, the tables to UNIT_VSM_TABLE, and sets virtual_pages.glsl's
-  // uniforms of `program` for the last update's view.
+  // pool (if any) to UNIT_VSM_MOMENTS, the tables to UNIT_VSM_TABLE, the tiles' bounds (if on) to
+  // UNIT_VSM_BOUNDS, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const;
@@ -180,6 +187,8 @@ class VirtualShadowMap {
   std::vector<SlotState> slot_states() const;
   const gl::Texture& pool() const { return pool_; }
   const gl::Texture& moments_pool() const { return moments_; }  // Content::depth_and_moments: RG32F, the pool's layout
+  // The tiles' bounds when on: RGBA32F, a texel per VSM_BOUNDS_TILE² texels of the pool (vsm_bounds.comp).
+  const gl::Texture& bounds_pool() const { return bounds_pool_; }
 
  private:
   // A page by its place in light space: level, then column and row from the light-space origin.
@@ -201,11 +210,17 @@ class VirtualShadowMap {
   std::uint64_t draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                           const std::vector<std::vector<scene::Footprint>>& footprints) const;
   void write_tables();
+  // Takes the bounds of every tile of the pages in `slots` (vsm_bounds.comp).
+  void write_bounds(const std::vector<int>& slots);
 
   adaptive::VirtualMapLayout layout_;
   int pool_side_ = 0;
   Content content_ = Content::depth;
   gl::Texture pool_, moments_, table_;
+  gl::Texture bounds_pool_;    // RGBA32F, a texel per tile of the pool (vsm_bounds.comp's planes)
+  gl::Program bounds_program_;
+  gl::Buffer bounds_slots_;    // the slots whose tiles vsm_bounds.comp takes
+  bool bounds_ = false;
   gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (vsm_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;

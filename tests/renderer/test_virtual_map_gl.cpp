@@ -315,6 +315,149 @@ void main() {
   });
 }
 
+// The tiles' bounds (vsm_bounds.comp): every texel of every page lies between its tile's two
+// planes, and on the demo's ground, tilted in light space, most tiles are one plane, their bounds
+// a rounding apart; tiles over an edge are wide.
+TEST(VirtualMap, TileBoundsHoldEveryTexelAndHugAPlanarGround) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 14);
+  ASSERT_TRUE(vsm.bounds()) << "on by default for a depth pool";
+  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  const int side = 14 * layout.page_texels, tile = shadows::contract::VSM_BOUNDS_TILE, tiles = side / tile;
+  std::vector<float> depth(static_cast<std::size_t>(side) * side), bounds(4 * static_cast<std::size_t>(tiles) * tiles);
+  glGetTextureImage(vsm.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
+  glGetTextureImage(vsm.bounds_pool().id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(bounds.size() * sizeof(float)), bounds.data());
+  int checked = 0, planar = 0, wide = 0;
+  for (const Page& page : every_page(layout)) {
+    const int slot = vsm.slot_of(page);
+    ASSERT_GE(slot, 0);
+    for (int ty = 0; ty < layout.page_texels / tile; ++ty)
+      for (int tx = 0; tx < layout.page_texels / tile; ++tx) {
+        const int cx = (slot % 14) * layout.page_texels + tx * tile, cy = (slot / 14) * layout.page_texels + ty * tile;
+        const float* b = &bounds[4 * (static_cast<std::size_t>(cy / tile) * tiles + static_cast<std::size_t>(cx / tile))];
+        for (int j = 0; j < tile; ++j)
+          for (int i = 0; i < tile; ++i) {
+            const float d = depth[static_cast<std::size_t>(cy + j) * side + static_cast<std::size_t>(cx + i)];
+            const float plane = b[2] * (static_cast<float>(i) + 0.5f - 0.5f * tile) + b[3] * (static_cast<float>(j) + 0.5f - 0.5f * tile);
+            ASSERT_GE(d, b[0] + plane - 1e-6f) << "slot " << slot << " tile " << tx << "," << ty << " texel " << i << "," << j;
+            ASSERT_LE(d, b[1] + plane + 1e-6f) << "slot " << slot << " tile " << tx << "," << ty << " texel " << i << "," << j;
+          }
+        ++checked;
+        planar += b[1] - b[0] < 1e-5f && (b[2] != 0 || b[3] != 0);  // a tilted plane, not the clear
+        wide += b[1] - b[0] > 1e-3f;
+      }
+  }
+  EXPECT_EQ(checked, 192 * 4);
+  EXPECT_GT(planar, checked / 4) << "the ground's tiles";
+  EXPECT_GT(wide, 0) << "tiles over a caster's edge";
+
+  vsm.set_bounds(false);
+  EXPECT_FALSE(vsm.bounds());
+  EXPECT_EQ(vsm.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 0) << "turning them off keeps the pages";
+  vsm.set_bounds(true);
+  EXPECT_EQ(vsm.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 192) << "pages drawn without bounds have none";
+}
+
+// The bounds decide a square only where the filter would say the same: box PCF and PCSS's search
+// through the tables with and without them, at 128 × 128 points over level 1's window, squares of
+// 3.5 texels (the rule's c) at receivers on the surface's own plane just in front of it (even
+// columns: mostly lit, most squares decided lit) and far behind everything (odd columns: umbra).
+TEST(VirtualMap, TileBoundsDecideOnlyWhatTheFilterFinds) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap vsm(layout, 14);
+  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  const int level = 1, side = layout.page_texels * layout.pages_per_side;
+  const std::vector<float> direct = full_map(f, vsm, level);
+  const gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
+  glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
+  const gl::Program p = compute_program("bounds.comp", R"(
+#include "virtual_pages.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(binding = 0, rgba32f) uniform writeonly image2D u_out;  // PCF, decided (1 lit, 0 umbra, -1 no), search mean + count, searched
+layout(binding = 13) uniform sampler2D u_single;
+uniform int u_level;
+const float R = 3.5;
+void main() {
+  const ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(q, imageSize(u_out)))) return;
+  const int side = u_vsm_page_texels * u_vsm_pages_per_side;
+  const float t = vsm_texel_ws(u_level);
+  const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));
+  const ivec2 c = clamp(ivec2(p), ivec2(1), ivec2(side - 2));
+  // The surface's plane at p from its neighbours (normalized depth per texel), the receiver on it.
+  const vec2 per_texel = 0.5 * vec2(texelFetch(u_single, c + ivec2(1, 0), 0).r - texelFetch(u_single, c - ivec2(1, 0), 0).r,
+                                    texelFetch(u_single, c + ivec2(0, 1), 0).r - texelFetch(u_single, c - ivec2(0, 1), 0).r);
+  const bool behind = (q.x & 1) == 1;
+  // In front: below the plane by the half texel a 2 × 2 block's shared corner lies from its texels'
+  // centres (the filter tests each block there), and 1e-4.
+  const float bias = 0.5 * (abs(per_texel.x) + abs(per_texel.y)) + 1e-4;
+  const float receiver = behind ? 1.01 : texelFetch(u_single, c, 0).r + dot(p - vec2(c) - 0.5, per_texel) - bias;
+  const vec2 gradient = behind ? vec2(0.0) : per_texel / t;
+  const vec2 xy = u_vsm_origin[u_level] + p * t;
+  bool found;
+  const float pcf = vsm_pcf_box(u_level, xy, receiver, gradient, R * t, found);
+  // The decision vsm_pcf_box takes, taken again.
+  const vec2 lo = p - R, hi = p + R;
+  const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
+  VsmSquare sq;
+  float decided = -1.0;
+  if (vsm_square(u_level, first, last, sq)) {
+    const vec2 gap = vsm_tile_gap(sq, first, last, p, receiver, gradient * t);
+    const float corner = 0.5 * (abs(gradient.x) + abs(gradient.y)) * t + VSM_GAP_EPSILON;
+    decided = gap.x >= corner ? 1.0 : gap.y < -corner ? 0.0 : -1.0;
+  }
+  int blockers;
+  bool searched;
+  const float mean = vsm_blocker_search(u_level, xy, receiver, gradient, R * t, blockers, searched);
+  imageStore(u_out, q, vec4(found ? pcf : -1.0, decided, mean + float(blockers), searched ? 1.0 : 0.0));
+})");
+  const int n = 128;
+  const gl::Texture out({GL_RGBA32F, n, n, 1}, "bounds comparison");
+  const auto run = [&](bool bounds) {
+    vsm.bind(p);
+    p.set("u_vsm_bounds", bounds);
+    p.set("u_level", level);
+    single.bind(13);
+    glBindSampler(13, 0);
+    glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    p.dispatch_covering(n, n);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    std::vector<float> v(4 * static_cast<std::size_t>(n) * n);
+    glGetTextureImage(out.id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(v.size() * sizeof(float)), v.data());
+    return v;
+  };
+  const std::vector<float> with = run(true), without = run(false);
+  int lit = 0, umbra = 0, open = 0, in_front = 0, behind = 0, searched = 0;
+  float worst = 0;
+  for (int q = 0; q < n * n; ++q) {
+    const float* a = &with[4 * static_cast<std::size_t>(q)];
+    const float* b = &without[4 * static_cast<std::size_t>(q)];
+    ASSERT_EQ(a[0] < 0, b[0] < 0) << "point " << q;
+    EXPECT_EQ(b[1], -1.0f) << "point " << q << ": without bounds nothing is decided";
+    if (a[0] < 0) continue;
+    worst = std::max(worst, std::abs(a[0] - b[0]));
+    if (a[1] == 1.0f) {
+      EXPECT_GE(b[0], 1.0f - 1e-5f) << "point " << q << ": decided lit, the filter says " << b[0];
+    } else if (a[1] == 0.0f) {
+      EXPECT_EQ(b[0], 0.0f) << "point " << q << ": decided umbra, the filter says " << b[0];
+    }
+    lit += a[1] == 1.0f, umbra += a[1] == 0.0f, open += a[1] < 0;
+    ((q % n) % 2 == 0 ? in_front : behind) += 1;
+    if (a[3] == 1.0f) {
+      ++searched;
+      EXPECT_EQ(a[2], b[2]) << "point " << q << ": the search's blockers and mean";
+    }
+  }
+  RecordProperty("decided_lit_umbra_open", std::to_string(lit) + " " + std::to_string(umbra) + " " + std::to_string(open));
+  EXPECT_LE(worst, 1e-5f) << "sums of weights round; nothing else differs";
+  EXPECT_GT(lit, in_front / 2) << "the ground in front of its own plane, lit";
+  EXPECT_GT(umbra, behind * 9 / 10) << "behind everything";
+  EXPECT_GT(open, 0) << "penumbrae and edges, filtered";
+  EXPECT_GT(searched, n * n / 2);
+}
+
 // VSM through the tables (vsm_moments_box) against the same box over a single map of the level's
 // moments drawn directly: squares of 2.5 and 20 texels' radius (up to three pages a side) at
 // 128 × 128 points over level 1's window, both moments.
@@ -630,7 +773,8 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
   EXPECT_GT(v.at_level, static_cast<std::uint64_t>(w * h / 2)) << "the ground fills most of the view";
   EXPECT_EQ(v.coarser, 0u);
   EXPECT_EQ(v.none, 0u);
-  EXPECT_EQ(v.resident_bytes, static_cast<std::uint64_t>(v.pages.resident) * 128 * 128 * 4);
+  // A page: its 128² depths and the bounds of its 8 × 8 tiles (four floats each).
+  EXPECT_EQ(v.resident_bytes, static_cast<std::uint64_t>(v.pages.resident) * (128 * 128 * 4 + 8 * 8 * 16));
 
   shadows::ShadowSettings fine = virtual_pcf(shadows::VirtualPages::off);
   fine.map.resolution_texels = 4096;
@@ -703,6 +847,39 @@ TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
   RecordProperty("mean_abs_vs_fine_map", std::to_string(mean));
   EXPECT_GT(shadowed, w * h / 50) << "the demo's casters shadow the ground";
   EXPECT_LT(mean, 0.02);
+}
+
+// The tiles' bounds change no image: PCF and PCSS through the pages on the demo scene with and
+// without them (map.virtual_bounds), within the rounding of the filters' sums of weights.
+TEST(VirtualMap, RendererImageIsTheSameWithOrWithoutTileBounds) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  shadows::ShadowSettings pcss;
+  pcss.technique = shadows::Technique::pcss;
+  pcss.pcss.kernel = shadows::Kernel::grid;
+  pcss.adaptive.min_texel_px = 1;
+  pcss.map.virtual_pages = shadows::VirtualPages::rule;
+  for (shadows::ShadowSettings s : {virtual_pcf(shadows::VirtualPages::rule), pcss}) {
+    SCOPED_TRACE(s.technique == shadows::Technique::pcf ? "pcf" : "pcss");
+    s.map.virtual_bounds = true;
+    const shadows::FrameInfo with = r.render(s, 320, 180);
+    const io::ImageF a = r.read_visibility();
+    s.map.virtual_bounds = false;
+    const shadows::FrameInfo without = r.render(s, 320, 180);
+    const io::ImageF b = r.read_visibility();
+    EXPECT_EQ(with.virtual_map->pages.requested, without.virtual_map->pages.requested);
+    EXPECT_EQ(with.virtual_map->at_level, without.virtual_map->at_level);
+    EXPECT_LT(without.virtual_map->resident_bytes, with.virtual_map->resident_bytes) << "the bounds are counted";
+    ASSERT_EQ(a.pixels.size(), b.pixels.size());
+    float worst = 0;
+    int shadowed = 0;
+    for (std::size_t p = 0; p < a.pixels.size(); ++p) {
+      worst = std::max(worst, std::abs(a.pixels[p] - b.pixels[p]));
+      shadowed += b.pixels[p] < 0.5f;
+    }
+    EXPECT_LE(worst, 1e-5f);
+    EXPECT_GT(shadowed, 320 * 180 / 50) << "shadows to compare";
+  }
 }
 
 // VSM through the pages (moments drawn beside the depths, box-filtered at lookup on the marked
