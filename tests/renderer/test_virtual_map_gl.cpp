@@ -170,6 +170,15 @@ std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& vsm, int l
   return v;
 }
 
+// full_map's depths as an R32F texture, which the comparison shaders read as the single map.
+gl::Texture single_map(const Fixture& f, const VirtualShadowMap& vsm, int level) {
+  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
+  const std::vector<float> direct = full_map(f, vsm, level);
+  gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
+  glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
+  return single;
+}
+
 TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
@@ -212,9 +221,7 @@ TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) 
   VirtualShadowMap vsm(layout, 14);
   vsm.update(every_page(layout), f.view, f.scene, f.meshes);
   const int level = 1, side = layout.page_texels * layout.pages_per_side;
-  const std::vector<float> direct = full_map(f, vsm, level);
-  const gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
-  glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
+  const gl::Texture single = single_map(f, vsm, level);
   const gl::Program p = compute_program("pcf.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -368,10 +375,8 @@ TEST(VirtualMap, TileBoundsDecideOnlyWhatTheFilterFinds) {
   const VirtualMapLayout layout = small_layout();
   VirtualShadowMap vsm(layout, 14);
   vsm.update(every_page(layout), f.view, f.scene, f.meshes);
-  const int level = 1, side = layout.page_texels * layout.pages_per_side;
-  const std::vector<float> direct = full_map(f, vsm, level);
-  const gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
-  glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
+  const int level = 1;
+  const gl::Texture single = single_map(f, vsm, level);
   const gl::Program p = compute_program("bounds.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
