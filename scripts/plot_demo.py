@@ -1,13 +1,21 @@
 #!/usr/bin/python3
-"""The figures of penumbra-demo's report.json: front.png first (frame time and memory against the
-error to the reference for the engine family, its Pareto front and the adaptive rule at equal error),
-then a bar chart: median frame time (with p10-p90 whiskers) of the
-fixed and the adaptive resolution per technique, and of the engine baselines when the run has
-them, annotated with the speedup over the fixed map, the adaptive cascades most frames had and the worst
-SSIM; flicker along the path (flicker.png), error against the reference against frame time per
-configuration (error.png) and the texels each configuration draws along the path (path.png).
+"""The figures of penumbra-demo's report.json, the equal-error comparison first:
+front.png   per technique, frame time and memory against the error to the reference: the engine
+            family, its Pareto front, and the adaptive rule and every virtual shadow map read
+            against the front at their own error (the headline's ratios);
+demo.png    median frame time (p10-p90 whiskers) per configuration, each bar labelled with its
+            error, under the equal-error ratios (the ratio against the fixed map alone compares
+            images of different error, so it is not the headline);
+error.png   error against frame time, one point per configuration;
+flicker.png the mean frame-to-frame change of every configuration, and along the path for the
+            few that answer the question (named in the figure);
+path.png    the texels each configuration draws along the path.
+Every figure draws a configuration in the same colour and marker (style()).
 Usage: plot_demo.py REPORT.json OUTDIR (writes front, demo, flicker, error and path .png/.svg)."""
 import json
+import math
+import re
+import textwrap
 import sys
 
 import matplotlib
@@ -15,51 +23,79 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+# The configurations whose name says nothing of a map size (apps/demo/configurations.cpp): the
+# rule in red, the virtual maps in greens (the rule's) and pink (the footprint's); the engine
+# family below, blues and greys.
+NAMED_STYLES = {
+    "adaptive": ("#d62728", "*"),
+    "adaptive, no hysteresis": ("#ff9896", "*"),
+    "virtual rule": ("#74c476", "P"),
+    "virtual rule, cached": ("#006d2c", "P"),
+    "virtual footprint": ("#e377c2", "X"),
+    "floor (world-fixed map)": ("#000000", "."),
+}
+# The engine family by cascade count: a colour map and a marker each; the shade darkens with the
+# map size (1024² light, 8192² dark), so that a sweep's dozen points stay apart.
+CASCADE_STYLES = {1: ("Blues", "o"), 2: ("Oranges", "s"), 3: ("Greys", "^"), 4: ("Purples", "D")}
+
+
+def style(name):
+    """(colour as #rrggbb, marker) of the configuration `name`, the same in every figure and run."""
+    if name in NAMED_STYLES:
+        return NAMED_STYLES[name]
+    m = re.fullmatch(r"fixed-(\d+)", name) or re.fullmatch(r"(\d+)x(\d+)-cascades", name)
+    if not m:
+        return ("#7f7f7f", "v")  # a configuration this script does not know yet: grey, never missing
+    cascades, texels = (1, int(m[1])) if name.startswith("fixed-") else (int(m[1]), int(m[2]))
+    cmap, marker = CASCADE_STYLES.get(min(cascades, 4), CASCADE_STYLES[4])
+    shade = 0.35 + 0.65 * min(max(math.log2(max(texels, 1) / 1024) / 3, 0.0), 1.0)
+    return (matplotlib.colors.to_hex(matplotlib.colormaps[cmap](shade)), marker)
+
+
+def colour(name):
+    return style(name)[0]
+
+
+def tag(artists, name):
+    """Marks what was drawn for configuration `name` (a test reads the colours back)."""
+    for a in artists if isinstance(artists, (list, tuple)) else [artists]:
+        a.configuration = name
+    return artists
+
 
 def main():
     if len(sys.argv) != 3:
         sys.exit("usage: plot_demo.py REPORT.json OUTDIR")
     with open(sys.argv[1]) as f:
         report = json.load(f)
-    techniques = report.get("techniques", [])
-    if not techniques:
+    if not report.get("techniques"):
         sys.exit(f"{sys.argv[1]}: techniques: empty")
-    bars = max(2 + len(shown_baselines(t)) for t in techniques)
-    fig, ax = plt.subplots(figsize=(1.8 + 0.95 * bars * len(techniques), 4.2))
-    width = 0.76 / bars
-    colours = ["#8c8c8c", "#2b7bba", "#d9a441", "#8e5ea2"]
-    for i, t in enumerate(techniques):
-        # fixed, adaptive, then the engine baselines (a larger single map, the cascades).
-        series = [(f"fixed {t['fixed']['resolution_texels']}$^2$", t["fixed"]), ("adaptive", t["adaptive"])]
-        series += [(b["name"], b) for b in shown_baselines(t)]
-        for j, (label, row) in enumerate(series):
-            ms = row["frame_ms"]
-            x = i + (j - (len(series) - 1) / 2) * width
-            ax.bar(x, ms["median"], width, color=colours[j % len(colours)], label=label if i == 0 else None)
-            ax.errorbar(x, ms["median"], yerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]], color="black", capsize=3)
-        cascades = t["adaptive"]["cascades_most_frames"]  # every cascade, as most frames had them
-        top = max(row["frame_ms"]["p90"] for _, row in series)
-        note = f"{t['speedup_median']:.2f}x vs fixed\n{cascades}$^2$ vs {t['fixed']['resolution_texels']}$^2$\n"
-        note += f"SSIM >= {t['image']['ssim_min']:.4f}"
-        if "speedup_vs_engine_median" in t:
-            note += f"\n{t['speedup_vs_engine_median']:.2f}x vs {t['engine_baseline']}"
-        ax.annotate(note, (i, top), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
-    ax.set_xticks(range(len(techniques)), [t["technique"] for t in techniques])
-    ax.set_ylabel(f"frame time, ms ({report.get('frame_time_method', '')})")
+    for name, fig in figures(report).items():
+        for ext in ("png", "svg"):
+            # tight: the legends outside the axes are part of the figure.
+            fig.savefig(f"{sys.argv[2]}/{name}.{ext}", dpi=110, bbox_inches="tight")
+        plt.close(fig)
+
+
+def figures(report):
+    """{file stem: figure} of every figure the report has data for, front first."""
+    techniques = report["techniques"]
+    out = {}
+    for name, plot in (("front", plot_front), ("demo", plot_demo), ("error", plot_error), ("flicker", plot_flicker),
+                       ("path", plot_path)):
+        fig = plot(report, techniques)
+        if fig is not None:
+            out[name] = fig
+    return out
+
+
+def run_line(report):
     w, h = report.get("image_px", [0, 0])
-    ax.set_title(f"{report.get('scene', '')} {w}x{h}, {report.get('path_frames', 0)} path frames: median, p10-p90", fontsize=9)
-    ax.margins(y=0.35)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=4, fontsize=8)
-    fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{sys.argv[2]}/demo.{ext}", dpi=110)
-    plot_front(report, techniques, sys.argv[2])
-    plot_flicker(report, techniques, sys.argv[2])
-    plot_error(report, techniques, sys.argv[2])
-    plot_path(report, techniques, sys.argv[2])
+    return f"{report.get('scene', '')} {w}x{h}, {report.get('path_frames', 0)} path frames"
 
 
-MARKERS = ["o", "s", "^", "v", "D", "x", "P"]
+def fixed_name(t):
+    return f"fixed-{t['fixed']['resolution_texels']}"
 
 
 def shown_baselines(t):
@@ -69,59 +105,132 @@ def shown_baselines(t):
             if b["name"] == t.get("engine_baseline") or b.get("on_front", {}).get("time") or len(t["baselines"]) <= 4]
 
 
-def engine_points(t):
-    """(name, error, ms, texels allocated) of the engine family: the fixed map and every baseline."""
-    rows = [(f"fixed-{t['fixed']['resolution_texels']}", t["fixed"])] + [(b["name"], b) for b in t.get("baselines", [])]
-    return [(name, row["reference_error"]["rmse_mean"], row["frame_ms"]["median"], row["texels_allocated"])
-            for name, row in rows if row.get("reference_error")]
+def configurations(t):
+    """(name, measured row) of every configuration in the tables: adaptive, fixed, the baselines,
+    the virtual maps."""
+    rows = [("adaptive", t["adaptive"]), (fixed_name(t), t["fixed"])]
+    return rows + [(b["name"], b) for b in t.get("baselines", [])] + [(v["name"], v) for v in t.get("virtual", [])]
 
 
-def plot_front(report, techniques, outdir):
+def rmse(row):
+    err = row.get("reference_error")
+    return err["rmse_mean"] if err else None
+
+
+def ratio_text(reading, what):
+    """'1.18x [1.13, 1.36] speedup', with >= / <= where the error lies beyond the front's ends."""
+    bound = {"more_accurate_than_front": ">= ", "less_accurate_than_front": "<= "}.get(reading["position"], "")
+    r = reading["ratio"]
+    return f"{bound}{r['median']:.2f}x [{r['ci95'][0]:.2f}, {r['ci95'][1]:.2f}] {what}"
+
+
+def equal_error_subjects(t):
+    """(name, row, error, time reading, memory reading) of what is read against the front: the
+    adaptive rule, then every virtual map that has a reading."""
+    eq = t.get("equal_error", {})
+    if "headline" not in eq:
+        return []
+    out = [("adaptive", t["adaptive"], eq["adaptive_error"], eq["time"], eq["memory"])]
+    for v in t.get("virtual", []):
+        ve = v.get("equal_error", {})
+        if "time" in ve:
+            out.append((v["name"], v, ve["error"], ve["time"], ve["memory"]))
+    return out
+
+
+def plot_front(report, techniques):
     """front.png, the first figure: per technique, frame time and memory against the error to the
-    reference, every engine configuration (grey), the Pareto front through the undominated ones,
-    and the adaptive rule with the engine's cost at its error (the headline's ratios)."""
-    with_front = [t for t in techniques if "headline" in t.get("equal_error", {})]
+    reference; every engine configuration (filled where on the front), the front through them, and
+    the adaptive rule and the virtual maps each with the engine's cost at its error."""
+    with_front = [t for t in techniques if equal_error_subjects(t)]
     if not with_front:
-        return
-    fig, axes = plt.subplots(len(with_front), 2, figsize=(10.5, 3.9 * len(with_front)), squeeze=False)
+        return None
+    fig, axes = plt.subplots(len(with_front), 2, figsize=(12, 6.2 * len(with_front)), squeeze=False)
     for row_axes, t in zip(axes, with_front):
         eq = t["equal_error"]
-        points = {name: (err, ms, tex) for name, err, ms, tex in engine_points(t)}
-        adaptive_err = eq["adaptive_error"]
-        adaptive = t["adaptive"]
-        for ax, key, cost_index, adaptive_cost, unit, label in (
-                (row_axes[0], "time", 1, adaptive["frame_ms"]["median"], "ms", "frame time, ms (median over the path)"),
-                (row_axes[1], "memory", 2, adaptive["texels_allocated"] / 1e6, "texels", "Mtexels allocated")):
-            scale = 1.0 if key == "time" else 1e-6
+        engine = [(fixed_name(t), t["fixed"])] + [(b["name"], b) for b in t.get("baselines", [])]
+        points = {name: (rmse(row), row["frame_ms"]["median"], row["texels_allocated"] / 1e6) for name, row in engine if rmse(row) is not None}
+        for ax, key, cost_index, unit, label in (
+                (row_axes[0], "time", 1, "ms", "frame time, ms (median over the path)"),
+                (row_axes[1], "memory", 2, "texels", "shadow-map memory, Mtexels allocated (mean over the path)")):
             front = eq[key]["front"]
             for name, p in points.items():
+                c, marker = style(name)
                 on = name in front
-                ax.plot(p[0], p[cost_index] * scale, "o", color="#444444" if on else "#bbbbbb", ms=6 if on else 5)
-                ax.annotate(name.replace("-cascades", "c").replace("fixed-", ""), (p[0], p[cost_index] * scale), fontsize=6,
-                            xytext=(4, 3), textcoords="offset points", color="#444444" if on else "#999999")
-            fx = [points[n][0] for n in front]
-            fy = [points[n][cost_index] * scale for n in front]
-            ax.plot(fx, fy, "-", color="#444444", lw=1.2, label="engine Pareto front")
-            ratio = eq[key]["ratio"]
-            at = eq[key][f"front_{unit}"] * scale
-            ax.plot([adaptive_err, adaptive_err], [adaptive_cost, at], ":", color="#2b7bba", lw=1.2)
-            ax.plot(adaptive_err, at, "x", color="#444444", ms=7, label="engine at equal error")
-            bound = {"more_accurate_than_front": ">= ", "less_accurate_than_front": "<= "}.get(eq[key]["position"], "")
-            ax.plot(adaptive_err, adaptive_cost, "*", color="#2b7bba", ms=13,
-                    label=f"adaptive: {bound}{ratio['median']:.2f}x [{ratio['ci95'][0]:.2f}, {ratio['ci95'][1]:.2f}]"
-                          f" {'speedup' if key == 'time' else 'memory ratio'}")
+                tag(ax.plot(p[0], p[cost_index], marker, color=c, mec="#333333" if on else c, mfc=c if on else "none", ms=7), name)
+                ax.annotate(name.replace("-cascades", "c").replace("fixed-", ""), (p[0], p[cost_index]), fontsize=6,
+                            xytext=(4, 3), textcoords="offset points", color="#333333" if on else "#999999")
+            ax.plot([points[n][0] for n in front], [points[n][cost_index] for n in front], "-", color="#555555", lw=1.2,
+                    zorder=1, label="engine Pareto front (filled: on it)")
+            for name, row, err, time, memory in equal_error_subjects(t):
+                reading = time if key == "time" else memory
+                cost = row["frame_ms"]["median"] if key == "time" else row["texels_allocated"] / 1e6
+                at = reading[f"front_{unit}"] * (1.0 if key == "time" else 1e-6)
+                c, marker = style(name)
+                ax.plot([err, err], [cost, at], ":", color=c, lw=1.2)
+                tag(ax.plot(err, at, "x", color=c, ms=7), name)
+                tag(ax.plot(err, cost, marker, color=c, mec="black", mew=0.6, ms=14 if name == "adaptive" else 11,
+                            label=f"{name}: {ratio_text(reading, 'speedup' if key == 'time' else 'memory ratio')}"), name)
+            ax.plot([], [], "x", color="#555555", label="x: the front at the same error")
             ax.set_xlabel("visibility RMSE against the reference (mean over the reference frames)", fontsize=8)
             ax.set_ylabel(label, fontsize=8)
             ax.set_yscale("log")
-            ax.set_title(f"{t['technique']}: {'time' if key == 'time' else 'memory'} against error", fontsize=9)
-            ax.legend(fontsize=7, loc="upper right")
-    w, h = report.get("image_px", [0, 0])
-    fig.suptitle(f"{report.get('scene', '')} {w}x{h}, {report.get('path_frames', 0)} path frames, engine family "
-                 f"{report.get('engine_family', '')}: adaptive against the engine front at equal error (lower left is better)",
+            ax.set_title(f"{t['technique']}: {'frame time' if key == 'time' else 'memory'} against error; "
+                         f"ratio = the front's {'time' if key == 'time' else 'memory'} at equal error / the configuration's",
+                         fontsize=8)
+            ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
+    fig.suptitle(f"{run_line(report)}, engine family {report.get('engine_family', '')}:\nthe adaptive rule and the virtual "
+                 "shadow maps against the engine's Pareto front at equal error (lower left is better; > 1x favours them)",
                  fontsize=9)
     fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{outdir}/front.{ext}", dpi=110)
+    return fig
+
+
+def plot_demo(report, techniques):
+    """demo.png: median frame time (p10-p90) of every configuration measured against the engine,
+    each bar labelled with its RMSE against the reference; above each technique the equal-error
+    ratios (front.png's), and the fixed map's ratio only with both errors beside it."""
+    per_technique = []
+    for t in techniques:
+        rows = [(fixed_name(t), t["fixed"]), ("adaptive", t["adaptive"])]
+        rows += [(b["name"], b) for b in shown_baselines(t)] + [(v["name"], v) for v in t.get("virtual", [])]
+        per_technique.append(rows)
+    bars = max(len(rows) for rows in per_technique)
+    fig, ax = plt.subplots(figsize=(max(7.5, 1.6 + 0.62 * bars * len(techniques)), 5.2))
+    width = 0.8 / bars
+    seen = set()
+    for i, (t, rows) in enumerate(zip(techniques, per_technique)):
+        for j, (name, row) in enumerate(rows):
+            ms = row["frame_ms"]
+            x = i + (j - (len(rows) - 1) / 2) * width
+            tag(list(ax.bar(x, ms["median"], width * 0.92, color=colour(name), label=name if name not in seen else None)), name)
+            seen.add(name)
+            ax.errorbar(x, ms["median"], yerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]], color="black", capsize=2, lw=0.8)
+            err = rmse(row)
+            if err is not None:
+                ax.annotate(f"{err:.3f}", (x, ms["p90"]), textcoords="offset points", xytext=(0, 2), ha="center", va="bottom",
+                            fontsize=6, rotation=90)
+        top = max(row["frame_ms"]["p90"] for _, row in rows)
+        subjects = equal_error_subjects(t)
+        if subjects:
+            lines = [f"{name}: {ratio_text(time, 'speedup')}, {ratio_text(memory, 'memory')}"
+                     for name, _, _, time, memory in subjects]
+            lines.insert(0, "at equal error against the engine front:")
+        else:
+            lines = [f"no equal-error reading: {t.get('equal_error', {}).get('unavailable', 'no engine front')}"]
+        fixed_err, adaptive_err = rmse(t["fixed"]), rmse(t["adaptive"])
+        errors = f" (RMSE {fixed_err:.3f} vs {adaptive_err:.3f})" if fixed_err is not None and adaptive_err is not None else ""
+        lines.append(f"fixed {t['fixed']['resolution_texels']}$^2$ / adaptive: {t['speedup_median']:.2f}x{errors}; "
+                     f"adaptive {t['adaptive']['cascades_most_frames']}$^2$ most frames")
+        ax.annotate("\n".join(lines), (i, top), textcoords="offset points", xytext=(0, 30), ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(range(len(techniques)), [t["technique"] for t in techniques])
+    ax.set_ylabel(f"frame time, ms ({report.get('frame_time_method', '')}; median, p10-p90)")
+    ax.set_title(f"{run_line(report)}: frame time per configuration; above each bar its visibility RMSE against the reference",
+                 fontsize=9)
+    ax.set_ylim(0, ax.get_ylim()[1] * 1.7)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0)
+    fig.tight_layout()
+    return fig
 
 
 def consecutive_pairs(report):
@@ -131,112 +240,128 @@ def consecutive_pairs(report):
     return [frames[j] for j in range(1, len(frames)) if frames[j] == frames[j - 1] + 1]
 
 
-def plot_flicker(report, techniques, outdir):
-    """flicker.png: mean |visibility change| at reprojected pixels from frame t - 1 to t, per
-    configuration, one line per run of consecutive frames (a short path's stations are not joined).
-    The world-fixed map of the tables is left out: on the outdoor town it lies above the cascades,
-    so it bounds nothing there."""
+def flicker_shown(t):
+    """The configurations flicker.png follows along the path: the rule with and without hysteresis
+    (does the hysteresis hold the map still?), the fixed map, the engine baseline, and the cached
+    virtual map (the strongest reading at equal error)."""
+    return ["adaptive", "adaptive, no hysteresis", fixed_name(t), t.get("engine_baseline", ""), "virtual rule, cached"]
+
+
+def plot_flicker(report, techniques):
+    """flicker.png: mean |visibility change| at reprojected pixels from frame t - 1 to t. Left, its
+    mean over the path for every configuration; right, along the path for flicker_shown(), one line
+    per run of consecutive frames (a short path's stations are not joined). The world-fixed map is
+    left out: on the outdoor town it lies above the cascades, so it bounds nothing there."""
     with_flicker = [t for t in techniques if any(f["mean_abs_per_frame"] for f in t.get("flicker", []))]
     if not with_flicker:
-        return
+        return None
     pairs = consecutive_pairs(report)
-    fig, axes = plt.subplots(1, len(with_flicker), figsize=(5.6 * len(with_flicker), 3.8), squeeze=False)
-    for ax, t in zip(axes[0], with_flicker):
-        shown = {"adaptive", "adaptive, no hysteresis", f"fixed-{t['fixed']['resolution_texels']}"}
-        shown |= {b["name"] for b in shown_baselines(t)}
-        for k, f in enumerate(c for c in t["flicker"] if c["configuration"] in shown):
+    fig, axes = plt.subplots(len(with_flicker), 2, figsize=(12, 3.9 * len(with_flicker)), squeeze=False,
+                             gridspec_kw={"width_ratios": [1, 1.5]})
+    for (bar_ax, ax), t in zip(axes, with_flicker):
+        rows = [f for f in t["flicker"] if f["mean_abs_per_frame"] and not f["configuration"].startswith("floor")]
+        names = [f["configuration"] for f in rows]
+        y = list(range(len(rows)))[::-1]
+        for bar, n in zip(bar_ax.barh(y, [f["mean_abs_mean"] for f in rows], color=[colour(n) for n in names]), names):
+            tag(bar, n)
+        for yy, f in zip(y, rows):
+            bar_ax.annotate(f" {f['resolution_changes']}", (f["mean_abs_mean"], yy), va="center", fontsize=6)
+        bar_ax.set_yticks(y, names, fontsize=7)
+        bar_ax.set_xlabel("mean |V(t) - V(t-1)| over the path, reprojected\n(beside each bar: resolution changes)", fontsize=8)
+        bar_ax.set_title(f"{t['technique']}: every configuration", fontsize=9)
+        bar_ax.margins(x=0.15)
+        shown = flicker_shown(t)
+        for f in sorted((f for f in rows if f["configuration"] in shown), key=lambda f: shown.index(f["configuration"])):
             ys = f["mean_abs_per_frame"]
             xs = pairs if len(pairs) == len(ys) else list(range(1, len(ys) + 1))
             # NaN between runs, so that a line never joins two stations.
             px, py = [], []
-            for i, (x, y) in enumerate(zip(xs, ys)):
+            for i, (x, v) in enumerate(zip(xs, ys)):
                 if i > 0 and x != xs[i - 1] + 1:
                     px.append(float("nan"))
                     py.append(float("nan"))
                 px.append(x)
-                py.append(y)
-            ax.plot(px, py, "-", marker=MARKERS[k % len(MARKERS)], ms=4, alpha=0.85, lw=max(1.6 - 0.15 * k, 0.6),
-                    label=f"{f['configuration']} ({f['resolution_changes']} res. changes)")
-        ax.set_title(t["technique"], fontsize=9)
-        ax.set_xlabel("path frame t (pair t - 1, t)" if len(pairs) else "consecutive frame pair")
-        ax.set_ylabel("mean |V(t) - V(t-1)|, reprojected")
-        ax.legend(fontsize=7)
-    fig.suptitle(f"{report.get('scene', '')}: flicker along the path", fontsize=9)
+                py.append(v)
+            name = f["configuration"]
+            c, marker = style(name)
+            tag(ax.plot(px, py, "--" if "no hysteresis" in name else "-", marker=marker, color=c, ms=5, lw=1.4, alpha=0.9,
+                        label=f"{name} ({f['resolution_changes']} res. changes)"), name)
+        ax.set_title(f"{t['technique']}: along the path, the rule with and without hysteresis against "
+                     f"{fixed_name(t)}, {t.get('engine_baseline', '')} and the cached virtual map", fontsize=8)
+        ax.set_xlabel("path frame t (pair t - 1, t)" if len(pairs) else "consecutive frame pair", fontsize=8)
+        ax.set_ylabel("mean |V(t) - V(t-1)|, reprojected", fontsize=8)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.suptitle(f"{run_line(report)}: flicker, the visibility's change from frame to frame where the surface stays in view",
+                 fontsize=9)
     fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{outdir}/flicker.{ext}", dpi=110)
+    return fig
 
 
-def configurations(t):
-    """(name, measured row) of every configuration in the tables: adaptive, fixed, the baselines."""
-    rows = [("adaptive", t["adaptive"]), (f"fixed-{t['fixed']['resolution_texels']}", t["fixed"])]
-    return rows + [(b["name"], b) for b in t.get("baselines", [])]
-
-
-def plot_error(report, techniques, outdir):
+def plot_error(report, techniques):
     """error.png: RMSE of the visibility against the technique's reference against median frame
     time, one point per configuration (lower left is better)."""
-    with_error = [t for t in techniques if any(row.get("reference_error") for _, row in configurations(t))]
+    with_error = [t for t in techniques if any(rmse(row) is not None for _, row in configurations(t))]
     if not with_error:
-        return
-    fig, axes = plt.subplots(1, len(with_error), figsize=(5.2 * len(with_error), 3.8), squeeze=False)
-    colours = ["#2b7bba", "#8c8c8c", "#d9a441", "#8e5ea2"]
+        return None
+    fig, axes = plt.subplots(1, len(with_error), figsize=(6.4 * len(with_error), 4.4), squeeze=False)
     for ax, t in zip(axes[0], with_error):
-        for j, (name, row) in enumerate(configurations(t)):
+        for name, row in configurations(t):
             err = row.get("reference_error")
             if not err:
                 continue
             ms = row["frame_ms"]
             per_frame = err.get("rmse_per_frame", [err["rmse_mean"]])
+            c, marker = style(name)
             # Vertical bar: the smallest and largest RMSE over the reference frames.
-            yerr = [[err["rmse_mean"] - min(per_frame)], [max(per_frame) - err["rmse_mean"]]]
-            ax.errorbar(ms["median"], err["rmse_mean"], xerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]],
-                        yerr=yerr, fmt=MARKERS[j % len(MARKERS)], color=colours[j % len(colours)], capsize=3,
-                        label=f"{name}: {row['texels_rendered']['median'] / 1e6:.1f} Mtexels")
-        ax.set_xlabel(f"frame time, ms ({report.get('frame_time_method', '')}; median, p10-p90)")
-        ax.set_ylabel("visibility RMSE vs reference\n(mean; bar: min-max over the frames)", fontsize=8)
-        ax.set_ylim(bottom=0)
-        ax.set_title(t["technique"], fontsize=9)
-        ax.legend(fontsize=6, loc="best", framealpha=0.85,
-                  title=f"reference: {t.get('reference', {}).get('description', '')[:60]}", title_fontsize=5)
-    fig.suptitle(f"{report.get('scene', '')}: error against the reference at {with_error[0].get('reference', {}).get('frames', 0)}"
-                 " frames against frame time", fontsize=9)
+            lines = ax.errorbar(ms["median"], err["rmse_mean"], xerr=[[ms["median"] - ms["p10"]], [ms["p90"] - ms["median"]]],
+                                yerr=[[err["rmse_mean"] - min(per_frame)], [max(per_frame) - err["rmse_mean"]]], fmt=marker,
+                                color=c, ms=9 if name == "adaptive" else 6, capsize=2, lw=0.8,
+                                label=f"{name}: {row['texels_rendered']['median'] / 1e6:.1f} Mtexels drawn")
+            tag(lines[0], name)
+        ax.set_xscale("log")
+        ax.set_xlabel(f"frame time, ms ({report.get('frame_time_method', '')}; median, p10-p90)", fontsize=8)
+        ax.set_ylabel("visibility RMSE against the reference\n(mean; bar: min-max over the frames)", fontsize=8)
+        reference = textwrap.fill(f"reference: {t.get('reference', {}).get('description', '')}", 80)
+        ax.set_title(f"{t['technique']}: error against frame time per configuration\n{reference}", fontsize=7)
+        ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.suptitle(f"{run_line(report)}: error against the reference (at {with_error[0].get('reference', {}).get('frames', 0)}"
+                 " reference frames) against frame time (lower left is better)", fontsize=9)
     fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{outdir}/error.{ext}", dpi=110)
+    return fig
 
 
-def plot_path(report, techniques, outdir):
-    """path.png: texels drawn per frame along the path by every configuration (the adaptive rule
-    with and without hysteresis follows the view; the fixed maps and cascades stay put)."""
+def plot_path(report, techniques):
+    """path.png: texels drawn per frame along the path (the adaptive rule with and without
+    hysteresis follows the view; the fixed maps and cascades stay put; a virtual map draws its
+    marked pages, the cached one only those it did not keep)."""
     frames = report.get("path_frame_index", [])
     with_path = [t for t in techniques if t.get("along_path")]
     if not with_path or len(frames) < 2:
-        return
-    fig, axes = plt.subplots(1, len(with_path), figsize=(5.6 * len(with_path), 3.8), squeeze=False)
+        return None
+    fig, axes = plt.subplots(1, len(with_path), figsize=(6.4 * len(with_path), 4.2), squeeze=False)
     for ax, t in zip(axes[0], with_path):
-        shown = {"adaptive", "adaptive, no hysteresis", f"fixed-{t['fixed']['resolution_texels']}"}
+        shown = {"adaptive", "adaptive, no hysteresis", fixed_name(t), "virtual rule", "virtual rule, cached"}
         shown |= {b["name"] for b in shown_baselines(t)}
         rows = [row for row in t["along_path"] if row["configuration"] in shown]
         for k, row in enumerate(rows):
-            style = "--" if "no hysteresis" in row["configuration"] else "-"
-            # Distinct markers and thinning lines: equal series (4096² and 4 × 2048² both draw
-            # 16.8 Mtexels) stay visible one over the other.
-            ax.plot(frames, [v / 1e6 for v in row["texels"]], style, marker=MARKERS[k % len(MARKERS)], ms=max(7 - k, 3), alpha=0.8,
-                    lw=max(2.2 - 0.25 * k, 0.6), label=row["configuration"])
+            name = row["configuration"]
+            c, marker = style(name)
+            # Thinning lines: equal series (4096² and 4 × 2048² both draw 16.8 Mtexels) stay
+            # visible one over the other.
+            tag(ax.plot(frames, [max(v, 1) / 1e6 for v in row["texels"]], "--" if "no hysteresis" in name else "-", marker=marker,
+                        color=c, ms=max(7 - k * 0.5, 3), alpha=0.85, lw=max(2.2 - 0.2 * k, 0.6), label=name), name)
         ax.set_yscale("log")
         if report.get("path") == "short":
             ax.set_xlabel(f"path frame\n({len(frames)} frames: stations of consecutive frames along the "
                           f"{report.get('path_length', len(frames))}-frame path)", fontsize=8)
         else:
-            ax.set_xlabel(f"frame of the {report.get('path_length', len(frames))}-frame {report.get('path', '')} path")
-        ax.set_ylabel("Mtexels drawn per frame")
-        ax.set_title(t["technique"], fontsize=9)
-        ax.legend(fontsize=7)
-    fig.suptitle(f"{report.get('scene', '')}: shadow-map texels along the path", fontsize=9)
+            ax.set_xlabel(f"frame of the {report.get('path_length', len(frames))}-frame {report.get('path', '')} path", fontsize=8)
+        ax.set_ylabel("Mtexels drawn per frame (virtual: pages drawn)", fontsize=8)
+        ax.set_title(f"{t['technique']}: shadow-map texels drawn along the path", fontsize=9)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.suptitle(f"{run_line(report)}: texels drawn per frame", fontsize=9)
     fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(f"{outdir}/path.{ext}", dpi=110)
+    return fig
 
 
 if __name__ == "__main__":
