@@ -95,6 +95,7 @@ void read_c(const json_input::Reader& r, const nlohmann::json& j, const std::str
   if (const auto* ci = r.get(j, at, spec, "ci95")) {
     e.ci95_lo = (*ci)[0].get<double>();
     e.ci95_hi = (*ci)[1].get<double>();
+    e.has_ci95 = true;
     if (!(e.ci95_lo <= e.c && e.c <= e.ci95_hi))
       r.fail(json_input::child(at, "ci95"), "expected 0 < lo <= c <= hi <= 1000, got " + json_input::printable(ci->dump()));
   }
@@ -163,7 +164,7 @@ std::string describe(const CalibrationEntry& e) {
 }
 
 CalibrationChoice from_entry(const CalibrationEntry& e, bool fallback, std::string from) {
-  return {e.c, e.ci95_lo, e.ci95_hi, e, fallback, std::move(from)};
+  return {e.c, e.ci95_lo, e.ci95_hi, e.has_ci95, e, fallback, std::move(from)};
 }
 
 }  // namespace
@@ -248,7 +249,7 @@ CalibrationChoice Calibration::choose(std::string_view technique, std::string_vi
     if (e.technique == technique) return from_entry(e, true, describe(e) + ", not measured for " + wanted);
   for (const CalibrationEntry& e : entries)
     if (e.technique == "pcf") return from_entry(e, true, describe(e) + ", not measured for " + wanted);
-  return {kPublishedC, kPublishedC, kPublishedC, std::nullopt, true, "published PCF value, not measured for " + wanted};
+  return {kPublishedC, kPublishedC, kPublishedC, false, std::nullopt, true, "published PCF value, not measured for " + wanted};
 }
 
 const json_input::ObjectSpec& calibration_fields() {
@@ -274,6 +275,11 @@ Calibration load_calibration(const std::filesystem::path& path) {
   try {
     Calibration cal;
     cal.source = path.string();
+    // A study config given by mistake (its c is "missing"): say what it is and which file is wanted.
+    if (j.is_object() && !j.contains("c") && !j.contains("entries") && (j.contains("rounds") || j.contains("quest")))
+      throw CalibrationError(path.string() +
+                             ": a study config (penumbra-study --config), not a calibration file; give the calibration.json "
+                             "penumbra-fit writes, or the shipped calibration/default.json");
     if (!j.is_object() || !j.contains("schema_version")) {
       // Version 1: one c, measured with the study's own filter before entries per technique.
       r.object(j, "", version_1_fields());

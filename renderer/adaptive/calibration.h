@@ -59,8 +59,11 @@ struct CalibrationEntry {
   std::string technique;  // a registry name: pcf, vsm, rpcf, ...
   std::string kernel;     // the technique's kernel (pcf: grid, poisson) or "" for any
   double c = kPublishedC;
+  // The 95 % interval; lo = hi = c when the entry has none (the published constant: the thesis gives
+  // none), and has_ci95 says which, so that no zero-width interval is ever written or printed.
   double ci95_lo = kPublishedC;
   double ci95_hi = kPublishedC;
+  bool has_ci95 = false;
   std::string condition;  // the condition c came from (e.g. "step, full contrast")
   CalibrationMethod obtained_by = CalibrationMethod::published;
   int participants = 0;  // 0: not stated
@@ -96,8 +99,9 @@ CAtVisibility c_at_visibility(const CalibrationEntry& entry, double visibility);
 // The c the rule uses for one technique, and where it came from, for output and reports.
 struct CalibrationChoice {
   double c = kPublishedC;
-  double ci95_lo = kPublishedC;
+  double ci95_lo = kPublishedC;  // = c when the entry has no interval (has_ci95)
   double ci95_hi = kPublishedC;
+  bool has_ci95 = false;
   // The entry used (nullopt: the published value, the file having nothing that applies).
   std::optional<CalibrationEntry> entry;
   // True when the entry was measured for another technique or kernel than the one rendered.

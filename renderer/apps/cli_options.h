@@ -217,7 +217,7 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
                       {"technique", std::string(shadows::to_string(settings.technique))},
                       {"kernel", kernel.empty() ? nlohmann::json(nullptr) : nlohmann::json(kernel)},
                       {"c", settings.adaptive.c},
-                      {"ci95", {chosen.ci95_lo, chosen.ci95_hi}},
+                      {"ci95", chosen.has_ci95 ? nlohmann::json{chosen.ci95_lo, chosen.ci95_hi} : nlohmann::json(nullptr)},  // null: none
                       {"entry", chosen.entry ? nlohmann::json(chosen.entry->label()) : nlohmann::json(nullptr)},
                       {"obtained_by", chosen.entry ? std::string(adaptive::method_name(chosen.entry->obtained_by)) : "published"},
                       {"observers", chosen.entry ? std::string(adaptive::method_description(chosen.entry->obtained_by)) : "published"},
@@ -233,7 +233,9 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
     adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
     if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
     const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
-    j["ci95_at_visibility"] = {at.lo, at.hi};
+    // Only an interval the entry has (of c, or of an estimated slope): none is written as null.
+    const bool interval = entry.has_ci95 || entry.definition().beta_lo < entry.definition().beta_hi;
+    j["ci95_at_visibility"] = interval ? nlohmann::json{at.lo, at.hi} : nlohmann::json(nullptr);
   }
   if (chosen.entry && !chosen.entry->usable) j["unusable_because"] = chosen.entry->unusable_because;
   return j;

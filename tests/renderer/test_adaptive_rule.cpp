@@ -177,6 +177,9 @@ TEST_F(CalibrationFile, ShippedDefaultIsThePublishedConstant) {
   EXPECT_DOUBLE_EQ(e.c, kPublishedC);
   EXPECT_EQ(e.obtained_by, CalibrationMethod::published);
   EXPECT_EQ(e.participants, 10);
+  // The thesis gives no interval: none is read (nor written as [3.47, 3.47]).
+  EXPECT_FALSE(e.has_ci95);
+  EXPECT_FALSE(cal.choose("pcf", "disk").has_ci95);
   // Issue 29: the published entry says what its c is a threshold of, as this project reads the
   // thesis (yes/no scored as balanced percent correct): F 0.674, QUEST's assumed slope 3.5; in 2AFC
   // terms (F* 0.6465) 3.54, or 3.97 if QUEST was fed the jagged trials only.
@@ -280,6 +283,25 @@ TEST_F(CalibrationFile, BadVersionTwoFilesNameTheField) {
       {R"({"schema_version": 2, "entries": [)" + ok_entry + ", " + ok_entry + "]}", ": entries[1]: a second entry for pcf"},
   };
   for (const auto& c : cases) expect_refused(c.text, c.field);
+}
+
+// A study config given as --calibration is named as such, with the file that is wanted, instead of
+// "c: missing".
+TEST_F(CalibrationFile, AStudyConfigIsNamedAsOneWithTheFileWanted) {
+  const auto p = write(R"({"name": "lab", "task": "2afc", "rounds": [{"pattern": "stair", "contrast": 1}], "quest": {"beta": 3.5}})");
+  try {
+    load_calibration(p);
+    ADD_FAILURE() << "a study config was read as a calibration";
+  } catch (const CalibrationError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.rfind(p.string() + ": a study config (penumbra-study --config), not a calibration file", 0), 0u) << msg;
+    EXPECT_NE(msg.find("calibration.json penumbra-fit writes"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("missing"), std::string::npos) << msg;
+  }
+  // A file with an interval says it has one.
+  const Calibration with = load_calibration(write(R"({"c": 3, "ci95": [2.5, 3.5]})"));
+  EXPECT_TRUE(with.entries.at(0).has_ci95);
+  EXPECT_TRUE(with.choose("pcf", "grid").has_ci95);
 }
 
 TEST_F(CalibrationFile, BadFilesNameTheField) {
