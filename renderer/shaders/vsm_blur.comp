@@ -40,8 +40,16 @@ uniform int u_axis;      // 0: along x (one invocation per row), 1: along y
 uniform ivec2 u_origin;  // the map's region in the atlas: u_size^2 texels from u_origin
 uniform int u_size;
 
+#if defined(COUNT_FETCHES_BINDING)
+// The blur's work for tests (shadows/moments_blur.h): every texel fetched, counted.
+layout(std430, binding = COUNT_FETCHES_BINDING) buffer FetchCount { uint u_fetches; };
+#endif
+
 // Texel i of the line (clamped to the map's edge); `line` indexes rows for axis 0, columns for axis 1.
 moments_t fetch(int i, int line, int len) {
+#if defined(COUNT_FETCHES_BINDING)
+  atomicAdd(u_fetches, 1u);
+#endif
   i = clamp(i, 0, len - 1);
   return texelFetch(u_source, u_origin + (u_axis == 0 ? ivec2(i, line) : ivec2(line, i)), 0).MOMENTS_SWIZZLE;
 }

@@ -12,25 +12,11 @@
 #include "gl/context.h"
 #include "sampling/poisson_disk.h"
 #include "shadows/contract.h"
+#include "shadows/moments_blur.h"
 #include "shadows/renderer.h"
 #include "shadows/scoped_pass.h"
 
 namespace penumbra::shadows {
-
-namespace {
-
-// The sized internal format of a moments texture (the planner's MomentsFormat has no GL in it).
-GLenum gl_format(MomentsFormat format) {
-  switch (format) {
-    case MomentsFormat::r32f: return GL_R32F;
-    case MomentsFormat::rg32f: return GL_RG32F;
-    case MomentsFormat::rgba16f: return GL_RGBA16F;
-    case MomentsFormat::rgba32f: return GL_RGBA32F;
-  }
-  return GL_RGBA32F;
-}
-
-}  // namespace
 
 const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std::string& key, const std::vector<gl::ShaderStage>& stages,
                                      const std::vector<gl::ShaderDefine>& defines) {
@@ -64,7 +50,7 @@ FrameResources::FrameResources(const gl::ShaderLibrary& library) : shaders(libra
 bool FrameResources::prepare(const FramePlan& plan) {
   bool reallocated = false;
   const AtlasLayout& layout = plan.atlas;
-  const GLenum moments_format = plan.moments ? gl_format(plan.moments->format) : 0;
+  const GLenum moments_format = plan.moments ? moments_gl_format(plan.moments->format) : 0;
   if (!maps || maps->width != layout.width || maps->height != layout.height || maps->moments_format != moments_format) {
     GLint max_size = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
@@ -404,39 +390,16 @@ class MomentsBlurPass final : public Pass {
     const FilterRadius radius = *f.plan.filter_radius;
     FrameResources& r = f.res;
     const char* qualifier = image_format_qualifier(moments.format);
-    std::vector<gl::ShaderDefine> defines = {{"MOMENTS_CHANNELS", std::to_string(channel_count(moments.format))},
-                                             {"MOMENTS_FORMAT", qualifier}};
-    if (moments.direct_sums) defines.push_back({"DIRECT_SUMS", "1"});
     const gl::Program& blur = r.programs.get(r.shaders, std::string("blur:") + qualifier + (moments.direct_sums ? ":direct" : ""),
-                                             {{GL_COMPUTE_SHADER, "vsm_blur.comp"}}, defines);
-    blur.use();
-    glBindSampler(0, 0);
+                                             {{GL_COMPUTE_SHADER, "vsm_blur.comp"}}, moments_blur_defines(moments));
     const LightFrame& lf = f.plan.light();
     const float mid_depth = 0.5f * (lf.near_ws + lf.far_ws);
     for (const auto& c : f.plan.cascades) {
       // World-space radii span a different number of texels in each cascade.
       const float texel = c.light.texel_ws(mid_depth, c.resolution_texels);
-      // A window wider than the map is cut to the map's width: beyond it only the edge texels'
-      // weights would grow (clamp to edge), and the sliding sum's first window would cost r fetches
-      // (ESM at r = 1e6 took 30 s).
       const float r_texels = radius.unit == RadiusUnit::texels ? radius.radius : radius.radius / texel;
-      blur.set("u_radius_texels", std::min(r_texels, static_cast<float>(c.resolution_texels)));
-      blur.set("u_origin", glm::ivec2(c.atlas_x, c.atlas_y));
-      blur.set("u_size", c.resolution_texels);
-      // Sliding sums: one invocation per line (x); direct sums: one per texel, x along the line and
-      // y the line (vsm_blur.comp). The map is square, so both grids are res x (1 or res).
-      const int lines_y = moments.direct_sums ? c.resolution_texels : 1;
-      const GLuint source = blur.binding("u_source"), target = blur.binding("u_target");
-      blur.set("u_axis", 0);
-      r.maps->moments_tex.bind(source);
-      glBindImageTexture(target, r.maps->moments_tmp.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
-      blur.dispatch_covering(c.resolution_texels, lines_y);
-      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-      blur.set("u_axis", 1);
-      r.maps->moments_tmp.bind(source);
-      glBindImageTexture(target, r.maps->moments_tex.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, gl_format(moments.format));
-      blur.dispatch_covering(c.resolution_texels, lines_y);
-      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      blur_moments_region(blur, moments, r.maps->moments_tex, r.maps->moments_tmp, glm::ivec2(c.atlas_x, c.atlas_y), c.resolution_texels,
+                          moments_blur_radius_texels(r_texels, c.resolution_texels));
     }
     gl::check_errors("vsm_blur pass");
   }

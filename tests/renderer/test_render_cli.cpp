@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fcntl.h>
 #include <filesystem>
@@ -579,24 +578,19 @@ TEST_F(RenderCli, MapResolutionTexelsAloneIsTheResolutionRendered) {
 }
 
 // Issue 27: --esm.radius 1e6 took 29.8 s and --evsm.radius 1e6 23.5 s, VSM at the same radius
-// 0.98 s: their blur summed each texel's window anew, len texels each once the window covered the
-// line. The window is cut to the map and wide windows add whole chunks of the line
-// (vsm_blur.comp): the work per texel is bounded by the map. Timed against VSM in the same test
-// (llvmpipe on 2 cores: ESM 4.7 s, EVSM 6.6 s, VSM 0.75 s).
-TEST_F(RenderCli, ABlurRadiusWiderThanTheMapCostsNoMoreThanTheMap) {
-  auto seconds = [&](const std::string& technique) {
-    const auto start = std::chrono::steady_clock::now();
-    const Result r = run_render({"--width", "64", "--height", "48", "--resolution", "2048", "--frames", "1", "--warmup", "0",
-                                 "--technique", technique, "--" + technique + ".radius", "1e6", "-o", (work_ / technique).string()},
+// 0.98 s: their blur summed each texel's window anew. A radius wider than the map renders, and
+// every visibility is finite; that its work is bounded by the map (not its seconds: a loaded
+// machine made a wall-clock bound here fail) is MomentsBlur.AWindowWiderThanTheMapFetchesNoMoreThanTheMapBounds.
+TEST_F(RenderCli, ABlurRadiusWiderThanTheMapRenders) {
+  for (const char* t : {"vsm", "esm", "evsm"}) {
+    SCOPED_TRACE(t);
+    const fs::path out = work_ / t;
+    const Result r = run_render({"--width", "64", "--height", "48", "--resolution", "512", "--frames", "1", "--warmup", "0", "--technique",
+                                 t, std::string("--") + t + ".radius", "1e6", "-o", out.string()},
                                 scratch_);
-    EXPECT_EQ(r.exit_code, 0) << technique << ": " << r.err;
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  const double vsm = seconds("vsm");
-  for (const char* t : {"esm", "evsm"}) {
-    const double s = seconds(t);
-    std::printf("%s at r = 1e6 texels on 2048^2: %.2f s (vsm %.2f s)\n", t, s, vsm);
-    EXPECT_LT(s, 15 * vsm + 1) << t;
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const penumbra::io::ImageF visibility = penumbra::io::read_imagef(only_render_dir(out) / "visibility.exr");
+    for (const float v : visibility.pixels) ASSERT_TRUE(std::isfinite(v) && v >= 0 && v <= 1) << v;
   }
 }
 

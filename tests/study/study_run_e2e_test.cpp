@@ -581,9 +581,7 @@ TEST(StudyRun, ResumeRefusesAnEditedSessionJsonAndLeavesEveryByte) {
   for (const auto& [text, expected] : cases) {
     { std::ofstream(dir / "session.json", std::ios::trunc) << text; }
     std::string out;
-    const auto start = std::chrono::steady_clock::now();
     EXPECT_EQ(run({"run", "--resume", dir.string(), "--headless"}, &out), 1) << expected;
-    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10)) << expected;
     EXPECT_NE(out.find(expected), std::string::npos) << out.substr(0, 300);
     EXPECT_EQ(lines_of(out), 1) << out.substr(0, 300);
     EXPECT_LT(out.size(), 600u) << expected;
