@@ -54,10 +54,11 @@ std::string header_line(Layout layout) {
 
 namespace {
 
+// The shortest text that reads back as the same double (0.3, not 0.29999999999999999).
 std::string num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, ec == std::errc() ? end : buf);
 }
 
 // A reaction time to the microsecond (a clock finer than that says nothing about a key press).

@@ -71,6 +71,25 @@ TEST(TrialLog, RoundTripsEveryValueExactly) {
   EXPECT_THROW(trial_log::Writer(dir / "trials.csv", true), std::runtime_error);  // never recreated
 }
 
+// A number is written in the shortest form that reads back as the same double: a contrast of 0.3
+// is "0.3" in trials.csv, not 0.29999999999999999 (what %.17g wrote), and still round-trips.
+TEST(TrialLog, NumbersAreWrittenInTheirShortestExactForm) {
+  trial_log::TrialRow r = sample_row(0);
+  r.contrast = 0.3;
+  r.quest_sd = 0.1 + 0.2;  // 0.30000000000000004: needs all 17 digits
+  const std::string line = trial_log::format_row(r);
+  EXPECT_NE(line.find(",0.3,"), std::string::npos) << line;
+  EXPECT_EQ(line.find("0.2999999"), std::string::npos) << line;
+  EXPECT_NE(line.find("0.30000000000000004"), std::string::npos) << line;
+  const fs::path dir = fresh_dir("log-shortest");
+  { trial_log::Writer(dir / "trials.csv", true).append(r); }
+  const auto log = trial_log::read(dir / "trials.csv");
+  ASSERT_EQ(log.rows.size(), 1u);
+  EXPECT_EQ(log.rows[0].contrast, 0.3);
+  EXPECT_EQ(log.rows[0].quest_sd, 0.1 + 0.2);
+  EXPECT_EQ(log.rows[0].intensity, r.intensity);
+}
+
 TEST(TrialLog, ReaderNamesFileLineAndColumn) {
   const fs::path dir = fresh_dir("log-errors");
   auto write = [&](const std::string& body) {
@@ -167,9 +186,9 @@ TEST(TrialLog, TimingColumnsRoundTripAndLogsWithoutThemStillRead) {
     return std::string(std::istreambuf_iterator<char>(in), {});
   }();
   EXPECT_NE(text.find(",stimulus_seed,onset_s,frames,frame_ms_mean,frame_ms_max,dropped_frames\n"), std::string::npos);
-  EXPECT_NE(text.find(",4010436946754998,12.5,4,22.574999999999999,40.100000000000001,1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find(",4010436946754998,12.5,4,22.575,40.1,1\n"), std::string::npos) << text;
   EXPECT_NE(text.find(",4010436946754998,,,,,\n"), std::string::npos) << text;
-  EXPECT_NE(text.find(",4010436946754998,14.5,4,22.574999999999999,40.100000000000001,\n"), std::string::npos) << text;
+  EXPECT_NE(text.find(",4010436946754998,14.5,4,22.575,40.1,\n"), std::string::npos) << text;
   const auto log = trial_log::read(dir / "trials.csv");
   EXPECT_EQ(log.layout, trial_log::Layout::current);
   ASSERT_EQ(log.rows.size(), 3u);
@@ -463,7 +482,7 @@ TEST(TrialLog, ValuesNoSessionWritesAreRefusedAndSpreadsheetDamageIsNamed) {
             f + ":2: column 'utc_time': expected a UTC time as the study writes it, 2026-12-03T09:15:02.123Z (found 'yesterday')");
   EXPECT_EQ(with("2025-01-01T00:00:00.000Z", "2025-13-01T00:00:00.000Z").find("column 'utc_time'"), f.size() + 4);
   EXPECT_EQ(with(",12.5,4,", ",1e308,4,"), f + ":2: column 'onset_s': expected a time in [0, 1e7] s since the window opened (found '1e308')");
-  EXPECT_EQ(with(",22.574999999999999,", ",1e300,").find("column 'frame_ms_mean'"), f.size() + 4);
+  EXPECT_EQ(with(",22.575,", ",1e300,").find("column 'frame_ms_mean'"), f.size() + 4);
   EXPECT_EQ(read_error(dir / "t.csv").find("no error"), std::string::npos);
   {
     std::ofstream(dir / "crlf.csv", std::ios::binary) << "session_id,participant\r\n";
