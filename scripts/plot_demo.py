@@ -15,13 +15,14 @@ Usage: plot_demo.py REPORT.json OUTDIR (writes front, demo, flicker, error and p
 import json
 import math
 import re
-import textwrap
 import sys
+import textwrap
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 # The configurations whose name says nothing of a map size (apps/demo/configurations.cpp): the
 # rule in red, the virtual maps in greens (the rule's) and pink (the footprint's); the engine
@@ -190,10 +191,12 @@ def plot_demo(report, techniques):
     """demo.png: median frame time (p10-p90) of every configuration measured against the engine,
     each bar labelled with its RMSE against the reference; above each technique the equal-error
     ratios (front.png's), and the fixed map's ratio only with both errors beside it."""
+    # The same bars in the same order for every technique: the baselines any technique shows.
+    shown = {b["name"] for t in techniques for b in shown_baselines(t)}
     per_technique = []
     for t in techniques:
         rows = [(fixed_name(t), t["fixed"]), ("adaptive", t["adaptive"])]
-        rows += [(b["name"], b) for b in shown_baselines(t)] + [(v["name"], v) for v in t.get("virtual", [])]
+        rows += [(b["name"], b) for b in t.get("baselines", []) if b["name"] in shown] + [(v["name"], v) for v in t.get("virtual", [])]
         per_technique.append(rows)
     bars = max(len(rows) for rows in per_technique)
     fig, ax = plt.subplots(figsize=(max(7.5, 1.6 + 0.62 * bars * len(techniques)), 5.2))
@@ -240,6 +243,34 @@ def consecutive_pairs(report):
     return [frames[j] for j in range(1, len(frames)) if frames[j] == frames[j - 1] + 1]
 
 
+def station_positions(frames):
+    """x of each path frame: consecutive frames one apart, a station's first frame two after the
+    last one's (a short path's stations, 120 frames apart, would otherwise squeeze each to a dot)."""
+    xs = []
+    for i, f in enumerate(frames):
+        xs.append(0 if i == 0 else xs[-1] + (1 if f == frames[i - 1] + 1 else 2))
+    return xs
+
+
+def station_series(frames, values):
+    """(x, y) over station_positions(frames), NaN between stations so that no line joins two."""
+    xs, px, py = station_positions(frames), [], []
+    for i, (x, v) in enumerate(zip(xs, values)):
+        if i > 0 and frames[i] != frames[i - 1] + 1:
+            px.append(float("nan"))
+            py.append(float("nan"))
+        px.append(x)
+        py.append(v)
+    return px, py
+
+
+def station_ticks(ax, frames):
+    """Ticks at station_positions(frames), labelled with the path frame (at most ~16 of them)."""
+    xs = station_positions(frames)
+    step = max(1, math.ceil(len(xs) / 16))
+    ax.set_xticks(xs[::step], [str(f) for f in frames[::step]], fontsize=7)
+
+
 def flicker_shown(t):
     """The configurations flicker.png follows along the path: the rule with and without hysteresis
     (does the hysteresis hold the map still?), the fixed map, the engine baseline, and the cached
@@ -273,22 +304,16 @@ def plot_flicker(report, techniques):
         shown = flicker_shown(t)
         for f in sorted((f for f in rows if f["configuration"] in shown), key=lambda f: shown.index(f["configuration"])):
             ys = f["mean_abs_per_frame"]
-            xs = pairs if len(pairs) == len(ys) else list(range(1, len(ys) + 1))
-            # NaN between runs, so that a line never joins two stations.
-            px, py = [], []
-            for i, (x, v) in enumerate(zip(xs, ys)):
-                if i > 0 and x != xs[i - 1] + 1:
-                    px.append(float("nan"))
-                    py.append(float("nan"))
-                px.append(x)
-                py.append(v)
+            px, py = station_series(pairs if len(pairs) == len(ys) else list(range(1, len(ys) + 1)), ys)
             name = f["configuration"]
             c, marker = style(name)
+            # The first of flicker_shown() on top: the rule is not hidden under the lines it is compared with.
             tag(ax.plot(px, py, "--" if "no hysteresis" in name else "-", marker=marker, color=c, ms=5, lw=1.4, alpha=0.9,
-                        label=f"{name} ({f['resolution_changes']} res. changes)"), name)
+                        zorder=3 + len(shown) - shown.index(name), label=f"{name} ({f['resolution_changes']} res. changes)"), name)
         ax.set_title(f"{t['technique']}: along the path, the rule with and without hysteresis against "
                      f"{fixed_name(t)}, {t.get('engine_baseline', '')} and the cached virtual map", fontsize=8)
-        ax.set_xlabel("path frame t (pair t - 1, t)" if len(pairs) else "consecutive frame pair", fontsize=8)
+        station_ticks(ax, pairs if pairs else list(range(1, len(rows[0]["mean_abs_per_frame"]) + 1)))
+        ax.set_xlabel("path frame t (pair t - 1, t); a gap between stations" if len(pairs) else "consecutive frame pair", fontsize=8)
         ax.set_ylabel("mean |V(t) - V(t-1)|, reprojected", fontsize=8)
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.suptitle(f"{run_line(report)}: flicker, the visibility's change from frame to frame where the surface stays in view",
@@ -319,6 +344,9 @@ def plot_error(report, techniques):
                                 label=f"{name}: {row['texels_rendered']['median'] / 1e6:.1f} Mtexels drawn")
             tag(lines[0], name)
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1, 2, 5)))
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel(f"frame time, ms ({report.get('frame_time_method', '')}; median, p10-p90)", fontsize=8)
         ax.set_ylabel("visibility RMSE against the reference\n(mean; bar: min-max over the frames)", fontsize=8)
         reference = textwrap.fill(f"reference: {t.get('reference', {}).get('description', '')}", 80)
@@ -348,9 +376,11 @@ def plot_path(report, techniques):
             c, marker = style(name)
             # Thinning lines: equal series (4096² and 4 × 2048² both draw 16.8 Mtexels) stay
             # visible one over the other.
-            tag(ax.plot(frames, [max(v, 1) / 1e6 for v in row["texels"]], "--" if "no hysteresis" in name else "-", marker=marker,
+            px, py = station_series(frames, [max(v, 1) / 1e6 for v in row["texels"]])
+            tag(ax.plot(px, py, "--" if "no hysteresis" in name else "-", marker=marker,
                         color=c, ms=max(7 - k * 0.5, 3), alpha=0.85, lw=max(2.2 - 0.2 * k, 0.6), label=name), name)
         ax.set_yscale("log")
+        station_ticks(ax, frames)
         if report.get("path") == "short":
             ax.set_xlabel(f"path frame\n({len(frames)} frames: stations of consecutive frames along the "
                           f"{report.get('path_length', len(frames))}-frame path)", fontsize=8)

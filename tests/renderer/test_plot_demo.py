@@ -120,6 +120,14 @@ class PlotDemo(unittest.TestCase):
             self.assertIn("adaptive", drawn)
             self.assertIn("virtual rule, cached", drawn)
 
+    def test_short_path_stations_keep_their_frames_apart_and_unjoined(self):
+        frames = [0, 1, 2, 357, 358, 359]
+        self.assertEqual(plot_demo.station_positions(frames), [0, 1, 2, 4, 5, 6])
+        xs, ys = plot_demo.station_series(frames, [1, 2, 3, 4, 5, 6])
+        self.assertEqual(len(xs), 7)
+        self.assertNotEqual(ys[3], ys[3])  # NaN: no line from frame 2 to frame 357
+        self.assertEqual(xs[4:], [4, 5, 6])
+
     def test_writes_png_and_svg(self):
         with tempfile.TemporaryDirectory() as out:
             sys.argv = ["plot_demo.py", FIXTURE, out]
