@@ -175,7 +175,7 @@ TEST(AreaLightSlow, DemoSceneReferenceConvergesBelowTheErrorsItMeasures) {
 
 // The main job's PCSS reference on the outdoor town (the street, frame 120; 1° sun; four fitted
 // cascades per sample): N samples against 4N. Its RMSE must stay below a fifth of the smallest
-// PCSS RMSE it is used to measure (docs/adaptive.md: 0.097, the adaptive maps). Measured at
+// PCSS RMSE it is used to measure (docs/results/adaptive.md: 0.097, the adaptive maps). Measured at
 // 480×270 with 2048² cascades: 16 against 64 samples 0.040 (what the demo used: too noisy),
 // 64 against 256 0.015, so the demo's default is 64. About 75 s on llvmpipe: label `slow`.
 TEST(AreaLightSlow, OutdoorReferenceConvergesBelowTheErrorsItMeasures) {
@@ -345,7 +345,7 @@ TEST(RayTraced, HardVisibilitySplitLeavesOutTheNamedCastersOnly) {
 // The main job's PCSS reference on the outdoor town (the street, frame 120, 960×540; 1° sun):
 // ray-traced, 256 shadow rays per pixel, against 1024. Compared where a surface faces the light
 // (elsewhere the shading is dark whatever the visibility). Its RMSE must stay below a fifth of the
-// smallest PCSS RMSE it is used to measure (docs/adaptive.md). The mean of hard shadows from four
+// smallest PCSS RMSE it is used to measure (docs/results/adaptive.md). The mean of hard shadows from four
 // fitted cascades per sample, the reference before, is further from it than that, even at 8188²
 // maps: the texel-sized biases decide the self-shadowing of thin receivers (branches, the fence,
 // the crane's lattice). Measured: 256 against 1024 rays 0.0057, 64 maps of 4096² against 1024

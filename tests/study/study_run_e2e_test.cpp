@@ -424,7 +424,7 @@ TEST(ObserverCurve, ListsTheTechniquesTheStudyCanDraw) {
 // The published orderings with the image observer on stimuli the renderer's PCF grid draws (issue
 // 15), never tuned for: at every artifact size the step needs a larger filter than the stair. The
 // stair's radii at a = 10 and 20 px (published: ~25 px and >= 50 px) are printed, not bounded;
-// the model's are ~11 and ~22 px (docs/study.md). The --json output is a calibration.json the
+// the model's are ~11 and ~22 px (docs/results/study.md). The --json output is a calibration.json the
 // renderer reads.
 TEST(ObserverCurve, StepNeedsALargerFilterThanTheStairOnTheRenderersPcf) {
   const fs::path out = fresh("observer-curve.json");
