@@ -99,20 +99,43 @@ double now_ms() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// Fixed | adaptive | |difference| × 10 (grey), side by side.
-io::Image8 side_by_side(const io::Image8& a, const io::Image8& b) {
-  io::Image8 out{a.width * 3, a.height, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(a.width) * 3 * a.height * 4)};
-  for (int y = 0; y < a.height; ++y)
-    for (int x = 0; x < a.width; ++x) {
-      int diff = 0;
-      for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(a.at(x, y, c)) - int(b.at(x, y, c))));
-      for (int c = 0; c < 4; ++c) {
-        out.at(x, y, c) = a.at(x, y, c);
-        out.at(x + a.width, y, c) = b.at(x, y, c);
-        out.at(x + 2 * a.width, y, c) = c == 3 ? 255 : static_cast<std::uint8_t>(std::min(255, diff * 10));
-      }
-    }
-  return out;
+// Fixed | adaptive | |difference| × 10 (grey), side by side, each under a dark band with its
+// label: what it is, its maps' resolution, the technique and the frame (io::montage draws the
+// text where the image backend has a font; the minimal backend leaves the bands blank).
+io::Image8 side_by_side(const io::Image8& a, const io::Image8& b, const std::vector<std::string>& labels) {
+  // The montage draws 24 px text from row 30 of a tile: a narrow image is scaled up to 720 px so
+  // that its label fits, and its band is 40 rows at that scale.
+  const int tile_width = std::max(a.width, 720);
+  const int band = (40 * a.width + tile_width - 1) / tile_width;
+  const auto banded = [&](auto pixel) {
+    io::Image8 out{a.width, a.height + band, 4, std::vector<std::uint8_t>(static_cast<std::size_t>(a.width) * (a.height + band) * 4, 32)};
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x)
+        for (int c = 0; c < 4; ++c) out.at(x, band + y, c) = pixel(x, y, c);
+    return out;
+  };
+  const auto diff = [&](int x, int y, int c) {
+    int d = 0;
+    for (int k = 0; k < 3; ++k) d = std::max(d, std::abs(int(a.at(x, y, k)) - int(b.at(x, y, k))));
+    return c == 3 ? std::uint8_t{255} : static_cast<std::uint8_t>(std::min(255, d * 10));
+  };
+  const std::vector<io::Image8> tiles = {banded([&](int x, int y, int c) { return a.at(x, y, c); }),
+                                         banded([&](int x, int y, int c) { return b.at(x, y, c); }), banded(diff)};
+  return io::montage(tiles, labels, 3, tile_width);
+}
+
+// The side-by-side's labels: the fixed map, the adaptive maps at the frame shown, the difference.
+// Sizes as "2048x2048" (OpenImageIO's text draws "²" as a full-size 2).
+std::vector<std::string> side_by_side_labels(const demo::TechniqueRun& run, const demo::PathPlan& plan) {
+  const demo::Series& adaptive = run.series[run.adaptive];
+  const std::string at = run.technique + ", path frame " + std::to_string(plan.frames[run.shown_at].frame);
+  const int fixed = run.series[run.fixed].config.settings.map.resolution_texels;
+  const std::string sides = run.shown_at < adaptive.resolution.size() ? adaptive.resolution[run.shown_at] : "?";  // "928" or "1024+512"
+  const auto cascades = std::count(sides.begin(), sides.end(), '+') + 1;
+  const std::string maps =
+      cascades == 1 ? "one " + sides + "x" + sides + " map" : std::to_string(cascades) + " cascades, " + sides + " a side,";
+  return {"fixed: one " + std::to_string(fixed) + "x" + std::to_string(fixed) + " map (" + at + ")", "adaptive: " + maps + " by the rule",
+          "|fixed - adaptive| x 10"};
 }
 
 struct Options {
@@ -219,7 +242,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     t["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
     report["techniques"].push_back(t);
     csv += run.csv;
-    io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"), side_by_side(run.shown_fixed, run.shown_adaptive));
+    io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"),
+                  side_by_side(run.shown_fixed, run.shown_adaptive, side_by_side_labels(run, walk.plan())));
     write_crops(out.path() / (name + "-crops.png"), run.thin_crops);
     write_crops(out.path() / (name + "-crops-gain.png"), run.gain_crops);
     // The tables need the numbers, not the renderers: their maps (up to 4 × 4096² each in a sweep)

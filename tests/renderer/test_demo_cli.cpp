@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <sstream>
 #include <string>
@@ -54,7 +55,17 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
     EXPECT_GT(t.at("speedup_median").get<double>(), 0);
     EXPECT_GE(t.at("image").at("ssim_min").get<double>(), 0.99);
     EXPECT_LE(t.at("image").at("max_abs_max").get<double>(), 0.25);
-    EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png")));
+    // Fixed | adaptive | difference, each 192 px image under a band of ceil(40 × 192 / 720) = 11
+    // rows for its label, scaled to 720 px (the PNG's IHDR: width, height, big-endian, bytes 16, 20).
+    const std::string png = test::read_file(out / (t["technique"].get<std::string>() + "-fixed-vs-adaptive.png"));
+    ASSERT_GT(png.size(), 24u);
+    const auto be32 = [&](std::size_t at) {
+      std::uint32_t v = 0;
+      for (std::size_t k = 0; k < 4; ++k) v = v << 8 | static_cast<unsigned char>(png[at + k]);
+      return v;
+    };
+    EXPECT_EQ(be32(16), 3u * 720u);
+    EXPECT_EQ(be32(20), 720u * (108u + 11u) / 192u) << "the label band above the images";
     // The engine family along the same path: one map of twice the fixed size, four cascades of it
     // (the engine baseline, compared with itself), single maps of half and four times it, two
     // cascades of once and twice it, each with its texels and its SSIM.

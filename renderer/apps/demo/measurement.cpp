@@ -352,7 +352,10 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
                     pf.continues ? s.flicker_mean_abs.back() : std::nan(""));
       run.csv += row;
     }
-    if (i == plan_.frames.size() / 2) run.shown_fixed = series[run.fixed].color, run.shown_adaptive = series[run.adaptive].color;
+    if (i == plan_.frames.size() / 2) {
+      run.shown_fixed = series[run.fixed].color, run.shown_adaptive = series[run.adaptive].color;
+      run.shown_at = i;
+    }
     for (Series& s : series) s.previous = std::move(s.visibility);
     surface_previous = std::move(surface);
     view_projection_previous = view_projection;

@@ -77,6 +77,7 @@ struct TechniqueRun {
   // the fixed map's image against the adaptive one, per frame
   std::vector<double> ssim_fixed_adaptive, max_abs_fixed_adaptive, share_fixed_adaptive;
   io::Image8 shown_fixed, shown_adaptive;  // lit images at the path's middle frame
+  std::size_t shown_at = 0;                // that frame's index in the plan (and in each series' per-frame vectors)
   Crops thin_crops;  // where the thin casters' shadow is densest
   Crops gain_crops;  // where the adaptive map is closest to the reference compared with the fixed map
   std::string csv;   // frames.csv rows
