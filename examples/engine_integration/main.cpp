@@ -3,7 +3,12 @@
 // "Using the rule from another engine"). Uses only the installed headers of Penumbra::adaptive
 // (CMake) or penumbra-adaptive (pkg-config): no GL, no GLM, nothing else of Penumbra's.
 //
-//   engine_integration [calibration.json]
+//   engine_integration [--allow-unusable] [calibration.json]
+//
+// An entry penumbra-fit judged unusable (written only with its --allow-unusable: "usable": false)
+// is refused, one line on stderr and exit 1, unless --allow-unusable is given here too; what the
+// fitter flagged, and why an entry is unusable, goes on the line that says which c is used, as
+// Penumbra's own tools print it (docs/fit.md).
 //
 // Copy the pattern: the parts marked ENGINE are what your engine has already (its camera, its
 // light fitting, its filter); everything else is the calls to make, in that order.
@@ -13,6 +18,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <string>
 #include <vector>
 
 namespace adaptive = penumbra::adaptive;
@@ -45,19 +52,48 @@ EngineFrame frame_at(int i) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const char* file = nullptr;
+  bool allow_unusable = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--allow-unusable") == 0) {
+      allow_unusable = true;
+    } else if (argv[i][0] == '-' || file) {
+      std::fprintf(stderr, "engine_integration: unexpected argument '%s' (usage: engine_integration [--allow-unusable] [calibration.json])\n",
+                   argv[i]);
+      return 2;
+    } else {
+      file = argv[i];
+    }
+  }
+
   // Once: the constant c for the filter the engine uses. calibration.json as penumbra-fit writes it
   // (or the package's share/penumbra/calibration/default.json); without a file, the published c.
   adaptive::Calibration calibration;
-  if (argc > 1) {
+  if (file) {
     try {
-      calibration = adaptive::load_calibration(argv[1]);
+      calibration = adaptive::load_calibration(file);
     } catch (const adaptive::CalibrationError& e) {
       std::fprintf(stderr, "engine_integration: %s\n", e.what());  // names the file and the field
       return 1;
     }
   }
   const adaptive::CalibrationChoice c = calibration.choose("pcf", "grid");
-  std::printf("c = %.2f texels (%s)\n", c.c, c.from.c_str());
+  // A fit the fitter judged unusable (not converged, an open interval, c outside [0.5, 20] texels)
+  // is no calibration: a pilot's c = 0.03 would size every map at the smallest the limits allow, and
+  // the staircase would show everywhere. Refuse it unless the engine's user asked for it.
+  if (c.entry && !c.entry->usable && !allow_unusable) {
+    std::string why;
+    for (const std::string& reason : c.entry->unusable_because) why += (why.empty() ? "" : ", ") + reason;
+    std::fprintf(stderr,
+                 "engine_integration: %s: the %s entry has \"usable\": false (%s): penumbra-fit judged its c = %.3g unusable; "
+                 "fit more data, or pass --allow-unusable to use it anyway\n",
+                 calibration.source.c_str(), c.entry->label().c_str(), why.empty() ? "no reason given" : why.c_str(), c.c);
+    return 1;
+  }
+  // What to know before trusting c, as the tools print it: "NOT USABLE: ..." (only with
+  // --allow-unusable) and the fitter's flags ("flags: one_participant"). An engine logs it.
+  const std::string warnings = c.warnings();
+  std::printf("c = %.2f texels (%s)%s%s\n", c.c, c.from.c_str(), warnings.empty() ? "" : "; ", warnings.c_str());
 
   // Once: the limits of the maps the engine can allocate, and up to how many cascades it renders.
   constexpr int kMaxCascades = 4;

@@ -11,6 +11,8 @@
 #      given as bare numbers) fails to compile, the right one compiles;
 #   4. tests/install/consumer (and examples/engine_integration through it) configures with
 #      find_package(Penumbra CONFIG REQUIRED), checks what each target links, builds and runs;
+#      examples/engine_integration refuses a calibration entry marked unusable (one line, exit 1)
+#      unless given --allow-unusable, and prints the fitter's flags and NOT USABLE on its c line;
 #   5. the rule's check and the example build with pkg-config penumbra-adaptive alone, and run;
 #   6. every installed tool prints its version, and its --help names the installed docs page; the
 #      installed tools find the installed calibration and study configs.
@@ -110,6 +112,36 @@ cmake --build "$work/consumer" -j 1 >"$work/consumer-build.log" || { cat "$work/
 "$work/consumer/example/engine_integration" "$prefix/share/penumbra/calibration/default.json" >"$work/example.txt"
 head -2 "$work/example.txt"
 grep -q "^frame 63 " "$work/example.txt" || fail "engine_integration stopped before frame 63"
+
+step "engine_integration: an unusable entry is refused (one line, exit 1) unless --allow-unusable; flags are printed"
+# A pilot fit written with penumbra-fit --allow-unusable: c = 0.03 would size every map at the
+# smallest resolution the limits allow.
+example=$work/consumer/example/engine_integration
+printf '%s\n' '{"schema_version": 2, "entries": [{"technique": "pcf", "kernel": "grid", "c": 0.03, "obtained_by": "study",' \
+  '  "participants": 1, "flags": ["one_participant"], "usable": false, "unusable_because": ["interval_open", "c_outside_0.5_20"]}]}' \
+  >"$work/unusable.json"
+status=0
+"$example" "$work/unusable.json" >"$work/unusable.out" 2>"$work/unusable.err" || status=$?
+((status == 1)) || fail "engine_integration with an unusable entry exited $status, not 1"
+[[ ! -s $work/unusable.out && $(wc -l <"$work/unusable.err") -eq 1 ]] ||
+  fail "engine_integration with an unusable entry: not one line on stderr and nothing else: $(cat "$work/unusable.out" "$work/unusable.err")"
+grep -q "^engine_integration: $work/unusable.json: the pcf grid entry has \"usable\": false (interval_open, c_outside_0.5_20): .*--allow-unusable" \
+  "$work/unusable.err" || fail "engine_integration's refusal names neither the file, the entry nor the reasons: $(cat "$work/unusable.err")"
+cat "$work/unusable.err"
+"$example" --allow-unusable "$work/unusable.json" >"$work/allowed.out" || fail "engine_integration --allow-unusable with an unusable entry"
+head -1 "$work/allowed.out"
+head -1 "$work/allowed.out" | grep -q "^c = 0.03 texels (.*); NOT USABLE: interval_open, c_outside_0.5_20; flags: one_participant$" ||
+  fail "engine_integration --allow-unusable does not say NOT USABLE and the flags on its c line"
+grep -q "^frame 63 " "$work/allowed.out" || fail "engine_integration --allow-unusable stopped before frame 63"
+# Usable, but flagged: used, the flags on the c line.
+sed -e 's/"usable": false, "unusable_because": \[[^]]*\]/"usable": true/' -e 's/"c": 0.03/"c": 3.1/' "$work/unusable.json" >"$work/flagged.json"
+"$example" "$work/flagged.json" >"$work/flagged.out" || fail "engine_integration with a usable, flagged entry"
+head -1 "$work/flagged.out" | grep -q "^c = 3.10 texels (.*); flags: one_participant$" ||
+  fail "engine_integration does not print the entry's flags: $(head -1 "$work/flagged.out")"
+head -1 "$work/example.txt" | grep -q "^c = 3.47 texels ([^;]*)$" || fail "the published entry printed warnings: $(head -1 "$work/example.txt")"
+status=0
+"$example" --allow-unusabel "$work/flagged.json" >/dev/null 2>&1 || status=$?
+((status == 2)) || fail "engine_integration with an unknown option exited $status, not 2"
 
 step "pkg-config penumbra-adaptive"
 pc=$(find "$prefix" -name penumbra-adaptive.pc)
