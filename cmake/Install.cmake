@@ -9,7 +9,9 @@
 #   lib/libpenumbra_*.a           the exported static libraries                  } component Development
 #   lib/cmake/Penumbra/           PenumbraConfig.cmake, its version file, the    |
 #                                 exported targets per component                 |
-#   lib/pkgconfig/                penumbra-adaptive.pc                           /
+#   lib/pkgconfig/                penumbra-adaptive.pc                           |
+#   share/penumbra/shaders/       virtual_mark.comp, the virtual shadow map's    |
+#                                 page marking, its includes inlined            /
 #
 # Exported targets (namespace Penumbra::), one export set, and so one file of targets, per component,
 # each linking only what it needs; PenumbraConfig.cmake (cmake/PenumbraConfig.cmake.in) loads the
@@ -63,6 +65,29 @@ install(FILES ${PROJECT_SOURCE_DIR}/scripts/plot_bench.py ${PROJECT_SOURCE_DIR}/
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT Documentation)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT Documentation)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples COMPONENT Documentation)
+
+# --- the virtual shadow map's page marking for engines: share/penumbra/shaders/ ----------------------
+#
+# renderer/shaders/virtual_mark.comp with its includes (virtual_mark_contract.h, virtual_pages.glsl,
+# shadow_contract.h) inlined, so that an engine compiles it as it is with its own #version and
+# defines (GLSL has no #include; the renderer's gl::ShaderLibrary expands them, an engine's loader
+# need not). Written at build time from the sources the renderer embeds, into build/install/shaders/
+# (not build/share/penumbra: a tool in the build tree would take that for an installed tree), and
+# installed with the Development component beside its C++ side,
+# <penumbra/shaders/virtual_mark_contract.h> (below). docs/virtual-pages-in-your-engine.md;
+# tests/install/test_virtual_mark_gl.cpp compiles the file below on the driver, alone.
+set(PENUMBRA_VIRTUAL_MARK_GLSL ${PROJECT_BINARY_DIR}/install/shaders/virtual_mark.comp)
+add_custom_command(
+  OUTPUT ${PENUMBRA_VIRTUAL_MARK_GLSL}
+  COMMAND ${CMAKE_COMMAND} -DDIR=${PROJECT_SOURCE_DIR}/renderer/shaders -DNAME=virtual_mark.comp -DOUT=${PENUMBRA_VIRTUAL_MARK_GLSL}
+          -DVERSION=${PROJECT_VERSION} -P ${PROJECT_SOURCE_DIR}/cmake/FlattenGlsl.cmake
+  DEPENDS ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_mark.comp ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_mark_contract.h
+          ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_pages.glsl ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h
+          ${PROJECT_SOURCE_DIR}/cmake/FlattenGlsl.cmake
+  COMMENT "Inlining the includes of virtual_mark.comp for engines"
+  VERBATIM)
+add_custom_target(penumbra_virtual_mark_glsl ALL DEPENDS ${PENUMBRA_VIRTUAL_MARK_GLSL})
+install(FILES ${PENUMBRA_VIRTUAL_MARK_GLSL} DESTINATION ${PENUMBRA_INSTALL_DATADIR}/shaders COMPONENT Development)
 
 # --- libraries, headers, CMake package, pkg-config -----------------------------------------------
 
@@ -170,7 +195,8 @@ foreach(h context embedded_files objects shader_library timer)
   penumbra_public_headers(gl ${PROJECT_SOURCE_DIR}/renderer/gl/${h}.h)
 endforeach()
 penumbra_public_headers(io ${PROJECT_SOURCE_DIR}/renderer/io/image_io.h ${PROJECT_SOURCE_DIR}/renderer/io/report.h)
-penumbra_public_headers(shaders ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h)
+penumbra_public_headers(shaders ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h
+                        ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_mark_contract.h)
 foreach(dir scene shadows shadows/techniques)
   file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/renderer/${dir}/*.h)
   penumbra_public_headers(${dir} ${headers})

@@ -42,7 +42,7 @@ vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (
 #include "virtual_pages.glsl"
 
 // Box PCF of world radius `radius_ws` through the sun's virtual shadow map: on the level this
-// pixel's pages were marked on (the request of vsm_mark.comp, the first level at or above it whose
+// pixel's pages were marked on (the request of virtual_mark.comp, the first level at or above it whose
 // window holds the point), with the normal offset and constant bias in that level's texels and the
 // receiver plane `gradient` (normalized depth per world unit across the light). Where the pool
 // could not hold a page, the next coarser resident level answers; where none does, the pixel is
@@ -74,7 +74,7 @@ float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
 }
 
 #if defined(TECHNIQUE_PCSS)
-// PCSS: the penumbra of this pixel's surface as the marking's blocker search found it (vsm_mark.comp,
+// PCSS: the penumbra of this pixel's surface as the marking's blocker search found it (virtual_mark.comp,
 // the same pixel of the position pass whose depth this pass reuses), so the search runs once a
 // frame and the filter reads the pages that penumbra marked. 0: nothing in front; -1: no level
 // held the search.

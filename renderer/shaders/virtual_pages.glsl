@@ -25,7 +25,7 @@ layout(binding = UNIT_VSM_BOUNDS) uniform sampler2D u_vsm_tile_bounds;
 uniform bool u_vsm_bounds;
 
 // Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
-// (vsm_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
+// (virtual_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
 // were marked on.
 uniform vec3 u_mark_camera_position;
 uniform vec3 u_mark_camera_forward;
@@ -381,7 +381,7 @@ vec2 vsm_plane_gradient(vec3 dx, vec3 dy) {
 }
 
 // PCSS through the pages, for a sun of angular radius atan(u_vsm_tan_half_angle)
-// (set_virtual_pcss_uniforms). The marking (vsm_mark.comp) runs the blocker search once a frame
+// (set_virtual_pcss_uniforms). The marking (virtual_mark.comp) runs the blocker search once a frame
 // and writes the penumbra it finds, which the shading filters with. The search reads the surface
 // point itself (no normal offset), each texel against the receiver's plane there (the marker's
 // gradient) less a constant bias of u_vsm_search_bias_texels of its level.

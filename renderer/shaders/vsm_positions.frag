@@ -1,4 +1,4 @@
-// The camera's surfaces for the virtual shadow map's page marking (vsm_mark.comp): world xyz and
+// The camera's surfaces for the virtual shadow map's page marking (virtual_mark.comp): world xyz and
 // w = 1 where a surface is (the target is cleared to 0). Drawn with shading.vert, whose invariant
 // positions let the shading pass test this pass's depth with LEQUAL.
 in vec3 v_world;

@@ -417,7 +417,7 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
                                 ", page_texels, pages_per_side and texel0_ws positive");
   const gl::ShaderLibrary shaders;
   for (int pass = 0; pass < 3; ++pass)
-    programs_[pass] = shaders.program({{GL_COMPUTE_SHADER, "vsm_mark.comp"}}, {{"VSM_MARK_PASS", std::to_string(pass)}});
+    programs_[pass] = shaders.program({{GL_COMPUTE_SHADER, "virtual_mark.comp"}}, {{"VIRTUAL_MARK_PASS", std::to_string(pass)}});
   const std::size_t bits = static_cast<std::size_t>(layout.levels) * layout.pages_per_side * layout.pages_per_side;
   words_ = (bits + 31) / 32;
   marks_ = gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);

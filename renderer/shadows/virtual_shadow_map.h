@@ -88,7 +88,7 @@ VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
 
 class VirtualShadowMap;
 
-// Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
+// Page marking on the GPU (shaders/virtual_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
 // float: a pixel exactly on a level's or a page's boundary may land on the other side).
 class PageMarker {
@@ -114,7 +114,7 @@ class PageMarker {
                                         const gl::Texture* levels = nullptr, const gl::Texture* radii = nullptr) const;
 
  private:
-  // The marking's three passes (vsm_mark.comp's VSM_MARK_PASS): a filter's pages, PCSS's searches',
+  // The marking's three passes (virtual_mark.comp's VIRTUAL_MARK_PASS): a filter's pages, PCSS's searches',
   // PCSS's penumbrae'.
   enum class Pass { filter = 0, pcss_search = 1, pcss_penumbra = 2 };
   adaptive::MarkResult run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,

@@ -4,9 +4,11 @@
 #   1. cmake --install of the build tree into a fresh prefix, its tools and libraries stripped;
 #   2. include/ holds penumbra/ and nothing else, and every installed header includes its siblings
 #      as <penumbra/...> (no quoted includes); every public header of the GL-free components
-#      (adaptive, psychometrics, study_log), with include/ alone on the include path, includes
-#      nothing but other installed headers and the C and C++ standard libraries, and compiles at
-#      the C++ standard its target asks for (17; psychometrics 20);
+#      (adaptive, psychometrics, study_log; shaders/virtual_mark_contract.h, the page marking's),
+#      with include/ alone on the include path, includes nothing but other installed headers and
+#      the C and C++ standard libraries, and compiles at the C++ standard its target asks for (17;
+#      psychometrics 20);
+#      share/penumbra/shaders/virtual_mark.comp is the build's, with no #include or #version left;
 #   3. a call to required_texels_ws with the light's extent and the filter radius swapped (or
 #      given as bare numbers) fails to compile, the right one compiles;
 #   4. tests/install/consumer (and examples/engine_integration through it) configures with
@@ -61,7 +63,8 @@ step "GL-free public headers: what they include, and that they compile (include/
 # What a header may reach: installed headers, libstdc++, GCC's own headers, libc.
 allowed="^($include/penumbra/|/usr/include/c\+\+/|/usr/include/[^/]*-linux-gnu/c\+\+/|/usr/lib/gcc/|/usr/include/[^/]+\.h$|/usr/include/[^/]*-linux-gnu/(bits|sys|gnu|asm)/|/usr/include/(linux|asm-generic)/)"
 headers=$(cd "$include" && ls penumbra/published.h penumbra/sampling/random.h penumbra/adaptive/*.h penumbra/quest/*.h \
-  penumbra/log/*.h penumbra/observers/observer.h penumbra/observers/psychometric_observer.h penumbra/observers/staircase_simulation.h)
+  penumbra/log/*.h penumbra/observers/observer.h penumbra/observers/psychometric_observer.h penumbra/observers/staircase_simulation.h \
+  penumbra/shaders/virtual_mark_contract.h)
 for h in $headers; do
   echo "#include <$h>" >"$work/header.cpp"
   # The files it includes, one per line (-M: preprocessing only, so a header not installed fails here).
@@ -79,6 +82,15 @@ for standard in c++17 c++20; do
     fail "the headers of $work/headers-$standard.cpp do not compile as $standard"
 done
 echo "$(wc -w <<<"$headers") headers"
+
+step "share/penumbra/shaders: the page marking for engines, its includes inlined"
+# GLSL has no #include: an engine's loader compiles the file as it is (test_virtual_mark_gl compiles it
+# on the driver from the build tree; here: the installed copy is that file).
+mark=$prefix/share/penumbra/shaders/virtual_mark.comp
+[[ -f $mark ]] || fail "no $mark"
+cmp -s "$mark" "$build/install/shaders/virtual_mark.comp" || fail "$mark is not the build's install/shaders/virtual_mark.comp"
+! grep -nE '^[[:space:]]*#[[:space:]]*(include[[:space:]]*"|version)' "$mark" || fail "$mark has an #include to expand or a #version of its own"
+echo "$mark: $(wc -l <"$mark") lines"
 
 step "required_texels_ws: the light's extent and the filter radius cannot be swapped (try-compiles that must fail)"
 # Both are world-space lengths; the rule takes them as LightExtentWs and FilterRadiusWs, whose

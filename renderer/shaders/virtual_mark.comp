@@ -5,32 +5,35 @@
 //                                                       world footprint, c in texels)
 //   footprint  texel <= s · min_texel_px
 // A pixel outside its level's window takes the next coarser level that holds it; beyond the
-// coarsest it is counted as unmarked.
+// coarsest it is counted as unmarked. Installed for engines, its includes inlined, as
+// share/penumbra/shaders/virtual_mark.comp: its bindings, buffer and uniforms are the contract of
+// virtual_mark_contract.h (docs/virtual-pages-in-your-engine.md).
+#include "virtual_mark_contract.h"
 #include "virtual_pages.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
-layout(binding = 0, rgba32f) uniform readonly image2D u_surface;  // world xyz; w > 0 where a surface is
-layout(binding = 1, r32f) uniform writeonly image2D u_levels;     // debug view: the level each pixel samples
-uniform bool u_write_levels;                                       // (-1: no surface, levels: beyond the coarsest)
-// PCSS (VSM_MARK_PASS 2): each pixel's penumbra, the world radius its search found (0: nothing in
+layout(local_size_x = VIRTUAL_MARK_GROUP_SIZE, local_size_y = VIRTUAL_MARK_GROUP_SIZE) in;
+layout(binding = VIRTUAL_MARK_IMAGE_SURFACE, rgba32f) uniform readonly image2D u_surface;  // world xyz; w > 0 where a surface is
+layout(binding = VIRTUAL_MARK_IMAGE_LEVELS, r32f) uniform writeonly image2D u_levels;      // debug view: the level each pixel samples
+uniform bool u_write_levels;                                                               // (-1: no surface, levels: beyond the coarsest)
+// PCSS (VIRTUAL_MARK_PASS 2): each pixel's penumbra, the world radius its search found (0: nothing in
 // front, lit; -1: no surface, or no level held its search), which the shading filters with.
-layout(binding = 2, r32f) uniform writeonly image2D u_radii;
+layout(binding = VIRTUAL_MARK_IMAGE_RADII, r32f) uniform writeonly image2D u_radii;
 uniform bool u_write_radii;
 
-layout(std430, binding = 0) buffer Marks {
-  uint u_pixels_per_level[VSM_MAX_LEVELS];
+layout(std430, binding = VIRTUAL_MARK_BUFFER) buffer Marks {
+  uint u_pixels_per_level[VIRTUAL_MARK_MAX_LEVELS];
   uint u_unmarked;
-  uint u_page_bits[];  // bit (level · pages_per_side + y) · pages_per_side + x
+  uint u_page_bits[];  // bit virtual_mark_page_bit(level, x, y, pages_per_side)
 };
 
 uniform float u_radius_ws;  // the filter's world radius (0: none)
 uniform bool u_search_receiver_plane;  // PCSS: the blocker search tests against the receiver's plane
-// VSM_MARK_PASS (a define: one program per pass, PageMarker) 0: the pages of a filter of
+// VIRTUAL_MARK_PASS (a define: one program per pass, PageMarker) 0: the pages of a filter of
 // u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the search's pages resident) the
 // pages of the penumbra that search finds. Not a uniform: llvmpipe runs both sides of a branch on a
 // uniform under an execution mask, and pass 2's search cost pass 0 two thirds of its time.
-#if !defined(VSM_MARK_PASS) || VSM_MARK_PASS < 0 || VSM_MARK_PASS > 2
-#error "vsm_mark.comp needs VSM_MARK_PASS 0, 1 or 2"
+#if !defined(VIRTUAL_MARK_PASS) || VIRTUAL_MARK_PASS < 0 || VIRTUAL_MARK_PASS > 2
+#error "virtual_mark.comp needs VIRTUAL_MARK_PASS 0, 1 or 2"
 #endif
 
 // Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
@@ -46,7 +49,7 @@ int mark_square(int level, vec2 xy, float r) {
     const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
     for (int y = lo.y; y <= hi.y; ++y)
       for (int x = lo.x; x <= hi.x; ++x) {
-        const uint bit = uint((level * n + y) * n + x);
+        const uint bit = virtual_mark_page_bit(level, x, y, n);
         atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
       }
     return level;
@@ -89,12 +92,12 @@ void main() {
   const vec3 light = vsm_light_point(world);
   const vec2 xy = light.xy;
   int level;
-#if VSM_MARK_PASS == 1
+#if VIRTUAL_MARK_PASS == 1
   {
     const float search = vsm_search_ws(vsm_depth_ws(light.z));
     level = mark_square(vsm_search_level(world, search, xy), xy, search);
   }
-#elif VSM_MARK_PASS == 2
+#elif VIRTUAL_MARK_PASS == 2
   {
     float radius;
     int blockers;

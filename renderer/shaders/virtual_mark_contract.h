@@ -1,0 +1,105 @@
+// The contract of the virtual shadow map's page marking (shaders/virtual_mark.comp), read by C++ and
+// by GLSL: what an engine binds before it dispatches the marking and how it reads the marks back.
+// Installed for engines as <penumbra/shaders/virtual_mark_contract.h> (C++17; no GL, no GLM), beside
+// share/penumbra/shaders/virtual_mark.comp, the marking shader with its includes inlined (this file
+// among them); docs/virtual-pages-in-your-engine.md walks through it. The renderer's PageMarker
+// (shadows/virtual_shadow_map.h) dispatches the same shader; tests/install/test_virtual_mark_gl.cpp
+// checks every number here against the driver's view of the installed shader and against
+// shaders/shadow_contract.h.
+//
+// Dispatch: ceil(width / VIRTUAL_MARK_GROUP_SIZE) × ceil(height / VIRTUAL_MARK_GROUP_SIZE) work
+// groups over the surface image, one invocation per pixel. Compile with `#version 450 core` and
+// `#define VIRTUAL_MARK_PASS 0` (1, 2: PCSS's two passes) before the shader's text.
+//
+// Images (glBindImageTexture unit = the constant):
+//   VIRTUAL_MARK_IMAGE_SURFACE  rgba32f, read: each pixel's surface point, world xyz; w > 0 where a
+//                               surface is (w <= 0: sky, not marked, not counted)
+//   VIRTUAL_MARK_IMAGE_LEVELS   r32f, written where u_write_levels: the level each pixel samples (-1:
+//                               no surface; u_vsm_levels: beyond the coarsest level's window)
+//   VIRTUAL_MARK_IMAGE_RADII    r32f, written in pass 2 where u_write_radii: each pixel's penumbra,
+//                               world radius (0: nothing in front; -1: no surface or no search)
+//
+// The marks buffer: std430, shader storage binding VIRTUAL_MARK_BUFFER, 32-bit unsigned words,
+// cleared to zero before each dispatch (the shader only adds and ORs), of at least
+// virtual_mark_buffer_words(levels, pages_per_side) words:
+//   word VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL + k  pixels that sample level k (k < VIRTUAL_MARK_MAX_LEVELS)
+//   word VIRTUAL_MARK_WORD_UNMARKED              pixels beyond the coarsest level's window
+//   words VIRTUAL_MARK_WORD_PAGE_BITS + ...      one bit per page: page (level, x, y) of a level's
+//                                                pages_per_side² window is bit
+//                                                b = virtual_mark_page_bit(level, x, y, pages_per_side),
+//                                                bit (b % 32) of page-bit word b / 32
+// Page (x, y) of level k covers light-space [u_vsm_origin[k] + (x, y) · page_ws, + page_ws) with
+// page_ws = u_vsm_page_texels · u_vsm_texel0_ws · 2^k.
+//
+// The level a pixel asks for (virtual_pages.glsl: vsm_requested_texel_ws, vsm_level_for_texel; on
+// the CPU adaptive::requested_texel_ws and adaptive::level_for_texel):
+//   texel_ws = max(r / c, s · min_texel_px)      (the rule; u_mark_footprint_only: s · min_texel_px)
+//   level    = clamp(floor(log2(texel_ws / u_vsm_texel0_ws)), 0, u_vsm_levels - 1)
+// r the filter's world radius (u_radius_ws), c u_mark_c_texels, s the pixel's world footprint (its
+// view depth · u_mark_footprint_per_depth), min_texel_px u_mark_min_texel_px. The pixel marks the
+// pages of that level under the square of half-side r around its light-space point; a level whose
+// window does not hold the point gives way to the next coarser one.
+//
+// Texture units of the pages PCSS's second pass (VIRTUAL_MARK_PASS 2) searches for blockers through
+// (virtual_pages.glsl; passes 0 and 1 read no texture): VIRTUAL_UNIT_POOL (the depth pool, r32f or
+// a depth format, gathered and fetched without a comparison), VIRTUAL_UNIT_TABLE (the page tables,
+// r32i: the pool slot of each page, -1 where not resident), VIRTUAL_UNIT_BOUNDS (each pool tile's
+// depth bounds, read only where u_vsm_bounds).
+#ifndef PENUMBRA_VIRTUAL_MARK_CONTRACT_H
+#define PENUMBRA_VIRTUAL_MARK_CONTRACT_H
+
+#ifdef __cplusplus
+#include <cstddef>
+#include <cstdint>
+
+namespace penumbra::shadows::virtual_mark {
+using uint = std::uint32_t;
+#define PENUMBRA_VIRTUAL_CONSTANT(name, value) inline constexpr int name = value;
+#define PENUMBRA_VIRTUAL_FUNCTION inline constexpr
+#else
+#define PENUMBRA_VIRTUAL_CONSTANT(name, value) const int name = value;
+#define PENUMBRA_VIRTUAL_FUNCTION
+#endif
+
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_MAX_LEVELS, 16)  // levels the buffer counts (the renderer's VSM_MAX_LEVELS)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_GROUP_SIZE, 8)   // a work group: 8 × 8 pixels
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_BUFFER, 0)       // shader storage binding of the marks buffer
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_SURFACE, 0)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_LEVELS, 1)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_RADII, 2)
+// The marks buffer, in 32-bit words from its start.
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL, 0)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_UNMARKED, 16)   // VIRTUAL_MARK_MAX_LEVELS
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PAGE_BITS, 17)  // VIRTUAL_MARK_MAX_LEVELS + 1
+// Texture units (the renderer's UNIT_VSM_* of shaders/shadow_contract.h).
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_POOL, 9)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_TABLE, 10)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_BOUNDS, 14)
+
+// The bit of page (x, y) of `level` among the page bits, for windows of pages_per_side² pages.
+PENUMBRA_VIRTUAL_FUNCTION uint virtual_mark_page_bit(int level, int x, int y, int pages_per_side) {
+  return uint((level * pages_per_side + y) * pages_per_side + x);
+}
+
+#ifdef __cplusplus
+// The words a marks buffer needs for `levels` levels of pages_per_side² pages.
+inline constexpr std::size_t virtual_mark_buffer_words(int levels, int pages_per_side) {
+  const std::size_t bits = static_cast<std::size_t>(levels) * static_cast<std::size_t>(pages_per_side) * static_cast<std::size_t>(pages_per_side);
+  return static_cast<std::size_t>(VIRTUAL_MARK_WORD_PAGE_BITS) + (bits + 31) / 32;
+}
+// The page of bit `bit` among the page bits: the inverse of virtual_mark_page_bit.
+struct Page {
+  int level = 0, x = 0, y = 0;
+};
+inline constexpr Page virtual_mark_page_of_bit(uint bit, int pages_per_side) {
+  const auto n = static_cast<uint>(pages_per_side);
+  return {static_cast<int>(bit / (n * n)), static_cast<int>(bit % n), static_cast<int>(bit / n % n)};
+}
+static_assert(VIRTUAL_MARK_WORD_UNMARKED == VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL + VIRTUAL_MARK_MAX_LEVELS, "std430: a uint array, no padding");
+static_assert(VIRTUAL_MARK_WORD_PAGE_BITS == VIRTUAL_MARK_WORD_UNMARKED + 1, "std430: a uint, then the page bits");
+}  // namespace penumbra::shadows::virtual_mark
+#endif
+#undef PENUMBRA_VIRTUAL_CONSTANT
+#undef PENUMBRA_VIRTUAL_FUNCTION
+
+#endif  // PENUMBRA_VIRTUAL_MARK_CONTRACT_H
