@@ -1,5 +1,5 @@
 #pragma once
-// Page marking for a virtual shadow map of the sun (issue 31's first part, GL-free): clipmap
+// Page marking for a virtual shadow map of the sun, GL-free: clipmap
 // levels around the camera, level k's texel t0·2^k, each level a virtual texture of
 // pages_per_side² pages of page_texels² texels centred (page-snapped) on the camera in light
 // space. Each pixel asks for the coarsest level whose texel still satisfies its rule, and for
@@ -13,7 +13,15 @@
 //
 // A pixel whose level does not reach it (outside the level's extent) takes the next coarser one
 // that does; beyond the coarsest it is not marked (counted). Pages are counted once per frame.
-// What this does not do yet: the page pool, drawing, the page table in the shaders, caching.
+//
+// This is the CPU reference of the marking, and all of the virtual map that Penumbra::adaptive
+// holds: it walks every pixel on one core, far too slow for every frame; test a GPU marking with
+// it. The GPU side is the renderer's (Penumbra::renderer): shaders/virtual_mark.comp marks the same
+// pages on the GPU, and is installed for another engine as share/penumbra/shaders/virtual_mark.comp
+// with its contract <penumbra/shaders/virtual_mark_contract.h> (docs/virtual-pages-in-your-engine.md);
+// shadows/virtual_shadow_map.h has the page pool, the page tables, drawing the marked pages, the
+// cache across frames and PageMarker; shaders/virtual_pages.glsl reads and filters depths through
+// the tables.
 #include <cstdint>
 #include <set>
 #include <string_view>
