@@ -42,6 +42,7 @@
 #include "stats/summary.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
+#include "shadows/virtual_shadow_map.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -466,6 +467,11 @@ int main(int argc, char** argv) {
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.memory_texels = shadows::shadow_memory_texels(info);
           if (info.virtual_map) {
+            // A pool that missed pages shades their pixels from a coarser level: that speed is not
+            // the configuration's, and the row is refused rather than reported.
+            if (const std::string w = shadows::missing_pages_warning(info.virtual_map->pages, info.virtual_map->pool_pages_per_side);
+                !w.empty())
+              throw std::runtime_error(scene.name + ", " + v.label + ", " + info.resolution_source + ": not timed: " + w.substr(w.find(": ") + 2));
             row.virtual_pages = info.resolution_source.substr(info.resolution_source.find('_') + 1);  // virtual_rule: rule
             row.resolution_texels = 0;
             row.cascades = 0;

@@ -323,9 +323,8 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
   const scene::GpuMeshes meshes(scene.objects);
-  shadows::VirtualMapView view;
-  view.light_view = shadows::sun_light_view(scene.light.direction);
-  shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
+  shadows::VirtualMapView view;  // per frame: the maps' bounded region for its camera (shadows::sun_virtual_view)
+  bool has_view = false;
   constexpr int kPoolSide = 32;
   adaptive::VirtualMapLayout layout;
   constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth
@@ -396,7 +395,10 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
       const adaptive::MarkResult& by_footprint = marked.footprint;
       const double ratio = by_rule.pages.empty() ? 0.0 : static_cast<double>(by_footprint.pages.size()) / static_cast<double>(by_rule.pages.size());
       ratios.push_back(ratio);
-      view.camera_xy = shadows::light_xy(view.light_view, camera.position);
+      scene::Scene seen = posed;
+      seen.camera = camera;
+      view = shadows::sun_virtual_view(seen, static_cast<float>(opt.width) / static_cast<float>(opt.height), has_view ? &view : nullptr);
+      has_view = true;
       double ms_rule = 0, ms_footprint = 0, ms_cached_rule = 0, ms_cached_footprint = 0;
       uncached.invalidate_all();
       const shadows::VirtualMapStats draw_rule = timed_update(uncached, by_rule, ms_rule);

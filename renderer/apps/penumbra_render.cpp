@@ -24,6 +24,7 @@
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
+#include "shadows/virtual_shadow_map.h"
 #include "apps/virtual_debug.h"
 #include "cli_options.h"
 
@@ -189,9 +190,16 @@ int main(int argc, char** argv) {
         }
         v.settings.map.resolution_texels = res;
         gl::PassTimer timer(!ctx.software);
-        for (int i = 0; i < warmup; ++i) renderer.render(v.settings, width, height);
+        // A frame whose page pool missed pages says so once per render (its pixels read a coarser level).
+        std::string missing;
+        const auto warn = [&](const shadows::FrameInfo& frame) {
+          if (!frame.virtual_map || !missing.empty()) return;
+          missing = shadows::missing_pages_warning(frame.virtual_map->pages, frame.virtual_map->pool_pages_per_side);
+          if (!missing.empty()) std::fprintf(stderr, "penumbra-render: %s: %s\n", v.name.c_str(), missing.c_str());
+        };
+        for (int i = 0; i < warmup; ++i) warn(renderer.render(v.settings, width, height));
         shadows::FrameInfo info;
-        for (int i = 0; i < frames; ++i) info = renderer.render(v.settings, width, height, &timer);
+        for (int i = 0; i < frames; ++i) warn(info = renderer.render(v.settings, width, height, &timer));
         timer.poll(true);
         const auto stats = timer.stats();
 

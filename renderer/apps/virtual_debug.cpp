@@ -104,10 +104,8 @@ struct VirtualDebug::State {
   shadows::PageMarker marker{layout};
   shadows::VirtualShadowMap vsm{layout, 32};
   gl::Texture positions, levels;
-  explicit State(const scene::Scene& scene) : meshes(scene.objects), probe(scene) {
-    view.light_view = shadows::sun_light_view(scene.light.direction);
-    shadows::light_depth_range(view.light_view, scene.bounds(), view.near_ws, view.far_ws);
-  }
+  bool has_view = false;
+  explicit State(const scene::Scene& scene) : meshes(scene.objects), probe(scene) {}
 };
 
 VirtualDebug::VirtualDebug(const scene::Scene& scene) {
@@ -131,10 +129,13 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
   st.probe.set_models(scene);
   const io::ImageF surface = st.probe.render(camera, width, height);
   glTextureSubImage2D(st.positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
-  // The light view follows the scene's light: a moved sun drops every page (update does).
-  st.view.light_view = shadows::sun_light_view(scene.light.direction);
+  // The light view follows the scene's light: a moved sun drops every page (update does). The
+  // depth range is the maps' bounded region for this camera (shadows::sun_virtual_view).
   st.vsm.invalidate_moved_casters(scene);
-  st.view.camera_xy = shadows::light_xy(st.view.light_view, camera.position);
+  scene::Scene seen = scene;
+  seen.camera = camera;
+  st.view = shadows::sun_virtual_view(seen, static_cast<float>(width) / static_cast<float>(height), st.has_view ? &st.view : nullptr);
+  st.has_view = true;
   adaptive::MarkOptions footprint = marking.options;
   footprint.marking = adaptive::Marking::footprint;
   const gl::Texture* levels = images ? &st.levels : nullptr;

@@ -249,6 +249,16 @@ LightBox shadow_region(const scene::Scene& scene, const std::vector<glm::dvec3>&
 }
 
 
+// What a directional light's shadows hold in `rotation`'s frame: shadow_region, or for a scene
+// without objects the unit box around the origin (every matrix stays finite).
+LightBox sun_region(const scene::Scene& scene, const std::vector<glm::dvec3>& psr, float aspect, const glm::dmat3& rotation) {
+  if (!scene.objects.empty()) return shadow_region(scene, psr, aspect, rotation);
+  scene::Aabb unit;
+  unit.extend(glm::vec3(-0.5f));
+  unit.extend(glm::vec3(0.5f));
+  return light_box(unit, rotation);
+}
+
 // Projection of the spot light's cone onto its unfitted frustum for the scene's depth range.
 glm::mat4 spot_projection(const scene::Light& light, float near_ws, float far_ws) {
   return glm::perspective(glm::radians(light.spot_fov_deg), 1.0f, near_ws, far_ws);
@@ -317,7 +327,7 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
     // scene's bounds: one object at 1e20 would otherwise put every receiver 1e20 from the origin
     // of a float matrix.
     const glm::dmat3 rotation = light_rotation(light);
-    const LightBox region = scene.objects.empty() ? light_box(bounds, rotation) : shadow_region(scene, psr, request.camera_aspect, rotation);
+    const LightBox region = sun_region(scene, psr, request.camera_aspect, rotation);
     glm::dvec3 mid = (region.lo + region.hi) * 0.5;
     const double radius = std::max(glm::length(region.hi - region.lo) * 0.5, 1e-3);
     // The view's axis through the scene's centre, as long as that lies within the region's reach:
@@ -431,9 +441,13 @@ LightFrame compute_light_frame(const scene::Scene& scene, const FitRequest& requ
 
 float shadow_region_diagonal_ws(const scene::Scene& scene, float camera_aspect) {
   if (scene.objects.empty()) return 1.0f;
-  const glm::dmat3 rotation = light_rotation(scene.light);
-  const LightBox region = shadow_region(scene, potential_receivers(scene, camera_aspect), camera_aspect, rotation);
+  const SunRegion region = sun_shadow_region(scene, camera_aspect, light_rotation(scene.light));
   return static_cast<float>(glm::length(region.hi - region.lo));
+}
+
+SunRegion sun_shadow_region(const scene::Scene& scene, float camera_aspect, const glm::dmat3& rotation) {
+  const LightBox region = sun_region(scene, potential_receivers(scene, camera_aspect), camera_aspect, rotation);
+  return {region.lo, region.hi};
 }
 
 std::array<float, 2> receiver_depth_range(const scene::Scene& scene, float camera_aspect) {

@@ -78,6 +78,17 @@ struct Cascades {
 // `request.fit` says (an empty PSR cannot be fitted). splits_ws always has frames + 1 entries.
 Cascades compute_cascades(const scene::Scene& scene, const CascadeRequest& request);
 
+// What a directional light's shadows must hold, in the frame of `rotation` (world → light: x and y
+// across the light, -z along it): the objects that can cast onto the potential receivers, within
+// 1000 receiver sizes of them (farther casters are depth-clamped), and the receivers; lo and hi
+// with z the depth along the light (a distance along -z). The one bounded fit of the sun's maps
+// and cascades (compute_light_frame) and of its virtual shadow map (sun_virtual_view): an object
+// at 1e20 or a box of 1e30 stretches neither.
+struct SunRegion {
+  glm::dvec3 lo{0}, hi{0};
+};
+SunRegion sun_shadow_region(const scene::Scene& scene, float camera_aspect, const glm::dmat3& rotation);
+
 // Diagonal of what a directional light's frame holds: the objects that can cast onto the
 // potential receivers, within 1000 receiver sizes of them (not the scene's bounds: one object at
 // 1e20 would make it 1e20).

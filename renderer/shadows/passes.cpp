@@ -275,7 +275,7 @@ class VirtualPagesPass final : public Pass {
     }
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
     v->map->set_bounds(s.map.virtual_bounds);
-    const scene::Aabb bounds = v->map->invalidate_moved_casters(f.scene);
+    v->map->invalidate_moved_casters(f.scene);
     const int w = f.plan.width_px, h = f.plan.height_px;
     if (v->targets_generation != r.targets_generation) {  // new camera targets: their depth is attached anew
       v->targets_generation = r.targets_generation;
@@ -296,13 +296,13 @@ class VirtualPagesPass final : public Pass {
     f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
 
     // Mark, then make the marked pages resident.
-    VirtualMapView view;
-    view.light_view = sun_light_view(f.scene.light.direction);
-    light_depth_range(view.light_view, bounds, view.near_ws, view.far_ws);
-    view.camera_xy = light_xy(view.light_view, f.scene.camera.position);
+    const VirtualMapView view =
+        sun_virtual_view(f.scene, static_cast<float>(w) / static_cast<float>(h), v->map->has_view() ? &v->map->view() : nullptr);
     v->options = virtual_mark_options(s);
     FrameInfo::Virtual out;
     out.page_texels = v->map->layout().page_texels;
+    out.pool_pages_per_side = v->map->pool_pages_per_side();
+    out.near_ws = view.near_ws, out.far_ws = view.far_ws;
     adaptive::MarkResult marked;
     if (s.technique == Technique::pcss) {
       // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
@@ -320,6 +320,7 @@ class VirtualPagesPass final : public Pass {
       out.pages.cached = second.cached - first.drawn;  // the search's pages drawn this frame are not cached ones
       out.pages.evicted = first.evicted + second.evicted;
       out.pages.invalidated = first.invalidated + second.invalidated;
+      out.pages.floor = std::max(first.floor, second.floor);
       out.pages.triangles = first.triangles + second.triangles;
       out.search_pages = static_cast<int>(search.pages.size());
     } else {

@@ -52,7 +52,9 @@ struct FrameInfo {
   // the shading's pixels by where they found their pages.
   struct Virtual {
     int page_texels = 0;                         // texels per page side
-    VirtualMapStats pages;                       // marked (requested), cached, drawn, missing, evicted, resident
+    int pool_pages_per_side = 0;                 // the pool: this many² slots
+    float near_ws = 0, far_ws = 0;               // the light-space depth range the pages hold (sun_virtual_view)
+    VirtualMapStats pages;                       // marked (requested), cached, drawn, missing, floor, evicted, resident
     int search_pages = 0;                        // PCSS: of those, the blocker searches' (marked first)
     std::vector<std::int64_t> pixels_per_level;  // the marking's pixels on each level (PCSS: its filter's; lit pixels none)
     std::int64_t unmarked = 0;                   // pixels beyond the coarsest level

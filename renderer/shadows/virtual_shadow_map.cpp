@@ -12,6 +12,7 @@
 
 #include "gl/shader_library.h"
 #include "scene/culling.h"
+#include "shadows/fitting.h"
 #include "shaders/shadow_contract.h"
 
 namespace penumbra::shadows {
@@ -39,6 +40,30 @@ void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, f
   const float margin = std::max(0.01f, 0.01f * (l.hi.z - l.lo.z));
   near_ws = -l.hi.z - margin;  // distances along -z
   far_ws = -l.lo.z + margin;
+}
+
+VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, const VirtualMapView* previous) {
+  VirtualMapView view;
+  view.light_view = sun_light_view(scene.light.direction);
+  // Rows x, y, -d of the light view: the region's depth (its z) is d · p, the distance along -z.
+  const SunRegion region = sun_shadow_region(scene, camera_aspect, glm::dmat3(glm::dmat4(view.light_view)));
+  const double depth = region.hi.z - region.lo.z;
+  const double margin = std::max(0.01, 0.01 * depth);
+  // Compared as the floats the view holds: the range taken last frame must hold this one exactly.
+  const auto near_ws = static_cast<float>(region.lo.z - margin), far_ws = static_cast<float>(region.hi.z + margin);
+  if (previous && previous->light_view == view.light_view && previous->near_ws <= near_ws && previous->far_ws >= far_ws &&
+      previous->far_ws - previous->near_ws <= 4 * (far_ws - near_ws)) {
+    view.near_ws = previous->near_ws, view.far_ws = previous->far_ws;
+  } else {
+    const double spare = previous ? 0.25 * depth : 0.0;
+    view.near_ws = static_cast<float>(region.lo.z - margin - spare);
+    view.far_ws = static_cast<float>(region.hi.z + margin + spare);
+  }
+  if (!(std::isfinite(view.near_ws) && std::isfinite(view.far_ws) && view.far_ws > view.near_ws))
+    throw std::runtime_error("virtual shadow map: the light's depth range is not finite (near " + std::to_string(view.near_ws) + ", far " +
+                             std::to_string(view.far_ws) + ")");
+  view.camera_xy = light_xy(view.light_view, scene.camera.position);
+  return view;
 }
 
 VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content)
@@ -209,6 +234,72 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene:
   return triangles;
 }
 
+adaptive::Page VirtualShadowMap::page_of(const Key& key) const {
+  const auto k = static_cast<std::size_t>(key.level);
+  return {key.level, static_cast<int>(key.x - origin_pages_x_[k]), static_cast<int>(key.y - origin_pages_y_[k])};
+}
+
+std::vector<VirtualShadowMap::Key> VirtualShadowMap::residency_order(const std::set<adaptive::Page>& requested, VirtualMapStats& stats) const {
+  const auto from_centre = [c = layout_.pages_per_side - 1](const adaptive::Page& p) {
+    return (2 * p.x - c) * (2 * p.x - c) + (2 * p.y - c) * (2 * p.y - c);
+  };
+  const auto coarse_first = [&](const adaptive::Page& a, const adaptive::Page& b) {
+    return a.level != b.level ? a.level > b.level : from_centre(a) < from_centre(b);
+  };
+  // The floor at level f: the pages of level f under each requested page of level f or finer, and
+  // the requested pages coarser than f; at f = 0, every requested page. A finer page's square is
+  // widened by 4 texels of level f, which a filter's square read there may reach beyond it (the
+  // normal offset, its 2 × 2 blocks). The windows share the camera's centre: what lies outside
+  // level f's window no pixel reads there.
+  const auto floor_at = [&](int f) {
+    std::set<adaptive::Page> floor;
+    const auto k = static_cast<std::size_t>(f);
+    const double wf = page_ws(f), margin = 4 * wf / layout_.page_texels;
+    for (const adaptive::Page& p : requested) {
+      if (p.level >= f) {
+        floor.insert(p);
+        continue;
+      }
+      const Key key = key_of(p);
+      const double w = page_ws(p.level);
+      const auto first_page = [&](std::int64_t i) { return static_cast<std::int64_t>(std::floor((static_cast<double>(i) * w - margin) / wf)); };
+      const auto last_page = [&](std::int64_t i) { return static_cast<std::int64_t>(std::floor((static_cast<double>(i + 1) * w + margin) / wf)); };
+      for (std::int64_t x = first_page(key.x); x <= last_page(key.x); ++x)
+        for (std::int64_t y = first_page(key.y); y <= last_page(key.y); ++y) {
+          const std::int64_t wx = x - origin_pages_x_[k], wy = y - origin_pages_y_[k];
+          if (wx >= 0 && wy >= 0 && wx < layout_.pages_per_side && wy < layout_.pages_per_side)
+            floor.insert({f, static_cast<int>(wx), static_cast<int>(wy)});
+        }
+    }
+    return floor;
+  };
+  std::set<adaptive::Page> floor;
+  int level = 0;
+  for (; level < layout_.levels; ++level) {
+    floor = floor_at(level);
+    if (static_cast<int>(floor.size()) <= pool_slots()) break;
+  }
+  if (level == layout_.levels)
+    throw PoolTooSmall("--map.virtual_pool_pages " + std::to_string(pool_side_) + ": a pool of " + std::to_string(pool_slots()) +
+                           (pool_slots() == 1 ? " page slot" : " page slots") + " cannot hold the " + std::to_string(floor.size()) +
+                           " pages of the coarsest level this view needs under its pixels; give at least " +
+                           std::to_string(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(floor.size()))))),
+                       static_cast<int>(floor.size()));
+  stats.floor_level = requested.empty() ? -1 : level;
+  std::vector<adaptive::Page> first(floor.begin(), floor.end()), rest;
+  for (const adaptive::Page& p : requested)
+    if (!floor.count(p)) rest.push_back(p);
+  std::stable_sort(first.begin(), first.end(), coarse_first);
+  std::stable_sort(rest.begin(), rest.end(), coarse_first);
+  std::vector<Key> order;
+  for (const adaptive::Page& p : first) {
+    order.push_back(key_of(p));
+    stats.floor += !requested.count(p);
+  }
+  for (const adaptive::Page& p : rest) order.push_back(key_of(p));
+  return order;
+}
+
 VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
                                          const scene::GpuMeshes& meshes) {
   if (meshes.size() != scene.objects.size()) throw std::invalid_argument("virtual shadow map: the meshes are not the scene's");
@@ -230,36 +321,30 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   VirtualMapStats stats;
   stats.requested = static_cast<int>(requested.size());
   stats.invalidated = std::exchange(invalidated_, 0);
-  // Coarse levels first, and within a level the pages nearest the camera: a full pool then leaves
-  // out fine pages far from the camera, and their pixels fall back to a coarser level that is there.
-  std::vector<adaptive::Page> order(requested.begin(), requested.end());
-  const auto from_centre = [c = layout_.pages_per_side - 1](const adaptive::Page& p) {
-    return (2 * p.x - c) * (2 * p.x - c) + (2 * p.y - c) * (2 * p.y - c);
-  };
-  std::stable_sort(order.begin(), order.end(), [&](const adaptive::Page& a, const adaptive::Page& b) {
-    return a.level != b.level ? a.level > b.level : from_centre(a) < from_centre(b);
-  });
-  // First what is cached, so that no page this frame asks for is evicted for another.
+  // What the pool holds this frame, in order: first a coarse floor, the pages of level
+  // stats.floor_level under every requested page (the finest level whose floor fits the pool with
+  // the requested pages coarser than it), so that each pixel has a level to fall back to; then the
+  // other requested pages, coarse levels first and within a level those nearest the camera. What
+  // does not fit is missing: fine pages far from the camera, whose pixels read the floor.
+  const std::vector<Key> order = residency_order(requested, stats);
+  const auto kept = static_cast<std::size_t>(std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(order.size()), pool_slots()));
+  for (std::size_t i = kept; i < order.size(); ++i) stats.missing += requested.count(page_of(order[i])) > 0;
+  // First what is cached, so that no page this frame keeps is evicted for another.
   std::vector<Key> wanted;
-  for (const adaptive::Page& page : order) {
-    const Key key = key_of(page);
+  for (std::size_t i = 0; i < kept; ++i) {
+    const Key& key = order[i];
     if (const auto it = resident_.find(key); it != resident_.end()) {
       slots_[static_cast<std::size_t>(it->second)].last_frame = frame_;
-      ++stats.cached;
+      stats.cached += requested.count(page_of(key)) > 0;
     } else {
       wanted.push_back(key);
     }
   }
   std::vector<std::pair<int, Key>> to_draw;
-  bool full = false;
   for (const Key& key : wanted) {
-    // A free slot, else the least recently asked-for page that this frame does not ask for; once
-    // every slot holds a page of this frame, the rest are missing.
+    // A free slot, else the least recently asked-for page this frame does not keep (there is one:
+    // the frame keeps at most a slot per page).
     int chosen = -1;
-    if (full) {
-      ++stats.missing;
-      continue;
-    }
     if (!free_.empty()) {
       chosen = free_.back();
       free_.pop_back();
@@ -267,16 +352,10 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       std::int64_t oldest = frame_;
       for (int i = 0; i < pool_slots(); ++i)
         if (slots_[static_cast<std::size_t>(i)].last_frame < oldest) oldest = slots_[static_cast<std::size_t>(i)].last_frame, chosen = i;
-      if (chosen >= 0) {
-        free_slot(chosen);  // back on the free list: take it again
-        free_.pop_back();
-        ++stats.evicted;
-      }
-    }
-    if (chosen < 0) {
-      full = true;
-      ++stats.missing;
-      continue;
+      if (chosen < 0) throw std::logic_error("virtual shadow map: no slot left for a page the frame keeps");
+      free_slot(chosen);  // back on the free list: take it again
+      free_.pop_back();
+      ++stats.evicted;
     }
     slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_};
     resident_[key] = chosen;
@@ -291,6 +370,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);  // thin planes and open meshes cast from both sides
+    glEnable(GL_DEPTH_CLAMP);  // casters nearer the sun than the depth range still occlude (as on the maps)
     glClearDepth(1.0);
     if (slope_bias_ != 0 || offset_bias_ != 0) {
       glEnable(GL_POLYGON_OFFSET_FILL);
@@ -302,6 +382,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       footprints.push_back(scene::unit_footprints(meshes[i].units(), view_.light_view * scene.objects[i].model));
     for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes, footprints);
     glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (bounds_) {
@@ -338,6 +419,17 @@ int VirtualShadowMap::slot_of(const adaptive::Page& page) const {
   if (page.level < 0 || page.level >= layout_.levels) return -1;
   const auto it = resident_.find(key_of(page));
   return it == resident_.end() ? -1 : it->second;
+}
+
+std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_per_side) {
+  if (stats.missing <= 0) return "";
+  const int slots = pool_pages_per_side * pool_pages_per_side;
+  const auto side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(stats.requested))));
+  return "warning: virtual shadow map: " + std::to_string(stats.missing) + " of the " + std::to_string(stats.requested) +
+         " pages the frame asked for did not fit a pool of " + std::to_string(slots) + (slots == 1 ? " slot" : " slots") +
+         " (--map.virtual_pool_pages " + std::to_string(pool_pages_per_side) + "); their pixels read level " +
+         std::to_string(stats.floor_level) + " or coarser instead of their own; --map.virtual_pool_pages " + std::to_string(side) +
+         " holds them all";
 }
 
 void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view) {

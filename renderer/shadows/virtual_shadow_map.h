@@ -7,14 +7,19 @@
 //
 // Pages are cached by their place in light space (level, page column and row counted from the
 // light-space origin), so a page stays valid while the camera moves and the level windows scroll
-// over it. Within a frame, coarse levels are served first, and within a level the pages nearest
+// over it. Within a frame a coarse floor is served first (the pages of the finest level that the
+// pool holds under every requested page), then coarse levels, and within a level the pages nearest
 // the camera: when the pool cannot hold every requested page, what is missing is fine pages far
-// from the camera, and a pixel falls back to the coarser level that covers it
-// (vsm_resident_level). Pages not asked for stay cached until their slot is needed (least recently
-// asked for first).
+// from the camera, and a pixel falls back to a coarser level that covers it, at worst the floor
+// (vsm_resident_level), never to none. A pool that cannot hold even the coarsest level's pages
+// under the view is refused (PoolTooSmall). Pages not asked for stay cached until their slot is
+// needed (least recently asked for first). The light view is a rotation only (pages are places in
+// light space); its depth range is the sun's bounded region (sun_virtual_view).
 #include <cstdint>
 #include <map>
 #include <set>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -44,17 +49,34 @@ adaptive::LightXY light_xy(const glm::mat4& light_view, const glm::vec3& p);
 // The light-space depth range (distances along -z) that holds the world box `bounds`, widened by
 // 1 % and at least 1 cm on each side.
 void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, float& near_ws, float& far_ws);
+// The sun's virtual map view of `scene`'s camera in an image of `camera_aspect` (width / height):
+// sun_light_view, the depth range of the region the sun's maps hold (fitting.h's
+// sun_shadow_region: the casters that can reach the receivers, within 1000 receiver sizes, the
+// rest depth-clamped as on the maps) widened by 1 % and at least 1 cm on each side, and the camera
+// across the light. Not the scene's bounds: one object at 1e20 made the range 1e20 deep, and
+// float depths then shadowed nothing. The region follows the camera, and a new depth range drops
+// every cached page: with `previous` (the last frame's view), its range is kept while it holds the
+// region and is at most 4 times its depth; a range taken anew has a quarter of the region's depth
+// to spare on each side, so a walking camera does not redraw every page each frame.
+VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, const VirtualMapView* previous = nullptr);
 
 struct VirtualMapStats {
   int requested = 0;    // pages the frame asked for
   int cached = 0;       // of those, already resident and valid: not drawn
-  int drawn = 0;        // pages drawn this frame
-  int missing = 0;      // asked for, but every slot held a page this frame also asked for
+  int drawn = 0;        // pages drawn this frame (floor pages included)
+  int missing = 0;      // asked for, but the pool held the floor and coarser or nearer pages instead
+  int floor = 0;        // pages of floor_level made resident though not asked for: what a missing page's pixels read
+  int floor_level = -1; // the coarse floor's level (-1: nothing asked for); 0 when the pool holds every page asked for
   int evicted = 0;      // resident pages dropped to make room this frame
   int invalidated = 0;  // resident pages dropped since the last update (light or caster moved)
   int resident = 0;     // pages in the pool after the update (asked for or kept from earlier frames)
   std::uint64_t triangles = 0;  // drawn into the pages
 };
+
+// The warning line for a frame whose pool did not hold every page it asked for ("" when none was
+// missing): how many, the coarser level their pixels read instead, and the pool side that holds
+// them all. The apps print it; the main job and the bench refuse to time such a frame.
+std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_per_side);
 
 // virtual_pages.glsl's uniforms for `layout` seen from `view` (the level windows around its camera).
 void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
@@ -88,7 +110,19 @@ VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
 
 class VirtualShadowMap;
 
-// Page marking on the GPU (shaders/virtual_mark.comp): the pages each pixel's surface asks for, by the
+// A pool too small for even the coarsest level under a view's pixels (VirtualShadowMap::update):
+// a pixel would find no page and be shaded lit. The message begins with --map.virtual_pool_pages
+// and says the least pool side that holds that level; `pages` is how many pages it is.
+class PoolTooSmall : public std::runtime_error {
+ public:
+  PoolTooSmall(const std::string& message, int pages) : std::runtime_error(message), pages_(pages) {}
+  int pages() const { return pages_; }
+
+ private:
+  int pages_;
+};
+
+// Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
 // float: a pixel exactly on a level's or a page's boundary may land on the other side).
 class PageMarker {
@@ -143,8 +177,12 @@ class VirtualShadowMap {
   Content content() const { return content_; }
 
   // Makes the `requested` pages (window-relative, as adaptive::mark_pages gives them for
-  // view.camera_xy) resident, coarse levels first, drawing those not cached, and writes the page
-  // tables. A view whose light_view or depth range differs from the last one invalidates every page.
+  // view.camera_xy) resident, drawing those not cached, and writes the page tables. First a coarse
+  // floor: the pages of the finest level whose pages under every requested one fit the pool (with
+  // the requested pages coarser than it), so that a pixel whose page is missing reads that level
+  // instead of being shaded lit; then the rest, coarse levels first, nearest the camera first.
+  // Throws PoolTooSmall when even the coarsest level's pages under the requested ones do not fit.
+  // A view whose light_view or depth range differs from the last one invalidates every page.
   // Leaves the pool's framebuffer unbound and the viewport and scissor test changed.
   VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
                          const scene::GpuMeshes& meshes);
@@ -175,8 +213,9 @@ class VirtualShadowMap {
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const;
-  // The last update's view.
+  // The last update's view (has_view: there was one).
   const VirtualMapView& view() const { return view_; }
+  bool has_view() const { return has_view_; }
   // Lower corner of level `level`'s window in light space, for the last update's view.
   adaptive::LightXY origin(int level) const;
 
@@ -204,6 +243,10 @@ class VirtualShadowMap {
     std::int64_t drawn_frame = -1;  // the update that drew it
   };
   Key key_of(const adaptive::Page& page) const;
+  adaptive::Page page_of(const Key& key) const;  // window-relative, in the current windows
+  // The pages update() keeps, in the order it keeps them (the floor first); sets stats.floor and
+  // stats.floor_level; throws PoolTooSmall.
+  std::vector<Key> residency_order(const std::set<adaptive::Page>& requested, VirtualMapStats& stats) const;
   double page_ws(int level) const;
   void free_slot(int slot);
   // Draws page `key` into `slot`, each object's units kept by their footprints across the light.

@@ -600,31 +600,56 @@ TEST(VirtualMap, AMovedObjectRedrawsItsPagesAndNoStaleDepthRemains) {
   }
 }
 
-TEST(VirtualMap, APoolTooSmallKeepsTheCoarseLevelsAndCountsWhatIsMissing) {
+// A pool too small for what the frame asks keeps a coarse floor: the pages of the finest level
+// whose pages under every requested one fit (with the requested pages coarser than it), so that
+// each texel of a requested page finds a level, never nothing; what is missing is counted. A pool
+// that cannot hold even the coarsest level under the request is refused, saying the side that would.
+TEST(VirtualMap, APoolTooSmallKeepsACoarseFloorUnderEveryRequestedPage) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 3);  // 9 slots for 192 pages
-  const auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
-  EXPECT_EQ(stats.drawn, 9);
-  EXPECT_EQ(stats.missing, 183);
-  EXPECT_EQ(stats.resident, 9);
-  std::set<std::pair<int, int>> coarse;
-  for (const Page& p : every_page(layout))
-    if (vsm.slot_of(p) >= 0) {
-      EXPECT_EQ(p.level, 2) << "the coarsest level is served first";
-      coarse.insert({p.x, p.y});
+  {
+    VirtualShadowMap vsm(layout, 3);  // 9 slots for 192 pages: level 2 alone is 64
+    try {
+      vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+      ADD_FAILURE() << "a pool of 9 slots took every page";
+    } catch (const shadows::PoolTooSmall& e) {
+      EXPECT_EQ(e.pages(), 64);
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("--map.virtual_pool_pages 3: ", 0), 0u) << what;
+      EXPECT_NE(what.find("give at least 8"), std::string::npos) << what;
     }
-  EXPECT_TRUE(coarse.count({3, 3}) && coarse.count({4, 4}) && coarse.count({3, 4}) && coarse.count({4, 3})) << "nearest the camera first";
-  // Level 1's texels (a 16 m window) fall back to level 2 where its pages are there, and find
-  // nothing elsewhere: never a depth from a slot the table does not give.
-  const std::vector<float> level = read_through_tables(vsm, 1, true);
-  std::size_t fallback = 0, none = 0;
-  for (float v : level) {
-    EXPECT_TRUE(v == 2.0f || v == -1.0f) << v;
-    fallback += v == 2.0f, none += v == -1.0f;
   }
-  EXPECT_GT(fallback, level.size() / 4);
-  EXPECT_GT(none, 0u);
+  // Four pages of level 0 around the camera (at a page corner of every level) and four of level 1:
+  // 8 pages for 4 slots. Level 1's four hold level 0's squares: they are the floor, level 0 is missing.
+  std::set<Page> around;
+  for (const int x : {3, 4})
+    for (const int y : {3, 4}) around.insert({0, x, y}), around.insert({1, x, y});
+  VirtualShadowMap four(layout, 2);
+  const auto stats = four.update(around, f.view, f.scene, f.meshes);
+  EXPECT_EQ(stats.floor_level, 1);
+  EXPECT_EQ(stats.floor, 0) << "the floor's pages were asked for";
+  EXPECT_EQ(stats.missing, 4);
+  EXPECT_EQ(stats.resident, 4);
+  for (const Page& p : around) EXPECT_EQ(four.slot_of(p) >= 0, p.level == 1) << p.level << " " << p.x << " " << p.y;
+
+  // Two level-0 pages away from the pages' corners, in a pool of one slot: one page of level 2
+  // (4 m) holds both, where level 1 needs four. The floor page was not asked for; the asked ones
+  // are missing.
+  VirtualShadowMap one(layout, 1);
+  const std::set<Page> apart = {{0, 5, 5}, {0, 6, 5}};  // [1, 3] x [1, 2] m
+  const auto single = one.update(apart, f.view, f.scene, f.meshes);
+  EXPECT_EQ(single.floor_level, 2);
+  EXPECT_EQ(single.floor, 1);
+  EXPECT_EQ(single.missing, 2);
+  EXPECT_EQ(single.resident, 1);
+  EXPECT_EQ(one.slot_of({2, 4, 4}), 0);
+  // Every texel of the asked pages finds level 2 through the tables; none finds nothing.
+  const std::vector<float> level0 = read_through_tables(one, 0, true);
+  const int n = layout.page_texels, side = n * layout.pages_per_side;
+  for (const Page& p : apart)
+    for (int y = p.y * n; y < (p.y + 1) * n; ++y)
+      for (int x = p.x * n; x < (p.x + 1) * n; ++x)
+        ASSERT_EQ(level0[static_cast<std::size_t>(y) * side + x], 2.0f) << "texel " << x << ", " << y;
 }
 
 // Marking on the GPU against adaptive::mark_pages on the CPU, by the rule and by the footprint,
@@ -965,13 +990,33 @@ TEST(VirtualMap, RendererCachesPagesRedrawsAMovedCasterAndCountsWhatAFullPoolCan
   EXPECT_EQ(worst, 0.0f) << "no stale page under the moved box";
   s.map.virtual_cache = true;
 
-  s.map.virtual_pool_pages = 1;
+  // A pool of 4 slots cannot hold the view: the demo's ground straddles the light-space origin, a
+  // page corner of every level, and the floor is the four pages of a coarse level around it.
+  // Pixels whose pages are missing read it; none is shaded lit for want of a page, and the shadow
+  // stays where the full pool puts it.
+  s.map.virtual_cache = false;
+  r.render(s, w, h);
+  const io::ImageF full = r.read_visibility();
+  s.map.virtual_pool_pages = 2;
   const shadows::FrameInfo small = r.render(s, w, h);
   const auto& v = *small.virtual_map;
-  EXPECT_EQ(v.pages.resident, 1);
-  EXPECT_EQ(v.pages.missing, v.pages.requested - 1);
-  EXPECT_GT(v.coarser + v.none, 0u) << "pixels whose pages the pool could not hold";
-  for (const float x : r.read_visibility().pixels) ASSERT_TRUE(std::isfinite(x) && x >= 0 && x <= 1);
+  EXPECT_EQ(v.pages.resident, 4);
+  EXPECT_GT(v.pages.floor_level, 0);
+  EXPECT_EQ(v.pages.missing + 4, v.pages.requested + v.pages.floor);
+  EXPECT_GT(v.coarser, 0u) << "pixels whose pages the pool could not hold";
+  EXPECT_EQ(v.none, 0u) << "a pixel shaded lit for want of a page";
+  EXPECT_NE(shadows::missing_pages_warning(v.pages, v.pool_pages_per_side), "");
+  const io::ImageF floor = r.read_visibility();
+  int dark_full = 0, dark_floor = 0;
+  for (std::size_t p = 0; p < full.pixels.size(); ++p) {
+    ASSERT_TRUE(std::isfinite(floor.pixels[p]) && floor.pixels[p] >= 0 && floor.pixels[p] <= 1);
+    dark_full += full.pixels[p] < 0.5f, dark_floor += floor.pixels[p] < 0.5f;
+  }
+  EXPECT_GT(dark_full, 30);
+  EXPECT_GT(dark_floor, dark_full / 2) << "the shadows went with the missing pages";
+  // One slot cannot hold even the coarsest level's four pages there: refused, not shaded lit.
+  s.map.virtual_pool_pages = 1;
+  EXPECT_THROW(r.render(s, w, h), shadows::PoolTooSmall);
 }
 
 TEST(VirtualMap, BadLayoutsAreRefused) {

@@ -6,10 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "metrics/temporal.h"
 #include "shadows/frame_plan.h"
+#include "shadows/virtual_shadow_map.h"
 #include "stats/summary.h"
 
 namespace penumbra::demo {
@@ -264,6 +267,12 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       s.ms.push_back(stats::median(repeats));
       if (s.info.pcss_requirement.valid) s.pcss_clamped.push_back(s.info.pcss_requirement.clamped_fraction);
       if (s.info.virtual_map) {
+        // A frame whose pool missed pages shades their pixels from a coarser level: its time is that
+        // of lesser shadows, not the configuration's, and is not reported.
+        if (const std::string w = shadows::missing_pages_warning(s.info.virtual_map->pages, s.info.virtual_map->pool_pages_per_side);
+            !w.empty())
+          throw std::runtime_error(name + ", " + s.config.name + ", path frame " + std::to_string(pf.frame) + ": not timed: " +
+                                   w.substr(w.find(": ") + 2));
         s.pages_drawn.push_back(s.info.virtual_map->pages.drawn);
         s.pages_invalidated.push_back(s.info.virtual_map->pages.invalidated);
       }
