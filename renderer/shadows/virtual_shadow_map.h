@@ -122,7 +122,7 @@ class PoolTooSmall : public std::runtime_error {
   int pages_;
 };
 
-// Page marking on the GPU (shaders/vsm_mark.comp): the pages each pixel's surface asks for, by the
+// Page marking on the GPU (shaders/virtual_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
 // float: a pixel exactly on a level's or a page's boundary may land on the other side).
 class PageMarker {
