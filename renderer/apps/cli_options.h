@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "adaptive/resolution_rule.h"
@@ -78,6 +79,41 @@ inline void refuse_unused_technique_options(const CLI::App& app, const std::vect
   });
 }
 
+// Options of the map and adaptive sections that no configuration the command renders reads
+// (shadows::unread_setting, the one list of them) are refused, naming the option and why: the run
+// would ignore them without a word (--map.virtual_pool_pages 1 with maps, --map.cascades 4 with a
+// virtual shadow map). `stands_for` pairs a tool's own option with the setting it sets
+// ({"--resolution", "map.resolution_texels"}: a virtual map reads no resolution, and rendered one
+// image per value). `rendered`: the settings of every configuration the command renders.
+inline void refuse_unread_settings(const CLI::App& app, const std::vector<shadows::ShadowSettings>& rendered,
+                                   const std::vector<std::pair<std::string, std::string>>& stands_for = {}) {
+  const auto why_unread = [&](std::string_view section, std::string_view key) {
+    std::string why;
+    for (const shadows::ShadowSettings& s : rendered) {
+      const std::string w = shadows::unread_setting(s, section, key);
+      if (w.empty()) return std::string();
+      if (why.empty()) why = w;
+    }
+    return why;
+  };
+  const auto check_section = [&](std::string_view section, const auto& params) {
+    for (const auto& row : shadows::settings_table(&params)) {
+      const std::string name = "--" + std::string(section) + "." + std::string(row.key);
+      if (app.count(name) == 0) continue;
+      if (const std::string why = why_unread(section, row.key); !why.empty()) throw CLI::ValidationError(name, "not read: " + why);
+    }
+  };
+  const shadows::ShadowSettings probe;
+  check_section("map", probe.map);
+  check_section("adaptive", probe.adaptive);
+  for (const auto& [option, setting] : stands_for) {
+    const std::size_t dot = setting.find('.');
+    if (app.count(option) == 0 || dot == std::string::npos) continue;
+    if (const std::string why = why_unread(setting.substr(0, dot), setting.substr(dot + 1)); !why.empty())
+      throw CLI::ValidationError(option, "not read (it sets " + setting + "): " + why);
+  }
+}
+
 // --light-size: overrides the scene light's size; `size` < 0 (its default here) keeps the scene's.
 inline void add_light_size_option(CLI::App& app, float& size) {
   app.add_option("--light-size", size,
@@ -122,11 +158,27 @@ inline void apply_calibration_for(const CalibrationOption& calibration, shadows:
   }
   const adaptive::CalibrationChoice chosen = calibration.choice(settings);
   if (settings.adaptive.visibility > 0) {
-    // c at the chosen detection probability on the entry's psychometric function.
+    // c at the chosen detection probability on the entry's psychometric function, within the
+    // range adaptive.c takes: far from the entry's criterion, or with a shallow slope, it leaves
+    // every usable c (F 1e-15: 69 215 texels; criterion 1e-6 with slope 0.01 at 0.999: 0).
     adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
     if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
     const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
-    settings.adaptive.c = static_cast<float>(calibration.ci_upper ? at.hi : at.c);
+    const double c = calibration.ci_upper ? at.hi : at.c;
+    double lo = 0, hi = 0;
+    for (const auto& row : shadows::settings_table(&settings.adaptive))
+      if (row.key == "c") lo = row.min, hi = row.max;
+    if (!(c >= lo && c <= hi)) {
+      const adaptive::ThresholdDefinition& t = entry.definition();
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "at F = %.6g the %s of %s (c %.6g at its criterion F = %.6g, %s slope %.6g) gives c = %.6g texels, outside "
+                    "[%g, %g]; choose a visibility nearer its criterion",
+                    settings.adaptive.visibility, chosen.from.c_str(), calibration.loaded.source.c_str(), chosen.c, t.criterion_f,
+                    t.family.c_str(), t.beta, c, lo, hi);
+      throw CLI::ValidationError("--adaptive.visibility", line);
+    }
+    settings.adaptive.c = static_cast<float>(c);
     return;
   }
   settings.adaptive.c = static_cast<float>(calibration.ci_upper ? chosen.ci95_hi : chosen.c);
@@ -174,6 +226,11 @@ inline void apply_calibration(const CLI::App& app, CalibrationOption& calibratio
   }
   const CLI::Option* explicit_c = app.get_option_no_throw("--adaptive.c");
   calibration.c_from_command_line = explicit_c && explicit_c->count() > 0;
+  // An explicit c is taken as it is: a visibility beside it would be recorded and never used.
+  if (const CLI::Option* visibility = app.get_option_no_throw("--adaptive.visibility");
+      calibration.c_from_command_line && visibility && visibility->count() > 0)
+    throw CLI::ValidationError("--adaptive.visibility", "not read: --adaptive.c gives c itself (the visibility sets c from the calibration "
+                                                        "entry); give one of them");
   calibration.command_line_c = settings.adaptive.c;
   calibration.ci_upper = ci_upper;
   apply_calibration_for(calibration, settings);

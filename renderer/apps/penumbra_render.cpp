@@ -138,6 +138,11 @@ int main(int argc, char** argv) {
       if (v.settings.map.virtual_pages != shadows::VirtualPages::off)
         if (const std::string why = shadows::virtual_pages_refusal(v.settings, scene); !why.empty())
           throw cli::UsageError("--map.virtual_pages: " + why);
+    {
+      std::vector<shadows::ShadowSettings> rendered;
+      for (const auto& v : variants) rendered.push_back(v.settings);
+      apps::refuse_unread_settings(app, rendered, {{"--resolution", "map.resolution_texels"}});
+    }
 
     gl::HeadlessContext context;
     const auto& ctx = context.info();

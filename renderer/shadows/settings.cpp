@@ -1,6 +1,8 @@
 #include "shadows/settings.h"
 
+#include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -46,9 +48,9 @@ const Setting<AdaptiveParams> kAdaptiveTable[] = {
     PENUMBRA_BOOL(AdaptiveParams, enabled, "choose the resolution from the filter with res = c / r_uv"),
     PENUMBRA_REAL(AdaptiveParams, c, "texels", 0.01, 100,
                   "filter radius per texel at which its staircase is still detected with the entry's criterion probability (calibration.json)"),
-    PENUMBRA_REAL(AdaptiveParams, visibility, "", 0, 0.999,
-                  "detection probability F the rule is for (0 = the calibration entry's criterion, 0.65 for 82 % correct in 2AFC); lower "
-                  "needs a larger c"),
+    PENUMBRA_REAL_OR_ZERO(AdaptiveParams, visibility, "", kMinVisibility, kMaxVisibility,
+                          "detection probability F the rule is for: 0 = the calibration entry's criterion (0.65 for 82 % correct in "
+                          "2AFC), else in [0.001, 0.999]; lower needs a larger c"),
     PENUMBRA_INT(AdaptiveParams, min_texels, "texels", 1, 65536, "smallest resolution"),
     PENUMBRA_INT(AdaptiveParams, max_texels, "texels", 1, 65536, "largest resolution (sub-rectangle storage allocates this)"),
     PENUMBRA_INT(AdaptiveParams, quantum_texels, "texels", 1, 4096, "resolutions are rounded up to a multiple of this"),
@@ -76,6 +78,8 @@ nlohmann::json table_json(const P& p) {
   }
   return j;
 }
+
+std::string value_of_virtual_pages(const ShadowSettings& s) { return std::string(kVirtualPages[static_cast<std::size_t>(s.map.virtual_pages)]); }
 
 }  // namespace
 
@@ -128,6 +132,8 @@ void set_from_string(const Setting<P>& s, P& params, std::string_view value) {
       auto [ptr, ec] = std::from_chars(text.data(), end, v);
       if (ec != std::errc() || ptr != end || !std::isfinite(v)) fail(range());
       if (s.type == SettingType::integer && v != std::floor(v)) fail("an integer in [" + nlohmann::json(s.min).dump() + ", " + nlohmann::json(s.max).dump() + "]");
+      if (s.min_positive > 0 && v != 0 && !(v >= s.min_positive && v <= s.max))
+        fail("0 or a number in [" + nlohmann::json(s.min_positive).dump() + ", " + nlohmann::json(s.max).dump() + "]");
       if (v < s.min || v > s.max) fail(range());
       s.set(params, v);
       return;
@@ -192,6 +198,25 @@ std::string variant_choice(const ShadowSettings& s) {
       if (row.key == key && row.type == SettingType::choice) out = value_to_string(row, params);
   });
   return out;
+}
+
+std::string unread_setting(const ShadowSettings& s, std::string_view section, std::string_view key) {
+  const auto among = [&](std::initializer_list<std::string_view> keys) { return std::find(keys.begin(), keys.end(), key) != keys.end(); };
+  const bool virtual_map = s.map.virtual_pages != VirtualPages::off;
+  if (section == "map") {
+    if (virtual_map && among({"resolution_texels", "fit", "cascades", "cascade_lambda", "cascade_blend", "cascade_stabilize"}))
+      return "a virtual shadow map (map.virtual_pages " + value_of_virtual_pages(s) + ") has pages, not a map's size, fit or cascades";
+    if (!virtual_map && among({"virtual_pool_pages", "virtual_cache", "virtual_bounds"}))
+      return "it sets the virtual shadow map, and map.virtual_pages is off";
+  }
+  if (section == "adaptive") {
+    if (virtual_map && among({"enabled", "min_texels", "max_texels", "quantum_texels", "shrink_delay_frames", "max_texel_ws", "storage", "pcss"}))
+      return "a virtual shadow map (map.virtual_pages " + value_of_virtual_pages(s) + ") marks pages by the rule's c, not map sizes";
+    const bool rule = virtual_map ? s.map.virtual_pages == VirtualPages::rule : s.adaptive.enabled;
+    if (!rule && key == "visibility")
+      return virtual_map ? "pages marked by the footprint have no rule to set c for" : "the adaptive rule is off (adaptive.enabled false)";
+  }
+  return "";
 }
 
 std::vector<std::string> variant_choices(Technique t) {

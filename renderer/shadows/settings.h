@@ -63,6 +63,9 @@ struct ShadowMapParams {
   bool virtual_bounds = true;
 };
 
+inline constexpr double kMinVisibility = 0.001;  // adaptive.visibility's range besides 0
+inline constexpr double kMaxVisibility = 0.999;
+
 // Adaptive resolution: res = c / r_uv (Kreuzer 2017 eq. 5.3/5.6) per map or cascade, clamped,
 // quantized and rate-limited (adaptive/resolution_rule.h). Off: map.resolution_texels is used.
 struct AdaptiveParams {
@@ -73,8 +76,10 @@ struct AdaptiveParams {
   // The detection probability F the rule is for; 0 = the calibration entry's own criterion (in 2AFC
   // terms F* = 0.6465, 82 % correct). Lower is less visible and needs a larger filter radius per
   // texel (adaptive::c_at_visibility: about 1.9 c at F 0.10 with slope 3.5). Used when c comes from
-  // the calibration file; an explicit --adaptive.c is taken as it is.
-  float visibility = 0;
+  // the calibration file (an explicit --adaptive.c with it is refused). A double: a float made
+  // 1e-45 .. 5e-324 the criterion's 0. Else in [kMinVisibility, kMaxVisibility]: below 0.1 % the
+  // psychometric function is extrapolated far beyond any trial a study runs.
+  double visibility = 0;
   // The limits and the hysteresis delay default to the library's (adaptive/resolution_rule.h):
   // one set of defaults for the tools and for an engine linking Penumbra::adaptive.
   int min_texels = adaptive::ResolutionLimits{}.min_texels;          // 32
@@ -153,6 +158,12 @@ std::string describe(const ShadowSettings& s);
 // The value of the technique's variant setting (PCF's kernel: "grid", "poisson"), or "" for a
 // technique without one: with the technique's name, what calibration.json entries are keyed by.
 std::string variant_choice(const ShadowSettings& s);
+// Why a frame rendered with `s` never reads the shared setting `section`.`key` ("map",
+// "virtual_pool_pages"), or "" when it may: the one list of what a configuration reads of the
+// map and adaptive sections. A virtual shadow map reads no map size, fit or cascades and none of
+// the rule's map limits; maps read no page pool; adaptive.visibility is read (as c) only where the
+// rule sizes something. The apps refuse an option a configuration does not read from it.
+std::string unread_setting(const ShadowSettings& s, std::string_view section, std::string_view key);
 // Every value the technique's variant setting can take (PCF: disk, grid, poisson); empty for a
 // technique without one.
 std::vector<std::string> variant_choices(Technique t);

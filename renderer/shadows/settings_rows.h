@@ -19,6 +19,8 @@ inline double decimal(float v) {
   std::from_chars(buf, r.ptr, d);
   return d;
 }
+// A double row is its own value (adaptive.visibility: 1e-300 must not become a float's 0).
+inline double decimal(double v) { return v; }
 
 inline constexpr std::array<std::string_view, 3> kKernels = {"grid", "poisson", "disk"};
 inline constexpr std::array<std::string_view, 2> kUnits = {"texels", "world"};
@@ -40,7 +42,15 @@ inline constexpr std::string_view kDepthThresholdHelp =
   ::penumbra::shadows::Setting<P> {                                                                        \
     #field, unit, ::penumbra::shadows::SettingType::real, lo, hi, help,                                    \
         [](const P& p) { return ::penumbra::shadows::rows::decimal(p.field); },                            \
-        [](P& p, double v) { p.field = static_cast<float>(v); }                                            \
+        [](P& p, double v) { p.field = static_cast<decltype(P::field)>(v); }                               \
+  }
+// A real row whose 0 stands for something else (off, the default) and whose values otherwise lie
+// in [lo, hi] (Setting::min_positive).
+#define PENUMBRA_REAL_OR_ZERO(P, field, unit, lo, hi, help)                                               \
+  ::penumbra::shadows::Setting<P> {                                                                        \
+    #field, unit, ::penumbra::shadows::SettingType::real, 0, hi, help,                                     \
+        [](const P& p) { return ::penumbra::shadows::rows::decimal(p.field); },                            \
+        [](P& p, double v) { p.field = static_cast<decltype(P::field)>(v); }, {}, lo                       \
   }
 #define PENUMBRA_INT(P, field, unit, lo, hi, help)                                                         \
   ::penumbra::shadows::Setting<P> {                                                                        \

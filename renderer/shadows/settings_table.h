@@ -28,6 +28,9 @@ struct Setting {
   double (*get)(const P&);
   void (*set)(P&, double);
   std::span<const std::string_view> choices = {};
+  // > 0: a real row whose 0 means "off" or "the default" (adaptive.visibility: the entry's
+  // criterion) and whose other values lie in [min_positive, max]; what lies between is refused.
+  double min_positive = 0;
 };
 
 // A technique without parameters (hard shadows): no section, an empty table.

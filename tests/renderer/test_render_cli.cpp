@@ -531,7 +531,7 @@ TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
   const double factor = penumbra::adaptive::c_at_visibility(3.47, 0.6737, 0.1, 3.5) / 3.47;
   EXPECT_NEAR(factor, 1.965, 0.01);
   EXPECT_NEAR(low.at("calibration").at("c").get<double>(), 3.47 * factor, 1e-3);
-  EXPECT_EQ(low.at("calibration").at("visibility").get<double>(), 0.1f);
+  EXPECT_EQ(low.at("calibration").at("visibility").get<double>(), 0.1) << "a double: the value typed";
   const double r0 = base.at("resolution_texels").get<double>(), r1 = low.at("resolution_texels").get<double>();
   EXPECT_GT(r1, r0);
   EXPECT_NEAR(r1 / r0, factor, 32.0 / r0 * factor + 1e-9) << r0 << " -> " << r1;
@@ -540,6 +540,154 @@ TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
   // A visibility no function reaches is refused by the settings table.
   const Result bad = run_render(small_args({"--adaptive.visibility", "1.5", "-o", (work_ / "bad").string()}), scratch_);
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
+// Issue 45: adaptive.visibility is a double in 0 (the entry's criterion) or [0.001, 0.999]. As a
+// float, 1e-45 .. 5e-324 became 0 and quietly meant the criterion; 1e-15 gave c = 69 215 texels;
+// 1e-17 failed blaming adaptive.c, exit 1. Each is refused in one line naming the option, exit 2.
+TEST_F(RenderCli, VisibilityOutsideItsRangeIsRefusedNamingTheOption) {
+  for (const char* value : {"1e-45", "5e-324", "1e-300", "1e-15", "1e-17", "0.0009", "-0.1", "0.9995", "1"}) {
+    SCOPED_TRACE(value);
+    const Result r = run_render(small_args({"--technique", "pcf", "--adaptive.enabled", "true", "--adaptive.visibility", value, "-o",
+                                            (work_ / "out").string()}),
+                                scratch_);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--adaptive.visibility"));
+    EXPECT_THAT(r.err, HasSubstr("0 or a number in [0.001, 0.999]"));
+    EXPECT_FALSE(fs::exists(work_ / "out"));
+  }
+  // The ends of the range are taken, and give a c within adaptive.c's range from the published entry.
+  for (const char* value : {"0.001", "0.999"}) {
+    SCOPED_TRACE(value);
+    const fs::path out = work_ / (std::string("edge-") + value);
+    const Result r = run_render(small_args({"--technique", "pcf", "--adaptive.enabled", "true", "--adaptive.visibility", value, "-o", out.string()}),
+                                scratch_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const double c = read_json(only_render_dir(out) / "report.json").at("calibration").at("c").get<double>();
+    EXPECT_TRUE(c >= 0.01 && c <= 100) << c;
+  }
+}
+
+// Issue 45: c at a visibility is bounded: a valid entry (criterion F 1e-6, slope 0.01) at F 0.999
+// gave c = 0 and failed blaming adaptive.c. The line names the option and the entry, exit 2.
+TEST_F(RenderCli, CAtAVisibilityOutsideAdaptiveCsRangeIsRefusedNamingTheEntry) {
+  const fs::path cal = scratch_ / "shallow.json";
+  std::ofstream(cal) << R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3.47, "obtained_by": "simulated",
+      "threshold": {"task": "2afc", "guess": 0.5, "criterion_f": 1e-6, "family": "log-weibull", "beta": 0.01}}]})"
+                     << "\n";
+  for (const auto& [calibration, value] : std::vector<std::pair<std::string, std::string>>{{cal.string(), "0.999"}, {"", "0.001"}}) {
+    SCOPED_TRACE(value);
+    std::vector<std::string> args = {"--technique", "pcf", "--adaptive.enabled", "true", "--adaptive.visibility", value, "-o", (work_ / "out").string()};
+    if (!calibration.empty()) args.insert(args.end(), {"--calibration", calibration});
+    const Result r = run_render(small_args(args), scratch_);
+    if (calibration.empty()) {  // the published entry at the range's end: c 25.3, taken
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+      continue;
+    }
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--adaptive.visibility: at F = 0.999 the pcf entry"));
+    EXPECT_THAT(r.err, HasSubstr(cal.string()));
+    EXPECT_THAT(r.err, HasSubstr("outside [0.01, 100]"));
+    EXPECT_THAT(r.err, ::testing::Not(HasSubstr("adaptive.c must")));
+  }
+}
+
+// Issue 45: options taken and not used, each refused in one line naming the option (exit 2) from
+// the one list of what a configuration reads (shadows::unread_setting).
+TEST_F(RenderCli, SettingsNoConfigurationReadsAreRefused) {
+  const std::vector<std::string> virtual_pcf = {"--technique", "pcf", "--pcf.kernel", "grid", "--pcf.radius_unit", "world", "--pcf.radius", "0.05"};
+  const auto with_virtual = [&](const std::string& marking, std::vector<std::string> extra) {
+    std::vector<std::string> args = virtual_pcf;
+    args.insert(args.end(), {"--map.virtual_pages", marking});
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  struct Case {
+    std::string name;
+    std::vector<std::string> args;
+    std::vector<std::string> needles;
+  };
+  const std::vector<Case> cases = {
+      {"c_beside_visibility", {"--adaptive.enabled", "true", "--adaptive.c", "3", "--adaptive.visibility", "0.1"},
+       {"--adaptive.visibility: not read", "--adaptive.c"}},
+      {"visibility_with_the_rule_off", {"--adaptive.visibility", "0.1"}, {"--adaptive.visibility: not read", "adaptive.enabled false"}},
+      {"visibility_with_footprint_pages", with_virtual("footprint", {"--adaptive.visibility", "0.1"}),
+       {"--adaptive.visibility: not read", "footprint"}},
+      {"pool_without_a_virtual_map", {"--map.virtual_pool_pages", "4"}, {"--map.virtual_pool_pages: not read", "map.virtual_pages is off"}},
+      {"cache_without_a_virtual_map", {"--map.virtual_cache", "false"}, {"--map.virtual_cache: not read", "map.virtual_pages is off"}},
+      {"bounds_without_a_virtual_map", {"--map.virtual_bounds", "false"}, {"--map.virtual_bounds: not read"}},
+      {"cascades_with_a_virtual_map", with_virtual("rule", {"--map.cascades", "4"}), {"--map.cascades: not read", "virtual shadow map"}},
+      {"adaptive_maps_with_a_virtual_map", with_virtual("rule", {"--adaptive.enabled", "true"}), {"--adaptive.enabled: not read"}},
+      {"resolutions_with_a_virtual_map", with_virtual("rule", {"--resolution", "64,4096"}),
+       {"--resolution: not read (it sets map.resolution_texels)", "virtual shadow map"}},
+      {"map_resolution_with_a_virtual_map", with_virtual("rule", {"--map.resolution_texels", "512"}), {"--map.resolution_texels"}}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    // The base arguments without --resolution (a virtual map reads none) unless the case gives it.
+    std::vector<std::string> args = {"--width", "64", "--height", "48", "--frames", "1", "--warmup", "0"};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    args.insert(args.end(), {"-o", (work_ / "out").string()});
+    const Result r = run_render(args, scratch_);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    for (const auto& n : c.needles) EXPECT_THAT(r.err, HasSubstr(n));
+    EXPECT_FALSE(fs::exists(work_ / "out"));
+  }
+  // What they are refused beside is read: the same options in the configurations that read them run.
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"--adaptive.enabled", "true", "--adaptive.visibility", "0.1"},
+           with_virtual("rule", {"--adaptive.visibility", "0.1", "--map.virtual_pool_pages", "8", "--map.virtual_cache", "false"}),
+           {"--resolution", "64", "--map.cascades", "2"}}) {
+    std::vector<std::string> full = {"--width", "64", "--height", "48", "--frames", "1", "--warmup", "0", "-o", (work_ / "ok").string()};
+    full.insert(full.end(), args.begin(), args.end());
+    const Result r = run_render(full, scratch_);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+  }
+}
+
+// Issue 45: a page pool too small for the view. One slot cannot hold even the coarsest level's
+// pages under the demo's view (its ground straddles a page corner of every level): refused in one
+// line naming the option, exit 2. Four slots hold a coarse floor: the pages that do not fit are
+// said on stderr, and no pixel is shaded lit for want of a page.
+TEST_F(RenderCli, APagePoolTooSmallIsRefusedOrWarnedAndNeverShadesLit) {
+  const std::vector<std::string> args = {"--scene", "demo", "--width", "96", "--height", "64", "--frames", "1", "--warmup", "0",
+                                         "--technique", "pcf", "--pcf.kernel", "grid", "--pcf.radius_unit", "world", "--pcf.radius", "0.05",
+                                         "--map.virtual_pages", "rule"};
+  const auto run = [&](const std::string& pool, const fs::path& out) {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"--map.virtual_pool_pages", pool, "-o", out.string()});
+    return run_render(a, scratch_);
+  };
+  const Result one = run("1", work_ / "one");
+  EXPECT_EQ(one.exit_code, 2) << one.err;
+  EXPECT_EQ(line_count(one.err), 1) << one.err;
+  EXPECT_THAT(one.err, HasSubstr("--map.virtual_pool_pages 1: a pool of 1 page slot cannot hold"));
+  EXPECT_THAT(one.err, HasSubstr("give at least 2"));
+  EXPECT_FALSE(fs::exists(work_ / "one"));
+
+  const Result full = run("32", work_ / "full");
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  EXPECT_EQ(full.err, "") << "a pool that holds the view warns of nothing";
+  const Result four = run("2", work_ / "four");
+  ASSERT_EQ(four.exit_code, 0) << four.err;
+  EXPECT_EQ(line_count(four.err), 1) << four.err;
+  EXPECT_THAT(four.err, HasSubstr("warning: virtual shadow map: "));
+  EXPECT_THAT(four.err, HasSubstr("(--map.virtual_pool_pages 2)"));
+  const nlohmann::json v = read_json(only_render_dir(work_ / "four") / "report.json").at("virtual_map");
+  EXPECT_GT(v.at("pages").at("missing").get<int>(), 0) << v;
+  EXPECT_GT(v.at("pages").at("floor_level").get<int>(), 0) << v;
+  EXPECT_EQ(v.at("shaded_pixels").at("none").get<int>(), 0) << "pixels shaded lit for want of a page: " << v;
+  // The shadow stays: as many shadowed pixels, within a few, as with a pool that holds every page.
+  const auto shadowed = [&](const fs::path& out) {
+    int n = 0;
+    for (const float x : penumbra::io::read_imagef(only_render_dir(out) / "visibility.exr").pixels) n += x < 0.5f;
+    return n;
+  };
+  const int with_full = shadowed(work_ / "full"), with_four = shadowed(work_ / "four");
+  EXPECT_GT(with_full, 20);
+  EXPECT_GT(with_four, with_full / 2) << with_four << " shadowed pixels against " << with_full;
 }
 
 // A bad calibration file is refused before anything is created: one line naming the file and field.
@@ -621,4 +769,62 @@ TEST_F(RenderCli, AFarAwayObjectLeavesTheShadowsAndTheReportFinite) {
   float darkest = 1;
   for (const float v : visibility.pixels) darkest = std::min(darkest, v);
   EXPECT_LT(darkest, 0.2f) << "the ball's shadow is gone";
+}
+
+// Issue 45: the far-away objects of issue 27 in every way of drawing the sun's shadows. The
+// virtual shadow map took its depth range from the scene's bounds: a sphere at x = 1e20, a box of
+// size 1e30 or an OBJ triangle with a vertex at 1e30 left every pixel lit, exit 0. Its light view
+// and depth range now come from the maps' bounded fit (fitting.h's sun_shadow_region): the pixel
+// darkest in the ball's shadow without the object stays dark with it, and the report stays finite.
+TEST_F(RenderCli, FarAwayObjectsLeaveTheShadowsInEveryWayOfDrawingTheSun) {
+  std::ofstream(scratch_ / "far.obj") << "v 1e30 -0.5 -5\nv -5 -0.5 -5\nv -5 -0.5 5\nf 1 2 3\n";
+  const std::string base = R"("camera": {"projection": "perspective", "position": [0, 7, 13], "target": [0, 1, 0], "fov_y_deg": 50, "near_ws": 0.1, "far_ws": 60},
+    "light": {"type": "directional", "direction": [-0.3, -1, -0.2], "size": 0.5},
+    "objects": [{"name": "ground", "shape": "plane", "size": [20, 20]},
+                {"name": "ball", "shape": "sphere", "radius": 1.2, "translate": [0, 1.5, 2]})";
+  const std::vector<std::pair<std::string, std::string>> objects = {
+      {"none", ""},
+      {"sphere_at_1e20", R"(, {"name": "faraway", "shape": "sphere", "radius": 1, "translate": [1e20, 0, 0]})"},
+      {"box_of_1e30", R"(, {"name": "enormous", "shape": "box", "size": [1e30, 1e30, 1e30], "translate": [0, 0, -1e30]})"},
+      {"obj_vertex_at_1e30", R"(, {"name": "sliver", "shape": "model", "path": "far.obj"})"}};
+  const std::vector<std::pair<std::string, std::vector<std::string>>> ways = {
+      {"single_map", {"--resolution", "256"}},
+      {"cascades", {"--resolution", "256", "--map.cascades", "4"}},
+      {"virtual_rule", {"--map.virtual_pages", "rule"}},
+      {"virtual_footprint", {"--map.virtual_pages", "footprint"}}};
+  for (const auto& [way, way_args] : ways) {
+    std::size_t shadow_pixel = 0;
+    for (const auto& [name, object] : objects) {
+      SCOPED_TRACE(way + ", " + name);
+      const fs::path scene = scratch_ / (name + ".json");
+      std::ofstream(scene) << "{\"name\": \"" << name << "\", " << base << object << "]}\n";
+      const fs::path out = work_ / (way + "-" + name);
+      std::vector<std::string> args = {"--scene", scene.string(), "--width", "96", "--height", "64", "--frames", "1", "--warmup", "0",
+                                       "--technique", "pcf", "--pcf.kernel", "grid", "--pcf.radius_unit", "world", "--pcf.radius", "0.05",
+                                       "-o", out.string()};
+      args.insert(args.end(), way_args.begin(), way_args.end());
+      const Result r = run_render(args, scratch_);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const fs::path dir = only_render_dir(out);
+      const nlohmann::json report = read_json(dir / "report.json");
+      for (const char* key : {"near_ws", "far_ws", "extent_ws", "s_xy"}) {
+        ASSERT_TRUE(report.at("light").at(key).is_number()) << key << ": " << report.at("light");
+        EXPECT_LT(std::abs(report.at("light").at(key).get<double>()), 1e6) << key;
+      }
+      if (way_args.front() == "--map.virtual_pages") {
+        const nlohmann::json& v = report.at("virtual_map");
+        for (const char* key : {"near_ws", "far_ws"}) {
+          ASSERT_TRUE(v.at("light").at(key).is_number()) << key << ": " << v;
+          EXPECT_LT(std::abs(v.at("light").at(key).get<double>()), 1e6) << key;
+        }
+        EXPECT_EQ(v.at("shaded_pixels").at("none").get<int>(), 0) << v;
+      }
+      const penumbra::io::ImageF visibility = penumbra::io::read_imagef(dir / "visibility.exr");
+      if (name == "none") {
+        shadow_pixel = static_cast<std::size_t>(std::min_element(visibility.pixels.begin(), visibility.pixels.end()) - visibility.pixels.begin());
+        ASSERT_LT(visibility.pixels[shadow_pixel], 0.2f) << "no shadow of the ball to compare with";
+      }
+      EXPECT_LT(visibility.pixels[shadow_pixel], 0.2f) << "the ball's shadow is gone";
+    }
+  }
 }
