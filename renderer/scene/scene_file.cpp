@@ -259,6 +259,10 @@ std::vector<ObjectPath> read_object_paths(const SceneReader& r, const json& j, c
     for (const Object& obj : scene.objects) named += obj.name == op.object;
     if (named != 1)
       r.fail(child(at, "object"), "must name exactly one object, '" + op.object + "' names " + std::to_string(named));
+    // Two paths for one object: one would silently win over the other.
+    for (std::size_t q = 0; q < out.size(); ++q)
+      if (out[q].object == op.object)
+        r.fail(child(at, "object"), "'" + op.object + "' already has a path (" + element(path, q) + "); give an object one path");
     const std::string keys_path = child(at, "keys");
     const json& keys = r.required(o, at, "keys", "a path needs its keys");
     r.check_field(keys, keys_path, {.type = Type::array, .min_items = 2, .items = json_input::item({.type = Type::object})});
@@ -699,7 +703,12 @@ Scene read_scene(const std::filesystem::path& path, const json& doc) {
     ObjectReader objects(r);
     for (std::size_t i = 0; i < v->size(); ++i) scene.objects.push_back(objects.read((*v)[i], element("objects", i)));
   }
-  if (const json* v = r.find(doc, "object_paths")) scene.object_paths = read_object_paths(r, *v, "object_paths", scene);
+  if (const json* v = r.find(doc, "object_paths")) {
+    scene.object_paths = read_object_paths(r, *v, "object_paths", scene);
+    // Objects are posed at a frame of the camera path: without one no frame poses them.
+    if (!scene.object_paths.empty() && scene.camera_path.empty())
+      r.fail("object_paths", "needs a camera_path: objects move over its frames, and this scene has none");
+  }
   return scene;
 }
 

@@ -345,7 +345,19 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"ObjectPathUnknownKey",
                 R"({"objects": [{"name": "a", "shape": "sphere", "radius": 1}],
                     "object_paths": [{"object": "a", "speed": 2, "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [1, 0, 0]}]}]})",
-                "object_paths[0].speed: unknown key"}),
+                "object_paths[0].speed: unknown key"},
+        // Issue 45: two paths for one object (the last won), and paths no frame poses.
+        BadCase{"ObjectPathTwiceForOneObject",
+                R"({"objects": [{"name": "a", "shape": "sphere", "radius": 1}],
+                    "camera_path": {"keys": [{"frame": 0, "position": [0, 1, 5], "target": [0, 0, 0]},
+                                             {"frame": 9, "position": [1, 1, 5], "target": [0, 0, 0]}]},
+                    "object_paths": [{"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [1, 0, 0]}]},
+                                     {"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [0, 0, 9]}]}]})",
+                "object_paths[1].object: 'a' already has a path (object_paths[0]); give an object one path"},
+        BadCase{"ObjectPathWithoutCameraPath",
+                R"({"objects": [{"name": "a", "shape": "sphere", "radius": 1}],
+                    "object_paths": [{"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [1, 0, 0]}]}]})",
+                "object_paths: needs a camera_path: objects move over its frames, and this scene has none"}),
     [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
 
 // The complete example in docs/scene-format.md stays a valid scene.
