@@ -1,6 +1,7 @@
 #include "display/display_fit.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -80,7 +81,7 @@ std::string check_fitted_levels(double black, double white, const std::string& w
   return warning.empty() ? "" : what + " " + warning;
 }
 
-std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
+std::vector<Reading> read_readings_csv(const std::filesystem::path& path, ReadingsSet set) {
   const std::string file = path.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(file + ": no such file");
@@ -138,12 +139,25 @@ std::vector<Reading> read_readings_csv(const std::filesystem::path& path) {
   }
   std::vector<Reading> readings;
   for (const auto& [level, reading] : by_level) readings.push_back({level, reading.first});
+  if (set == ReadingsSet::partial) return readings;
   try {
     check_readings(readings);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(file + ": " + e.what());
   }
   return readings;
+}
+
+std::string readings_csv(std::vector<Reading> readings) {
+  std::sort(readings.begin(), readings.end(), [](const Reading& a, const Reading& b) { return a.level < b.level; });
+  std::string text = "level,luminance_cd_m2\n";
+  for (const Reading& r : readings) {
+    char b[48];
+    const auto [end, ec] = std::to_chars(b, b + sizeof b, r.luminance_cd_m2);  // shortest that reads back the same double
+    (void)ec;  // 48 characters hold any double
+    text += std::to_string(r.level) + "," + std::string(b, end) + "\n";
+  }
+  return text;
 }
 
 namespace {
@@ -167,17 +181,32 @@ DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
   std::sort(readings.begin(), readings.end(), [](const Reading& a, const Reading& b) { return a.level < b.level; });
   check_readings(readings);
   double black = readings.front().luminance_cd_m2, white = readings.back().luminance_cd_m2, gamma = 2.2;
-  ceres::Problem problem;
-  for (const Reading& r : readings)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GammaResidual, 1, 1, 1, 1>(new GammaResidual{r.level / 255.0, r.luminance_cd_m2}),
-                             nullptr, &black, &white, &gamma);
-  problem.SetParameterLowerBound(&gamma, 0, 0.5);
-  problem.SetParameterUpperBound(&gamma, 0, 5.0);
-  const ceres::Solver::Options options = solver::small_problem_options(1e-14);
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (!summary.IsSolutionUsable() || !(white > black))
-    throw std::invalid_argument("the gamma model does not fit these readings (" + summary.message + ")");
+  // No monitor emits less than nothing: black >= 0 is part of the model. Where the free optimum
+  // lies below 0 (readings near black a little under the curve through the rest, e.g. 0.31, 9.2,
+  // 41.5, 98.7, 181 cd/m² gave -0.0823), the fit is the best one with black at 0: white and gamma
+  // fitted again with black held there. (A lower bound on black in one solve stopped on the bound
+  // with a cost 0.05 % above that optimum: Ceres' projected steps crawl along an active bound.)
+  auto solve = [&](bool black_at_zero) {
+    ceres::Problem problem;
+    for (const Reading& r : readings)
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GammaResidual, 1, 1, 1, 1>(new GammaResidual{r.level / 255.0, r.luminance_cd_m2}),
+                               nullptr, &black, &white, &gamma);
+    if (black_at_zero) problem.SetParameterBlockConstant(&black);
+    problem.SetParameterLowerBound(&gamma, 0, 0.5);
+    problem.SetParameterUpperBound(&gamma, 0, 5.0);
+    const ceres::Solver::Options options = solver::small_problem_options(1e-14);
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    if (!summary.IsSolutionUsable() || !(white > black))
+      throw std::invalid_argument("the gamma model does not fit these readings (" + summary.message + ")");
+  };
+  solve(false);
+  if (black < 0) {
+    black = 0;
+    white = readings.back().luminance_cd_m2;
+    gamma = 2.2;
+    solve(true);
+  }
   double sum = 0;
   for (const Reading& r : readings) {
     double residual = 0;
@@ -185,7 +214,7 @@ DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
     sum += residual * residual;
   }
   // The table is the readings themselves: its black and white are what was measured. The gamma
-  // model's come from the fit, and a fit below 0 is no monitor.
+  // model's come from the fit (black >= 0 by its bound; checked again as every model is).
   if (model == Model::table) {
     black = readings.front().luminance_cd_m2;
     white = readings.back().luminance_cd_m2;
@@ -201,6 +230,19 @@ DisplayCalibration fit_readings(std::vector<Reading> readings, Model model) {
   c.points = std::move(readings);
   c.residual_rms_cd_m2 = std::sqrt(sum / static_cast<double>(c.points.size()));
   return c;
+}
+
+std::string gamma_fit_note(const DisplayCalibration& c) {
+  if (c.model != Model::gamma || c.method != "photometer" || c.points.empty() || !c.black_cd_m2 || !c.white_cd_m2) return "";
+  std::string note;
+  if (*c.black_cd_m2 == 0 && c.points.front().luminance_cd_m2 > 0)
+    note = "black held at 0 cd/m2 (the gamma curve through the other readings passes below 0 at level 0, read as " +
+           fmt(c.points.front().luminance_cd_m2) + ")";
+  const double range = *c.white_cd_m2 - *c.black_cd_m2;
+  if (c.residual_rms_cd_m2 && *c.residual_rms_cd_m2 > kGammaMissWarning * range)
+    note += (note.empty() ? "" : "; ") + std::string("the gamma model misses the readings by ") + fmt(*c.residual_rms_cd_m2) +
+            " cd/m2 RMS (" + fmt(std::round(1000 * *c.residual_rms_cd_m2 / range) / 10) + " % of the range): the table model follows them";
+  return note;
 }
 
 double checkerboard_gamma(int matched_level) {

@@ -32,16 +32,27 @@ std::string check_fitted_levels(double black_cd_m2, double white_cd_m2, const st
 // A CSV of photometer readings: the header `level,luminance_cd_m2`, then one row per level
 // (an integer 0..255, a luminance >= 0 in cd/m²), in any order. Throws std::runtime_error, one
 // line naming the file, the line and the column ("r.csv:4: column 'luminance_cd_m2': 'n/a' is not
-// a number"), or the file alone for what concerns all rows (too few, no black or white). Sorted by level.
-std::vector<Reading> read_readings_csv(const std::filesystem::path& path);
+// a number"), or the file alone for what concerns all rows (too few, no black or white). Sorted by
+// level. ReadingsSet::partial takes any number of rising readings (the readings file of a window
+// stopped half way, to go on from), with the same checks of each row.
+enum class ReadingsSet { calibration, partial };
+std::vector<Reading> read_readings_csv(const std::filesystem::path& path, ReadingsSet set = ReadingsSet::calibration);
+// Readings as the CSV above (header, one row per reading, by level, luminance as typed: %.17g
+// would show 0.31 as 0.31000000000000000), the form the window keeps them in as they are typed.
+std::string readings_csv(std::vector<Reading> readings);
 
 // Readings (any order) -> a calibration of `model`: the gamma model L(v) = L_black + (L_white -
-// L_black) (v/255)^gamma fitted by least squares in cd/m² (Ceres; gamma in [0.5, 5]), its RMS
-// residual, and the readings themselves (the table model interpolates them, and its black and
-// white are the readings of levels 0 and 255). Throws std::invalid_argument as check_readings
-// does, and for a gamma fit whose black lies below 0 (the readings do not follow the model near
-// black).
+// L_black) (v/255)^gamma fitted by least squares in cd/m² (Ceres) with gamma in [0.5, 5] and
+// black >= 0 as part of the model (where the free optimum has black below 0, the best fit with
+// black at 0), its RMS residual, and the readings themselves (the table model interpolates them,
+// and its black and white are the readings of levels 0 and 255). Throws std::invalid_argument as
+// check_readings does (too few, not rising, not a luminance).
 DisplayCalibration fit_readings(std::vector<Reading> readings, Model model);
+// What to know about a gamma fit before using it, "" if nothing: its black held at the bound 0
+// (the curve through the other readings passes below 0), or a curve that misses the readings by
+// more than kGammaMissWarning of the range RMS, where the table model follows them.
+inline constexpr double kGammaMissWarning = 0.02;  // a photometer's own accuracy is a few %
+std::string gamma_fit_note(const DisplayCalibration& gamma_fit);
 
 // Without a photometer: a 1-px checkerboard of levels 0 and 255 averages to half way between
 // black and white, so the grey level m that matches it has relative luminance 0.5:

@@ -79,31 +79,48 @@ void begin_corner_box(const char* id, ImVec2 pivot) {
 
 }  // namespace
 
-std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, display::Model model, const CalibrationScreen& s) {
+MeasuredLevels measure_levels(const std::vector<int>& levels, display::Model model, const std::vector<display::Reading>& kept,
+                              const std::string& kept_file, const std::function<void(const std::vector<display::Reading>&)>& keep,
+                              const CalibrationScreen& s) {
   gl::Glfw glfw;
   Screen screen = open_screen(glfw, s, "Penumbra display calibration");
   gl::Window& window = *screen.window;
-  display::TypedReadings entry(levels, model);
+  display::TypedReadings entry(levels, model, kept);
+  auto stopped = [&] { return MeasuredLevels{false, entry.readings(), entry.model(), screen.monitor}; };
+  if (!kept.empty()) say("going on from " + std::to_string(kept.size()) + " readings kept in " + kept_file);
   std::size_t shown = levels.size() + 1;
   bool review_said = false;
+  const ImVec4 red{1.0f, 0.55f, 0.45f, 1.0f}, amber{1.0f, 0.8f, 0.4f, 1.0f};
+  const std::string escape_line = "Escape: stop; the readings are kept in " + kept_file + ".";
   for (;;) {
     glfw.wait_events(0.05);
-    if (window.should_close()) return std::nullopt;
+    if (window.should_close()) return stopped();
     bool write = false;
     for (const gl::Press& p : window.take_presses()) {
-      if (p.key == GLFW_KEY_ESCAPE) return std::nullopt;
-      if (!entry.reviewing()) continue;  // the text box takes the keys while levels are read
+      if (p.key == GLFW_KEY_ESCAPE) return stopped();
+      // Up/Down select a level, on the review and while levels are read (the one-line text box
+      // has no use for them). Other keys belong to the text box while levels are read.
+      if (p.key == GLFW_KEY_UP || p.key == GLFW_KEY_DOWN) {
+        entry.select(p.key == GLFW_KEY_UP ? -1 : 1);
+        if (entry.reviewing()) say("selected level " + std::to_string(entry.level()));
+        continue;
+      }
+      if (!entry.reviewing()) continue;
       if (p.key == GLFW_KEY_BACKSPACE) {
-        entry.undo();
+        entry.remeasure();
         review_said = false;
         say("measuring level " + std::to_string(entry.level()) + " again");
+      } else if (p.key == GLFW_KEY_TAB) {
+        entry.set_model(entry.model() == display::Model::gamma ? display::Model::table : display::Model::gamma);
+        review_said = false;
+        say("model " + display::to_string(entry.model()));
       } else if ((p.key == GLFW_KEY_ENTER || p.key == GLFW_KEY_KP_ENTER) && entry.fitted()) {
         write = true;
       }
     }
     if (write) {
       say("readings accepted");
-      return MeasuredLevels{entry.readings(), screen.monitor};
+      return MeasuredLevels{true, entry.readings(), entry.model(), screen.monitor};
     }
     window.begin_frame();
     int w = 0, h = 0;
@@ -119,13 +136,23 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, dis
       glClearColor(v, v, v, 1);
       glClear(GL_COLOR_BUFFER_BIT);
       begin_corner_box("##reading", {0.0f, 1.0f});
-      ImGui::Text("Level %d (%zu of %zu): point the photometer at the centre,", level, entry.current() + 1, levels.size());
-      ImGui::Text("type its reading in cd/m\xc2\xb2 (a decimal point: 8.1) and press Enter. Escape: stop, nothing written.");
-      if (!entry.message().empty()) ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "%s", entry.message().c_str());
+      ImGui::Text("Level %d (%zu of %zu; %zu read): point the photometer at the centre,", level, entry.current() + 1, levels.size(),
+                  entry.read_count());
+      ImGui::Text("type its reading in cd/m\xc2\xb2 (a decimal point: 8.1) and press Enter.");
+      if (const auto& before = entry.reading(entry.current()))
+        ImGui::Text("Read before: %g cd/m\xc2\xb2; a new reading replaces it.", *before);
+      ImGui::Text("Up/Down: another level (to read it again). %s", escape_line.c_str());
+      if (!entry.message().empty()) {  // wrapped: a refusal names the level to read again
+        ImGui::PushTextWrapPos(ImGui::GetFontSize() * 36);
+        ImGui::TextColored(red, "%s", entry.message().c_str());
+        ImGui::PopTextWrapPos();
+      }
       if (!ImGui::IsAnyItemActive()) ImGui::SetKeyboardFocusHere();
       ImGui::SetNextItemWidth(160);
       char typed[32] = {};
       entry.field().copy(typed, sizeof typed - 1);
+      // One box per level: another level's box starts empty, not with what ImGui held for this one.
+      ImGui::PushID(level);
       // No character filter: a typed comma reaches the parser, which says what to type instead.
       entered = ImGui::InputText("cd/m\xc2\xb2", typed, sizeof typed, ImGuiInputTextFlags_EnterReturnsTrue);
       // Enter leaves the box; it takes the keyboard back at once, so the next reading's first
@@ -133,6 +160,7 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, dis
       if (entered) ImGui::SetKeyboardFocusHere(-1);
       entry.field() = typed;
       typing = ImGui::IsItemActive();
+      ImGui::PopID();
       ImGui::End();
     } else {
       // The review: every reading and the fitted model, before anything is written.
@@ -140,28 +168,37 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, dis
       glClear(GL_COLOR_BUFFER_BIT);
       begin_corner_box("##review", {0.0f, 1.0f});
       ImGui::Text("All %zu levels read. Check them before the calibration is written:", levels.size());
-      if (ImGui::BeginTable("readings", 2, ImGuiTableFlags_Borders | ImGuiTableFlags_SizingFixedFit)) {
+      if (ImGui::BeginTable("readings", 3, ImGuiTableFlags_Borders | ImGuiTableFlags_SizingFixedFit)) {
+        ImGui::TableSetupColumn("");
         ImGui::TableSetupColumn("level");
         ImGui::TableSetupColumn("cd/m\xc2\xb2");
         ImGui::TableHeadersRow();
-        for (const display::Reading& r : entry.readings()) {
+        for (std::size_t i = 0; i < levels.size(); ++i) {
           ImGui::TableNextRow();
           ImGui::TableNextColumn();
-          ImGui::Text("%d", r.level);
+          ImGui::TextUnformatted(i == entry.current() ? ">" : "");
           ImGui::TableNextColumn();
-          ImGui::Text("%g", r.luminance_cd_m2);
+          ImGui::Text("%d", levels[i]);
+          ImGui::TableNextColumn();
+          ImGui::Text("%g", entry.reading(i).value_or(0));
         }
         ImGui::EndTable();
       }
+      const char* other = entry.model() == display::Model::gamma ? "table" : "gamma";
       if (const auto& c = entry.fitted()) {
-        ImGui::Text("gamma %.3f, black %.4g cd/m\xc2\xb2, white %.4g cd/m\xc2\xb2, RMS residual %.3g cd/m\xc2\xb2", c->gamma,
-                    *c->black_cd_m2, *c->white_cd_m2, *c->residual_rms_cd_m2);
-        if (!entry.fit_warning().empty()) ImGui::TextColored({1.0f, 0.8f, 0.4f, 1.0f}, "%s", entry.fit_warning().c_str());
-        ImGui::Text("Enter: write the calibration. Backspace: measure the last level again. Escape: stop, nothing written.");
+        if (entry.model() == display::Model::gamma)
+          ImGui::Text("Model gamma: gamma %.3f, black %.4g cd/m\xc2\xb2, white %.4g cd/m\xc2\xb2, RMS residual %.3g cd/m\xc2\xb2", c->gamma,
+                      *c->black_cd_m2, *c->white_cd_m2, *c->residual_rms_cd_m2);
+        else
+          ImGui::Text("Model table: the readings, interpolated between levels; black %.4g cd/m\xc2\xb2, white %.4g cd/m\xc2\xb2",
+                      *c->black_cd_m2, *c->white_cd_m2);
+        if (!entry.fit_warning().empty()) ImGui::TextColored(amber, "%s", entry.fit_warning().c_str());
+        ImGui::Text("Enter: write the calibration. Tab: the %s model instead.", other);
       } else {
-        ImGui::TextColored({1.0f, 0.55f, 0.45f, 1.0f}, "No calibration from these readings: %s", entry.fit_problem().c_str());
-        ImGui::Text("Backspace: measure the last level again. Escape: stop, nothing written.");
+        ImGui::TextColored(red, "No calibration from these readings: %s", entry.fit_problem().c_str());
+        ImGui::Text("Tab: the %s model instead.", other);
       }
+      ImGui::Text("Up/Down: select a level; Backspace: read it again. %s", escape_line.c_str());
       ImGui::End();
     }
     window.end_frame();
@@ -175,14 +212,18 @@ std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, dis
     if (entry.reviewing() && !review_said) {
       review_said = true;
       shown = levels.size() + 1;
-      say(entry.fitted() ? "review: " + std::to_string(levels.size()) + " readings, Enter writes" + (entry.fit_warning().empty() ? "" : "; warning: " + entry.fit_warning())
+      say(entry.fitted() ? "review: " + std::to_string(levels.size()) + " readings, model " + display::to_string(entry.model()) +
+                               ", Enter writes" + (entry.fit_warning().empty() ? "" : "; note: " + entry.fit_warning())
                          : "review: no calibration from these readings: " + entry.fit_problem());
     }
     if (!entered) continue;
     const std::string typed = entry.field();
     const int level = entry.level();
     switch (entry.enter()) {
-      case display::TypedReadings::Outcome::accepted: say("level " + std::to_string(level) + ": " + typed + " cd/m2"); break;
+      case display::TypedReadings::Outcome::accepted:
+        keep(entry.readings());  // on disk before the next level is shown
+        say("level " + std::to_string(level) + ": " + typed + " cd/m2");
+        break;
       case display::TypedReadings::Outcome::refused: say("level " + std::to_string(level) + ": refused: " + entry.message()); break;
       case display::TypedReadings::Outcome::confirm: say("level " + std::to_string(level) + ": confirm: " + entry.message()); break;
     }

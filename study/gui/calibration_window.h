@@ -5,6 +5,7 @@
 // they are (no sRGB framebuffer, pixel copies 1:1), so what is measured is the monitor's own
 // transfer. Status lines on stdout ("showing level 64 (3 of 9)", "grey level 186") are for the
 // operator's terminal and the GUI test.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,15 +22,22 @@ struct CalibrationScreen {
 };
 
 struct MeasuredLevels {
-  std::vector<display::Reading> readings;
-  nlohmann::json monitor;  // name, video mode, full screen or not
+  bool accepted = false;                   // Enter on the review; false: stopped (Escape, the window closed)
+  std::vector<display::Reading> readings;  // accepted: one per level; stopped: those read so far
+  display::Model model = display::Model::gamma;  // the model chosen on the review
+  nlohmann::json monitor;                  // name, video mode, full screen or not
 };
 // Shows each level full screen (a small entry box in the lower left corner, away from the
 // photometer's spot at the centre) and takes the luminance typed for it (Enter), by the rules of
-// display::TypedReadings; then the review of every reading with `model` fitted, where Enter accepts
-// them and Backspace measures the last level again. Escape or closing the window: nothing (the
-// caller writes nothing).
-std::optional<MeasuredLevels> measure_levels(const std::vector<int>& levels, display::Model model, const CalibrationScreen& screen);
+// display::TypedReadings, starting from `kept` (readings of an earlier window). Up/Down select
+// another level, to read it again. `keep` is called with every reading so far after each one
+// taken (the caller writes them to `kept_file`, named on screen), so a stop or a crash loses
+// nothing. Then the review of every reading with the model fitted: Up/Down select a level,
+// Backspace reads it again, Tab switches between the gamma and the table model, Enter accepts.
+// Escape or closing the window stops (accepted false).
+MeasuredLevels measure_levels(const std::vector<int>& levels, display::Model model, const std::vector<display::Reading>& kept,
+                              const std::string& kept_file, const std::function<void(const std::vector<display::Reading>&)>& keep,
+                              const CalibrationScreen& screen);
 
 struct CheckerboardMatch {
   int level = 128;

@@ -93,6 +93,26 @@ TEST(DisplayCalibrationCli, RecoversTheSyntheticMonitorsGammaFromACsv) {
   fs::remove_all(dir);
 }
 
+// Issue 44: five plausible readings were refused ("black level -0.0823 cd/m2, below 0"); the CSV
+// gets the same constrained fit as the window: black held at 0, said once on stderr.
+TEST(DisplayCalibrationCli, TheReportedFiveReadingsFitWithBlackHeldAtZero) {
+  const fs::path dir = fresh("five");
+  fs::create_directories(dir);
+  const fs::path csv = dir / "readings.csv", out = dir / "display-calibration.json";
+  std::ofstream(csv) << "level,luminance_cd_m2\n0,0.31\n64,9.2\n128,41.5\n191,98.7\n255,181\n";
+  std::string output;
+  ASSERT_EQ(run({"calibrate-display", "--luminances", csv.string(), "-o", out.string()}, &output), 0) << output;
+  EXPECT_NE(output.find("penumbra-study: note: black held at 0 cd/m2 (the gamma curve through the other readings passes below 0 at "
+                        "level 0, read as 0.31)\n"),
+            std::string::npos)
+      << output;
+  const display::DisplayCalibration c = display::load_calibration(out);
+  EXPECT_EQ(*c.black_cd_m2, 0.0);
+  EXPECT_NEAR(c.gamma, 2.12, 0.05);
+  EXPECT_TRUE(fs::exists(csv)) << "an input is never removed";
+  fs::remove_all(dir);
+}
+
 TEST(DisplayCalibrationCli, BadReadingsAreRefusedWithOneLineAndNothingWritten) {
   const fs::path dir = fresh("bad");
   fs::create_directories(dir);
