@@ -370,4 +370,67 @@ TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
   EXPECT_FALSE(fs::exists(s / "c.json"));
 }
 
+// Issue 45, part A: the virtual shadow map's options, the visibility and object paths, each with
+// the line it must print (they were taken and not used, or failed blaming another option).
+TEST(ErrorLines, VirtualMapVisibilityAndObjectPathsNameWhatIsWrong) {
+  const Scratch s("virtual");
+  const std::string out = (s / "out").string();
+  std::ofstream(s / "twice.json") << R"({"objects": [{"name": "a", "shape": "sphere", "radius": 1}],
+    "camera_path": {"keys": [{"frame": 0, "position": [0, 1, 5], "target": [0, 0, 0]}, {"frame": 9, "position": [1, 1, 5], "target": [0, 0, 0]}]},
+    "object_paths": [{"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [1, 0, 0]}]},
+                     {"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [0, 0, 9]}]}]})"
+                                  << "\n";
+  std::ofstream(s / "no-path.json") << R"({"objects": [{"name": "a", "shape": "sphere", "radius": 1}],
+    "object_paths": [{"object": "a", "keys": [{"frame": 0, "translate": [0, 0, 0]}, {"frame": 5, "translate": [1, 0, 0]}]}]})"
+                                    << "\n";
+  std::ofstream(s / "shallow.json") << R"({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3.47, "obtained_by": "simulated",
+    "threshold": {"task": "2afc", "guess": 0.5, "criterion_f": 1e-6, "family": "log-weibull", "beta": 0.01}}]})"
+                                    << "\n";
+  const std::vector<std::string> pages = {"--technique", "pcf", "--pcf.kernel", "grid", "--pcf.radius_unit", "world", "--map.virtual_pages", "rule"};
+  const auto with = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  struct Case {
+    std::string exe;
+    std::vector<std::string> args;
+    int status;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      // was: 1e-45 .. 5e-324 a float's 0 (the entry's criterion), 1e-15 c = 69 215 texels, 1e-17 blamed adaptive.c (exit 1)
+      {kRender, {"--adaptive.enabled", "true", "--adaptive.visibility", "1e-15", "-o", out}, 2,
+       "--adaptive.visibility: visibility: expected 0 or a number in [0.001, 0.999], got '1e-15'"},
+      {kRender, {"--adaptive.enabled", "true", "--adaptive.visibility", "5e-324", "-o", out}, 2, "got '5e-324'"},
+      {kDemo, {"--headless", "--adaptive.visibility", "1e-17", "-o", out}, 2, "--adaptive.visibility: visibility: expected 0 or"},
+      {kBench, {"--adaptive.visibility", "1e-45", "-o", out}, 2, "--adaptive.visibility: visibility: expected 0 or"},
+      // was: a valid entry's c(F) = 0 blamed adaptive.c
+      {kRender, {"--adaptive.enabled", "true", "--adaptive.visibility", "0.999", "--calibration", (s / "shallow.json").string(), "-o", out}, 2,
+       "--adaptive.visibility: at F = 0.999 the pcf entry"},
+      // was: taken and not used
+      {kRender, {"--adaptive.enabled", "true", "--adaptive.c", "3", "--adaptive.visibility", "0.1", "-o", out}, 2,
+       "--adaptive.visibility: not read: --adaptive.c gives c itself"},
+      {kRender, {"--adaptive.visibility", "0.1", "-o", out}, 2, "--adaptive.visibility: not read: the adaptive rule is off"},
+      {kRender, {"--map.virtual_pool_pages", "4", "-o", out}, 2,
+       "--map.virtual_pool_pages: not read: it sets the virtual shadow map, and map.virtual_pages is off"},
+      {kRender, {"--map.virtual_cache", "false", "-o", out}, 2, "--map.virtual_cache: not read"},
+      {kRender, with(pages, {"--resolution", "64,4096", "-o", out}), 2, "--resolution: not read (it sets map.resolution_texels)"},
+      {kRender, with(pages, {"--map.cascades", "4", "-o", out}), 2, "--map.cascades: not read: a virtual shadow map"},
+      // was: pages that did not fit shaded lit, exit 0
+      {kRender, with(pages, {"--map.virtual_pool_pages", "1", "--width", "64", "--height", "48", "-o", out}), 2,
+       "--map.virtual_pool_pages 1: a pool of 1 page slot cannot hold the"},
+      // was: the last path won; paths no frame poses
+      {kRender, {"--scene", (s / "twice.json").string(), "-o", out}, 1,
+       "twice.json: object_paths[1].object: 'a' already has a path (object_paths[0]); give an object one path"},
+      {kRender, {"--scene", (s / "no-path.json").string(), "-o", out}, 1,
+       "no-path.json: object_paths: needs a camera_path: objects move over its frames, and this scene has none"},
+  };
+  for (const Case& c : cases) {
+    const std::string tool = fs::path(c.exe).filename().string();
+    SCOPED_TRACE(tool + " " + c.line);
+    expect_one_line(run(c.exe, c.args, s), c.status, tool, c.line);
+  }
+  EXPECT_FALSE(fs::exists(s / "out"));
+}
+
 }  // namespace
