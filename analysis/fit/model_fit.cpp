@@ -6,8 +6,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <cstdint>
+#include <cstring>
 #include <map>
+#include <memory>
+#include <exception>
 #include <stdexcept>
+#include <thread>
+#include <unordered_map>
 
 #include "solver/solver_options.h"
 
@@ -63,18 +69,40 @@ struct GroupModel {
     scale = T(1.0) - gamma - lambda;
   }
   // log psi and log(1 - psi) at x; 1 - psi is built from 1 - F so that it keeps its precision far
-  // above threshold, and both stay away from log(0).
+  // above threshold, and both stay away from log(0). A null pointer skips that logarithm: a row of
+  // one trial needs only one of them.
   void log_probabilities(psy::Model family, double x, T* log_p, T* log_q) const {
+    using std::exp;
+    using std::expm1;
     using std::log;
     using std::log1p;
+    using std::pow;
+    if (family == psy::Model::weibull || family == psy::Model::log_weibull) {
+      // psy::core_and_complement's expressions, with F computed only where it is used: log psi is
+      // taken from psi itself only for a correct answer where 1 - psi >= 0.5, so most rows skip
+      // F's expm1 (and, for a Jet, the exp of its derivative). The numbers are the same.
+      const T z = family == psy::Model::weibull ? T(pow(T(x) / alpha, beta)) : psy::pow10(T(beta * (T(x) - alpha)));
+      T q = lambda + scale * T(exp(-z));
+      if (q < T(kTiny)) q = T(kTiny);
+      if (log_q) *log_q = log(q);
+      if (!log_p) return;
+      if (q < T(0.5)) {
+        *log_p = T(log1p(-q));
+        return;
+      }
+      T p = gamma + scale * T(-expm1(-z));
+      if (p < T(kTiny)) p = T(kTiny);
+      *log_p = T(log(p));
+      return;
+    }
     T f, f_complement;
     psy::core_and_complement(family, T(x), alpha, beta, &f, &f_complement);
     T p = gamma + scale * f;
     T q = lambda + scale * f_complement;
     if (p < T(kTiny)) p = T(kTiny);
     if (q < T(kTiny)) q = T(kTiny);
-    *log_p = q < T(0.5) ? T(log1p(-q)) : T(log(p));
-    *log_q = log(q);
+    if (log_p) *log_p = q < T(0.5) ? T(log1p(-q)) : T(log(p));
+    if (log_q) *log_q = log(q);
   }
 };
 
@@ -97,14 +125,68 @@ struct GroupNllCost {
     const GroupModel<T> model(*spec, group->guess, u[0] + s[0] * group->offset, log_beta[0], lambda[0]);
     for (std::size_t i = 0; i < group->rows.size(); ++i) {
       const BinomialRow& row = group->rows[i];
-      T log_p, log_q;
-      model.log_probabilities(spec->family, row.x, &log_p, &log_q);
       const double k = row.n_correct, m = row.n_total - row.n_correct;
+      T log_p, log_q;
+      model.log_probabilities(spec->family, row.x, k > 0 ? &log_p : nullptr, m > 0 ? &log_q : nullptr);
       residuals[2 * i] = k > 0 ? T(sqrt(T(-2.0 * k) * log_p)) : T(0.0);
       residuals[2 * i + 1] = m > 0 ? T(sqrt(T(-2.0 * m) * log_q)) : T(0.0);
     }
     return true;
   }
+};
+
+// The cost of a group that appears more than once in a problem (a participant the bootstrap drew
+// twice or more): every copy's residual block shares this one cost, which evaluates the group once
+// per evaluation of the problem and hands the copies the stored residuals and derivatives. The
+// copies get the very numbers they would have computed (same data, same parameters, same call),
+// so the fit does not change; a resample of n participants holds about n (1 - 1/e) distinct ones,
+// so about a third of its evaluations were repeats. The store is not locked: a problem is
+// evaluated by one thread (solver::small_problem_options).
+class RepeatedGroupCost final : public ceres::CostFunction {
+ public:
+  explicit RepeatedGroupCost(std::unique_ptr<ceres::CostFunction> inner) : inner_(std::move(inner)) {
+    set_num_residuals(inner_->num_residuals());
+    *mutable_parameter_block_sizes() = inner_->parameter_block_sizes();
+    const std::size_t blocks = parameter_block_sizes().size();
+    parameters_.resize(blocks);
+    residuals_.resize(static_cast<std::size_t>(num_residuals()));
+    jacobians_.resize(blocks);
+    for (std::size_t i = 0; i < blocks; ++i)
+      jacobians_[i].resize(static_cast<std::size_t>(num_residuals() * parameter_block_sizes()[i]));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const std::vector<std::int32_t>& sizes = parameter_block_sizes();
+    // What was asked decides how the inner cost computes (with or without derivatives): a stored
+    // evaluation serves only the same question.
+    std::vector<bool> wanted(sizes.size() + 1);
+    wanted.back() = jacobians != nullptr;
+    for (std::size_t i = 0; i < sizes.size(); ++i) wanted[i] = jacobians && jacobians[i];
+    bool stored = ok_ && wanted == wanted_;
+    for (std::size_t i = 0; i < sizes.size() && stored; ++i)
+      stored = parameters_[i].size() == static_cast<std::size_t>(sizes[i]) &&
+               std::memcmp(parameters_[i].data(), parameters[i], sizeof(double) * static_cast<std::size_t>(sizes[i])) == 0;
+    if (!stored) {
+      std::vector<double*> into(sizes.size(), nullptr);
+      for (std::size_t i = 0; i < sizes.size(); ++i)
+        if (wanted[i]) into[i] = jacobians_[i].data();
+      ok_ = inner_->Evaluate(parameters, residuals_.data(), jacobians ? into.data() : nullptr);
+      wanted_ = wanted;
+      for (std::size_t i = 0; i < sizes.size(); ++i) parameters_[i].assign(parameters[i], parameters[i] + sizes[i]);
+      if (!ok_) return false;
+    }
+    std::copy(residuals_.begin(), residuals_.end(), residuals);
+    for (std::size_t i = 0; i < sizes.size(); ++i)
+      if (wanted[i]) std::copy(jacobians_[i].begin(), jacobians_[i].end(), jacobians[i]);
+    return true;
+  }
+
+ private:
+  std::unique_ptr<ceres::CostFunction> inner_;
+  mutable bool ok_ = false;
+  mutable std::vector<bool> wanted_;
+  mutable std::vector<std::vector<double>> parameters_, jacobians_;
+  mutable std::vector<double> residuals_;
 };
 
 // Residuals w_i psi_i(theta) with w_i = sqrt(n_i / (psi^_i (1 - psi^_i))) fixed at the optimum:
@@ -237,11 +319,71 @@ struct Blocks {
   double s, log_beta, lambda;
 };
 
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// Groups equal bit for bit: the same rows, threshold, offset and guess rate.
+bool same_group(const Group& a, const Group& b) {
+  if (a.threshold_index != b.threshold_index || !same_bits(a.offset, b.offset) || a.guess.has_value() != b.guess.has_value() ||
+      (a.guess && !same_bits(*a.guess, *b.guess)) || a.rows.size() != b.rows.size())
+    return false;
+  for (std::size_t i = 0; i < a.rows.size(); ++i)
+    if (!same_bits(a.rows[i].x, b.rows[i].x) || !same_bits(a.rows[i].n_correct, b.rows[i].n_correct) ||
+        !same_bits(a.rows[i].n_total, b.rows[i].n_total))
+      return false;
+  return true;
+}
+
+std::uint64_t group_hash(const Group& g) {
+  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over the words
+  const auto mix = [&h](std::uint64_t word) { h = (h ^ word) * 0x100000001b3ull; };
+  const auto bits = [](double v) {
+    std::uint64_t w;
+    std::memcpy(&w, &v, sizeof w);
+    return w;
+  };
+  mix(static_cast<std::uint64_t>(g.threshold_index));
+  mix(bits(g.offset));
+  mix(g.guess ? bits(*g.guess) : 1);
+  for (const BinomialRow& r : g.rows) {
+    mix(bits(r.x));
+    mix(bits(r.n_correct));
+    mix(bits(r.n_total));
+  }
+  return h;
+}
+
+// For each group, the index of the first group equal to it (its own index when none before it is).
+std::vector<std::size_t> first_copies(const ModelSpec& spec) {
+  std::vector<std::size_t> first(spec.groups.size());
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_hash;
+  for (std::size_t i = 0; i < spec.groups.size(); ++i) {
+    first[i] = i;
+    std::vector<std::size_t>& candidates = by_hash[group_hash(spec.groups[i])];
+    for (std::size_t j : candidates)
+      if (same_group(spec.groups[j], spec.groups[i])) {
+        first[i] = j;
+        break;
+      }
+    if (first[i] == i) candidates.push_back(i);
+  }
+  return first;
+}
+
 void add_nll_blocks(ceres::Problem& problem, const ModelSpec& spec, Blocks& blocks) {
-  for (const Group& group : spec.groups) {
+  const std::vector<std::size_t> first = first_copies(spec);
+  std::vector<int> copies(spec.groups.size(), 0);
+  for (std::size_t f : first) ++copies[f];
+  std::vector<ceres::CostFunction*> costs(spec.groups.size(), nullptr);
+  for (std::size_t i = 0; i < spec.groups.size(); ++i) {
+    const Group& group = spec.groups[i];
     if (group.rows.empty()) continue;
-    auto* cost = new ceres::AutoDiffCostFunction<GroupNllCost, ceres::DYNAMIC, 1, 1, 1, 1>(
-        new GroupNllCost{&spec, &group}, static_cast<int>(2 * group.rows.size()));
+    ceres::CostFunction*& cost = costs[first[i]];
+    if (!cost) {
+      auto nll = std::make_unique<ceres::AutoDiffCostFunction<GroupNllCost, ceres::DYNAMIC, 1, 1, 1, 1>>(
+          new GroupNllCost{&spec, &group}, static_cast<int>(2 * group.rows.size()));
+      cost = copies[i] > 1 ? new RepeatedGroupCost(std::move(nll)) : static_cast<ceres::CostFunction*>(nll.release());
+    }
+    // The problem owns each cost once, however many blocks share it.
     problem.AddResidualBlock(cost, nullptr, &blocks.u[static_cast<std::size_t>(group.threshold_index)], &blocks.s,
                              &blocks.log_beta, &blocks.lambda);
   }
@@ -458,7 +600,8 @@ double negative_log_likelihood(const ModelSpec& spec, const Parameters& params) 
                                    params.log_beta, params.lambda);
     for (const BinomialRow& r : g.rows) {
       double log_p = 0, log_q = 0;
-      model.log_probabilities(spec.family, r.x, &log_p, &log_q);
+      model.log_probabilities(spec.family, r.x, r.n_correct > 0 ? &log_p : nullptr,
+                              r.n_total - r.n_correct > 0 ? &log_q : nullptr);
       if (r.n_correct > 0) nll -= r.n_correct * log_p;
       if (r.n_total - r.n_correct > 0) nll -= (r.n_total - r.n_correct) * log_q;
     }
@@ -483,17 +626,20 @@ FitResult fit_with_threshold(const ModelSpec& spec, int threshold_index, double 
   return solve(spec, b, p, threshold_index, false);
 }
 
-ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, int threshold_index, double level) {
+ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, int threshold_index, double level,
+                                 int threads) {
   ProfileInterval out;
   const double target = best.nll + 0.5 * chi2_1_quantile(level);
   const double u_hat = best.params.u.at(static_cast<std::size_t>(threshold_index));
   const double se = best.se(threshold_index);
   const double step0 = std::isfinite(se) && se > 0 ? std::clamp(2.0 * se, 1e-3, 0.25) : 0.05;
-  auto profile = [&](double u) {
-    ++out.fits;
-    return fit_with_threshold(spec, threshold_index, u, best.params).nll;
-  };
-  for (int side : {-1, +1}) {
+  int fits[2] = {0, 0};
+  // The two ends are searched apart from each other, each its own sequence of fits.
+  auto search = [&](int side) {
+    auto profile = [&](double u) {
+      ++fits[side > 0];
+      return fit_with_threshold(spec, threshold_index, u, best.params).nll;
+    };
     const double bound = side < 0 ? best.u_min : best.u_max;
     double inside = u_hat, outside = u_hat, step = step0;
     bool crossed = false;
@@ -521,7 +667,29 @@ ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, i
     }
     (side < 0 ? out.lo : out.hi) = edge;
     (side < 0 ? out.lo_open : out.hi_open) = !crossed;
+  };
+  if (threads < 2) {
+    search(-1);
+    search(+1);
+  } else {
+    std::exception_ptr failed[2];
+    std::thread lower([&] {
+      try {
+        search(-1);
+      } catch (...) {
+        failed[0] = std::current_exception();
+      }
+    });
+    try {
+      search(+1);
+    } catch (...) {
+      failed[1] = std::current_exception();
+    }
+    lower.join();
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
   }
+  out.fits = fits[0] + fits[1];
   return out;
 }
 

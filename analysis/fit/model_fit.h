@@ -132,9 +132,10 @@ struct ProfileInterval {
   int fits = 0;
 };
 // Profile-likelihood interval of u[threshold_index]: where 2 (NLL_profile - NLL_min) crosses the
-// chi-square(1) quantile of `level`.
+// chi-square(1) quantile of `level`. With `threads` >= 2 the two ends are searched at once (the
+// same fits either way).
 ProfileInterval profile_interval(const ModelSpec& spec, const FitResult& best, int threshold_index,
-                                 double level = 0.95);
+                                 double level = 0.95, int threads = 1);
 
 // alpha of the model at (u, beta, lambda), and its standard error by the delta method from the
 // covariance of u[threshold_index], log beta and lambda (parameters held fixed or at a bound

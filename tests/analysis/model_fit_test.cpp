@@ -1,7 +1,9 @@
 // The single-data-set fit: recovery, the likelihood's definition, the Weibull / log-Weibull
-// invariance, standard errors against the spread of repeated fits, and degenerate data.
+// invariance, standard errors against the spread of repeated fits, degenerate data, and the
+// shortcuts that must not change a number (repeated groups evaluated once, a profile on two threads).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -209,6 +211,65 @@ TEST(ModelFit, ProfileIntervalBracketsTheEstimateLikeTheWaldInterval) {
   // At the interval's ends the profile deviance is the chi-square(1) 95 % point.
   const double at_lo = fit_with_threshold(spec, 0, pi.lo, f.params).nll;
   EXPECT_NEAR(2 * (at_lo - f.nll), 3.841459, 1e-3);
+}
+
+// Issue 44: the two ends of a profile interval searched at once give the same interval, bit for bit.
+TEST(ModelFit, ProfileIntervalIsTheSameOnTwoThreads) {
+  const ModelSpec spec = one_group(psy::Model::log_weibull,
+                                   simulate(psy::Model::log_weibull, -0.6, 3.5, 0.01, log_levels(), 30, 4));
+  const FitResult f = fit(spec);
+  const ProfileInterval one = profile_interval(spec, f, 0, 0.95, 1), two = profile_interval(spec, f, 0, 0.95, 2);
+  EXPECT_EQ(one.lo, two.lo);
+  EXPECT_EQ(one.hi, two.hi);
+  EXPECT_EQ(one.fits, two.fits);
+  EXPECT_GT(one.fits, 4);
+}
+
+// Issue 44: a group repeated in one problem (a participant the bootstrap drew twice) is evaluated
+// once per step and its copies take the stored residuals and derivatives. The fit is the same, bit
+// for bit, as when each copy is evaluated on its own (copies told apart by an offset of -0, which
+// moves no threshold), with and without the covariance.
+TEST(ModelFit, RepeatedGroupsFitExactlyAsCopiesEvaluatedApart) {
+  std::vector<std::vector<BinomialRow>> people;
+  sampling::Random random(44);
+  for (int person = 0; person < 6; ++person) {
+    std::vector<double> levels;  // one trial per level, as a staircase's rows are
+    for (int i = 0; i < 40; ++i) levels.push_back(-1.2 + random.uniform());
+    people.push_back(simulate(psy::Model::log_weibull, -0.55 + 0.03 * person, 3.5, 0.02, levels, 1, 100 + person));
+  }
+  ModelSpec shared;
+  shared.lapse.max = 0.06;
+  for (int pick : {0, 3, 3, 1, 5, 3, 0, 2, 2, 4, 5, 5}) shared.groups.push_back({people[static_cast<std::size_t>(pick)], 0, 0.0});
+  ModelSpec apart = shared;
+  int repeats = 0;
+  for (std::size_t i = 0; i < shared.groups.size(); ++i) {
+    const std::size_t first = static_cast<std::size_t>(
+        std::find_if(shared.groups.begin(), shared.groups.end(),
+                     [&](const Group& g) { return g.rows.front().x == shared.groups[i].rows.front().x; }) -
+        shared.groups.begin());
+    if (first != i) apart.groups[i].offset = -0.0, ++repeats;
+  }
+  ASSERT_EQ(repeats, 6);
+  for (bool covariance : {false, true}) {
+    const FitResult a = fit(shared, std::nullopt, covariance), b = fit(apart, std::nullopt, covariance);
+    EXPECT_EQ(a.params.u, b.params.u);
+    EXPECT_EQ(a.params.log_beta, b.params.log_beta);
+    EXPECT_EQ(a.params.lambda, b.params.lambda);
+    EXPECT_EQ(a.nll, b.nll);
+    EXPECT_EQ(a.iterations, b.iterations);
+    EXPECT_EQ(a.covariance, b.covariance);
+    EXPECT_EQ(a.flags.list, b.flags.list);
+    EXPECT_GT(a.iterations, 2) << "a fit that took steps";
+  }
+  // From a start away from the optimum too (the bootstrap starts from the full data's).
+  Parameters start;
+  start.u = {-0.2};
+  start.log_beta = std::log(1.5);
+  start.lambda = 0.05;
+  const FitResult a = fit(shared, start, false), b = fit(apart, start, false);
+  EXPECT_EQ(a.params.u, b.params.u);
+  EXPECT_EQ(a.params.log_beta, b.params.log_beta);
+  EXPECT_EQ(a.iterations, b.iterations);
 }
 
 TEST(ModelFit, DegenerateDataGiveBoundedFlaggedResults) {
