@@ -14,7 +14,7 @@ seconds="${1:-20}"
 shift || true
 targets=("$@")
 if [[ ${#targets[@]} -eq 0 ]]; then
-  targets=(scene_file model_obj model_gltf study_config session_json trials_csv calibration counts_csv)
+  targets=(scene_file model_obj model_gltf study_config session_json trials_csv calibration counts_csv comma_list)
 fi
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "${FUZZ_BUILD_JOBS:-$(nproc)}"

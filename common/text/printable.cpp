@@ -50,7 +50,14 @@ std::string printable(std::string_view s, std::size_t max) {
 }
 
 std::string one_line(std::string_view message, std::size_t max_word, std::size_t max_line) {
-  auto space = [](char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t' || c == '\v' || c == '\f'; };
+  // Only spaces separate words. A newline or tab inside a message is escaped like any control byte:
+  // it may be part of a path ("a\nb.json"), and printed as a space it named another path. Those at
+  // the ends (a library's closing newline) are dropped.
+  auto blank = [](char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t' || c == '\v' || c == '\f'; };
+  const std::size_t total = message.size();
+  while (!message.empty() && blank(message.front())) message.remove_prefix(1);
+  while (!message.empty() && blank(message.back())) message.remove_suffix(1);
+  auto space = [](char c) { return c == ' '; };
   std::string out;
   std::size_t i = 0;
   while (i < message.size()) {
@@ -80,7 +87,7 @@ std::string one_line(std::string_view message, std::size_t max_word, std::size_t
       out.resize(max_line);
       while (!out.empty() && (static_cast<unsigned char>(out.back()) & 0xc0) == 0x80) out.pop_back();  // whole characters
       if (!out.empty() && static_cast<unsigned char>(out.back()) >= 0xc0) out.pop_back();
-      return out + "... (" + std::to_string(message.size()) + " bytes)";
+      return out + "... (" + std::to_string(total) + " bytes)";
     }
   }
   return out;

@@ -15,8 +15,9 @@ bool valid_utf8(std::string_view s);
 // named: for quoting a value.
 std::string printable(std::string_view s, std::size_t max = 80);
 
-// A whole message made safe for one line on stderr: every whitespace run (newlines included)
-// becomes one space, words with control bytes or invalid UTF-8 are escaped, words longer than
+// A whole message made safe for one line on stderr: every run of spaces becomes one space,
+// whitespace at either end is dropped, words with control bytes (a newline or tab inside the message
+// included: it may be part of a path) or invalid UTF-8 are escaped, words longer than
 // `max_word` bytes are cut as printable() cuts them, and the line is cut after about `max_line`
 // bytes. Valid UTF-8 stays as it is.
 std::string one_line(std::string_view message, std::size_t max_word = 120, std::size_t max_line = 1000);

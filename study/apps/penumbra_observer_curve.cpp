@@ -134,9 +134,9 @@ int main(int argc, char** argv) {
   observers::ImageObserverParams params;
   params.blur_sigma_arcmin = 1.0;
   params.pixels_per_degree = 38.2;  // data/studies/default.json's display: 1.57 arcmin per pixel
-  cli::add_list_option(app, "--pattern", patterns, "stair and/or step", cli::names("a pattern (stair or step)"));
+  cli::add_list_option(app, "--pattern", patterns, "stair and/or step", cli::one_of({"stair", "step"}));
   cli::add_list_option(app, "--artifact-px", artifacts, "artifact sizes", cli::numbers_in(1, 1000));
-  cli::add_list_option(app, "--contrast", contrasts, "lit levels, linear light", cli::numbers_in(0, 1));
+  cli::add_list_option(app, "--contrast", contrasts, "lit levels, linear light", cli::numbers_in(0, 1, cli::Bound::open));
   app.add_option("--technique", technique, "the renderer's technique that draws the stimuli (pcf, rpcf, vsm, ...; default pcf with pcf.kernel=disk)");
   app.add_option("--set", settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   app.add_option("--json", json_out, "write the implied c per condition as a calibration.json (schema 2) image-observer entry");

@@ -19,8 +19,8 @@ namespace fs = std::filesystem;
 ReferenceCommand::ReferenceCommand(CLI::App& app) {
   command_ = app.add_subcommand(
       "reference", "reference filter size: the smallest radius at which jagged and straight 8-bit stimuli are identical");
-  cli::add_list_option(*command_, "--pattern", patterns_, "stair and/or step", cli::names("a pattern (stair or step)"));
-  cli::add_list_option(*command_, "--contrast", contrasts_, "lit levels in linear light", cli::numbers_in(0, 1));
+  cli::add_list_option(*command_, "--pattern", patterns_, "stair and/or step", cli::one_of({"stair", "step"}));
+  cli::add_list_option(*command_, "--contrast", contrasts_, "lit levels in linear light", cli::numbers_in(0, 1, cli::Bound::open));
   cli::add_list_option(*command_, "--artifact-px", artifact_px_, "artifact sizes (px)", cli::numbers_in(1, 1000));
   command_->add_option("--partner", partner_,
                        "straight partner: original (the study's), mean-line (through the staircase's mean; stair only) or bresenham (the edge drawn at 1 px and filtered the same way: sec. 4.4)")

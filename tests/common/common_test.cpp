@@ -39,7 +39,10 @@ fs::path scratch(const std::string& name) {
 TEST(Text, OneLineKeepsUtf8AndEscapesControlBytes) {
   EXPECT_EQ(text::one_line("size_px: expected 16..4096 (r \xe2\x89\xa4 160 px)"),
             "size_px: expected 16..4096 (r \xe2\x89\xa4 160 px)");
-  EXPECT_EQ(text::one_line("two\nlines\r\n  and\ttabs "), "two lines and tabs");
+  EXPECT_EQ(text::one_line("\n two  spaces\n"), "two spaces");
+  // Issue 45: a newline or tab inside is escaped, not turned into a space that names another path.
+  EXPECT_EQ(text::one_line("a\nb.json: cannot read"), "a\\x0ab.json: cannot read");
+  EXPECT_EQ(text::one_line("two\nlines\r\n  and\ttabs "), "two\\x0alines\\x0d\\x0a and\\x09tabs");
   EXPECT_EQ(text::one_line("--format 'a\x01\x1b[31mred'"), "--format 'a\\x01\\x1b[31mred'");
   EXPECT_EQ(text::one_line("bad \xff byte"), "bad \\xff byte");
 }
@@ -125,13 +128,62 @@ TEST(Cli, CommaListsReadEveryItemOrRefuseTheWholeList) {
     EXPECT_EQ(v, std::vector<int>{7}) << bad << ": nothing is half-read";
   }
   std::string sixty_five;
-  for (int i = 0; i < 65; ++i) sixty_five += (i ? "," : "") + std::to_string(i % 9 + 1);
+  for (int i = 0; i < 65; ++i) sixty_five += (i ? "," : "") + std::to_string(i + 1);
   EXPECT_NE(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_five}).find("at most 64"), std::string::npos);
-  std::string sixty_four = sixty_five.substr(0, sixty_five.size() - 2);
+  const std::string sixty_four = sixty_five.substr(0, sixty_five.rfind(','));
   EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_four}), "");
   EXPECT_EQ(ints.size(), 64u);
-  EXPECT_NE(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_four, "--list", "1"}).find("at most 64"), std::string::npos)
+  EXPECT_NE(list_error(ints, cli::integers_in(1, 100), {"--list", sixty_four, "--list", "99"}).find("at most 64"), std::string::npos)
       << "the cap counts every occurrence";
+}
+
+// Issue 45: `--resolution 64,64` rendered hard-64 twice into one directory, the second over the
+// first. An item given twice is refused in every list, by value ("64" and "064", "0.5" and "5e-1"
+// are the same render), over all occurrences of the option.
+TEST(Cli, CommaListsRefuseAnItemGivenTwice) {
+  std::vector<int> ints{7};
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"--list", "64,64"}, {"--list", "64,064"}, {"--list", "64,1,64"}, {"--list", "64", "--list", "64"}}) {
+    SCOPED_TRACE(args[1]);
+    const std::string e = list_error(ints, cli::integers_in(1, 100), args);
+    EXPECT_EQ(e.rfind("--list: '", 0), 0u) << e;
+    EXPECT_NE(e.find("' is given twice (each item once), got '"), std::string::npos) << e;
+    EXPECT_EQ(ints, std::vector<int>{7}) << "nothing is half-read";
+  }
+  EXPECT_EQ(list_error(ints, cli::integers_in(1, 100), {"--list", "64,064"}),
+            "--list: '064' is given twice (each item once), got '64,064'");
+  std::vector<double> numbers;
+  EXPECT_EQ(list_error(numbers, cli::numbers_in(0, 1), {"--list", "0.5,5e-1"}),
+            "--list: '5e-1' is given twice (each item once), got '0.5,5e-1'");
+  EXPECT_EQ(list_error(numbers, cli::numbers_in(0, 1), {"--list", "0.5,0.25"}), "");
+  std::vector<std::uint64_t> seeds;
+  EXPECT_NE(list_error(seeds, cli::non_negative_integers(), {"--list", "3,3"}).find("given twice"), std::string::npos);
+  std::vector<std::string> names;
+  EXPECT_NE(list_error(names, cli::names("a scene"), {"--list", "demo,demo"}).find("'demo' is given twice"), std::string::npos);
+  EXPECT_NE(list_error(names, cli::one_of({"stair", "step"}), {"--list", "step", "--list", "step"}).find("'step' is given twice"),
+            std::string::npos);
+  EXPECT_EQ(list_error(names, cli::one_of({"stair", "step"}), {"--list", "step,stair"}), "");
+}
+
+// Issue 45: one number grammar for every list. strtod took ' 0.05' and '0x1p-4' where the integer
+// lists refused ' 64', and read '1e-400' as 0.
+TEST(Cli, OneNumberGrammarForEveryList) {
+  for (const std::string good : {"0.05", "-1", "+2.5", "1e6", "1E-6", "2.5e+3", ".5", "5.", "0", "-0.0", "007"}) {
+    const std::optional<double> v = cli::decimal(good);
+    ASSERT_TRUE(v) << good;
+    EXPECT_EQ(*v, std::strtod(good.c_str(), nullptr)) << good;
+  }
+  for (const std::string bad : {"", " 0.05", "0.05 ", "\t1", "0x1p-4", "0x10", "inf", "-inf", "nan", "infinity", "1e", "1e+",
+                                "e5", ".", "-", "+", "--1", "+-1", "1.2.3", "1,5", "1e-400", "1e999", "-1e999", "1_000",
+                                "\xd9\xa1"})
+    EXPECT_FALSE(cli::decimal(bad)) << "'" << bad << "'";
+  std::vector<double> numbers;
+  for (const std::string bad : {" 0.05", "0x1p-4", "1e-400"})
+    EXPECT_EQ(list_error(numbers, cli::numbers_in(0, 1), {"--list", bad}),
+              "--list: expected a decimal number in [0, 1], or at most 64 separated by commas, got '" + bad + "'");
+  EXPECT_EQ(list_error(numbers, cli::numbers_in(0, 1, cli::Bound::open), {"--list", "0"}),
+            "--list: expected a decimal number in (0, 1], or at most 64 separated by commas, got '0'");
+  EXPECT_EQ(list_error(numbers, cli::numbers_in(0, 1, cli::Bound::open), {"--list", "1,1e-300"}), "");
 }
 
 TEST(Cli, CommaListsOfNumbersNamesAndSeeds) {
@@ -140,7 +192,7 @@ TEST(Cli, CommaListsOfNumbersNamesAndSeeds) {
   EXPECT_EQ(numbers, (std::vector<double>{0.05, 1e6, 1e-6}));
   for (const std::string bad : {"nan", "inf", "-1", "1e7", "0.05x", "0,05;"})
     EXPECT_EQ(list_error(numbers, cli::numbers_in(1e-6, 1e6), {"--list", bad}),
-              "--list: expected a finite number in [1e-06, 1e+06], or at most 64 separated by commas, got '" + bad + "'");
+              "--list: expected a decimal number in [1e-06, 1e+06], or at most 64 separated by commas, got '" + bad + "'");
   std::vector<std::uint64_t> seeds;
   EXPECT_EQ(list_error(seeds, cli::non_negative_integers(), {"--list", "0,18446744073709551615"}), "");
   EXPECT_EQ(seeds, (std::vector<std::uint64_t>{0, 18446744073709551615u}));
@@ -148,6 +200,8 @@ TEST(Cli, CommaListsOfNumbersNamesAndSeeds) {
     EXPECT_NE(list_error(seeds, cli::non_negative_integers(), {"--list", bad}).find("expected a non-negative integer"), std::string::npos)
         << bad << ": never wraps or saturates";
   std::vector<std::string> names;
+  EXPECT_EQ(list_error(names, cli::one_of({"stair", "step"}), {"--list", "STAIR"}),
+            "--list: expected stair or step, or at most 64 separated by commas, got 'STAIR'");
   EXPECT_EQ(list_error(names, cli::names("a pattern"), {"--list", "stair,step"}), "");
   EXPECT_EQ(names, (std::vector<std::string>{"stair", "step"}));
   EXPECT_EQ(list_error(names, cli::names("a pattern"), {"--list", "stair,"}),
