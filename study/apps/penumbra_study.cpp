@@ -285,6 +285,7 @@ ObserverSetup parse_observer(const std::string& given, const procedure::StudyCon
 struct RunOptions {
   fs::path config, output, resume;
   fs::path display_calibration;  // replaces the config's display transfer (new sessions)
+  std::optional<stimuli::Kernel> kernel;  // --kernel: replaces the config's stimulus kernel (new sessions)
   std::string observer = "psychometric:c=3.0,beta=3.5,lapse=0.02";
   std::string participant = "sim";
   bool headless = false;
@@ -300,14 +301,32 @@ struct RunOptions {
 #endif
 };
 
-// A resume continues the run session.json records: its config, participant, observer and observer
-// seed. An option that says otherwise is refused, not ignored.
-void check_resume_options(const RunOptions& o, const nlohmann::json& session) {
+// --kernel on a config: one line naming the option (exit 2) for a technique without kernels.
+void apply_kernel_option(const RunOptions& o, procedure::StudyConfig& config) {
+  if (!o.kernel) return;
+  try {
+    procedure::set_stimulus_kernel(config, *o.kernel);
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError("--kernel " + stimuli::to_string(*o.kernel) + ": " + e.what());
+  }
+}
+
+// A resume continues the run session.json records: its config (the stimulus kernel too),
+// participant, observer and observer seed. An option that says otherwise is refused, not ignored.
+void check_resume_options(const RunOptions& o, const procedure::Session& s) {
+  const nlohmann::json& session = s.session_json();
   if (!o.config.empty())
     throw std::invalid_argument("--config: not with --resume (the session's config is in its session.json)");
   if (!o.output.empty()) throw std::invalid_argument("-o: not with --resume (the session stays in its directory)");
   if (!o.display_calibration.empty())
     throw std::invalid_argument("--display-calibration: not with --resume (the session's calibration is in its session.json)");
+  if (o.kernel) {
+    procedure::StudyConfig probe = s.config();
+    apply_kernel_option(o, probe);
+    if (*o.kernel != s.config().kernel)
+      throw cli::UsageError("--kernel " + stimuli::to_string(*o.kernel) + ": the session was run with the " +
+                            stimuli::to_string(s.config().kernel) + " kernel (session.json); leave --kernel out to continue it");
+  }
   const std::string participant = session.at("participant").get<std::string>();
   if (o.participant_given && o.participant != participant)
     throw std::invalid_argument("--participant '" + json_input::printable(o.participant) + "': the session is '" +
@@ -343,6 +362,7 @@ procedure::StudyConfig new_session_config(const RunOptions& o) {
   if (o.config.empty() || o.output.empty()) throw std::invalid_argument("run: --config and -o are required (or --resume DIR)");
   procedure::StudyConfig config = procedure::load_config(o.config);
   if (!o.display_calibration.empty()) procedure::load_display_calibration(config, o.display_calibration);
+  apply_kernel_option(o, config);
   check_stimulus_technique(config, o.config);
   return config;
 }
@@ -351,7 +371,7 @@ procedure::StudyConfig new_session_config(const RunOptions& o) {
 // in o.output; `extra` goes into the new session.json (who answers: observer_kind, observer, ...).
 procedure::Session open_session(const RunOptions& o, const std::function<void(const procedure::Session&)>& accept) {
   return procedure::Session::resume(o.resume, [&](const procedure::Session& s) {
-    check_resume_options(o, s.session_json());
+    check_resume_options(o, s);
     if (accept) accept(s);
   });
 }
@@ -624,6 +644,11 @@ int main(int argc, char** argv) {
                   "the monitor's measured transfer (display-calibration.json from calibrate-display): replaces the config's "
                   "display.transfer / display.calibration for a new session")
       ->check(cli::path_given());
+  std::string run_kernel;
+  run->add_option("--kernel", run_kernel,
+                  "the PCF kernel the stimuli are drawn with, disk, grid or poisson: the one your engine filters with, so "
+                  "that the fitted c is its entry; replaces the config's stimulus.kernel (or its pcf.kernel setting) and is "
+                  "recorded in session.json's config; refused for a technique without kernels");
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
   run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)")
       ->check(CLI::Range(0, 60000));
@@ -649,6 +674,7 @@ int main(int argc, char** argv) {
     ro.observer_given = run->count("--observer") > 0;
     ro.observer_seed_given = run->count("--observer-seed") > 0;
     ro.seed_given = run->count("--seed") > 0;
+    if (run->count("--kernel") > 0) ro.kernel = as_option("--kernel", [&] { return stimuli::parse_kernel(run_kernel); });
     ro.gui_given = [run](const std::string& name) { return run->count(name) > 0; };
     if (run->parsed()) return run_study(ro);
   } catch (const std::exception& e) {

@@ -419,6 +419,15 @@ void load_display_calibration(StudyConfig& c, const std::filesystem::path& calib
   c.display.calibration_file = file.string();
 }
 
+void set_stimulus_kernel(StudyConfig& c, stimuli::Kernel kernel) {
+  if (!c.technique.empty() && c.technique != "pcf")
+    throw std::invalid_argument("the stimuli are drawn by " + text::printable(c.technique) +
+                                ", which has no kernel to choose (only pcf has; its entry is one for any kernel)");
+  c.kernel = kernel;
+  for (auto& [key, value] : c.technique_settings)
+    if (key == "pcf.kernel") value = stimuli::to_string(kernel);
+}
+
 // Hand-written: the config file's layout (nested sections, enums as names, fields only when set or not default).
 nlohmann::json to_json(const StudyConfig& c) {
   nlohmann::json rounds = nlohmann::json::array();

@@ -124,6 +124,11 @@ StudyConfig load_config(const std::filesystem::path& path);
 // transfer, loaded: display.calibration of a config, or `run --display-calibration FILE`.
 // Throws std::runtime_error "<calibration file>: <field>: <what>".
 void load_display_calibration(StudyConfig& c, const std::filesystem::path& calibration_file);
+// Makes `kernel` the PCF kernel the stimuli are drawn with (`run --kernel`): stimulus.kernel, or
+// pcf.kernel among the settings of a config drawn by the renderer's PCF, so that session.json's
+// config, the log's kernel column and the fitted entry all name it. Throws std::invalid_argument
+// ("the stimuli are drawn by vsm, ...") for a technique without kernels: its c is one entry.
+void set_stimulus_kernel(StudyConfig& c, stimuli::Kernel kernel);
 nlohmann::json to_json(const StudyConfig& c);
 
 }  // namespace penumbra::procedure

@@ -634,6 +634,65 @@ TEST(StudyRun, ResumeRestoresTheRecordedObserverAndRefusesContradictions) {
   fs::remove_all(dir);
 }
 
+// Issue 44: a lab measures the kernel its engine filters with. `run --kernel grid` on the lab's
+// config (drawn with disk) draws grid: session.json's config and the log's kernel column say so, a
+// resume keeps it (and takes the same --kernel), a different one is refused in one line (exit 2)
+// leaving every byte, and so is --kernel for a technique without kernels or a kernel with no name.
+TEST(StudyRun, TheKernelOptionIsTheSessionsKernelThroughResume) {
+  const fs::path dir = fresh("kernel");
+  const std::string lab = PENUMBRA_DATA_DIR "/studies/default-lab.json";
+  std::string out;
+  ASSERT_EQ(run({"run", "--config", lab, "--kernel", "grid", "--headless", "--stop-after", "30", "-o", dir.string()}, &out), 0) << out;
+  auto kernel_of = [&] { return nlohmann::json::parse(bytes(dir / "session.json"))["config"]["stimulus"]["kernel"]; };
+  EXPECT_EQ(kernel_of(), "grid");
+  const auto first = trial_log::read(dir / "trials.csv").rows;
+  ASSERT_EQ(first.size(), 30u);
+  for (const auto& r : first) EXPECT_EQ(r.kernel, "grid") << r.trial;
+
+  const std::string log = bytes(dir / "trials.csv"), json = bytes(dir / "session.json");
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless", "--kernel", "disk"}, &out), 2) << out;
+  EXPECT_NE(out.find("--kernel disk: the session was run with the grid kernel (session.json)"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(bytes(dir / "trials.csv"), log);
+  EXPECT_EQ(bytes(dir / "session.json"), json);
+
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless", "--stop-after", "60"}, &out), 0) << out;
+  ASSERT_EQ(run({"run", "--resume", dir.string(), "--headless", "--kernel", "grid"}, &out), 0) << out;
+  EXPECT_EQ(kernel_of(), "grid");
+  const auto rows = trial_log::read(dir / "trials.csv").rows;
+  ASSERT_GT(rows.size(), 60u);
+  for (const auto& r : rows) EXPECT_EQ(r.kernel, "grid") << r.trial;
+
+  // A config drawn by the renderer's PCF: its pcf.kernel setting is replaced.
+  const fs::path drawn = fresh("kernel-drawn");
+  ASSERT_EQ(run({"run", "--config", PENUMBRA_DATA_DIR "/studies/pcf-poisson.json", "--kernel", "grid", "--headless", "--stop-after", "5", "-o", drawn.string()}, &out), 0)
+      << out;
+  const nlohmann::json stimulus = nlohmann::json::parse(bytes(drawn / "session.json"))["config"]["stimulus"];
+  EXPECT_EQ(stimulus["technique"], "pcf");
+  EXPECT_EQ(stimulus["settings"]["pcf.kernel"], "grid");
+  for (const auto& r : trial_log::read(drawn / "trials.csv").rows) EXPECT_EQ(r.kernel, "grid") << r.trial;
+
+  for (const auto& [args, says] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--config", PENUMBRA_DATA_DIR "/studies/vsm.json", "--kernel", "grid"}, "penumbra-study: --kernel grid: the stimuli are drawn by vsm, which has no kernel"},
+           {{"--config", lab, "--kernel", "box"}, "penumbra-study: --kernel: kernel 'box': expected disk, grid or poisson"}}) {
+    const fs::path never = fresh("kernel-never");
+    std::vector<std::string> full = {"run", "--headless", "-o", never.string()};
+    full.insert(full.end(), args.begin(), args.end());
+    EXPECT_EQ(run(full, &out), 2) << out;
+    EXPECT_EQ(out.rfind(says, 0), 0u) << out;
+    EXPECT_EQ(lines_of(out), 1) << out;
+    EXPECT_FALSE(fs::exists(never));
+  }
+  // A resumed session drawn by a technique without kernels refuses it as well.
+  const fs::path boxed = fresh("kernel-boxed");
+  ASSERT_EQ(run({"run", "--config", PENUMBRA_DATA_DIR "/studies/rpcf.json", "--headless", "--stop-after", "2", "-o", boxed.string()}, &out), 0) << out;
+  EXPECT_EQ(run({"run", "--resume", boxed.string(), "--headless", "--kernel", "grid"}, &out), 2) << out;
+  EXPECT_EQ(out.rfind("penumbra-study: --kernel grid: the stimuli are drawn by rpcf, which has no kernel", 0), 0u) << out;
+  fs::remove_all(dir);
+  fs::remove_all(drawn);
+  fs::remove_all(boxed);
+}
+
 // Issue 14.6: a rejected --observer created the session directory (session.json and a header-only
 // log), so the same -o was refused afterwards.
 TEST(StudyRun, ARejectedObserverCreatesNothing) {

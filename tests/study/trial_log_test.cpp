@@ -428,6 +428,39 @@ TEST(StudyConfig, StimulusTechniqueAndItsSettings) {
   EXPECT_EQ(with({{"technique", "pcf"}, {"settings", "grid"}}), "study.json: stimulus.settings: expected an object of \"section.key\": value");
 }
 
+// Issue 44: `run --kernel` makes the lab's stimuli the engine's kernel. It replaces the kernel field
+// of a config without a technique and pcf.kernel of one drawn by the renderer's PCF, and what
+// session.json records (to_json) reads back with it; a technique without kernels refuses it.
+TEST(StudyConfig, TheKernelOptionReplacesTheStimulusKernel) {
+  procedure::StudyConfig lab = procedure::load_config(PENUMBRA_DATA_DIR "/studies/default-lab.json");
+  ASSERT_EQ(lab.kernel, stimuli::Kernel::disk);
+  procedure::set_stimulus_kernel(lab, stimuli::Kernel::grid);
+  EXPECT_EQ(lab.kernel, stimuli::Kernel::grid);
+  EXPECT_EQ(procedure::to_json(lab)["stimulus"]["kernel"], "grid");
+  EXPECT_EQ(procedure::parse_config(procedure::to_json(lab), "session.json").kernel, stimuli::Kernel::grid);
+  EXPECT_EQ(procedure::Procedure(lab).next()->stimulus.kernel, stimuli::Kernel::grid) << "the trials are drawn with it";
+
+  procedure::StudyConfig drawn = procedure::load_config(PENUMBRA_DATA_DIR "/studies/pcf-poisson.json");
+  procedure::set_stimulus_kernel(drawn, stimuli::Kernel::disk);
+  EXPECT_EQ(drawn.kernel, stimuli::Kernel::disk);
+  EXPECT_EQ(drawn.technique_settings, (std::vector<std::pair<std::string, std::string>>{{"pcf.kernel", "disk"}}));
+  const procedure::StudyConfig back = procedure::parse_config(procedure::to_json(drawn), "session.json");
+  EXPECT_EQ(back.kernel, stimuli::Kernel::disk);
+  EXPECT_EQ(back.technique_settings, drawn.technique_settings);
+
+  for (const char* name : {"vsm", "rpcf"}) {
+    procedure::StudyConfig boxed = procedure::load_config(PENUMBRA_DATA_DIR "/studies/" + std::string(name) + ".json");
+    const nlohmann::json before = procedure::to_json(boxed);
+    try {
+      procedure::set_stimulus_kernel(boxed, stimuli::Kernel::grid);
+      ADD_FAILURE() << name << ": a kernel for a technique without kernels";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("the stimuli are drawn by " + std::string(name) + ", which has no kernel", 0), 0u) << e.what();
+    }
+    EXPECT_EQ(procedure::to_json(boxed), before) << name << ": a refused kernel changes nothing";
+  }
+}
+
 // round_order "latin-square" (issue 16): balanced counterbalancing. Over a full set of rows every
 // round runs once in every position, and every ordered pair of rounds is adjacent equally often
 // (even n: once; odd n over 2n rows: twice); the row comes from the number the id ends in.
