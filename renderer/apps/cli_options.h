@@ -15,7 +15,9 @@
 #include "adaptive/resolution_rule.h"
 #include "cli/checks.h"
 #include "cli/list_option.h"
+#include "cli/main.h"
 #include "json/json_input.h"
+#include "scene/scene.h"
 #include "shadows/settings.h"
 #include "tool/tool.h"
 
@@ -114,11 +116,50 @@ inline void refuse_unread_settings(const CLI::App& app, const std::vector<shadow
   }
 }
 
+// Items of --techniques: a technique of the registry, or also "all" where the tool takes it; refused
+// while parsing, naming the option (exit 2), like any other bad item of a list.
+inline cli::ListItem<std::string> technique_items(bool with_all) {
+  std::vector<std::string> names(shadows::technique_names().begin(), shadows::technique_names().end());
+  if (with_all) names.emplace_back("all");
+  return cli::one_of(std::move(names));
+}
+
+// Items of --scenes: a built-in scene's name, or a scene file (.json), which is read (and blamed,
+// exit 1) later.
+inline cli::ListItem<std::string> scene_items() {
+  std::string one;
+  for (const std::string_view n : scene::builtin_scene_names()) one += (one.empty() ? "" : ", ") + std::string(n);
+  return {"a built-in scene (" + one + ") or a scene file ending in .json",
+          [](const std::string& s) -> std::optional<std::string> {
+            const auto builtin = scene::builtin_scene_names();
+            if (std::find(builtin.begin(), builtin.end(), s) != builtin.end()) return s;
+            if (s.size() > 5 && s.compare(s.size() - 5, 5, ".json") == 0) return s;
+            return std::nullopt;
+          }};
+}
+
 // --light-size: overrides the scene light's size; `size` < 0 (its default here) keeps the scene's.
+// Which range applies depends on the scene's light, so override_light_size checks it once the
+// scene is loaded.
 inline void add_light_size_option(CLI::App& app, float& size) {
   app.add_option("--light-size", size,
-                 "override the scene light's size: angular diameter in degrees (directional) or width in world units (spot)")
+                 "override the scene light's size: angular diameter in degrees, in [0, 90], for a directional light (the sun's "
+                 "is 0.53), or width in world units for a spot light")
       ->check(cli::finite_range(0.0, 1e6));
+}
+
+// The --light-size override applied to `light`: a directional light's angular diameter beyond 90°
+// is refused naming the option (180° failed as "the shadow map's frame is not finite", exit 1, and
+// 400° rendered as 40°).
+inline void override_light_size(float size, scene::Light& light) {
+  if (size < 0) return;
+  if (light.type == scene::Light::Type::directional && size > scene::Light::kMaxAngularDiameterDeg) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "--light-size %g: a directional light's angular diameter must lie in [0, 90] degrees (the sun's is 0.53)", size);
+    throw cli::UsageError(line);
+  }
+  light.size = size;
 }
 
 // --calibration FILE: the constant c of the adaptive rule per technique, from the fitter's

@@ -290,9 +290,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> techniques_arg{"all"};
   bool quick = false, no_plot = false;
   cli::add_list_option(app, "--scenes", opt.scenes, "built-in scene names or scene files (.json), comma-separated",
-                       cli::names("a built-in scene name or a scene file"));
+                       apps::scene_items());
   cli::add_list_option(app, "--techniques", techniques_arg, "techniques of the settings table, comma-separated, or all",
-                       cli::names("a technique or all"));
+                       apps::technique_items(true));
   cli::add_list_option(app, "--resolutions", opt.resolutions, "shadow-map texels per side, comma-separated", cli::integers_in(1, 65536));
   std::vector<std::string> fixed_radius;  // the techniques --radii applies to, from the registry
   for (const auto name : shadows::technique_names())

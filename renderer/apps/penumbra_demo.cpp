@@ -181,7 +181,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   gl::HeadlessContext ctx;
   const double t_scene = now_ms();
   scene::Scene scene = scene::load_scene(opt.scene);
-  if (opt.light_size >= 0) scene.light.size = opt.light_size;
+  apps::override_light_size(opt.light_size, scene.light);
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
   std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
@@ -318,7 +318,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   io::StagedDirectory out(opt.output, "pages.json");
   gl::HeadlessContext ctx;
   scene::Scene scene = scene::load_scene(opt.scene);
-  if (opt.light_size >= 0) scene.light.size = opt.light_size;
+  apps::override_light_size(opt.light_size, scene.light);
   if (scene.light.type != scene::Light::Type::directional)
     throw std::runtime_error("--pages: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
   const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
@@ -443,7 +443,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
 #if PENUMBRA_DEMO_GUI
 int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   scene::Scene scene = scene::load_scene(opt.scene);
-  if (opt.light_size >= 0) scene.light.size = opt.light_size;
+  apps::override_light_size(opt.light_size, scene.light);
   gl::Glfw glfw;
   gl::Window window(
       {.title = "Penumbra demo - " + scene.name, .width = opt.width, .height = opt.height, .gl_errors_throw = gl::kDebugBuild});
@@ -536,7 +536,7 @@ int main(int argc, char** argv) {
   app.add_flag("--headless", headless, "run the comparison along the camera path without a window");
   app.add_option("--scene", opt.scene, "built-in scene name or scene file (.json)");
   apps::add_light_size_option(app, opt.light_size);
-  cli::add_list_option(app, "--techniques", opt.techniques, "techniques to compare (comma separated)", cli::names("a technique"));
+  cli::add_list_option(app, "--techniques", opt.techniques, "techniques to compare (comma separated)", apps::technique_items(false));
   app.add_option("--path", opt.path,
                  "scenes with a camera path: short (--frames frames, as stations of 3 consecutive frames spread over the path) "
                  "or full (every frame)")

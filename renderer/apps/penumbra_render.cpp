@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <new>
+#include <set>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -88,13 +90,19 @@ int main(int argc, char** argv) {
 
   if (const auto status = cli::parse(app, argc, argv, "penumbra-render")) return *status;
 
+  std::string scene_size;  // "N objects (M distinct meshes)" once loaded: what an out-of-memory line names
   try {
     apps::apply_calibration(app, calibration, base);
     if (apps::setting_stands_for(app, "--map.resolution_texels", "--resolution")) resolutions = {base.map.resolution_texels};
     if (technique_arg != "all")
       apps::refuse_unused_technique_options(app, {shadows::technique_from_string(technique_arg)}, "--technique " + technique_arg);
     scene::Scene scene = scene::load_scene(scene_arg);
-    if (light_size >= 0) scene.light.size = light_size;
+    {
+      std::set<const scene::MeshData*> meshes;
+      for (const scene::Object& o : scene.objects) meshes.insert(o.mesh.get());
+      scene_size = std::to_string(scene.objects.size()) + " objects (" + std::to_string(meshes.size()) + " distinct meshes)";
+    }
+    apps::override_light_size(light_size, scene.light);
     if (virtual_debug && scene.light.type != scene::Light::Type::directional)
       throw cli::UsageError("--virtual-debug: the virtual shadow map is the sun's; scene " + scene.name + " has a spot light");
     scene::Camera previous_camera;
@@ -267,6 +275,11 @@ int main(int argc, char** argv) {
     out.commit();
     std::cout << "wrote " << out.target().string() << "/\n";
     return 0;
+  } catch (const std::bad_alloc&) {
+    // Was "std::bad_alloc" after 35 s, naming nothing.
+    return cli::fail("penumbra-render", "out of memory" + (scene_size.empty() ? std::string(" reading the scene")
+                                                                              : " rendering the scene's " + scene_size) +
+                                            "; nothing written (fewer or shared meshes, a smaller --resolution or image)");
   } catch (const std::exception& e) {
     return cli::fail("penumbra-render", e);
   }

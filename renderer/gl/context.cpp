@@ -9,7 +9,11 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 namespace penumbra::gl {
 namespace {
@@ -43,6 +47,8 @@ void GLAPIENTRY on_debug_message(GLenum source, GLenum type, GLuint id, GLenum s
   std::lock_guard lock(state.mutex);
   if (state.throw_on_error) {
     if (state.pending.empty()) state.pending = message;
+  } else if (std::string_view(message).find("OUT_OF_MEMORY") != std::string_view::npos) {
+    // glGetError() still holds it: check_errors() throws OutOfMemory at the allocation.
   } else if (state.reported_ids.insert(id).second) {
     std::fprintf(stderr, "GL debug: %s\n", message);
   }
@@ -88,7 +94,20 @@ void check_errors(const char* where) {
   }
   while (glGetError() != GL_NO_ERROR) {
   }
+  if (err == GL_OUT_OF_MEMORY) throw OutOfMemory(std::string(where) + ": out of GPU memory");
   throw std::runtime_error(std::string(where) + ": " + message);
+}
+
+std::optional<std::uint64_t> address_space_left_bytes() {
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  unsigned long pages = 0;  // the first field of /proc/self/statm: the whole mapped size, in pages
+  if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%lu", &pages) != 1) pages = 0;
+    std::fclose(f);
+  }
+  const std::uint64_t used = static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+  return used >= limit.rlim_cur ? 0 : limit.rlim_cur - used;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -59,6 +59,11 @@ struct Light {
   // Area-light size for soft shadows (PCSS): the light's angular diameter in degrees for a
   // directional light, the emitter's width in world units for a spot light.
   float size = 1;
+  // A directional light's angular diameter lies in [0, kMaxAngularDiameterDeg]: the sun's is 0.53°;
+  // 90° is a cone of half-angle 45°, whose penumbrae grow as fast as the distance from the caster.
+  // The soft-shadow model widens them by tan(size / 2), infinite at 180° and wrapping beyond it (400°
+  // rendered as 40°).
+  static constexpr float kMaxAngularDiameterDeg = 90;
   glm::vec3 color{1, 1, 1};
   float ambient = 0.2f;  // fraction of light that reaches shadowed surfaces
 };

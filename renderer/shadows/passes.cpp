@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <set>
 #include <span>
 #include <stdexcept>
+#include <string>
 
 #include "gl/context.h"
 #include "sampling/poisson_disk.h"
@@ -59,22 +61,48 @@ bool FrameResources::prepare(const FramePlan& plan) {
                                " exceeds GL_MAX_TEXTURE_SIZE " + std::to_string(max_size) +
                                " (lower map.resolution_texels, adaptive.max_texels or map.cascades)");
     maps.reset();
-    auto m = std::make_unique<Maps>();
-    m->width = layout.width;
-    m->height = layout.height;
-    m->moments_format = moments_format;
-    m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, layout.width, layout.height, 1}, "shadow depth atlas");
-    const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
-    glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
-    const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
-    m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
-    if (plan.moments) {
-      m->moments_tex = gl::Texture({moments_format, layout.width, layout.height, 1}, "shadow moments");
-      m->moments_tmp = gl::Texture({moments_format, layout.width, layout.height, 1}, "moments blur temporary");
-      const gl::Framebuffer::Attachment att[] = {{&m->moments_tex, GL_COLOR_ATTACHMENT0}, {&m->depth, GL_DEPTH_ATTACHMENT}};
-      m->moments_fbo = gl::Framebuffer(att, "moments framebuffer");
+    // Out of memory is one line naming the map and what to lower, never an abort later on: a
+    // 16384² VSM (5 GiB) under `ulimit -v 6 GiB` aborted in a thread start, or printed a GL debug
+    // line before its error line. Software GL maps textures in this process, so its address-space
+    // limit is checked first, with room left for the rest of the frame (and the image writers).
+    const std::uint64_t texels = static_cast<std::uint64_t>(layout.width) * static_cast<std::uint64_t>(layout.height);
+    const std::uint64_t moments_bytes = moments_format == GL_R32F ? 4 : moments_format == GL_RGBA32F ? 16 : 8;  // per texel
+    const std::uint64_t needed = texels * (4 + (plan.moments ? 2 * moments_bytes : 0));
+    const auto out_of_memory = [&](const std::string& why) {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "render: the shadow atlas %dx%d (%s%.0f MiB) does not fit in memory: %s (lower map.resolution_texels, "
+                    "adaptive.max_texels or map.cascades)",
+                    layout.width, layout.height, plan.moments ? "depth and two moment maps, " : "depth, ",
+                    static_cast<double>(needed) / (1 << 20), why.c_str());
+      return gl::OutOfMemory(line);
+    };
+    constexpr std::uint64_t kRoomAfterMapsBytes = 1ull << 30;
+    if (const auto left = gl::address_space_left_bytes(); left && needed + kRoomAfterMapsBytes > *left) {
+      char why[160];
+      std::snprintf(why, sizeof why, "this process's address-space limit (ulimit -v) leaves %.0f MiB", static_cast<double>(*left) / (1 << 20));
+      throw out_of_memory(why);
     }
-    maps = std::move(m);
+    try {
+      auto m = std::make_unique<Maps>();
+      m->width = layout.width;
+      m->height = layout.height;
+      m->moments_format = moments_format;
+      m->depth = gl::Texture({GL_DEPTH_COMPONENT32F, layout.width, layout.height, 1}, "shadow depth atlas");
+      const GLint grey[4] = {GL_RED, GL_RED, GL_RED, GL_ONE};  // debug views show depth as grey
+      glTextureParameteriv(m->depth.id(), GL_TEXTURE_SWIZZLE_RGBA, grey);
+      const gl::Framebuffer::Attachment depth_only[] = {{&m->depth, GL_DEPTH_ATTACHMENT}};
+      m->depth_fbo = gl::Framebuffer(depth_only, "shadow depth framebuffer");
+      if (plan.moments) {
+        m->moments_tex = gl::Texture({moments_format, layout.width, layout.height, 1}, "shadow moments");
+        m->moments_tmp = gl::Texture({moments_format, layout.width, layout.height, 1}, "moments blur temporary");
+        const gl::Framebuffer::Attachment att[] = {{&m->moments_tex, GL_COLOR_ATTACHMENT0}, {&m->depth, GL_DEPTH_ATTACHMENT}};
+        m->moments_fbo = gl::Framebuffer(att, "moments framebuffer");
+      }
+      maps = std::move(m);
+    } catch (const gl::OutOfMemory& e) {
+      throw out_of_memory(e.what());
+    }
     reallocated = true;
   }
   if (plan.runs(PassId::depth_minmax) && !maps->depth_minmax.id()) {

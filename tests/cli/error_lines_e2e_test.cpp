@@ -6,7 +6,10 @@
 // given as a file read as "no data rows" or "no header", megabyte values and control bytes echoed
 // whole, and a write that failed on a full disk (simulated here by a file-size limit) named
 // errno left over from elsewhere.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -28,7 +31,7 @@ using namespace penumbra;
 
 const std::string kStudy = PENUMBRA_STUDY_EXE, kFit = PENUMBRA_FIT_EXE, kQuest = PENUMBRA_QUEST_EXE,
                   kRender = PENUMBRA_RENDER_EXE, kScene = PENUMBRA_SCENE_EXE, kBench = PENUMBRA_BENCH_EXE,
-                  kCurve = PENUMBRA_OBSERVER_CURVE_EXE;
+                  kCurve = PENUMBRA_OBSERVER_CURVE_EXE, kDemo = PENUMBRA_DEMO_EXE;
 const std::string kConfig = PENUMBRA_DATA_DIR "/studies/default.json";
 
 // A scratch directory per test, removed at the end.
@@ -71,6 +74,39 @@ test::Result run(const std::string& exe, const std::vector<std::string>& args, c
 test::Result run_with_file_limit(int kib, const std::string& exe, std::vector<std::string> args, const Scratch& scratch) {
   args.insert(args.begin(), {"-c", "trap '' XFSZ; ulimit -f " + std::to_string(2 * kib) + "; exec \"$0\" \"$@\"", exe});
   return test::run_exe("/bin/sh", args, scratch.dir());
+}
+
+// `exe args...` in a child whose address space is limited to `bytes` (fork, setrlimit(RLIMIT_AS),
+// exec): out of memory as `ulimit -v` makes it, for the CPU and, on software GL, the GPU.
+test::Result run_with_address_limit(std::uint64_t bytes, const std::string& exe, const std::vector<std::string>& args,
+                                    const Scratch& scratch) {
+  const fs::path out_file = scratch / "stdout.txt", err_file = scratch / "stderr.txt";
+  std::vector<std::string> argv_s = {exe};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int in = ::open("/dev/null", O_RDONLY), out = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644),
+              err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(in, STDIN_FILENO);
+    ::dup2(out, STDOUT_FILENO);
+    ::dup2(err, STDERR_FILENO);
+    const rlimit limit{bytes, bytes};
+    if (::setrlimit(RLIMIT_AS, &limit) != 0) ::_exit(126);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  test::Result r;
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+  }
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  else r.err = "killed by signal " + std::to_string(WTERMSIG(status)) + "\n";
+  r.out = test::read_file(out_file);
+  r.err += test::read_file(err_file);
+  return r;
 }
 
 std::vector<fs::path> simulated_sessions(const fs::path& dir, int participants) {
@@ -368,6 +404,125 @@ TEST(ErrorLines, UnclearErrorsOfTheSecondCampaignNameTheirCause) {
   EXPECT_FALSE(fs::exists(s / "r"));
   EXPECT_FALSE(fs::exists(s / "b"));
   EXPECT_FALSE(fs::exists(s / "c.json"));
+}
+
+// Issue 45: every comma list refuses an item given twice (`--resolution 64,64` rendered hard-64
+// twice into one directory, the second over the first), by the one number grammar (strtod took
+// ' 0.05' and '0x1p-4'), and a name it does not know while parsing: the option named, exit 2
+// (`--scenes nope`, `--techniques nope`, `--pattern STAIR`, `--contrast 1e-400` exited 1 naming none).
+TEST(ErrorLines, CommaListsRefuseRepeatsBadNumbersAndUnknownNamesNamingTheOption) {
+  const Scratch s("lists");
+  const std::string out = (s / "out").string(), json = (s / "c.json").string();
+  struct Case {
+    std::string exe;
+    std::vector<std::string> args;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      // An item given twice, in each of the twelve lists.
+      {kRender, {"--resolution", "64,64", "-o", out}, "--resolution: '64' is given twice (each item once), got '64,64'"},
+      {kBench, {"--scenes", "demo,box,demo", "-o", out}, "--scenes: 'demo' is given twice"},
+      {kBench, {"--techniques", "pcf,pcf", "-o", out}, "--techniques: 'pcf' is given twice"},
+      {kBench, {"--resolutions", "64,128", "--resolutions", "64", "-o", out}, "--resolutions: '64' is given twice"},
+      {kBench, {"--radii", "0.05,5e-2", "-o", out}, "--radii: '5e-2' is given twice"},
+      {kDemo, {"--headless", "--techniques", "pcss,pcss", "-o", out}, "--techniques: 'pcss' is given twice"},
+      {kStudy, {"reference", "--pattern", "stair,stair", "-o", json}, "--pattern: 'stair' is given twice"},
+      {kStudy, {"reference", "--contrast", "1,1.0", "-o", json}, "--contrast: '1.0' is given twice"},
+      {kStudy, {"reference", "--artifact-px", "5,5", "-o", json}, "--artifact-px: '5' is given twice"},
+      {kStudy, {"reference", "--seeds", "1,2,1", "-o", json}, "--seeds: '1' is given twice"},
+      {kCurve, {"--pattern", "step,step", "--json", json}, "--pattern: 'step' is given twice"},
+      {kCurve, {"--artifact-px", "10,10", "--json", json}, "--artifact-px: '10' is given twice"},
+      {kCurve, {"--contrast", "0.5,0.5", "--json", json}, "--contrast: '0.5' is given twice"},
+      // One number grammar: no whitespace, hexadecimal, or values strtod rounds to 0.
+      {kRender, {"--resolution", " 64", "-o", out}, "--resolution: expected an integer in [1, 65536]"},
+      {kBench, {"--radii", " 0.05", "-o", out}, "--radii: expected a decimal number in [1e-06, 1e+06]"},
+      {kStudy, {"reference", "--contrast", "0x1p-4", "-o", json}, "--contrast: expected a decimal number in (0, 1]"},
+      {kStudy, {"reference", "--contrast", "1e-400", "-o", json}, "--contrast: expected a decimal number in (0, 1]"},
+      {kCurve, {"--contrast", "0", "--json", json}, "--contrast: expected a decimal number in (0, 1]"},
+      {kCurve, {"--artifact-px", "inf", "--json", json}, "--artifact-px: expected a decimal number in [1, 1000]"},
+      // Names the list does not know, refused while parsing.
+      {kBench, {"--scenes", "nope", "-o", out}, "--scenes: expected a built-in scene (demo, box"},
+      {kBench, {"--techniques", "nope", "-o", out}, "--techniques: expected hard, pcf"},
+      {kDemo, {"--headless", "--techniques", "nope", "-o", out}, "--techniques: expected hard, pcf"},
+      {kStudy, {"reference", "--pattern", "STAIR", "-o", json}, "--pattern: expected stair or step, or at most 64"},
+      {kCurve, {"--pattern", "STAIR", "--json", json}, "--pattern: expected stair or step, or at most 64"},
+  };
+  for (const Case& c : cases) {
+    const std::string tool = fs::path(c.exe).filename().string();
+    SCOPED_TRACE(tool + " " + c.line);
+    expect_one_line(run(c.exe, c.args, s), 2, tool, c.line);
+  }
+  EXPECT_FALSE(fs::exists(s / "out"));
+  EXPECT_FALSE(fs::exists(s / "c.json"));
+}
+
+// Issue 45: values refused after parsing name their option and exit 2; paths are said as what
+// they are, with their control characters escaped.
+TEST(ErrorLines, ValuesRefusedAfterParsingNameTheirOption) {
+  const Scratch s("after-parsing");
+  const std::string out = (s / "out").string();
+  std::ofstream(s / "counts.csv") << "level,n_correct,n_total\n-1,5,10\n0,9,10\n";
+  const auto sessions = simulated_sessions(s / "sessions", 1);
+  fs::create_directories(s / "folder.obj");
+  std::ofstream(s / "dir-model.json") << R"({"objects": [{"shape": "model", "path": "folder.obj"}]})" << "\n";
+  std::ofstream(s / "null-model.json") << R"({"objects": [{"shape": "model", "path": "/dev/null"}]})" << "\n";
+  const std::string newline = (s / "a\nb.json").string(), tab = (s / "c\tounts.csv").string();
+  struct Case {
+    std::string exe;
+    std::vector<std::string> args;
+    int status;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      // was: "the shadow map's frame is not finite" (exit 1) at 180° and 1e6°; 400° rendered as 40°
+      {kRender, {"--light-size", "180", "-o", out}, 2,
+       "--light-size 180: a directional light's angular diameter must lie in [0, 90] degrees (the sun's is 0.53)"},
+      {kRender, {"--light-size", "1e6", "-o", out}, 2, "--light-size 1e+06: a directional light's angular diameter"},
+      {kRender, {"--light-size", "400", "-o", out}, 2, "--light-size 400: a directional light's angular diameter"},
+      {kDemo, {"--headless", "--light-size", "90.5", "-o", out}, 2, "--light-size 90.5: a directional light's angular diameter"},
+      // was: the valid counts file blamed (exit 1), and with a session no option named
+      {kFit, {"psychometric", "--input", (s / "counts.csv").string(), "--p-threshold", "0.5"}, 2,
+       "--p-threshold 0.5: expected a proportion correct in (0.5, 1), above the guess rate"},
+      {kFit, {sessions[0].string(), "-o", out, "--no-progress", "--p-threshold", "0.5"}, 2,
+       "--p-threshold 0.5: expected a proportion correct between the guess rate 0.5 and 0.995"},
+      {kFit, {sessions[0].string(), "-o", out, "--no-progress", "--p-threshold", "1"}, 2, "--p-threshold 1: expected a proportion correct"},
+      // was: "no such file" for a directory and for /dev/null
+      {kRender, {"--scene", (s / "dir-model.json").string(), "-o", out}, 1,
+       "objects[0].path: cannot read model 'folder.obj': not a regular file (a directory)"},
+      {kRender, {"--scene", (s / "null-model.json").string(), "-o", out}, 1,
+       "objects[0].path: cannot read model '/dev/null': not a regular file (a device)"},
+      // was: a newline or tab printed as a space, naming another path
+      {kRender, {"--scene", newline, "-o", out}, 1, (s / "a\\x0ab.json").string() + ": cannot read scene file: no such file"},
+      {kFit, {"psychometric", "--input", tab}, 1, (s / "c\\x09ounts.csv").string() + ": cannot read: no such file"},
+  };
+  for (const Case& c : cases) {
+    const std::string tool = fs::path(c.exe).filename().string();
+    SCOPED_TRACE(tool + " " + c.line);
+    expect_one_line(run(c.exe, c.args, s), c.status, tool, c.line);
+  }
+  EXPECT_FALSE(fs::exists(s / "out"));
+}
+
+// Issue 45: a 16384² VSM under `ulimit -v 6 GiB` aborted ("The futex facility returned an unexpected
+// error code.", SIGABRT, exit 134), and MSM printed a GL debug line before its error line. Out of
+// memory is one line naming the map's size and what to lower, exit 1, nothing written.
+TEST(ErrorLines, OutOfMemoryForAShadowMapIsOneLineNamingTheMap) {
+  const Scratch s("memory");
+  for (const char* technique : {"vsm", "msm"}) {
+    SCOPED_TRACE(technique);
+    const test::Result r = run_with_address_limit(6ull << 30, kRender,
+                                                  {"--technique", technique, "--resolution", "16384", "--width", "64", "--height",
+                                                   "48", "--frames", "1", "--warmup", "0", "-o", (s / "out").string()},
+                                                  s);
+    expect_one_line(r, 1, "penumbra-render", "the shadow atlas 16384x16384 (depth and two moment maps, ");
+    EXPECT_NE(r.err.find("does not fit in memory"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("(lower map.resolution_texels, adaptive.max_texels or map.cascades)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("GL debug"), std::string::npos) << r.err;
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(s.dir())) left.push_back(e.path().filename().string());
+    std::sort(left.begin(), left.end());
+    EXPECT_EQ(left, (std::vector<std::string>{"stderr.txt", "stdout.txt"})) << "nothing written, no staging directory";
+  }
 }
 
 // Issue 45, part A: the virtual shadow map's options, the visibility and object paths, each with

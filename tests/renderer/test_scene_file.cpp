@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -489,6 +490,75 @@ TEST(SceneFile, InstancesShareOneWrittenModelUnlessOneIsMirrored) {
       ASSERT_EQ(placed_got.vertices.size(), placed_want.vertices.size());
       for (std::size_t v = 0; v < placed_want.vertices.size(); ++v)
         expect_near(placed_got.vertices[v].position, placed_want.vertices[v].position, 1e-4f);
+    }
+  }
+}
+
+// Issue 45: each primitive got its own mesh (10 000 equal boxes were 10 000 meshes, and 100 000
+// ran out of memory). Objects of one shape and parameters share one mesh, whatever their
+// placement, as the outdoor town's instances and one model file's objects do; others do not.
+TEST(SceneFile, IdenticalPrimitivesShareOneMesh) {
+  std::string objects;
+  for (int i = 0; i < 500; ++i) {
+    objects += R"({"shape": "box", "size": [0.2, 0.4, 0.2], "translate": [)" + std::to_string(i) + R"(, 0, 0]},)";
+    objects += R"({"shape": "sphere", "radius": 0.5, "translate": [0, )" + std::to_string(i) + R"(, 0], "albedo": [1, 0, 0]},)";
+  }
+  objects += R"({"shape": "box", "size": [0.2, 0.4, 0.3]}, {"shape": "plane", "size": [10, 10]}, {"shape": "plane", "size": [10, 10]},)";
+  objects += R"({"shape": "lattice", "width": 2, "height": 2, "bars_x": 3, "bars_y": 0, "bar_width": 0.1},)";
+  objects += R"({"shape": "lattice", "width": 2, "height": 2, "bars_x": 0, "bars_y": 3, "bar_width": 0.1})";
+  TempDir dir;
+  const Scene s = load_scene_file(dir.write("many.json", R"({"objects": [)" + objects + "]}"));
+  ASSERT_EQ(s.objects.size(), 1005u);
+  std::set<const MeshData*> meshes;
+  for (const Object& o : s.objects) meshes.insert(o.mesh.get());
+  // 0.2 x 0.4 x 0.2 boxes, 0.5 spheres, the other box, the planes, two lattices.
+  EXPECT_EQ(meshes.size(), 6u);
+  EXPECT_EQ(s.objects[0].mesh, s.objects[998].mesh);
+  EXPECT_EQ(s.objects[1].mesh, s.objects[999].mesh);
+  EXPECT_NE(s.objects[0].mesh, s.objects[1000].mesh) << "another size is another mesh";
+  EXPECT_EQ(s.objects[1001].mesh, s.objects[1002].mesh);
+  EXPECT_NE(s.objects[1003].mesh, s.objects[1004].mesh) << "bars across, not along: another lattice";
+  EXPECT_NE(s.objects[0].model, s.objects[2].model) << "each keeps its own placement";
+  expect_near(s.objects[1].albedo, {1, 0, 0});
+}
+
+// Issue 45: a model path that is a directory or a device was "no such file".
+TEST(SceneFile, AModelPathIsSaidAsWhatItIs) {
+  TempDir dir;
+  fs::create_directories(dir.path() / "folder.obj");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"folder.obj", "cannot read model 'folder.obj': not a regular file (a directory)"},
+      {"/dev/null", "cannot read model '/dev/null': not a regular file (a device)"},
+      {"missing.obj", "cannot read model 'missing.obj': no such file"}};
+  for (const auto& [model, expected] : cases) {
+    SCOPED_TRACE(model);
+    const fs::path file = dir.write("m.json", R"({"objects": [{"shape": "model", "path": ")" + model + R"("}]})");
+    try {
+      load_scene_file(file);
+      ADD_FAILURE() << "accepted";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("objects[0].path: " + expected), std::string::npos) << e.what();
+    }
+  }
+}
+
+// Issue 45: a directional light's angular diameter has a range: 180° made the model's tan(size / 2)
+// infinite ("the shadow map's frame is not finite") and 400° rendered as 40°. A spot light's size is
+// a width in world units and is not bounded so.
+TEST(SceneFile, ADirectionalLightsAngularDiameterIsAtMost90Degrees) {
+  TempDir dir;
+  EXPECT_EQ(load_scene_file(dir.write("sun.json", R"({"light": {"size": 90}})")).light.size, 90.0f);
+  EXPECT_EQ(load_scene_file(dir.write("spot.json", R"({"light": {"type": "spot", "size": 400}})")).light.size, 400.0f);
+  for (const char* size : {"90.01", "180", "400", "1e6"}) {
+    SCOPED_TRACE(size);
+    const fs::path file = dir.write("wide.json", std::string(R"({"light": {"size": )") + size + "}}");
+    try {
+      load_scene_file(file);
+      ADD_FAILURE() << "accepted";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("light.size: a directional light's angular diameter must be at most 90 degrees"),
+                std::string::npos)
+          << e.what();
     }
   }
 }
