@@ -3,10 +3,8 @@
 //   penumbra-fit psychometric --input data.csv [--format counts|trials] [--family log-weibull]
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
-#include <unistd.h>
 
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -56,12 +54,29 @@ psychometric::Model parse_family(const std::string& name) {
   return *model;
 }
 
-// A rate as the error lines show it ("0.5", "0.82").
-std::string rate_text(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
+// The progress of the run's phases on stderr, one bar per phase named after it (cli/progress_bar.h:
+// redrawn in place on a terminal; in a log, whole lines: one once the phase has run half a second,
+// then at most one every ten seconds, and always its last).
+class PhaseProgress {
+ public:
+  explicit PhaseProgress(bool enabled) : enabled_(enabled) {}
+  void operator()(const std::string& phase, int done, int total) {
+    if (!enabled_) return;
+    if (!bar_ || phase != phase_) {
+      bar_.reset();
+      bar_.emplace(phase, true, phase == "bootstrap" ? " resamples" : "");
+      phase_ = phase;
+    }
+    (*bar_)(done, total);
+  }
+  // Ends the last bar's line (on a terminal) before other output.
+  void end() { bar_.reset(); }
+
+ private:
+  bool enabled_;
+  std::optional<ProgressBar> bar_;
+  std::string phase_;
+};
 
 LapseSpec lapse_of(const ModelOptions& o) {
   LapseSpec l;
@@ -87,11 +102,6 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
   spec.guess = o.guess.value_or(0.5);
   spec.lapse = lapse_of(o);
   spec.p_threshold = o.p_threshold.value_or(0.82);
-  // The option, not the counts file, when the criterion lies outside what the curve reaches (it
-  // runs from the guess rate to 1; the criterion's lapse is 0 here).
-  if (o.p_threshold && !(spec.p_threshold > spec.guess && spec.p_threshold < 1))
-    throw std::invalid_argument("--p-threshold " + rate_text(spec.p_threshold) + ": expected a proportion correct in (" +
-                                rate_text(spec.guess) + ", 1), above the guess rate");
   std::vector<BinomialRow> rows = read_level_data(input, f);
   spec.groups.push_back({rows, 0, 0.0});
   const FitResult fit = [&] {
@@ -170,9 +180,14 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   }
   options.accept_inconsistent = so.accept_inconsistent;
   options.pool = so.pool;
+  PhaseProgress progress(!so.no_progress);
   const Dataset data = [&] {
     try {
-      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent, .pool = so.pool});
+      // The last line of reading waits for the checks below: refused input stays one line.
+      const auto reading = [&](int done, int total) {
+        if (done < total) progress("reading logs", done, total);
+      };
+      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent, .pool = so.pool, .progress = reading});
     } catch (const InconsistentLog& e) {
       throw std::runtime_error(std::string(e.what()) +
                                "; the log is inconsistent (rows duplicated, removed, reordered or edited?): not fitted "
@@ -181,12 +196,13 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   }();
   // Before the fit: sessions of different kernels or observer kinds are refused at once.
   const CalibrationProvenance provenance = calibration_provenance(data, so.pool_observers);
+  progress("reading logs", static_cast<int>(so.inputs.size()), static_cast<int>(so.inputs.size()));
   const auto start = std::chrono::steady_clock::now();
   const StudyFit fit = [&] {
-    ProgressBar bar("bootstrap", !so.no_progress && ::isatty(STDERR_FILENO));
-    options.progress = [&bar](int done, int total) { bar(done, total); };
+    options.progress = [&progress](const std::string& phase, int done, int total) { progress(phase, done, total); };
     return fit_study(data, options);
   }();
+  progress.end();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const WorstCase chosen = entry_choice(fit, so.condition);  // an unknown --condition fails before anything is written
 

@@ -224,6 +224,7 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
   Dataset data;
   std::set<std::string> seen_ids;
   for (const fs::path& input : inputs) {
+    if (options.progress) options.progress(static_cast<int>(&input - inputs.data()), static_cast<int>(inputs.size()));
     if (!fs::exists(input)) throw std::runtime_error(input.string() + ": no such file or directory");
     SessionInfo info;
     fs::path log = input;
@@ -281,6 +282,7 @@ Dataset load_dataset(const std::vector<fs::path>& inputs, const LoadOptions& opt
     throw std::runtime_error(named + ": no trials to fit (only headers, practice rows or catch trials)");
   }
   check_poolable(data, options.pool);
+  if (options.progress) options.progress(static_cast<int>(inputs.size()), static_cast<int>(inputs.size()));
   return data;
 }
 

@@ -3,6 +3,7 @@
 // or bare trial CSVs, read through the study's validating reader (penumbra_study_log, no GL).
 // Practice rows are counted and left out; yes/no catch trials are kept apart (Dataset::catch_trials).
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -64,6 +65,9 @@ struct LoadOptions {
   // parameters); each difference is kept in Dataset::pooled_differences. Without it such
   // sessions are refused, naming both and the first field that differs.
   bool pool = false;
+  // Called before each input is read and checked (done = inputs read so far, total = all inputs)
+  // and once when all are (done = total).
+  std::function<void(int done, int total)> progress;
 };
 
 struct Dataset {

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <set>
@@ -161,6 +161,53 @@ void fit_linearity(ConditionFit& cf, const std::vector<std::pair<std::size_t, Gr
   cf.lr_power_p = chi2_survival(cf.lr_power_stat, 1);
 }
 
+// Runs body(i) for i in [0, n) on `threads` threads. A body that throws stops the others taking
+// more; the exception of the lowest i is rethrown (the one a loop in order would have thrown, since
+// every lower i was taken, and finished, before it).
+void parallel_for(int n, int threads, const std::function<void(int)>& body) {
+  std::atomic<int> next{0};
+  std::mutex failure_mutex;
+  int failed_at = n;
+  std::exception_ptr failure;
+  auto worker = [&] {
+    for (int i = next++; i < n; i = next++) {
+      try {
+        body(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (i < failed_at) failed_at = i, failure = std::current_exception();
+        next = n;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, std::min(threads, n)); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+// One phase of StudyFitOptions::progress: done counted over the threads, the callback called one at
+// a time with done rising to total.
+class Phase {
+ public:
+  Phase(const StudyFitOptions& options, std::string name, int total)
+      : progress_(options.progress), name_(std::move(name)), total_(total) {
+    if (progress_ && total_ > 0) progress_(name_, 0, total_);
+  }
+  void one_done() {
+    if (!progress_ || total_ <= 0) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    progress_(name_, ++done_, total_);
+  }
+
+ private:
+  const std::function<void(const std::string&, int, int)>& progress_;
+  std::string name_;
+  int total_ = 0, done_ = 0;
+  std::mutex mutex_;
+};
+
 // `catches`: the staircase's yes/no catch trials, which its QUEST saw when the session was scored
 // balanced (empty otherwise); merged with `trials` in trial order.
 void recompute_quest(StaircaseFit& sf, const SessionInfo& session, const std::vector<const Trial*>& trials,
@@ -191,28 +238,20 @@ BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector
   out.resamples = resamples;
   std::vector<double> log_c(static_cast<std::size_t>(resamples), NAN);
   std::vector<char> flagged(static_cast<std::size_t>(resamples), 0);
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int i = next++; i < resamples; i = next++) {
-      sampling::Random random(sampling::derive_seed(seed, static_cast<std::uint64_t>(i)));
-      ModelSpec spec = base;
-      spec.groups.clear();
-      for (std::size_t j = 0; j < participants.size(); ++j) {
-        const auto& pick = participants[random.bits() % participants.size()];
-        spec.groups.insert(spec.groups.end(), pick.begin(), pick.end());
-      }
-      const FitResult f = fit(spec, start, false);
-      log_c[static_cast<std::size_t>(i)] = -f.params.u[0];
-      flagged[static_cast<std::size_t>(i)] =
-          f.flags.has("threshold_at_bound") || f.flags.has("not_converged") ? 1 : 0;
-      if (one_done) one_done();
+  parallel_for(resamples, threads, [&](int i) {
+    sampling::Random random(sampling::derive_seed(seed, static_cast<std::uint64_t>(i)));
+    ModelSpec spec = base;
+    spec.groups.clear();
+    for (std::size_t j = 0; j < participants.size(); ++j) {
+      const auto& pick = participants[random.bits() % participants.size()];
+      spec.groups.insert(spec.groups.end(), pick.begin(), pick.end());
     }
-  };
-  const int n_threads = std::max(1, std::min(threads, resamples));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n_threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
+    const FitResult f = fit(spec, start, false);
+    log_c[static_cast<std::size_t>(i)] = -f.params.u[0];
+    flagged[static_cast<std::size_t>(i)] =
+        f.flags.has("threshold_at_bound") || f.flags.has("not_converged") ? 1 : 0;
+    if (one_done) one_done();
+  });
   for (char f : flagged) out.flagged += f;
   const double tail = 0.5 * (1.0 - level);
   out.c = {std::pow(10.0, percentile(log_c, tail)), std::pow(10.0, percentile(log_c, 1.0 - tail)), false, false};
@@ -227,18 +266,6 @@ BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector
 }
 
 namespace {
-
-// Runs body(i) for i in [0, n) on `threads` threads.
-void parallel_for(int n, int threads, const std::function<void(int)>& body) {
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int i = next++; i < n; i = next++) body(i);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, std::min(threads, n)); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-}
 
 Interval hull(const Interval& a, const Interval& b) {
   if (!std::isfinite(a.lo) || !std::isfinite(a.hi)) return b;
@@ -286,7 +313,8 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
   }
   // Do the conditions differ? One threshold for all against one per condition.
   const ModelSpec one = joint_spec(fit, groups, true), each = joint_spec(fit, groups, false);
-  const FitResult f_one = analysis::fit(one), f_each = analysis::fit(each);
+  FitResult f_one, f_each;
+  parallel_for(2, threads, [&](int i) { (i == 0 ? f_one : f_each) = analysis::fit(i == 0 ? one : each); });
   w.lr_dof = static_cast<int>(fit.conditions.size()) - 1;
   w.lr_stat = std::max(0.0, 2.0 * (f_one.nll - f_each.nll));
   w.lr_p = chi2_survival(w.lr_stat, w.lr_dof);
@@ -307,7 +335,7 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
     ModelSpec bounded = one;
     bounded.u_min = f_one.u_min;
     bounded.u_max = f_one.u_max;
-    const ProfileInterval p = profile_interval(bounded, f_one, 0, options.level);
+    const ProfileInterval p = profile_interval(bounded, f_one, 0, options.level, threads);
     w.profile = c_interval(p.lo, p.hi, p.lo_open, p.hi_open);
     w.beta = std::exp(f_one.params.log_beta);
     w.lapse = f_one.params.lambda;
@@ -451,15 +479,6 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.quest_delta = deltas.size() == 1 ? *deltas.begin() : 0.01;
   if (deltas.size() > 1) out.notes.push_back("sessions use different QUEST delta values; the criterion uses delta 0.01");
   out.criterion_f = psychometric::criterion_f(out.p_threshold, out.guess, out.quest_delta);
-  // A --p-threshold the curves never reach is the option's fault, not the sessions' (it was
-  // refused by the fit, naming no option, exit 1).
-  if (options.p_threshold && !(out.criterion_f > 0 && out.criterion_f < 1)) {
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "--p-threshold %g: expected a proportion correct between the guess rate %g and %g (1 - QUEST's delta lapse)",
-                  out.p_threshold, out.guess, 1 - out.quest_delta * (1 - out.guess));
-    throw std::invalid_argument(line);
-  }
   if (!data.trials.empty()) out.task = data.trials.front().row.task;
   // yes/no: the fits model detections on the jagged trials, P = fa + (1 - fa - lambda) F, with
   // each participant's own false-alarm rate as the guess rate. QUEST's gamma is what the session
@@ -503,87 +522,95 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     if (!by_condition.count(name)) order.push_back(name);
     by_condition[name].push_back(&t);
   }
-  int total_bootstrap = 0;
-  for (const std::string& name : order) {
-    std::set<std::string> people;
-    for (const Trial* t : by_condition[name]) people.insert(t->row.participant);
-    if (people.size() >= 2) total_bootstrap += options.bootstrap;
-  }
-  if (order.size() > 1 && options.bootstrap > 0) total_bootstrap += options.bootstrap;  // the worst case's
-  std::atomic<int> bootstrap_done{0};
-  std::mutex progress_mutex;
-  const auto one_done = [&] {
-    const int done = ++bootstrap_done;
-    if (!options.progress) return;
-    std::lock_guard<std::mutex> lock(progress_mutex);
-    options.progress(done, total_bootstrap);
-  };
 
+  // Each condition's fits but the bootstrap, the conditions side by side (a study of one
+  // condition searches its profile interval's two ends at once instead).
+  const int condition_count = static_cast<int>(order.size());
+  std::vector<ConditionFit> conditions(order.size());
+  std::vector<std::map<std::string, std::vector<Group>>> condition_groups(order.size());  // per condition: participant -> groups
+  {
+    Phase phase(options, "conditions", condition_count);
+    parallel_for(condition_count, threads, [&](int k) {
+      const std::string& name = order[static_cast<std::size_t>(k)];
+      ConditionFit& cf = conditions[static_cast<std::size_t>(k)];
+      std::map<std::string, std::vector<Group>>& by_participant = condition_groups[static_cast<std::size_t>(k)];
+      const auto& trials = by_condition.at(name);
+      cf.condition = name;
+      cf.pattern = trials.front()->row.pattern;
+      cf.contrast = trials.front()->row.contrast;
+      cf.trials = static_cast<int>(trials.size());
+      std::set<double> sizes;
+      for (const Trial* t : trials) sizes.insert(t->row.artifact_px);
+      cf.artifact_px.assign(sizes.begin(), sizes.end());
+      // Groups per (participant, size).
+      std::map<std::pair<std::string, std::size_t>, std::vector<BinomialRow>> rows;
+      for (const Trial* t : trials) {
+        const std::size_t size_index = static_cast<std::size_t>(
+            std::lower_bound(cf.artifact_px.begin(), cf.artifact_px.end(), t->row.artifact_px) - cf.artifact_px.begin());
+        rows[{t->row.participant, size_index}].push_back(
+            {model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
+      }
+      std::vector<std::pair<std::size_t, Group>> sized_groups;
+      cf.spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
+      for (auto& [key, r] : rows) {
+        Group g{merge_rows(std::move(r)), 0, 0.0, participant_guess(key.first)};
+        sized_groups.emplace_back(key.second, g);
+        by_participant[key.first].push_back(g);
+        cf.spec.groups.push_back(g);
+      }
+      cf.participant_count = static_cast<int>(by_participant.size());
+      cf.linear = fit(cf.spec);
+      cf.spec.u_min = cf.linear.u_min;  // every later fit of this condition shares the bounds
+      cf.spec.u_max = cf.linear.u_max;
+      cf.flags = cf.linear.flags;
+      cf.c = std::pow(10.0, -cf.linear.params.u[0]);
+      const ProfileInterval profile =
+          profile_interval(cf.spec, cf.linear, 0, options.level, condition_count == 1 ? threads : 1);
+      cf.c_profile = c_interval(profile.lo, profile.hi, profile.lo_open, profile.hi_open);
+      if (profile.lo_open || profile.hi_open) cf.flags.add("interval_open");
+      cf.c_wald = wald_c(cf.linear, 0, options.level);
+      cf.beta = std::exp(cf.linear.params.log_beta);
+      if (const double se = cf.linear.se(cf.linear.index_log_beta()); std::isfinite(se)) {
+        const double z = z_of(options.level);
+        cf.beta_wald = {std::exp(cf.linear.params.log_beta - z * se), std::exp(cf.linear.params.log_beta + z * se), false, false};
+      }
+      fit_linearity(cf, sized_groups, options);
+      fit_participants(cf, by_participant, options);
+      if (by_participant.size() < 2) cf.flags.add("one_participant");
+      phase.one_done();
+    });
+  }
+
+  // The bootstraps over participants: each condition's, then the worst case's, each resample a fit
+  // of its own on the threads.
   std::map<std::string, double> condition_lambda, condition_beta;
-  std::vector<std::map<std::string, std::vector<Group>>> condition_groups;  // per condition: participant -> groups
-  for (const std::string& name : order) {
-    const auto& trials = by_condition[name];
-    ConditionFit cf;
-    cf.condition = name;
-    cf.pattern = trials.front()->row.pattern;
-    cf.contrast = trials.front()->row.contrast;
-    cf.trials = static_cast<int>(trials.size());
-    std::set<double> sizes;
-    for (const Trial* t : trials) sizes.insert(t->row.artifact_px);
-    cf.artifact_px.assign(sizes.begin(), sizes.end());
-    // Groups per (participant, size).
-    std::map<std::pair<std::string, std::size_t>, std::vector<BinomialRow>> rows;
-    for (const Trial* t : trials) {
-      const std::size_t size_index = static_cast<std::size_t>(
-          std::lower_bound(cf.artifact_px.begin(), cf.artifact_px.end(), t->row.artifact_px) - cf.artifact_px.begin());
-      rows[{t->row.participant, size_index}].push_back(
-          {model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
-    }
-    std::vector<std::pair<std::size_t, Group>> sized_groups;
-    std::map<std::string, std::vector<Group>> by_participant;
-    cf.spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
-    for (auto& [key, r] : rows) {
-      Group g{merge_rows(std::move(r)), 0, 0.0, participant_guess(key.first)};
-      sized_groups.emplace_back(key.second, g);
-      by_participant[key.first].push_back(g);
-      cf.spec.groups.push_back(g);
-    }
-    cf.participant_count = static_cast<int>(by_participant.size());
-    cf.linear = fit(cf.spec);
-    cf.spec.u_min = cf.linear.u_min;  // every later fit of this condition shares the bounds
-    cf.spec.u_max = cf.linear.u_max;
-    cf.flags = cf.linear.flags;
-    cf.c = std::pow(10.0, -cf.linear.params.u[0]);
-    const ProfileInterval profile = profile_interval(cf.spec, cf.linear, 0, options.level);
-    cf.c_profile = c_interval(profile.lo, profile.hi, profile.lo_open, profile.hi_open);
-    if (profile.lo_open || profile.hi_open) cf.flags.add("interval_open");
-    cf.c_wald = wald_c(cf.linear, 0, options.level);
-    cf.beta = std::exp(cf.linear.params.log_beta);
-    if (const double se = cf.linear.se(cf.linear.index_log_beta()); std::isfinite(se)) {
-      const double z = z_of(options.level);
-      cf.beta_wald = {std::exp(cf.linear.params.log_beta - z * se), std::exp(cf.linear.params.log_beta + z * se), false, false};
-    }
-    fit_linearity(cf, sized_groups, options);
-    fit_participants(cf, by_participant, options);
-    condition_groups.push_back(by_participant);
-    if (by_participant.size() < 2) {
-      cf.flags.add("one_participant");
-    } else if (options.bootstrap > 0) {
-      std::vector<std::vector<Group>> groups;
-      for (auto& [name_p, g] : by_participant) groups.push_back(g);
-      cf.bootstrap = bootstrap_participants(cf.spec, groups, cf.linear.params, options.bootstrap,
-                                            sampling::derive_seed(options.seed, out.conditions.size()), threads,
-                                            options.level, one_done);
-      const double profile_width = std::log10(cf.c_profile.hi / cf.c_profile.lo);
-      const double boot_width = std::log10(cf.bootstrap.c.hi / cf.bootstrap.c.lo);
-      if (std::isfinite(profile_width) && boot_width > 1.5 * profile_width) cf.flags.add("participants_differ");
-    }
-    condition_lambda[name] = cf.linear.params.lambda;
-    condition_beta[name] = std::exp(cf.linear.params.log_beta);
-    out.conditions.push_back(std::move(cf));
+  int total_bootstrap = 0;
+  std::set<std::string> people;
+  for (const auto& by_participant : condition_groups) {
+    if (by_participant.size() >= 2) total_bootstrap += options.bootstrap;
+    for (const auto& [participant, groups] : by_participant) people.insert(participant);
   }
-
-  out.worst = worst_case(out, condition_groups, options, threads, one_done);
+  if (order.size() > 1 && people.size() >= 2) total_bootstrap += options.bootstrap;  // the worst case's
+  {
+    Phase phase(options, "bootstrap", total_bootstrap);
+    const auto one_done = [&phase] { phase.one_done(); };
+    for (std::size_t k = 0; k < conditions.size(); ++k) {
+      ConditionFit& cf = conditions[k];
+      if (condition_groups[k].size() >= 2 && options.bootstrap > 0) {
+        std::vector<std::vector<Group>> groups;
+        for (auto& [name_p, g] : condition_groups[k]) groups.push_back(g);
+        cf.bootstrap = bootstrap_participants(cf.spec, groups, cf.linear.params, options.bootstrap,
+                                              sampling::derive_seed(options.seed, k), threads, options.level, one_done);
+        const double profile_width = std::log10(cf.c_profile.hi / cf.c_profile.lo);
+        const double boot_width = std::log10(cf.bootstrap.c.hi / cf.bootstrap.c.lo);
+        if (std::isfinite(profile_width) && boot_width > 1.5 * profile_width) cf.flags.add("participants_differ");
+      }
+      condition_lambda[cf.condition] = cf.linear.params.lambda;
+      condition_beta[cf.condition] = std::exp(cf.linear.params.log_beta);
+      out.conditions.push_back(std::move(cf));
+    }
+    out.worst = worst_case(out, condition_groups, options, threads, one_done);
+  }
 
   // Staircases: (session, round, staircase) in log order.
   std::map<std::tuple<std::size_t, int, std::string>, std::vector<const Trial*>> staircases;
@@ -593,49 +620,63 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
     if (!staircases.count(key)) staircase_order.push_back(key);
     staircases[key].push_back(&t);
   }
+  // The catch trials a balanced-scored session's QUEST saw, by staircase (one pass, not one per staircase).
+  std::map<std::tuple<std::size_t, int, std::string>, std::vector<const Trial*>> staircase_catches;
+  for (const Trial& t : data.catch_trials)
+    if (data.sessions[t.session].yesno_scoring == "balanced")
+      staircase_catches[std::make_tuple(t.session, t.row.condition_index, t.row.staircase)].push_back(&t);
+  // Checked before any fit, so that the first bad row in log order is the one named.
   for (const auto& key : staircase_order) {
     const auto& trials = staircases[key];
-    const SessionInfo& session = data.sessions[std::get<0>(key)];
     const trial_log::TrialRow& first = trials.front()->row;
-    StaircaseFit sf;
-    sf.participant = session.participant;
-    sf.session_id = session.session_id;
-    sf.condition = condition_name(first.pattern, first.contrast);
-    sf.staircase = first.staircase;
-    sf.artifact_px = first.artifact_px;
-    sf.round = first.condition_index;
-    ModelSpec spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
-    // A staircase's 20-40 trials sit near its threshold and cannot tell a slope: free, it ran to
-    // its bound on half of clean simulated staircases (a step function, flagged). The slope and
-    // the lapse are the condition's, so each staircase gives its threshold only.
-    spec.lapse.fixed = condition_lambda.at(sf.condition);
-    spec.slope.fixed = condition_beta.at(sf.condition);
-    std::vector<BinomialRow> rows;
-    for (const Trial* t : trials) {
-      if (t->row.artifact_px != first.artifact_px || condition_name(t->row.pattern, t->row.contrast) != sf.condition)
-        throw std::runtime_error(session.log_file + ":" + std::to_string(t->line) + ": staircase '" + sf.staircase +
-                                 "' of round " + std::to_string(sf.round) + " changes artifact size or condition");
-      rows.push_back({model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
-      sf.track.push_back({t->row.trial, t->row.intensity, t->row.filter_radius_px, t->row.correct, t->row.clamped != 0});
-    }
-    spec.groups.push_back({merge_rows(std::move(rows)), 0, 0.0, participant_guess(session.participant)});
-    sf.fit = fit(spec);
-    sf.flags = sf.fit.flags;
-    sf.c = std::pow(10.0, -sf.fit.params.u[0]);
-    const Interval w = wald_c(sf.fit, 0, options.level);
-    sf.c_lo = w.lo;
-    sf.c_hi = w.hi;
-    std::vector<const Trial*> catches;
-    if (session.yesno_scoring == "balanced")
-      for (const Trial& t : data.catch_trials)
-        if (t.session == std::get<0>(key) && t.row.condition_index == first.condition_index && t.row.staircase == first.staircase)
-          catches.push_back(&t);
-    recompute_quest(sf, session, trials, catches);
-    const double final_sd = sf.quest_recomputed ? sf.quest_sd : sf.logged_quest_sd;
-    sf.converged = final_sd <= session.sd_below && !sf.fit.flags.has("threshold_at_bound") &&
-                   !sf.fit.flags.has("covariance_failed") && !sf.fit.flags.has("not_converged");
-    if (!sf.converged) sf.flags.add("staircase_not_converged");
-    out.staircases.push_back(std::move(sf));
+    const std::string condition = condition_name(first.pattern, first.contrast);
+    for (const Trial* t : trials)
+      if (t->row.artifact_px != first.artifact_px || condition_name(t->row.pattern, t->row.contrast) != condition)
+        throw std::runtime_error(data.sessions[std::get<0>(key)].log_file + ":" + std::to_string(t->line) + ": staircase '" +
+                                 first.staircase + "' of round " + std::to_string(first.condition_index) +
+                                 " changes artifact size or condition");
+  }
+  out.staircases.resize(staircase_order.size());
+  {
+    Phase phase(options, "staircases", static_cast<int>(staircase_order.size()));
+    parallel_for(static_cast<int>(staircase_order.size()), threads, [&](int index) {
+      const auto& key = staircase_order[static_cast<std::size_t>(index)];
+      const auto& trials = staircases.at(key);
+      const SessionInfo& session = data.sessions[std::get<0>(key)];
+      const trial_log::TrialRow& first = trials.front()->row;
+      StaircaseFit& sf = out.staircases[static_cast<std::size_t>(index)];
+      sf.participant = session.participant;
+      sf.session_id = session.session_id;
+      sf.condition = condition_name(first.pattern, first.contrast);
+      sf.staircase = first.staircase;
+      sf.artifact_px = first.artifact_px;
+      sf.round = first.condition_index;
+      ModelSpec spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
+      // A staircase's 20-40 trials sit near its threshold and cannot tell a slope: free, it ran to
+      // its bound on half of clean simulated staircases (a step function, flagged). The slope and
+      // the lapse are the condition's, so each staircase gives its threshold only.
+      spec.lapse.fixed = condition_lambda.at(sf.condition);
+      spec.slope.fixed = condition_beta.at(sf.condition);
+      std::vector<BinomialRow> rows;
+      for (const Trial* t : trials) {
+        rows.push_back({model_x(options.family, t->row.intensity), static_cast<double>(t->row.correct), 1.0});
+        sf.track.push_back({t->row.trial, t->row.intensity, t->row.filter_radius_px, t->row.correct, t->row.clamped != 0});
+      }
+      spec.groups.push_back({merge_rows(std::move(rows)), 0, 0.0, participant_guess(session.participant)});
+      sf.fit = fit(spec);
+      sf.flags = sf.fit.flags;
+      sf.c = std::pow(10.0, -sf.fit.params.u[0]);
+      const Interval w = wald_c(sf.fit, 0, options.level);
+      sf.c_lo = w.lo;
+      sf.c_hi = w.hi;
+      const auto catches = staircase_catches.find(key);
+      recompute_quest(sf, session, trials, catches == staircase_catches.end() ? std::vector<const Trial*>{} : catches->second);
+      const double final_sd = sf.quest_recomputed ? sf.quest_sd : sf.logged_quest_sd;
+      sf.converged = final_sd <= session.sd_below && !sf.fit.flags.has("threshold_at_bound") &&
+                     !sf.fit.flags.has("covariance_failed") && !sf.fit.flags.has("not_converged");
+      if (!sf.converged) sf.flags.add("staircase_not_converged");
+      phase.one_done();
+    });
   }
   out.thesis = thesis_estimates(out);
   return out;

@@ -33,9 +33,14 @@ struct StudyFitOptions {
   double level = 0.95;
   int bootstrap = 1000;               // resamples over participants; 0 = none
   std::uint64_t seed = 1;
-  int threads = 0;                    // 0: hardware concurrency
+  int threads = 0;                    // 0: hardware concurrency; results do not depend on it
   double outlier_z = 3.0;             // participants farther than this (robust z of log10 c) are flagged
-  std::function<void(int done, int total)> progress;  // bootstrap progress, called from worker threads (serialized)
+  // Progress of each long phase, in this order: "conditions" (each condition's joint fit, profile
+  // interval, linearity and participant fits; total = conditions), "bootstrap" (every resample of
+  // the participant bootstraps and of the worst case's), "staircases" (one fit each). Each phase
+  // starts with done = 0 and ends with done = total; a phase with nothing to do is not reported.
+  // Called from worker threads, one call at a time.
+  std::function<void(const std::string& phase, int done, int total)> progress;
   bool accept_inconsistent = false;   // the logs were loaded with LoadOptions::accept_inconsistent
   bool pool = false;                  // the logs were loaded with LoadOptions::pool
 };

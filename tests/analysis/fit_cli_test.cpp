@@ -1,6 +1,6 @@
 // penumbra-fit end to end: session directories in, calibration.json (read back by the renderer's
 // reader), report.json and summary.txt out; bad input gives one line naming the file and line and
-// writes nothing; the psychometric subcommand; and the real pipeline penumbra-study run -> fit.
+// writes nothing; the psychometric subcommand; progress lines on stderr; and the real pipeline penumbra-study run -> fit.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <functional>
+#include <regex>
 #include <set>
 #include <sstream>
 
@@ -113,6 +114,47 @@ TEST(FitCli, FitsSessionDirectoriesAndWritesTheContract) {
 // Issue 15: sessions that measure different things are not pooled into one c: a session answered by
 // a person beside simulated ones, or drawn with another kernel, is refused before the fit with one
 // line naming both logs, and nothing is written.
+// Issue 44: progress on stderr. In a log (stderr a file) each phase writes whole lines of the
+// shared progress bar, no carriage returns or terminal codes, and always its last line, in the
+// order the phases run; stdout is the same as without them; --no-progress writes none.
+TEST(FitCli, EveryPhaseWritesItsProgressAsWholeLinesToALog) {
+  const fs::path dir = fresh("progress");
+  const auto sessions = simulated_sessions(dir / "sessions", 3);
+  std::string args;
+  for (const auto& s : sessions) args += s.string() + " ";
+  auto run_logged = [&](const std::string& more, std::string* out, std::string* log) {
+    const std::string command = std::string(PENUMBRA_FIT_EXE) + " " + args + more + " 2> " + (dir / "stderr.txt").string();
+    FILE* pipe = ::popen(command.c_str(), "r");
+    char buf[4096];
+    out->clear();
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) out->append(buf, n);
+    const int status = ::pclose(pipe);
+    *log = read(dir / "stderr.txt");
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  std::string out, log;
+  ASSERT_EQ(run_logged("-o " + (dir / "out").string() + " --bootstrap 20 --threads 2", &out, &log), 0) << out << log;
+  EXPECT_EQ(log.find('\r'), std::string::npos) << log;
+  EXPECT_EQ(log.find('\033'), std::string::npos) << log;
+  const std::regex line(R"((reading logs|conditions|bootstrap|staircases) \[[#.]{40}\] (\d+)/(\d+)( resamples)?, \d+ s left)");
+  std::vector<std::string> last;  // each phase's last line, in order
+  std::istringstream lines(log);
+  for (std::string l; std::getline(lines, l);) {
+    std::smatch m;
+    ASSERT_TRUE(std::regex_match(l, m, line)) << "not a progress line: " << l;
+    if (m[2] == m[3]) last.push_back(m[1].str() + " " + m[2].str());
+  }
+  EXPECT_EQ(last, (std::vector<std::string>{"reading logs 3", "conditions 1", "bootstrap 20", "staircases 9"})) << log;
+  EXPECT_EQ(log.back(), '\n');
+
+  std::string quiet_out, quiet_log;
+  ASSERT_EQ(run_logged("-o " + (dir / "quiet").string() + " --bootstrap 20 --threads 2 --no-progress", &quiet_out, &quiet_log), 0);
+  EXPECT_EQ(quiet_log, "");
+  const auto without_paths = [](std::string text) { return text.substr(0, text.find("fit took")); };
+  EXPECT_EQ(without_paths(quiet_out), without_paths(out));
+  fs::remove_all(dir);
+}
+
 TEST(FitCli, RefusesToPoolSessionsOfDifferentObserversOrKernels) {
   for (const std::string what : {"observer", "kernel"}) {
     SCOPED_TRACE(what);

@@ -1,13 +1,19 @@
 // The study analysis on simulated studies (the study's procedure and planted observer, no GL):
 // recovery of c, the linearity check and the power-law exponent, QUEST recomputed from the log,
-// outlying participants, degenerate studies, the bootstrap, and calibration.json read back by the
-// renderer's reader.
+// outlying participants, degenerate studies, the bootstrap, calibration.json read back by the
+// renderer's reader, results independent of the thread count and the progress of each phase.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <numeric>
+#include <set>
+#include <string>
 #include <unistd.h>
+#include <vector>
 
 #include "adaptive/resolution_rule.h"
 #include "data/simulate.h"
@@ -319,5 +325,74 @@ TEST(StudyFit, TheThesisStyleEstimateRecoversAPlantedC) {
     EXPECT_EQ(f.thesis[0].staircases, 30);
     EXPECT_EQ(f.thesis[0].artifact_px, (std::vector<double>{5, 10, 20}));
     EXPECT_NEAR(f.thesis[0].c / c_true, 1.0, 0.08) << c_true;
+  }
+}
+
+// Issue 44: every phase runs its fits on the threads (conditions, profile ends, bootstrap resamples,
+// the worst case's fits, staircases), and nothing they compute depends on how many: report.json and
+// calibration.json come out the same text with 1, 2 and 3 threads, for a worst case pooled over
+// equal conditions and for a bias-corrected maximum.
+TEST(StudyFit, TheWholeFitIsIndependentOfTheThreadCount) {
+  SimulatedStudy equal = four_equal_conditions(3.0, 5, 4401);
+  SimulatedStudy differ = four_equal_conditions(3.0, 5, 4402);
+  differ.conditions[1].planted.c_true = 6.0;
+  std::set<std::string> methods;
+  for (const SimulatedStudy& s : {equal, differ}) {
+    const Dataset d = as_dataset(s, simulate_study(s));
+    const CalibrationProvenance provenance = calibration_provenance(d);
+    StudyFitOptions o = quick();
+    o.bootstrap = 12;
+    std::string report_1, calibration_1;
+    for (int threads : {1, 2, 3}) {
+      o.threads = threads;
+      const StudyFit f = fit_study(d, o);
+      const std::string report = report_json(f, nullptr, {"sim"}, "2024-01-01T00:00:00Z", provenance).dump();
+      const std::string calibration = calibration_json(f, std::nullopt, "2024-01-01T00:00:00Z", {"sim"}, provenance).dump();
+      if (threads == 1) {
+        report_1 = report;
+        calibration_1 = calibration;
+        methods.insert(f.worst.method);
+        EXPECT_EQ(f.worst.resamples, 12);
+        continue;
+      }
+      EXPECT_EQ(report, report_1) << threads << " threads";
+      EXPECT_EQ(calibration, calibration_1) << threads << " threads";
+    }
+  }
+  EXPECT_EQ(methods, (std::set<std::string>{"pooled", "bias-corrected maximum"})) << "both ways to the entry's c";
+}
+
+// Issue 44: each long phase reports its progress, in order, from 0 up to its total one at a time
+// (the callback is called from worker threads, never two at once).
+TEST(StudyFit, ReportsTheProgressOfEveryPhase) {
+  const SimulatedStudy s = four_equal_conditions(3.0, 5, 4403);
+  StudyFitOptions o = quick();
+  o.bootstrap = 10;
+  o.threads = 2;
+  std::vector<std::pair<std::string, std::vector<int>>> phases;  // each phase's done values, in call order
+  std::map<std::string, int> totals;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  o.progress = [&](const std::string& phase, int done, int total) {
+    if (++inside > 1) overlapped = true;
+    if (phases.empty() || phases.back().first != phase) phases.push_back({phase, {}});
+    phases.back().second.push_back(done);
+    EXPECT_TRUE(totals.emplace(phase, total).first->second == total) << phase << ": the total changed";
+    --inside;
+  };
+  const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), o);
+  EXPECT_FALSE(overlapped);
+  ASSERT_EQ(phases.size(), 3u);
+  EXPECT_EQ(phases[0].first, "conditions");
+  EXPECT_EQ(phases[1].first, "bootstrap");
+  EXPECT_EQ(phases[2].first, "staircases");
+  EXPECT_EQ(totals["conditions"], 4);
+  EXPECT_EQ(totals["bootstrap"], 5 * 10) << "four conditions' bootstraps and the worst case's";
+  EXPECT_EQ(totals["staircases"], static_cast<int>(f.staircases.size()));
+  EXPECT_EQ(f.staircases.size(), 5u * 4 * 3);
+  for (const auto& [phase, done] : phases) {
+    std::vector<int> expected(static_cast<std::size_t>(totals[phase]) + 1);
+    std::iota(expected.begin(), expected.end(), 0);
+    EXPECT_EQ(done, expected) << phase;
   }
 }
