@@ -259,8 +259,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 1000000));
   app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str()->check(cli::non_negative_integer());
-  app.add_option("--threads", so.threads, "bootstrap threads (0: all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
-  app.add_flag("--no-progress", so.no_progress, "no progress bar on stderr");
+  app.add_option("--threads", so.threads, "threads for the fits of every phase (0: all cores); the results do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
+  app.add_flag("--no-progress", so.no_progress,
+               "no progress on stderr (otherwise one bar per phase: redrawn on a terminal, whole lines in a log)");
   app.add_flag("--accept-inconsistent", so.accept_inconsistent,
                "fit logs that fail the integrity check (trial numbers, design, QUEST replay) and list them in "
                "report.json and summary.txt; without it such a log is refused");
