@@ -8,9 +8,9 @@
 #include <epoxy/gl.h>
 #include <glm/vec2.hpp>
 
-#include "gl/objects.h"
-#include "gl/shader_library.h"
-#include "shadows/moments.h"
+#include <penumbra/gl/objects.h>
+#include <penumbra/gl/shader_library.h>
+#include <penumbra/shadows/moments.h>
 
 namespace penumbra::shadows {
 
