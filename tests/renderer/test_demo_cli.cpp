@@ -401,27 +401,6 @@ TEST_F(DemoCli, BadInputIsOneLineAndWritesNothing) {
 
 // Issue 45: the main job does not time a virtual configuration whose pool missed pages (its frame
 // would be that of coarser shadows): one line naming the configuration, the frame and the pool
-// that holds the pages, exit 1, nothing written. With the pool the pages need it runs.
-TEST_F(DemoCli, AVirtualConfigurationThatMissesPagesIsNotTimed) {
-  const fs::path out = dir_ / "small-pool";
-  const std::vector<std::string> args = {"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36",
-                                         "--techniques", "pcf", "--fixed-resolution", "256", "--no-plot", "--no-baselines",
-                                         "-o", out.string()};
-  std::vector<std::string> small = args;
-  small.insert(small.end(), {"--map.virtual_pool_pages", "2"});
-  const auto r = demo(small);
-  EXPECT_EQ(r.exit_code, 1) << r.err;
-  const std::string last = r.err.substr(r.err.rfind('\n', r.err.size() - 2) + 1);
-  EXPECT_THAT(last, HasSubstr("penumbra-demo: pcf, virtual rule, path frame 0: not timed: virtual shadow map: "));
-  EXPECT_THAT(last, HasSubstr("did not fit a pool of 4 slots (--map.virtual_pool_pages 2)"));
-  EXPECT_FALSE(fs::exists(out));
-  std::vector<std::string> enough = args;
-  enough.insert(enough.end(), {"--map.virtual_pool_pages", "3"});
-  EXPECT_EQ(demo(enough).exit_code, 0);
-}
-
-// Issue 45: the main job does not time a virtual configuration whose pool missed pages (its frame
-// would be that of coarser shadows): one line naming the configuration, the frame and the pool
 // that holds the pages, exit 1, nothing written.
 TEST_F(DemoCli, AVirtualConfigurationThatMissesPagesIsNotTimed) {
   const fs::path out = dir_ / "small-pool";
