@@ -63,7 +63,18 @@ def pages(build, work):
     return "\n".join([header] + keep)
 
 
-GENERATORS = {"fit-example": fit_example, "pages": pages}
+def engine_example(build, work):
+    """docs/adaptive.md's engine example (examples/engine_integration) with the shipped calibration."""
+    out = run(f"{build}/tests/docs/engine_integration_in_tree data/calibration/default.json", work)
+    # The first line (c and its entry) and the frames the doc's prose reads: the first, where one
+    # cascade reaches the largest map, where two take over and one returns, and the hysteresis's end.
+    shown = {0, 22, 23, 27, 31, 60}
+    keep = [line.rstrip() for line in out.strip().split("\n")
+            if not line.startswith("frame") or int(line.split()[1]) in shown]
+    return "\n".join(keep)
+
+
+GENERATORS = {"fit-example": fit_example, "pages": pages, "engine-example": engine_example}
 
 
 def marked_blocks(path):
