@@ -529,7 +529,8 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   std::vector<ConditionFit> conditions(order.size());
   std::vector<std::map<std::string, std::vector<Group>>> condition_groups(order.size());  // per condition: participant -> groups
   {
-    Phase phase(options, "conditions", condition_count);
+    // Four steps each: the joint fit, its profile interval, the linearity fits, the participants'.
+    Phase phase(options, "conditions", 4 * condition_count);
     parallel_for(condition_count, threads, [&](int k) {
       const std::string& name = order[static_cast<std::size_t>(k)];
       ConditionFit& cf = conditions[static_cast<std::size_t>(k)];
@@ -560,12 +561,14 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       }
       cf.participant_count = static_cast<int>(by_participant.size());
       cf.linear = fit(cf.spec);
+      phase.one_done();
       cf.spec.u_min = cf.linear.u_min;  // every later fit of this condition shares the bounds
       cf.spec.u_max = cf.linear.u_max;
       cf.flags = cf.linear.flags;
       cf.c = std::pow(10.0, -cf.linear.params.u[0]);
       const ProfileInterval profile =
           profile_interval(cf.spec, cf.linear, 0, options.level, condition_count == 1 ? threads : 1);
+      phase.one_done();
       cf.c_profile = c_interval(profile.lo, profile.hi, profile.lo_open, profile.hi_open);
       if (profile.lo_open || profile.hi_open) cf.flags.add("interval_open");
       cf.c_wald = wald_c(cf.linear, 0, options.level);
@@ -575,6 +578,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
         cf.beta_wald = {std::exp(cf.linear.params.log_beta - z * se), std::exp(cf.linear.params.log_beta + z * se), false, false};
       }
       fit_linearity(cf, sized_groups, options);
+      phase.one_done();
       fit_participants(cf, by_participant, options);
       if (by_participant.size() < 2) cf.flags.add("one_participant");
       phase.one_done();

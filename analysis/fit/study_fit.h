@@ -36,7 +36,7 @@ struct StudyFitOptions {
   int threads = 0;                    // 0: hardware concurrency; results do not depend on it
   double outlier_z = 3.0;             // participants farther than this (robust z of log10 c) are flagged
   // Progress of each long phase, in this order: "conditions" (each condition's joint fit, profile
-  // interval, linearity and participant fits; total = conditions), "bootstrap" (every resample of
+  // interval, linearity and participant fits; total = 4 x conditions), "bootstrap" (every resample of
   // the participant bootstraps and of the worst case's), "staircases" (one fit each). Each phase
   // starts with done = 0 and ends with done = total; a phase with nothing to do is not reported.
   // Called from worker threads, one call at a time.

@@ -144,7 +144,7 @@ TEST(FitCli, EveryPhaseWritesItsProgressAsWholeLinesToALog) {
     ASSERT_TRUE(std::regex_match(l, m, line)) << "not a progress line: " << l;
     if (m[2] == m[3]) last.push_back(m[1].str() + " " + m[2].str());
   }
-  EXPECT_EQ(last, (std::vector<std::string>{"reading logs 3", "conditions 1", "bootstrap 20", "staircases 9"})) << log;
+  EXPECT_EQ(last, (std::vector<std::string>{"reading logs 3", "conditions 4", "bootstrap 20", "staircases 9"})) << log;
   EXPECT_EQ(log.back(), '\n');
 
   std::string quiet_out, quiet_log;

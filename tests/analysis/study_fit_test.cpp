@@ -386,7 +386,7 @@ TEST(StudyFit, ReportsTheProgressOfEveryPhase) {
   EXPECT_EQ(phases[0].first, "conditions");
   EXPECT_EQ(phases[1].first, "bootstrap");
   EXPECT_EQ(phases[2].first, "staircases");
-  EXPECT_EQ(totals["conditions"], 4);
+  EXPECT_EQ(totals["conditions"], 4 * 4) << "four steps of four conditions";
   EXPECT_EQ(totals["bootstrap"], 5 * 10) << "four conditions' bootstraps and the worst case's";
   EXPECT_EQ(totals["staircases"], static_cast<int>(f.staircases.size()));
   EXPECT_EQ(f.staircases.size(), 5u * 4 * 3);
