@@ -362,7 +362,7 @@ TEST_P(RenderCliRefuses, WithOneLineAndNoOutput) {
 // 65 resolutions: one more than a list may hold.
 std::string sixty_five_resolutions() {
   std::string list = "64";
-  for (int i = 1; i < 65; ++i) list += ",64";
+  for (int i = 1; i < 65; ++i) list += "," + std::to_string(64 + i);  // distinct: a repeat is refused on its own (issue 45)
   return list;
 }
 
