@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -203,19 +204,75 @@ TEST(Flip, PixelsPerDegreeFromViewingGeometry) {
 }
 
 TEST(Flip, PoolingIsFlipsValueWeightedConvention) {
-  ImageF map{4, 1, 1, {0.3f, 0.1f, 0.4f, 0.2f}};
-  const auto p = penumbra::metrics::pool_flip(map, 0.25);
-  // Sorted 0.1, 0.2, 0.3, 0.4 (total 1.0); running sums 0.1, 0.3, 0.6, 1.0.
-  EXPECT_FLOAT_EQ(p.weighted_q1, 0.2f);      // first running sum above 0.25
-  EXPECT_FLOAT_EQ(p.weighted_median, 0.3f);  // first above 0.5
-  EXPECT_FLOAT_EQ(p.weighted_q3, 0.4f);      // first above 0.75
-  EXPECT_NEAR(p.mean, 0.25, 1e-7);
-  EXPECT_FLOAT_EQ(p.min, 0.1f);
-  EXPECT_FLOAT_EQ(p.max, 0.4f);
-  EXPECT_DOUBLE_EQ(p.share_above, 0.5);
-  // Strictly above: a value at the threshold does not count.
-  EXPECT_DOUBLE_EQ(penumbra::metrics::pool_flip(map, 0.3f).share_above, 0.25);
-  EXPECT_EQ(p.pixels, 4);
+  ImageF map{8, 1, 1, {0.25f, 0.01f, 0.35f, 0.03f, 0.1f, 0.02f, 0.2f, 0.04f}};
+  const auto p = penumbra::metrics::pool_flip(map, static_cast<double>(0.1f));  // the stored value itself
+  // Sorted 0.01 0.02 0.03 0.04 0.1 0.2 0.25 0.35 (total 1.0); running sums .01 .03 .06 .10 .20 .40
+  // .65 1.0. Weighted by value, not by count (by count the median would be 0.04 or 0.1).
+  EXPECT_FLOAT_EQ(p.weighted_q1, 0.2f);       // first running sum above 0.25
+  EXPECT_FLOAT_EQ(p.weighted_median, 0.25f);  // first above 0.5
+  EXPECT_FLOAT_EQ(p.weighted_q3, 0.35f);      // first above 0.75
+  EXPECT_NEAR(p.mean, 0.125, 1e-7);
+  EXPECT_FLOAT_EQ(p.min, 0.01f);
+  EXPECT_FLOAT_EQ(p.max, 0.35f);
+  // Strictly above: the value at the threshold (0.1) does not count.
+  EXPECT_DOUBLE_EQ(p.share_above, 3.0 / 8.0);
+  EXPECT_DOUBLE_EQ(penumbra::metrics::pool_flip(map, 0.0).share_above, 1.0);
+  EXPECT_EQ(p.pixels, 8);
+}
+
+TEST(Flip, MatchesTheAuthorsImplementation) {
+  // A grey square (code value 200 of 255, 32×24) on black in a 64×48 image, shifted right by one
+  // pixel: the means that the authors' tool (NVlabs/flip v1.6, commit 1eb247c, built from its
+  // source; docs/compare.md) prints for the same pair as PNGs, 6 decimals. They pin every part of
+  // the pipeline at once (filters, their sizes from pixels per degree, the feature term's scale).
+  auto square = [](int x0) {
+    ImageF img{64, 48, 3, std::vector<float>(64 * 48 * 3, 0.0f)};
+    for (int y = 12; y < 36; ++y)
+      for (int x = x0; x < x0 + 32; ++x)
+        for (int c = 0; c < 3; ++c) img.at(x, y, c) = 200.0f / 255.0f;
+    return img;
+  };
+  const struct {
+    double ppd, mean;
+  } published[] = {{15, 0.018572}, {30, 0.032451}, {67, 0.045405}, {120, 0.058106}};
+  for (const auto& p : published) {
+    FlipOptions o;
+    o.pixels_per_degree = p.ppd;
+    EXPECT_NEAR(ldr_flip(square(16), Encoding::srgb, square(17), Encoding::srgb, o).pooled.mean, p.mean, 2e-6) << p.ppd << " px/deg";
+  }
+  // One-pixel stripes (code values 102, 153) against grey 127, 64×64: the pattern runs into the
+  // borders, so these pin the border rule (edge pixels repeated) too.
+  ImageF stripes{64, 64, 3, std::vector<float>(64 * 64 * 3)}, grey{64, 64, 3, std::vector<float>(64 * 64 * 3, 127.0f / 255.0f)};
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) stripes.at(x, y, c) = (x % 2 ? 153.0f : 102.0f) / 255.0f;
+  const struct {
+    double ppd, mean;
+  } striped[] = {{15, 0.442832}, {30, 0.239187}, {67, 0.092054}, {120, 0.100721}};
+  for (const auto& p : striped) {
+    FlipOptions o;
+    o.pixels_per_degree = p.ppd;
+    EXPECT_NEAR(ldr_flip(grey, Encoding::srgb, stripes, Encoding::srgb, o).pooled.mean, p.mean, 2e-5) << p.ppd << " px/deg";
+  }
+  // Saturated colours, whose blur leaves the RGB cube (the clamp): a red/blue edge at x = 24 of
+  // 48×32 shifted by one pixel, and a green/magenta one-pixel checkerboard against grey 128, 32×32.
+  auto red_blue = [](int x0) {
+    ImageF img{48, 32, 3, std::vector<float>(48 * 32 * 3, 0.0f)};
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 48; ++x) img.at(x, y, x < x0 ? 0 : 2) = 1.0f;
+    return img;
+  };
+  ImageF checker{32, 32, 3, std::vector<float>(32 * 32 * 3, 0.0f)};
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x)
+      for (int c = 0; c < 3; ++c) checker.at(x, y, c) = ((x + y) % 2 ? c == 1 : c != 1) ? 1.0f : 0.0f;
+  const ImageF grey128{32, 32, 3, std::vector<float>(32 * 32 * 3, 128.0f / 255.0f)};
+  for (const auto& [ppd, edge_mean, checker_mean] : {std::tuple{30.0, 0.058291, 0.849530}, std::tuple{67.0, 0.075685, 0.526710}}) {
+    FlipOptions o;
+    o.pixels_per_degree = ppd;
+    EXPECT_NEAR(ldr_flip(red_blue(24), Encoding::srgb, red_blue(25), Encoding::srgb, o).pooled.mean, edge_mean, 2e-6) << ppd;
+    EXPECT_NEAR(ldr_flip(grey128, Encoding::srgb, checker, Encoding::srgb, o).pooled.mean, checker_mean, 5e-6) << ppd;
+  }
 }
 
 TEST(Flip, MagmaMapEndsAndSize) {
