@@ -452,6 +452,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
   settings.adaptive.enabled = true;
   if (opt.auto_cascades) settings.map.cascades = 0;
   apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
+  gui::SettingsUndo undo;  // a panel change the view cannot draw is undone, and said in the panel
   gl::PassTimer timer(!window.info().software);
   bool show_map = true, show_cascades = false, animate = true;
   int frame = 0, path_i = 0;
@@ -470,8 +471,11 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     window.framebuffer_size(fb_w, fb_h);
     if (frame % 30 == 0) timer.clear();
     renderer.set_show_cascades(show_cascades);
-    follower.update(opt.calibration, settings);
-    const shadows::FrameInfo info = renderer.render(gui::drawable_settings(settings, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+    shadows::FrameInfo info;
+    undo.render(settings, [&](shadows::ShadowSettings& s) {
+      follower.update(opt.calibration, s);
+      info = renderer.render(gui::drawable_settings(s, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+    });
     renderer.present(0, fb_w, fb_h);
     const double t = now_ms();
     fps = 0.9 * fps + 0.1 * 1000.0 / std::max(t - last, 1e-3);
@@ -486,6 +490,7 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
     ImGui::Checkbox("adaptive resolution", &settings.adaptive.enabled);
     ImGui::Text("%s", apps::calibration_line(opt.calibration, settings).c_str());
     gui::shadow_settings_panel(settings);
+    undo.line();
     gui::virtual_pages_line(settings, renderer.scene(), info);
     gui::light_size_control(renderer.scene().light);
     ImGui::Separator();

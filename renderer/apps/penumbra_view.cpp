@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
     apps::apply_calibration(app, calibration, settings);
     std::printf("%s\n", apps::calibration_line(calibration, settings).c_str());
     apps::CalibrationFollower follower;  // the panel's technique switch picks that technique's c
+    gui::SettingsUndo undo;  // a panel change the view cannot draw is undone, and said in the panel
     scene::Scene scene = scene::load_scene(scene_arg);
     gl::Glfw glfw;
     gl::Window window({.title = "Penumbra — " + scene.name, .width = width, .height = height, .gl_errors_throw = gl::kDebugBuild});
@@ -147,8 +148,11 @@ int main(int argc, char** argv) {
       int fb_w = 0, fb_h = 0;
       window.framebuffer_size(fb_w, fb_h);
       if (frame % 30 == 0) timer.clear();
-      follower.update(calibration, settings);
-      const shadows::FrameInfo info = renderer.render(gui::drawable_settings(settings, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+      shadows::FrameInfo info;
+      undo.render(settings, [&](shadows::ShadowSettings& s) {
+        follower.update(calibration, s);
+        info = renderer.render(gui::drawable_settings(s, renderer.scene()), std::max(fb_w, 1), std::max(fb_h, 1), &timer);
+      });
       renderer.present(0, fb_w, fb_h);
 
       ImGui::SetNextWindowPos({10, 10}, ImGuiCond_FirstUseEver);
@@ -158,6 +162,7 @@ int main(int argc, char** argv) {
       ImGui::Text("%s | %s", scene.name.c_str(), window.info().renderer.c_str());
       ImGui::Text("%s", apps::calibration_line(calibration, settings).c_str());
       gui::shadow_settings_panel(settings);
+      undo.line();
     gui::virtual_pages_line(settings, renderer.scene(), info);
       gui::light_size_control(renderer.scene().light);
       ImGui::Separator();

@@ -1,5 +1,7 @@
 #include "gui/settings_panel.h"
 
+#include <functional>
+#include <stdexcept>
 #include <string>
 
 #include <imgui.h>
@@ -43,8 +45,12 @@ bool settings_panel(const char* id, P& params) {
         float v = static_cast<float>(value);
         const float speed = std::max(0.001f, std::abs(v) * 0.01f);
         if (ImGui::DragFloat(label.c_str(), &v, speed, static_cast<float>(row.min), static_cast<float>(row.max), "%.4g",
-                             ImGuiSliderFlags_AlwaysClamp))
+                             ImGuiSliderFlags_AlwaysClamp)) {
+          // A row that is 0 or at least min_positive (adaptive.visibility) refuses what lies between:
+          // a drag up from 0 lands on min_positive, a drag down below it on 0.
+          if (row.min_positive > 0 && v > 0 && v < row.min_positive) v = v > value ? static_cast<float>(row.min_positive) : 0.0f;
           row.set(params, v), changed = true;
+        }
         break;
       }
     }
@@ -62,6 +68,26 @@ template bool settings_panel<shadows::AdaptiveParams>(const char*, shadows::Adap
 #define PENUMBRA_INSTANTIATE_PANEL(name, P) template bool settings_panel<shadows::P>(const char*, shadows::P&);
 PENUMBRA_TECHNIQUES(PENUMBRA_INSTANTIATE_PANEL)
 #undef PENUMBRA_INSTANTIATE_PANEL
+
+std::string SettingsUndo::render(shadows::ShadowSettings& settings, const std::function<void(shadows::ShadowSettings&)>& draw) {
+  if (!last_good_) last_good_ = settings;
+  try {
+    draw(settings);
+    last_good_ = settings;
+    return "";
+  } catch (const std::runtime_error& e) {  // PoolTooSmall, a visibility's c out of range (CLI::ValidationError)
+    refused_ = e.what();
+  } catch (const std::invalid_argument& e) {
+    refused_ = e.what();
+  }
+  settings = *last_good_;
+  draw(settings);  // what drew last frame; its own failure ends the app as before
+  return refused_;
+}
+
+void SettingsUndo::line() const {
+  if (!refused_.empty()) ImGui::TextColored({1.0f, 0.45f, 0.35f, 1.0f}, "undone: %s", refused_.c_str());
+}
 
 bool shadow_settings_panel(shadows::ShadowSettings& s) {
   bool changed = false;

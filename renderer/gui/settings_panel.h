@@ -1,5 +1,9 @@
 #pragma once
 // ImGui widgets generated from the parameters tables (shadows/settings.h): one row, one widget.
+#include <functional>
+#include <optional>
+#include <string>
+
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
@@ -19,6 +23,20 @@ bool shadow_settings_panel(shadows::ShadowSettings& settings);
 // frame's `info`, the panel's line on its pages.
 shadows::ShadowSettings drawable_settings(const shadows::ShadowSettings& settings, const scene::Scene& scene);
 void virtual_pages_line(const shadows::ShadowSettings& settings, const scene::Scene& scene, const shadows::FrameInfo& info);
+
+// A window's frame under the panel's settings: `draw` renders with them; where the renderer or the
+// calibration refuses them (a page pool too small for this view, a visibility whose c leaves
+// adaptive.c's range), the panel's change is undone (the last settings that drew become `settings`
+// again and are drawn) and line() says why in the panel, instead of the app ending.
+class SettingsUndo {
+ public:
+  std::string render(shadows::ShadowSettings& settings, const std::function<void(shadows::ShadowSettings&)>& draw);
+  void line() const;  // the last refusal, in the panel (nothing when none)
+
+ private:
+  std::optional<shadows::ShadowSettings> last_good_;
+  std::string refused_;
+};
 
 // The light's size: angular diameter in degrees (directional) or width in world units (spot).
 bool light_size_control(scene::Light& light);
