@@ -146,12 +146,18 @@ FeatureKernels feature_kernels(double ppd) {
     (dg[u] > 0 ? dg_pos : dg_neg) += std::abs(dg[u]);
     (ddg[u] > 0 ? ddg_pos : ddg_neg) += std::abs(ddg[u]);
   }
+  // At a fraction of a pixel per degree σ is so small that the outer taps underflow to 0: a side
+  // with no weight stays 0 instead of 0/0.
+  auto normalized = [](double v, double positive_sum, double negative_sum) {
+    const double sum = v > 0 ? positive_sum : negative_sum;
+    return sum > 0 ? v / sum : 0.0;
+  };
   FeatureKernels k{cv::Mat(1, n, CV_32F), cv::Mat(1, n, CV_32F), cv::Mat(1, n, CV_32F)};
   for (int i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     k.g.at<float>(i) = static_cast<float>(g[u] / g_sum);
-    k.dg.at<float>(i) = static_cast<float>(dg[u] / (dg[u] > 0 ? dg_pos : dg_neg));
-    k.ddg.at<float>(i) = static_cast<float>(ddg[u] / (ddg[u] > 0 ? ddg_pos : ddg_neg));
+    k.dg.at<float>(i) = static_cast<float>(normalized(dg[u], dg_pos, dg_neg));
+    k.ddg.at<float>(i) = static_cast<float>(normalized(ddg[u], ddg_pos, ddg_neg));
   }
   return k;
 }

@@ -201,6 +201,13 @@ TEST(Flip, PixelsPerDegreeFromViewingGeometry) {
   EXPECT_NEAR(penumbra::metrics::pixels_per_degree(1920, 0.527, 1.2), 2 * 38.15, 0.02);
   EXPECT_THROW(penumbra::metrics::pixels_per_degree(1920, 0, 0.6), std::invalid_argument);
   EXPECT_THROW(penumbra::metrics::pixels_per_degree(1920, 0.5, NAN), std::invalid_argument);
+  // A viewer so far that a pixel spans degrees: the filters shrink to their centre tap, the map
+  // stays finite (the colour difference alone).
+  FlipOptions o;
+  o.pixels_per_degree = 0.01;
+  const auto far = ldr_flip(edge(16, 8, 8, 0, 1), Encoding::srgb, edge(16, 8, 9, 0, 1), Encoding::srgb, o);
+  for (float v : far.map.pixels) ASSERT_TRUE(std::isfinite(v));
+  EXPECT_GT(far.pooled.max, 0.9);  // the one column that changed from black to white
 }
 
 TEST(Flip, PoolingIsFlipsValueWeightedConvention) {
