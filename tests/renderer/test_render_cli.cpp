@@ -152,7 +152,7 @@ TEST_F(RenderCli, GoodRunWritesImagesAndReport) {
   const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string()}), scratch_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "") << "a good run prints nothing on stderr when it is not a terminal";
-  EXPECT_THAT(r.out, HasSubstr("pcf-poisson"));
+  EXPECT_THAT(r.out, HasSubstr("pcf-disk")) << "PCF's default kernel: the one the study's configs draw (issue 44)";
   expect_render_files(only_render_dir(out), {"shadow_map", "shading"});
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
 }
@@ -292,7 +292,7 @@ TEST_F(RenderCli, PreviousOutputIsKeptWhenARunFails) {
 TEST_F(RenderCli, OutputWithTrailingSlashIsReplacedOnSuccess) {
   const fs::path out = work_ / "out";
   ASSERT_EQ(run_render(small_args({"--technique", "hard", "-o", out.string()}), scratch_).exit_code, 0);
-  const Result r = run_render(small_args({"--technique", "pcf", "-o", out.string() + "/"}), scratch_);
+  const Result r = run_render(small_args({"--technique", "pcf", "--pcf.kernel", "poisson", "-o", out.string() + "/"}), scratch_);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(listing(out), (std::set<std::string>{"pcf-poisson", "report.json"}));
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"});
@@ -395,7 +395,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"option_of_a_technique_not_rendered", {"--technique", "hard", "--vsm.radius", "3"}, {"--vsm.radius", "--technique hard"}},
         BadCase{"resolution_list_too_long", {"--resolution", sixty_five_resolutions()}, {"--resolution", "at most 64"}},
         // Issue 31: a technique that reads no pages is refused before anything renders.
-        BadCase{"virtual_pages_for_poisson_pcf", {"--technique", "pcf", "--map.virtual_pages", "rule"}, {"--map.virtual_pages", "kernel=poisson"}},
+        BadCase{"virtual_pages_for_poisson_pcf", {"--technique", "pcf", "--pcf.kernel", "poisson", "--map.virtual_pages", "rule"}, {"--map.virtual_pages", "kernel=poisson"}},
         BadCase{"missing_output", {"--technique", "hard"}, {"--output"}, false}),
     [](const ::testing::TestParamInfo<BadCase>& param_info) { return param_info.param.name; });
 
@@ -484,6 +484,26 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
   }
 }
 
+// Issue 44: a lab's fit of the shipped lab config (default-lab.json draws with the disk kernel)
+// writes the entry pcf disk; a render with PCF's defaults uses it as measured, not as a fallback
+// for another kernel.
+TEST_F(RenderCli, PcfsDefaultKernelUsesTheLabsEntry) {
+  const fs::path cal_file = scratch_ / "lab.json";
+  std::ofstream(cal_file) << R"({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "disk", "c": 3.1, "ci95": [2.8, 3.4], "obtained_by": "study", "participants": 8}]})"
+                          << "\n";
+  const fs::path out = work_ / "out-lab";
+  const Result r = run_render(small_args({"--technique", "pcf", "--adaptive.enabled", "true", "--calibration", cal_file.string(), "-o",
+                                          out.string()}),
+                              scratch_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("not measured for"), std::string::npos) << r.out;
+  const auto cal = read_json(out / "pcf-disk" / "report.json").at("calibration");
+  EXPECT_EQ(cal.at("fallback").get<bool>(), false);
+  EXPECT_EQ(cal.at("from"), "pcf disk entry (people, 8 participants)");
+  EXPECT_NEAR(cal.at("c").get<double>(), 3.1, 1e-6);
+}
+
 // Issue 26: a render with the adaptive rule says the c it uses, where it came from and what the fitter
 // flagged, before it renders: an entry written with --allow-unusable is named NOT USABLE.
 TEST_F(RenderCli, TheAdaptiveRulesCIsPrintedWithItsFlags) {
@@ -519,7 +539,8 @@ TEST_F(RenderCli, TheAdaptiveRulesCIsPrintedWithItsFlags) {
 // criterion F* 0.6737), and the map grows by that factor (within a resolution quantum of 32 texels).
 TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
   auto render = [&](const std::vector<std::string>& extra, const std::string& name) {
-    std::vector<std::string> args = {"--technique", "pcf", "--pcf.radius", "0.1", "--pcf.radius_unit", "world", "--adaptive.enabled", "true"};
+    std::vector<std::string> args = {"--technique", "pcf", "--pcf.kernel", "poisson", "--pcf.radius", "0.1", "--pcf.radius_unit", "world",
+                                     "--adaptive.enabled", "true"};
     args.insert(args.end(), extra.begin(), extra.end());
     args.insert(args.end(), {"-o", (work_ / name).string()});
     const Result r = run_render(small_args(args), scratch_);

@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <fstream>
 
+#include "adaptive/calibration.h"
 #include "config_error.h"
 #include "log/trial_log.h"
 #include "procedure/config.h"
 #include "procedure/procedure.h"
+#include "shadows/settings.h"
 
 namespace {
 
@@ -459,6 +461,34 @@ TEST(StudyConfig, TheKernelOptionReplacesTheStimulusKernel) {
     }
     EXPECT_EQ(procedure::to_json(boxed), before) << name << ": a refused kernel changes nothing";
   }
+}
+
+// Issue 44: the renderer's default PCF kernel is one a lab measures by default (default-lab.json's
+// kernel: an entry the lab's fit writes is used without a fallback) and one the shipped calibrations
+// have an entry for (the published entry, whose reading assumes the study's disk, and predicted.json).
+TEST(StudyConfig, TheRenderersDefaultKernelIsOneTheLabAndTheShippedCalibrationsMeasure) {
+  shadows::ShadowSettings defaults;
+  defaults.technique = shadows::Technique::pcf;
+  const std::string kernel = shadows::variant_choice(defaults);
+  EXPECT_EQ(kernel, stimuli::to_string(procedure::load_config(PENUMBRA_DATA_DIR "/studies/default-lab.json").kernel));
+  adaptive::Calibration lab;
+  adaptive::CalibrationEntry fitted;
+  fitted.technique = "pcf";
+  fitted.kernel = stimuli::to_string(procedure::load_config(PENUMBRA_DATA_DIR "/studies/default-lab.json").kernel);
+  fitted.obtained_by = adaptive::CalibrationMethod::study;
+  lab.entries = {fitted};
+  EXPECT_FALSE(lab.choose("pcf", kernel).fallback) << lab.choose("pcf", kernel).from;
+  for (const char* shipped : {"default.json", "predicted.json"}) {
+    const adaptive::Calibration cal = adaptive::load_calibration(PENUMBRA_DATA_DIR "/calibration/" + std::string(shipped));
+    const adaptive::CalibrationChoice chosen = cal.choose("pcf", kernel);
+    EXPECT_FALSE(chosen.fallback) << shipped << ": " << chosen.from;
+    ASSERT_TRUE(chosen.entry) << shipped;
+    EXPECT_TRUE(chosen.entry->kernel.empty() || chosen.entry->kernel == kernel) << shipped;
+  }
+  const std::string reading =
+      nlohmann::json::parse(std::ifstream(PENUMBRA_DATA_DIR "/calibration/default.json"))["entries"][0]["threshold"]["reading"];
+  EXPECT_NE(reading.find("the study's " + kernel + " is assumed"), std::string::npos)
+      << "the published entry's kernel, as default.json reads it: " << reading;
 }
 
 // round_order "latin-square" (issue 16): balanced counterbalancing. Over a full set of rows every
