@@ -5,6 +5,7 @@
 #include <glog/logging.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -52,6 +53,13 @@ psychometric::Model parse_family(const std::string& name) {
   if (!model)
     throw std::invalid_argument("--family '" + json_input::printable(name) + "': expected log-weibull, weibull, normal or logistic");
   return *model;
+}
+
+// A rate as the error lines show it ("0.5", "0.82").
+std::string rate_text(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
 }
 
 // The progress of the run's phases on stderr, one bar per phase named after it (cli/progress_bar.h:
@@ -102,6 +110,11 @@ int run_psychometric(const fs::path& input, const std::string& format, const Mod
   spec.guess = o.guess.value_or(0.5);
   spec.lapse = lapse_of(o);
   spec.p_threshold = o.p_threshold.value_or(0.82);
+  // The option, not the counts file, when the criterion lies outside what the curve reaches (it
+  // runs from the guess rate to 1; the criterion's lapse is 0 here).
+  if (o.p_threshold && !(spec.p_threshold > spec.guess && spec.p_threshold < 1))
+    throw std::invalid_argument("--p-threshold " + rate_text(spec.p_threshold) + ": expected a proportion correct in (" +
+                                rate_text(spec.guess) + ", 1), above the guess rate");
   std::vector<BinomialRow> rows = read_level_data(input, f);
   spec.groups.push_back({rows, 0, 0.0});
   const FitResult fit = [&] {

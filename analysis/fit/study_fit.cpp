@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <map>
@@ -479,6 +480,15 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.quest_delta = deltas.size() == 1 ? *deltas.begin() : 0.01;
   if (deltas.size() > 1) out.notes.push_back("sessions use different QUEST delta values; the criterion uses delta 0.01");
   out.criterion_f = psychometric::criterion_f(out.p_threshold, out.guess, out.quest_delta);
+  // A --p-threshold the curves never reach is the option's fault, not the sessions' (it was
+  // refused by the fit, naming no option, exit 1).
+  if (options.p_threshold && !(out.criterion_f > 0 && out.criterion_f < 1)) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "--p-threshold %g: expected a proportion correct between the guess rate %g and %g (1 - QUEST's delta lapse)",
+                  out.p_threshold, out.guess, 1 - out.quest_delta * (1 - out.guess));
+    throw std::invalid_argument(line);
+  }
   if (!data.trials.empty()) out.task = data.trials.front().row.task;
   // yes/no: the fits model detections on the jagged trials, P = fa + (1 - fa - lambda) F, with
   // each participant's own false-alarm rate as the guess rate. QUEST's gamma is what the session
