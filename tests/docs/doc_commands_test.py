@@ -17,6 +17,8 @@ import subprocess
 import sys
 import tempfile
 
+from marked_blocks import docs, finish, marked_blocks
+
 MARKER = "<!-- doc-commands: run -->"
 
 # (file, text as the doc writes it, text run here): fewer participants, smaller images, fewer seeds.
@@ -34,25 +36,14 @@ SHORTER = [
 def blocks(path):
     """The marked ```sh blocks of a markdown file, as (first line number, text)."""
     lines = open(path, encoding="utf-8").read().split("\n")
-    found = []
-    for i, line in enumerate(lines):
-        if line.strip() != MARKER:
-            continue
-        if i + 1 >= len(lines) or lines[i + 1].strip() != "```sh":
-            sys.exit(f"{path}:{i + 1}: {MARKER} must stand right before a ```sh block")
-        end = next((j for j in range(i + 2, len(lines)) if lines[j].strip() == "```"), None)
-        if end is None:
-            sys.exit(f"{path}:{i + 2}: the block never closes")
-        found.append((i + 3, "\n".join(lines[i + 2:end])))
-    return found
+    return [(start + 1, "\n".join(lines[start:end])) for _, start, end in marked_blocks(path, re.escape(MARKER), "```sh")]
 
 
 def main():
     if len(sys.argv) != 3:
         sys.exit("usage: doc_commands_test.py SOURCE_DIR BUILD_DIR")
     source, build = (os.path.abspath(p) for p in sys.argv[1:])
-    docs = ["README.md"] + sorted(os.path.join("docs", f) for f in os.listdir(os.path.join(source, "docs")) if f.endswith(".md"))
-    marked = {doc: blocks(os.path.join(source, doc)) for doc in docs}
+    marked = {doc: blocks(os.path.join(source, doc)) for doc in docs(source)}
     marked = {doc: b for doc, b in marked.items() if b}
     # The guides write commands as installed (penumbra-study); the build's tools stand in for them.
     env = dict(os.environ)
@@ -84,10 +75,7 @@ def main():
                     failures.append(f"{doc}:{line}: exit {r.returncode} in a fresh folder:\n{tail}")
                 else:
                     passed += 1
-    for f in failures:
-        print("FAILED " + f)
-    print(f"{passed} passed, {len(failures)} failed")
-    sys.exit(1 if failures else 0)
+    finish(passed, failures)
 
 
 if __name__ == "__main__":

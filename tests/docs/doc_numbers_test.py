@@ -12,12 +12,13 @@ instead and are refreshed by the change that moves them.
 Usage: doc_numbers_test.py SOURCE_DIR BUILD_DIR [--update] [--only NAME]
 """
 import os
-import re
 import subprocess
 import sys
 import tempfile
 
-MARKER = re.compile(r"^<!-- doc-numbers: ([a-z0-9-]+) -->$")
+from marked_blocks import docs, finish, marked_blocks
+
+MARKER = r"<!-- doc-numbers: ([a-z0-9-]+) -->"
 
 
 def run(cmd, cwd, timeout=1200):
@@ -77,23 +78,6 @@ def engine_example(build, work):
 GENERATORS = {"fit-example": fit_example, "pages": pages, "engine-example": engine_example}
 
 
-def marked_blocks(path):
-    """(name, first line index of the block's text, end index) for every marked block."""
-    lines = open(path, encoding="utf-8").read().split("\n")
-    found = []
-    for i, line in enumerate(lines):
-        m = MARKER.match(line.strip())
-        if not m:
-            continue
-        if i + 1 >= len(lines) or lines[i + 1].strip() != "```text":
-            sys.exit(f"{path}:{i + 1}: the doc-numbers marker must stand right before a ```text block")
-        end = next((j for j in range(i + 2, len(lines)) if lines[j].strip() == "```"), None)
-        if end is None:
-            sys.exit(f"{path}:{i + 2}: the block never closes")
-        found.append((m.group(1), i + 2, end))
-    return lines, found
-
-
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     update = "--update" in sys.argv
@@ -103,12 +87,10 @@ def main():
     if len(args) != 2:
         sys.exit("usage: doc_numbers_test.py SOURCE_DIR BUILD_DIR [--update] [--only NAME]")
     source, build = (os.path.abspath(p) for p in args)
-    docs = ["README.md"] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(source, "docs"))) if f.endswith(".md")]
     uses = {}
-    for doc in docs:
-        lines, found = marked_blocks(os.path.join(source, doc))
-        for name, start, end in found:
-            uses.setdefault(name, []).append((doc, start, end))
+    for doc in docs(source):
+        for m, start, end in marked_blocks(os.path.join(source, doc), MARKER, "```text"):
+            uses.setdefault(m.group(1), []).append((doc, start, end))
     failures = []
     for name in sorted(set(GENERATORS) - set(uses)):
         failures.append(f"generator {name} quotes into no doc (mark its block with <!-- doc-numbers: {name} -->)")
@@ -145,10 +127,7 @@ def main():
                 diff.append(f"  the doc quotes {quoted.count(chr(10)) + 1} lines, the program prints {printed.count(chr(10)) + 1}")
             failures.append(f"{doc}:{start + 1}: {name} differs from what the program prints now "
                             f"(rerun with --update, then check the prose around it):\n" + "\n".join(diff[:12]))
-    for f in failures:
-        print("FAILED " + f)
-    print(f"{passed} passed, {len(failures)} failed")
-    sys.exit(1 if failures else 0)
+    finish(passed, failures)
 
 
 if __name__ == "__main__":
