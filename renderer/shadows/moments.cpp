@@ -12,6 +12,8 @@ int channel_count(MomentsFormat format) {
   return 4;
 }
 
+int bytes_per_texel(MomentsFormat format) { return channel_count(format) * (format == MomentsFormat::rgba16f ? 2 : 4); }
+
 const char* image_format_qualifier(MomentsFormat format) {
   switch (format) {
     case MomentsFormat::r32f: return "r32f";

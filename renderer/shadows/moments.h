@@ -22,6 +22,8 @@ struct MomentsLayout {
 
 // Channels of a moments format (1, 2 or 4) and its GLSL image-format qualifier ("rgba16f", ...).
 int channel_count(MomentsFormat format);
+// Bytes a texel of the format takes (4 per channel, 2 for rgba16f's).
+int bytes_per_texel(MomentsFormat format);
 const char* image_format_qualifier(MomentsFormat format);
 
 }  // namespace penumbra::shadows

@@ -66,8 +66,7 @@ bool FrameResources::prepare(const FramePlan& plan) {
     // line before its error line. Software GL maps textures in this process, so its address-space
     // limit is checked first, with room left for the rest of the frame (and the image writers).
     const std::uint64_t texels = static_cast<std::uint64_t>(layout.width) * static_cast<std::uint64_t>(layout.height);
-    const std::uint64_t moments_bytes = moments_format == GL_R32F ? 4 : moments_format == GL_RGBA32F ? 16 : 8;  // per texel
-    const std::uint64_t needed = texels * (4 + (plan.moments ? 2 * moments_bytes : 0));
+    const std::uint64_t needed = texels * (4 + (plan.moments ? 2 * bytes_per_texel(plan.moments->format) : 0));
     const auto out_of_memory = [&](const std::string& why) {
       char line[400];
       std::snprintf(line, sizeof line,
