@@ -186,8 +186,9 @@ TEST_F(StudyGui, TheAdminPanelWithdrawsTheTrialWhileItIsOpen) {
     std::this_thread::sleep_for(400ms);
     EXPECT_EQ(app.output().find("trial 0: "), std::string::npos) << app.output();
     EXPECT_EQ(trial_log::read(dir / "trials.csv").rows.size(), 0u);
-    ASSERT_TRUE(xdo(app, "key F12"));  // closed: the same trial comes again and takes the answer
+    // Read before the key: the app may show the trial again before xdotool returns.
     const std::string before = app.output();
+    ASSERT_TRUE(xdo(app, "key F12"));  // closed: the same trial comes again and takes the answer
     for (auto end = std::chrono::steady_clock::now() + 20s;
          std::chrono::steady_clock::now() < end && app.output().rfind("trial 0 on screen") <= before.rfind("trial 0 on screen");)
       std::this_thread::sleep_for(15ms);
