@@ -1,0 +1,95 @@
+#pragma once
+// The study's image observer (study/observers/image_observer.h) generalized from a known straight
+// edge to any frame with its reference: the probability that a participant of the 2AFC study, shown
+// the frame and its reference ("which one is the reference?"), picks the reference out, per patch
+// of a few degrees and for the frame. A model of an observer, calibrated on the study's step
+// stimulus against the image observer; it has never been compared with people on frames
+// (docs/compare.md, docs/results/frame-observer.md).
+//
+// The image observer's ingredients, with the meaning of its parameters kept:
+//   luminance  the displayed values decoded to linear luminance Y (sRGB for PNG, linear for EXR;
+//              Rec. 709 weights for colour), values clamped to [0, 1] (white = 1);
+//   optics     a Gaussian blur of sigma `blur_sigma_arcmin` at `pixels_per_degree`, on both images;
+//   position   an edge displaced by δ with penumbra width w is judged by δ/w (Weber's law for the
+//              position of blurred edges). Without knowing where the edges are: a displacement δ of
+//              an edge of contrast C and width w changes the luminance by ΔY ≈ C·δ/w, so
+//                rel = (Y_test − Y_ref) / (C_ref + floor)
+//              with C_ref the reference's local contrast, the range (max − min) of its blurred
+//              luminance in a square of side `contrast_deg` around the pixel (an edge's whole
+//              contrast as long as its penumbra is narrower than that), and
+//                floor = contrast_floor · (local mean of Y_ref + black_level):
+//              where the reference has no edge (C_ref ≈ 0) a change is a luminance contrast against
+//              the surround (Weber's law for luminance), and a dark region is seen against the
+//              display's black and flare; without it rel would divide by ~0 in flat regions.
+//              Both terms scale with the light, so a frame and its reference both dimmed by the same
+//              factor give the same rel (the study's full and half contrast conditions alike);
+//   deviation  the RMS of rel over square windows of side `window_deg` (the image observer's
+//              windows are 0.5 filter radii along the edge: at its calibration point, a = 10 px and
+//              r ≈ 3.5 a at 38.2 px/deg, that is about 0.45°), the largest window whose centre lies
+//              in a patch is the patch's deviation;
+//   decision   Gaussian decision noise of sd `weber` on each look. The reference's own deviation is
+//              0, so the 2AFC p_correct = Φ(deviation / (√2·weber)), and the guess-corrected
+//              p_detect = (p_correct − 0.5) / 0.5 in [0, 1], the scale of a calibration entry's
+//              threshold.criterion_f.
+// Unlike the image observer's local criterion, a shift of a whole straight edge counts here: the
+// reference is shown, so a shift is a difference to find (the image observer judged one image).
+// weber, window_deg and contrast_floor were chosen once (docs/results/frame-observer.md).
+//
+// GL-free (OpenCV and the CPU images of common/image; library penumbra_frame_observer).
+#include <vector>
+
+#include "image/image.h"
+#include "metrics/flip.h"
+
+namespace penumbra::metrics {
+
+// The study's default display (data/studies/default.json): 1.57 arcmin per pixel.
+inline constexpr double kStudyPixelsPerDegree = 38.2;
+// 2AFC detection probability at 82 % correct with QUEST's delta 0.01: adaptive::ThresholdDefinition's
+// default, the criterion of the image observer's predictions.
+inline constexpr double kStudyCriterionF = 0.6465;
+
+struct FrameObserverParams {
+  double pixels_per_degree = kStudyPixelsPerDegree;  // > 0
+  double patch_deg = 2.0;                            // side of the square patches, degrees
+  double criterion_f = kStudyCriterionF;             // "visible": some patch's p_detect above this, in (0, 1)
+  double blur_sigma_arcmin = 1.0;                    // optical blur (the image observer's default); 0 = none
+  double window_deg = 0.45;                          // side of the RMS windows, degrees
+  double contrast_deg = 1.0;                         // side of the square whose luminance range is the local contrast
+  double contrast_floor = 0.1;                       // floor of the local contrast, a fraction of the local mean luminance
+  double black_level = 0.01;                         // the display's black and flare, fraction of white, > 0
+  double weber = 0.003;                              // decision noise sd, relative deviation
+};
+
+struct PatchDetection {
+  int x_px = 0, y_px = 0, width_px = 0, height_px = 0;  // top-left corner (top row first) and size
+  double deviation = 0;  // largest windowed RMS of rel with its centre in the patch
+  double p_correct = 0.5;
+  double p_detect = 0;
+};
+
+struct FrameDetection {
+  std::vector<PatchDetection> patches;  // row by row from the top left; edge patches are cut to the frame
+  int patches_x = 0, patches_y = 0;
+  int patch_px = 0;   // a whole patch's side, pixels
+  int window_px = 0;  // an RMS window's side, pixels
+  double pixels_per_degree = 0;
+  double deviation_max = 0;  // the largest patch deviation
+  double p_detect_max = 0;   // the largest patch p_detect: the frame's detection probability
+  int patches_visible = 0;   // patches with p_detect > criterion_f
+  double criterion_f = 0;
+  bool visible = false;      // patches_visible > 0
+};
+
+// 2AFC p_correct for a deviation seen against a reference of deviation 0: Φ(deviation / (√2·weber)).
+double frame_p_correct(double deviation, double weber);
+// Guess-corrected: (p_correct − 0.5) / 0.5, clamped to [0, 1].
+double frame_p_detect(double p_correct);
+
+// The observer on `test` against `reference`: same width and height, 1 to 4 channels each (alpha
+// ignored). Throws std::invalid_argument with one line naming what is wrong: an empty or malformed
+// image, different sizes, an unsupported channel count, a non-finite value, a parameter out of range.
+FrameDetection detect_difference(const image::ImageF& reference, Encoding reference_encoding, const image::ImageF& test,
+                                 Encoding test_encoding, const FrameObserverParams& params = {});
+
+}  // namespace penumbra::metrics
