@@ -14,13 +14,13 @@
 // A pixel whose level does not reach it (outside the level's extent) takes the next coarser one
 // that does; beyond the coarsest it is not marked (counted). Pages are counted once per frame.
 //
-// This is the CPU reference of the marking, and all of the virtual map that Penumbra::adaptive
-// holds: it walks every pixel on one core, far too slow for every frame; test a GPU marking with
-// it. The GPU side is the renderer's (Penumbra::renderer): shaders/virtual_mark.comp marks the same
+// This is the CPU reference of the marking: it walks every pixel on one core, far too slow for
+// every frame; test a GPU marking with it. Penumbra::adaptive also holds the page cache
+// (adaptive/page_cache.h: which slot holds which page, what a frame admits and evicts, the tables). The GPU side is the renderer's (Penumbra::renderer): shaders/virtual_mark.comp marks the same
 // pages on the GPU, and is installed for another engine as share/penumbra/shaders/virtual_mark.comp
 // with its contract <penumbra/shaders/virtual_mark_contract.h> (docs/virtual-pages-in-your-engine.md);
-// shadows/virtual_shadow_map.h has the page pool, the page tables, drawing the marked pages, the
-// cache across frames and PageMarker; shaders/virtual_pages.glsl reads and filters depths through
+// shadows/virtual_shadow_map.h has the page pool and the tables on the GPU, drawing the pages the
+// cache admits, and PageMarker; shaders/virtual_pages.glsl reads and filters depths through
 // the tables.
 #include <cstdint>
 #include <set>

@@ -66,12 +66,23 @@ VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, 
   return view;
 }
 
-VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content)
-    : layout_(layout), pool_side_(pool_pages_per_side), content_(content) {
+namespace {
+
+const adaptive::VirtualMapLayout& checked_layout(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side) {
   if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
       !(layout.texel0_ws > 0) || pool_pages_per_side < 1)
     throw std::invalid_argument("virtual shadow map: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
                                 ", page_texels, pages_per_side, texel0_ws and the pool's pages per side positive");
+  return layout;
+}
+
+}  // namespace
+
+VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content)
+    : layout_(checked_layout(layout, pool_pages_per_side)),
+      pool_side_(pool_pages_per_side),
+      content_(content),
+      cache_(layout, pool_pages_per_side * pool_pages_per_side) {
   const int side = pool_side_ * layout.page_texels;
   pool_ = gl::Texture({GL_DEPTH_COMPONENT32F, side, side, 1}, "virtual shadow map page pool");
   glTextureParameteri(pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // complete with one level: textureGather reads it
@@ -103,31 +114,7 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
     bounds_slots_ = gl::Buffer(static_cast<std::size_t>(pool_slots()) * sizeof(std::int32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
     bounds_ = true;
   }
-  slots_.resize(static_cast<std::size_t>(pool_slots()));
-  for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
-  origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
-  origin_pages_y_.assign(static_cast<std::size_t>(layout.levels), 0);
   write_tables();
-}
-
-double VirtualShadowMap::page_ws(int level) const { return layout_.page_texels * layout_.texel0_ws * std::ldexp(1.0, level); }
-
-VirtualShadowMap::Key VirtualShadowMap::key_of(const adaptive::Page& page) const {
-  const auto k = static_cast<std::size_t>(page.level);
-  return {page.level, origin_pages_x_[k] + page.x, origin_pages_y_[k] + page.y};
-}
-
-adaptive::LightXY VirtualShadowMap::origin(int level) const {
-  const auto k = static_cast<std::size_t>(level);
-  return {static_cast<double>(origin_pages_x_[k]) * page_ws(level), static_cast<double>(origin_pages_y_[k]) * page_ws(level)};
-}
-
-void VirtualShadowMap::free_slot(int slot) {
-  Slot& s = slots_[static_cast<std::size_t>(slot)];
-  if (!s.used) return;
-  resident_.erase(s.key);
-  s = Slot{};
-  free_.push_back(slot);
 }
 
 void VirtualShadowMap::set_raster_bias(float slope, float offset) {
@@ -164,24 +151,12 @@ void VirtualShadowMap::write_bounds(const std::vector<int>& slots) {
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
 }
 
-void VirtualShadowMap::invalidate_all() {
-  invalidated_ += static_cast<int>(resident_.size());
-  for (int i = 0; i < pool_slots(); ++i) free_slot(i);
-}
+void VirtualShadowMap::invalidate_all() { cache_.invalidate_all(); }
 
 void VirtualShadowMap::invalidate(const scene::Aabb& bounds) {
   if (bounds.empty() || !has_view_) return;
   const scene::Aabb l = bounds.transformed(view_.light_view);
-  for (int i = 0; i < pool_slots(); ++i) {
-    const Slot& s = slots_[static_cast<std::size_t>(i)];
-    if (!s.used) continue;
-    const double w = page_ws(s.key.level);
-    const double x0 = static_cast<double>(s.key.x) * w, y0 = static_cast<double>(s.key.y) * w;
-    if (x0 <= l.hi.x && l.lo.x <= x0 + w && y0 <= l.hi.y && l.lo.y <= y0 + w) {
-      free_slot(i);
-      ++invalidated_;
-    }
-  }
+  cache_.invalidate({l.lo.x, l.lo.y}, {l.hi.x, l.hi.y});
 }
 
 scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene) {
@@ -204,7 +179,7 @@ scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene
   return all;
 }
 
-std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+std::uint64_t VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                                          const std::vector<std::vector<scene::Footprint>>& footprints) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
@@ -215,7 +190,7 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene:
     const float far_moments[4] = {1, 1, 0, 0};  // the far plane, t = 1: nothing in front
     glClearBufferfv(GL_COLOR, 0, far_moments);
   }
-  const double w = page_ws(key.level);
+  const double w = cache_.page_ws(key.level);
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
   program_.set("u_clip_from_world", glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view);
@@ -234,76 +209,10 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const Key& key, const scene:
   return triangles;
 }
 
-adaptive::Page VirtualShadowMap::page_of(const Key& key) const {
-  const auto k = static_cast<std::size_t>(key.level);
-  return {key.level, static_cast<int>(key.x - origin_pages_x_[k]), static_cast<int>(key.y - origin_pages_y_[k])};
-}
-
-std::vector<VirtualShadowMap::Key> VirtualShadowMap::residency_order(const std::set<adaptive::Page>& requested, VirtualMapStats& stats) const {
-  const auto from_centre = [c = layout_.pages_per_side - 1](const adaptive::Page& p) {
-    return (2 * p.x - c) * (2 * p.x - c) + (2 * p.y - c) * (2 * p.y - c);
-  };
-  const auto coarse_first = [&](const adaptive::Page& a, const adaptive::Page& b) {
-    return a.level != b.level ? a.level > b.level : from_centre(a) < from_centre(b);
-  };
-  // The floor at level f: the pages of level f under each requested page of level f or finer, and
-  // the requested pages coarser than f; at f = 0, every requested page. A finer page's square is
-  // widened by 4 texels of level f, which a filter's square read there may reach beyond it (the
-  // normal offset, its 2 × 2 blocks). The windows share the camera's centre: what lies outside
-  // level f's window no pixel reads there.
-  const auto floor_at = [&](int f) {
-    std::set<adaptive::Page> floor;
-    const auto k = static_cast<std::size_t>(f);
-    const double wf = page_ws(f), margin = 4 * wf / layout_.page_texels;
-    for (const adaptive::Page& p : requested) {
-      if (p.level >= f) {
-        floor.insert(p);
-        continue;
-      }
-      const Key key = key_of(p);
-      const double w = page_ws(p.level);
-      const auto first_page = [&](std::int64_t i) { return static_cast<std::int64_t>(std::floor((static_cast<double>(i) * w - margin) / wf)); };
-      const auto last_page = [&](std::int64_t i) { return static_cast<std::int64_t>(std::floor((static_cast<double>(i + 1) * w + margin) / wf)); };
-      for (std::int64_t x = first_page(key.x); x <= last_page(key.x); ++x)
-        for (std::int64_t y = first_page(key.y); y <= last_page(key.y); ++y) {
-          const std::int64_t wx = x - origin_pages_x_[k], wy = y - origin_pages_y_[k];
-          if (wx >= 0 && wy >= 0 && wx < layout_.pages_per_side && wy < layout_.pages_per_side)
-            floor.insert({f, static_cast<int>(wx), static_cast<int>(wy)});
-        }
-    }
-    return floor;
-  };
-  std::set<adaptive::Page> floor;
-  int level = 0;
-  for (; level < layout_.levels; ++level) {
-    floor = floor_at(level);
-    if (static_cast<int>(floor.size()) <= pool_slots()) break;
-  }
-  if (level == layout_.levels)
-    throw PoolTooSmall("--map.virtual_pool_pages " + std::to_string(pool_side_) + ": a pool of " + std::to_string(pool_slots()) +
-                           (pool_slots() == 1 ? " page slot" : " page slots") + " cannot hold the " + std::to_string(floor.size()) +
-                           " pages of the coarsest level this view needs under its pixels; give at least " +
-                           std::to_string(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(floor.size()))))),
-                       static_cast<int>(floor.size()));
-  stats.floor_level = requested.empty() ? -1 : level;
-  std::vector<adaptive::Page> first(floor.begin(), floor.end()), rest;
-  for (const adaptive::Page& p : requested)
-    if (!floor.count(p)) rest.push_back(p);
-  std::stable_sort(first.begin(), first.end(), coarse_first);
-  std::stable_sort(rest.begin(), rest.end(), coarse_first);
-  std::vector<Key> order;
-  for (const adaptive::Page& p : first) {
-    order.push_back(key_of(p));
-    stats.floor += !requested.count(p);
-  }
-  for (const adaptive::Page& p : rest) order.push_back(key_of(p));
-  return order;
-}
-
 VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
                                          const scene::GpuMeshes& meshes) {
   if (meshes.size() != scene.objects.size()) throw std::invalid_argument("virtual shadow map: the meshes are not the scene's");
-  for (const adaptive::Page& page : requested)  // before anything changes
+  for (const adaptive::Page& page : requested)  // before anything changes (the cache checks too, after a new view)
     if (page.level < 0 || page.level >= layout_.levels || page.x < 0 || page.y < 0 || page.x >= layout_.pages_per_side ||
         page.y >= layout_.pages_per_side)
       throw std::invalid_argument("virtual shadow map: page outside the layout (level " + std::to_string(page.level) + ", " +
@@ -311,56 +220,10 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   if (has_view_ && (view.light_view != view_.light_view || view.near_ws != view_.near_ws || view.far_ws != view_.far_ws)) invalidate_all();
   view_ = view;
   has_view_ = true;
-  ++frame_;
-  for (int k = 0; k < layout_.levels; ++k) {
-    const adaptive::LightXY o = adaptive::level_origin(k, view.camera_xy, layout_);  // page-snapped: whole pages
-    origin_pages_x_[static_cast<std::size_t>(k)] = std::llround(o.x / page_ws(k));
-    origin_pages_y_[static_cast<std::size_t>(k)] = std::llround(o.y / page_ws(k));
-  }
-
-  VirtualMapStats stats;
-  stats.requested = static_cast<int>(requested.size());
-  stats.invalidated = std::exchange(invalidated_, 0);
-  // What the pool holds this frame, in order: first a coarse floor, the pages of level
-  // stats.floor_level under every requested page (the finest level whose floor fits the pool with
-  // the requested pages coarser than it), so that each pixel has a level to fall back to; then the
-  // other requested pages, coarse levels first and within a level those nearest the camera. What
-  // does not fit is missing: fine pages far from the camera, whose pixels read the floor.
-  const std::vector<Key> order = residency_order(requested, stats);
-  const auto kept = static_cast<std::size_t>(std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(order.size()), pool_slots()));
-  for (std::size_t i = kept; i < order.size(); ++i) stats.missing += requested.count(page_of(order[i])) > 0;
-  // First what is cached, so that no page this frame keeps is evicted for another.
-  std::vector<Key> wanted;
-  for (std::size_t i = 0; i < kept; ++i) {
-    const Key& key = order[i];
-    if (const auto it = resident_.find(key); it != resident_.end()) {
-      slots_[static_cast<std::size_t>(it->second)].last_frame = frame_;
-      stats.cached += requested.count(page_of(key)) > 0;
-    } else {
-      wanted.push_back(key);
-    }
-  }
-  std::vector<std::pair<int, Key>> to_draw;
-  for (const Key& key : wanted) {
-    // A free slot, else the least recently asked-for page this frame does not keep (there is one:
-    // the frame keeps at most a slot per page).
-    int chosen = -1;
-    if (!free_.empty()) {
-      chosen = free_.back();
-      free_.pop_back();
-    } else {
-      std::int64_t oldest = frame_;
-      for (int i = 0; i < pool_slots(); ++i)
-        if (slots_[static_cast<std::size_t>(i)].last_frame < oldest) oldest = slots_[static_cast<std::size_t>(i)].last_frame, chosen = i;
-      if (chosen < 0) throw std::logic_error("virtual shadow map: no slot left for a page the frame keeps");
-      free_slot(chosen);  // back on the free list: take it again
-      free_.pop_back();
-      ++stats.evicted;
-    }
-    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_};
-    resident_[key] = chosen;
-    to_draw.emplace_back(chosen, key);
-  }
+  const adaptive::PageCache::Update admitted = cache_.update(requested, view.camera_xy);
+  const adaptive::PageCacheStats& c = admitted.stats;
+  VirtualMapStats stats{c.requested, c.cached, c.drawn, c.missing, c.floor, c.floor_level, c.evicted, c.invalidated, c.resident, 0};
+  const std::vector<adaptive::PageCache::Admitted>& to_draw = admitted.to_draw;
 
   if (!to_draw.empty()) {
     fbo_.bind();
@@ -391,34 +254,13 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       write_bounds(drawn);
     }
   }
-  stats.drawn = static_cast<int>(to_draw.size());
-  stats.resident = static_cast<int>(resident_.size());
   write_tables();
   return stats;
 }
 
 void VirtualShadowMap::write_tables() {
-  const int pps = layout_.pages_per_side;
-  std::vector<std::int32_t> table(static_cast<std::size_t>(pps) * pps * layout_.levels, -1);
-  for (const auto& [key, slot] : resident_) {
-    const auto k = static_cast<std::size_t>(key.level);
-    const std::int64_t x = key.x - origin_pages_x_[k], y = key.y - origin_pages_y_[k];
-    if (x < 0 || y < 0 || x >= pps || y >= pps) continue;  // cached, outside this frame's window
-    table[(static_cast<std::size_t>(key.level) * pps + static_cast<std::size_t>(y)) * pps + static_cast<std::size_t>(x)] = slot;
-  }
-  glTextureSubImage2D(table_.id(), 0, 0, 0, pps, pps * layout_.levels, GL_RED_INTEGER, GL_INT, table.data());
-}
-
-std::vector<VirtualShadowMap::SlotState> VirtualShadowMap::slot_states() const {
-  std::vector<SlotState> states;
-  for (const Slot& s : slots_) states.push_back(!s.used ? SlotState::free : s.drawn_frame == frame_ ? SlotState::drawn : SlotState::cached);
-  return states;
-}
-
-int VirtualShadowMap::slot_of(const adaptive::Page& page) const {
-  if (page.level < 0 || page.level >= layout_.levels) return -1;
-  const auto it = resident_.find(key_of(page));
-  return it == resident_.end() ? -1 : it->second;
+  const std::vector<std::int32_t> table = cache_.table();
+  glTextureSubImage2D(table_.id(), 0, 0, 0, layout_.pages_per_side, layout_.pages_per_side * layout_.levels, GL_RED_INTEGER, GL_INT, table.data());
 }
 
 std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_per_side) {

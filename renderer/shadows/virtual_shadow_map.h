@@ -1,30 +1,23 @@
 #pragma once
 // The physical side of a virtual shadow map for the sun (issue 31's second part): one pool of
 // page slots (a 32-bit depth atlas), a page table per clipmap level, each page drawn with its own
-// caster culling, and a cache that keeps drawn pages across frames until the light, or a caster
-// over them, moves. Which pages a frame needs comes from adaptive/virtual_pages.h (by the rule or
-// by the footprint); shaders read depths through the tables with shaders/virtual_pages.glsl.
-//
-// Pages are cached by their place in light space (level, page column and row counted from the
-// light-space origin), so a page stays valid while the camera moves and the level windows scroll
-// over it. Within a frame a coarse floor is served first (the pages of the finest level that the
-// pool holds under every requested page), then coarse levels, and within a level the pages nearest
-// the camera: when the pool cannot hold every requested page, what is missing is fine pages far
-// from the camera, and a pixel falls back to a coarser level that covers it, at worst the floor
-// (vsm_resident_level), never to none. A pool that cannot hold even the coarsest level's pages
-// under the view is refused (PoolTooSmall). Pages not asked for stay cached until their slot is
-// needed (least recently asked for first). The light view is a rotation only (pages are places in
-// light space); its depth range is the sun's bounded region (sun_virtual_view).
+// caster culling, kept across frames until the light, or a caster over them, moves. Which pages a
+// frame needs comes from adaptive/virtual_pages.h (by the rule or by the footprint); which slot
+// holds which page, what a frame keeps, draws and evicts, and the tables, from the GL-free
+// adaptive/page_cache.h (the floor first, coarse levels and near pages first, least recently asked
+// for evicted: its comment); this class draws the pages it is told into their slots and uploads the
+// tables. Shaders read depths through the tables with shaders/virtual_pages.glsl; a pixel whose page
+// is missing reads a coarser resident level (vsm_resident_level), never none. The light view is a
+// rotation only (pages are places in light space); its depth range is the sun's bounded region
+// (sun_virtual_view).
 #include <cstdint>
-#include <map>
 #include <set>
-#include <stdexcept>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include <penumbra/adaptive/page_cache.h>
 #include <penumbra/adaptive/virtual_pages.h>
 #include <penumbra/gl/objects.h>
 #include <penumbra/scene/gpu_mesh.h>
@@ -110,17 +103,8 @@ VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
 
 class VirtualShadowMap;
 
-// A pool too small for even the coarsest level under a view's pixels (VirtualShadowMap::update):
-// a pixel would find no page and be shaded lit. The message begins with --map.virtual_pool_pages
-// and says the least pool side that holds that level; `pages` is how many pages it is.
-class PoolTooSmall : public std::runtime_error {
- public:
-  PoolTooSmall(const std::string& message, int pages) : std::runtime_error(message), pages_(pages) {}
-  int pages() const { return pages_; }
-
- private:
-  int pages_;
-};
+// A pool too small for even the coarsest level under a view's pixels (VirtualShadowMap::update).
+using PoolTooSmall = adaptive::PoolTooSmall;
 
 // Page marking on the GPU (shaders/virtual_mark.comp): the pages each pixel's surface asks for, by the
 // rule or by the footprint, as adaptive::mark_pages finds them on the CPU (the same arithmetic in
@@ -174,6 +158,8 @@ class VirtualShadowMap {
   const adaptive::VirtualMapLayout& layout() const { return layout_; }
   int pool_pages_per_side() const { return pool_side_; }
   int pool_slots() const { return pool_side_ * pool_side_; }
+  // Which slot holds which page (GL-free): what update() admitted, evicted and kept.
+  const adaptive::PageCache& cache() const { return cache_; }
   Content content() const { return content_; }
 
   // Makes the `requested` pages (window-relative, as adaptive::mark_pages gives them for
@@ -212,45 +198,26 @@ class VirtualShadowMap {
   // UNIT_VSM_BOUNDS, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
-  int slot_of(const adaptive::Page& page) const;
+  int slot_of(const adaptive::Page& page) const { return cache_.slot_of(page); }
   // The last update's view (has_view: there was one).
   const VirtualMapView& view() const { return view_; }
   bool has_view() const { return has_view_; }
   // Lower corner of level `level`'s window in light space, for the last update's view.
-  adaptive::LightXY origin(int level) const;
+  adaptive::LightXY origin(int level) const { return cache_.origin(level); }
 
   // The debug view of the pool: each slot free, holding a page drawn by the last update, or one
   // kept from an earlier update (cached); the pool itself (32-bit depth, slot s at column
   // s % pool_pages_per_side, row s / pool_pages_per_side).
-  enum class SlotState { free, drawn, cached };
-  std::vector<SlotState> slot_states() const;
+  using SlotState = adaptive::PageCache::SlotState;
+  std::vector<SlotState> slot_states() const { return cache_.slot_states(); }
   const gl::Texture& pool() const { return pool_; }
   const gl::Texture& moments_pool() const { return moments_; }  // Content::depth_and_moments: RG32F, the pool's layout
   // The tiles' bounds when on: RGBA32F, a texel per VSM_BOUNDS_TILE² texels of the pool (vsm_bounds.comp).
   const gl::Texture& bounds_pool() const { return bounds_pool_; }
 
  private:
-  // A page by its place in light space: level, then column and row from the light-space origin.
-  struct Key {
-    int level = 0;
-    std::int64_t x = 0, y = 0;
-    bool operator<(const Key& o) const { return std::tie(level, x, y) < std::tie(o.level, o.x, o.y); }
-  };
-  struct Slot {
-    bool used = false;
-    Key key;
-    std::int64_t last_frame = -1;  // the last update that asked for it
-    std::int64_t drawn_frame = -1;  // the update that drew it
-  };
-  Key key_of(const adaptive::Page& page) const;
-  adaptive::Page page_of(const Key& key) const;  // window-relative, in the current windows
-  // The pages update() keeps, in the order it keeps them (the floor first); sets stats.floor and
-  // stats.floor_level; throws PoolTooSmall.
-  std::vector<Key> residency_order(const std::set<adaptive::Page>& requested, VirtualMapStats& stats) const;
-  double page_ws(int level) const;
-  void free_slot(int slot);
   // Draws page `key` into `slot`, each object's units kept by their footprints across the light.
-  std::uint64_t draw_page(int slot, const Key& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+  std::uint64_t draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                           const std::vector<std::vector<scene::Footprint>>& footprints) const;
   void write_tables();
   // Takes the bounds of every tile of the pages in `slots` (vsm_bounds.comp).
@@ -267,10 +234,7 @@ class VirtualShadowMap {
   gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (vsm_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;
-  std::vector<Slot> slots_;
-  std::vector<int> free_;  // unused slots, a stack
-  std::map<Key, int> resident_;
-  std::vector<std::int64_t> origin_pages_x_, origin_pages_y_;  // each level's window corner, in pages
+  adaptive::PageCache cache_;
   VirtualMapView view_;
   bool has_view_ = false;
   float slope_bias_ = 0, offset_bias_ = 0;
@@ -281,8 +245,6 @@ class VirtualShadowMap {
     scene::Aabb bounds;  // world
   };
   std::vector<Caster> casters_;
-  std::int64_t frame_ = 0;
-  int invalidated_ = 0;
 };
 
 }  // namespace penumbra::shadows
