@@ -11,6 +11,8 @@
 #include <glm/glm.hpp>
 
 #include "metrics/surface_probe.h"
+#include "shadows/frame_plan.h"
+#include "shadows/technique.h"
 
 namespace penumbra::apps {
 
@@ -33,17 +35,15 @@ void put(io::Image8& img, std::size_t pixel, const glm::vec3& c) {
 }  // namespace
 
 VirtualMarking virtual_marking(const shadows::ShadowSettings& s, const scene::Light& light) {
+  // Who marks and how, from the technique's registry entry (as the renderer's pass): the pages a
+  // fixed filter of world radius reaches, or PCSS's two rounds.
   VirtualMarking m;
-  if (s.technique == shadows::Technique::pcf) {
-    m.radius_ws = s.pcf.radius;
-    if (s.pcf.radius_unit != shadows::RadiusUnit::world) m.problem = "pcf marks pages by a world radius (--pcf.radius_unit world)";
-  } else if (s.technique == shadows::Technique::vsm) {
-    m.radius_ws = s.vsm.radius;
-    if (s.vsm.radius_unit != shadows::RadiusUnit::world) m.problem = "vsm marks pages by a world radius (--vsm.radius_unit world)";
-  } else if (s.technique == shadows::Technique::pcss) {
+  m.problem = shadows::virtual_marking_unsupported(s);
+  const shadows::TechniqueEntry& e = shadows::technique_entry(s.technique);
+  if (e.pages == shadows::PageReading::blocker_search) {
     m.pcss = shadows::virtual_pcss(s, light.size);
-  } else {
-    m.problem = "pages are marked for pcf or vsm (world radius) or pcss, not " + std::string(shadows::to_string(s.technique));
+  } else if (m.problem.empty()) {
+    m.radius_ws = e.filter_radius(s).radius;
   }
   m.options = shadows::virtual_mark_options(s);
   m.options.marking = adaptive::Marking::rule;  // the views show the rule beside the footprint themselves

@@ -18,11 +18,12 @@
 
 namespace penumbra::apps {
 
-// How the debug views mark pages for a technique's settings, as the renderer does: PCF and VSM by
-// their world radius; PCSS in the renderer's two rounds (the pages of each pixel's blocker search, then
-// those of the penumbra it finds, `pcss`); its c and the pixel floor (1 pixel where the settings
-// have none: the footprint marking needs one). `problem`: empty, or why these settings mark no
-// pages.
+// How the debug views mark pages for a technique's settings, as the renderer does (the technique's
+// registry entry, TechniqueEntry::pages): a fixed filter by its world radius; PCSS in the renderer's
+// two rounds (the pages of each pixel's blocker search, then those of the penumbra it finds,
+// `pcss`); its c and the pixel floor (1 pixel where the settings have none: the footprint marking
+// needs one). `problem`: empty, or why these settings mark no pages (shadows::virtual_marking_unsupported;
+// the shading's own needs, such as the pages' box filter, do not matter to the marking).
 struct VirtualMarking {
   double radius_ws = 0;                       // PCF
   std::optional<shadows::VirtualPcss> pcss;  // PCSS, for the scene's sun

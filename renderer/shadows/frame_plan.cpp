@@ -60,12 +60,34 @@ FitRequest fit_request(const ShadowSettings& s, const TechniqueEntry& entry, con
 
 }  // namespace
 
+std::string page_reading_techniques() {
+  std::vector<std::string_view> names;
+  for (const std::string_view name : technique_names())
+    if (technique_entry(technique_from_string(name)).pages != PageReading::none) names.push_back(name);
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + std::string(names[i]);
+  return out;
+}
+
+std::string virtual_marking_unsupported(const ShadowSettings& s) {
+  const TechniqueEntry& e = technique_entry(s.technique);
+  const std::string name(e.name);
+  if (e.pages == PageReading::none) return "pages are marked for " + page_reading_techniques() + ", not " + name;
+  if (e.filter_radius && e.filter_radius(s).unit != RadiusUnit::world)
+    return name + " marks pages by a world radius (--" + name + ".radius_unit world)";
+  return "";
+}
+
 std::string virtual_pages_unsupported(const ShadowSettings& s) {
-  if (s.technique == Technique::pcf && s.pcf.kernel == Kernel::grid && s.pcf.radius_unit == RadiusUnit::world) return "";
-  if (s.technique == Technique::vsm && s.vsm.radius_unit == RadiusUnit::world) return "";
-  if (s.technique == Technique::pcss && s.pcss.kernel == Kernel::grid) return "";
-  return "pages are read by box pcf with a world radius (--technique pcf --pcf.kernel grid --pcf.radius_unit world), vsm with a world "
-         "radius (--technique vsm --vsm.radius_unit world) or pcss with a box filter (--pcss.kernel grid), not " + describe(s);
+  const TechniqueEntry& e = technique_entry(s.technique);
+  const std::string name(e.name);
+  if (e.pages == PageReading::none) return "pages are read by " + page_reading_techniques() + ", not " + describe(s);
+  // Every setting it lacks, at once: the marking's world radius and the shading's own needs.
+  std::string needs;
+  if (e.filter_radius && e.filter_radius(s).unit != RadiusUnit::world) needs = "--" + name + ".radius_unit world";
+  if (const std::string_view need = e.pages_need ? e.pages_need(s) : std::string_view(); !need.empty())
+    needs += (needs.empty() ? "" : " ") + std::string(need);
+  return needs.empty() ? "" : name + " reads pages only with " + needs + ", not " + describe(s);
 }
 
 std::string virtual_pages_refusal(const ShadowSettings& s, const scene::Scene& scene) {

@@ -121,9 +121,16 @@ std::string resource_names(unsigned resources);  // "depth atlas, moments"
 // the pass and what it lacks. Renderer::render refuses a plan that is not a frame.
 std::string plan_problem(const FramePlan& plan);
 
-// "" when `s` can be drawn through the sun's virtual shadow map (box PCF or VSM with a world
-// radius, or PCSS with a box filter), else
-// why not ("pcf ... kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
+// The techniques whose registry entry reads pages (TechniqueEntry::pages), "pcf, pcss or vsm".
+std::string page_reading_techniques();
+// "" when `s`'s technique can mark the sun's virtual shadow map's pages (its entry reads pages, and
+// a fixed filter has a world radius), else why not ("pcf marks pages by a world radius
+// (--pcf.radius_unit world)"): the debug views refuse with it.
+std::string virtual_marking_unsupported(const ShadowSettings& s);
+// "" when `s` can be drawn through the pages: it can mark them, and the shading's needs beyond
+// marking hold (TechniqueEntry::pages_need: the pages' box filter); else why not, every missing
+// setting in one line ("pcf reads pages only with --pcf.radius_unit world --pcf.kernel grid, not
+// pcf kernel=poisson ..."): plan_frame refuses map.virtual_pages then.
 std::string virtual_pages_unsupported(const ShadowSettings& s);
 // "" when a frame of `scene` can draw `s` through the virtual shadow map (a sun, and a technique
 // virtual_pages_unsupported accepts), else why not: plan_frame refuses map.virtual_pages with it.

@@ -290,8 +290,10 @@ class VirtualPagesPass final : public Pass {
     FrameResources& r = f.res;
     const ShadowSettings& s = f.settings;
     auto& v = r.virtual_map;
-    // VSM (the one moments technique the pages hold, virtual_pages_unsupported) draws its moments too.
-    const auto content = s.technique == Technique::vsm ? VirtualShadowMap::Content::depth_and_moments : VirtualShadowMap::Content::depth;
+    // How the technique reads pages (its registry entry): moments are drawn beside the depths, a
+    // blocker search marks in two rounds.
+    const PageReading reading = technique_entry(s.technique).pages;
+    const auto content = reading == PageReading::moments ? VirtualShadowMap::Content::depth_and_moments : VirtualShadowMap::Content::depth;
     if (!v || v->pool_pages != s.map.virtual_pool_pages || v->map->content() != content) {
       v = std::make_unique<FrameResources::Virtual>();
       const adaptive::VirtualMapLayout layout;
@@ -331,7 +333,7 @@ class VirtualPagesPass final : public Pass {
     out.pool_pages_per_side = v->map->pool_pages_per_side();
     out.near_ws = view.near_ws, out.far_ws = view.far_ws;
     adaptive::MarkResult marked;
-    if (s.technique == Technique::pcss) {
+    if (reading == PageReading::blocker_search) {
       // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
       v->radius_ws = 0;
       v->pcss = virtual_pcss(s, f.scene.light.size);

@@ -59,10 +59,25 @@ void set_section_radius(ShadowSettings& s, FilterRadius r) {
   (s.*Section).radius_unit = r.unit;
 }
 
+// How a technique's shading reads the sun's virtual shadow map (map.virtual_pages,
+// virtual_shadow_map.h); every entry states it (a test refuses `unset`). What a pixel marks follows
+// from it: the pages its fixed filter reaches (a world radius, filter_radius), or PCSS's two rounds.
+enum class PageReading {
+  unset,
+  none,            // it cannot read pages
+  filter_radius,   // a fixed filter of world radius over the pages' depths (PCF)
+  blocker_search,  // a blocker search, then the penumbra it finds: two marking rounds (PCSS)
+  moments,         // a fixed filter of world radius over moments drawn into the pages beside the depths (VSM)
+};
+
 struct TechniqueEntry {
   std::string_view name;    // CLI/JSON name and the settings section of its parameters
   std::string_view define;  // what the shading pass defines for it (shading.frag)
   RadiusReading radius = RadiusReading::unset;
+  PageReading pages = PageReading::unset;
+  // What the shading through pages needs of the settings beyond what marking needs (the pages'
+  // filters are boxes: "--pcf.kernel grid"), or "" when the settings hold it; nullptr: nothing more.
+  std::string_view (*pages_need)(const ShadowSettings&) = nullptr;
   ReferenceKind reference = ReferenceKind::same_filter;
   // The choice row penumbra-render's `--technique all` expands into one variant per choice
   // ("kernel": pcf-grid, pcf-poisson); empty: one variant.

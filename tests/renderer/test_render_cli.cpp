@@ -200,7 +200,7 @@ TEST_F(RenderCli, VirtualDebugWritesTheLevelsAndThePool) {
            {{"--scene", "outdoor-spot", "--virtual-debug"}, "--virtual-debug: the virtual shadow map is the sun's"},
            {{"--scene", "outdoor", "--virtual-debug", "--pcf.radius_unit", "texels"}, "--virtual-debug: pcf marks pages by a world radius"},
            {{"--scene", "outdoor", "--virtual-debug", "--technique", "vsm"}, "--virtual-debug: vsm marks pages by a world radius"},
-           {{"--scene", "outdoor", "--virtual-debug", "--technique", "msm"}, "--virtual-debug: pages are marked for pcf or vsm"}}) {
+           {{"--scene", "outdoor", "--virtual-debug", "--technique", "msm"}, "--virtual-debug: pages are marked for pcf, pcss or vsm, not msm"}}) {
     std::vector<std::string> with_output = args;
     with_output.insert(with_output.end(), {"-o", (work_ / "refused").string()});
     const Result bad = run_render(small_args(with_output), scratch_);

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "gl/embedded_files.h"
+#include "shadows/frame_plan.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
 
@@ -75,6 +76,73 @@ TEST(TechniqueRegistry, EveryTechniqueStatesHowItsRadiusReads) {
       EXPECT_EQ(e.radius, RadiusReading::penumbra);
     }
   }
+}
+
+// Issue 47: who reads the virtual map's pages is the registry's to say (it was four if-chains on
+// the technique, two of which disagreed). Every entry states it; the techniques that can are
+// listed from the registry alone; the frame plan and the debug views ask the same function.
+TEST(TechniqueRegistry, TheRegistryDecidesWhoReadsPages) {
+  std::vector<std::string> readers;
+  for (auto name : technique_names()) {
+    const TechniqueEntry& e = technique_entry(technique_from_string(name));
+    SCOPED_TRACE(std::string(name));
+    ASSERT_NE(e.pages, PageReading::unset);
+    if (e.pages == PageReading::none) {
+      EXPECT_EQ(e.pages_need, nullptr);
+      continue;
+    }
+    readers.emplace_back(name);
+    if (e.pages == PageReading::blocker_search) {
+      EXPECT_NE(e.search_scale, nullptr);
+    } else {
+      EXPECT_NE(e.filter_radius, nullptr) << "pages are marked by a fixed filter's world radius";
+    }
+    EXPECT_EQ(e.pages == PageReading::moments, e.moments != nullptr);
+  }
+  EXPECT_EQ(readers, (std::vector<std::string>{"pcf", "pcss", "vsm"}));
+  EXPECT_EQ(page_reading_techniques(), "pcf, pcss or vsm");
+
+  for (auto name : technique_names()) {
+    SCOPED_TRACE(std::string(name));
+    ShadowSettings s;
+    s.technique = technique_from_string(name);
+    const TechniqueEntry& e = technique_entry(s.technique);
+    if (e.set_filter_radius) e.set_filter_radius(s, {0.05f, RadiusUnit::world});
+    s.pcf.kernel = s.pcss.kernel = Kernel::grid;
+    const bool reads = e.pages != PageReading::none;
+    EXPECT_EQ(virtual_marking_unsupported(s).empty(), reads) << virtual_marking_unsupported(s);
+    EXPECT_EQ(virtual_pages_unsupported(s).empty(), reads) << virtual_pages_unsupported(s);
+    if (!reads) {
+      EXPECT_EQ(virtual_pages_unsupported(s).rfind("pages are read by pcf, pcss or vsm, not " + std::string(name), 0), 0u);
+    }
+    if (!reads) {
+      EXPECT_EQ(virtual_marking_unsupported(s), "pages are marked for pcf, pcss or vsm, not " + std::string(name));
+    }
+    if (e.set_filter_radius && reads) {
+      e.set_filter_radius(s, {2.0f, RadiusUnit::texels});
+      EXPECT_EQ(virtual_marking_unsupported(s), std::string(name) + " marks pages by a world radius (--" + std::string(name) + ".radius_unit world)");
+      EXPECT_EQ(virtual_pages_unsupported(s).rfind(std::string(name) + " reads pages only with --" + std::string(name) + ".radius_unit world, not " + std::string(name), 0), 0u)
+          << virtual_pages_unsupported(s);
+    }
+  }
+  // The shading's own need beyond marking: the pages' filters are boxes. The marking (the debug
+  // views) does not need it.
+  ShadowSettings pcf;
+  pcf.technique = technique_from_string("pcf");
+  pcf.pcf.radius_unit = RadiusUnit::world;
+  pcf.pcf.kernel = Kernel::poisson;
+  EXPECT_EQ(virtual_marking_unsupported(pcf), "");
+  EXPECT_NE(virtual_pages_unsupported(pcf).find("pcf reads pages only with --pcf.kernel grid, not pcf"), std::string::npos)
+      << virtual_pages_unsupported(pcf);
+  pcf.pcf.radius_unit = RadiusUnit::texels;  // both lacking: both named in the one line
+  EXPECT_NE(virtual_pages_unsupported(pcf).find("pcf reads pages only with --pcf.radius_unit world --pcf.kernel grid, not pcf"), std::string::npos)
+      << virtual_pages_unsupported(pcf);
+  ShadowSettings pcss;
+  pcss.technique = technique_from_string("pcss");
+  pcss.pcss.kernel = Kernel::disk;
+  EXPECT_EQ(virtual_marking_unsupported(pcss), "");
+  EXPECT_NE(virtual_pages_unsupported(pcss).find("pcss reads pages only with --pcss.kernel grid, not pcss"), std::string::npos)
+      << virtual_pages_unsupported(pcss);
 }
 
 TEST(TechniqueRegistry, FixedFilterRadiusRoundTripsThroughTheEntry) {

@@ -35,6 +35,7 @@ const TechniqueEntry& edtsm_technique() {
       .name = "edtsm",
       .define = "SCREEN_SPACE_VISIBILITY",
       .radius = RadiusReading::none,
+      .pages = PageReading::none,
       .pad_texels = 1,  // the revectorization reads the neighbours of every receiver texel
       .post = [](ScreenSpace& ss, const ShadowSettings& s, const PostPassContext& ctx) -> const gl::Texture& {
         return run_edtsm(ss, s.edtsm, ctx);

@@ -35,6 +35,7 @@ const TechniqueEntry& edtssm_technique() {
       .name = "edtssm",
       .define = "SCREEN_SPACE_VISIBILITY",
       .radius = RadiusReading::none,
+      .pages = PageReading::none,
       .reference = ReferenceKind::area_light,
       .search_scale = [](const ShadowSettings& s) { return s.edtssm.search_scale; },
       .pad_texels = 1,

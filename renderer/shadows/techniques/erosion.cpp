@@ -75,6 +75,7 @@ const TechniqueEntry& erosion_technique() {
       .name = "erosion",
       .define = "TECHNIQUE_EROSION",
       .radius = RadiusReading::none,
+      .pages = PageReading::none,
       .reference = ReferenceKind::area_light,
       .search_scale = [](const ShadowSettings& s) { return s.erosion.search_scale; },
       .pad_texels = 1,

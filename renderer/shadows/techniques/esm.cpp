@@ -26,6 +26,7 @@ const TechniqueEntry& esm_technique() {
       .name = "esm",
       .define = "TECHNIQUE_ESM",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::none,
       .filter_radius = section_radius<&ShadowSettings::esm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::esm>,
       // exp(c t) of normalized linear depth t, one float; the far plane t = 1 reads exp(c). Summed

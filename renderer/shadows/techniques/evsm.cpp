@@ -44,6 +44,7 @@ const TechniqueEntry& evsm_technique() {
       .name = "evsm",
       .define = "TECHNIQUE_EVSM",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::none,
       .filter_radius = section_radius<&ShadowSettings::evsm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::evsm>,
       .moments = [](const ShadowSettings& s) { return std::optional<MomentsLayout>(evsm_layout(s.evsm)); },

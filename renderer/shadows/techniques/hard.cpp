@@ -5,7 +5,7 @@
 namespace penumbra::shadows {
 
 const TechniqueEntry& hard_technique() {
-  static const TechniqueEntry entry{.name = "hard", .define = "TECHNIQUE_HARD", .radius = RadiusReading::none};
+  static const TechniqueEntry entry{.name = "hard", .define = "TECHNIQUE_HARD", .radius = RadiusReading::none, .pages = PageReading::none};
   return entry;
 }
 

@@ -23,6 +23,7 @@ const TechniqueEntry& msm_technique() {
       .name = "msm",
       .define = "TECHNIQUE_MSM",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::none,
       .filter_radius = section_radius<&ShadowSettings::msm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::msm>,
       // (z, z², z³, z⁴) of z in [-1, 1]; the far plane z = 1 has every moment 1.

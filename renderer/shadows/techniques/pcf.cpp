@@ -25,6 +25,8 @@ const TechniqueEntry& pcf_technique() {
       .name = "pcf",
       .define = "TECHNIQUE_PCF",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::filter_radius,
+      .pages_need = [](const ShadowSettings& s) { return s.pcf.kernel == Kernel::grid ? std::string_view() : std::string_view("--pcf.kernel grid"); },
       .variant_setting = "kernel",
       .filter_radius = section_radius<&ShadowSettings::pcf>,
       .set_filter_radius = set_section_radius<&ShadowSettings::pcf>,

@@ -31,6 +31,8 @@ const TechniqueEntry& pcss_technique() {
       .name = "pcss",
       .define = "TECHNIQUE_PCSS",
       .radius = RadiusReading::penumbra,
+      .pages = PageReading::blocker_search,
+      .pages_need = [](const ShadowSettings& s) { return s.pcss.kernel == Kernel::grid ? std::string_view() : std::string_view("--pcss.kernel grid"); },
       .reference = ReferenceKind::area_light,
       // The filter is never narrower than the minimum penumbra: the rule's bound without a
       // per-pixel measurement (adaptive.pcss = per_pixel lowers it to what the frame needed).

@@ -23,6 +23,7 @@ const TechniqueEntry& rbsm_technique() {
       .name = "rbsm",
       .define = "TECHNIQUE_RBSM",
       .radius = RadiusReading::none,
+      .pages = PageReading::none,
       .pad_texels = 1,  // the revectorization reads the neighbours of every receiver texel
       .set_uniforms = [](const gl::Program& p, const ShadowSettings& s) { set_rbsm_uniforms(p, s.rbsm); },
   };

@@ -22,6 +22,7 @@ const TechniqueEntry& rpcf_technique() {
       .name = "rpcf",
       .define = "TECHNIQUE_RPCF",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::none,
       .filter_radius = section_radius<&ShadowSettings::rpcf>,
       .set_filter_radius = set_section_radius<&ShadowSettings::rpcf>,
       .set_uniforms =

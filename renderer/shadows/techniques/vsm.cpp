@@ -22,6 +22,7 @@ const TechniqueEntry& vsm_technique() {
       .name = "vsm",
       .define = "TECHNIQUE_VSM",
       .radius = RadiusReading::fixed_filter,
+      .pages = PageReading::moments,
       .filter_radius = section_radius<&ShadowSettings::vsm>,
       .set_filter_radius = set_section_radius<&ShadowSettings::vsm>,
       // (t, t² + texel variance) of normalized linear depth t; the far plane t = 1.
