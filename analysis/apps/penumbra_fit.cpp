@@ -9,11 +9,13 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "data/dataset.h"
 #include "data/level_data.h"
 #include "data/reference_table.h"
+#include "fit/frame_fit.h"
 #include "fit/model_fit.h"
 #include "fit/study_fit.h"
 #include "report/outputs.h"
@@ -169,6 +171,35 @@ struct StudyOptions {
   bool allow_unusable = false;
 };
 
+// A frame study's sessions: k* per patch, per technique and pooled (fit/frame_fit.h) into
+// report.json and summary.txt; no calibration.json (k* is a verdict on c, not a new c).
+int run_frame_study(const StudyOptions& so, const StudyFitOptions& options, const Dataset& data, PhaseProgress& progress) {
+  if (!so.references.empty()) throw std::invalid_argument("--reference: a frame study has no reference filter sizes");
+  if (so.condition) throw std::invalid_argument("--condition: a frame study writes no calibration entry to choose one for");
+  std::set<std::string> kinds;
+  for (const SessionInfo& s : data.sessions) kinds.insert(s.observer_kind);
+  if (kinds.size() > 1 && !so.pool_observers)
+    throw std::runtime_error("the sessions were answered by different kinds of observer (people, simulations, the image observer); "
+                             "fit them apart, or --pool-observers");
+  progress("reading logs", static_cast<int>(so.inputs.size()), static_cast<int>(so.inputs.size()));
+  progress.end();
+  const auto start = std::chrono::steady_clock::now();
+  const FrameStudyFit fit = fit_frame_study(data, options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::vector<std::string> inputs;
+  for (const fs::path& p : so.inputs) inputs.push_back(p.string());
+  nlohmann::json report = frame_report_json(fit, inputs, utc_now());
+  report["fit_seconds"] = seconds;
+  const std::string summary = frame_summary_text(fit);
+  io::StagedDirectory out(so.output.string(), "report.json");
+  io::write_file_atomic(out.path() / "summary.txt", summary);
+  io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 1) + "\n");
+  out.commit();
+  std::cout << summary;
+  std::printf("fit took %.2f s; wrote %s/{report.json, summary.txt}\n", seconds, so.output.string().c_str());
+  return 0;
+}
+
 int run_study(const StudyOptions& so, const ModelOptions& mo) {
   if (so.output.empty()) throw std::invalid_argument("-o/--output DIR is required");
   StudyFitOptions options;
@@ -207,6 +238,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
                                "(--accept-inconsistent fits it anyway, listed in report.json and summary.txt)");
     }
   }();
+  if (is_frame_study(data)) return run_frame_study(so, options, data, progress);
   // Before the fit: sessions of different kernels or observer kinds are refused at once.
   const CalibrationProvenance provenance = calibration_provenance(data, so.pool_observers);
   progress("reading logs", static_cast<int>(so.inputs.size()), static_cast<int>(so.inputs.size()));

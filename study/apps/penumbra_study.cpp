@@ -30,6 +30,7 @@
 #include "procedure/session.h"
 #include "procedure/session_record.h"
 #include "sampling/random.h"
+#include "stimuli/frame_patch.h"
 #include "stimuli/stimulus.h"
 #ifdef PENUMBRA_STUDY_GUI
 #include "gui/study_gui.h"
@@ -213,13 +214,56 @@ observers::PlantedModel parse_psychometric(const std::string& spec, const std::s
 struct ObserverSetup {
   std::string spec;  // as given; recorded in session.json and restored by --resume
   bool image = false;
+  bool frame = false;  // the frame observer (a frame study): metrics/frame_observer.h on each trial's patches
   double false_alarm = 0.05;  // yesno: the observer's rate of "jagged" for a straight edge
   observers::PlantedModel model;
   observers::ImageObserverParams image_params;
+  metrics::FrameObserverParams frame_params;
 };
+
+// A frame study's observers: psychometric:k=..,beta=..,lapse=.. (a planted k*: the psychometric
+// observer's threshold at intensity log10(1 / k*)) or frame[:ppd=..,weber=..,blur_arcmin=..].
+ObserverSetup parse_frame_observer(const std::string& given, const procedure::StudyConfig& config, const std::string& where) {
+  ObserverSetup setup;
+  setup.spec = given;
+  std::string spec = given;
+  if (given.rfind("frame", 0) == 0 && (given.size() == 5 || given[5] == ':')) {
+    setup.frame = true;
+    auto& p = setup.frame_params;
+    p.pixels_per_degree = config.display.pixels_per_degree();
+    for (const auto& [k, v] : parse_key_values(spec, where)) {
+      if (!(v > 0) && k != "blur_arcmin") throw std::invalid_argument(where + ": " + k + ": expected a number > 0");
+      if (k == "ppd") p.pixels_per_degree = v;
+      else if (k == "weber") p.weber = v;
+      else if (k == "blur_arcmin") p.blur_sigma_arcmin = v;
+      else if (k == "patch_deg") p.patch_deg = v;
+      else throw std::invalid_argument(where + ": unknown frame observer parameter '" + json_input::printable(k) +
+                                       "' (ppd, weber, blur_arcmin, patch_deg)");
+    }
+    return setup;
+  }
+  if (given.rfind("psychometric", 0) != 0)
+    throw std::invalid_argument(where + " '" + json_input::printable(given) +
+                                "': a frame study takes psychometric:k=..,beta=..,lapse=.. or frame[:ppd=..,weber=..]");
+  const auto k = take_key(spec, "k");
+  if (!k) throw std::invalid_argument(where + ": a frame study plants k (psychometric:k=1.5,...), the multiple of c at threshold");
+  for (const auto& [key, v] : parse_key_values(spec, where))
+    if (key == "c") throw std::invalid_argument(where + ": c: a frame study plants k, not c");
+  setup.model = parse_psychometric(spec, where);
+  try {
+    setup.model.c_true = std::stod(*k);
+  } catch (const std::exception&) {
+    setup.model.c_true = -1;
+  }
+  if (!(setup.model.c_true > 0 && std::isfinite(setup.model.c_true))) throw std::invalid_argument(where + ": k: expected a number > 0");
+  if (!(setup.model.lapse >= 0 && setup.model.lapse < 1 - setup.model.guess))
+    throw std::invalid_argument(where + ": lapse: expected a rate in [0, 1 - guess)");
+  return setup;
+}
 
 // `where` names the source in errors: "--observer", or "<session.json>: observer" on a resume.
 ObserverSetup parse_observer(const std::string& given, const procedure::StudyConfig& config, const std::string& where = "--observer") {
+  if (config.frames.enabled()) return parse_frame_observer(given, config, where);
   ObserverSetup setup;
   setup.spec = given;
   setup.image = given.rfind("image", 0) == 0;
@@ -288,6 +332,7 @@ struct RunOptions {
   std::optional<stimuli::Kernel> kernel;  // --kernel: replaces the config's stimulus kernel (new sessions)
   std::string observer = "psychometric:c=3.0,beta=3.5,lapse=0.02";
   std::string participant = "sim";
+  fs::path frame_cache;  // a frame study's rendered frames (stimuli/frame_patch.h); empty: the default
   bool headless = false;
   int pace_ms = 0;
   int stop_after = 0;
@@ -413,6 +458,13 @@ std::string intake_problem(const fs::path& root, const procedure::StudyConfig& c
   return "";
 }
 
+// The windows show square grey stimuli, two side by side; a frame study's colour patches and its
+// reference above them are not drawn there yet (docs/study.md#frames-the-rules-own-frames).
+[[maybe_unused]] void refuse_frames_in_windows(const procedure::StudyConfig& config) {
+  if (config.frames.enabled())
+    throw cli::UsageError("run: a frame study (config frames) runs --headless only for now: the windows do not draw its patches yet");
+}
+
 // A participant session in the windows (study/gui); the same Session, so the same log. Without
 // --participant (a new session), the intake screen asks for the id and -o is the folder of sessions.
 // Consent, when the config has a text for it, is asked before the session is created either way.
@@ -431,6 +483,7 @@ int run_participant(RunOptions o) {
     start.resume = [&](const std::function<void(const procedure::Session&)>& accept) {
       return open_session(o, [&](const procedure::Session& s) {
         // A person may not answer a simulated session's trials (a finished one may be looked at).
+        refuse_frames_in_windows(s.config());
         const procedure::ObserverKind kind = procedure::observer_kind(s.session_json(), (s.dir() / "session.json").string());
         if (kind != procedure::ObserverKind::person && s.next())
           throw std::invalid_argument(std::string("--resume: the session was answered by a ") + procedure::describe(kind) +
@@ -441,6 +494,7 @@ int run_participant(RunOptions o) {
     return study_gui::run_session(start, o.gui);
   }
   start.config = new_session_config(o);
+  refuse_frames_in_windows(start.config);
   start.intake = !o.participant_given;
   if (start.intake) {
     // -o is the folder of sessions: it may hold others, must not be a link, and its own folder must
@@ -518,9 +572,12 @@ int run_study(const RunOptions& o) {
   const double false_alarm = setup.false_alarm;
   const observers::PlantedModel model = setup.model;
   const observers::ImageObserverParams image_params = setup.image_params;
+  const bool frames = session.config().frames.enabled();
+  std::unique_ptr<stimuli::FrameCache> frame_cache;  // makes its own GL context at its first render
+  if (frames && setup.frame) frame_cache = std::make_unique<stimuli::FrameCache>(o.frame_cache.empty() ? stimuli::default_frame_cache() : o.frame_cache);
   std::unique_ptr<gl::HeadlessContext> context;
   std::unique_ptr<stimuli::StimulusRenderer> renderer;
-  if (image_observer) {
+  if (image_observer && !frames) {
     context = std::make_unique<gl::HeadlessContext>();
     renderer = std::make_unique<stimuli::StimulusRenderer>();
   }
@@ -529,7 +586,14 @@ int run_study(const RunOptions& o) {
   while (const auto plan = session.next()) {
     bool correct = false;
     const std::uint64_t trial_seed = sampling::derive_seed(observer_seed, static_cast<std::uint64_t>(plan->trial));
-    if (image_observer) {
+    if (frames && setup.frame) {
+      const stimuli::PatchPair pair = stimuli::patch_pair(*frame_cache, session.config(), *plan);
+      correct = sampling::Random(trial_seed).uniform() < stimuli::observe_pair(pair, setup.frame_params).p_detect_max * 0.5 + 0.5;
+    } else if (frames) {
+      // The planted k* is the psychometric observer's c: at "artifact" 1 and "radius" k its intensity is log10(1 / k).
+      observers::PsychometricObserver observer(conditions, trial_seed);
+      correct = observer.respond({session.condition(plan->round), 1.0, plan->k}).correct;
+    } else if (image_observer) {
       const stimuli::StimulusPair pair = renderer->render(plan->stimulus);
       observers::ImageObserver eye(image_params, trial_seed);
       if (yesno) {
@@ -561,10 +625,19 @@ int run_study(const RunOptions& o) {
               session.randomization().seed_from.c_str());
   for (const int r : session.randomization().round_order) std::printf(" %s", session.condition(r).c_str());
   std::printf("\n");
+  if (frame_cache)
+    std::printf("  frames: %d rendered, %d read from the cache %s\n", frame_cache->renders(), frame_cache->reads(),
+                frame_cache->dir().string().c_str());
   for (const int round : session.randomization().round_order) {
     const auto r = static_cast<std::size_t>(round);
     for (const auto& sc : session.rounds()[r]) {
       const double t = sc.quest.mean();
+      if (frames) {
+        std::printf("  round %d %-10s %-10s trials %3zu  threshold log10(1/k) %+.3f sd %.3f  -> k = %.2f\n", session.round_position(round) + 1,
+                    session.condition(static_cast<int>(r)).c_str(), sc.name.c_str(), sc.quest.trial_count(), t, sc.quest.sd(),
+                    std::pow(10.0, -t));
+        continue;
+      }
       std::printf("  round %d %-10s %-4s trials %3zu  threshold log10(a/r) %+.3f sd %.3f  -> r/a = %.2f\n", session.round_position(round) + 1,
                   session.condition(static_cast<int>(r)).c_str(), sc.name.c_str(), sc.quest.trial_count(), t,
                   sc.quest.sd(), std::pow(10.0, -t));
@@ -650,6 +723,10 @@ int main(int argc, char** argv) {
                   "that the fitted c is its entry; replaces the config's stimulus.kernel (or its pcf.kernel setting) and is "
                   "recorded in session.json's config; refused for a technique without kernels");
   run->add_flag("--headless", ro.headless, "no window: the observer answers");
+  run->add_option("--frame-cache", ro.frame_cache,
+                  "a frame study's rendered frames, one PNG per settings fingerprint, shared by sessions (default: "
+                  "$PENUMBRA_FRAME_CACHE, else $XDG_CACHE_HOME/penumbra/frames or ~/.cache/penumbra/frames)")
+      ->check(cli::path_given());
   run->add_option("--pace-ms", ro.pace_ms, "wait after each simulated trial (tests of crash recovery)")
       ->check(CLI::Range(0, 60000));
   run->add_option("--stop-after", ro.stop_after, "headless: stop once the session has this many trials (resumable)")

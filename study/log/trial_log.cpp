@@ -38,10 +38,15 @@ const std::vector<std::string>& columns(Layout layout) {
     c.insert(c.begin() + 4, "round_position");
     return c;
   }();
+  static const std::vector<std::string> frames = {
+      "session_id", "participant", "utc_time", "condition_index", "round_position", "trial", "staircase", "technique", "scene",
+      "path_frame", "task", "intensity", "k", "requested_k", "clamped", "target", "response", "correct", "rt_ms", "quest_mean",
+      "quest_sd", "practice", "stimulus_seed", "onset_s", "frames", "frame_ms_mean", "frame_ms_max", "dropped_frames"};
   switch (layout) {
     case Layout::without_timing: return without_timing;
     case Layout::with_timing: return with_timing;
     case Layout::current: return current;
+    case Layout::frames: return frames;
   }
   return current;
 }
@@ -99,8 +104,29 @@ bool valid_text(const std::string& s) {
 
 }  // namespace
 
+namespace {
+void format_timing(std::ostringstream& o, const TrialRow& r) {
+  if (r.timing)
+    o << ',' << num(r.timing->onset_s) << ',' << r.timing->frames << ',' << num(r.timing->frame_ms_mean) << ','
+      << num(r.timing->frame_ms_max) << ',' << (r.timing->dropped_frames ? std::to_string(*r.timing->dropped_frames) : "");
+  else
+    o << ",,,,,";  // not measured
+}
+}  // namespace
+
 std::string format_row(const TrialRow& r, Layout layout) {
   std::ostringstream o;
+  if (layout == Layout::frames) {
+    o << text(r.session_id, "session_id") << ',' << text(r.participant, "participant") << ',' << r.utc_time << ','
+      << r.condition_index << ',' << r.round_position << ',' << r.trial << ',' << text(r.staircase, "staircase") << ','
+      << text(r.technique, "technique") << ',' << text(r.scene, "scene") << ',' << r.path_frame << ',' << r.task << ','
+      << num(r.intensity) << ',' << num(r.k) << ',' << num(r.requested_k) << ',' << r.clamped << ',' << r.target << ','
+      << r.response << ',' << r.correct << ',' << ms_to_us(r.rt_ms) << ',' << num(r.quest_mean) << ',' << num(r.quest_sd)
+      << ',' << r.practice << ',' << r.stimulus_seed;
+    format_timing(o, r);
+    o << '\n';
+    return o.str();
+  }
   o << text(r.session_id, "session_id") << ',' << text(r.participant, "participant") << ',' << r.utc_time << ','
     << r.condition_index << ',' << (layout == Layout::current ? std::to_string(r.round_position) + "," : std::string()) << r.trial
     << ',' << text(r.staircase, "staircase") << ',' << r.pattern << ',' << num(r.contrast)
@@ -109,13 +135,7 @@ std::string format_row(const TrialRow& r, Layout layout) {
     << num(r.quest_mean) << ',' << num(r.quest_sd) << ',' << r.practice << ',' << num(r.requested_filter_radius_px)
     << ',' << r.clamped << ',' << num(r.artifact_arcmin) << ',' << num(r.filter_radius_arcmin) << ','
     << r.stimulus_seed;
-  if (layout != Layout::without_timing) {
-    if (r.timing)
-      o << ',' << num(r.timing->onset_s) << ',' << r.timing->frames << ',' << num(r.timing->frame_ms_mean) << ','
-        << num(r.timing->frame_ms_max) << ',' << (r.timing->dropped_frames ? std::to_string(*r.timing->dropped_frames) : "");
-    else
-      o << ",,,,,";  // not measured
-  }
+  if (layout != Layout::without_timing) format_timing(o, r);
   o << '\n';
   return o.str();
 }
@@ -135,7 +155,62 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
       fail(i, "expected UTF-8 text without quotes or control characters");
     return f[i];
   };
+  // The timing columns from `first` on: all empty (not measured) or all filled, but for
+  // dropped_frames, empty when the refresh rate was unknown.
+  auto timing = [&](std::size_t first) -> std::optional<FrameTiming> {
+    const std::size_t n = 5;
+    std::size_t empty = 0;
+    for (std::size_t i = first; i < first + n; ++i) empty += f[i].empty();
+    if (empty == n) return std::nullopt;
+    for (std::size_t i = first; i < first + n - 1; ++i)
+      if (f[i].empty()) fail(i, "expected a value (the timing columns are all empty or all filled)");
+    FrameTiming t;
+    t.onset_s = real(first);
+    if (!(t.onset_s >= 0 && t.onset_s <= kMaxOnsetS)) fail(first, "expected a time in [0, 1e7] s since the window opened");
+    t.frames = integer(first + 1, 1, 1000000000);
+    t.frame_ms_mean = real(first + 2);
+    if (!(t.frame_ms_mean >= 0 && t.frame_ms_mean <= kMaxFrameMs)) fail(first + 2, "expected a frame interval in [0, 1e6] ms");
+    t.frame_ms_max = real(first + 3);
+    if (t.frame_ms_max < t.frame_ms_mean) fail(first + 3, "expected >= frame_ms_mean");
+    if (t.frame_ms_max > kMaxFrameMs) fail(first + 3, "expected a frame interval in [0, 1e6] ms");
+    if (!f[first + 4].empty()) t.dropped_frames = integer(first + 4, 0, t.frames);
+    return t;
+  };
   TrialRow r;
+  if (layout == Layout::frames) {
+    r.session_id = nonempty(0);
+    r.participant = nonempty(1);
+    r.utc_time = nonempty(2);
+    if (!utc_time_ok(r.utc_time)) fail(2, "expected a UTC time as the study writes it, 2026-12-03T09:15:02.123Z");
+    r.condition_index = integer(3, 0, 1000);
+    r.round_position = integer(4, 1, 1001);
+    r.trial = integer(5, 0, 1000000);
+    r.staircase = nonempty(6);
+    r.technique = nonempty(7);
+    r.scene = nonempty(8);
+    r.path_frame = integer(9, -1, 10000000);
+    r.task = one_of(10, {"2afc"});
+    r.intensity = real(11);
+    r.k = real(12);
+    if (!(r.k > 0)) fail(12, "expected > 0");
+    if (std::abs(r.intensity + std::log10(r.k)) > 1e-9) fail(11, "expected log10(1 / k)");
+    r.requested_k = real(13);
+    if (!(r.requested_k > 0)) fail(13, "expected > 0");
+    r.clamped = integer(14, 0, 1);
+    r.target = one_of(15, {"left", "right"});
+    r.response = one_of(16, {"left", "right"});
+    r.correct = integer(17, 0, 1);
+    if (r.correct != (r.response == r.target ? 1 : 0)) fail(17, "does not agree with target and response");
+    r.rt_ms = real(18);
+    if (!(r.rt_ms >= 0 && r.rt_ms <= kMaxRtMs)) fail(18, "expected a time in [0, 1e8] ms");
+    r.quest_mean = real(19);
+    r.quest_sd = real(20);
+    if (r.quest_sd < 0) fail(20, "expected >= 0");
+    r.practice = integer(21, 0, 1);
+    r.stimulus_seed = f.unsigned_integer(22);
+    r.timing = timing(23);
+    return r;
+  }
   // The current layout has round_position after condition_index: the columns after it move by one.
   const std::size_t k = layout == Layout::current ? 1 : 0;
   r.session_id = nonempty(0);
@@ -179,27 +254,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
   r.artifact_arcmin = real(22 + k);
   r.filter_radius_arcmin = real(23 + k);
   r.stimulus_seed = f.unsigned_integer(24 + k);
-  if (layout != Layout::without_timing) {
-    // Either all five timing columns are empty (not measured) or all hold values, but for
-    // dropped_frames, empty when the refresh rate was unknown.
-    const std::size_t first = 25 + k, n = 5;
-    std::size_t empty = 0;
-    for (std::size_t i = first; i < first + n; ++i) empty += f[i].empty();
-    if (empty == n) return r;
-    for (std::size_t i = first; i < first + n - 1; ++i)
-      if (f[i].empty()) fail(i, "expected a value (the timing columns are all empty or all filled)");
-    FrameTiming t;
-    t.onset_s = real(25 + k);
-    if (!(t.onset_s >= 0 && t.onset_s <= kMaxOnsetS)) fail(25 + k, "expected a time in [0, 1e7] s since the window opened");
-    t.frames = integer(26 + k, 1, 1000000000);
-    t.frame_ms_mean = real(27 + k);
-    if (!(t.frame_ms_mean >= 0 && t.frame_ms_mean <= kMaxFrameMs)) fail(27 + k, "expected a frame interval in [0, 1e6] ms");
-    t.frame_ms_max = real(28 + k);
-    if (t.frame_ms_max < t.frame_ms_mean) fail(28 + k, "expected >= frame_ms_mean");
-    if (t.frame_ms_max > kMaxFrameMs) fail(28 + k, "expected a frame interval in [0, 1e6] ms");
-    if (!f[29 + k].empty()) t.dropped_frames = integer(29 + k, 0, t.frames);
-    r.timing = t;
-  }
+  if (layout != Layout::without_timing) r.timing = timing(25 + k);
   return r;
 }
 
@@ -221,7 +276,7 @@ FrameTiming frame_timing(double onset_s, const std::vector<double>& intervals_ms
   return t;
 }
 
-Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
+Writer::Writer(const std::filesystem::path& path, bool create, Layout layout) : path_(path), layout_(layout) {
   if (!create) {
     io::refuse_link(path, "a session directory holds its own files, never links");
     std::ifstream in(path, std::ios::binary);
@@ -229,14 +284,14 @@ Writer::Writer(const std::filesystem::path& path, bool create) : path_(path) {
     std::getline(in, first);
     first += '\n';
     bool known = false;
-    for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current})
+    for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current, Layout::frames})
       if (first == header_line(l)) layout_ = l, known = true;
     if (in && !known) throw std::runtime_error(path.string() + ":1: the header does not match the trial-log columns");
   }
   // Never through a symbolic link: rows appended to trials.csv went to whatever file it pointed at.
   fd_ = io::open_no_follow(path, O_WRONLY | O_APPEND | (create ? (O_CREAT | O_EXCL) : 0), 0644, "the trial log");
   if (create) {
-    int error = io::write_all(fd_, header_line());
+    int error = io::write_all(fd_, header_line(layout_));
     if (error == 0 && ::fsync(fd_) != 0) error = errno;
     if (error != 0) {
       ::close(fd_);
@@ -283,7 +338,7 @@ ReadResult read(const std::filesystem::path& path) {
     const std::string line = all.substr(pos, nl - pos);
     if (line_number == 1) {
       bool known = false;
-      for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current})
+      for (Layout l : {Layout::without_timing, Layout::with_timing, Layout::current, Layout::frames})
         if (line + "\n" == header_line(l)) result.layout = l, known = true;
       if (!known) {
         // The two ways a spreadsheet saves a good log badly, named (they look like the right header).

@@ -61,6 +61,12 @@ struct TrialRow {
   // Written as empty fields when absent: headless and simulated sessions, and logs begun before the
   // timing columns existed.
   std::optional<FrameTiming> timing;
+  // A frame study's rows (Layout::frames) instead of pattern, contrast, artifact and radius: the
+  // round's technique, the scene and path frame of the patch (the staircase), the multiple k of the
+  // rule's c shown (intensity = log10(1 / k)) and the one QUEST asked for.
+  std::string technique, scene;
+  int path_frame = -1;
+  double k = 0, requested_k = 0;
 };
 
 // The log's layouts, oldest first. `current` names the round two ways: `condition_index` (the
@@ -68,7 +74,10 @@ struct TrialRow {
 // the older layouts had one column `round` holding the condition index, and `without_timing` lacks
 // the timing columns. Older logs are read and, when such a session is resumed, appended to in their
 // own layout.
-enum class Layout { without_timing, with_timing, current };
+// `frames` is a frame study's log (config.frames): the current layout's identity, answer, QUEST and
+// timing columns with technique, scene, path_frame, k and requested_k in place of the edge
+// stimulus's columns.
+enum class Layout { without_timing, with_timing, current, frames };
 
 const std::vector<std::string>& columns(Layout layout = Layout::current);
 std::string header_line(Layout layout = Layout::current);  // with '\n'
@@ -81,7 +90,7 @@ TrialRow parse_row(const std::string& line, const std::string& file, int line_nu
 // header; an existing log keeps the layout of its header.
 class Writer {
  public:
-  Writer(const std::filesystem::path& path, bool create);
+  Writer(const std::filesystem::path& path, bool create, Layout layout = Layout::current);
   ~Writer();
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;

@@ -193,14 +193,94 @@ class Reader {
   json_input::Reader r_;
 };
 
+// "section.key": value pairs (penumbra-render's keys) as text, in the file's order.
+std::vector<std::pair<std::string, std::string>> settings_of(const Reader& r, const nlohmann::json& settings, const std::string& path) {
+  if (!settings.is_object()) r.fail(path, "expected an object of \"section.key\": value");
+  std::vector<std::pair<std::string, std::string>> out;
+  for (auto it = settings.begin(); it != settings.end(); ++it) {
+    const std::string field = path + "." + text::printable(it.key());
+    if (it.key().empty() || it.key().size() > 64) r.fail(field, "expected a setting's name (e.g. pcf.kernel)");
+    std::string value;
+    if (it->is_string()) value = it->get<std::string>();
+    else if (it->is_boolean()) value = it->get<bool>() ? "true" : "false";
+    else if (it->is_number()) value = it->dump();
+    else r.fail(field, "expected a string, a number or true/false");
+    if (value.size() > 64) r.fail(field, "value longer than 64 characters");
+    out.emplace_back(it.key(), value);
+  }
+  return out;
+}
+
+// The settings a frame study sets itself for every frame (the rule, its constant, the maps).
+bool study_owned_setting(const std::string& key) {
+  return key.rfind("adaptive.enabled", 0) == 0 || key == "adaptive.c" || key == "adaptive.visibility" || key == "map.cascades" ||
+         key == "map.resolution_texels" || key == "map.virtual_pages";
+}
+
+void parse_frames(const Reader& r, const nlohmann::json& f, FramesConfig& out) {
+  r.only(f, "frames.", {"scene", "width_px", "height_px", "c", "settings", "reference", "k_grid", "warmup_frames", "patches"});
+  const auto* scene = r.get(f, "frames.", {.name = "scene", .type = json_input::Type::string, .required = true,
+                                           .why = "the scene whose frames are shown (outdoor, demo, or a scene file)"});
+  out.scene = scene->get<std::string>();
+  if (out.scene.empty() || out.scene.size() > 4096) r.fail("frames.scene", "expected a built-in scene name or a scene file");
+  out.width_px = static_cast<int>(r.integer(f, "frames.", "width_px", 960, 16, 8192));
+  out.height_px = static_cast<int>(r.integer(f, "frames.", "height_px", 540, 16, 8192));
+  out.c = r.number(f, "frames.", "c", 3.47, 0.1, 100);
+  if (const auto* settings = r.find(f, "settings")) {
+    out.settings = settings_of(r, *settings, "frames.settings");
+    for (const auto& [key, value] : out.settings)
+      if (study_owned_setting(key))
+        r.fail("frames.settings." + text::printable(key), "set by the study (the rule with adaptive.c = k c, the reference's maps)");
+  }
+  if (const auto* ref = r.find(f, "reference")) {
+    r.only(*ref, "frames.reference.", {"cascades", "resolution_texels"});
+    out.reference_cascades = static_cast<int>(r.integer(*ref, "frames.reference.", "cascades", 4, 1, 4));
+    out.reference_texels = static_cast<int>(r.integer(*ref, "frames.reference.", "resolution_texels", 8188, 64, 16384));
+  }
+  if (const auto* grid = r.find(f, "k_grid")) {
+    r.only(*grid, "frames.k_grid.", {"min", "max", "steps_per_octave"});
+    out.k_min = r.number(*grid, "frames.k_grid.", "min", 0.125, 0.01, 100);
+    out.k_max = r.number(*grid, "frames.k_grid.", "max", 8, 0.01, 100);
+    if (!(out.k_max > out.k_min)) r.fail("frames.k_grid.max", "expected above frames.k_grid.min");
+    out.k_steps_per_octave = static_cast<int>(r.integer(*grid, "frames.k_grid.", "steps_per_octave", 4, 1, 64));
+  }
+  out.warmup_frames = static_cast<int>(r.integer(f, "frames.", "warmup_frames", 2, 0, 100));
+  const auto* patches = r.get(f, "frames.", {.name = "patches", .type = json_input::Type::array, .required = true,
+                                             .why = "the patches shown: [{\"name\", \"path_frame\", \"x_px\", \"y_px\"}]", .min_items = 1});
+  for (std::size_t i = 0; i < patches->size(); ++i) {
+    const std::string p = "frames.patches[" + std::to_string(i) + "].";
+    const nlohmann::json& e = (*patches)[i];
+    r.only(e, p, {"name", "path_frame", "x_px", "y_px"});
+    FramePatch patch;
+    patch.name = r.text(e, p, "name", "");
+    if (patch.name.empty() || patch.name.size() > 64 ||
+        patch.name.find_first_of(",\"\n\r ") != std::string::npos || !text::valid_utf8(patch.name))
+      r.fail(p + "name", "expected a short name without spaces, commas or quotes (the staircase's name in the log)");
+    for (const FramePatch& other : out.patches)
+      if (other.name == patch.name) r.fail(p + "name", "'" + patch.name + "' names another patch already");
+    patch.path_frame = static_cast<int>(r.integer(e, p, "path_frame", -1, -1, 10'000'000));
+    patch.x_px = static_cast<int>(r.integer(e, p, "x_px", 0, 0, 8192));
+    patch.y_px = static_cast<int>(r.integer(e, p, "y_px", 0, 0, 8192));
+    out.patches.push_back(patch);
+  }
+}
+
 }  // namespace
+
+double FramesConfig::round_k(double k) const {
+  const double step = 1.0 / k_steps_per_octave;  // in octaves
+  const double lo = std::ceil(std::log2(k_min) / step - 1e-9), hi = std::floor(std::log2(k_max) / step + 1e-9);
+  const double i = std::clamp(std::round(std::log2(k) / step), lo, hi);
+  return std::exp2(i * step);
+}
 
 StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const Reader r(file);
   r.only(j, "", {"name", "task", "artifact_px", "rounds", "quest", "intensity_bounds", "stopping", "practice_trials",
                  "practice_intensity", "practice", "texts", "break_every_trials", "seed", "round_order", "stimulus", "display", "description",
-                 "yesno_scoring", "readings"});
+                 "yesno_scoring", "readings", "frames"});
   StudyConfig c;
+  const nlohmann::json* frames = r.find(j, "frames");
   c.name = r.text(j, "", "name", "study");
   c.task = r.choice(j, "", "task", "2afc", {"2afc", "yesno"});
   if (r.find(j, "yesno_scoring")) {
@@ -217,6 +297,16 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     }
   }
 
+  if (frames) {
+    if (c.task != "2afc") r.fail("task", "a frame study is 2afc (which of the two is the reference?)");
+    parse_frames(r, *frames, c.frames);
+    for (const char* edge_only : {"artifact_px", "intensity_bounds"})
+      if (r.find(j, edge_only))
+        r.fail(edge_only, "not with frames (a frame study's staircases are its patches, its intensities log10(1 / k) within frames.k_grid)");
+    c.artifact_px.clear();
+    c.intensity_min = -std::log10(c.frames.k_max);
+    c.intensity_max = -std::log10(c.frames.k_min);
+  }
   if (const auto* a = r.find(j, "artifact_px")) {
     if (!a->is_array() || a->empty()) r.fail("artifact_px", "expected a non-empty array of sizes in px");
     c.artifact_px.clear();
@@ -233,8 +323,18 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
                                      .why = "a study needs its rounds: [{\"pattern\", \"contrast\"}]", .min_items = 1});
   for (std::size_t i = 0; i < rounds->size(); ++i) {
     const std::string p = "rounds[" + std::to_string(i) + "].";
-    r.only((*rounds)[i], p, {"pattern", "contrast"});
     RoundConfig rc;
+    if (frames) {
+      r.only((*rounds)[i], p, {"technique"});
+      rc.technique = r.text((*rounds)[i], p, "technique", "");
+      if (rc.technique.empty() || rc.technique.size() > 32)
+        r.fail(p + "technique", "expected the technique whose frames the round shows (penumbra-render --technique: pcf, pcss, ...)");
+      for (std::size_t k = 0; k < i; ++k)
+        if (c.rounds[k].technique == rc.technique) r.fail(p + "technique", "'" + text::printable(rc.technique) + "' has a round already");
+      c.rounds.push_back(rc);
+      continue;
+    }
+    r.only((*rounds)[i], p, {"pattern", "contrast"});
     rc.pattern = r.parse_enum(p + "pattern", r.text((*rounds)[i], p, "pattern", "stair"), stimuli::parse_pattern);
     rc.contrast = r.number((*rounds)[i], p, "contrast", 1.0, 0.01, 1.0);
     c.rounds.push_back(rc);
@@ -247,7 +347,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const double default_gamma = yesno ? 0.05 : 0.5, default_p = yesno ? 0.658 : 0.82;
   if (const auto* q = r.find(j, "quest")) {
     r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range"});
-    c.quest.t_guess = r.number(*q, "quest.", "t_guess", -0.5, -5, 5);
+    c.quest.t_guess = r.number(*q, "quest.", "t_guess", frames ? 0.0 : -0.5, -5, 5);
     c.quest.t_guess_sd = r.number(*q, "quest.", "t_guess_sd", 1.0, 0.01, 100);
     c.quest.p_threshold = r.number(*q, "quest.", "p_threshold", default_p, 0.01, 0.999);
     c.quest.beta = r.number(*q, "quest.", "beta", 3.5, 0.1, 100);
@@ -257,7 +357,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     c.quest.grain = r.number(*q, "quest.", "grain", 0.01, 1e-4, 1);
     if (r.find(*q, "range")) c.quest.range = r.number(*q, "quest.", "range", 5, 0.1, 100);
   } else {
-    c.quest.t_guess = -0.5;
+    c.quest.t_guess = frames ? 0.0 : -0.5;  // frames: k = 1, the rule as it is
     c.quest.t_guess_sd = 1.0;
     c.quest.gamma = default_gamma;
     c.quest.p_threshold = default_p;
@@ -281,13 +381,13 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
       if (r.find(j, flat)) r.fail(flat, "not with practice (practice.trials and practice.intensity say it)");
     r.only(*p, "practice.", {"trials", "intensity", "every_round", "feedback", "feedback_ms"});
     c.practice.trials = static_cast<int>(r.integer(*p, "practice.", "trials", 4, 0, 1000));
-    c.practice.intensity = r.number(*p, "practice.", "intensity", 0.3, -3, 3);
+    c.practice.intensity = r.number(*p, "practice.", "intensity", frames ? kFramePracticeIntensity : 0.3, -3, 3);
     c.practice.every_round = r.boolean(*p, "practice.", "every_round", true);
     c.practice.feedback = r.boolean(*p, "practice.", "feedback", true);
     c.practice.feedback_ms = r.number(*p, "practice.", "feedback_ms", 800, 0, 10000);
   } else {  // configs and sessions from before the practice block: the first round's practice, no feedback
     c.practice.trials = static_cast<int>(r.integer(j, "", "practice_trials", 4, 0, 1000));
-    c.practice.intensity = r.number(j, "", "practice_intensity", 0.3, -3, 3);
+    c.practice.intensity = r.number(j, "", "practice_intensity", frames ? kFramePracticeIntensity : 0.3, -3, 3);
   }
   if (const auto* t = r.find(j, "texts")) {
     if (!t->is_object()) r.fail("texts", "expected an object of \"name\": \"text\"");
@@ -315,6 +415,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     c.seed = s->get<std::uint64_t>();
   }
   if (const auto* s = r.find(j, "stimulus")) {
+    if (frames) r.only(*s, "stimulus.", {"size_px"});  // the rounds name the technique, frames.settings its settings
     r.only(*s, "stimulus.", {"size_px", "kernel", "poisson_taps", "technique", "settings"});
     c.stimulus_size_px = static_cast<int>(r.integer(*s, "stimulus.", "size_px", 320, 16, 4096));
     if (r.find(*s, "technique")) {
@@ -392,6 +493,14 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   if (across > d.width_px || c.stimulus_size_px > d.height_px)
     r.fail("stimulus.size_px", std::to_string(c.stimulus_size_px) + " px" + (c.task == "2afc" ? " twice side by side" : "") +
                                    " does not fit the display's " + std::to_string(d.width_px) + " x " + std::to_string(d.height_px) + " px");
+  for (std::size_t i = 0; frames && i < c.frames.patches.size(); ++i) {
+    const FramePatch& patch = c.frames.patches[i];
+    if (patch.x_px + c.stimulus_size_px > c.frames.width_px || patch.y_px + c.stimulus_size_px > c.frames.height_px)
+      r.fail("frames.patches[" + std::to_string(i) + "]", "a patch of stimulus.size_px " + std::to_string(c.stimulus_size_px) + " at (" +
+                                                          std::to_string(patch.x_px) + ", " + std::to_string(patch.y_px) +
+                                                          ") does not fit the " + std::to_string(c.frames.width_px) + " x " +
+                                                          std::to_string(c.frames.height_px) + " frame");
+  }
   try {
     quest::Quest probe(c.quest);
   } catch (const std::exception& e) {
@@ -431,16 +540,18 @@ void set_stimulus_kernel(StudyConfig& c, stimuli::Kernel kernel) {
 // Hand-written: the config file's layout (nested sections, enums as names, fields only when set or not default).
 nlohmann::json to_json(const StudyConfig& c) {
   nlohmann::json rounds = nlohmann::json::array();
-  for (const auto& r : c.rounds) rounds.push_back({{"pattern", stimuli::to_string(r.pattern)}, {"contrast", r.contrast}});
+  for (const auto& r : c.rounds)
+    rounds.push_back(c.frames.enabled() ? nlohmann::json{{"technique", r.technique}}
+                                        : nlohmann::json{{"pattern", stimuli::to_string(r.pattern)}, {"contrast", r.contrast}});
   nlohmann::json quest = {{"t_guess", c.quest.t_guess}, {"t_guess_sd", c.quest.t_guess_sd},
                           {"p_threshold", c.quest.p_threshold}, {"beta", c.quest.beta}, {"delta", c.quest.delta},
                           {"gamma", c.quest.gamma}, {"grain", c.quest.grain}};
   if (c.quest.range) quest["range"] = *c.quest.range;
   nlohmann::json stimulus = {{"size_px", c.stimulus_size_px}};
-  if (c.technique.empty()) {
+  if (c.technique.empty() && !c.frames.enabled()) {  // a frame study's stimulus block holds its size alone
     stimulus["kernel"] = stimuli::to_string(c.kernel);
     stimulus["poisson_taps"] = c.poisson_taps;
-  } else {
+  } else if (!c.technique.empty()) {
     stimulus["technique"] = c.technique;
     stimulus["settings"] = nlohmann::json::object();
     for (const auto& [key, value] : c.technique_settings) stimulus["settings"][key] = value;
@@ -473,6 +584,19 @@ nlohmann::json to_json(const StudyConfig& c) {
   if (!c.texts.empty()) {
     j["texts"] = nlohmann::json::object();
     for (const auto& [key, value] : c.texts) j["texts"][key] = value;
+  }
+  if (c.frames.enabled()) {
+    j.erase("artifact_px");
+    j.erase("intensity_bounds");
+    const FramesConfig& f = c.frames;
+    nlohmann::json patches = nlohmann::json::array();
+    for (const FramePatch& p : f.patches) patches.push_back({{"name", p.name}, {"path_frame", p.path_frame}, {"x_px", p.x_px}, {"y_px", p.y_px}});
+    nlohmann::json settings = nlohmann::json::object();
+    for (const auto& [key, value] : f.settings) settings[key] = value;
+    j["frames"] = {{"scene", f.scene}, {"width_px", f.width_px}, {"height_px", f.height_px}, {"c", f.c}, {"settings", settings},
+                   {"reference", {{"cascades", f.reference_cascades}, {"resolution_texels", f.reference_texels}}},
+                   {"k_grid", {{"min", f.k_min}, {"max", f.k_max}, {"steps_per_octave", f.k_steps_per_octave}}},
+                   {"warmup_frames", f.warmup_frames}, {"patches", patches}};
   }
   // Only when not the default, so that sessions written before the field existed read back equal.
   if (c.yesno_scoring != "jagged_only") j["yesno_scoring"] = c.yesno_scoring;

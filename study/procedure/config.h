@@ -16,6 +16,40 @@ namespace penumbra::procedure {
 struct RoundConfig {
   stimuli::Pattern pattern = stimuli::Pattern::stair;
   double contrast = 1.0;  // lit level in linear light
+  // A frame study's round: the renderer's technique whose frames it shows (penumbra-render's
+  // names: pcf, pcss, ...); empty in the edge study.
+  std::string technique;
+};
+
+// A frame study (config "frames", docs/study.md#frames-the-rules-own-frames): patches of frames
+// the renderer draws, by the rule with its constant c scaled by k, against the same patch of a
+// reference frame. One QUEST per patch within a round (a technique); the intensity is
+// log10(1 / k), so detectability rises as k falls, as QUEST assumes, and a threshold u means
+// k* = 10^-u, the way u means c in the edge study. QUEST's suggestion is rounded to a grid of k
+// (k_grid): each frame is rendered once per grid value and cached (stimuli/frame_patch.h).
+// A frame study's practice: k = 1/4, a map a quarter of the rule's size per side (log10 4).
+inline constexpr double kFramePracticeIntensity = 0.6020599913279624;
+struct FramePatch {
+  std::string name;     // the staircase's name ("street")
+  int path_frame = -1;  // frame of the scene's camera path; -1: the scene's own camera
+  int x_px = 0, y_px = 0;  // the patch's top-left corner in the frame (top row first)
+};
+struct FramesConfig {
+  std::string scene;  // built-in scene name or scene file (penumbra-render --scene); empty: not a frame study
+  int width_px = 960, height_px = 540;  // the frame
+  double c = 3.47;                      // the rule's constant that k scales (adaptive.c = k c)
+  // Renderer settings every frame shares ("section.key": value, penumbra-render's keys), e.g. the
+  // filter radius in world units; the map's size, cascades and the adaptive rule are the study's.
+  std::vector<std::pair<std::string, std::string>> settings;
+  int reference_cascades = 4;        // the reference: this many cascades ...
+  int reference_texels = 8188;       // ... of this many texels, the rule off
+  double k_min = 0.125, k_max = 8;   // the grid of k: powers of 2^(1 / k_steps_per_octave) in [k_min, k_max]
+  int k_steps_per_octave = 4;
+  int warmup_frames = 2;             // frames rendered before the one kept (PCSS's rule reads the frame before)
+  std::vector<FramePatch> patches;
+  bool enabled() const { return !scene.empty(); }
+  // The k shown for a requested one: the grid value nearest in log k, within [k_min, k_max].
+  double round_k(double k) const;
 };
 
 // Plausible display geometry, checked when a config is read: square pixels within 5 %, the eyes at
@@ -106,6 +140,7 @@ struct StudyConfig {
   std::string technique;
   std::vector<std::pair<std::string, std::string>> technique_settings;
   Display display;
+  FramesConfig frames;  // frames.enabled(): a frame study (stimulus.size_px is the patch's side)
   std::vector<std::pair<std::string, std::string>> texts;  // as given (text_table keys); the rest default
   // "readings": the choices a design's source does not state, as declared by the config
   // ({"kernel": "disk: the thesis does not name it", ...}); documentation carried into

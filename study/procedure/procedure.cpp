@@ -93,6 +93,7 @@ Procedure::Procedure(const StudyConfig& config, Randomization randomization) : c
   for (std::size_t r = 0; r < config_.rounds.size(); ++r) {
     std::vector<Staircase> round;
     for (double a : config_.artifact_px) round.push_back({"a" + fmt(a), a, quest::Quest(config_.quest), false, {}, {}});
+    for (const FramePatch& patch : config_.frames.patches) round.push_back({patch.name, 0, quest::Quest(config_.quest), false, {}, {}});
     rounds_.push_back(std::move(round));
   }
   ended_rounds_.assign(config_.rounds.size(), false);
@@ -101,6 +102,7 @@ Procedure::Procedure(const StudyConfig& config, Randomization randomization) : c
 
 std::string Procedure::condition(int round) const {
   const auto& r = config_.rounds.at(static_cast<std::size_t>(round));
+  if (config_.frames.enabled()) return r.technique;
   return stimuli::to_string(r.pattern) + "/" + fmt(r.contrast);
 }
 
@@ -135,10 +137,11 @@ std::optional<TrialPlan> Procedure::next() const {
   } else {
     p.round = randomization_.round_order.front();
   }
+  const int staircases = static_cast<int>(config_.artifact_px.size() + config_.frames.patches.size());
   if (practice_done < practice.trials) {
     p.practice = true;  // shows the round's pattern and contrast
-    p.staircase = practice_done % static_cast<int>(config_.artifact_px.size());
-    artifact = config_.artifact_px[static_cast<std::size_t>(p.staircase)];
+    p.staircase = practice_done % staircases;
+    artifact = config_.frames.enabled() ? 0.0 : config_.artifact_px[static_cast<std::size_t>(p.staircase)];
     x = practice.intensity;
     p.staircase_name = rounds_[static_cast<std::size_t>(p.round)][static_cast<std::size_t>(p.staircase)].name;
     random.bits();  // the staircase draw a main trial makes, so both use the stream alike
@@ -153,7 +156,19 @@ std::optional<TrialPlan> Procedure::next() const {
     const Staircase& sc = round[static_cast<std::size_t>(p.staircase)];
     p.staircase_name = sc.name;
     artifact = sc.artifact_px;
-    x = std::clamp(sc.quest.quantile(), config_.intensity_min, config_.intensity_max);
+    x = sc.quest.quantile();
+    if (config_.frames.enabled()) p.requested_k = std::pow(10.0, -x);
+    x = std::clamp(x, config_.intensity_min, config_.intensity_max);
+  }
+  if (config_.frames.enabled()) {
+    // QUEST's suggestion rounded to the grid of k: every frame a session shows is one of a few, rendered once.
+    p.k = config_.frames.round_k(std::pow(10.0, -x));
+    if (p.practice) p.requested_k = p.k;
+    p.clamped = p.requested_k < config_.frames.k_min * (1 - 1e-12) || p.requested_k > config_.frames.k_max * (1 + 1e-12);
+    p.intensity = -std::log10(p.k);
+    p.target = random.uniform() < 0.5 ? "left" : "right";  // the side of the reference
+    p.stimulus = stimulus(p.round, 0, 0, random.bits() >> 12);
+    return p;
   }
   p.requested_filter_radius_px = artifact / std::pow(10.0, x);
   const auto shown = stimuli::clamp_filter_radius(p.requested_filter_radius_px, config_.stimulus_size_px);
@@ -168,6 +183,13 @@ std::optional<TrialPlan> Procedure::next() const {
 stimuli::StimulusSpec Procedure::stimulus(int round, double artifact_px, double filter_radius_px, std::uint64_t seed) const {
   const auto& rc = config_.rounds.at(static_cast<std::size_t>(round));
   stimuli::StimulusSpec s;
+  if (config_.frames.enabled()) {  // a patch of a frame: its size, the display's transfer and the seed; the plan holds k
+    s.technique = rc.technique;
+    s.size_px = config_.stimulus_size_px;
+    s.transfer = config_.display.transfer;
+    s.seed = seed;
+    return s;
+  }
   s.pattern = rc.pattern;
   s.artifact_px = artifact_px;
   s.filter_radius_px = filter_radius_px;

@@ -27,12 +27,15 @@ struct TrialPlan {
   double requested_filter_radius_px = 0;
   bool clamped = false;
   double intensity = 0;  // log10(a / r) as shown
-  std::string target;    // 2afc: left|right (side of the jagged one); yesno: jagged|straight
+  std::string target;    // 2afc: left|right (side of the jagged one; a frame study: of the reference); yesno: jagged|straight
+  // A frame study (config.frames): the multiple of the rule's c shown (a grid value) and the one
+  // QUEST asked for; intensity = log10(1 / k). The patch is staircase_name.
+  double k = 0, requested_k = 0;
 };
 
 struct Staircase {
   std::string name;
-  double artifact_px = 0;
+  double artifact_px = 0;  // 0 in a frame study (a staircase per patch)
   quest::Quest quest;
   bool done = false;
   std::vector<double> filter_radius_px;  // per trial, as shown (for the admin plot)

@@ -90,7 +90,8 @@ Session Session::start(const StudyConfig& config, const fs::path& dir, const std
   if (const auto block = display_calibration_block(config)) s.session_json_["display_calibration"] = *block;
   for (auto it = extra.begin(); it != extra.end(); ++it) s.session_json_[it.key()] = it.value();
   s.write_session_json();
-  s.writer_ = std::make_unique<trial_log::Writer>(dir / "trials.csv", true);
+  s.writer_ = std::make_unique<trial_log::Writer>(dir / "trials.csv", true,
+                                                  config.frames.enabled() ? trial_log::Layout::frames : trial_log::Layout::current);
   return s;
 }
 
@@ -135,13 +136,8 @@ trial_log::TrialRow Session::make_row(const TrialPlan& plan, const std::string& 
   r.round_position = procedure_.round_position(plan.round) + 1;
   r.trial = plan.trial;
   r.staircase = plan.staircase_name;
-  r.pattern = stimuli::to_string(plan.stimulus.pattern);
-  r.contrast = plan.stimulus.lit_linear;
-  r.artifact_px = plan.stimulus.artifact_px;
   r.task = config().task;
   r.intensity = plan.intensity;
-  r.filter_radius_px = plan.stimulus.filter_radius_px;
-  r.kernel = stimuli::to_string(plan.stimulus.kernel);
   r.target = plan.target;
   r.response = response;
   r.correct = correct ? 1 : 0;
@@ -149,11 +145,25 @@ trial_log::TrialRow Session::make_row(const TrialPlan& plan, const std::string& 
   r.quest_mean = sc.quest.mean();
   r.quest_sd = sc.quest.sd();
   r.practice = plan.practice ? 1 : 0;
-  r.requested_filter_radius_px = plan.requested_filter_radius_px;
   r.clamped = plan.clamped ? 1 : 0;
+  r.stimulus_seed = plan.stimulus.seed;
+  if (config().frames.enabled()) {
+    const FramesConfig& f = config().frames;
+    r.technique = plan.stimulus.technique;
+    r.scene = f.scene;
+    r.path_frame = f.patches.at(static_cast<std::size_t>(plan.staircase)).path_frame;
+    r.k = plan.k;
+    r.requested_k = plan.requested_k;
+    return r;
+  }
+  r.pattern = stimuli::to_string(plan.stimulus.pattern);
+  r.contrast = plan.stimulus.lit_linear;
+  r.artifact_px = plan.stimulus.artifact_px;
+  r.filter_radius_px = plan.stimulus.filter_radius_px;
+  r.kernel = stimuli::to_string(plan.stimulus.kernel);
+  r.requested_filter_radius_px = plan.requested_filter_radius_px;
   r.artifact_arcmin = config().display.arcmin(plan.stimulus.artifact_px);
   r.filter_radius_arcmin = config().display.arcmin(plan.stimulus.filter_radius_px);
-  r.stimulus_seed = plan.stimulus.seed;
   return r;
 }
 

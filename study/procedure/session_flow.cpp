@@ -114,7 +114,7 @@ void SessionFlow::welcome() {
 }
 
 void SessionFlow::show_examples(int round) {
-  if (round == examples_round_) return;
+  if (round == examples_round_ || setup_.config.artifact_px.empty()) return;  // a frame study: no edge examples
   const double artifact_px = *std::max_element(setup_.config.artifact_px.begin(), setup_.config.artifact_px.end());
   if (hooks_.examples) hooks_.examples(session_->stimulus(round, artifact_px, 1.0, 1));
   examples_round_ = round;

@@ -36,7 +36,7 @@ nlohmann::json quest_block(const StudyConfig& config) {
           {"p_threshold", q.params().p_threshold}, {"beta", q.params().beta},
           {"delta", q.params().delta}, {"gamma", q.params().gamma},
           {"grain", q.params().grain}, {"dim", q.dim()},
-          {"intensity", "log10(artifact_px / filter_radius_px)"}};
+          {"intensity", config.frames.enabled() ? "log10(1 / k)" : "log10(artifact_px / filter_radius_px)"}};
 }
 
 
@@ -85,7 +85,8 @@ const char* describe(ObserverKind kind, int count) {
 }
 
 ObserverKind observer_kind_of_spec(const std::string& spec) {
-  return spec.rfind("image", 0) == 0 ? ObserverKind::image : ObserverKind::psychometric;
+  // The frame observer (a frame study's) is the image observer on frames.
+  return spec.rfind("image", 0) == 0 || spec.rfind("frame", 0) == 0 ? ObserverKind::image : ObserverKind::psychometric;
 }
 
 ObserverKind observer_kind(const nlohmann::json& j, const std::string& file) {
@@ -269,23 +270,37 @@ Procedure replay_log(const SessionRecord& record, const std::vector<trial_log::T
     if (row.round_position > 0) integer(row.round_position, p.round_position(plan->round) + 1, "round_position");
     integer(row.trial, plan->trial, "trial");
     expect(row.staircase == plan->staircase_name, "staircase", row.staircase, plan->staircase_name);
-    const std::string pattern = stimuli::to_string(plan->stimulus.pattern);
-    expect(row.pattern == pattern, "pattern", row.pattern, pattern);
-    number(row.contrast, plan->stimulus.lit_linear, "contrast");
-    number(row.artifact_px, plan->stimulus.artifact_px, "artifact_px");
-    expect(row.task == c.task, "task", row.task, c.task);
-    number(row.filter_radius_px, plan->stimulus.filter_radius_px, "filter_radius_px");
-    const std::string kernel = stimuli::to_string(plan->stimulus.kernel);
-    expect(row.kernel == kernel, "kernel", row.kernel, kernel);
-    expect(row.target == plan->target, "target", row.target, plan->target);
-    integer(row.practice, plan->practice ? 1 : 0, "practice");
-    number(row.requested_filter_radius_px, plan->requested_filter_radius_px, "requested_filter_radius_px");
-    integer(row.clamped, plan->clamped ? 1 : 0, "clamped");
-    // The display as the rows recorded it: an edited size or distance changes every angle.
-    number(row.artifact_arcmin, c.display.arcmin(row.artifact_px), "artifact_arcmin");
-    number(row.filter_radius_arcmin, c.display.arcmin(row.filter_radius_px), "filter_radius_arcmin");
-    expect(row.stimulus_seed == plan->stimulus.seed, "stimulus_seed", std::to_string(row.stimulus_seed),
-           std::to_string(plan->stimulus.seed));
+    if (c.frames.enabled()) {
+      expect(row.technique == plan->stimulus.technique, "technique", row.technique, plan->stimulus.technique);
+      expect(row.scene == c.frames.scene, "scene", row.scene, c.frames.scene);
+      integer(row.path_frame, c.frames.patches.at(static_cast<std::size_t>(plan->staircase)).path_frame, "path_frame");
+      expect(row.task == c.task, "task", row.task, c.task);
+      number(row.k, plan->k, "k");
+      number(row.requested_k, plan->requested_k, "requested_k");
+      integer(row.clamped, plan->clamped ? 1 : 0, "clamped");
+      expect(row.target == plan->target, "target", row.target, plan->target);
+      integer(row.practice, plan->practice ? 1 : 0, "practice");
+      expect(row.stimulus_seed == plan->stimulus.seed, "stimulus_seed", std::to_string(row.stimulus_seed),
+             std::to_string(plan->stimulus.seed));
+    } else {
+      const std::string pattern = stimuli::to_string(plan->stimulus.pattern);
+      expect(row.pattern == pattern, "pattern", row.pattern, pattern);
+      number(row.contrast, plan->stimulus.lit_linear, "contrast");
+      number(row.artifact_px, plan->stimulus.artifact_px, "artifact_px");
+      expect(row.task == c.task, "task", row.task, c.task);
+      number(row.filter_radius_px, plan->stimulus.filter_radius_px, "filter_radius_px");
+      const std::string kernel = stimuli::to_string(plan->stimulus.kernel);
+      expect(row.kernel == kernel, "kernel", row.kernel, kernel);
+      expect(row.target == plan->target, "target", row.target, plan->target);
+      integer(row.practice, plan->practice ? 1 : 0, "practice");
+      number(row.requested_filter_radius_px, plan->requested_filter_radius_px, "requested_filter_radius_px");
+      integer(row.clamped, plan->clamped ? 1 : 0, "clamped");
+      // The display as the rows recorded it: an edited size or distance changes every angle.
+      number(row.artifact_arcmin, c.display.arcmin(row.artifact_px), "artifact_arcmin");
+      number(row.filter_radius_arcmin, c.display.arcmin(row.filter_radius_px), "filter_radius_arcmin");
+      expect(row.stimulus_seed == plan->stimulus.seed, "stimulus_seed", std::to_string(row.stimulus_seed),
+             std::to_string(plan->stimulus.seed));
+    }
     p.apply(*plan, row.correct == 1);
     // Every posterior after the update: a changed response (or a row added, removed or moved
     // within its staircase) shows here.

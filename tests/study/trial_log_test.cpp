@@ -321,7 +321,7 @@ TEST(StudyConfig, DefaultLoadsAndErrorsNameTheField) {
   EXPECT_EQ(with("artifact_px", {5, 5}), "study.json: artifact_px[1]: duplicate artifact size");
   EXPECT_EQ(with("colour", 1), "study.json: colour: unknown key (allowed: name, task, artifact_px, rounds, quest, intensity_bounds, stopping, "
             "practice_trials, practice_intensity, practice, texts, break_every_trials, seed, round_order, stimulus, display, "
-            "description, yesno_scoring, readings)");
+            "description, yesno_scoring, readings, frames)");
   // Issue 14.8: a duplicated key in the file was read as its last value.
   const fs::path dup = fs::temp_directory_path() / ("penumbra-dup-" + std::to_string(::getpid()) + ".json");
   std::ofstream(dup) << R"({"rounds": [{"pattern": "stair"}], "stopping": {"max_trials": 40, "max_trials": 4}})";
