@@ -2,7 +2,10 @@
 """The figures of penumbra-demo's report.json, the equal-error comparison first:
 front.png   per technique, frame time and memory against the error to the reference: the engine
             family, its Pareto front, and the adaptive rule and every virtual shadow map read
-            against the front at their own error (the headline's ratios);
+            against the front at their own error (the headline's second line, at equal RMSE);
+front-flip.png  the same with the perceived difference as the error: LDR-FLIP's mean of the lit
+            frames against the reference (PCSS: against PCSS at converged resolution and taps),
+            the headline's first line;
 demo.png    median frame time (p10-p90 whiskers) per configuration, each bar labelled with its
             error, under the equal-error ratios (the ratio against the fixed map alone compares
             images of different error, so it is not the headline);
@@ -11,7 +14,7 @@ flicker.png the mean frame-to-frame change of every configuration, and along the
             few that answer the question (named in the figure);
 path.png    the texels each configuration draws along the path.
 Every figure draws a configuration in the same colour and marker (style()).
-Usage: plot_demo.py REPORT.json OUTDIR (writes front, demo, flicker, error and path .png/.svg)."""
+Usage: plot_demo.py REPORT.json OUTDIR (writes front, front-flip, demo, flicker, error and path .png/.svg)."""
 import json
 import math
 import re
@@ -82,8 +85,8 @@ def figures(report):
     """{file stem: figure} of every figure the report has data for, front first."""
     techniques = report["techniques"]
     out = {}
-    for name, plot in (("front", plot_front), ("demo", plot_demo), ("error", plot_error), ("flicker", plot_flicker),
-                       ("path", plot_path)):
+    for name, plot in (("front", plot_front), ("front-flip", plot_front_flip), ("demo", plot_demo), ("error", plot_error),
+                       ("flicker", plot_flicker), ("path", plot_path)):
         fig = plot(report, techniques)
         if fig is not None:
             out[name] = fig
@@ -118,6 +121,21 @@ def rmse(row):
     return err["rmse_mean"] if err else None
 
 
+def flip_mean(row):
+    flip = row.get("flip")
+    return flip["mean"] if flip else None
+
+
+# The two error axes of the front: (report.json's reading, the virtual map's reading, a row's
+# error, the axis label ({}: what FLIP was taken against), what the title calls it).
+MEASURES = {
+    "rmse": ("equal_error", "equal_error", rmse, "visibility RMSE against the reference (mean over the reference frames)", "error"),
+    "flip": ("equal_flip", "equal_flip", flip_mean,
+             "FLIP of the lit frames against {} (mean over the reference frames)",
+             "perceived difference (FLIP)"),
+}
+
+
 def ratio_text(reading, what):
     """'1.18x [1.13, 1.36] speedup', with >= / <= where the error lies beyond the front's ends."""
     bound = {"more_accurate_than_front": ">= ", "less_accurate_than_front": "<= "}.get(reading["position"], "")
@@ -125,32 +143,40 @@ def ratio_text(reading, what):
     return f"{bound}{r['median']:.2f}x [{r['ci95'][0]:.2f}, {r['ci95'][1]:.2f}] {what}"
 
 
-def equal_error_subjects(t):
+def equal_error_subjects(t, measure="rmse"):
     """(name, row, error, time reading, memory reading) of what is read against the front: the
     adaptive rule, then every virtual map that has a reading."""
-    eq = t.get("equal_error", {})
+    key, virtual_key = MEASURES[measure][:2]
+    eq = t.get(key, {})
     if "headline" not in eq:
         return []
     out = [("adaptive", t["adaptive"], eq["adaptive_error"], eq["time"], eq["memory"])]
     for v in t.get("virtual", []):
-        ve = v.get("equal_error", {})
+        ve = v.get(virtual_key, {})
         if "time" in ve:
             out.append((v["name"], v, ve["error"], ve["time"], ve["memory"]))
     return out
 
 
-def plot_front(report, techniques):
+def plot_front_flip(report, techniques):
+    """front-flip.png: front.png with the perceived difference (FLIP mean) as the error."""
+    return plot_front(report, techniques, "flip")
+
+
+def plot_front(report, techniques, measure="rmse"):
     """front.png, the first figure: per technique, frame time and memory against the error to the
     reference; every engine configuration (filled where on the front), the front through them, and
     the adaptive rule and the virtual maps each with the engine's cost at its error."""
-    with_front = [t for t in techniques if equal_error_subjects(t)]
+    reading_key, _, error_of, xlabel, called = MEASURES[measure]
+    with_front = [t for t in techniques if equal_error_subjects(t, measure)]
     if not with_front:
         return None
     fig, axes = plt.subplots(len(with_front), 2, figsize=(12, 6.2 * len(with_front)), squeeze=False)
     for row_axes, t in zip(axes, with_front):
-        eq = t["equal_error"]
+        eq = t[reading_key]
         engine = [(fixed_name(t), t["fixed"])] + [(b["name"], b) for b in t.get("baselines", [])]
-        points = {name: (rmse(row), row["frame_ms"]["median"], row["texels_allocated"] / 1e6) for name, row in engine if rmse(row) is not None}
+        points = {name: (error_of(row), row["frame_ms"]["median"], row["texels_allocated"] / 1e6) for name, row in engine
+                  if error_of(row) is not None}
         for ax, key, cost_index, unit, label in (
                 (row_axes[0], "time", 1, "ms", "frame time, ms (median over the path)"),
                 (row_axes[1], "memory", 2, "texels", "shadow-map memory, Mtexels allocated (mean over the path)")):
@@ -163,7 +189,7 @@ def plot_front(report, techniques):
                             xytext=(4, 3), textcoords="offset points", color="#333333" if on else "#999999")
             ax.plot([points[n][0] for n in front], [points[n][cost_index] for n in front], "-", color="#555555", lw=1.2,
                     zorder=1, label="engine Pareto front (filled: on it)")
-            for name, row, err, time, memory in equal_error_subjects(t):
+            for name, row, err, time, memory in equal_error_subjects(t, measure):
                 reading = time if key == "time" else memory
                 cost = row["frame_ms"]["median"] if key == "time" else row["texels_allocated"] / 1e6
                 at = reading[f"front_{unit}"] * (1.0 if key == "time" else 1e-6)
@@ -173,7 +199,8 @@ def plot_front(report, techniques):
                 tag(ax.plot(err, cost, marker, color=c, mec="black", mew=0.6, ms=14 if name == "adaptive" else 11,
                             label=f"{name}: {ratio_text(reading, 'speedup' if key == 'time' else 'memory ratio')}"), name)
             ax.plot([], [], "x", color="#555555", label="x: the front at the same error")
-            ax.set_xlabel("visibility RMSE against the reference (mean over the reference frames)", fontsize=8)
+            ax.set_xlabel(xlabel.format("converged PCSS" if "converged" in t.get("perceptual", {}).get("target", "") else "the reference"),
+                          fontsize=8)
             ax.set_ylabel(label, fontsize=8)
             ax.set_yscale("log")
             ax.set_title(f"{t['technique']}: {'frame time' if key == 'time' else 'memory'} against error; "
@@ -181,7 +208,7 @@ def plot_front(report, techniques):
                          fontsize=8)
             ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
     fig.suptitle(f"{run_line(report)}, engine family {report.get('engine_family', '')}:\nthe adaptive rule and the virtual "
-                 "shadow maps against the engine's Pareto front at equal error (lower left is better; > 1x favours them)",
+                 f"shadow maps against the engine's Pareto front at equal {called} (lower left is better; > 1x favours them)",
                  fontsize=9)
     fig.tight_layout()
     return fig

@@ -58,6 +58,7 @@
 #include "shadows/renderer.h"
 #include "shadows/virtual_shadow_map.h"
 #include "stats/summary.h"
+#include "tool/tool.h"
 
 #if PENUMBRA_DEMO_GUI
 #define GLFW_INCLUDE_NONE
@@ -157,6 +158,8 @@ struct Options {
   bool auto_cascades = true;   // adaptive: as many cascades as the rule needs (unless --map.cascades is given)
   bool virtual_pages = true;   // the sun's virtual map beside the maps (a directional light; box PCF in world units)
   bool reference = true;       // error against a reference of the technique at the reference frames
+  bool flip = true;            // and the perceptual difference of the lit frames (apps/demo/perceptual.h)
+  std::string display = tool::data_file("studies/default.json").string();  // its viewing geometry
   // Area-light reference: shadow rays per pixel, ray-traced (256 against 1024 differ by RMSE
   // 0.005 on the street: AreaLightSlow.OutdoorRayTracedReference...); in a build without Embree,
   // point-light maps averaged (64: 64 against 256 differ by 0.015, AreaLightSlow.OutdoorReference...).
@@ -186,6 +189,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
   const bool directional = scene.light.type == scene::Light::Type::directional;
+  const bool flip = opt.flip && opt.reference;
+  const double pixels_per_degree = flip ? demo::display_pixels_per_degree(opt.display) : 0.0;
 
   nlohmann::json report;
   report["scene"] = scene.name;
@@ -202,6 +207,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   report["engine_family"] = !opt.baselines ? "none" : opt.sweep ? "sweep" : "default";
   report["calibration"] = apps::calibration_json(opt.calibration, base);
   report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
+  if (flip)
+    report["perceptual"] = {{"measure", "LDR-FLIP (metrics/flip.h) of the lit frames at the reference frames"},
+                            {"display", opt.display},
+                            {"pixels_per_degree", pixels_per_degree},
+                            {"pixels_per_degree_formula", "2 d tan(0.5 deg) width_px / width_mm (metrics::pixels_per_degree), the frame shown "
+                                                          "pixel for pixel"}};
   std::string csv = "technique,configuration,path_frame,frame_ms,texels,cascades,ssim_vs_engine,flicker_mean_abs\n";
 
   demo::ConfigurationOptions config_options;
@@ -226,14 +237,16 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   walk_options.repeats = opt.repeats;
   walk_options.reference = opt.reference;
   walk_options.reference_samples = opt.reference_samples;
+  walk_options.perceptual = flip;
+  walk_options.pixels_per_degree = flip ? pixels_per_degree : walk_options.pixels_per_degree;
   demo::Walk walk(scene, plan, walk_options, method);
   std::vector<demo::TechniqueRun> runs;
-  std::vector<demo::EqualError> equal;
+  std::vector<demo::EqualErrors> equal;
   for (std::size_t i = 0; i < opt.techniques.size(); ++i) {
     const std::string& name = opt.techniques[i];
     runs.push_back(walk.run(name, per_technique[i], progress, done, total));
     const demo::TechniqueRun& run = runs.back();
-    equal.push_back(demo::equal_error(run));
+    equal.push_back(demo::equal_errors(run));
     nlohmann::json t = demo::technique_json(run, equal.back());
     const shadows::ShadowSettings& adapt = run.series[run.adaptive].config.settings;
     t["settings_fixed"] = shadows::to_json(run.series[run.fixed].config.settings);
@@ -246,6 +259,10 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
                   side_by_side(run.shown_fixed, run.shown_adaptive, side_by_side_labels(run, walk.plan())));
     write_crops(out.path() / (name + "-crops.png"), run.thin_crops);
     write_crops(out.path() / (name + "-crops-gain.png"), run.gain_crops);
+    if (!run.flip_tiles.empty())
+      io::write_png(out.path() / (name + "-flip-montage.png"),
+                    io::montage(run.flip_tiles, run.flip_labels, demo::kFlipMontageColumns, demo::flip_montage_tile_width(opt.width)));
+    runs.back().flip_tiles.clear();
     // The tables need the numbers, not the renderers: their maps (up to 4 × 4096² each in a sweep)
     // and images go before the next technique's.
     for (demo::Series& s : runs.back().series) {
@@ -256,11 +273,19 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   progress.clear();  // the tables follow on stdout
 
   // The adoption question first.
-  std::printf("penumbra-demo: adaptive against the engine's Pareto front at equal error to the reference (engine at equal error / "
-              "adaptive, per frame along the path: median [95 %% bootstrap interval]; > 1 favours adaptive)\n");
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    std::printf("%s\n", demo::headline(runs[i], equal[i]).c_str());
-    for (const demo::VirtualReading& v : equal[i].virtual_maps) std::printf("%s\n", demo::virtual_headline(runs[i], v).c_str());
+  // At equal perceived difference (FLIP) first, where it was measured; then at equal RMSE.
+  const bool perceived = std::any_of(equal.begin(), equal.end(), [](const demo::EqualErrors& e) { return e.flip.available; });
+  std::printf("penumbra-demo: adaptive against the engine's Pareto front at equal %s to the reference (engine at equal error / "
+              "adaptive, per frame along the path: median [95 %% bootstrap interval]; > 1 favours adaptive)\n",
+              perceived ? "perceived difference (LDR-FLIP mean of the lit frames)" : "error");
+  for (const demo::ErrorMeasure m : {demo::ErrorMeasure::flip, demo::ErrorMeasure::flip_ray_traced, demo::ErrorMeasure::rmse}) {
+    if (m == demo::ErrorMeasure::rmse && perceived) std::printf("at equal error (visibility RMSE against the reference):\n");
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      for (const demo::EqualError* eq : equal[i].shown()) {
+        if (eq->measure != m) continue;
+        std::printf("%s\n", demo::headline(runs[i], *eq).c_str());
+        for (const demo::VirtualReading& v : eq->virtual_maps) std::printf("%s\n", demo::virtual_headline(runs[i], v).c_str());
+      }
   }
   std::printf("\n%s at %dx%d on %s; %zu frames of a %d-frame %s path; engine family %s; calibration %s\n", scene.name.c_str(), opt.width,
               opt.height, ctx.info().renderer.c_str(), plan.frames.size(), plan.length, plan.kind.c_str(),
@@ -574,6 +599,12 @@ int main(int argc, char** argv) {
                "box PCF in world units only)");
   app.add_flag("!--no-reference", opt.reference,
                "skip the error against the reference (four cascades of 8192² with the same filter, or the area-light mean)");
+  app.add_flag("!--no-flip", opt.flip,
+               "skip the perceptual difference (LDR-FLIP of the lit frames against the reference's; PCSS also against PCSS at "
+               "converged resolution and taps)");
+  app.add_option("--display", opt.display,
+                 "study config whose display block (width_px, width_mm, viewing_distance_mm) gives FLIP's pixels per degree")
+      ->check(cli::path_given());
   app.add_option("--reference-samples", opt.reference_samples,
                  "area-light reference: shadow rays per pixel (ray-traced) or point-light maps averaged (without Embree), rounded "
                  "up to a square")

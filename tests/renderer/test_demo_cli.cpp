@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <sstream>
@@ -39,14 +40,70 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   const auto r = demo({"--headless", "--scene", "demo", "--frames", "3", "--width", "192", "--height", "108", "--techniques", "pcf,pcss",
                        "--reference-samples", "16", "-o", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // The adoption question comes first: adaptive against the engine front at equal error.
-  EXPECT_EQ(r.out.rfind("penumbra-demo: adaptive against the engine's Pareto front at equal error", 0), 0u) << r.out;
-  EXPECT_THAT(r.out.substr(0, r.out.find("\n\n")), HasSubstr("pcss   at RMSE"));
+  // The adoption question comes first: adaptive against the engine front at equal perceived
+  // difference (FLIP), PCSS also against the ray-traced sun, then at equal RMSE.
+  EXPECT_EQ(r.out.rfind("penumbra-demo: adaptive against the engine's Pareto front at equal perceived difference", 0), 0u) << r.out;
+  const std::string head = r.out.substr(0, r.out.find("\n\n"));
+  EXPECT_THAT(head, HasSubstr("pcss   at RMSE"));
+  EXPECT_LT(head.find("pcf    at FLIP"), head.find("pcf    at RMSE"));
+  EXPECT_THAT(head, HasSubstr("pcss   at FLIP"));
+  EXPECT_THAT(head, ::testing::ContainsRegex("pcss   at FLIP [0-9.]+ against the ray-traced sun"));
   EXPECT_THAT(r.out, HasSubstr("speedup"));
   const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
   ASSERT_EQ(report.at("techniques").size(), 2u);
+  // FLIP's viewing geometry: the study's default display (1920 px, 527 mm wide, seen from 600 mm).
+  EXPECT_NEAR(report.at("perceptual").at("pixels_per_degree").get<double>(), 2 * 600 * std::tan(0.5 * M_PI / 180) * 1920 / 527, 1e-6);
   for (const auto& t : report["techniques"]) {
     SCOPED_TRACE(t.at("technique").get<std::string>());
+    const bool pcss = t["technique"] == "pcss";
+    // The perceived difference beside the RMSE for every timed configuration; the lit frames it
+    // compares are composed from the visibility within a code value or two of the renderer's.
+    EXPECT_LE(t.at("perceptual").at("lit_frames").at("max_code_difference").get<int>(), 2);
+    EXPECT_EQ(t["perceptual"].at("flip_evaluations").get<int>(), (pcss ? 2 : 1) * 11);
+    EXPECT_THAT(t["perceptual"].at("target").get<std::string>(), HasSubstr(pcss ? "PCSS at converged resolution and taps" : "4 cascades of 81"));
+    std::vector<const nlohmann::json*> rows = {&t.at("adaptive"), &t.at("fixed")};
+    for (const auto& b : t.at("baselines")) rows.push_back(&b);
+    for (const auto& v : t.at("virtual")) rows.push_back(&v);
+    for (const auto* row : rows) {
+      const auto& flip = row->at("flip");
+      EXPECT_EQ(flip.at("frames").get<int>(), 1);
+      EXPECT_GT(flip.at("mean").get<double>(), 0);
+      EXPECT_LT(flip.at("mean").get<double>(), 0.1);
+      EXPECT_GE(flip.at("max_max").get<double>(), flip.at("weighted_median_mean").get<double>());
+      EXPECT_GE(flip.at("share_above_mean").get<double>(), 0);
+      EXPECT_LE(flip.at("share_above_mean").get<double>(), 1);
+      EXPECT_EQ(flip.at("per_frame")[0].at("mean").get<double>(), flip.at("mean").get<double>());
+      EXPECT_EQ(row->contains("flip_ray_traced"), pcss);
+      EXPECT_EQ(row->contains("reference_error_converged"), pcss);
+    }
+    // The headline reads the front at equal FLIP: the adaptive rule's FLIP, and the time front of the
+    // engine family by FLIP mean and median frame time (no member both faster and closer).
+    const auto& ef = t.at("equal_flip");
+    EXPECT_EQ(ef.at("adaptive_error").get<double>(), t.at("adaptive").at("flip").at("mean").get<double>());
+    {
+      std::vector<const nlohmann::json*> by_flip = {&t["fixed"]};
+      std::vector<std::string> by_flip_names = {"fixed-2048"};
+      for (const auto& b : t["baselines"]) by_flip.push_back(&b), by_flip_names.push_back(b["name"]);
+      std::vector<std::string> front;
+      for (std::size_t a = 0; a < by_flip.size(); ++a) {
+        const double ea = by_flip[a]->at("flip").at("mean").get<double>(), ta = by_flip[a]->at("frame_ms").at("median").get<double>();
+        bool dominated = false;
+        for (std::size_t b = 0; b < by_flip.size(); ++b) {
+          const double eb = by_flip[b]->at("flip").at("mean").get<double>(), tb = by_flip[b]->at("frame_ms").at("median").get<double>();
+          dominated = dominated || (b != a && eb <= ea && tb <= ta && (eb < ea || tb < ta));
+        }
+        if (!dominated) front.push_back(by_flip_names[a]);
+      }
+      std::vector<std::string> listed = ef.at("time").at("front").get<std::vector<std::string>>();
+      std::sort(front.begin(), front.end()), std::sort(listed.begin(), listed.end());
+      EXPECT_EQ(listed, front);
+    }
+    if (pcss) {
+      EXPECT_EQ(t.at("equal_flip_ray_traced").at("adaptive_error").get<double>(),
+                t.at("adaptive").at("flip_ray_traced").at("mean").get<double>());
+      EXPECT_GT(t.at("adaptive").at("reference_error_converged").at("rmse_mean").get<double>(), 0);
+    }
+    EXPECT_TRUE(fs::exists(out / (t["technique"].get<std::string>() + "-flip-montage.png")));
     EXPECT_EQ(t.at("fixed").at("resolution_texels").get<int>(), 2048);
     const auto& res = t.at("adaptive").at("resolution_texels");
     EXPECT_GE(res.at("min").get<double>(), 32);
@@ -173,6 +230,34 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
   EXPECT_EQ(rows, 2 * 3 * 13);  // technique x frame x configuration
   for (const char* plot : {"front.png", "demo.png", "error.png", "flicker.png", "path.png"}) EXPECT_TRUE(fs::exists(out / plot)) << plot;
   EXPECT_EQ(report.at("path"), "orbit");
+}
+
+// A configuration equal to the reference (with --fixed-resolution 8188 the sweep's four cascades
+// of 8188² are PCF's reference on llvmpipe) shows no perceived difference: FLIP 0 everywhere; a
+// coarser map does show one.
+TEST_F(DemoCli, AConfigurationEqualToTheReferenceHasNoPerceivedDifference) {
+  const fs::path out = dir_ / "out";
+  const auto r = demo({"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf", "--sweep",
+                       "--fixed-resolution", "8188", "--no-virtual", "--no-plot", "-o", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(test::read_file(out / "report.json"));
+  const auto& t = report.at("techniques")[0];
+  const std::string reference = t.at("reference").at("description");
+  if (reference.find("4 cascades of 8188²") == std::string::npos) GTEST_SKIP() << "the reference here is " << reference;
+  bool seen = false;
+  for (const auto& b : t.at("baselines")) {
+    SCOPED_TRACE(b.at("name").get<std::string>());
+    if (b["name"] == "4x8188-cascades") {
+      seen = true;
+      EXPECT_EQ(b.at("reference_error").at("rmse_mean").get<double>(), 0.0);
+      EXPECT_EQ(b.at("flip").at("mean").get<double>(), 0.0);
+      EXPECT_EQ(b.at("flip").at("max_max").get<double>(), 0.0);
+    } else if (b["name"] == "fixed-1024") {
+      EXPECT_GT(b.at("flip").at("mean").get<double>(), 0.001);
+      EXPECT_GT(b.at("flip").at("max_max").get<double>(), 0.05);
+    }
+  }
+  EXPECT_TRUE(seen);
 }
 
 // A scene with a camera path is walked along it: --path short visits stations of three

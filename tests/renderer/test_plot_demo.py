@@ -2,7 +2,8 @@
 """scripts/plot_demo.py on a penumbra-demo report (data/demo-report.json: the demo scene, 3 orbit
 frames at 192x108, PCF and PCSS, the default engine family, the virtual maps; trimmed of the
 settings and pass times the figures do not read): one colour per configuration in every figure,
-the virtual maps on front.png, demo.png led by the equal-error ratios, labelled axes, a readable
+the virtual maps on front.png and on its perceptual twin front-flip.png (FLIP mean as the error),
+demo.png led by the equal-error ratios, labelled axes, a readable
 flicker.png. Run by CTest (PlotDemo.*); needs python3-matplotlib (scripts/setup.sh)."""
 import copy
 import json
@@ -45,7 +46,7 @@ class PlotDemo(unittest.TestCase):
         return sorted(set(out))
 
     def test_every_figure_is_drawn_front_first(self):
-        self.assertEqual(list(self.figures), ["front", "demo", "error", "flicker", "path"])
+        self.assertEqual(list(self.figures), ["front", "front-flip", "demo", "error", "flicker", "path"])
 
     def test_one_colour_per_configuration_in_every_figure(self):
         seen = {}
@@ -81,6 +82,22 @@ class PlotDemo(unittest.TestCase):
                 ratio = v["equal_error"]["time"]["ratio"]["median"]
                 self.assertTrue(any(label.startswith(v["name"] + ":") and f"{ratio:.2f}x" in label for label in labels), v["name"])
 
+    def test_front_flip_reads_every_configuration_at_its_flip(self):
+        fig = self.figures["front-flip"]
+        drawn = {name for name, _ in tagged(fig)}
+        labels = [text.get_text() for ax in fig.axes for text in ax.get_legend().get_texts()]
+        for t, axes in zip(self.report["techniques"], (fig.axes[0:2], fig.axes[2:4])):
+            self.assertIn("FLIP", axes[0].get_xlabel())
+            # Each configuration sits at its FLIP mean, not at its RMSE.
+            stars = [line for line in axes[0].get_lines() if getattr(line, "configuration", "") == "adaptive" and line.get_marker() == "*"]
+            self.assertEqual(len(stars), 1)
+            self.assertAlmostEqual(stars[0].get_xdata()[0], t["adaptive"]["flip"]["mean"])
+            self.assertNotAlmostEqual(stars[0].get_xdata()[0], t["adaptive"]["reference_error"]["rmse_mean"])
+            for v in t["virtual"]:
+                self.assertIn(v["name"], drawn)
+                ratio = v["equal_flip"]["time"]["ratio"]["median"]
+                self.assertTrue(any(label.startswith(v["name"] + ":") and f"{ratio:.2f}x" in label for label in labels), v["name"])
+
     def test_demo_leads_with_the_equal_error_ratio(self):
         notes = [a.get_text() for a in self.figures["demo"].axes[0].texts if "\n" in a.get_text()]
         self.assertEqual(len(notes), len(self.report["techniques"]))
@@ -95,12 +112,14 @@ class PlotDemo(unittest.TestCase):
         report = copy.deepcopy(self.report)
         for t in report["techniques"]:
             t["equal_error"] = {"unavailable": "no reference (--no-reference): no error to compare at"}
+            t.pop("equal_flip")
             for _, row in plot_demo.configurations(t):
                 row["reference_error"] = None
             for v in t["virtual"]:
                 v["equal_error"] = {"why_not": "no reference"}
         figures = plot_demo.figures(report)
         self.assertNotIn("front", figures)
+        self.assertNotIn("front-flip", figures)
         self.assertNotIn("error", figures)
         note = figures["demo"].axes[0].texts[-1].get_text()
         self.assertTrue(note.startswith("no equal-error reading: no reference"), note)

@@ -6,7 +6,11 @@
 // technique (metrics/ground_truth.h; ray-traced for an area light where Embree is built in),
 // the thin casters' shadow and gaps, and the crops. Errors are taken where a surface faces the
 // light (ray_traced.h's facing mask; without Embree, wherever a surface is drawn): elsewhere the
-// shading's max(n·l, 0) makes the visibility invisible.
+// shading's max(n·l, 0) makes the visibility invisible. At the reference frames also the
+// perceptual difference of each timed configuration's lit frame against the reference's
+// (perceptual.h: LDR-FLIP at the study display's pixels per degree); for PCSS against two
+// references: PCSS itself at converged resolution and taps (what the rule controls) and the
+// ray-traced sun (what a player sees).
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -15,6 +19,7 @@
 
 #include "apps/demo/configurations.h"
 #include "apps/demo/path.h"
+#include "apps/demo/perceptual.h"
 #include "cli/progress_bar.h"
 #include "gl/timer.h"
 #include "io/image_io.h"
@@ -49,6 +54,11 @@ struct Series {
   int resolution_changes = 0;
   // at the reference frames
   std::vector<metrics::ImageError> vs_reference;
+  // Timed configurations, at the reference frames: FLIP of the lit frame against the target
+  // reference (TechniqueRun::target_description: the reference for PCF, converged PCSS for PCSS),
+  // and PCSS's RMSE against converged PCSS and FLIP against the ray-traced sun.
+  FlipSeries flip, flip_ray_traced;
+  std::vector<metrics::ImageError> vs_converged;
   double thin_shadow = 0, gaps = 0;  // masked sums (thin casters)
 };
 
@@ -80,6 +90,18 @@ struct TechniqueRun {
   std::size_t shown_at = 0;                // that frame's index in the plan (and in each series' per-frame vectors)
   Crops thin_crops;  // where the thin casters' shadow is densest
   Crops gain_crops;  // where the adaptive map is closest to the reference compared with the fixed map
+  // the perceptual difference (perceptual.h)
+  bool perceptual = false;           // FLIP was measured
+  bool converged = false;            // PCSS: also against PCSS at converged resolution and taps
+  std::string target_description;    // what FLIP is taken against (the converged PCSS, or the reference)
+  double pixels_per_degree = 0;
+  int lit_code_difference = 0;       // composed against the renderer's lit frames, largest over every frame compared
+  double flip_ms = 0;                // wall time of the FLIP evaluations
+  double converged_ms = 0;           // rendering the converged PCSS reference
+  int flip_frames_evaluated = 0;     // FLIP maps computed
+  std::vector<io::Image8> flip_tiles;  // FLIP maps (magma) against the target, at the first reference frame
+  std::vector<std::string> flip_labels;
+  int flip_montage_frame = -1;
   std::string csv;   // frames.csv rows
 };
 
@@ -90,6 +112,11 @@ struct WalkOptions {
   // Area-light reference: shadow rays per pixel when ray-traced (a directional light in a build
   // with Embree), else point-light maps averaged.
   int reference_samples = 256;
+  // The perceptual difference at the reference frames (perceptual.h); pixels per degree of the
+  // display the frames are seen on, pixel for pixel.
+  bool perceptual = true;
+  double pixels_per_degree = metrics::kFlipDefaultPixelsPerDegree;
+  int threads = 2;  // FLIP evaluations in parallel
 };
 
 // Shared by every technique of a run: the scene, the surface probe, the thin casters' masks.
@@ -107,6 +134,12 @@ class Walk {
   // The ray-traced scene with the moving objects (scene::ObjectPath) where they are at `frame`,
   // rebuilt when they moved since it was last built; null without ray tracing.
   const metrics::RayTracedScene* traced_at(int frame);
+  // At reference frame `index` of the plan: FLIP of every timed configuration's lit frame against
+  // the reference's (PCSS: against PCSS at converged resolution and taps, rendered here with
+  // `ref_renderer` at `reference_texels`, and against `reference`, the ray-traced sun), and PCSS's
+  // RMSE against the converged one over `mask`.
+  void perceive(TechniqueRun& run, shadows::Renderer& ref_renderer, const shadows::ShadowSettings& ref_settings, int reference_texels,
+                const io::ImageF& reference, const io::Image8& mask, std::size_t index);
 
   const scene::Scene& scene_;
   PathPlan plan_;

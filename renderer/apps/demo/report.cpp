@@ -52,13 +52,32 @@ std::string usual_resolution(const Series& s) {
 double shadow_kept(const TechniqueRun& run, const Series& s) { return s.thin_shadow / std::max(run.reference_thin_shadow, 1e-9); }
 double gaps_kept(const TechniqueRun& run, const Series& s) { return run.gap_pixels > 0 ? s.gaps / std::max(run.reference_gaps, 1e-9) : 1.0; }
 
-// `subject` (a series index) read against the family's front at its error `subject_error`.
-FrontComparison compare_on(const TechniqueRun& run, const std::vector<std::size_t>& family, std::size_t subject, double subject_error,
-                           const std::vector<double> Series::*per_frame, bool median_cost) {
+// FLIP's pooled values over the reference frames: the means of each value, the largest max, and
+// each frame's.
+nlohmann::json flip_json(const FlipSeries& f) {
+  if (f.frames.empty()) return nullptr;
+  std::vector<double> mean, median, share, q1, q3, max;
+  nlohmann::json per_frame = nlohmann::json::array();
+  for (const auto& p : f.frames) {
+    mean.push_back(p.mean), median.push_back(p.weighted_median), share.push_back(p.share_above), max.push_back(p.max);
+    q1.push_back(p.weighted_q1), q3.push_back(p.weighted_q3);
+    per_frame.push_back({{"mean", p.mean}, {"weighted_median", p.weighted_median}, {"weighted_q1", p.weighted_q1},
+                         {"weighted_q3", p.weighted_q3}, {"share_above", p.share_above}, {"max", p.max}});
+  }
+  // mean is f.mean(), the error the front is read at.
+  return {{"frames", f.frames.size()},        {"mean", f.mean()},       {"weighted_median_mean", mean_of(median)},
+          {"weighted_q1_mean", mean_of(q1)},  {"weighted_q3_mean", mean_of(q3)},
+          {"threshold", f.frames.front().threshold}, {"share_above_mean", mean_of(share)}, {"max_max", max_of(max)},
+          {"per_frame", per_frame}};
+}
+
+// `subject` (a series index) read against the family's front at its error `subject_error` by `measure`.
+FrontComparison compare_on(const TechniqueRun& run, ErrorMeasure measure, const std::vector<std::size_t>& family, std::size_t subject,
+                           double subject_error, const std::vector<double> Series::*per_frame, bool median_cost) {
   std::vector<stats::Candidate> candidates;
   for (const std::size_t k : family) {
     const auto& v = run.series[k].*per_frame;
-    candidates.push_back({reference_rmse(run.series[k]), median_cost ? stats::median(v) : mean_of(v)});
+    candidates.push_back({error_of(run.series[k], measure), median_cost ? stats::median(v) : mean_of(v)});
   }
   FrontComparison out;
   const std::vector<std::size_t> front = stats::pareto_front(candidates);
@@ -112,49 +131,78 @@ double reference_rmse(const Series& s) {
   return mean_of(rmse);
 }
 
-EqualError equal_error(const TechniqueRun& run) {
+const char* measure_label(ErrorMeasure m) { return m == ErrorMeasure::rmse ? "RMSE" : "FLIP"; }
+
+double error_of(const Series& s, ErrorMeasure m) {
+  switch (m) {
+    case ErrorMeasure::flip: return s.flip.mean();
+    case ErrorMeasure::flip_ray_traced: return s.flip_ray_traced.mean();
+    case ErrorMeasure::rmse: return reference_rmse(s);
+  }
+  return NAN;
+}
+
+std::vector<const EqualError*> EqualErrors::shown() const {
+  std::vector<const EqualError*> out;
+  if (flip.available) out.push_back(&flip);
+  if (flip_ray_traced.available) out.push_back(&flip_ray_traced);
+  out.push_back(&rmse);
+  return out;
+}
+
+EqualErrors equal_errors(const TechniqueRun& run) {
+  return {equal_error(run, ErrorMeasure::flip), equal_error(run, ErrorMeasure::flip_ray_traced), equal_error(run, ErrorMeasure::rmse)};
+}
+
+EqualError equal_error(const TechniqueRun& run, ErrorMeasure measure) {
   EqualError eq;
+  eq.measure = measure;
   for (std::size_t k = 0; k < run.series.size(); ++k)
     if (run.series[k].config.engine_family()) eq.family.push_back(k);
-  eq.adaptive_error = reference_rmse(run.series[run.adaptive]);
+  eq.adaptive_error = error_of(run.series[run.adaptive], measure);
   if (std::isnan(eq.adaptive_error)) {
-    eq.why_not = "no reference (--no-reference): no error to compare at";
+    eq.why_not = measure == ErrorMeasure::rmse              ? "no reference (--no-reference): no error to compare at"
+                 : measure == ErrorMeasure::flip_ray_traced ? "no second reference (PCSS only): no error to compare at"
+                                                            : "no perceptual difference (--no-reference or --no-flip): no error to compare at";
     return eq;
   }
   if (eq.family.size() < 2) {
     eq.why_not = "no engine family (--no-baselines): no front";
     return eq;
   }
-  eq.time = compare_on(run, eq.family, run.adaptive, eq.adaptive_error, &Series::ms, true);
-  eq.memory = compare_on(run, eq.family, run.adaptive, eq.adaptive_error, &Series::allocated, false);
+  eq.time = compare_on(run, measure, eq.family, run.adaptive, eq.adaptive_error, &Series::ms, true);
+  eq.memory = compare_on(run, measure, eq.family, run.adaptive, eq.adaptive_error, &Series::allocated, false);
   eq.available = !eq.time.front.empty() && !eq.memory.front.empty();
   if (!eq.available) eq.why_not = "no engine configuration was measured against the reference";
   for (std::size_t k = 0; k < run.series.size() && eq.available; ++k) {
     if (run.series[k].config.role != Role::virtual_pages) continue;
     VirtualReading v;
+    v.measure = measure;
     v.series = k;
-    v.error = reference_rmse(run.series[k]);
-    v.time = compare_on(run, eq.family, k, v.error, &Series::ms, true);
-    v.memory = compare_on(run, eq.family, k, v.error, &Series::allocated, false);
+    v.error = error_of(run.series[k], measure);
+    v.time = compare_on(run, measure, eq.family, k, v.error, &Series::ms, true);
+    v.memory = compare_on(run, measure, eq.family, k, v.error, &Series::allocated, false);
     eq.virtual_maps.push_back(v);
   }
   return eq;
 }
 
 namespace {
-// One configuration read against the front: "pcf    [LABEL ]at RMSE ...: speedup ..., memory ratio ...".
-std::string reading_line(const TechniqueRun& run, const std::string& label, double error, const FrontComparison& time,
-                         const FrontComparison& memory) {
-  char line[512];
-  std::snprintf(line, sizeof line, "%-6s %sat RMSE %.4f: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
-                label.empty() ? "" : (label + " ").c_str(), error, ratio_text(time).c_str(), ratio_text(memory).c_str(),
-                where_text(run, time).c_str(), where_text(run, memory).c_str());
+// One configuration read against the front: "pcf    [LABEL ]at RMSE ...: speedup ..., memory ratio ...";
+// PCSS's FLIP against the ray-traced sun says so.
+std::string reading_line(const TechniqueRun& run, ErrorMeasure measure, const std::string& label, double error,
+                         const FrontComparison& time, const FrontComparison& memory) {
+  char line[640];
+  std::snprintf(line, sizeof line, "%-6s %sat %s %.4f%s: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
+                label.empty() ? "" : (label + " ").c_str(), measure_label(measure), error,
+                measure == ErrorMeasure::flip_ray_traced ? " against the ray-traced sun" : "", ratio_text(time).c_str(),
+                ratio_text(memory).c_str(), where_text(run, time).c_str(), where_text(run, memory).c_str());
   return line;
 }
 }  // namespace
 
 std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v) {
-  return reading_line(run, run.series[v.series].config.name, v.error, v.time, v.memory);
+  return reading_line(run, v.measure, run.series[v.series].config.name, v.error, v.time, v.memory);
 }
 
 std::string headline(const TechniqueRun& run, const EqualError& eq) {
@@ -163,10 +211,32 @@ std::string headline(const TechniqueRun& run, const EqualError& eq) {
     std::snprintf(line, sizeof line, "%-6s %s", run.technique.c_str(), eq.why_not.c_str());
     return line;
   }
-  return reading_line(run, "", eq.adaptive_error, eq.time, eq.memory);
+  return reading_line(run, eq.measure, "", eq.adaptive_error, eq.time, eq.memory);
 }
 
-nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
+namespace {
+// A reading's entry in report.json: the error it is read at, the two comparisons, the headline.
+nlohmann::json equal_json(const TechniqueRun& run, const EqualError& eq, const std::string& error) {
+  if (!eq.available) return {{"unavailable", eq.why_not}};
+  return {{"error", error},
+          {"adaptive_error", eq.adaptive_error},
+          {"time", comparison_json(run, eq.time, "ms")},
+          {"memory", comparison_json(run, eq.memory, "texels")},
+          {"headline", headline(run, eq)}};
+}
+nlohmann::json virtual_json(const TechniqueRun& run, const EqualError& eq, std::size_t k) {
+  const auto reading = std::find_if(eq.virtual_maps.begin(), eq.virtual_maps.end(), [&](const VirtualReading& v) { return v.series == k; });
+  if (reading == eq.virtual_maps.end()) return {{"why_not", eq.why_not}};
+  const VirtualReading& v = *reading;
+  return {{"error", v.error},
+          {"time", comparison_json(run, v.time, "ms")},
+          {"memory", comparison_json(run, v.memory, "texels")},
+          {"headline", virtual_headline(run, v)}};
+}
+}  // namespace
+
+nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
+  const EqualError& eq = eqs.rmse;
   const Series& ca = run.series[run.adaptive];
   const Series& cf = run.series[run.fixed];
   std::vector<double> res_a;
@@ -228,8 +298,15 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
     j["map_triangles"] = spread(s.map_triangles);
     j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
     j["reference_error"] = reference_error_json(s.vs_reference);
+    if (run.perceptual) j["flip"] = flip_json(s.flip);
+    if (run.converged) {
+      j["flip_ray_traced"] = flip_json(s.flip_ray_traced);
+      j["reference_error_converged"] = reference_error_json(s.vs_converged);
+    }
     if (run.thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(run, s)}, {"gaps_kept", gaps_kept(run, s)}};
     if (eq.available && s.config.engine_family()) j["on_front"] = {{"time", on(eq.time, k)}, {"memory", on(eq.memory, k)}};
+    if (eqs.flip.available && s.config.engine_family())
+      j["on_front_flip"] = {{"time", on(eqs.flip.time, k)}, {"memory", on(eqs.flip.memory, k)}};
   };
   measured(run.fixed, t["fixed"]);
   measured(run.adaptive, t["adaptive"]);
@@ -257,16 +334,9 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
                         {"frame_ms", spread(s.ms)},
                         {"passes", io::to_json(s.timer->stats())},
                         {"pages_marked", s.resolution}};
-    const auto reading = std::find_if(eq.virtual_maps.begin(), eq.virtual_maps.end(), [&](const VirtualReading& v) { return v.series == k; });
-    if (reading != eq.virtual_maps.end()) {
-      const VirtualReading& v = *reading;
-      j["equal_error"] = {{"error", v.error},
-                          {"time", comparison_json(run, v.time, "ms")},
-                          {"memory", comparison_json(run, v.memory, "texels")},
-                          {"headline", virtual_headline(run, v)}};
-    } else {
-      j["equal_error"] = {{"why_not", eq.why_not}};
-    }
+    j["equal_error"] = virtual_json(run, eq, k);
+    if (run.perceptual) j["equal_flip"] = virtual_json(run, eqs.flip, k);
+    if (run.converged) j["equal_flip_ray_traced"] = virtual_json(run, eqs.flip_ray_traced, k);
     if (s.info.virtual_map) {
       const auto& last = *s.info.virtual_map;
       j["last_frame"] = {{"pages", {{"requested", last.pages.requested}, {"drawn", last.pages.drawn}, {"cached", last.pages.cached},
@@ -279,15 +349,19 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq) {
   }
   t["engine_baseline"] = run.series[run.engine].config.name;
   t["speedup_vs_engine_median"] = spread(run.series[run.engine].ms).median / std::max(sa.median, 1e-9);
-  if (eq.available) {
-    t["equal_error"] = {{"error", "rmse_mean against the reference"},
-                        {"adaptive_error", eq.adaptive_error},
-                        {"time", comparison_json(run, eq.time, "ms")},
-                        {"memory", comparison_json(run, eq.memory, "texels")},
-                        {"headline", headline(run, eq)}};
-  } else {
-    t["equal_error"] = {{"unavailable", eq.why_not}};
+  t["equal_error"] = equal_json(run, eq, "rmse_mean against the reference");
+  if (run.perceptual) {
+    t["perceptual"] = {{"target", run.target_description},
+                       {"pixels_per_degree", run.pixels_per_degree},
+                       {"lit_frames", {{"composed", "per pixel base + V direct in linear RGB from the frame's shading (apps/demo/perceptual.h)"},
+                                       {"max_code_difference", run.lit_code_difference}}},
+                       {"flip_evaluations", run.flip_frames_evaluated},
+                       {"flip_ms", run.flip_ms},
+                       {"montage_frame", run.flip_montage_frame}};
+    if (run.converged) t["perceptual"]["converged_render_ms_mean"] = run.converged_ms / std::max(run.reference_frames, 1);
+    t["equal_flip"] = equal_json(run, eqs.flip, "flip mean against " + run.target_description);
   }
+  if (run.converged) t["equal_flip_ray_traced"] = equal_json(run, eqs.flip_ray_traced, "flip mean against " + run.reference_description);
   return t;
 }
 
@@ -302,13 +376,18 @@ void print_single_map_row(const TechniqueRun& run) {
               max_of(run.share_fixed_adaptive));
 }
 
-void print_tables(const TechniqueRun& run, const EqualError& eq) {
+void print_tables(const TechniqueRun& run, const EqualErrors& eqs) {
+  const EqualError& eq = *eqs.shown().front();  // the headline's reading marks its fronts
   const auto& series = run.series;
   const double engine_median = spread(series[run.engine].ms).median;
-  std::printf("%s: every configuration against %s (the engine baseline) and the reference; * on the time front, + on the memory front\n",
-              run.technique.c_str(), series[run.engine].config.name.c_str());
-  std::printf("  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s\n", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
+  std::printf("%s: every configuration against %s (the engine baseline) and the reference; * on the time front, + on the memory front "
+              "(at equal %s)\n",
+              run.technique.c_str(), series[run.engine].config.name.c_str(), measure_label(eq.measure));
+  std::printf("  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
               "Mtri maps", "SSIM eng", "RMSE ref", "SSIM ref", "thin", "gaps");
+  if (run.perceptual) std::printf(" %8s %8s %7s", "FLIP", "FLIP>.05", "max");
+  if (run.converged) std::printf(" %9s %9s", "RMSE conv", "FLIP sun");
+  std::printf("\n");
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
     if (!s.config.timed()) continue;
@@ -322,8 +401,17 @@ void print_tables(const TechniqueRun& run, const EqualError& eq) {
     if (const nlohmann::json err = reference_error_json(s.vs_reference); !err.is_null())
       std::printf(" %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
     if (run.thin_pixels > 0) std::printf(" %7.3f %7.3f", shadow_kept(run, s), gaps_kept(run, s));
+    if (const nlohmann::json f = flip_json(s.flip); run.perceptual && !f.is_null())
+      std::printf(" %8.5f %7.2f%% %7.3f", f["mean"].get<double>(), 100 * f["share_above_mean"].get<double>(), f["max_max"].get<double>());
+    if (run.converged && !s.vs_converged.empty())
+      std::printf(" %9.5f %9.5f", reference_error_json(s.vs_converged)["rmse_mean"].get<double>(), s.flip_ray_traced.mean());
     std::printf("\n");
   }
+  if (run.perceptual)
+    std::printf("  FLIP: LDR-FLIP of the lit frame against %s at %.2f pixels per degree, mean over the reference frames (FLIP>.05: share "
+                "of pixels above 0.05; max: the largest pixel)%s\n",
+                run.target_description.c_str(), run.pixels_per_degree,
+                run.converged ? "; RMSE conv: visibility against it; FLIP sun: against the ray-traced sun" : "");
   if (run.reference_frames > 0)
     std::printf("  reference: %s; compared at %s (%lld pixels over %d frames)\n", run.reference_description.c_str(),
                 run.mask_description.c_str(), static_cast<long long>(run.mask_pixels), run.reference_frames);

@@ -12,21 +12,36 @@
 
 namespace penumbra::demo {
 
-// The adaptive configuration read against the engine front: error = mean RMSE of the visibility
-// against the reference over the reference frames; time = frame ms (paired per frame along the
-// path); memory = texels allocated for the maps (the same format within a technique).
+// The adaptive configuration read against the engine front at equal error, the error being one of
+// (ErrorMeasure): the mean FLIP of the lit frames against the target reference over the reference
+// frames (the perceived difference, the headline's first line), PCSS's mean FLIP against the
+// ray-traced sun, or the mean RMSE of the visibility against the reference (the second line);
+// time = frame ms (paired per frame along the path); memory = texels allocated for the maps (the
+// same format within a technique).
 struct FrontComparison {
   std::vector<std::size_t> front;  // series indices, error ascending
   stats::FrontReading reading;     // indices into the series
   stats::RatioInterval ratio;      // engine at equal error / adaptive, per frame
 };
 // A virtual map's configuration read against the same front at its own error.
+enum class ErrorMeasure {
+  flip,             // mean FLIP against the target (PCF: the reference; PCSS: converged PCSS)
+  flip_ray_traced,  // PCSS: mean FLIP against the ray-traced sun
+  rmse,             // mean RMSE of the visibility against the reference
+};
+// "FLIP" or "RMSE" (the headline's "at FLIP 0.0071"), and what it is measured against.
+const char* measure_label(ErrorMeasure m);
+// A configuration's error by `m` (NaN where it was not measured).
+double error_of(const Series& s, ErrorMeasure m);
+
 struct VirtualReading {
+  ErrorMeasure measure = ErrorMeasure::rmse;
   std::size_t series = 0;
   double error = 0;
   FrontComparison time, memory;
 };
 struct EqualError {
+  ErrorMeasure measure = ErrorMeasure::rmse;
   bool available = false;
   std::string why_not;             // when not available
   double adaptive_error = 0;
@@ -34,7 +49,14 @@ struct EqualError {
   FrontComparison time, memory;
   std::vector<VirtualReading> virtual_maps;  // each virtual configuration (Role::virtual_pages)
 };
-EqualError equal_error(const TechniqueRun& run);
+EqualError equal_error(const TechniqueRun& run, ErrorMeasure measure = ErrorMeasure::rmse);
+// Every reading the run has: FLIP (when measured), FLIP against the ray-traced sun (PCSS), RMSE.
+struct EqualErrors {
+  EqualError flip, flip_ray_traced, rmse;
+  // The readings to print, headline first.
+  std::vector<const EqualError*> shown() const;
+};
+EqualErrors equal_errors(const TechniqueRun& run);
 // "pcf    virtual rule at RMSE 0.0402: speedup ..., memory ratio ...", as headline() for the adaptive maps.
 std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v);
 
@@ -42,7 +64,7 @@ std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v);
 double reference_rmse(const Series& s);
 
 // The run's entry in report.json's "techniques" (settings and calibration are the caller's).
-nlohmann::json technique_json(const TechniqueRun& run, const EqualError& eq);
+nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eq);
 
 // One line per technique for the head of the output: "pcf   at RMSE 0.0402 ...: speedup 1.19x
 // [1.10, 1.25], memory ratio 0.50x [...]".
@@ -52,6 +74,6 @@ std::string headline(const TechniqueRun& run, const EqualError& eq);
 void print_single_map_row(const TechniqueRun& run);
 // Every configuration against the engine baseline and the reference, the thin casters, PCSS's
 // clamped pixels and flicker along the path.
-void print_tables(const TechniqueRun& run, const EqualError& eq);
+void print_tables(const TechniqueRun& run, const EqualErrors& eq);
 
 }  // namespace penumbra::demo

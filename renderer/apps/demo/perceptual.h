@@ -1,0 +1,60 @@
+#pragma once
+// The main job's perceptual yardstick (issue 46): a configuration's lit frame against the
+// reference's lit frame by LDR-FLIP (metrics/flip.h), at the pixels per degree of the study's
+// display, beside the RMSE of the visibility.
+//
+// The lit frames are composed from the visibility with the frame's own shading: the camera pass
+// (shaders/shading.frag) writes albedo·light·(ambient + (1 − ambient)·max(n·l, 0)·V), linear in
+// the visibility V, so per pixel lit(V) = base + V·direct in linear RGB. The ray-traced reference
+// has a visibility and no lit frame; composing every frame, reference and configuration alike,
+// from its visibility makes a configuration whose visibility equals the reference's score exactly
+// 0, and the composition stays within a code value or two of the renderer's own lit frame
+// (report.json's lit_frames.max_code_difference says how close, measured on every frame compared).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+#include "io/image_io.h"
+#include "metrics/flip.h"
+#include "shadows/renderer.h"
+#include "shadows/settings.h"
+
+namespace penumbra::demo {
+
+// Per pixel, linear RGB: the radiance at V = 0 (ambient only) and what V = 1 adds.
+struct ShadingBasis {
+  image::ImageF base, direct;  // 3 channels each, the frame's size
+};
+
+// Two cheap renders of `renderer`'s scene at its camera and poses: the light's ambient at 1 (the
+// radiance albedo·light whatever the shadow) and hard shadows whose depth bias leaves nothing
+// in shadow (V = 1 everywhere; a pixel with V < 1 throws std::runtime_error). The scene's light is
+// restored. `settings`: the reference's settings (only the map's placement is kept).
+ShadingBasis shading_basis(shadows::Renderer& renderer, const shadows::ShadowSettings& settings, int width_px, int height_px);
+
+// The lit frame for `visibility` (one channel, the basis's size): sRGB code values in [0, 1],
+// 3 channels, not rounded.
+image::ImageF lit_frame(const ShadingBasis& basis, const io::ImageF& visibility);
+
+// The largest difference, in 8-bit code values, between a composed lit frame and the renderer's
+// own (RGB or RGBA, sRGB-encoded).
+int code_difference(const image::ImageF& composed, const io::Image8& rendered);
+
+// The pixels per degree of a study config's display block (data/studies/*.json: width_px,
+// width_mm, viewing_distance_mm; docs/study-config.md), by metrics::pixels_per_degree: the same
+// formula penumbra-compare --display uses. Throws std::runtime_error naming the file and field.
+double display_pixels_per_degree(const std::string& study_config);
+
+// The FLIP montage (<technique>-flip-montage.png): 3 tiles a row, each this wide (the frame's
+// half, at least 480 px: room for the longest label at the montage's 24 px text).
+constexpr int kFlipMontageColumns = 3;
+inline int flip_montage_tile_width(int frame_width_px) { return frame_width_px / 2 > 480 ? frame_width_px / 2 : 480; }
+
+// FLIP's pooled values of one configuration against one reference over the reference frames.
+struct FlipSeries {
+  std::vector<metrics::FlipPooled> frames;  // one per reference frame
+  double mean() const;                      // of the frames' means: the error the front is read at
+};
+
+}  // namespace penumbra::demo
