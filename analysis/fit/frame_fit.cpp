@@ -37,6 +37,8 @@ FrameThreshold fit_cells(const ModelSpec& base, const std::vector<const Cell*>& 
   // k = 10^-u: the lower end of u is the upper end of k.
   t.k_profile = {std::pow(10.0, -p.hi), std::pow(10.0, -p.lo), p.hi_open, p.lo_open};
   t.beta = std::exp(t.fit.params.log_beta);
+  // A slope at its bound is a step: the threshold's place is known, its interval is not to be trusted.
+  if (t.beta >= 0.99 * spec.slope.max && !t.fit.flags.has("slope_at_upper_bound")) t.fit.flags.add("slope_at_upper_bound");
   t.usable = t.fit.converged && !p.lo_open && !p.hi_open && !t.fit.flags.has("threshold_at_bound") &&
              !t.fit.flags.has("slope_at_upper_bound") && !t.fit.flags.has("not_converged");
   return t;
@@ -183,7 +185,7 @@ std::string frame_summary_text(const FrameStudyFit& fit) {
     char b[300];
     std::snprintf(b, sizeof b, "  %-24s k* %-7s %-20s beta %-6s %5d trials, %d participant%s%s\n", label.c_str(), num(t.k).c_str(),
                   interval_text(t).c_str(), num(t.beta).c_str(), t.trials, t.participants, t.participants == 1 ? "" : "s",
-                  t.usable ? "" : "  (not usable: open interval, a bound or no convergence)");
+                  t.usable ? "" : "  (not usable: an open interval, a bound, or no convergence)");
     s += b;
   };
   s += "per patch:\n";
