@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/calibration.h"
 #include "adaptive/resolution_rule.h"
 #include "adaptive/virtual_pages.h"
 #include "apps/cli_options.h"
@@ -54,6 +55,7 @@
 #include "io/report.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
+#include "metrics/frame_observer.h"
 #include "scene/scene.h"
 #include "shadows/renderer.h"
 #include "shadows/virtual_shadow_map.h"
@@ -244,6 +246,10 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   std::vector<demo::EqualErrors> equal;
   for (std::size_t i = 0; i < opt.techniques.size(); ++i) {
     const std::string& name = opt.techniques[i];
+    // The frame observer's "visible": the technique's calibration entry's criterion F (the
+    // published design's without an entry).
+    const adaptive::CalibrationChoice choice = opt.calibration.choice(per_technique[i].front().settings);
+    walk.set_criterion_f(choice.entry ? choice.entry->definition().criterion_f : metrics::kStudyCriterionF);
     runs.push_back(walk.run(name, per_technique[i], progress, done, total));
     const demo::TechniqueRun& run = runs.back();
     equal.push_back(demo::equal_errors(run));
@@ -279,7 +285,12 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
               "adaptive, per frame along the path: median [95 %% bootstrap interval]; > 1 favours adaptive)\n",
               perceived ? "perceived difference (LDR-FLIP mean of the lit frames)" : "error");
   for (const demo::ErrorMeasure m : {demo::ErrorMeasure::flip, demo::ErrorMeasure::flip_ray_traced, demo::ErrorMeasure::rmse}) {
-    if (m == demo::ErrorMeasure::rmse && perceived) std::printf("at equal error (visibility RMSE against the reference):\n");
+    if (m == demo::ErrorMeasure::rmse && perceived) {
+      std::printf("the frame observer (metrics/frame_observer.h) on the lit frames against the reference (PCSS: converged PCSS) at the "
+                  "technique's criterion F, every reference frame:\n");
+      for (const demo::TechniqueRun& run : runs) std::printf("%s\n", demo::unseen_line(run, demo::cheapest_unseen(run)).c_str());
+      std::printf("at equal error (visibility RMSE against the reference):\n");
+    }
     for (std::size_t i = 0; i < runs.size(); ++i)
       for (const demo::EqualError* eq : equal[i].shown()) {
         if (eq->measure != m) continue;

@@ -75,6 +75,28 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
       EXPECT_EQ(flip.at("per_frame")[0].at("mean").get<double>(), flip.at("mean").get<double>());
       EXPECT_EQ(row->contains("flip_ray_traced"), pcss);
       EXPECT_EQ(row->contains("reference_error_converged"), pcss);
+      EXPECT_EQ(row->contains("observer_ray_traced"), pcss);
+      // The frame observer on the same pair, at the calibration entry's F (data/calibration/default.json).
+      const auto& seen = row->at("observer");
+      EXPECT_EQ(seen.at("frames").get<int>(), 1);
+      EXPECT_EQ(seen.at("criterion_f").get<double>(), 0.6737);
+      EXPECT_GE(seen.at("p_detect_max").get<double>(), 0);
+      EXPECT_LE(seen.at("p_detect_max").get<double>(), 1);
+      EXPECT_EQ(seen.at("visible").get<bool>(), seen.at("p_detect_max").get<double>() > 0.6737);
+      EXPECT_GE(seen.at("patches_per_frame")[0].get<int>(), 1);
+    }
+    // The family's verdict: the cheapest configuration (median frame time) the observer cannot
+    // tell from the reference, or none.
+    {
+      std::string cheapest = "none";
+      double best_ms = 1e300;
+      for (const auto* row : rows)
+        if (!row->at("observer").at("visible").get<bool>() && row->at("frame_ms").at("median").get<double>() < best_ms) {
+          best_ms = row->at("frame_ms").at("median").get<double>();
+          cheapest = row == &t["adaptive"] ? "adaptive" : row == &t["fixed"] ? "fixed-2048" : row->at("name").get<std::string>();
+        }
+      EXPECT_EQ(t.at("observer").at("cheapest_by_time").get<std::string>(), cheapest);
+      EXPECT_THAT(r.out, HasSubstr(t["observer"].at("line").get<std::string>()));
     }
     // The headline reads the front at equal FLIP: the adaptive rule's FLIP, and the time front of the
     // engine family by FLIP mean and median frame time (no member both faster and closer).
@@ -233,8 +255,8 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
 }
 
 // A configuration equal to the reference (with --fixed-resolution 8188 the sweep's four cascades
-// of 8188² are PCF's reference on llvmpipe) shows no perceived difference: FLIP 0 everywhere; a
-// coarser map does show one.
+// of 8188² are PCF's reference on llvmpipe) shows no perceived difference: FLIP 0 everywhere and
+// the frame observer at the guess rate (p_detect 0); a coarser map does show one.
 TEST_F(DemoCli, AConfigurationEqualToTheReferenceHasNoPerceivedDifference) {
   const fs::path out = dir_ / "out";
   const auto r = demo({"--headless", "--scene", "demo", "--frames", "1", "--width", "64", "--height", "36", "--techniques", "pcf", "--sweep",
@@ -252,9 +274,12 @@ TEST_F(DemoCli, AConfigurationEqualToTheReferenceHasNoPerceivedDifference) {
       EXPECT_EQ(b.at("reference_error").at("rmse_mean").get<double>(), 0.0);
       EXPECT_EQ(b.at("flip").at("mean").get<double>(), 0.0);
       EXPECT_EQ(b.at("flip").at("max_max").get<double>(), 0.0);
+      EXPECT_EQ(b.at("observer").at("p_detect_max").get<double>(), 0.0);
+      EXPECT_FALSE(b.at("observer").at("visible").get<bool>());
     } else if (b["name"] == "fixed-1024") {
       EXPECT_GT(b.at("flip").at("mean").get<double>(), 0.001);
       EXPECT_GT(b.at("flip").at("max_max").get<double>(), 0.05);
+      EXPECT_GT(b.at("observer").at("p_detect_max").get<double>(), 0.0);
     }
   }
   EXPECT_TRUE(seen);

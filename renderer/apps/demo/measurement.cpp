@@ -276,12 +276,18 @@ void Walk::perceive(TechniqueRun& run, shadows::Renderer& ref_renderer, const sh
   // Every (configuration, reference) pair, over the threads the GL work leaves idle here.
   const std::size_t pairs = timed.size() * (run.converged ? 2 : 1);
   std::vector<metrics::FlipResult> flips(pairs);
+  std::vector<metrics::FrameDetection> seen(pairs);
   metrics::FlipOptions fo;
   fo.pixels_per_degree = options_.pixels_per_degree;
+  metrics::FrameObserverParams observer;
+  observer.pixels_per_degree = options_.pixels_per_degree;
+  observer.criterion_f = options_.criterion_f;
   const double t0 = now_ms();
   parallel_for(pairs, options_.threads, [&](std::size_t p) {
     const std::size_t j = p % timed.size();
-    flips[p] = metrics::ldr_flip(p < timed.size() ? target : sun, metrics::Encoding::srgb, lit[j], metrics::Encoding::srgb, fo);
+    const image::ImageF& against = p < timed.size() ? target : sun;
+    flips[p] = metrics::ldr_flip(against, metrics::Encoding::srgb, lit[j], metrics::Encoding::srgb, fo);
+    seen[p] = metrics::detect_difference(against, metrics::Encoding::srgb, lit[j], metrics::Encoding::srgb, observer);
   });
   run.flip_ms += now_ms() - t0;
   run.flip_frames_evaluated += static_cast<int>(pairs);
@@ -293,7 +299,8 @@ void Walk::perceive(TechniqueRun& run, shadows::Renderer& ref_renderer, const sh
   for (std::size_t j = 0; j < timed.size(); ++j) {
     Series& s = series[timed[j]];
     s.flip.frames.push_back(flips[j].pooled);
-    if (run.converged) s.flip_ray_traced.frames.push_back(flips[timed.size() + j].pooled);
+    s.seen.add(seen[j]);
+    if (run.converged) s.flip_ray_traced.frames.push_back(flips[timed.size() + j].pooled), s.seen_ray_traced.add(seen[timed.size() + j]);
     if (montage) {
       char label[160];
       std::snprintf(label, sizeof label, "%s: FLIP %.4f", s.config.name.c_str(), flips[j].pooled.mean);

@@ -58,6 +58,7 @@ struct Series {
   // reference (TechniqueRun::target_description: the reference for PCF, converged PCSS for PCSS),
   // and PCSS's RMSE against converged PCSS and FLIP against the ray-traced sun.
   FlipSeries flip, flip_ray_traced;
+  ObserverSeries seen, seen_ray_traced;  // the frame observer on the same pairs
   std::vector<metrics::ImageError> vs_converged;
   double thin_shadow = 0, gaps = 0;  // masked sums (thin casters)
 };
@@ -96,7 +97,7 @@ struct TechniqueRun {
   std::string target_description;    // what FLIP is taken against (the converged PCSS, or the reference)
   double pixels_per_degree = 0;
   int lit_code_difference = 0;       // composed against the renderer's lit frames, largest over every frame compared
-  double flip_ms = 0;                // wall time of the FLIP evaluations
+  double flip_ms = 0;                // wall time of the FLIP and frame observer evaluations
   double converged_ms = 0;           // rendering the converged PCSS reference
   int flip_frames_evaluated = 0;     // FLIP maps computed
   std::vector<io::Image8> flip_tiles;  // FLIP maps (magma) against the target, at the first reference frame
@@ -117,6 +118,7 @@ struct WalkOptions {
   bool perceptual = true;
   double pixels_per_degree = metrics::kFlipDefaultPixelsPerDegree;
   int threads = 2;  // FLIP evaluations in parallel
+  double criterion_f = metrics::kStudyCriterionF;  // the frame observer's "visible" (the technique's calibration entry's F)
 };
 
 // Shared by every technique of a run: the scene, the surface probe, the thin casters' masks.
@@ -125,6 +127,8 @@ class Walk {
   Walk(const scene::Scene& scene, PathPlan plan, WalkOptions options, gl::TimingMethod method);
   ~Walk();
   const PathPlan& plan() const { return plan_; }
+  // The criterion F of the next run's technique (its calibration entry's threshold.criterion_f).
+  void set_criterion_f(double f) { options_.criterion_f = f; }
   // Walks the path with `configs` of technique `name`. `progress` counts frames from `done` of `total`.
   TechniqueRun run(const std::string& name, std::vector<Configuration> configs, ProgressBar& progress, int& done, int total);
 

@@ -113,6 +113,21 @@ double display_pixels_per_degree(const std::string& file) {
                                     r.number(*d, "display", display, "viewing_distance_mm") / 1000.0);
 }
 
+bool ObserverSeries::visible() const {
+  return std::any_of(frames.begin(), frames.end(), [](const Frame& f) { return f.visible; });
+}
+
+double ObserverSeries::p_detect_max() const {
+  double m = frames.empty() ? NAN : 0.0;
+  for (const Frame& f : frames) m = std::max(m, f.p_detect_max);
+  return m;
+}
+
+void ObserverSeries::add(const metrics::FrameDetection& d) {
+  frames.push_back({d.p_detect_max, d.patches_visible, static_cast<int>(d.patches.size()), d.visible});
+  criterion_f = d.criterion_f;
+}
+
 double FlipSeries::mean() const {
   if (frames.empty()) return NAN;
   double sum = 0;

@@ -17,6 +17,7 @@
 #include "image/image.h"
 #include "io/image_io.h"
 #include "metrics/flip.h"
+#include "metrics/frame_observer.h"
 #include "shadows/renderer.h"
 #include "shadows/settings.h"
 
@@ -50,6 +51,22 @@ double display_pixels_per_degree(const std::string& study_config);
 // half, at least 480 px: room for the longest label at the montage's 24 px text).
 constexpr int kFlipMontageColumns = 3;
 inline int flip_montage_tile_width(int frame_width_px) { return frame_width_px / 2 > 480 ? frame_width_px / 2 : 480; }
+
+// The frame observer's verdict (metrics/frame_observer.h) on one configuration against one
+// reference over the reference frames: per frame its largest patch p_detect and the patches above
+// the criterion F.
+struct ObserverSeries {
+  struct Frame {
+    double p_detect_max = 0;
+    int patches_visible = 0, patches = 0;
+    bool visible = false;
+  };
+  std::vector<Frame> frames;
+  double criterion_f = 0;
+  bool visible() const;          // in some frame
+  double p_detect_max() const;   // over the frames
+  void add(const metrics::FrameDetection& d);
+};
 
 // FLIP's pooled values of one configuration against one reference over the reference frames.
 struct FlipSeries {

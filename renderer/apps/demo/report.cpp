@@ -71,6 +71,17 @@ nlohmann::json flip_json(const FlipSeries& f) {
           {"per_frame", per_frame}};
 }
 
+// The frame observer's verdict over the reference frames.
+nlohmann::json observer_json(const ObserverSeries& o) {
+  if (o.frames.empty()) return nullptr;
+  std::vector<double> p;
+  std::vector<int> visible_patches, patches;
+  for (const auto& f : o.frames) p.push_back(f.p_detect_max), visible_patches.push_back(f.patches_visible), patches.push_back(f.patches);
+  return {{"frames", o.frames.size()},  {"criterion_f", o.criterion_f},       {"visible", o.visible()},
+          {"p_detect_max", o.p_detect_max()}, {"p_detect_max_per_frame", p}, {"patches_visible_per_frame", visible_patches},
+          {"patches_per_frame", patches}};
+}
+
 // `subject` (a series index) read against the family's front at its error `subject_error` by `measure`.
 FrontComparison compare_on(const TechniqueRun& run, ErrorMeasure measure, const std::vector<std::size_t>& family, std::size_t subject,
                            double subject_error, const std::vector<double> Series::*per_frame, bool median_cost) {
@@ -129,6 +140,48 @@ double reference_rmse(const Series& s) {
   std::vector<double> rmse;
   for (const auto& e : s.vs_reference) rmse.push_back(e.rmse);
   return mean_of(rmse);
+}
+
+Unseen cheapest_unseen(const TechniqueRun& run) {
+  Unseen u;
+  for (std::size_t k = 0; k < run.series.size(); ++k) {
+    const Series& s = run.series[k];
+    if (!s.config.timed() || s.seen.frames.empty()) continue;
+    u.measured = true;
+    u.criterion_f = s.seen.criterion_f;
+    if (s.seen.visible()) continue;
+    u.unseen.push_back(k);
+    const auto cheaper = [&](const std::optional<std::size_t>& best, const std::vector<double> Series::*cost, bool median) {
+      if (!best) return true;
+      const auto& a = s.*cost;
+      const auto& b = run.series[*best].*cost;
+      return median ? stats::median(a) < stats::median(b) : mean_of(a) < mean_of(b);
+    };
+    if (cheaper(u.by_time, &Series::ms, true)) u.by_time = k;
+    if (cheaper(u.by_memory, &Series::allocated, false)) u.by_memory = k;
+  }
+  return u;
+}
+
+std::string unseen_line(const TechniqueRun& run, const Unseen& u) {
+  std::size_t timed = 0;
+  for (const Series& s : run.series) timed += s.config.timed() ? 1 : 0;
+  char line[512];
+  if (!u.measured) {
+    std::snprintf(line, sizeof line, "%-6s the frame observer: not run (--no-reference or --no-flip)", run.technique.c_str());
+  } else if (!u.by_time) {
+    std::snprintf(line, sizeof line, "%-6s the frame observer (F = %.3f) tells every configuration (%zu) from the reference: none it cannot",
+                  run.technique.c_str(), u.criterion_f, timed);
+  } else {
+    const Series& t = run.series[*u.by_time];
+    const Series& m = run.series[*u.by_memory];
+    std::snprintf(line, sizeof line,
+                  "%-6s the frame observer (F = %.3f) cannot tell %zu of %zu configurations from the reference; the cheapest: %s "
+                  "(%.1f ms), by memory %s (%.2f Mtexels)",
+                  run.technique.c_str(), u.criterion_f, u.unseen.size(), timed, t.config.name.c_str(), stats::median(t.ms),
+                  m.config.name.c_str(), mean_of(m.allocated) / 1e6);
+  }
+  return line;
 }
 
 const char* measure_label(ErrorMeasure m) { return m == ErrorMeasure::rmse ? "RMSE" : "FLIP"; }
@@ -298,9 +351,10 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
     j["map_triangles"] = spread(s.map_triangles);
     j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
     j["reference_error"] = reference_error_json(s.vs_reference);
-    if (run.perceptual) j["flip"] = flip_json(s.flip);
+    if (run.perceptual) j["flip"] = flip_json(s.flip), j["observer"] = observer_json(s.seen);
     if (run.converged) {
       j["flip_ray_traced"] = flip_json(s.flip_ray_traced);
+      j["observer_ray_traced"] = observer_json(s.seen_ray_traced);
       j["reference_error_converged"] = reference_error_json(s.vs_converged);
     }
     if (run.thin_pixels > 0) j["thin_casters"] = {{"shadow_kept", shadow_kept(run, s)}, {"gaps_kept", gaps_kept(run, s)}};
@@ -360,6 +414,15 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
                        {"montage_frame", run.flip_montage_frame}};
     if (run.converged) t["perceptual"]["converged_render_ms_mean"] = run.converged_ms / std::max(run.reference_frames, 1);
     t["equal_flip"] = equal_json(run, eqs.flip, "flip mean against " + run.target_description);
+    const Unseen u = cheapest_unseen(run);
+    nlohmann::json unseen = nlohmann::json::array();
+    for (const std::size_t k : u.unseen) unseen.push_back(run.series[k].config.name);
+    t["observer"] = {{"criterion_f", u.criterion_f},
+                     {"against", run.target_description},
+                     {"not_told_apart", unseen},
+                     {"cheapest_by_time", u.by_time ? nlohmann::json(run.series[*u.by_time].config.name) : nlohmann::json("none")},
+                     {"cheapest_by_memory", u.by_memory ? nlohmann::json(run.series[*u.by_memory].config.name) : nlohmann::json("none")},
+                     {"line", unseen_line(run, u)}};
   }
   if (run.converged) t["equal_flip_ray_traced"] = equal_json(run, eqs.flip_ray_traced, "flip mean against " + run.reference_description);
   return t;
@@ -385,8 +448,8 @@ void print_tables(const TechniqueRun& run, const EqualErrors& eqs) {
               run.technique.c_str(), series[run.engine].config.name.c_str(), measure_label(eq.measure));
   std::printf("  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
               "Mtri maps", "SSIM eng", "RMSE ref", "SSIM ref", "thin", "gaps");
-  if (run.perceptual) std::printf(" %8s %8s %7s", "FLIP", "FLIP>.05", "max");
-  if (run.converged) std::printf(" %9s %9s", "RMSE conv", "FLIP sun");
+  if (run.perceptual) std::printf(" %8s %8s %7s %6s", "FLIP", "FLIP>.05", "max", "p_det");
+  if (run.converged) std::printf(" %9s %9s %6s", "RMSE conv", "FLIP sun", "p_sun");
   std::printf("\n");
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
@@ -402,16 +465,19 @@ void print_tables(const TechniqueRun& run, const EqualErrors& eqs) {
       std::printf(" %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
     if (run.thin_pixels > 0) std::printf(" %7.3f %7.3f", shadow_kept(run, s), gaps_kept(run, s));
     if (const nlohmann::json f = flip_json(s.flip); run.perceptual && !f.is_null())
-      std::printf(" %8.5f %7.2f%% %7.3f", f["mean"].get<double>(), 100 * f["share_above_mean"].get<double>(), f["max_max"].get<double>());
+      std::printf(" %8.5f %7.2f%% %7.3f %5.2f%s", f["mean"].get<double>(), 100 * f["share_above_mean"].get<double>(),
+                  f["max_max"].get<double>(), s.seen.p_detect_max(), s.seen.visible() ? "!" : " ");
     if (run.converged && !s.vs_converged.empty())
-      std::printf(" %9.5f %9.5f", reference_error_json(s.vs_converged)["rmse_mean"].get<double>(), s.flip_ray_traced.mean());
+      std::printf(" %9.5f %9.5f %5.2f%s", reference_error_json(s.vs_converged)["rmse_mean"].get<double>(), s.flip_ray_traced.mean(),
+                  s.seen_ray_traced.p_detect_max(), s.seen_ray_traced.visible() ? "!" : " ");
     std::printf("\n");
   }
   if (run.perceptual)
     std::printf("  FLIP: LDR-FLIP of the lit frame against %s at %.2f pixels per degree, mean over the reference frames (FLIP>.05: share "
-                "of pixels above 0.05; max: the largest pixel)%s\n",
-                run.target_description.c_str(), run.pixels_per_degree,
-                run.converged ? "; RMSE conv: visibility against it; FLIP sun: against the ray-traced sun" : "");
+                "of pixels above 0.05; max: the largest pixel); p_det: the frame observer's detection probability, the largest patch's over the reference frames, "
+                "! where above F = %.3f%s\n",
+                run.target_description.c_str(), run.pixels_per_degree, cheapest_unseen(run).criterion_f,
+                run.converged ? "; RMSE conv: visibility against it; FLIP sun, p_sun: against the ray-traced sun" : "");
   if (run.reference_frames > 0)
     std::printf("  reference: %s; compared at %s (%lld pixels over %d frames)\n", run.reference_description.c_str(),
                 run.mask_description.c_str(), static_cast<long long>(run.mask_pixels), run.reference_frames);

@@ -2,6 +2,7 @@
 // What penumbra-demo says about a walk (measurement.h): the adaptive configuration against the
 // engine family's Pareto front at equal error (stats/pareto.h), report.json's technique entry,
 // and the printed tables.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,19 @@ struct EqualErrors {
 EqualErrors equal_errors(const TechniqueRun& run);
 // "pcf    virtual rule at RMSE 0.0402: speedup ..., memory ratio ...", as headline() for the adaptive maps.
 std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v);
+
+// The frame observer's verdict on the family: the cheapest timed configuration (by median frame
+// time, and by memory allocated) it cannot tell from the target reference at the technique's
+// criterion F at any reference frame; none when it tells every one apart.
+struct Unseen {
+  bool measured = false;
+  double criterion_f = 0;
+  std::optional<std::size_t> by_time, by_memory;  // series indices
+  std::vector<std::size_t> unseen;                // every configuration it cannot tell apart
+};
+Unseen cheapest_unseen(const TechniqueRun& run);
+// "pcf    the observer (F = 0.674) cannot tell 4 of 11 from the reference: cheapest fixed-2048 (32.8 ms) ..."
+std::string unseen_line(const TechniqueRun& run, const Unseen& u);
 
 // Mean RMSE against the reference over the reference frames (NaN without a reference).
 double reference_rmse(const Series& s);
