@@ -8,12 +8,15 @@
 //               1024²-4096²). The walk (apps/demo/measurement.h) measures per configuration
 //               frame time, texels drawn and allocated, triangles, SSIM against the engine
 //               baseline, error against a reference of the technique (metrics/ground_truth.h)
-//               and flicker from frame to frame (metrics/temporal.h). The report
-//               (apps/demo/report.h) reads the adaptive rule against the engine family's Pareto
-//               front at equal error (speedup and memory ratio with intervals) and prints that
-//               first, then the single-map comparison and the tables; writes report.json,
-//               frames.csv, side-by-side images, crops and the plots (scripts/plot_demo.py)
-//               into -o DIR.
+//               and flicker from frame to frame (metrics/temporal.h), and at the reference
+//               frames the perceived difference of the lit frames (apps/demo/perceptual.h:
+//               LDR-FLIP and the frame observer at the study display's pixels per degree). The
+//               report (apps/demo/report.h) reads the adaptive rule against the engine family's
+//               Pareto front at equal perceived difference (FLIP), then at equal error (RMSE)
+//               (speedup and memory ratio with intervals), names the cheapest configuration the
+//               observer cannot tell from the reference, then the single-map comparison and the
+//               tables; writes report.json, frames.csv, side-by-side images, crops, FLIP montages
+//               and the plots (scripts/plot_demo.py) into -o DIR.
 //   windowed    the same renderer in a window with a panel: technique and filter, fitting,
 //               adaptive on/off, c and its calibration file, the resolution in use per cascade,
 //               shadow-map and cascade overlays, fps and per-pass times.

@@ -230,9 +230,8 @@ const Walk::ThinMasks& Walk::thin_masks(int frame, const scene::Camera& camera, 
 }
 
 // PCSS converged: four cascades of the reference's size, twice the grid's taps per axis and the
-// most blocker-search taps the settings allow. On the street (path frame 120) 32 against 64 taps
-// per axis at 8188² differ by a mean FLIP of 0.003 (docs/adaptive.md), a third of the
-// configurations' smallest.
+// most blocker-search taps the settings allow. Under the crane (path frame 120) 32 against 64 taps
+// per axis at 8188² differ by a mean FLIP of 0.003 (docs/adaptive.md).
 constexpr int kConvergedGridTaps = 64;
 constexpr int kConvergedBlockerTaps = 64;
 
