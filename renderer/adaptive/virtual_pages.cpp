@@ -65,4 +65,42 @@ MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy
   return out;
 }
 
+std::set<Page> rebase_pages(const std::set<Page>& pages, LightXY from, LightXY to, const VirtualMapLayout& layout) {
+  std::set<Page> out;
+  for (const Page& p : pages) {
+    if (p.level < 0 || p.level >= layout.levels) continue;
+    const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, p.level);
+    const LightXY a = level_origin(p.level, from, layout), b = level_origin(p.level, to, layout);
+    // Both corners are whole pages: the shift is a whole number of pages.
+    const auto dx = static_cast<std::int64_t>(std::llround((a.x - b.x) / page_ws));
+    const auto dy = static_cast<std::int64_t>(std::llround((a.y - b.y) / page_ws));
+    const std::int64_t x = p.x + dx, y = p.y + dy;
+    if (x < 0 || y < 0 || x >= layout.pages_per_side || y >= layout.pages_per_side) continue;
+    out.insert({p.level, static_cast<int>(x), static_cast<int>(y)});
+  }
+  return out;
+}
+
+std::set<Page> region_floor_pages(LightXY lo, LightXY hi, LightXY camera_xy, const VirtualMapLayout& layout, int max_pages) {
+  std::set<Page> out;
+  if (!(std::isfinite(lo.x) && std::isfinite(lo.y) && std::isfinite(hi.x) && std::isfinite(hi.y)) || lo.x > hi.x || lo.y > hi.y)
+    return out;
+  for (int level = 0; level < layout.levels; ++level) {
+    const bool coarsest = level == layout.levels - 1;
+    const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, level);
+    const LightXY o = level_origin(level, camera_xy, layout);
+    // The rectangle in the window's pages (floating: beyond the window where it reaches out).
+    const double x0 = std::floor((lo.x - o.x) / page_ws), x1 = std::floor((hi.x - o.x) / page_ws);
+    const double y0 = std::floor((lo.y - o.y) / page_ws), y1 = std::floor((hi.y - o.y) / page_ws);
+    const double n = layout.pages_per_side;
+    const bool inside = x0 >= 0 && y0 >= 0 && x1 < n && y1 < n;
+    const double count = (std::min(x1, n - 1) - std::max(x0, 0.0) + 1) * (std::min(y1, n - 1) - std::max(y0, 0.0) + 1);
+    if (!coarsest && !(inside && count <= max_pages)) continue;
+    for (auto y = static_cast<int>(std::max(y0, 0.0)); y <= static_cast<int>(std::min(y1, n - 1)); ++y)
+      for (auto x = static_cast<int>(std::max(x0, 0.0)); x <= static_cast<int>(std::min(x1, n - 1)); ++x) out.insert({level, x, y});
+    break;
+  }
+  return out;
+}
+
 }  // namespace penumbra::adaptive

@@ -86,4 +86,16 @@ LightXY level_origin(int level, LightXY camera_xy, const VirtualMapLayout& layou
 MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy, const VirtualMapLayout& layout,
                       const MarkOptions& options);
 
+// Marks read a frame late (no read-back waited for within a frame): the window-relative `pages`
+// marked for a camera at `from` as pages of the windows of a camera at `to`, the same places in
+// light space; those now outside their level's window are dropped.
+std::set<Page> rebase_pages(const std::set<Page>& pages, LightXY from, LightXY to, const VirtualMapLayout& layout);
+
+// What a frame asks for besides the marks it has, so that every pixel of a view whose light-space
+// footprint lies in [lo, hi] finds a page even where its own marks are not read yet (the first
+// frame after a cut; a pixel newly in view): the pages over [lo, hi] of the finest level whose
+// window holds the whole rectangle in at most `max_pages` pages; if none does, the coarsest
+// level's pages over it (clipped to its window). Empty for an empty or non-finite rectangle.
+std::set<Page> region_floor_pages(LightXY lo, LightXY hi, LightXY camera_xy, const VirtualMapLayout& layout, int max_pages);
+
 }  // namespace penumbra::adaptive

@@ -88,5 +88,66 @@ TEST(VirtualPages, TheFilterReachMarksNeighboursAndFarPixelsGoCoarser) {
   EXPECT_THROW(mark_pages({}, {0, 0}, bad, footprint), std::invalid_argument);
 }
 
+// Issue 47: marks read a frame late are the previous camera's window-relative pages; rebased to the
+// new camera they are the pages the new camera's marking gives the same surface points.
+TEST(VirtualPages, MarksRebasedToAMovedCameraAreThatCamerasMarks) {
+  const VirtualMapLayout l = layout();
+  const MarkOptions footprint{Marking::footprint, 3.47, 1};
+  std::vector<PixelRequest> pixels;
+  // Within 9 cm of both cameras (inside level 0's window, 16 cm each way, for both), none on a
+  // page boundary (where the two windows' float arithmetic may round apart).
+  for (int i = 0; i < 40; ++i)
+    pixels.push_back({{0.0131 + 0.06 * std::sin(0.7 * i), -0.0087 + 0.06 * std::cos(1.3 * i)}, i % 2 ? 0.004 : 0.008, 0});
+  const LightXY a{0, 0}, b{0.05, -0.03};
+  const MarkResult at_a = mark_pages(pixels, a, l, footprint), at_b = mark_pages(pixels, b, l, footprint);
+  ASSERT_GT(at_a.pages.size(), 10u);
+  EXPECT_EQ(at_a.unmarked + at_b.unmarked, 0);
+  EXPECT_EQ(rebase_pages(at_a.pages, a, b, l), at_b.pages);
+  EXPECT_EQ(rebase_pages(at_a.pages, a, a, l), at_a.pages);
+  // A camera a metre away: level 0's and 1's windows (32 and 64 cm) hold none of them any more; a
+  // level-5 page (10.24 m window) keeps its place.
+  const std::set<Page> far = rebase_pages({{0, 8, 8}, {1, 8, 8}, {5, 8, 8}}, a, {1.0, 0}, l);
+  ASSERT_EQ(far.size(), 1u);
+  EXPECT_EQ(far.begin()->level, 5);
+  EXPECT_EQ(far.begin()->x, 8 - 1);  // level 5's window moved one of its 64 cm pages
+}
+
+TEST(VirtualPages, TheRegionFloorCoversTheRegionOnTheFinestLevelThatFits) {
+  const VirtualMapLayout l = layout();
+  const LightXY camera{0.01, -0.02}, lo{-0.2, -0.25}, hi{0.22, 0.18};
+  for (int max_pages : {16, 64, 400}) {
+    SCOPED_TRACE(max_pages);
+    const std::set<Page> floor = region_floor_pages(lo, hi, camera, l, max_pages);
+    ASSERT_FALSE(floor.empty());
+    const int level = floor.begin()->level;
+    EXPECT_EQ(floor.rbegin()->level, level) << "one level";
+    EXPECT_LE(static_cast<int>(floor.size()), max_pages);
+    // Every point of the region lies in a page of the floor.
+    const double page_ws = l.page_texels * l.texel0_ws * std::ldexp(1.0, level);
+    const LightXY o = level_origin(level, camera, l);
+    for (double x = lo.x; x <= hi.x; x += 0.01)
+      for (double y = lo.y; y <= hi.y; y += 0.01) {
+        const Page p{level, static_cast<int>(std::floor((x - o.x) / page_ws)), static_cast<int>(std::floor((y - o.y) / page_ws))};
+        EXPECT_TRUE(floor.count(p)) << x << ", " << y;
+      }
+    // The next finer level would not do: more pages than allowed, or its window misses some.
+    if (level > 0) {
+      const double finer = page_ws / 2;
+      const LightXY of = level_origin(level - 1, camera, l);
+      const double nx = std::floor((hi.x - of.x) / finer) - std::floor((lo.x - of.x) / finer) + 1;
+      const double ny = std::floor((hi.y - of.y) / finer) - std::floor((lo.y - of.y) / finer) + 1;
+      const bool fits = of.x <= lo.x && of.y <= lo.y && hi.x < of.x + l.pages_per_side * finer && hi.y < of.y + l.pages_per_side * finer;
+      EXPECT_TRUE(!fits || nx * ny > max_pages) << "level " << level - 1 << " would hold it in " << nx * ny;
+    }
+  }
+  EXPECT_GT(region_floor_pages(lo, hi, camera, l, 16).begin()->level, region_floor_pages(lo, hi, camera, l, 400).begin()->level);
+  // A region larger than the coarsest window: that level's whole window.
+  const std::set<Page> huge = region_floor_pages({-100, -100}, {100, 100}, camera, l, 4);
+  EXPECT_EQ(huge.size(), 16u * 16u);
+  EXPECT_EQ(huge.begin()->level, 5);
+  EXPECT_TRUE(region_floor_pages(hi, lo, camera, l, 64).empty());  // lo above hi: nothing
+  EXPECT_TRUE(region_floor_pages({std::nan(""), 0}, hi, camera, l, 64).empty());
+}
+
 }  // namespace
 }  // namespace penumbra::adaptive
