@@ -1,6 +1,7 @@
 // penumbra-study: the 2AFC study app (docs/study.md).
 //   penumbra-study stimulus --pattern stair --artifact-px 10 --filter-radius-px 20 -o DIR
 #include <CLI/CLI.hpp>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -80,6 +81,23 @@ int run_display_check(const fs::path& config_file) {
   std::printf("artifacts:");
   for (double a : c.artifact_px) std::printf(" %g px = %.2f arcmin;", a, d.arcmin(a));
   std::printf("\nlargest filter radius shown: %d px = %.1f arcmin\n", c.stimulus_size_px / 2, d.arcmin(c.stimulus_size_px / 2.0));
+  return 0;
+}
+
+// prepare-frames: every frame a session of a frame study can show, rendered into the cache (the
+// windows only read them; headless sessions render what they lack themselves).
+int run_prepare_frames(const fs::path& config_file, const fs::path& cache_dir) {
+  const procedure::StudyConfig config = procedure::load_config(config_file);
+  if (!config.frames.enabled()) throw cli::UsageError("--config " + config_file.string() + ": not a frame study (no frames block)");
+  const fs::path dir = cache_dir.empty() ? stimuli::default_frame_cache() : cache_dir;
+  stimuli::FrameCache cache(dir);
+  const std::vector<stimuli::FrameRequest> frames = stimuli::session_frames(config);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    cache.frame(frames[i]);
+    if (::isatty(STDERR_FILENO)) std::fprintf(stderr, "[%zu/%zu]\r", i + 1, frames.size());
+  }
+  std::printf("%zu frames of %s: %d rendered, %d in the cache %s already\n", frames.size(), config.name.c_str(), cache.renders(),
+              cache.reads(), dir.string().c_str());
   return 0;
 }
 
@@ -458,11 +476,20 @@ std::string intake_problem(const fs::path& root, const procedure::StudyConfig& c
   return "";
 }
 
-// The windows show square grey stimuli, two side by side; a frame study's colour patches and its
-// reference above them are not drawn there yet (docs/study.md#frames-the-rules-own-frames).
-[[maybe_unused]] void refuse_frames_in_windows(const procedure::StudyConfig& config) {
-  if (config.frames.enabled())
-    throw cli::UsageError("run: a frame study (config frames) runs --headless only for now: the windows do not draw its patches yet");
+// The windows read a frame study's frames and never render them (their GL context is the
+// participant's): every frame a session can show must be prepared first, or the session is refused
+// before anything is opened or written.
+fs::path frame_cache_of(const RunOptions& o) { return o.frame_cache.empty() ? stimuli::default_frame_cache() : o.frame_cache; }
+[[maybe_unused]] void check_frames_prepared(const procedure::StudyConfig& config, const RunOptions& o) {
+  if (!config.frames.enabled()) return;
+  const stimuli::FrameCache cache(frame_cache_of(o), false);
+  const std::vector<stimuli::FrameRequest> frames = stimuli::session_frames(config);
+  std::size_t missing = 0;
+  for (const stimuli::FrameRequest& f : frames) missing += cache.cached(f) ? 0 : 1;
+  if (missing > 0)
+    throw cli::UsageError("run: " + std::to_string(missing) + " of the " + std::to_string(frames.size()) + " frames of " + config.name +
+                          " are not in the frame cache " + cache.dir().string() + "; render them first: penumbra-study prepare-frames --config " +
+                          (o.config.empty() ? config.name : o.config.string()) + " --frame-cache " + cache.dir().string());
 }
 
 // A participant session in the windows (study/gui); the same Session, so the same log. Without
@@ -483,7 +510,7 @@ int run_participant(RunOptions o) {
     start.resume = [&](const std::function<void(const procedure::Session&)>& accept) {
       return open_session(o, [&](const procedure::Session& s) {
         // A person may not answer a simulated session's trials (a finished one may be looked at).
-        refuse_frames_in_windows(s.config());
+        check_frames_prepared(s.config(), o);
         const procedure::ObserverKind kind = procedure::observer_kind(s.session_json(), (s.dir() / "session.json").string());
         if (kind != procedure::ObserverKind::person && s.next())
           throw std::invalid_argument(std::string("--resume: the session was answered by a ") + procedure::describe(kind) +
@@ -491,10 +518,12 @@ int run_participant(RunOptions o) {
         accept(s);
       });
     };
+    start.frame_cache = frame_cache_of(o);
     return study_gui::run_session(start, o.gui);
   }
+  start.frame_cache = frame_cache_of(o);
   start.config = new_session_config(o);
-  refuse_frames_in_windows(start.config);
+  check_frames_prepared(start.config, o);
   start.intake = !o.participant_given;
   if (start.intake) {
     // -o is the folder of sessions: it may hold others, must not be a link, and its own folder must
@@ -574,7 +603,7 @@ int run_study(const RunOptions& o) {
   const observers::ImageObserverParams image_params = setup.image_params;
   const bool frames = session.config().frames.enabled();
   std::unique_ptr<stimuli::FrameCache> frame_cache;  // makes its own GL context at its first render
-  if (frames && setup.frame) frame_cache = std::make_unique<stimuli::FrameCache>(o.frame_cache.empty() ? stimuli::default_frame_cache() : o.frame_cache);
+  if (frames && setup.frame) frame_cache = std::make_unique<stimuli::FrameCache>(frame_cache_of(o));
   std::unique_ptr<gl::HeadlessContext> context;
   std::unique_ptr<stimuli::StimulusRenderer> renderer;
   if (image_observer && !frames) {
@@ -735,6 +764,17 @@ int main(int argc, char** argv) {
   study_gui::add_options(*run, ro.gui);
 #endif
 
+  auto* prepare = app.add_subcommand("prepare-frames", "render every frame a frame study's sessions can show into the frame cache "
+                                                      "(the windows read them; docs/study.md#frames-the-rules-own-frames--frames)");
+  fs::path prepare_config, prepare_cache;
+  prepare->add_option("--config", prepare_config, "a frame study's config (a file or a shipped name: frames-town, frames-demo)")
+      ->required()
+      ->check(cli::path_given())
+      ->transform(shipped_config());
+  prepare->add_option("--frame-cache", prepare_cache,
+                      "the frame cache (default: $PENUMBRA_FRAME_CACHE, else $XDG_CACHE_HOME/penumbra/frames or ~/.cache/penumbra/frames)")
+      ->check(cli::path_given());
+
   const study_app::ReferenceCommand reference(app);
   const study_app::CalibrateDisplayCommand calibrate_display(app);
 
@@ -743,6 +783,7 @@ int main(int argc, char** argv) {
     if (reference.parsed()) return reference.run();
     if (calibrate_display.parsed()) return calibrate_display.run();
     if (display_check->parsed()) return run_display_check(display_config);
+    if (prepare->parsed()) return run_prepare_frames(prepare_config, prepare_cache);
     if (stim->parsed()) {
       stimuli::set_technique_settings(spec, stim_settings);
       return run_stimulus(pattern, kernel, transfer, stim_calibration, spec, stim_out);

@@ -66,16 +66,15 @@ float centred_lines(const std::vector<std::string>& lines, float y) {
 // Text centred horizontally at ImGui y `y`, wrapped to the screen.
 float centred_text(const std::string& text, float y) { return centred_lines(wrapped(text, text_width_limit()), y); }
 
-// A grey image into an RGBA8 texture, rows flipped (GL rows go bottom-up), so a blit or a quad
-// with flipped v copies it without any other transform.
+// A grey (or RGB: a frame study's patches) image into an RGBA8 texture, rows flipped (GL rows go
+// bottom-up), so a blit or a quad with flipped v copies it without any other transform.
 void upload_grey(const gl::Texture& texture, const io::Image8& img) {
   const int size = img.width;
   std::vector<std::uint8_t> rgba(static_cast<std::size_t>(size) * size * 4);
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) {
-      const std::uint8_t v = img.at(x, size - 1 - y);
       std::uint8_t* p = &rgba[(static_cast<std::size_t>(y) * size + x) * 4];
-      p[0] = p[1] = p[2] = v;
+      for (int c = 0; c < 3; ++c) p[c] = img.at(x, size - 1 - y, img.channels >= 3 ? c : 0);
       p[3] = 255;
     }
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -83,8 +82,8 @@ void upload_grey(const gl::Texture& texture, const io::Image8& img) {
 }
 
 void check_square(const io::Image8& img, int size) {
-  if (img.width != size || img.height != size || img.channels != 1)
-    throw std::invalid_argument("ParticipantView: stimuli must be square one-channel images of the same size");
+  if (img.width != size || img.height != size || (img.channels != 1 && img.channels != 3))
+    throw std::invalid_argument("ParticipantView: stimuli must be square grey or RGB images of the same size");
 }
 
 // A button of at least `min_width` centred on x, at y; true when clicked.
@@ -96,22 +95,26 @@ bool button_at(const std::string& label, float centre_x, float y, float min_widt
 
 }  // namespace
 
-StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count) {
+StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count, bool sample) {
   if (count != 1 && count != 2) throw std::invalid_argument("stimulus_layout: 1 or 2 stimuli");
   StimulusLayout l;
   l.size_px = size_px;
   l.count = count;
+  l.sample = sample;
   const int gap = size_px / 2;
   const int total_w = count * size_px + (count - 1) * gap;
-  // Room above for the question and below for the buttons and the progress line.
-  const int total_h = size_px + 2 * (kQuestionGapPx + kButtonGapPx + kButtonHeightPx + kMarginPx);
+  // Room above for the question and below for the buttons and the progress line (and the sample's row).
+  const int rows_h = sample ? 2 * size_px + gap : size_px;
+  const int total_h = rows_h + 2 * (kQuestionGapPx + kButtonGapPx + kButtonHeightPx + kMarginPx);
   if (total_w + 2 * kMarginPx > framebuffer_width || total_h > framebuffer_height)
     throw std::runtime_error("the participant screen (" + std::to_string(framebuffer_width) + "x" +
                              std::to_string(framebuffer_height) + " px) is too small for " + std::to_string(count) +
                              " stimuli of " + std::to_string(size_px) + " px with the question and buttons");
   l.x_px[0] = (framebuffer_width - total_w) / 2;
   l.x_px[1] = l.x_px[0] + size_px + gap;
-  l.y_px = (framebuffer_height - size_px) / 2;
+  l.y_px = (framebuffer_height - rows_h) / 2 + (sample ? size_px + gap : 0);
+  l.sample_x_px = (framebuffer_width - size_px) / 2;
+  l.sample_y_px = l.y_px - size_px - gap;
   return l;
 }
 
@@ -135,11 +138,11 @@ ParticipantView::ParticipantView(std::string task) : task_(std::move(task)) {
   c[ImGuiCol_Border] = {gray(150), gray(150), gray(150), 1};
 }
 
-void ParticipantView::set_stimuli(const std::vector<const io::Image8*>& images) {
+void ParticipantView::set_stimuli(const std::vector<const io::Image8*>& images, const io::Image8* sample) {
   if (images.empty() || images.size() > 2) throw std::invalid_argument("ParticipantView: 1 or 2 stimuli");
   const int size = images[0]->width;
   if (size != size_px_) {
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0; i < 3; ++i) {
       textures_[i] = gl::Texture({GL_RGBA8, size, size, 1}, "participant stimulus");
       const gl::Framebuffer::Attachment a{&textures_[i], GL_COLOR_ATTACHMENT0};
       framebuffers_[i] = gl::Framebuffer({&a, 1}, "participant stimulus");
@@ -151,6 +154,11 @@ void ParticipantView::set_stimuli(const std::vector<const io::Image8*>& images) 
     upload_grey(textures_[i], *images[i]);
   }
   count_ = static_cast<int>(images.size());
+  sample_ = sample != nullptr;
+  if (sample) {
+    check_square(*sample, size);
+    upload_grey(textures_[2], *sample);
+  }
 }
 
 void ParticipantView::set_examples(const io::Image8& jagged, const io::Image8& straight) {
@@ -202,11 +210,12 @@ Answer ParticipantView::draw_trial(gl::Window& window, const TrialText& text, co
   clear(window);
   int w = 0, h = 0;
   window.framebuffer_size(w, h);
-  layout_ = stimulus_layout(w, h, size_px_, count_);
-  for (int i = 0; i < count_; ++i) {
+  layout_ = stimulus_layout(w, h, size_px_, count_, sample_);
+  for (int i = 0; i < count_ + (sample_ ? 1 : 0); ++i) {
     // Same source and destination size: a pixel copy (GL_NEAREST only matters for scaling).
-    const int x0 = layout_.x_px[i], y0 = h - layout_.y_px - size_px_;
-    glBlitNamedFramebuffer(framebuffers_[i].id(), 0, 0, 0, size_px_, size_px_, x0, y0, x0 + size_px_, y0 + size_px_,
+    const bool above = i == count_;  // the sample
+    const int x0 = above ? layout_.sample_x_px : layout_.x_px[i], y0 = h - (above ? layout_.sample_y_px : layout_.y_px) - size_px_;
+    glBlitNamedFramebuffer(framebuffers_[above ? 2 : i].id(), 0, 0, 0, size_px_, size_px_, x0, y0, x0 + size_px_, y0 + size_px_,
                            GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
   const float s = window.framebuffer_scale();
@@ -216,7 +225,7 @@ Answer ParticipantView::draw_trial(gl::Window& window, const TrialText& text, co
   if (feedback)
     ImGui::PushStyleColor(ImGuiCol_Text, text.feedback_correct ? ImVec4{0.55f, 0.90f, 0.55f, 1} : ImVec4{1.0f, 0.62f, 0.55f, 1});
   const auto question = wrapped(feedback ? text.feedback : text.question, text_width_limit());
-  centred_lines(question, (layout_.y_px - kQuestionGapPx) / s - ImGui::GetTextLineHeight() -
+  centred_lines(question, (layout_.top_px() - kQuestionGapPx) / s - ImGui::GetTextLineHeight() -
                               static_cast<float>(question.size() - 1) * ImGui::GetTextLineHeightWithSpacing());
   if (feedback) ImGui::PopStyleColor();
   ImGui::PopFont();

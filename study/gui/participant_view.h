@@ -18,14 +18,18 @@ namespace penumbra::study_gui {
 
 // Where the stimuli go, in framebuffer pixels (origin top-left): centred, side by side with a
 // gap of half a stimulus for 2afc, one in the middle for yesno.
+// A frame study's 2afc adds the sample (the reference) centred above the two, half a stimulus apart.
 struct StimulusLayout {
   int size_px = 0;
   int count = 0;
   int x_px[2] = {0, 0};  // left edges
   int y_px = 0;          // top edge
+  bool sample = false;
+  int sample_x_px = 0, sample_y_px = 0;
+  int top_px() const { return sample ? sample_y_px : y_px; }  // the question goes above this
 };
 // Throws when the framebuffer cannot hold the stimuli with room for the question and buttons.
-StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count);
+StimulusLayout stimulus_layout(int framebuffer_width, int framebuffer_height, int size_px, int count, bool sample = false);
 
 using procedure::Answer;
 // Left arrow or F -> first; right arrow or J -> second (GLFW key codes).
@@ -56,8 +60,9 @@ class ParticipantView {
   // Needs the participant window's contexts current (sets that ImGui context's style).
   explicit ParticipantView(std::string task);
 
-  // The trial's images (8-bit grey, top row first, all the same square size), left to right.
-  void set_stimuli(const std::vector<const io::Image8*>& images);
+  // The trial's images (8-bit grey or RGB, top row first, all the same square size), left to right,
+  // and a frame study's sample shown above them (null: none).
+  void set_stimuli(const std::vector<const io::Image8*>& images, const io::Image8* sample = nullptr);
   // The instruction screens' examples (8-bit grey, square, the same size).
   void set_examples(const io::Image8& jagged, const io::Image8& straight);
 
@@ -87,8 +92,9 @@ class ParticipantView {
   void progress_line(gl::Window& window, const std::string& progress);
 
   std::string task_;
-  gl::Texture textures_[2];
-  gl::Framebuffer framebuffers_[2];
+  gl::Texture textures_[3];  // left, right, the sample
+  gl::Framebuffer framebuffers_[3];
+  bool sample_ = false;
   gl::Texture examples_[2];  // jagged, straight
   int count_ = 0, size_px_ = 0, example_px_ = 0;
   StimulusLayout layout_;

@@ -23,6 +23,7 @@
 #include "gl/window.h"
 #include "gui/participant_view.h"
 #include "procedure/config.h"
+#include "stimuli/frame_patch.h"
 #include "stimuli/stimulus.h"
 #include "text/printable.h"
 
@@ -153,7 +154,7 @@ struct Screens {
       w = mode->width;
       h = mode->height;
     }
-    (void)stimulus_layout(w, h, c.stimulus_size_px, c.task == "2afc" ? 2 : 1);  // throws naming the sizes
+    (void)stimulus_layout(w, h, c.stimulus_size_px, c.task == "2afc" ? 2 : 1, c.frames.enabled());  // throws naming the sizes
   }
   GLFWmonitor* participant_monitor() const { return fullscreen ? monitors[static_cast<std::size_t>(monitor)] : glfwGetPrimaryMonitor(); }
 };
@@ -347,6 +348,7 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
   const nlohmann::json presentation = presentation_record(screens, participant, config, o, refresh_hz);
   ParticipantView view(config.task);   // styles the participant's ImGui context
   stimuli::StimulusRenderer renderer;  // lives in the participant window's GL context
+  stimuli::FrameCache frames(start.frame_cache, false);  // a frame study's patches: prepared, read from disk
   struct CurrentOnExit {
     gl::Window& window;
     ~CurrentOnExit() { window.make_current(); }  // GL objects are freed in the context that made them
@@ -373,6 +375,12 @@ int run_session(const SessionStart& start, const GuiOptions& o) {
   hooks.say = say;
   hooks.present = [&](const procedure::TrialPlan& plan) {
     participant.make_current();  // the renderer's GL context (the flow may move on in the admin's frame)
+    if (config.frames.enabled()) {  // the reference above; below, the reference on the target's side
+      const stimuli::PatchPair pair = stimuli::patch_pair(frames, config, plan);
+      const bool left_reference = plan.target == "left";
+      view.set_stimuli({left_reference ? &pair.reference : &pair.test, left_reference ? &pair.test : &pair.reference}, &pair.reference);
+      return;
+    }
     const stimuli::StimulusPair pair = renderer.render(plan.stimulus);
     if (config.task == "2afc") {
       const bool left_jagged = plan.target == "left";

@@ -45,6 +45,8 @@ struct SessionStart {
   // Set for --resume: opens the session; `accept` sees it replayed, before anything is written, and
   // may throw to refuse.
   std::function<procedure::Session(const std::function<void(const procedure::Session&)>& accept)> resume;
+  // A frame study's prepared frames (stimuli/frame_patch.h), read, never rendered, by the windows.
+  std::filesystem::path frame_cache;
 };
 
 // Adds --monitor, --windowed, --admin-panel, --iti-ms, --screenshot, --screenshot-at, --refresh-hz to `run`.

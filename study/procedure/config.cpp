@@ -233,7 +233,13 @@ void parse_frames(const Reader& r, const nlohmann::json& f, FramesConfig& out) {
         r.fail("frames.settings." + text::printable(key), "set by the study (the rule with adaptive.c = k c, the reference's maps)");
   }
   if (const auto* ref = r.find(f, "reference")) {
-    r.only(*ref, "frames.reference.", {"cascades", "resolution_texels"});
+    r.only(*ref, "frames.reference.", {"cascades", "resolution_texels", "k"});
+    if (r.find(*ref, "k")) {
+      for (const char* maps : {"cascades", "resolution_texels"})
+        if (r.find(*ref, maps))
+          r.fail(std::string("frames.reference.") + maps, "not with frames.reference.k (the reference is the rule at that k, or maps)");
+      out.reference_k = r.number(*ref, "frames.reference.", "k", 8, 0.01, 1000);
+    }
     out.reference_cascades = static_cast<int>(r.integer(*ref, "frames.reference.", "cascades", 4, 1, 4));
     out.reference_texels = static_cast<int>(r.integer(*ref, "frames.reference.", "resolution_texels", 8188, 64, 16384));
   }
@@ -594,7 +600,8 @@ nlohmann::json to_json(const StudyConfig& c) {
     nlohmann::json settings = nlohmann::json::object();
     for (const auto& [key, value] : f.settings) settings[key] = value;
     j["frames"] = {{"scene", f.scene}, {"width_px", f.width_px}, {"height_px", f.height_px}, {"c", f.c}, {"settings", settings},
-                   {"reference", {{"cascades", f.reference_cascades}, {"resolution_texels", f.reference_texels}}},
+                   {"reference", f.reference_k > 0 ? nlohmann::json{{"k", f.reference_k}}
+                                                   : nlohmann::json{{"cascades", f.reference_cascades}, {"resolution_texels", f.reference_texels}}},
                    {"k_grid", {{"min", f.k_min}, {"max", f.k_max}, {"steps_per_octave", f.k_steps_per_octave}}},
                    {"warmup_frames", f.warmup_frames}, {"patches", patches}};
   }

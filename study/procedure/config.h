@@ -42,7 +42,8 @@ struct FramesConfig {
   // filter radius in world units; the map's size, cascades and the adaptive rule are the study's.
   std::vector<std::pair<std::string, std::string>> settings;
   int reference_cascades = 4;        // the reference: this many cascades ...
-  int reference_texels = 8188;       // ... of this many texels, the rule off
+  int reference_texels = 8188;       // ... of this many texels, the rule off;
+  double reference_k = 0;            // or, when > 0, the rule itself at this k (its converged frame)
   double k_min = 0.125, k_max = 8;   // the grid of k: powers of 2^(1 / k_steps_per_octave) in [k_min, k_max]
   int k_steps_per_octave = 4;
   int warmup_frames = 2;             // frames rendered before the one kept (PCSS's rule reads the frame before)

@@ -312,8 +312,11 @@ void SessionFlow::swapped(Screen drawn, double swap_s) {
   last_swap_s_ = swap_s;
   if (first_trial_frame) {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "trial %d on screen (%s, %s, r %.2f px, %s)", plan_->trial, round_line(plan_->round).c_str(),
-                  plan_->staircase_name.c_str(), plan_->stimulus.filter_radius_px, plan_->practice ? "practice" : "QUEST");
+    char level[40];  // a frame study shows a multiple k of the rule's c, the edge study a filter radius
+    if (plan_->k > 0) std::snprintf(level, sizeof level, "k %.3g", plan_->k);
+    else std::snprintf(level, sizeof level, "r %.2f px", plan_->stimulus.filter_radius_px);
+    std::snprintf(buf, sizeof buf, "trial %d on screen (%s, %s, %s, %s)", plan_->trial, round_line(plan_->round).c_str(),
+                  plan_->staircase_name.c_str(), level, plan_->practice ? "practice" : "QUEST");
     say(buf);
   }
 }

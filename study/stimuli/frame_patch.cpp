@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -40,6 +42,8 @@ FrameRequest test_frame(const procedure::StudyConfig& config, int round, int pat
 }
 
 FrameRequest reference_frame(const procedure::StudyConfig& config, int round, int patch) {
+  // The rule at reference.k is a test frame like the others (the same fingerprint: one render).
+  if (config.frames.reference_k > 0) return test_frame(config, round, patch, config.frames.reference_k);
   FrameRequest r = frame_common(config, round, patch);
   r.reference = true;
   r.reference_cascades = config.frames.reference_cascades;
@@ -113,7 +117,13 @@ struct FrameCache::Gl {
   int posed_frame = -2;  // the path frame the renderer's scene is at (-2: none yet)
 };
 
-FrameCache::FrameCache(fs::path dir) : dir_(std::move(dir)) {}
+FrameCache::FrameCache(fs::path dir, bool may_render) : dir_(std::move(dir)), may_render_(may_render) {}
+
+bool FrameCache::cached(const FrameRequest& request) const {
+  const std::string key = fingerprint(request);
+  std::error_code ec;
+  return fs::is_regular_file(dir_ / (key + ".png"), ec) && fs::is_regular_file(dir_ / (key + ".json"), ec);
+}
 FrameCache::~FrameCache() = default;
 
 io::Image8 FrameCache::render(const FrameRequest& request) {
@@ -158,13 +168,18 @@ const io::Image8& FrameCache::frame(const FrameRequest& request) {
   const fs::path png = dir_ / (key + ".png"), json = dir_ / (key + ".json");
   std::error_code ec;
   io::Image8 image;
-  if (fs::is_regular_file(png, ec) && fs::is_regular_file(json, ec)) {
+  if (cached(request)) {
     image = io::read_image8(png);
     if (image.width != request.width_px || image.height != request.height_px || image.channels < 3)
       throw std::runtime_error(png.string() + ": not the " + std::to_string(request.width_px) + " x " + std::to_string(request.height_px) +
                                " RGB frame its name says (remove it to render it again)");
     ++reads_;
   } else {
+    if (!may_render_)
+      throw std::runtime_error(png.string() + ": frame not in the cache (" + request.technique + ", path frame " +
+                               std::to_string(request.path_frame) + (request.reference ? ", the reference" : "") +
+                               "); render the study's frames first: penumbra-study prepare-frames --config CONFIG --frame-cache " +
+                               dir_.string());
     image = render(request);
     fs::create_directories(dir_, ec);
     if (ec) throw std::runtime_error(dir_.string() + ": cannot create the frame cache: " + ec.message());
@@ -176,6 +191,29 @@ const io::Image8& FrameCache::frame(const FrameRequest& request) {
     io::write_file_atomic(json, json_input::dump(to_json(request), 2) + "\n");
   }
   return memory_.emplace(key, std::move(image)).first->second;
+}
+
+std::vector<FrameRequest> session_frames(const procedure::StudyConfig& config) {
+  const procedure::FramesConfig& f = config.frames;
+  std::vector<double> grid;
+  for (double k = f.round_k(f.k_min); k <= f.k_max * (1 + 1e-12); k = f.round_k(k * std::exp2(1.0 / f.k_steps_per_octave))) {
+    grid.push_back(k);
+    if (f.round_k(k * std::exp2(1.0 / f.k_steps_per_octave)) <= k) break;  // the grid's top
+  }
+  std::vector<FrameRequest> out;
+  std::vector<std::string> seen;
+  for (std::size_t round = 0; round < config.rounds.size(); ++round)
+    for (std::size_t patch = 0; patch < f.patches.size(); ++patch) {
+      std::vector<FrameRequest> these{reference_frame(config, static_cast<int>(round), static_cast<int>(patch))};
+      for (double k : grid) these.push_back(test_frame(config, static_cast<int>(round), static_cast<int>(patch), k));
+      for (FrameRequest& r : these) {
+        const std::string key = fingerprint(r);
+        if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;  // patches of one path frame share it
+        seen.push_back(key);
+        out.push_back(std::move(r));
+      }
+    }
+  return out;
 }
 
 io::Image8 crop(const io::Image8& frame, int x_px, int y_px, int size_px) {

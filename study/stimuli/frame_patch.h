@@ -3,7 +3,7 @@
 // patches of frames the renderer draws of a scene at a path frame, by the resolution rule with its
 // constant c scaled by k (adaptive.c = k c, as many cascades as the rule needs), and the same patch
 // of the reference frame (the same technique and filter on frames.reference's cascades, the rule
-// off). A frame is rendered once per settings fingerprint and kept on disk (FrameCache), so a
+// off; or, with frames.reference.k, the rule's own frame at that k). A frame is rendered once per settings fingerprint and kept on disk (FrameCache), so a
 // session renders only the grid values of k it has not met before and a second session none.
 //
 // The patches are the renderer's lit colour as it is, sRGB-encoded, 8 bits, RGB: shown 1:1, as a
@@ -54,7 +54,9 @@ shadows::ShadowSettings frame_settings(const FrameRequest& request);
 // none half written.
 class FrameCache {
  public:
-  explicit FrameCache(std::filesystem::path dir);
+  // `may_render` false: a frame not on disk is an error (the windows, whose GL context is the
+  // participant's, read frames prepared before: penumbra-study prepare-frames).
+  explicit FrameCache(std::filesystem::path dir, bool may_render = true);
   ~FrameCache();
   FrameCache(const FrameCache&) = delete;
   FrameCache& operator=(const FrameCache&) = delete;
@@ -62,6 +64,8 @@ class FrameCache {
   // The frame's lit colour, RGB, sRGB-encoded, top row first. Throws std::runtime_error naming the
   // scene, frame or setting that cannot be rendered.
   const io::Image8& frame(const FrameRequest& request);
+  // Whether the frame is on disk (its image and its request).
+  bool cached(const FrameRequest& request) const;
   int renders() const { return renders_; }   // frames rendered by this cache object
   int reads() const { return reads_; }       // frames read from disk
   const std::filesystem::path& dir() const { return dir_; }
@@ -70,10 +74,15 @@ class FrameCache {
   io::Image8 render(const FrameRequest& request);
   struct Gl;
   std::filesystem::path dir_;
+  bool may_render_ = true;
   std::unique_ptr<Gl> gl_;  // the renderer and the loaded scene, made at the first render
   std::map<std::string, io::Image8> memory_;  // this session's frames by fingerprint
   int renders_ = 0, reads_ = 0;
 };
+
+// Every frame a session of `config` can show: per round, per path frame of its patches, the
+// reference and the rule at every k of the grid.
+std::vector<FrameRequest> session_frames(const procedure::StudyConfig& config);
 
 // The square patch of `size_px` at (x_px, y_px) of `frame`.
 io::Image8 crop(const io::Image8& frame, int x_px, int y_px, int size_px);

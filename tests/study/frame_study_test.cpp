@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -17,9 +18,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/image_io.h"
 #include "log/trial_log.h"
 #include "procedure/config.h"
 #include "procedure/procedure.h"
+#include "stimuli/frame_patch.h"
+#ifdef PENUMBRA_FRAME_GUI_TEST
+#include "gui/participant_view.h"
+#endif
 
 namespace {
 
@@ -279,5 +285,71 @@ TEST(FrameStudyCache, ASecondSessionRendersNothing) {
   fs::remove_all(second);
   fs::remove(config);
 }
+
+// The small study the window tests show: one patch, three values of k, 160 x 120 frames.
+fs::path window_config() {
+  return config_file("window", [](nlohmann::json& j) {
+    j["frames"]["width_px"] = 160;
+    j["frames"]["height_px"] = 120;
+    j["frames"]["reference"]["resolution_texels"] = 1024;
+    j["frames"]["patches"] = {{{"name", "box"}, {"x_px", 20}, {"y_px", 55}}};
+    j["frames"]["k_grid"] = {{"min", 0.25}, {"max", 1}, {"steps_per_octave", 1}};
+    j["stimulus"]["size_px"] = 32;
+  });
+}
+
+// The windows read prepared frames only: without them a session is refused in one line before any
+// window opens; prepare-frames renders each once (a second run renders none).
+TEST(FrameStudyWindows, RefuseUnpreparedFramesAndPrepareFramesRendersEachOnce) {
+  const fs::path config = window_config(), cache = fresh("prepare"), dir = fresh("unprepared");
+  std::string out;
+  EXPECT_EQ(run(kStudy, {"run", "--config", config.string(), "--participant", "p1", "--frame-cache", cache.string(), "-o", dir.string()}, &out), 2)
+      << out;
+  EXPECT_NE(out.find("penumbra-study: run: 8 of the 8 frames of frames-demo are not in the frame cache"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir));
+  ASSERT_EQ(run(kStudy, {"prepare-frames", "--config", config.string(), "--frame-cache", cache.string()}, &out), 0) << out;
+  EXPECT_NE(out.find("8 frames of frames-demo: 8 rendered, 0 in the cache"), std::string::npos) << out;  // 2 techniques x (reference + 3 k)
+  ASSERT_EQ(run(kStudy, {"prepare-frames", "--config", config.string(), "--frame-cache", cache.string()}, &out), 0) << out;
+  EXPECT_NE(out.find("8 frames of frames-demo: 0 rendered, 8 in the cache"), std::string::npos) << out;
+  fs::remove_all(cache);
+  fs::remove(config);
+}
+
+#ifdef PENUMBRA_FRAME_GUI_TEST
+// What the participant sees: the reference above, pixel for pixel the reference frame's patch, and
+// below it the reference on the side the plan names and the rule's patch on the other.
+TEST(FrameStudyWindows, TheScreenShowsTheReferenceAboveAndOnTheTargetsSide) {
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xvfb-run";
+  const fs::path config = window_config(), cache = fresh("window-cache"), dir = fresh("window"), shots = fresh("shots");
+  std::string out;
+  ASSERT_EQ(run(kStudy, {"prepare-frames", "--config", config.string(), "--frame-cache", cache.string()}, &out), 0) << out;
+  fs::create_directories(shots);
+  ASSERT_EQ(run("/usr/bin/xvfb-run", {"-a", "-s", "-screen 0 1920x1080x24", kStudy, "run", "--config", config.string(), "--participant",
+                                      "p1", "--frame-cache", cache.string(), "--windowed", "1280x800", "--admin-panel", "--screenshot",
+                                      shots.string(), "-o", dir.string()}, &out), 0) << out;
+  const procedure::StudyConfig c = procedure::load_config(config);
+  const procedure::Procedure procedure(c, procedure::randomize(c, "p1", std::nullopt));
+  const auto plan = procedure.next();  // the trial on the screenshot
+  ASSERT_TRUE(plan);
+  stimuli::FrameCache frames(cache, false);
+  const stimuli::PatchPair pair = stimuli::patch_pair(frames, c, *plan);
+  ASSERT_NE(pair.reference.pixels, pair.test.pixels);  // practice: k = 1/4 differs
+  const io::Image8 shot = io::read_image8(shots / "participant.png");
+  const study_gui::StimulusLayout l = study_gui::stimulus_layout(shot.width, shot.height, 32, 2, true);
+  auto shows = [&](const io::Image8& patch, int x0, int y0) {
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x)
+        for (int ch = 0; ch < 3; ++ch)
+          if (shot.at(x0 + x, y0 + y, ch) != patch.at(x, y, ch)) return false;
+    return true;
+  };
+  EXPECT_TRUE(shows(pair.reference, l.sample_x_px, l.sample_y_px));
+  const int reference_side = plan->target == "left" ? 0 : 1;
+  EXPECT_TRUE(shows(pair.reference, l.x_px[reference_side], l.y_px)) << plan->target;
+  EXPECT_TRUE(shows(pair.test, l.x_px[1 - reference_side], l.y_px)) << plan->target;
+  for (const fs::path& p : {cache, dir, shots}) fs::remove_all(p);
+  fs::remove(config);
+}
+#endif
 
 }  // namespace
