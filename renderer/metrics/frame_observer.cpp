@@ -59,14 +59,36 @@ int odd_side_px(double deg, double ppd) {
   return px % 2 ? px : px + 1;
 }
 
-// The mean of `m` over a square of side `side` around each pixel, over the pixels inside the image
-// only (a window cut by the border is the mean of what it holds, not of made-up pixels).
-cv::Mat windowed_mean(const cv::Mat& m, int side) {
-  cv::Mat sum, count;
-  const cv::Mat ones = cv::Mat::ones(m.size(), CV_64F);
+// The sum of `m` over a square of side `side` around each pixel, over the pixels inside the image
+// only (a window cut by the border holds what it holds, no made-up pixels).
+cv::Mat windowed_sum(const cv::Mat& m, int side) {
+  cv::Mat sum;
   cv::boxFilter(m, sum, CV_64F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
-  cv::boxFilter(ones, count, CV_64F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
-  return sum / count;
+  return sum;
+}
+
+cv::Mat windowed_mean(const cv::Mat& m, int side) { return windowed_sum(m, side) / windowed_sum(cv::Mat::ones(m.size(), CV_64F), side); }
+
+// Per window of side `side` around each pixel: the RMS of rel = d / den left after the best local
+// displacement t of the reference, d ≈ g·t (least squares, weighted like rel: g and d divided by
+// den). What a shift explains is not seen (positions are compared within a window, not across the
+// two images); what is left is the change of shape.
+cv::Mat residual_rms(const cv::Mat& gx, const cv::Mat& gy, const cv::Mat& d, int side) {
+  const cv::Mat sxx = windowed_sum(gx.mul(gx), side), sxy = windowed_sum(gx.mul(gy), side), syy = windowed_sum(gy.mul(gy), side);
+  const cv::Mat bx = windowed_sum(gx.mul(d), side), by = windowed_sum(gy.mul(d), side), dd = windowed_sum(d.mul(d), side);
+  const cv::Mat count = windowed_sum(cv::Mat::ones(d.size(), CV_64F), side);
+  cv::Mat out(d.size(), CV_64F);
+  for (int y = 0; y < d.rows; ++y)
+    for (int x = 0; x < d.cols; ++x) {
+      // A small ridge keeps a window without gradient (flat) or with one direction only (a straight
+      // edge) solvable: the missing direction then explains nothing.
+      const double ridge = 1e-9 * (sxx.at<double>(y, x) + syy.at<double>(y, x)) + 1e-300;
+      const double a = sxx.at<double>(y, x) + ridge, b = sxy.at<double>(y, x), c = syy.at<double>(y, x) + ridge;
+      const double u = bx.at<double>(y, x), v = by.at<double>(y, x), det = a * c - b * b;
+      const double explained = det > 0 ? (c * u * u - 2 * b * u * v + a * v * v) / det : 0.0;
+      out.at<double>(y, x) = std::sqrt(std::max(0.0, dd.at<double>(y, x) - explained) / count.at<double>(y, x));
+    }
+  return out;
 }
 
 }  // namespace
@@ -89,6 +111,8 @@ FrameDetection detect_difference(const image::ImageF& reference, Encoding refere
   check_param(p.criterion_f, p.criterion_f > 0 && p.criterion_f < 1, "criterion_f", "in (0, 1)");
   check_param(p.blur_sigma_arcmin, p.blur_sigma_arcmin >= 0, "blur_sigma_arcmin", "finite and >= 0");
   check_param(p.window_deg, p.window_deg > 0, "window_deg", "finite and positive");
+  check_param(p.pool_arcmin, p.pool_arcmin >= 0, "pool_arcmin", "finite and >= 0");
+  check_param(p.window_max_deg, p.window_max_deg > 0, "window_max_deg", "finite and positive");
   check_param(p.contrast_deg, p.contrast_deg > 0, "contrast_deg", "finite and positive");
   check_param(p.contrast_floor, p.contrast_floor > 0, "contrast_floor", "finite and positive");
   check_param(p.black_level, p.black_level > 0, "black_level", "finite and positive");
@@ -109,11 +133,24 @@ FrameDetection detect_difference(const image::ImageF& reference, Encoding refere
   cv::erode(ref, low, square);
   const cv::Mat mean = windowed_mean(ref, contrast_px);
   const cv::Mat denominator = (high - low) + p.contrast_floor * (mean + p.black_level);
-  cv::Mat rel;
+  cv::Mat rel, gx, gy;
   cv::divide(tst - ref, denominator, rel);
+  cv::Sobel(ref, gx, CV_64F, 1, 0, 1, 0.5, 0, cv::BORDER_REPLICATE);  // central differences, luminance per pixel
+  cv::Sobel(ref, gy, CV_64F, 0, 1, 1, 0.5, 0, cv::BORDER_REPLICATE);
+  cv::divide(gx, denominator, gx);
+  cv::divide(gy, denominator, gy);
+  // The signed change pooled over a small neighbourhood before it is squared, as the image
+  // observer's fit of the edge's position per slice averages the slice's pixels: a change of one
+  // code value here and there (8-bit rounding of two renders) cancels instead of adding up.
+  if (const double pool_px = p.pool_arcmin / 60.0 * p.pixels_per_degree; pool_px > 0.05)
+    for (cv::Mat* m : {&rel, &gx, &gy}) cv::GaussianBlur(*m, *m, cv::Size(0, 0), pool_px, pool_px, cv::BORDER_REPLICATE);
+  // Windows from window_deg up to the patch in octaves, the largest residual at each pixel: the
+  // window that holds the whole change (a blurred edge's bend spans its penumbra, which the
+  // image observer's windows of 0.5 r followed).
   const int window_px = odd_side_px(p.window_deg, p.pixels_per_degree);
-  cv::Mat rms;
-  cv::sqrt(windowed_mean(rel.mul(rel), window_px), rms);
+  cv::Mat rms = cv::Mat::zeros(ref.size(), CV_64F);
+  for (double deg = p.window_deg; deg <= std::max(p.window_deg, p.window_max_deg) * 1.0001; deg *= 2)
+    rms = cv::max(rms, residual_rms(gx, gy, rel, odd_side_px(deg, p.pixels_per_degree)));
 
   FrameDetection out;
   out.patch_px = std::max(1, static_cast<int>(std::lround(p.patch_deg * p.pixels_per_degree)));

@@ -17,23 +17,38 @@
 //              with C_ref the reference's local contrast, the range (max − min) of its blurred
 //              luminance in a square of side `contrast_deg` around the pixel (an edge's whole
 //              contrast as long as its penumbra is narrower than that), and
-//                floor = contrast_floor · (local mean of Y_ref + black_level):
-//              where the reference has no edge (C_ref ≈ 0) a change is a luminance contrast against
-//              the surround (Weber's law for luminance), and a dark region is seen against the
-//              display's black and flare; without it rel would divide by ~0 in flat regions.
-//              Both terms scale with the light, so a frame and its reference both dimmed by the same
-//              factor give the same rel (the study's full and half contrast conditions alike);
-//   deviation  the RMS of rel over square windows of side `window_deg` (the image observer's
-//              windows are 0.5 filter radii along the edge: at its calibration point, a = 10 px and
-//              r ≈ 3.5 a at 38.2 px/deg, that is about 0.45°), the largest window whose centre lies
-//              in a patch is the patch's deviation;
+//                floor = contrast_floor · (local mean of Y_ref + black_level).
+//              Where the reference has no edge (C_ref ≈ 0) a change is then a luminance contrast
+//              against the surround (Weber's law for luminance), and a dark region is seen against
+//              the display's black and flare; without it rel would divide by ~0 in flat regions.
+//              contrast_floor = 0.2 is set so that a uniform change of 1 % of the surround's
+//              luminance (the classic Weber fraction for fields of a fraction of a degree and more)
+//              reaches the criterion (82 % correct) with the calibrated weber: 0.01 / 0.2 = 0.05 ≈
+//              1.29·weber. Both terms scale with the light, so a frame and its reference both dimmed
+//              by one factor give the same rel (the study's full and half contrast alike);
+//   slices     the image observer fits the edge's position per 1-px slice across the edge, which
+//              averages the slice's pixels: here the signed rel is pooled by a Gaussian of sigma
+//              `pool_arcmin` before it is squared, so that 8-bit rounding that differs from pixel to
+//              pixel between two renders cancels instead of adding up;
+//   windows    the image observer removes the best straight line from the trace in each window (a
+//              shift of the whole edge is not a bend). Here, in each square window, the part of rel
+//              explained by a displacement of the reference (rel ≈ (∇Y_ref / den)·t, least squares)
+//              is removed and the RMS of the rest is the window's deviation: positions are compared
+//              within a window, not across the two images shown side by side, so a shadow that
+//              moves as a whole is not seen, one that moves against its occluder or bends is.
+//              The image observer's windows are 0.5 filter radii long, so they grow with the blur;
+//              here windows of `window_deg`, twice that, ... up to `window_max_deg` are tried at
+//              every pixel and the largest deviation is kept (a bend is seen at the scale that holds
+//              it). The largest window deviation whose centre lies in a patch is the patch's;
 //   decision   Gaussian decision noise of sd `weber` on each look. The reference's own deviation is
 //              0, so the 2AFC p_correct = Φ(deviation / (√2·weber)), and the guess-corrected
 //              p_detect = (p_correct − 0.5) / 0.5 in [0, 1], the scale of a calibration entry's
 //              threshold.criterion_f.
-// Unlike the image observer's local criterion, a shift of a whole straight edge counts here: the
-// reference is shown, so a shift is a difference to find (the image observer judged one image).
-// weber, window_deg and contrast_floor were chosen once (docs/results/frame-observer.md).
+// weber was chosen once, on the study's step at a = 10 px (PCF disk, full contrast, the study's
+// display: 38.2 px/deg, blur 1 arcmin): the frame observer's threshold there equals the image
+// observer's (3.43 a on the same radii). The stair, the other artifact sizes, the half contrast and
+// other kernels are a validation it was not fitted to, and it has never been compared with people
+// on frames: docs/results/frame-observer.md, docs/compare.md.
 //
 // GL-free (OpenCV and the CPU images of common/image; library penumbra_frame_observer).
 #include <vector>
@@ -54,11 +69,13 @@ struct FrameObserverParams {
   double patch_deg = 2.0;                            // side of the square patches, degrees
   double criterion_f = kStudyCriterionF;             // "visible": some patch's p_detect above this, in (0, 1)
   double blur_sigma_arcmin = 1.0;                    // optical blur (the image observer's default); 0 = none
-  double window_deg = 0.45;                          // side of the RMS windows, degrees
-  double contrast_deg = 1.0;                         // side of the square whose luminance range is the local contrast
-  double contrast_floor = 0.1;                       // floor of the local contrast, a fraction of the local mean luminance
+  double window_deg = 0.25;                          // side of the smallest RMS window, degrees
+  double pool_arcmin = 1.5;                          // signed change pooled by a Gaussian of this sigma before the windows
+  double window_max_deg = 2.0;                       // the largest, degrees: windows from window_deg up to it in octaves
+  double contrast_deg = 2.0;                         // side of the square whose luminance range is the local contrast
+  double contrast_floor = 0.2;                       // floor of the local contrast, a fraction of the local mean luminance
   double black_level = 0.01;                         // the display's black and flare, fraction of white, > 0
-  double weber = 0.003;                              // decision noise sd, relative deviation
+  double weber = 0.0357;                              // decision noise sd, relative deviation
 };
 
 struct PatchDetection {
