@@ -5,6 +5,10 @@
 // decisions carry independent N(0, weber) noise). The implied c is the r / a beyond which P stays
 // below p_threshold (interpolated in log r / a at the last crossing): the radius from which on the
 // artifact is detected at no more than the criterion.
+// --observer frame asks the frame observer (renderer/metrics/frame_observer.h) instead: the straight
+// image is its reference, the jagged one the frame, and the deviation is the largest patch's (the
+// reference's own is 0); --weber and --window are then the frame observer's (the window in degrees).
+// It is how that observer was calibrated on the step and validated on the rest (docs/compare.md).
 // With --technique the renderer's technique draws the stimuli (docs/study.md); --json writes the
 // implied c per condition as a calibration.json image-observer entry (data/calibration/predicted.json),
 // with a percentile bootstrap interval over the stimuli (seeds) rendered per radius.
@@ -25,6 +29,7 @@
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
 #include "json/json_input.h"
+#include "metrics/frame_observer.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
 #include "psychometric/psychometric.h"
@@ -132,6 +137,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> settings;
   std::string json_out;
   observers::ImageObserverParams params;
+  std::string observer_kind = "image";
   params.blur_sigma_arcmin = 1.0;
   params.pixels_per_degree = 38.2;  // data/studies/default.json's display: 1.57 arcmin per pixel
   cli::add_list_option(app, "--pattern", patterns, "stair and/or step", cli::one_of({"stair", "step"}));
@@ -140,6 +146,11 @@ int main(int argc, char** argv) {
   app.add_option("--technique", technique, "the renderer's technique that draws the stimuli (pcf, rpcf, vsm, ...; default pcf with pcf.kernel=disk)");
   app.add_option("--set", settings, "a technique setting KEY=VALUE by penumbra-render's keys (pcf.kernel=grid); repeatable");
   app.add_option("--json", json_out, "write the implied c per condition as a calibration.json (schema 2) image-observer entry");
+  app.add_option("--observer", observer_kind,
+                 "image: the study's image observer (traces the edge); frame: the frame observer on the jagged image against "
+                 "the straight one as its reference (renderer/metrics/frame_observer.h)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"image", "frame"}));
   app.add_option("--ratio-min", ratio_min, "smallest r / a")->capture_default_str()->check(CLI::Range(0.05, 100.0));
   app.add_option("--ratio-max", ratio_max, "largest r / a (clamped radii are skipped)")->capture_default_str()->check(CLI::Range(0.05, 100.0));
   app.add_option("--ratio-step", step, "grid factor between radii")->capture_default_str()->check(CLI::Range(1.001, 4.0));
@@ -148,8 +159,18 @@ int main(int argc, char** argv) {
   app.add_option("--p-threshold", p_threshold, "threshold criterion")->capture_default_str()->check(CLI::Range(0.51, 0.999));
   app.add_option("--blur-arcmin", params.blur_sigma_arcmin, "optical blur sigma")->capture_default_str();
   app.add_option("--ppd", params.pixels_per_degree, "display pixels per degree")->capture_default_str();
-  app.add_option("--window", params.window_r, "local window, filter radii")->capture_default_str();
-  app.add_option("--weber", params.weber, "decision noise sd (relative deviation)")->capture_default_str();
+  app.add_option("--window", params.window_r, "local window, filter radii (--observer frame: the smallest window, degrees, default 0.25)")->capture_default_str();
+  metrics::FrameObserverParams frame_params;
+  app.add_option("--window-max", frame_params.window_max_deg, "--observer frame: the largest window, degrees (octaves from --window)")
+      ->capture_default_str();
+  app.add_option("--pool-arcmin", frame_params.pool_arcmin, "--observer frame: sigma of the pooling of the signed change, arcmin")
+      ->capture_default_str();
+  app.add_option("--contrast-floor", frame_params.contrast_floor, "--observer frame: the local contrast's floor, a fraction of the local mean")
+      ->capture_default_str();
+  app.add_option("--contrast-deg", frame_params.contrast_deg, "--observer frame: side of the local contrast's square, degrees")
+      ->capture_default_str();
+  app.add_option("--weber", params.weber, "decision noise sd (relative deviation; --observer frame: its own, default 0.0357)")
+      ->capture_default_str();
   bool list_techniques = false;
   app.add_flag("--list-techniques", list_techniques,
                "print the techniques the study can draw, one a line as --technique and --set take them (TECHNIQUE or "
@@ -173,12 +194,29 @@ int main(int argc, char** argv) {
     std::vector<stimuli::Pattern> parsed_patterns;
     for (const std::string& p : patterns) parsed_patterns.push_back(stimuli::parse_pattern(p));
 
+    const bool frame = observer_kind == "frame";
+    frame_params.pixels_per_degree = params.pixels_per_degree;
+    frame_params.blur_sigma_arcmin = params.blur_sigma_arcmin;
+    if (app.count("--window")) frame_params.window_deg = params.window_r;
+    if (app.count("--weber")) frame_params.weber = params.weber;
+    if (frame) {  // the rest of the curve reads these two: the frame observer's
+      params.window_r = frame_params.window_deg;
+      params.weber = frame_params.weber;
+    }
+    // The shown 8-bit values decoded through the display's transfer: the frame observer sees
+    // exactly the luminance the image observer sees.
+    auto displayed = [](const io::Image8& img, const stimuli::Transfer& transfer) {
+      image::ImageF out{img.width, img.height, 1, std::vector<float>(img.pixels.size())};
+      for (std::size_t i = 0; i < img.pixels.size(); ++i) out.pixels[i] = static_cast<float>(stimuli::decode(img.pixels[i], transfer));
+      return out;
+    };
+
     gl::HeadlessContext context;
     stimuli::StimulusRenderer renderer;
     observers::ImageObserver eye(params, 1);
-    std::printf("%s%s, window %g r, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
-                ("technique " + base.technique).c_str(), kernel.empty() ? "" : (" " + kernel).c_str(), params.window_r, params.weber,
-                params.blur_sigma_arcmin, params.pixels_per_degree, seeds);
+    std::printf("%s%s, %s observer, window %g %s, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
+                ("technique " + base.technique).c_str(), kernel.empty() ? "" : (" " + kernel).c_str(), observer_kind.c_str(), params.window_r,
+                frame ? "deg" : "r", params.weber, params.blur_sigma_arcmin, params.pixels_per_degree, seeds);
     nlohmann::json per_condition = nlohmann::json::array();
     double largest = NAN;
     std::string largest_condition;
@@ -208,8 +246,15 @@ int main(int argc, char** argv) {
             for (int s = 0; s < seeds; ++s) {
               spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
               const stimuli::StimulusPair pair = renderer.render(spec);
-              point.jagged.push_back(eye.local_deviation(pair.artifact, spec, pair.geometry, false));
-              point.straight.push_back(eye.local_deviation(pair.line, spec, pair.geometry, false));
+              if (frame) {
+                point.jagged.push_back(metrics::detect_difference(displayed(pair.line, spec.transfer), metrics::Encoding::linear,
+                                                                  displayed(pair.artifact, spec.transfer), metrics::Encoding::linear, frame_params)
+                                           .deviation_max);
+                point.straight.push_back(0.0);  // the reference against itself
+              } else {
+                point.jagged.push_back(eye.local_deviation(pair.artifact, spec, pair.geometry, false));
+                point.straight.push_back(eye.local_deviation(pair.line, spec, pair.geometry, false));
+              }
             }
             double jagged = 0, straight = 0;
             for (int s = 0; s < seeds; ++s) {
@@ -280,11 +325,11 @@ int main(int argc, char** argv) {
                                     {"c", largest},
                                     {"ci95", interval(largest_draws, largest)},
                                     {"condition", largest_condition},
-                                    {"obtained_by", "image-observer"},
+                                    {"obtained_by", "image-observer"},  // a model observer either way: "observer"."kind" says which
                                     {"participants", nullptr},
                                     {"trials", nullptr},
                                     {"per_condition", per_condition},
-                                    {"observer", {{"window_r", params.window_r}, {"weber", params.weber},
+                                    {"observer", {{"kind", observer_kind}, {frame ? "window_deg" : "window_r", params.window_r}, {"weber", params.weber},
                                                   {"blur_sigma_arcmin", params.blur_sigma_arcmin},
                                                   {"pixels_per_degree", params.pixels_per_degree},
                                                   {"p_threshold", p_threshold}, {"seeds", seeds}, {"size_px", size_px},
