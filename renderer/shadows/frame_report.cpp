@@ -68,7 +68,12 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                         {"pixels_per_level", v.pixels_per_level},
                         {"unmarked_pixels", v.unmarked},
                         {"bytes", {{"resident_pages", v.resident_bytes}, {"tables", v.table_bytes}, {"pool_allocated", v.pool_bytes}}},
-                        {"shaded_pixels", {{"at_level", v.at_level}, {"coarser", v.coarser}, {"none", v.none}}}};
+                        {"shaded_pixels", {{"at_level", v.at_level}, {"coarser", v.coarser}, {"none", v.none}}},
+                        {"marks",
+                         {{"late", v.marks_late},
+                          {"region_floor_pages", v.region_floor},
+                          {"shaded_pixels_of_previous_frame", v.shaded_of_previous_frame},
+                          {"sync_reads", v.sync_reads}}}};
   }
   return j;
 }

@@ -333,10 +333,56 @@ class VirtualPagesPass final : public Pass {
     out.pool_pages_per_side = v->map->pool_pages_per_side();
     out.near_ws = view.near_ws, out.far_ws = view.far_ws;
     adaptive::MarkResult marked;
-    if (reading == PageReading::blocker_search) {
-      // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
+    const bool pcss = reading == PageReading::blocker_search;
+    if (pcss) {
       v->radius_ws = 0;
       v->pcss = virtual_pcss(s, f.scene.light.size);
+    } else {
+      v->radius_ws = f.plan.filter_radius->radius;
+      v->pcss.reset();
+    }
+    if (s.map.virtual_marks_late) {
+      // The previous frame's marks, read now that the GPU has long finished them, as pages of this
+      // frame's windows; with the sun's region on a coarse level, so that a pixel whose marks are
+      // not read yet finds a page. This frame's marks go to the next.
+      auto& late = v->late;
+      if (late.filter.id() == 0) late.filter = v->marker->make_marks(), late.search = v->marker->make_marks();
+      const adaptive::VirtualMapLayout& layout = v->map->layout();
+      std::set<adaptive::Page> requested;
+      if (late.pending && late.light_view == view.light_view && late.pcss == pcss) {
+        marked = v->marker->read(late.filter);
+        requested = adaptive::rebase_pages(marked.pages, late.camera_xy, view.camera_xy, layout);
+        if (pcss) {
+          const std::set<adaptive::Page> search =
+              adaptive::rebase_pages(v->marker->read(late.search).pages, late.camera_xy, view.camera_xy, layout);
+          out.search_pages = static_cast<int>(search.size());
+          requested.insert(search.begin(), search.end());
+        }
+      }
+      // 16 pages: 1 MiB of 128² depths; on the town that is level 8's 164 m pages (1.3 m texels), what
+      // the first frame after a cut shows for a frame. 256 pages (a quarter of the default pool) gave
+      // level 5 and 234 pages resident beside the 104 the marks asked for.
+      constexpr int kRegionFloorPages = 16;
+      const std::set<adaptive::Page> floor =
+          adaptive::region_floor_pages(view.region_lo, view.region_hi, view.camera_xy, layout, std::min(kRegionFloorPages, v->map->pool_slots() / 4));
+      out.region_floor = static_cast<int>(floor.size());
+      requested.insert(floor.begin(), floor.end());
+      if (!s.map.virtual_cache) v->map->invalidate_all();
+      out.pages = v->map->update(requested, view, f.scene, f.meshes);
+      if (pcss) {
+        v->marker->dispatch_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options, late.search);
+        v->marker->dispatch_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, &v->pcss_radii, late.filter);
+      } else {
+        v->marker->dispatch(v->positions, f.scene.camera, h, view, v->radius_ws, v->options, late.filter);
+      }
+      late.pending = true;
+      late.camera_xy = view.camera_xy;
+      late.light_view = view.light_view;
+      late.pcss = pcss;
+      out.marks_late = true;
+    } else if (pcss) {
+      // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
+      v->late.pending = false;
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes);
@@ -352,12 +398,13 @@ class VirtualPagesPass final : public Pass {
       out.pages.floor = std::max(first.floor, second.floor);
       out.pages.triangles = first.triangles + second.triangles;
       out.search_pages = static_cast<int>(search.pages.size());
+      out.sync_reads = 2;
     } else {
-      v->radius_ws = f.plan.filter_radius->radius;
-      v->pcss.reset();
+      v->late.pending = false;
       marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
+      out.sync_reads = 1;
     }
     out.pixels_per_level = marked.pixels_per_level;
     out.unmarked = marked.unmarked;
@@ -521,10 +568,25 @@ class PostPass final : public Pass {
 };
 
 // The shading's pixels by where they found their virtual-map pages (vsm_status.comp), read at
-// once (a wait for the pass): the counts belong to this frame's report.
+// once (a wait for the pass): the counts belong to this frame's report. With
+// map.virtual_marks_late the previous frame's counts are read first and reported instead, and
+// this frame's are left for the next.
 void count_virtual_status(FrameContext& f) {
   FrameResources& r = f.res;
-  const gl::Buffer& counts = r.virtual_map->shading_counts;
+  FrameResources::Virtual& v = *r.virtual_map;
+  const gl::Buffer& counts = v.shading_counts;
+  const bool late = f.settings.map.virtual_marks_late;
+  const auto report = [&] {
+    contract::VsmShadingResult c{};
+    glGetNamedBufferSubData(counts.id(), 0, sizeof c, &c);
+    f.info.virtual_map->at_level = c.at_level;
+    f.info.virtual_map->coarser = c.coarser;
+    f.info.virtual_map->none = c.none;
+  };
+  if (late && v.shading_counts_pending) {
+    report();  // written by the previous frame
+    f.info.virtual_map->shaded_of_previous_frame = true;
+  }
   const std::uint32_t zero = 0;
   glClearNamedBufferData(counts.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   const gl::Program& prog = r.programs.get(r.shaders, "vsm_status", {{GL_COMPUTE_SHADER, "vsm_status.comp"}});
@@ -535,11 +597,11 @@ void count_virtual_status(FrameContext& f) {
   constexpr int group = contract::VSM_STATUS_GROUP_PIXELS;
   glDispatchCompute(static_cast<GLuint>((f.plan.width_px + group - 1) / group), static_cast<GLuint>((f.plan.height_px + group - 1) / group), 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  contract::VsmShadingResult c{};
-  glGetNamedBufferSubData(counts.id(), 0, sizeof c, &c);
-  f.info.virtual_map->at_level = c.at_level;
-  f.info.virtual_map->coarser = c.coarser;
-  f.info.virtual_map->none = c.none;
+  v.shading_counts_pending = late;
+  if (!late) {
+    report();
+    ++f.info.virtual_map->sync_reads;
+  }
   gl::check_errors("virtual map status count");
 }
 

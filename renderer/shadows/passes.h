@@ -91,6 +91,16 @@ struct FrameResources {
     gl::Texture pcss_radii;  // PCSS: each pixel's penumbra as the marking's search found it (R32F)
     gl::Framebuffer fbo;
     gl::Buffer shading_counts;  // contract::VsmShadingResult
+    bool shading_counts_pending = false;  // map.virtual_marks_late: the counts hold the previous frame's, not yet read
+    // map.virtual_marks_late: the marks of the previous frame (PCSS: its searches' and its
+    // penumbrae'), read by this one; where its camera stood in light space, and how it marked.
+    struct Late {
+      gl::Buffer filter, search;
+      bool pending = false;
+      adaptive::LightXY camera_xy;
+      glm::mat4 light_view{1};
+      bool pcss = false;
+    } late;
   };
 
   explicit FrameResources(const gl::ShaderLibrary& library);

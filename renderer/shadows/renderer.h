@@ -60,6 +60,15 @@ struct FrameInfo {
     std::int64_t unmarked = 0;                   // pixels beyond the coarsest level
     std::uint64_t resident_bytes = 0, table_bytes = 0, pool_bytes = 0;
     std::uint64_t at_level = 0, coarser = 0, none = 0;  // shaded pixels: on their level, a coarser one, none (lit)
+    // map.virtual_marks_late: the pages drawn are the previous frame's marks (pixels_per_level and
+    // unmarked are that frame's), with `region_floor` pages over the sun's region; the shaded
+    // pixels' counts are the previous frame's too (`shaded_of_previous_frame`; none on a first frame).
+    bool marks_late = false;
+    int region_floor = 0;
+    bool shaded_of_previous_frame = false;
+    // Read-backs of what this frame's GPU work wrote, each a wait for it: the marks (PCSS: two) and
+    // the shaded pixels' counts without map.virtual_marks_late, none with it.
+    int sync_reads = 0;
   };
   std::optional<Virtual> virtual_map;
 };

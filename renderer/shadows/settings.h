@@ -61,6 +61,12 @@ struct ShadowMapParams {
   // which the filters skip a square surely lit or in umbra and PCSS's search one without blockers.
   // The image is the same either way, up to float rounding; off measures what they save.
   bool virtual_bounds = true;
+  // Draw the pages the previous frame marked, read a frame late, with a coarse floor over the
+  // sun's region (adaptive::region_floor_pages) so that every pixel finds a page: no read-back is
+  // waited for within a frame. A pixel whose page is not there yet (the first frame after a cut, a
+  // pixel newly in view) reads a coarser resident level for a frame. Off: marked, read and drawn
+  // within the frame.
+  bool virtual_marks_late = false;
 };
 
 inline constexpr double kMinVisibility = 0.001;  // adaptive.visibility's range besides 0

@@ -63,6 +63,8 @@ VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, 
     throw std::runtime_error("virtual shadow map: the light's depth range is not finite (near " + std::to_string(view.near_ws) + ", far " +
                              std::to_string(view.far_ws) + ")");
   view.camera_xy = light_xy(view.light_view, scene.camera.position);
+  view.region_lo = {region.lo.x, region.lo.y};
+  view.region_hi = {region.hi.x, region.hi.y};
   return view;
 }
 
@@ -354,18 +356,19 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
     programs_[pass] = shaders.program({{GL_COMPUTE_SHADER, "virtual_mark.comp"}}, {{"VIRTUAL_MARK_PASS", std::to_string(pass)}});
   const std::size_t bits = static_cast<std::size_t>(layout.levels) * layout.pages_per_side * layout.pages_per_side;
   words_ = (bits + 31) / 32;
-  marks_ = gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  marks_ = make_marks();
 }
 
 adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                       double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
-  return run(Pass::filter, surface, camera, height_px, view, radius_ws, options, levels);
+  run(Pass::filter, surface, camera, height_px, view, radius_ws, options, levels, nullptr, marks_);
+  return read(marks_);
 }
 
 adaptive::MarkResult PageMarker::mark_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px,
                                                   const VirtualMapView& view, const VirtualPcss& pcss, const adaptive::MarkOptions& options) const {
-  set_virtual_pcss_uniforms(program(Pass::pcss_search), pcss);
-  return run(Pass::pcss_search, surface, camera, height_px, view, 0, options, nullptr);
+  dispatch_pcss_search(surface, camera, height_px, view, pcss, options, marks_);
+  return read(marks_);
 }
 
 adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px,
@@ -373,12 +376,36 @@ adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, co
                                                   const gl::Texture* levels, const gl::Texture* radii) const {
   set_virtual_pcss_uniforms(program(Pass::pcss_penumbra), pcss);
   map.bind(program(Pass::pcss_penumbra));  // the search reads the pages the first pass marked
-  return run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, levels, radii);
+  run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, levels, radii, marks_);
+  return read(marks_);
 }
 
-adaptive::MarkResult PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                                     double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
-                                     const gl::Texture* radii) const {
+gl::Buffer PageMarker::make_marks() const {
+  return gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+}
+
+void PageMarker::dispatch(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                          double radius_ws, const adaptive::MarkOptions& options, const gl::Buffer& marks) const {
+  run(Pass::filter, surface, camera, height_px, view, radius_ws, options, nullptr, nullptr, marks);
+}
+
+void PageMarker::dispatch_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                                      const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Buffer& marks) const {
+  set_virtual_pcss_uniforms(program(Pass::pcss_search), pcss);
+  run(Pass::pcss_search, surface, camera, height_px, view, 0, options, nullptr, nullptr, marks);
+}
+
+void PageMarker::dispatch_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
+                                      const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Texture* radii,
+                                      const gl::Buffer& marks) const {
+  set_virtual_pcss_uniforms(program(Pass::pcss_penumbra), pcss);
+  map.bind(program(Pass::pcss_penumbra));  // the search reads the pages resident now
+  run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, nullptr, radii, marks);
+}
+
+void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                     double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii,
+                     const gl::Buffer& marks) const {
   const gl::Program& prog = program(pass);
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
   const auto same_size_r32f = [&](const gl::Texture* t) {
@@ -394,14 +421,16 @@ adaptive::MarkResult PageMarker::run(Pass pass, const gl::Texture& surface, cons
   set_virtual_mark_uniforms(prog, camera, height_px, options);
   prog.set("u_radius_ws", static_cast<float>(radius_ws));
   const std::uint32_t zero = 0;
-  glClearNamedBufferData(marks_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks_.id());
+  glClearNamedBufferData(marks.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks.id());
   glBindImageTexture(0, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   prog.dispatch_covering(surface.desc().width, surface.desc().height);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-  std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
-  glGetNamedBufferSubData(marks_.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
+}
 
+adaptive::MarkResult PageMarker::read(const gl::Buffer& marks) const {
+  std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
+  glGetNamedBufferSubData(marks.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
   adaptive::MarkResult out;
   for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(k)]);
   out.unmarked = m[contract::VSM_MAX_LEVELS];

@@ -31,6 +31,9 @@ struct VirtualMapView {
   glm::mat4 light_view{1};        // world -> light space: x, y across the light, -z along it
   float near_ws = 0, far_ws = 1;  // the light-space depth range every page holds (distances along -z)
   adaptive::LightXY camera_xy;    // the camera in light space: each level's window is centred on it
+  // Across the light, the sun's bounded region (fitting.h's sun_shadow_region): what the view's
+  // pixels can read (the floor of map.virtual_marks_late, adaptive::region_floor_pages).
+  adaptive::LightXY region_lo, region_hi;
 };
 
 // A light view for a sun whose light travels along `direction`: light-space x and y span the plane
@@ -131,13 +134,26 @@ class PageMarker {
                                         const VirtualPcss& pcss, const adaptive::MarkOptions& options,
                                         const gl::Texture* levels = nullptr, const gl::Texture* radii = nullptr) const;
 
+  // The same marking without a read (map.virtual_marks_late: no read-back waited for within a
+  // frame): each dispatch writes into `marks` (a buffer from make_marks()), and read() takes it in a
+  // later frame, when the GPU has long finished it.
+  gl::Buffer make_marks() const;
+  void dispatch(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view, double radius_ws,
+                const adaptive::MarkOptions& options, const gl::Buffer& marks) const;
+  void dispatch_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+                            const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Buffer& marks) const;
+  void dispatch_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
+                            const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Texture* radii,
+                            const gl::Buffer& marks) const;
+  adaptive::MarkResult read(const gl::Buffer& marks) const;
+
  private:
   // The marking's three passes (virtual_mark.comp's VIRTUAL_MARK_PASS): a filter's pages, PCSS's searches',
   // PCSS's penumbrae'.
   enum class Pass { filter = 0, pcss_search = 1, pcss_penumbra = 2 };
-  adaptive::MarkResult run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels,
-                           const gl::Texture* radii = nullptr) const;
+  void run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii,
+           const gl::Buffer& marks) const;
   const gl::Program& program(Pass pass) const { return programs_[static_cast<int>(pass)]; }
   adaptive::VirtualMapLayout layout_;
   gl::Program programs_[3];  // one per Pass: a pass chosen by a uniform costs the others' code on llvmpipe

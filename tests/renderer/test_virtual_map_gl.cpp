@@ -1019,6 +1019,72 @@ TEST(VirtualMap, RendererCachesPagesRedrawsAMovedCasterAndCountsWhatAFullPoolCan
   EXPECT_THROW(r.render(s, w, h), shadows::PoolTooSmall);
 }
 
+// Issue 47: with map.virtual_marks_late a frame draws the pages the previous frame marked, read a
+// frame late: no read-back of this frame's GPU work is waited for (counted: zero, against one or
+// two without). The first frame after a cut has no marks: every pixel reads the coarse floor over
+// the sun's region, none is shaded lit, every value finite; the next frame reads the first one's
+// marks and draws what the same-frame marking draws, and the image is that image.
+TEST(VirtualMap, MarksReadAFrameLateWaitForNothingAndTheFirstFrameIsCoarseNotLit) {
+  for (const bool pcss : {false, true}) {
+    SCOPED_TRACE(pcss ? "pcss" : "pcf");
+    shadows::ShadowSettings s = virtual_pcf(shadows::VirtualPages::rule);
+    if (pcss) {
+      s.technique = shadows::Technique::pcss;
+      s.pcss.kernel = shadows::Kernel::grid;
+    }
+    const int w = 160, h = 90;
+    shadows::Renderer same_frame;
+    same_frame.set_scene(scene::make_builtin_scene("demo"));
+    const shadows::FrameInfo now = same_frame.render(s, w, h);
+    EXPECT_EQ(now.virtual_map->sync_reads, pcss ? 3 : 2) << "the marks and the shaded pixels' counts, read at once";
+    const io::ImageF reference = same_frame.read_visibility();
+
+    s.map.virtual_marks_late = true;
+    shadows::Renderer late;
+    late.set_scene(scene::make_builtin_scene("demo"));
+    const shadows::FrameInfo cut = late.render(s, w, h);
+    const auto& v = *cut.virtual_map;
+    EXPECT_EQ(v.sync_reads, 0);
+    EXPECT_TRUE(v.marks_late);
+    EXPECT_GT(v.region_floor, 0);
+    EXPECT_EQ(v.pages.requested, v.region_floor) << "no marks yet: the floor alone";
+    EXPECT_FALSE(v.shaded_of_previous_frame);
+    const io::ImageF first = late.read_visibility();
+    int dark = 0;
+    for (float p : first.pixels) {
+      ASSERT_TRUE(std::isfinite(p) && p >= 0 && p <= 1);
+      dark += p < 0.5f;
+    }
+    EXPECT_GT(dark, w * h / 100) << "the first frame keeps its shadows, coarse";
+
+    const shadows::FrameInfo second = late.render(s, w, h);
+    const auto& v2 = *second.virtual_map;
+    EXPECT_EQ(v2.sync_reads, 0);
+    EXPECT_TRUE(v2.shaded_of_previous_frame);
+    const std::uint64_t surface = now.virtual_map->at_level + now.virtual_map->coarser;
+    EXPECT_EQ(v2.at_level + v2.coarser, surface) << "the first frame's pixels, counted";
+    EXPECT_GT(v2.coarser, 0u) << "pixels read the floor, coarser than their own level";
+    EXPECT_EQ(v2.none, 0u) << "none shaded lit for want of a page";
+    // The camera stands still: the second frame draws what the first marked, and besides it the
+    // floor. PCSS's first marks searched the floor alone, so its penumbrae settle a frame later.
+    EXPECT_LE(v2.pages.requested, now.virtual_map->pages.requested + v2.region_floor);
+    if (!pcss) {
+      EXPECT_GE(v2.pages.requested, now.virtual_map->pages.requested);
+    }
+    late.render(s, w, h);
+    const io::ImageF settled = late.read_visibility();
+    const shadows::FrameInfo fourth = late.render(s, w, h);
+    EXPECT_EQ(fourth.virtual_map->coarser, 0u) << "the third frame's pixels all found their own level";
+    EXPECT_EQ(fourth.virtual_map->at_level, surface);
+    double diff = 0;
+    for (std::size_t p = 0; p < settled.pixels.size(); ++p) diff = std::max(diff, std::abs(double(settled.pixels[p]) - reference.pixels[p]));
+    // PCF's settled frame is the same-frame marking's image. PCSS's searches read the pages then
+    // resident: a frame late that is more of them (the previous frame's penumbrae besides the
+    // searches'), and a few penumbrae come out a little different.
+    EXPECT_LT(diff, pcss ? 1e-3 : 1e-6) << "a settled frame is the same-frame marking's image";
+  }
+}
+
 TEST(VirtualMap, BadLayoutsAreRefused) {
   VirtualMapLayout l = small_layout();
   l.levels = shadows::contract::VSM_MAX_LEVELS + 1;
