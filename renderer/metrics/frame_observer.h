@@ -21,9 +21,9 @@
 //              Where the reference has no edge (C_ref ≈ 0) a change is then a luminance contrast
 //              against the surround (Weber's law for luminance), and a dark region is seen against
 //              the display's black and flare; without it rel would divide by ~0 in flat regions.
-//              contrast_floor = 0.2 is set so that a uniform change of 1 % of the surround's
+//              contrast_floor = 0.25 is set so that a uniform change of 1 % of the surround's
 //              luminance (the classic Weber fraction for fields of a fraction of a degree and more)
-//              reaches the criterion (82 % correct) with the calibrated weber: 0.01 / 0.2 = 0.05 ≈
+//              reaches the criterion (82 % correct) with the calibrated weber: 0.01 / 0.25 = 0.04 ≈
 //              1.29·weber. Both terms scale with the light, so a frame and its reference both dimmed
 //              by one factor give the same rel (the study's full and half contrast alike);
 //   slices     the image observer fits the edge's position per 1-px slice across the edge, which
@@ -39,7 +39,10 @@
 //              The image observer's windows are 0.5 filter radii long, so they grow with the blur;
 //              here windows of `window_deg`, twice that, ... up to `window_max_deg` are tried at
 //              every pixel and the largest deviation is kept (a bend is seen at the scale that holds
-//              it). The largest window deviation whose centre lies in a patch is the patch's;
+//              it: the step's bend at a = 20 px and r = 3.5 a spans about 3.7° at 38.2 px/deg, so
+//              the windows and the contrast's square reach 4°; with 2° the step's threshold at a = 20
+//              came out twice the one at a = 10). The largest window deviation whose centre lies in
+//              a patch is the patch's, so a patch sees up to half the largest window beyond itself;
 //   decision   Gaussian decision noise of sd `weber` on each look. The reference's own deviation is
 //              0, so the 2AFC p_correct = Φ(deviation / (√2·weber)), and the guess-corrected
 //              p_detect = (p_correct − 0.5) / 0.5 in [0, 1], the scale of a calibration entry's
@@ -71,11 +74,11 @@ struct FrameObserverParams {
   double blur_sigma_arcmin = 1.0;                    // optical blur (the image observer's default); 0 = none
   double window_deg = 0.25;                          // side of the smallest RMS window, degrees
   double pool_arcmin = 1.5;                          // signed change pooled by a Gaussian of this sigma before the windows
-  double window_max_deg = 2.0;                       // the largest, degrees: windows from window_deg up to it in octaves
-  double contrast_deg = 2.0;                         // side of the square whose luminance range is the local contrast
-  double contrast_floor = 0.2;                       // floor of the local contrast, a fraction of the local mean luminance
+  double window_max_deg = 4.0;                       // the largest, degrees: windows from window_deg up to it in octaves
+  double contrast_deg = 4.0;                         // side of the square whose luminance range is the local contrast
+  double contrast_floor = 0.25;                      // floor of the local contrast, a fraction of the local mean luminance
   double black_level = 0.01;                         // the display's black and flare, fraction of white, > 0
-  double weber = 0.0357;                              // decision noise sd, relative deviation
+  double weber = 0.0304;                             // decision noise sd, relative deviation
 };
 
 struct PatchDetection {

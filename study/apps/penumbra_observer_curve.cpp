@@ -169,7 +169,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--contrast-deg", frame_params.contrast_deg, "--observer frame: side of the local contrast's square, degrees")
       ->capture_default_str();
-  app.add_option("--weber", params.weber, "decision noise sd (relative deviation; --observer frame: its own, default 0.0357)")
+  app.add_option("--weber", params.weber, "decision noise sd (relative deviation; --observer frame: its own, default 0.0304)")
       ->capture_default_str();
   bool list_techniques = false;
   app.add_flag("--list-techniques", list_techniques,
