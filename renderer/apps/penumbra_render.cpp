@@ -163,6 +163,7 @@ int main(int argc, char** argv) {
     const fs::path& staging = out.path();
 
     shadows::Renderer renderer;
+    renderer.set_count_work(true);  // report.json's work: what each pass gave the GPU to do
     renderer.set_scene(scene);
     nlohmann::json summary;
     summary["device"] = nlohmann::json(ctx);

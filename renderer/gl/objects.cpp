@@ -87,7 +87,15 @@ VertexArray::VertexArray() {
 
 Query::Query(GLenum target) {
   GLuint id = 0;
-  glCreateQueries(target, 1, &id);
+  // Mesa 22's glCreateQueries refuses the pipeline-statistics targets (GL_INVALID_ENUM for
+  // GL_PRIMITIVES_SUBMITTED); a name from glGenQueries takes its target at its first glBeginQuery.
+  const bool statistics =  // ARB_pipeline_statistics_query's targets, 0x82EE to 0x82F7, and the geometry shader's
+      (target >= GL_VERTICES_SUBMITTED_ARB && target <= GL_CLIPPING_OUTPUT_PRIMITIVES_ARB) || target == GL_GEOMETRY_SHADER_INVOCATIONS;
+  if (statistics) {
+    glGenQueries(1, &id);
+  } else {
+    glCreateQueries(target, 1, &id);
+  }
   handle_ = Handle<detail::delete_query>(id);
 }
 

@@ -49,6 +49,11 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                              {"clamped_fraction", r.clamped_fraction},
                              {"above_max_fraction", r.above_max_fraction}};
   }
+  if (!frame.work.empty()) {
+    nlohmann::json& work = j["work"];
+    for (const PassWork& w : frame.work)
+      work[w.pass] = {{"primitives", w.primitives}, {"fragments", w.fragments}, {"compute_invocations", w.compute_invocations}};
+  }
   if (frame.virtual_map) {
     const FrameInfo::Virtual& v = *frame.virtual_map;
     j["virtual_map"] = {{"pages",

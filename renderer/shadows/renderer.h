@@ -28,6 +28,17 @@
 
 namespace penumbra::shadows {
 
+// What a pass gave the GPU to do, counted by the driver (ARB_pipeline_statistics_query) when the
+// renderer counts work (Renderer::set_count_work): primitives submitted (after the CPU's culling),
+// fragment shader invocations (a depth pass's rasterized texels, the shading's pixels) and compute
+// shader invocations. Counts, not times: what a GPU pays for whatever the machine measuring them.
+struct PassWork {
+  std::string pass;
+  std::uint64_t primitives = 0;
+  std::uint64_t fragments = 0;
+  std::uint64_t compute_invocations = 0;
+};
+
 struct FrameInfo {
   LightFrame light;                // cascade 0
   int resolution_texels = 0;       // cascade 0
@@ -47,6 +58,7 @@ struct FrameInfo {
   std::vector<std::uint64_t> map_triangles;
   std::uint64_t camera_triangles = 0;
   std::uint64_t scene_triangles = 0;
+  std::vector<PassWork> work;  // per pass run, in order; empty unless the renderer counts work
   // The sun's virtual shadow map (map.virtual_pages): what the frame marked and drew, the memory it
   // holds (the pool's resident pages and every level's table; the pool is allocated whole), and
   // the shading's pixels by where they found their pages.
@@ -108,6 +120,9 @@ class Renderer {
   void reset_adaptive();
   // Tints the image by cascade (debug overlay).
   void set_show_cascades(bool on) { show_cascades_ = on; }
+  // Counts each pass's work with pipeline statistics queries (FrameInfo::work), read at the end of
+  // the frame (a wait for the frame's GPU work: for measuring runs; off by default).
+  void set_count_work(bool on) { count_work_ = on; }
 
   io::Image8 read_color() const;       // RGBA, sRGB-encoded
   io::ImageF read_visibility() const;  // one channel
@@ -128,6 +143,8 @@ class Renderer {
   AdaptiveState adaptive_;
   std::vector<CascadeInfo> last_cascades_;
   bool show_cascades_ = false;
+  bool count_work_ = false;
+  std::vector<std::unique_ptr<gl::Query>> work_queries_;  // three per pass run (primitives, fragments, compute), reused
 };
 
 }  // namespace penumbra::shadows

@@ -461,5 +461,40 @@ TEST(PassTimer, OneMethodPerTimerAndQueriesWithoutWallClock) {
   }
 }
 
+// Issue 47: the work a GPU pays for, counted by the driver per pass. A map 4 times finer rasterizes
+// about 16 times the texels (the casters' area in texels) from the same primitives; the shading
+// shades the same pixels; counting off leaves the list empty.
+TEST(WorkCounts, AFourTimesFinerMapRasterizesAboutSixteenTimesTheTexels) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  shadows::ShadowSettings s;
+  s.technique = shadows::Technique::pcf;
+  const int w = 160, h = 90;
+  EXPECT_TRUE(r.render(s, w, h).work.empty());
+  r.set_count_work(true);
+  const auto pass = [](const shadows::FrameInfo& f, const std::string& name) {
+    for (const shadows::PassWork& p : f.work)
+      if (p.pass == name) return p;
+    ADD_FAILURE() << "no pass " << name;
+    return shadows::PassWork{};
+  };
+  s.map.resolution_texels = 512;
+  const shadows::FrameInfo coarse = r.render(s, w, h);
+  s.map.resolution_texels = 2048;
+  const shadows::FrameInfo fine = r.render(s, w, h);
+  ASSERT_EQ(coarse.work.size(), coarse.passes.size());
+  const shadows::PassWork cm = pass(coarse, "shadow_map"), fm = pass(fine, "shadow_map");
+  EXPECT_EQ(cm.primitives, fm.primitives) << "the same casters";
+  EXPECT_EQ(cm.primitives, coarse.map_triangles.at(0)) << "what the CPU counted as drawn";
+  EXPECT_GT(cm.fragments, 1000u);
+  const double ratio = static_cast<double>(fm.fragments) / static_cast<double>(cm.fragments);
+  EXPECT_GT(ratio, 12.0);
+  EXPECT_LT(ratio, 20.0);
+  const shadows::PassWork cs = pass(coarse, "shading"), fs = pass(fine, "shading");
+  EXPECT_EQ(cs.fragments, fs.fragments) << "the same pixels shaded";
+  EXPECT_GE(cs.fragments, static_cast<std::uint64_t>(w) * h / 2);
+  EXPECT_EQ(cm.compute_invocations, 0u);
+}
+
 }  // namespace
 }  // namespace penumbra
