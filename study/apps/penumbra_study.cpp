@@ -255,8 +255,12 @@ ObserverSetup parse_frame_observer(const std::string& given, const procedure::St
       else if (k == "weber") p.weber = v;
       else if (k == "blur_arcmin") p.blur_sigma_arcmin = v;
       else if (k == "patch_deg") p.patch_deg = v;
+      else if (k == "window_deg") p.window_deg = v;
+      else if (k == "window_max_deg") p.window_max_deg = v;
+      else if (k == "contrast_deg") p.contrast_deg = v;
+      else if (k == "contrast_floor") p.contrast_floor = v;
       else throw std::invalid_argument(where + ": unknown frame observer parameter '" + json_input::printable(k) +
-                                       "' (ppd, weber, blur_arcmin, patch_deg)");
+                                       "' (ppd, weber, blur_arcmin, patch_deg, window_deg, window_max_deg, contrast_deg, contrast_floor)");
     }
     return setup;
   }
@@ -657,6 +661,12 @@ int run_study(const RunOptions& o) {
   if (frame_cache)
     std::printf("  frames: %d rendered, %d read from the cache %s\n", frame_cache->renders(), frame_cache->reads(),
                 frame_cache->dir().string().c_str());
+  if (frames && setup.frame) {  // every parameter, defaults included: what the answers came from
+    const metrics::FrameObserverParams& p = setup.frame_params;
+    std::printf("  frame observer: ppd %g, patch_deg %g, blur_arcmin %g, window_deg %g, window_max_deg %g, contrast_deg %g, "
+                "contrast_floor %g, weber %g\n", p.pixels_per_degree, p.patch_deg, p.blur_sigma_arcmin, p.window_deg, p.window_max_deg,
+                p.contrast_deg, p.contrast_floor, p.weber);
+  }
   for (const int round : session.randomization().round_order) {
     const auto r = static_cast<std::size_t>(round);
     for (const auto& sc : session.rounds()[r]) {
