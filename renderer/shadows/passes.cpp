@@ -359,9 +359,10 @@ class VirtualPagesPass final : public Pass {
           requested.insert(search.begin(), search.end());
         }
       }
-      // 16 pages: 1 MiB of 128² depths; on the town that is level 8's 164 m pages (1.3 m texels), what
-      // the first frame after a cut shows for a frame. 256 pages (a quarter of the default pool) gave
-      // level 5 and 234 pages resident beside the 104 the marks asked for.
+      // At most 16 pages (1 MiB of 128² depths; 8 coarse pages on the town's street), what the first
+      // frame after a cut shows. 256 pages (a quarter of the default pool) took 234 pages beside the
+      // 104 the street's marks asked for. Each floor page draws every caster over it: uncached, the
+      // floor costs about one more draw of the town a frame (docs/results/virtual-maps.md).
       constexpr int kRegionFloorPages = 16;
       const std::set<adaptive::Page> floor =
           adaptive::region_floor_pages(view.region_lo, view.region_hi, view.camera_xy, layout, std::min(kRegionFloorPages, v->map->pool_slots() / 4));
