@@ -63,7 +63,12 @@ TEST_F(CompareCli, PrintsPooledValuesAndWritesTheMap) {
   EXPECT_THAT(r.out, HasSubstr("67.02 px/deg"));
   EXPECT_THAT(r.out, HasSubstr("weighted median"));
   EXPECT_THAT(r.out, HasSubstr("share above 0.05"));
-  EXPECT_THAT(r.out, HasSubstr("detection probability  not computed"));
+  // The frame observer: the whole square moved by one pixel side by side is a shift its windows
+  // explain, so it is detected with a probability well inside (0, 1), below F = the published entry's.
+  const double p_shift = printed(r.out, "detection probability");
+  EXPECT_GT(p_shift, 0.0);
+  EXPECT_LT(p_shift, 0.6737);
+  EXPECT_THAT(r.out, HasSubstr("patches above F        0 of 1: not visible at F = 0.6737 (the published entry, data/calibration/default.json)"));
   const double mean = printed(r.out, "mean");
   EXPECT_GT(mean, 0.0);
 
@@ -83,7 +88,21 @@ TEST_F(CompareCli, PrintsPooledValuesAndWritesTheMap) {
   EXPECT_NEAR(j.at("mean").get<double>(), mean, 1e-6);
   EXPECT_EQ(j.at("width").get<int>(), 64);
   EXPECT_EQ(j.at("reference").at("encoding"), "srgb");
-  EXPECT_TRUE(j.at("detection_probability").is_null());
+  EXPECT_NEAR(j.at("detection_probability").get<double>(), printed(r.out, "detection probability"), 1e-4);
+  EXPECT_EQ(j.at("visible"), false);
+
+  // detection.json: every patch (2° at 67.02 px/deg: 134 px, so one patch holds the 64×48 frame),
+  // and detection.png: the test image, tinted.
+  std::ifstream det_in(out / "detection.json");
+  const nlohmann::json det = nlohmann::json::parse(det_in);
+  ASSERT_EQ(det.at("patches").size(), 1u);
+  EXPECT_EQ(det.at("patches")[0].at("width"), 64);
+  EXPECT_EQ(det.at("patches")[0].at("height"), 48);
+  EXPECT_NEAR(det.at("p_detect_max").get<double>(), j.at("detection_probability").get<double>(), 1e-12);
+  EXPECT_EQ(det.at("criterion_f"), 0.6737);
+  const penumbra::io::Image8 tinted = penumbra::io::read_image8(out / "detection.png");
+  EXPECT_EQ(tinted.width, 64);
+  EXPECT_EQ(tinted.height, 48);
   EXPECT_LE(j.at("weighted_q1").get<double>(), j.at("weighted_median").get<double>());
   EXPECT_LE(j.at("weighted_median").get<double>(), j.at("weighted_q3").get<double>());
 
@@ -91,6 +110,56 @@ TEST_F(CompareCli, PrintsPooledValuesAndWritesTheMap) {
   const auto same = compare({ref.string(), ref.string()});
   ASSERT_EQ(same.exit_code, 0) << same.err;
   EXPECT_EQ(printed(same.out, "mean"), 0.0);
+  EXPECT_EQ(printed(same.out, "detection probability"), 0.0);
+  EXPECT_THAT(same.out, HasSubstr("patches above F        0 of 1: not visible at F = 0.6737"));
+  // The square brighter (200 -> 230) is no shift: seen almost surely.
+  const fs::path bright = png("bright.png", 64, 48, 230, 16);
+  const auto brighter = compare({ref.string(), bright.string()});
+  ASSERT_EQ(brighter.exit_code, 0) << brighter.err;
+  EXPECT_GT(printed(brighter.out, "detection probability"), 0.99);
+  EXPECT_THAT(brighter.out, HasSubstr("patches above F        1 of 1: visible at F = 0.6737 (the published entry, data/calibration/default.json)"));
+}
+
+TEST_F(CompareCli, CriterionFromOptionOrCalibrationFile) {
+  // A faint change: a square 1 code value brighter than the reference's, so that its detection
+  // probability lies inside (0, 1) and F decides.
+  const fs::path ref = png("ref.png", 160, 120, 200, 40), test = png("test.png", 160, 120, 201, 40);
+  const auto base = compare({ref.string(), test.string(), "--ppd", "38.2"});
+  ASSERT_EQ(base.exit_code, 0) << base.err;
+  const double p = printed(base.out, "detection probability");
+  ASSERT_GT(p, 0.0);
+  ASSERT_LT(p, 0.99);
+  char below[32], above[32];
+  std::snprintf(below, sizeof below, "%.6f", 0.5 * p);
+  std::snprintf(above, sizeof above, "%.6f", std::min(0.999, 0.5 * (1 + p)));
+  const auto low_f = compare({ref.string(), test.string(), "--ppd", "38.2", "--criterion-f", below});
+  const auto high_f = compare({ref.string(), test.string(), "--ppd", "38.2", "--criterion-f", above});
+  EXPECT_THAT(low_f.out, HasSubstr(": visible at F = "));
+  EXPECT_THAT(high_f.out, HasSubstr(": not visible at F = "));
+  EXPECT_THAT(high_f.out, HasSubstr("(--criterion-f)"));
+  // A calibration file's entries give F; one whose entries disagree is refused with one line.
+  const fs::path one = dir_ / "one.json", two = dir_ / "two.json";
+  const std::string entry = R"({"technique": "pcf", "kernel": "KERNEL", "c": 3, "obtained_by": "study",
+      "threshold": {"task": "2afc", "guess": 0.5, "criterion_f": FVALUE, "family": "log-weibull", "beta": 3.5}})";
+  auto make = [&](const std::string& kernel, const std::string& f) {
+    std::string e = entry;
+    e.replace(e.find("KERNEL"), 6, kernel);
+    e.replace(e.find("FVALUE"), 6, f);
+    return e;
+  };
+  std::ofstream(one) << R"({"schema_version": 2, "entries": [)" << make("grid", below) << "]}";
+  std::ofstream(two) << R"({"schema_version": 2, "entries": [)" << make("grid", below) << ", " << make("disk", above) << "]}";
+  const auto from_file = compare({ref.string(), test.string(), "--ppd", "38.2", "--calibration", one.string()});
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  EXPECT_THAT(from_file.out, HasSubstr(": visible at F = "));
+  EXPECT_THAT(from_file.out, HasSubstr("(the entries of " + one.string() + ")"));
+  const auto disagree = compare({ref.string(), test.string(), "--calibration", two.string()});
+  EXPECT_EQ(disagree.exit_code, 1);
+  EXPECT_THAT(disagree.err, HasSubstr("penumbra-compare: " + two.string() + ": its entries state different criteria"));
+  EXPECT_EQ(std::count(disagree.err.begin(), disagree.err.end(), '\n'), 1) << disagree.err;
+  // Out of range, or both at once: usage errors.
+  EXPECT_EQ(compare({ref.string(), test.string(), "--criterion-f", "1"}).exit_code, 2);
+  EXPECT_EQ(compare({ref.string(), test.string(), "--criterion-f", "0.5", "--calibration", one.string()}).exit_code, 2);
 }
 
 TEST_F(CompareCli, PixelsPerDegreeFromOptionOrStudyDisplay) {
