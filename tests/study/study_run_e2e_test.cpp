@@ -462,6 +462,28 @@ TEST(ObserverCurve, StepNeedsALargerFilterThanTheStairOnTheRenderersPcf) {
   fs::remove(out);
 }
 
+// The frame observer (renderer/metrics/frame_observer.h) on the study's own step, the jagged
+// image against the straight one: its weber was set so that its threshold at a = 10 px equals the
+// image observer's there (3.43 a, docs/results/frame-observer.md); at a = 5 it was not fitted and
+// stays near (3.56 a). Fails if the observer's model or its calibration moves.
+TEST(ObserverCurve, TheFrameObserverHoldsItsCalibrationOnTheStep) {
+  const fs::path out = fresh("frame-observer.json");
+  const std::string command = std::string(PENUMBRA_OBSERVER_CURVE_EXE) +
+                              " --observer frame --pattern step --artifact-px 5,10 --ratio-min 2.5 --ratio-max 5"
+                              " --ratio-step 1.08 --seeds 3 --json " + out.string() + " > /dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const nlohmann::json entry = nlohmann::json::parse(bytes_of(out))["entries"][0];
+  EXPECT_EQ(entry["observer"]["kind"], "frame");
+  std::map<double, double> c;
+  for (const auto& per : entry["per_condition"][0]["per_artifact"]) {
+    ASSERT_TRUE(per["c"].is_number()) << per;
+    c[per["artifact_px"].get<double>()] = per["c"].get<double>();
+  }
+  EXPECT_NEAR(c[10.0], 3.43, 0.1);
+  EXPECT_NEAR(c[5.0], 3.56, 0.2);
+  fs::remove(out);
+}
+
 std::string bytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
