@@ -94,6 +94,7 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
   if (j.contains("config") && j["config"].is_object()) {
     const auto& config = j["config"];
     if (config.contains("stimulus")) flatten("stimulus.", config["stimulus"]);
+    if (config.contains("frames")) flatten("frames.", config["frames"]);  // a frame study: scene, patches, reference, grid
     if (config.contains("task") && config["task"].is_string()) info.setup["task"] = config["task"].get<std::string>();
     if (config.contains("yesno_scoring")) {
       if (!config["yesno_scoring"].is_string() ||

@@ -243,6 +243,23 @@ TEST(FrameStudyFit, PenumbraFitRecoversAPlantedK) {
   fs::remove(config);
 }
 
+// Sessions of frame studies that differ (here the reference) are not pooled without --pool.
+TEST(FrameStudyFit, SessionsOfDifferentFrameStudiesAreNotPooled) {
+  const fs::path other = config_file("other-reference", [](nlohmann::json& j) { j["frames"]["reference"] = {{"k", 4}}; });
+  const fs::path a = fresh("pool-a"), b = fresh("pool-b"), out_dir = fresh("pool-fit");
+  std::string out;
+  ASSERT_EQ(run(kStudy, {"run", "--config", kDemo, "--headless", "--observer", "psychometric:k=1.5", "--participant", "p1", "-o", a.string()},
+                &out), 0) << out;
+  ASSERT_EQ(run(kStudy, {"run", "--config", other.string(), "--headless", "--observer", "psychometric:k=1.5", "--participant", "p2", "-o",
+                         b.string()}, &out), 0) << out;
+  EXPECT_EQ(run(kFit, {a.string(), b.string(), "-o", out_dir.string(), "--no-progress"}, &out), 1) << out;
+  EXPECT_NE(out.find("frames.reference"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(out_dir));
+  EXPECT_EQ(run(kFit, {a.string(), b.string(), "-o", out_dir.string(), "--no-progress", "--pool"}, &out), 0) << out;
+  for (const fs::path& p : {a, b, out_dir}) fs::remove_all(p);
+  fs::remove(other);
+}
+
 int counted(const std::string& out, const char* what) {
   std::smatch m;
   const std::regex re(std::string("frames: ([0-9]+) rendered, ([0-9]+) read from the cache"));
