@@ -38,6 +38,7 @@
 #include "metrics/image_error.h"
 #include "scene/scene.h"
 #include "shadows/frame_plan.h"
+#include "shadows/frame_report.h"
 #include "shadows/renderer.h"
 #include "stats/summary.h"
 #include "shadows/settings.h"
@@ -105,6 +106,7 @@ struct Row {
   std::string settings;
   float c = 0;         // adaptive.c of the row's settings
   std::string c_from;  // where it came from (calibration.json entry, fallback or --adaptive.c)
+  std::vector<shadows::PassWork> work;  // the last timed frame's, per pass (what a GPU pays for)
 };
 
 // Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
@@ -270,6 +272,7 @@ nlohmann::json row_json(const Row& r) {
                       {"c", r.c},
                       {"c_from", r.c_from},
                       {"settings", r.settings}};
+  j["work"] = shadows::work_json(r.work);
   return j;
 }
 
@@ -420,6 +423,7 @@ int main(int argc, char** argv) {
     std::vector<std::unique_ptr<metrics::Reference>> references;  // rows point into these
     nlohmann::json scene_reports = nlohmann::json::array();
     shadows::Renderer renderer;
+    renderer.set_count_work(true);  // each row's work per pass (report.json)
     int done = 0;
     for (const auto& scene : scenes) {
       renderer.set_scene(scene);
@@ -466,6 +470,7 @@ int main(int argc, char** argv) {
           row.cascades = static_cast<int>(info.cascades.size());
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.memory_texels = shadows::shadow_memory_texels(info);
+          row.work = info.work;
           if (info.virtual_map) {
             // A pool that missed pages shades their pixels from a coarser level: that speed is not
             // the configuration's, and the row is refused rather than reported.

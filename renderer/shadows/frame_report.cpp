@@ -17,6 +17,13 @@ nlohmann::json to_json(const LightFrame& l) {
           {"far_ws", l.far_ws}};
 }
 
+nlohmann::json work_json(const std::vector<PassWork>& work) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const PassWork& w : work)
+    j[w.pass] = {{"primitives", w.primitives}, {"fragments", w.fragments}, {"compute_invocations", w.compute_invocations}};
+  return j;
+}
+
 nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settings, const std::vector<gl::PassStats>& stats) {
   nlohmann::json j;
   j["settings"] = to_json(settings);
@@ -49,11 +56,7 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                              {"clamped_fraction", r.clamped_fraction},
                              {"above_max_fraction", r.above_max_fraction}};
   }
-  if (!frame.work.empty()) {
-    nlohmann::json& work = j["work"];
-    for (const PassWork& w : frame.work)
-      work[w.pass] = {{"primitives", w.primitives}, {"fragments", w.fragments}, {"compute_invocations", w.compute_invocations}};
-  }
+  if (!frame.work.empty()) j["work"] = work_json(frame.work);
   if (frame.virtual_map) {
     const FrameInfo::Virtual& v = *frame.virtual_map;
     j["virtual_map"] = {{"pages",

@@ -13,6 +13,8 @@
 namespace penumbra::shadows {
 
 nlohmann::json to_json(const LightFrame& light);
+// FrameInfo::work as report.json holds it: {pass: {primitives, fragments, compute_invocations}}.
+nlohmann::json work_json(const std::vector<PassWork>& work);
 nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settings, const std::vector<gl::PassStats>& stats);
 
 }  // namespace penumbra::shadows

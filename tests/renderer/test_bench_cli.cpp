@@ -240,6 +240,29 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
   EXPECT_EQ(report.at("scenes")[0].at("references").size(), same_filter_variants.size() + 1);
   EXPECT_GT(report.at("scenes")[0].at("floor_ms").at("median").get<double>(), 0);
   EXPECT_EQ(report.at("rows")[0].at("frame_ms").size(), 2u);
+  // What each row gave the GPU to do (issue 47): every row shades its pixels; a shadow-map row
+  // rasterizes texels, and more of them at a larger resolution of the same variant.
+  std::map<std::string, std::map<int, std::uint64_t>> map_fragments;  // variant, resolution
+  for (const auto& row : report.at("rows")) {
+    const auto& work = row.at("work");
+    ASSERT_TRUE(work.contains("shading")) << row.dump();
+    EXPECT_GT(work.at("shading").at("fragments").get<std::uint64_t>(), 0u);
+    if (work.contains("shadow_map") && !row.at("adaptive").get<bool>())
+      map_fragments[row.at("variant").get<std::string>()][row.at("resolution_texels").get<int>()] =
+          work.at("shadow_map").at("fragments").get<std::uint64_t>();
+  }
+  int ordered = 0;
+  for (const auto& [variant, by_resolution] : map_fragments) {
+    const std::pair<const int, std::uint64_t>* coarser = nullptr;
+    for (const auto& finer : by_resolution) {
+      if (coarser) {
+        EXPECT_LT(coarser->second, finer.second) << variant << " at " << coarser->first << " vs " << finer.first;
+        ++ordered;
+      }
+      coarser = &finer;
+    }
+  }
+  EXPECT_GT(ordered, 0) << "two resolutions of a shadow-map variant";
   EXPECT_TRUE(report.contains("device"));
   const auto png = fs::file_size(out / "pareto-two-planes.png");
   EXPECT_GT(png, 10000u) << "a real plot";
