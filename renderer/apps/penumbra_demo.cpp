@@ -185,6 +185,8 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   // Everything that can refuse the command comes before any output: the plotter, the output
   // directory, the scene and its path; then the first line of progress.
   if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the chart");
+  const bool flip = opt.flip && opt.reference;
+  const double pixels_per_degree = flip ? demo::display_pixels_per_degree(opt.display) : 0.0;  // --display's viewing geometry
   io::StagedDirectory out(opt.output, "report.json");
   gl::HeadlessContext ctx;
   const double t_scene = now_ms();
@@ -194,8 +196,6 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
   const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
   const bool directional = scene.light.type == scene::Light::Type::directional;
-  const bool flip = opt.flip && opt.reference;
-  const double pixels_per_degree = flip ? demo::display_pixels_per_degree(opt.display) : 0.0;
 
   nlohmann::json report;
   report["scene"] = scene.name;

@@ -270,7 +270,9 @@ void Walk::perceive(TechniqueRun& run, shadows::Renderer& ref_renderer, const sh
   std::vector<image::ImageF> lit(timed.size());
   for (std::size_t j = 0; j < timed.size(); ++j) {
     lit[j] = lit_frame(basis, series[timed[j]].visibility);
-    run.lit_code_difference = std::max(run.lit_code_difference, code_difference(lit[j], series[timed[j]].color));
+    const CodeDifference d = code_difference(lit[j], series[timed[j]].color);
+    run.lit_code_difference.max = std::max(run.lit_code_difference.max, d.max);
+    run.lit_code_difference.above_2 += d.above_2, run.lit_code_difference.pixels += d.pixels;
   }
   // Every (configuration, reference) pair, over the threads the GL work leaves idle here.
   const std::size_t pairs = timed.size() * (run.converged ? 2 : 1);

@@ -96,7 +96,7 @@ struct TechniqueRun {
   bool converged = false;            // PCSS: also against PCSS at converged resolution and taps
   std::string target_description;    // what FLIP is taken against (the converged PCSS, or the reference)
   double pixels_per_degree = 0;
-  int lit_code_difference = 0;       // composed against the renderer's lit frames, largest over every frame compared
+  CodeDifference lit_code_difference;  // composed against the renderer's lit frames, over every frame compared
   double flip_ms = 0;                // wall time of the FLIP and frame observer evaluations
   double converged_ms = 0;           // rendering the converged PCSS reference
   int flip_frames_evaluated = 0;     // FLIP maps computed

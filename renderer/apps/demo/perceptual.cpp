@@ -75,15 +75,20 @@ image::ImageF lit_frame(const ShadingBasis& basis, const io::ImageF& visibility)
   return out;
 }
 
-int code_difference(const image::ImageF& composed, const io::Image8& rendered) {
+CodeDifference code_difference(const image::ImageF& composed, const io::Image8& rendered) {
   if (composed.width != rendered.width || composed.height != rendered.height || rendered.channels < 3)
     throw std::invalid_argument("code_difference: the frames differ in size or the rendered one is not RGB");
-  int worst = 0;
+  CodeDifference d;
   for (int y = 0; y < composed.height; ++y)
-    for (int x = 0; x < composed.width; ++x)
+    for (int x = 0; x < composed.width; ++x) {
+      int pixel = 0;
       for (int c = 0; c < 3; ++c)
-        worst = std::max(worst, std::abs(static_cast<int>(std::lround(255.0f * composed.at(x, y, c))) - rendered.at(x, y, c)));
-  return worst;
+        pixel = std::max(pixel, std::abs(static_cast<int>(std::lround(255.0f * composed.at(x, y, c))) - rendered.at(x, y, c)));
+      d.max = std::max(d.max, pixel);
+      d.above_2 += pixel > 2 ? 1 : 0;
+      ++d.pixels;
+    }
+  return d;
 }
 
 double display_pixels_per_degree(const std::string& file) {

@@ -408,7 +408,9 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
     t["perceptual"] = {{"target", run.target_description},
                        {"pixels_per_degree", run.pixels_per_degree},
                        {"lit_frames", {{"composed", "per pixel base + V direct in linear RGB from the frame's shading (apps/demo/perceptual.h)"},
-                                       {"max_code_difference", run.lit_code_difference}}},
+                                       {"max_code_difference", run.lit_code_difference.max},
+                                       {"share_above_2_codes", static_cast<double>(run.lit_code_difference.above_2) /
+                                                                   static_cast<double>(std::max<std::int64_t>(run.lit_code_difference.pixels, 1))}}},
                        {"flip_evaluations", run.flip_frames_evaluated},
                        {"flip_ms", run.flip_ms},
                        {"montage_frame", run.flip_montage_frame}};
