@@ -5,10 +5,14 @@
 # beside the engine family (single maps of 1024²-8192², two stabilized cascades of 2048² and
 # 4096², four of 2048²) and the sun's virtual shadow map (by the rule and the footprint, drawn
 # every frame, and the rule cached): first the adaptive rule and each virtual map against the
-# family's Pareto front at equal error (speedup and memory ratio with intervals), then frame time,
+# family's Pareto front at equal perceived difference (LDR-FLIP of the lit frames; PCSS against
+# converged PCSS and the ray-traced sun), the frame observer's verdict, then at equal error (RMSE)
+# (speedup and memory ratio with intervals), then frame time,
 # texels, error against the reference (PCF: the same filter on 8188² cascades; PCSS: ray-traced),
 # thin casters, flicker; into out/demo/ (report.json, frames.csv, crops, side-by-side images,
-# plots). About 5 min on 2 cores without a GPU (3.5 with `--no-virtual`); `--sweep` measures the
+# plots, FLIP montages). About 5 min on 2 cores without a GPU before the perceived difference,
+# which added 23 % on a loaded machine (docs/results/adaptive.md; `--no-flip` leaves it out;
+# 3.5 min with `--no-virtual`); `--sweep` measures the
 # whole engine family, `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
