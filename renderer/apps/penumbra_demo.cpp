@@ -60,6 +60,7 @@
 #include "json/json_input.h"
 #include "metrics/frame_observer.h"
 #include "scene/scene.h"
+#include "shadows/frame_report.h"
 #include "shadows/renderer.h"
 #include "shadows/virtual_shadow_map.h"
 #include "stats/summary.h"
@@ -406,9 +407,9 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
       return st;
     };
     const auto stats_json = [](const shadows::VirtualMapStats& st, double ms) {
-      return nlohmann::json{{"requested", st.requested}, {"cached", st.cached},     {"drawn", st.drawn},
-                            {"missing", st.missing},     {"evicted", st.evicted},   {"resident", st.resident},
-                            {"triangles", st.triangles}, {"update_ms", ms}};
+      nlohmann::json j = shadows::virtual_pages_json(st);  // the key set of every report
+      j["update_ms"] = ms;
+      return j;
     };
     const auto marked_pixels = [](const adaptive::MarkResult& m) {
       std::int64_t n = m.unmarked;

@@ -17,6 +17,30 @@ nlohmann::json to_json(const LightFrame& l) {
           {"far_ws", l.far_ws}};
 }
 
+nlohmann::json virtual_pages_json(const VirtualMapStats& p) {
+  return {{"requested", p.requested}, {"cached", p.cached},   {"drawn", p.drawn},
+          {"missing", p.missing},     {"evicted", p.evicted}, {"invalidated", p.invalidated},
+          {"resident", p.resident},   {"floor", p.floor},     {"floor_level", p.floor_level},
+          {"triangles", p.triangles}};
+}
+
+nlohmann::json virtual_map_json(const FrameInfo::Virtual& v) {
+  nlohmann::json pages = virtual_pages_json(v.pages);
+  pages["search"] = v.search_pages;
+  return {{"pages", pages},
+          {"pool_pages_per_side", v.pool_pages_per_side},
+          {"light", {{"near_ws", v.near_ws}, {"far_ws", v.far_ws}}},
+          {"pixels_per_level", v.pixels_per_level},
+          {"unmarked_pixels", v.unmarked},
+          {"bytes", {{"resident_pages", v.resident_bytes}, {"tables", v.table_bytes}, {"pool_allocated", v.pool_bytes}}},
+          {"shaded_pixels", {{"at_level", v.at_level}, {"coarser", v.coarser}, {"none", v.none}}},
+          {"marks",
+           {{"late", v.marks_late},
+            {"region_floor_pages", v.region_floor},
+            {"shaded_pixels_of_previous_frame", v.shaded_of_previous_frame},
+            {"sync_reads", v.sync_reads}}}};
+}
+
 nlohmann::json work_json(const std::vector<PassWork>& work) {
   nlohmann::json j = nlohmann::json::object();
   for (const PassWork& w : work)
@@ -57,32 +81,7 @@ nlohmann::json frame_report(const FrameInfo& frame, const ShadowSettings& settin
                              {"above_max_fraction", r.above_max_fraction}};
   }
   if (!frame.work.empty()) j["work"] = work_json(frame.work);
-  if (frame.virtual_map) {
-    const FrameInfo::Virtual& v = *frame.virtual_map;
-    j["virtual_map"] = {{"pages",
-                         {{"requested", v.pages.requested},
-                          {"cached", v.pages.cached},
-                          {"drawn", v.pages.drawn},
-                          {"missing", v.pages.missing},
-                          {"evicted", v.pages.evicted},
-                          {"invalidated", v.pages.invalidated},
-                          {"resident", v.pages.resident},
-                          {"floor", v.pages.floor},
-                          {"floor_level", v.pages.floor_level},
-                          {"search", v.search_pages},
-                          {"triangles", v.pages.triangles}}},
-                        {"pool_pages_per_side", v.pool_pages_per_side},
-                        {"light", {{"near_ws", v.near_ws}, {"far_ws", v.far_ws}}},
-                        {"pixels_per_level", v.pixels_per_level},
-                        {"unmarked_pixels", v.unmarked},
-                        {"bytes", {{"resident_pages", v.resident_bytes}, {"tables", v.table_bytes}, {"pool_allocated", v.pool_bytes}}},
-                        {"shaded_pixels", {{"at_level", v.at_level}, {"coarser", v.coarser}, {"none", v.none}}},
-                        {"marks",
-                         {{"late", v.marks_late},
-                          {"region_floor_pages", v.region_floor},
-                          {"shaded_pixels_of_previous_frame", v.shaded_of_previous_frame},
-                          {"sync_reads", v.sync_reads}}}};
-  }
+  if (frame.virtual_map) j["virtual_map"] = virtual_map_json(*frame.virtual_map);
   return j;
 }
 

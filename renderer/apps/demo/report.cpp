@@ -6,6 +6,7 @@
 #include <map>
 
 #include "io/report.h"
+#include "shadows/frame_report.h"
 #include "shadows/settings.h"
 #include "stats/summary.h"
 
@@ -392,11 +393,7 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
     if (run.perceptual) j["equal_flip"] = virtual_json(run, eqs.flip, k);
     if (run.converged) j["equal_flip_ray_traced"] = virtual_json(run, eqs.flip_ray_traced, k);
     if (s.info.virtual_map) {
-      const auto& last = *s.info.virtual_map;
-      j["last_frame"] = {{"pages", {{"requested", last.pages.requested}, {"drawn", last.pages.drawn}, {"cached", last.pages.cached},
-                                    {"missing", last.pages.missing}, {"resident", last.pages.resident}}},
-                         {"shaded_pixels", {{"at_level", last.at_level}, {"coarser", last.coarser}, {"none", last.none}}},
-                         {"bytes", {{"resident_pages", last.resident_bytes}, {"tables", last.table_bytes}, {"pool_allocated", last.pool_bytes}}}};
+      j["last_frame"] = shadows::virtual_map_json(*s.info.virtual_map);  // as penumbra-render's report.json
     }
     measured(k, j);
     t["virtual"].push_back(j);
