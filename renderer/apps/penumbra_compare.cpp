@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "adaptive/calibration.h"
+#include "apps/display_geometry.h"
 #include "cli/checks.h"
 #include "cli/main.h"
 #include "io/atomic_file.h"
@@ -48,36 +49,6 @@ metrics::Encoding encoding_of(const std::string& path) {
 }
 
 const char* encoding_name(metrics::Encoding e) { return e == metrics::Encoding::linear ? "linear" : "srgb"; }
-
-// Pixels per degree from a study config's display block (data/studies/*.json, docs/study-config.md):
-// width_px, width_mm and viewing_distance_mm, each required here (the study would take its
-// defaults for a missing one; a comparison should not rest on a silent default).
-double display_pixels_per_degree(const std::string& file) {
-  const nlohmann::json j = ji::read_file(file);
-  const ji::Reader r(file);
-  auto number = [](const char* name, const char* unit) {
-    ji::Field f;
-    f.name = name;
-    f.type = std::string(name) == "width_px" ? ji::Type::integer : ji::Type::number;
-    f.required = true;
-    f.why = "penumbra-compare takes the viewing geometry from it";
-    f.min = 1;
-    f.max = 100000;
-    f.unit = unit;
-    return f;
-  };
-  ji::ObjectSpec display{{number("width_px", ""), number("width_mm", "mm"), number("viewing_distance_mm", "mm")}, false};
-  ji::Field block;
-  block.name = "display";
-  block.type = ji::Type::object;
-  block.required = true;
-  block.why = "a study config's display block: width_px, width_mm, viewing_distance_mm";
-  block.object = ji::spec(display);
-  if (!j.is_object()) r.fail("", "expected an object (a study config), got " + ji::describe(j));
-  const nlohmann::json* d = r.get(j, "", block);
-  return metrics::pixels_per_degree(r.number(*d, "display", display, "width_px"), r.number(*d, "display", display, "width_mm") / 1000.0,
-                                    r.number(*d, "display", display, "viewing_distance_mm") / 1000.0);
-}
 
 io::ImageF read(const std::string& path) {
   io::ImageF img = io::read_imagef(path);
@@ -170,7 +141,7 @@ int main(int argc, char** argv) {
   try {
     std::string ppd_source = app.count("--ppd") ? "--ppd" : "FLIP's default viewer";
     if (!display_config.empty()) {
-      ppd = display_pixels_per_degree(display_config);
+      ppd = apps::display_pixels_per_degree(display_config, "penumbra-compare");
       ppd_source = "the display of " + display_config;
     }
     // An unusable output is refused before the work (check_output's rule, by the staging itself).

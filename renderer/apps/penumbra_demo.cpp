@@ -60,6 +60,7 @@
 #include "json/json_input.h"
 #include "metrics/frame_observer.h"
 #include "scene/scene.h"
+#include "apps/display_geometry.h"
 #include "shadows/frame_report.h"
 #include "shadows/renderer.h"
 #include "shadows/virtual_shadow_map.h"
@@ -187,7 +188,7 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
   // directory, the scene and its path; then the first line of progress.
   if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the chart");
   const bool flip = opt.flip && opt.reference;
-  const double pixels_per_degree = flip ? demo::display_pixels_per_degree(opt.display) : 0.0;  // --display's viewing geometry
+  const double pixels_per_degree = flip ? apps::display_pixels_per_degree(opt.display, "penumbra-demo") : 0.0;  // --display's viewing geometry
   io::StagedDirectory out(opt.output, "report.json");
   gl::HeadlessContext ctx;
   const double t_scene = now_ms();

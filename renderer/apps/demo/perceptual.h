@@ -48,11 +48,6 @@ struct CodeDifference {
 };
 CodeDifference code_difference(const image::ImageF& composed, const io::Image8& rendered);
 
-// The pixels per degree of a study config's display block (data/studies/*.json: width_px,
-// width_mm, viewing_distance_mm; docs/study-config.md), by metrics::pixels_per_degree: the same
-// formula penumbra-compare --display uses. Throws std::runtime_error naming the file and field.
-double display_pixels_per_degree(const std::string& study_config);
-
 // The FLIP montage (<technique>-flip-montage.png): 3 tiles a row, each this wide (the frame's
 // half, at least 480 px: room for the longest label at the montage's 24 px text).
 constexpr int kFlipMontageColumns = 3;
