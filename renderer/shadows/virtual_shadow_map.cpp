@@ -223,8 +223,8 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   view_ = view;
   has_view_ = true;
   const adaptive::PageCache::Update admitted = cache_.update(requested, view.camera_xy);
-  const adaptive::PageCacheStats& c = admitted.stats;
-  VirtualMapStats stats{c.requested, c.cached, c.drawn, c.missing, c.floor, c.floor_level, c.evicted, c.invalidated, c.resident, 0};
+  VirtualMapStats stats;
+  static_cast<adaptive::PageCacheStats&>(stats) = admitted.stats;
   const std::vector<adaptive::PageCache::Admitted>& to_draw = admitted.to_draw;
 
   if (!to_draw.empty()) {

@@ -56,16 +56,9 @@ void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, f
 // to spare on each side, so a walking camera does not redraw every page each frame.
 VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, const VirtualMapView* previous = nullptr);
 
-struct VirtualMapStats {
-  int requested = 0;    // pages the frame asked for
-  int cached = 0;       // of those, already resident and valid: not drawn
-  int drawn = 0;        // pages drawn this frame (floor pages included)
-  int missing = 0;      // asked for, but the pool held the floor and coarser or nearer pages instead
-  int floor = 0;        // pages of floor_level made resident though not asked for: what a missing page's pixels read
-  int floor_level = -1; // the coarse floor's level (-1: nothing asked for); 0 when the pool holds every page asked for
-  int evicted = 0;      // resident pages dropped to make room this frame
-  int invalidated = 0;  // resident pages dropped since the last update (light or caster moved)
-  int resident = 0;     // pages in the pool after the update (asked for or kept from earlier frames)
+// The page cache's counts of a frame (adaptive::PageCacheStats: requested, cached, drawn, missing,
+// floor, floor_level, evicted, invalidated, resident), and the triangles drawn into the pages.
+struct VirtualMapStats : adaptive::PageCacheStats {
   std::uint64_t triangles = 0;  // drawn into the pages
 };
 
