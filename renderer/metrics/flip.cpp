@@ -228,6 +228,53 @@ Features features(const cv::Mat& ycxcz_y, const FeatureKernels& k) {
   return f;
 }
 
+void check_options(const FlipOptions& options) {
+  const double ppd = options.pixels_per_degree;
+  if (!(std::isfinite(ppd) && ppd > 0))
+    throw std::invalid_argument("LDR-FLIP: pixels per degree must be finite and positive, got " + std::to_string(ppd));
+  if (!(options.threshold >= 0 && options.threshold <= 1))
+    throw std::invalid_argument("LDR-FLIP: threshold must lie in [0, 1], got " + std::to_string(options.threshold));
+}
+
+// One image's half of LDR-FLIP: the Hunt-adjusted L*a*b* of its filtered colours, and its edge and
+// point strengths.
+struct Prepared {
+  std::vector<double> lab;  // 3 per pixel
+  cv::Mat edge, point;
+};
+
+Prepared prepare(const image::ImageF& img, Encoding encoding, double ppd) {
+  const std::array<cv::Mat, 3> planes = to_ycxcz(img, encoding);
+  // Colour: each opponent channel through its contrast-sensitivity filter.
+  const int radius = spatial_radius(ppd);
+  std::array<cv::Mat, 3> filtered;
+  for (int c = 0; c < 3; ++c) {
+    const auto u = static_cast<std::size_t>(c);
+    filtered[u] = spatial_filter(planes[u], spatial_kernels(c, ppd, radius));
+  }
+  const Colour w = white();
+  const Mat3 xyz_to_rgb = inverse(kRgbToXyz);
+  Prepared p;
+  p.lab.resize(3 * static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height));
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const Colour lab = filtered_to_hunt_lab(filtered[0].at<float>(y, x), filtered[1].at<float>(y, x), filtered[2].at<float>(y, x),
+                                              xyz_to_rgb, w);
+      const std::size_t i = 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) + static_cast<std::size_t>(x));
+      for (std::size_t c = 0; c < 3; ++c) p.lab[i + c] = lab.v[c];
+    }
+  // Features: on the unfiltered luminance.
+  Features f = features(planes[0], feature_kernels(ppd));
+  p.edge = std::move(f.edge);
+  p.point = std::move(f.point);
+  return p;
+}
+
+std::vector<float> to_vector(const cv::Mat& m) {
+  CV_Assert(m.type() == CV_32F && m.isContinuous());
+  return std::vector<float>(m.ptr<float>(), m.ptr<float>() + m.total());
+}
+
 }  // namespace
 
 double pixels_per_degree(double width_px, double width_m, double distance_m) {
@@ -235,6 +282,44 @@ double pixels_per_degree(double width_px, double width_m, double distance_m) {
       !(std::isfinite(distance_m) && distance_m > 0))
     throw std::invalid_argument("pixels per degree: width in pixels, width and distance must be finite and positive");
   return 2.0 * distance_m * std::tan(0.5 * kPi / 180.0) * width_px / width_m;
+}
+
+FlipReference::FlipReference(const image::ImageF& reference, Encoding encoding, const FlipOptions& options) : options_(options) {
+  check_image(reference, "reference");
+  check_options(options);
+  width_ = reference.width;
+  height_ = reference.height;
+  Prepared p = prepare(reference, encoding, options.pixels_per_degree);
+  lab_ = std::move(p.lab);
+  edge_ = to_vector(p.edge);
+  point_ = to_vector(p.point);
+}
+
+FlipResult FlipReference::compare(const image::ImageF& test, Encoding test_encoding) const {
+  check_image(test, "test");
+  if (width_ != test.width || height_ != test.height)
+    throw std::invalid_argument("LDR-FLIP: image sizes differ (reference " + std::to_string(width_) + "×" + std::to_string(height_) +
+                                ", test " + std::to_string(test.width) + "×" + std::to_string(test.height) + ")");
+  const Prepared t = prepare(test, test_encoding, options_.pixels_per_degree);
+  const double c_max = cmax(), pc_cmax = C::pc * c_max;
+  FlipResult result;
+  result.pixels_per_degree = options_.pixels_per_degree;
+  result.map = image::ImageF{width_, height_, 1, std::vector<float>(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_))};
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x);
+      const Colour p{{lab_[3 * i], lab_[3 * i + 1], lab_[3 * i + 2]}};
+      const Colour q{{t.lab[3 * i], t.lab[3 * i + 1], t.lab[3 * i + 2]}};
+      const double e = std::pow(hyab(p, q), C::qc);
+      // [0, p_c·c_max) onto [0, p_t); the rest, up to c_max, onto [p_t, 1].
+      const double delta_c = e < pc_cmax ? C::pt / pc_cmax * e : C::pt + (e - pc_cmax) / (c_max - pc_cmax) * (1.0 - C::pt);
+      const double edge = std::abs(static_cast<double>(edge_[i]) - t.edge.at<float>(y, x));
+      const double point = std::abs(static_cast<double>(point_[i]) - t.point.at<float>(y, x));
+      const double delta_f = std::pow(std::max(edge, point) / std::sqrt(2.0), C::qf);
+      result.map.at(x, y) = static_cast<float>(std::clamp(std::pow(delta_c, 1.0 - delta_f), 0.0, 1.0));
+    }
+  result.pooled = pool_flip(result.map, options_.threshold);
+  return result;
 }
 
 FlipResult ldr_flip(const image::ImageF& reference, Encoding reference_encoding, const image::ImageF& test, Encoding test_encoding,
@@ -245,48 +330,7 @@ FlipResult ldr_flip(const image::ImageF& reference, Encoding reference_encoding,
     throw std::invalid_argument("LDR-FLIP: image sizes differ (reference " + std::to_string(reference.width) + "×" +
                                 std::to_string(reference.height) + ", test " + std::to_string(test.width) + "×" +
                                 std::to_string(test.height) + ")");
-  const double ppd = options.pixels_per_degree;
-  if (!(std::isfinite(ppd) && ppd > 0))
-    throw std::invalid_argument("LDR-FLIP: pixels per degree must be finite and positive, got " + std::to_string(ppd));
-  if (!(options.threshold >= 0 && options.threshold <= 1))
-    throw std::invalid_argument("LDR-FLIP: threshold must lie in [0, 1], got " + std::to_string(options.threshold));
-
-  const std::array<cv::Mat, 3> ref = to_ycxcz(reference, reference_encoding);
-  const std::array<cv::Mat, 3> tst = to_ycxcz(test, test_encoding);
-
-  // Colour: each opponent channel through its contrast-sensitivity filter.
-  const int radius = spatial_radius(ppd);
-  std::array<cv::Mat, 3> ref_f, tst_f;
-  for (int c = 0; c < 3; ++c) {
-    const SpatialKernels k = spatial_kernels(c, ppd, radius);
-    ref_f[static_cast<std::size_t>(c)] = spatial_filter(ref[static_cast<std::size_t>(c)], k);
-    tst_f[static_cast<std::size_t>(c)] = spatial_filter(tst[static_cast<std::size_t>(c)], k);
-  }
-  // Features: on the unfiltered luminance.
-  const FeatureKernels fk = feature_kernels(ppd);
-  const Features ref_features = features(ref[0], fk), tst_features = features(tst[0], fk);
-
-  const Colour w = white();
-  const Mat3 xyz_to_rgb = inverse(kRgbToXyz);
-  const double c_max = cmax(), pc_cmax = C::pc * c_max;
-  FlipResult result;
-  result.pixels_per_degree = ppd;
-  result.map = image::ImageF{reference.width, reference.height, 1,
-                             std::vector<float>(static_cast<std::size_t>(reference.width) * static_cast<std::size_t>(reference.height))};
-  for (int y = 0; y < reference.height; ++y)
-    for (int x = 0; x < reference.width; ++x) {
-      const Colour p = filtered_to_hunt_lab(ref_f[0].at<float>(y, x), ref_f[1].at<float>(y, x), ref_f[2].at<float>(y, x), xyz_to_rgb, w);
-      const Colour q = filtered_to_hunt_lab(tst_f[0].at<float>(y, x), tst_f[1].at<float>(y, x), tst_f[2].at<float>(y, x), xyz_to_rgb, w);
-      const double e = std::pow(hyab(p, q), C::qc);
-      // [0, p_c·c_max) onto [0, p_t); the rest, up to c_max, onto [p_t, 1].
-      const double delta_c = e < pc_cmax ? C::pt / pc_cmax * e : C::pt + (e - pc_cmax) / (c_max - pc_cmax) * (1.0 - C::pt);
-      const double edge = std::abs(static_cast<double>(ref_features.edge.at<float>(y, x)) - tst_features.edge.at<float>(y, x));
-      const double point = std::abs(static_cast<double>(ref_features.point.at<float>(y, x)) - tst_features.point.at<float>(y, x));
-      const double delta_f = std::pow(std::max(edge, point) / std::sqrt(2.0), C::qf);
-      result.map.at(x, y) = static_cast<float>(std::clamp(std::pow(delta_c, 1.0 - delta_f), 0.0, 1.0));
-    }
-  result.pooled = pool_flip(result.map, options.threshold);
-  return result;
+  return FlipReference(reference, reference_encoding, options).compare(test, test_encoding);
 }
 
 FlipPooled pool_flip(const image::ImageF& map, double threshold) {

@@ -54,6 +54,7 @@
 // on frames: docs/results/frame-observer.md, docs/compare.md.
 //
 // GL-free (OpenCV and the CPU images of common/image; library penumbra_frame_observer).
+#include <memory>
 #include <vector>
 
 #include "image/image.h"
@@ -111,5 +112,28 @@ double frame_p_detect(double p_correct);
 // image, different sizes, an unsupported channel count, a non-finite value, a parameter out of range.
 FrameDetection detect_difference(const image::ImageF& reference, Encoding reference_encoding, const image::ImageF& test,
                                  Encoding test_encoding, const FrameObserverParams& params = {});
+
+// The reference's half of the observer, computed once: its blurred luminance, local contrast,
+// gradients and their windowed sums. Judging n frames against one reference then prepares n + 1
+// images instead of 2n, with the same values to the bit as detect_difference on each pair. Throws
+// like detect_difference for a bad reference or parameter.
+class ObserverReference {
+ public:
+  ObserverReference(const image::ImageF& reference, Encoding encoding, const FrameObserverParams& params = {});
+  ~ObserverReference();
+  ObserverReference(ObserverReference&&) noexcept;
+  ObserverReference& operator=(ObserverReference&&) noexcept;
+
+  const FrameObserverParams& params() const { return params_; }
+
+  // Throws like detect_difference for a bad test image or one of another size.
+  FrameDetection judge(const image::ImageF& test, Encoding test_encoding) const;
+
+ private:
+  struct Planes;
+  FrameObserverParams params_;
+  int width_ = 0, height_ = 0;
+  std::unique_ptr<Planes> planes_;  // OpenCV matrices, kept out of this header
+};
 
 }  // namespace penumbra::metrics

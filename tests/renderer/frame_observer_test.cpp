@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <stdexcept>
+#include <vector>
 
 #include "metrics/frame_observer.h"
 
@@ -179,6 +180,29 @@ TEST(FrameObserver, PatchesTileTheFrameEdgesIncluded) {
   EXPECT_EQ(d.patches.back().height_px, 10);
   EXPECT_GT(d.patches.back().deviation, 0.0);
   EXPECT_EQ(d.patches.front().deviation, 0.0);
+}
+
+// A reference prepared once judges every frame as a fresh pair would, to the bit, whatever it
+// judged before; and it refuses what the pairwise call refuses.
+TEST(FrameObserver, APreparedReferenceGivesEachPairsVerdictWhateverCameBefore) {
+  const image::ImageF reference = slanted_edge(96, 4, false);
+  const std::vector<image::ImageF> tests = {slanted_edge(96, 4, true), soft_edge(96, 48, 6), reference, slanted_edge(96, 2, true)};
+  const metrics::ObserverReference prepared(reference, Encoding::linear);
+  for (int round = 0; round < 2; ++round)
+    for (std::size_t i = 0; i < tests.size(); ++i) {
+      const metrics::FrameDetection pair = metrics::detect_difference(reference, Encoding::linear, tests[i], Encoding::linear);
+      const metrics::FrameDetection reused = prepared.judge(tests[i], Encoding::linear);
+      ASSERT_EQ(reused.patches.size(), pair.patches.size());
+      for (std::size_t k = 0; k < pair.patches.size(); ++k)
+        ASSERT_EQ(reused.patches[k].deviation, pair.patches[k].deviation) << "test " << i << ", patch " << k << ", round " << round;
+      EXPECT_EQ(reused.visible, pair.visible);
+    }
+  EXPECT_EQ(prepared.judge(reference, Encoding::linear).deviation_max, 0.0);
+  EXPECT_TRUE(prepared.judge(tests[0], Encoding::linear).visible);
+  EXPECT_THROW(prepared.judge(soft_edge(95, 48, 6), Encoding::linear), std::invalid_argument);
+  metrics::FrameObserverParams bad;
+  bad.weber = 0;
+  EXPECT_THROW(metrics::ObserverReference(reference, Encoding::linear, bad), std::invalid_argument);
 }
 
 TEST(FrameObserver, RefusesMismatchedSizesAndBadParameters) {

@@ -295,6 +295,30 @@ TEST(Flip, MagmaMapEndsAndSize) {
   EXPECT_LT(luma(1), luma(2));
 }
 
+// A reference prepared once (the main job compares a dozen configurations against each) judges
+// every test image as a fresh pair would, to the bit, whatever it judged before; and it refuses
+// what the pairwise call refuses.
+TEST(Flip, APreparedReferenceGivesEachPairsValueWhateverCameBefore) {
+  const ImageF reference = edge(48, 24, 24, 0.1, 0.9);
+  const std::vector<ImageF> tests = {edge(48, 24, 25, 0.1, 0.9), uniform(48, 24, 0.5, 0.2, 0.7), edge(48, 24, 20, 0.0, 1.0), reference};
+  FlipOptions o;
+  o.pixels_per_degree = 30;
+  const penumbra::metrics::FlipReference prepared(reference, Encoding::srgb, o);
+  for (int round = 0; round < 2; ++round)
+    for (std::size_t i = 0; i < tests.size(); ++i) {
+      const auto pair = ldr_flip(reference, Encoding::srgb, tests[i], Encoding::srgb, o);
+      const auto reused = prepared.compare(tests[i], Encoding::srgb);
+      ASSERT_EQ(reused.map.pixels, pair.map.pixels) << "test " << i << ", round " << round;
+      EXPECT_EQ(reused.pooled.mean, pair.pooled.mean);
+      EXPECT_EQ(reused.pixels_per_degree, 30.0);
+    }
+  EXPECT_EQ(prepared.compare(reference, Encoding::srgb).pooled.max, 0.0);
+  EXPECT_GT(prepared.compare(tests[2], Encoding::srgb).pooled.mean, 0.01);
+  EXPECT_THROW(prepared.compare(uniform(47, 24, 0.5, 0.5, 0.5), Encoding::srgb), std::invalid_argument);
+  o.pixels_per_degree = -1;
+  EXPECT_THROW(penumbra::metrics::FlipReference(reference, Encoding::srgb, o), std::invalid_argument);
+}
+
 TEST(Flip, RefusesWhatItCannotCompare) {
   const ImageF a = uniform(8, 8, 0.5, 0.5, 0.5);
   auto message = [](auto f) {

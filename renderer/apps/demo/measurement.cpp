@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -284,11 +285,22 @@ void Walk::perceive(TechniqueRun& run, shadows::Renderer& ref_renderer, const sh
   observer.pixels_per_degree = options_.pixels_per_degree;
   observer.criterion_f = options_.criterion_f;
   const double t0 = now_ms();
+  // Each reference's half of FLIP and of the observer once, then every configuration against it.
+  const std::size_t references = run.converged ? 2 : 1;
+  std::vector<std::optional<metrics::FlipReference>> flip_refs(references);
+  std::vector<std::optional<metrics::ObserverReference>> observer_refs(references);
+  parallel_for(2 * references, options_.threads, [&](std::size_t i) {
+    const std::size_t r = i % references;
+    const image::ImageF& against = r == 0 ? target : sun;
+    if (i < references)
+      flip_refs[r].emplace(against, metrics::Encoding::linear, fo);
+    else
+      observer_refs[r].emplace(against, metrics::Encoding::linear, observer);
+  });
   parallel_for(pairs, options_.threads, [&](std::size_t p) {
-    const std::size_t j = p % timed.size();
-    const image::ImageF& against = p < timed.size() ? target : sun;
-    flips[p] = metrics::ldr_flip(against, metrics::Encoding::srgb, lit[j], metrics::Encoding::srgb, fo);
-    seen[p] = metrics::detect_difference(against, metrics::Encoding::srgb, lit[j], metrics::Encoding::srgb, observer);
+    const std::size_t j = p % timed.size(), r = p / timed.size();
+    flips[p] = flip_refs[r]->compare(lit[j], metrics::Encoding::linear);
+    seen[p] = observer_refs[r]->judge(lit[j], metrics::Encoding::linear);
   });
   run.flip_ms += now_ms() - t0;
   run.flip_frames_evaluated += static_cast<int>(pairs);

@@ -65,7 +65,7 @@ image::ImageF lit_frame(const ShadingBasis& basis, const io::ImageF& visibility)
     const float v = std::clamp(visibility.pixels[p], 0.0f, 1.0f);
     for (std::size_t c = 0; c < 3; ++c) {
       const std::size_t i = 3 * p + c;
-      out.pixels[i] = linear_to_srgb(std::clamp(basis.base.pixels[i] + v * basis.direct.pixels[i], 0.0f, 1.0f));
+      out.pixels[i] = std::clamp(basis.base.pixels[i] + v * basis.direct.pixels[i], 0.0f, 1.0f);
     }
   }
   return out;
@@ -79,7 +79,7 @@ CodeDifference code_difference(const image::ImageF& composed, const io::Image8& 
     for (int x = 0; x < composed.width; ++x) {
       int pixel = 0;
       for (int c = 0; c < 3; ++c)
-        pixel = std::max(pixel, std::abs(static_cast<int>(std::lround(255.0f * composed.at(x, y, c))) - rendered.at(x, y, c)));
+        pixel = std::max(pixel, std::abs(static_cast<int>(std::lround(255.0f * linear_to_srgb(composed.at(x, y, c)))) - rendered.at(x, y, c)));
       d.max = std::max(d.max, pixel);
       d.above_2 += pixel > 2 ? 1 : 0;
       ++d.pixels;

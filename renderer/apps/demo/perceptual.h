@@ -36,12 +36,14 @@ struct ShadingBasis {
 // restored. `settings`: the reference's settings (only the map's placement is kept).
 ShadingBasis shading_basis(shadows::Renderer& renderer, const shadows::ShadowSettings& settings, int width_px, int height_px);
 
-// The lit frame for `visibility` (one channel, the basis's size): sRGB code values in [0, 1],
-// 3 channels, not rounded.
+// The lit frame for `visibility` (one channel, the basis's size): linear RGB in [0, 1] (what the
+// display shows once sRGB-encoded), 3 channels, not rounded. FLIP and the observer read it as
+// Encoding::linear: no sRGB round trip per comparison.
 image::ImageF lit_frame(const ShadingBasis& basis, const io::ImageF& visibility);
 
-// How far a composed lit frame is from the renderer's own (RGB or RGBA, sRGB-encoded), in 8-bit
-// code values: the largest difference and the pixels differing by more than 2.
+// How far a composed lit frame (linear, lit_frame's) is from the renderer's own (RGB or RGBA,
+// sRGB-encoded), in 8-bit code values of the sRGB encoding: the largest difference and the pixels
+// differing by more than 2.
 struct CodeDifference {
   int max = 0;
   std::int64_t above_2 = 0, pixels = 0;
