@@ -399,10 +399,10 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
     // Drawn from nothing each frame (uncached), and along the path keeping pages (cached), per marking.
     shadows::VirtualShadowMap uncached(layout, kPoolSide), cached_rule(layout, kPoolSide), cached_footprint(layout, kPoolSide);
     scene::Scene posed = scene;  // the moving objects (scene::ObjectPath) where the frame drawn has them
-    const auto timed_update = [&](shadows::VirtualShadowMap& vsm, const adaptive::MarkResult& marks, double& ms) {
+    const auto timed_update = [&](shadows::VirtualShadowMap& map, const adaptive::MarkResult& marks, double& ms) {
       glFinish();
       const double t0 = now_ms();
-      const shadows::VirtualMapStats st = vsm.update(marks.pages, view, posed, meshes);
+      const shadows::VirtualMapStats st = map.update(marks.pages, view, posed, meshes);
       glFinish();
       ms = now_ms() - t0;
       return st;
@@ -421,7 +421,7 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
       const demo::PathFrame& pf = plan.frames[fi];
       const scene::Camera camera = demo::camera_at(scene, plan, pf.frame);
       posed = scene::posed_at(scene, pf.frame);
-      for (shadows::VirtualShadowMap* vsm : {&cached_rule, &cached_footprint}) vsm->invalidate_moved_casters(posed);  // the van's pages
+      for (shadows::VirtualShadowMap* map : {&cached_rule, &cached_footprint}) map->invalidate_moved_casters(posed);  // the van's pages
       // The debug view (the first technique, each station's first frame): the level each pixel
       // samples, by the rule and by the footprint.
       const bool images = &name == &opt.techniques.front() && (fi == 0 || pf.frame != plan.frames[fi - 1].frame + 1);

@@ -67,13 +67,13 @@ io::Image8 level_key(int levels, int width, int height) {
   return img;
 }
 
-io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side) {
-  const int side = vsm.pool().desc().width;
+io::Image8 pool_image(const shadows::VirtualShadowMap& map, int max_side) {
+  const int side = map.pool().desc().width;
   std::vector<float> depth(static_cast<std::size_t>(side) * side);
-  glGetTextureImage(vsm.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
+  glGetTextureImage(map.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
   const int step = std::max(1, (side + max_side - 1) / std::max(max_side, 1));
-  const int out = side / step, page = vsm.layout().page_texels, per_side = vsm.pool_pages_per_side();
-  const auto states = vsm.slot_states();
+  const int out = side / step, page = map.layout().page_texels, per_side = map.pool_pages_per_side();
+  const auto states = map.slot_states();
   // Depths stretched over the range the pages hold (the sun's depth range spans the whole town).
   float lo = 1, hi = 0;
   for (float d : depth)
@@ -102,7 +102,7 @@ struct VirtualDebug::State {
   metrics::SurfaceProbe probe;
   shadows::VirtualMapView view;
   shadows::PageMarker marker{layout};
-  shadows::VirtualShadowMap vsm{layout, 32};
+  shadows::VirtualShadowMap map{layout, 32};
   gl::Texture positions, levels;
   bool has_view = false;
   explicit State(const scene::Scene& scene) : meshes(scene.objects), probe(scene) {}
@@ -116,7 +116,7 @@ VirtualDebug::VirtualDebug(const scene::Scene& scene) {
 
 VirtualDebug::~VirtualDebug() = default;
 
-const shadows::VirtualShadowMap& VirtualDebug::map() const { return state_->vsm; }
+const shadows::VirtualShadowMap& VirtualDebug::map() const { return state_->map; }
 const adaptive::VirtualMapLayout& VirtualDebug::layout() const { return state_->layout; }
 
 VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Camera& camera, int width, int height,
@@ -131,7 +131,7 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
   glTextureSubImage2D(st.positions.id(), 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, surface.pixels.data());
   // The light view follows the scene's light: a moved sun drops every page (update does). The
   // depth range is the maps' bounded region for this camera (shadows::sun_virtual_view).
-  st.vsm.invalidate_moved_casters(scene);
+  st.map.invalidate_moved_casters(scene);
   scene::Scene seen = scene;
   seen.camera = camera;
   st.view = shadows::sun_virtual_view(seen, static_cast<float>(width) / static_cast<float>(height), st.has_view ? &st.view : nullptr);
@@ -144,14 +144,14 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
     // The renderer's two rounds: the searches' pages (one set for both markings: a search's level
     // is set by its radius and the pixel floor), then each marking's penumbra pages.
     const adaptive::MarkResult search = st.marker.mark_pcss_search(st.positions, camera, height, st.view, *marking.pcss, marking.options);
-    const shadows::VirtualMapStats first = st.vsm.update(search.pages, st.view, scene, st.meshes);
-    v.footprint = st.marker.mark_pcss_filter(st.positions, camera, height, st.vsm, *marking.pcss, footprint, levels);
+    const shadows::VirtualMapStats first = st.map.update(search.pages, st.view, scene, st.meshes);
+    v.footprint = st.marker.mark_pcss_filter(st.positions, camera, height, st.map, *marking.pcss, footprint, levels);
     if (images) v.footprint_levels = level_image(st.levels, st.layout.levels);
-    v.rule = st.marker.mark_pcss_filter(st.positions, camera, height, st.vsm, *marking.pcss, marking.options, levels);
+    v.rule = st.marker.mark_pcss_filter(st.positions, camera, height, st.map, *marking.pcss, marking.options, levels);
     if (images) v.rule_levels = level_image(st.levels, st.layout.levels);
     v.rule.pages.insert(search.pages.begin(), search.pages.end());
     v.footprint.pages.insert(search.pages.begin(), search.pages.end());
-    v.stats = st.vsm.update(v.rule.pages, st.view, scene, st.meshes);
+    v.stats = st.map.update(v.rule.pages, st.view, scene, st.meshes);
     v.stats.drawn += first.drawn;  // the searches' pages drawn by the first round are this view's too
     v.stats.cached -= first.drawn;
     v.stats.evicted += first.evicted;
@@ -161,7 +161,7 @@ VirtualDebug::View VirtualDebug::view(const scene::Scene& scene, const scene::Ca
   if (images) v.footprint_levels = level_image(st.levels, st.layout.levels);
   v.rule = st.marker.mark(st.positions, camera, height, st.view, marking.radius_ws, marking.options, levels);
   if (images) v.rule_levels = level_image(st.levels, st.layout.levels);
-  v.stats = st.vsm.update(v.rule.pages, st.view, scene, st.meshes);
+  v.stats = st.map.update(v.rule.pages, st.view, scene, st.meshes);
   return v;
 }
 

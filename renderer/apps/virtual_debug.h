@@ -40,7 +40,7 @@ io::Image8 level_key(int levels, int width, int height);
 // The pool as an image of at most `max_side` pixels a side: each slot's depths in grey (light: near
 // the sun; stretched over the depths the pages hold), tinted by its state (drawn by the last
 // update: green; cached from an earlier one: blue; free: dark red), slots outlined.
-io::Image8 pool_image(const shadows::VirtualShadowMap& vsm, int max_side);
+io::Image8 pool_image(const shadows::VirtualShadowMap& map, int max_side);
 
 // The virtual map of one scene kept across views (a window's frames): each view() marks the pages
 // by the rule and by the footprint, draws the rule's into a pool of 32² slots (keeping what earlier

@@ -31,9 +31,9 @@ layout(location = 1) out float o_visibility;
 layout(location = 2) out vec2 o_requirement;  // (1 / filter radius in map uv, cascade + 0.5 if clamped)
 #endif
 #if defined(VIRTUAL_SHADOW_MAP)
-// Where the pixel found its pages (vsm_status.comp counts them): 1 on the level it marked, 2 on a
+// Where the pixel found its pages (virtual_status.comp counts them): 1 on the level it marked, 2 on a
 // coarser resident one, 3 none (lit); 0 (the clear) where no surface is.
-layout(location = 2) out uint o_vsm_status;
+layout(location = 2) out uint o_virtual_status;
 #endif
 
 vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (G-buffer pass)
@@ -46,30 +46,30 @@ vec3 g_sc = vec3(0.0);  // map coordinates of the last cascade_visibility call (
 // window holds the point), with the normal offset and constant bias in that level's texels and the
 // receiver plane `gradient` (normalized depth per world unit across the light). Where the pool
 // could not hold a page, the next coarser resident level answers; where none does, the pixel is
-// lit (o_vsm_status says which). VSM: the box-filtered moments of the same square and
+// lit (o_virtual_status says which). VSM: the box-filtered moments of the same square and
 // Chebyshev's bound for the receiver's own depth (as the maps' VSM: no bias, the normal offset
 // moves the lookup only).
 float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
-  const vec3 receiver = vsm_light_point(v_world);
+  const vec3 receiver = virtual_light_point(v_world);
   const vec2 xy = receiver.xy;
-  int marked = vsm_level_for_texel(vsm_requested_texel_ws(v_world, radius_ws));
-  while (marked < u_vsm_levels - 1 && !vsm_in_window(marked, xy)) ++marked;
-  for (int k = marked; k < u_vsm_levels; ++k) {
-    const float texel = vsm_texel_ws(k);
-    const vec3 lp = vsm_light_point(v_world + n * (u_normal_offset_texels * texel * sin_angle));
-    const float bias = u_depth_bias_texels * texel / (u_vsm_far_ws - u_vsm_near_ws);
+  int marked = virtual_level_for_texel(virtual_requested_texel_ws(v_world, radius_ws));
+  while (marked < u_virtual_levels - 1 && !virtual_in_window(marked, xy)) ++marked;
+  for (int k = marked; k < u_virtual_levels; ++k) {
+    const float texel = virtual_texel_ws(k);
+    const vec3 lp = virtual_light_point(v_world + n * (u_normal_offset_texels * texel * sin_angle));
+    const float bias = u_depth_bias_texels * texel / (u_virtual_far_ws - u_virtual_near_ws);
     bool found;
 #if defined(TECHNIQUE_VSM)
-    const float v = vsm_visibility(vsm_moments_box(k, lp.xy, radius_ws, found), receiver.z);
+    const float v = vsm_visibility(virtual_moments_box(k, lp.xy, radius_ws, found), receiver.z);
 #else
-    const float v = vsm_pcf_box(k, lp.xy, lp.z - bias, gradient, radius_ws, found);
+    const float v = virtual_pcf_box(k, lp.xy, lp.z - bias, gradient, radius_ws, found);
 #endif
     if (found) {
-      o_vsm_status = k == marked ? 1u : 2u;
+      o_virtual_status = k == marked ? 1u : 2u;
       return v;
     }
   }
-  o_vsm_status = 3u;
+  o_virtual_status = 3u;
   return 1.0;
 }
 
@@ -78,20 +78,20 @@ float virtual_filter(vec3 n, float sin_angle, vec2 gradient, float radius_ws) {
 // the same pixel of the position pass whose depth this pass reuses), so the search runs once a
 // frame and the filter reads the pages that penumbra marked. 0: nothing in front; -1: no level
 // held the search.
-layout(binding = UNIT_VSM_PCSS_RADII) uniform sampler2D u_vsm_pcss_radii;
+layout(binding = UNIT_VIRTUAL_PCSS_RADII) uniform sampler2D u_virtual_pcss_radii;
 #endif
 
 // The technique's visibility through the pages: box PCF (or VSM's box-filtered moments) of the
 // fixed world radius, or PCSS's box filter of the penumbra its blocker search found.
 float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #if defined(TECHNIQUE_PCSS)
-  const float radius_ws = texelFetch(u_vsm_pcss_radii, ivec2(gl_FragCoord.xy), 0).r;
+  const float radius_ws = texelFetch(u_virtual_pcss_radii, ivec2(gl_FragCoord.xy), 0).r;
   if (radius_ws < 0.0) {
-    o_vsm_status = 3u;  // no level held the search
+    o_virtual_status = 3u;  // no level held the search
     return 1.0;
   }
   if (radius_ws == 0.0) {
-    o_vsm_status = 1u;  // nothing in front: lit, as the search says
+    o_virtual_status = 1u;  // nothing in front: lit, as the search says
     return 1.0;
   }
   return virtual_filter(n, sin_angle, gradient, radius_ws);
@@ -100,12 +100,12 @@ float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #endif
 }
 
-// The receiver plane in the virtual map's light space (vsm_plane_gradient) from screen-space
+// The receiver plane in the virtual map's light space (virtual_plane_gradient) from screen-space
 // derivatives (uniform control flow).
 vec2 virtual_receiver_gradient() {
   if (!u_receiver_plane_bias) return vec2(0.0);
-  const vec3 l = vsm_light_point(v_world);
-  return vsm_plane_gradient(dFdx(l), dFdy(l));
+  const vec3 l = virtual_light_point(v_world);
+  return virtual_plane_gradient(dFdx(l), dFdy(l));
 }
 #endif
 

@@ -52,14 +52,14 @@ PENUMBRA_CONSTANT(UNIT_GBUFFER_LIGHT, 5)       // post passes: map uv, reference
 PENUMBRA_CONSTANT(UNIT_DEPTH_MINMAX, 6)        // min-max depth pyramid of the atlas (PCSS bounds)
 PENUMBRA_CONSTANT(UNIT_POST_INPUT, 7)          // post passes: the previous post pass's output
 PENUMBRA_CONSTANT(UNIT_POST_INPUT_2, 8)        // post passes: a second input (site widths)
-PENUMBRA_CONSTANT(UNIT_VSM_POOL, 9)            // virtual shadow map: the page pool (raw depth, texelFetch)
-PENUMBRA_CONSTANT(UNIT_VSM_TABLE, 10)          // virtual shadow map: the page tables (slot per page, -1: none)
-PENUMBRA_CONSTANT(UNIT_VSM_POOL_CMP, 11)       // virtual shadow map: the page pool, nearest depth comparison (gathers)
-PENUMBRA_CONSTANT(UNIT_VSM_PCSS_RADII, 12)     // virtual shadow map, PCSS: each pixel's penumbra as the marking found it
-PENUMBRA_CONSTANT(UNIT_VSM_MOMENTS, 13)        // virtual shadow map, VSM: the moments pool (t, t² + texel variance)
-PENUMBRA_CONSTANT(VSM_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
-PENUMBRA_CONSTANT(UNIT_VSM_BOUNDS, 14)         // virtual shadow map: each pool tile's depth bounds (vsm_bounds.comp)
-PENUMBRA_CONSTANT(VSM_BOUNDS_TILE, 16)         // virtual shadow map: texels per side of a bounds tile (divides a page's side)
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_POOL, 9)            // virtual shadow map: the page pool (raw depth, texelFetch)
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_TABLE, 10)          // virtual shadow map: the page tables (slot per page, -1: none)
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_POOL_CMP, 11)       // virtual shadow map: the page pool, nearest depth comparison (gathers)
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_PCSS_RADII, 12)     // virtual shadow map, PCSS: each pixel's penumbra as the marking found it
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_MOMENTS, 13)        // virtual shadow map, VSM: the moments pool (t, t² + texel variance)
+PENUMBRA_CONSTANT(VIRTUAL_MAX_LEVELS, 16)          // virtual shadow map: clipmap levels at most
+PENUMBRA_CONSTANT(UNIT_VIRTUAL_BOUNDS, 14)         // virtual shadow map: each pool tile's depth bounds (virtual_bounds.comp)
+PENUMBRA_CONSTANT(VIRTUAL_BOUNDS_TILE, 16)         // virtual shadow map: texels per side of a bounds tile (divides a page's side)
 
 // Uniform-block binding points.
 PENUMBRA_CONSTANT(BLOCK_SHADOW_FRAME, 0)
@@ -118,12 +118,12 @@ PENUMBRA_STORAGE_BUFFER(PcssRequirementResult, BUFFER_PCSS_REQUIREMENT) {
 
 // The shading pass through a virtual shadow map (VIRTUAL_SHADOW_MAP) marks each pixel by where it
 // found its pages: on the level it marked, on a coarser resident one (the pool could not hold
-// its), or nowhere (lit); vsm_status.comp counts them into this buffer, read back after the pass
-// (FrameInfo::virtual_map). A work group covers VSM_STATUS_GROUP_PIXELS² pixels.
-PENUMBRA_CONSTANT(BUFFER_VSM_SHADING, 1)
-PENUMBRA_CONSTANT(VSM_STATUS_GROUP_PIXELS, 64)
-#if defined(__cplusplus) || defined(PENUMBRA_VSM_SHADING_RESULT)
-PENUMBRA_STORAGE_BUFFER(VsmShadingResult, BUFFER_VSM_SHADING) {
+// its), or nowhere (lit); virtual_status.comp counts them into this buffer, read back after the pass
+// (FrameInfo::virtual_map). A work group covers VIRTUAL_STATUS_GROUP_PIXELS² pixels.
+PENUMBRA_CONSTANT(BUFFER_VIRTUAL_SHADING, 1)
+PENUMBRA_CONSTANT(VIRTUAL_STATUS_GROUP_PIXELS, 64)
+#if defined(__cplusplus) || defined(PENUMBRA_VIRTUAL_SHADING_RESULT)
+PENUMBRA_STORAGE_BUFFER(VirtualShadingResult, BUFFER_VIRTUAL_SHADING) {
   uint at_level;
   uint coarser;
   uint none;
@@ -132,7 +132,7 @@ PENUMBRA_STORAGE_BUFFER(VsmShadingResult, BUFFER_VSM_SHADING) {
 
 #ifdef __cplusplus
 static_assert(sizeof(PcssRequirementResult) == 4 * MAX_CASCADES * sizeof(std::uint32_t), "std430: four uint arrays, no padding");
-static_assert(sizeof(VsmShadingResult) == 3 * sizeof(std::uint32_t), "std430: three uints");
+static_assert(sizeof(VirtualShadingResult) == 3 * sizeof(std::uint32_t), "std430: three uints");
 static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_cascade_res, ...)");
 }  // namespace penumbra::shadows::contract
 #else

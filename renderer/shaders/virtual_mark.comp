@@ -37,13 +37,13 @@ uniform bool u_search_receiver_plane;  // PCSS: the blocker search tests against
 #endif
 
 // Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
-// xy ± r; returns the level, or u_vsm_levels when none holds xy.
+// xy ± r; returns the level, or u_virtual_levels when none holds xy.
 int mark_square(int level, vec2 xy, float r) {
-  const int n = u_vsm_pages_per_side;
-  for (; level < u_vsm_levels; ++level) {
-    if (!vsm_in_window(level, xy)) continue;
-    const float page_ws = float(u_vsm_page_texels) * vsm_texel_ws(level);
-    const vec2 local = (xy - u_vsm_origin[level]) / page_ws;
+  const int n = u_virtual_pages_per_side;
+  for (; level < u_virtual_levels; ++level) {
+    if (!virtual_in_window(level, xy)) continue;
+    const float page_ws = float(u_virtual_page_texels) * virtual_texel_ws(level);
+    const vec2 local = (xy - u_virtual_origin[level]) / page_ws;
     const float reach = r / page_ws;  // the square [xy - r, xy + r], in pages
     const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
     const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
@@ -54,7 +54,7 @@ int mark_square(int level, vec2 xy, float r) {
       }
     return level;
   }
-  return u_vsm_levels;
+  return u_virtual_levels;
 }
 
 // The receiver plane at pixel `p` (light-space point `l`) from its neighbours' surface points, the
@@ -70,13 +70,13 @@ vec2 receiver_gradient(ivec2 p, vec3 l) {
       if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, imageSize(u_surface)))) continue;
       const vec4 s = imageLoad(u_surface, q);
       if (s.w <= 0.0) continue;
-      const vec3 d = (vsm_light_point(s.xyz) - l) * float(side);
+      const vec3 d = (virtual_light_point(s.xyz) - l) * float(side);
       if (!have || abs(d.z) < abs(steps[axis].z)) steps[axis] = d;
       have = true;
     }
     if (!have) return vec2(0.0);
   }
-  return vsm_plane_gradient(steps[0], steps[1]);
+  return virtual_plane_gradient(steps[0], steps[1]);
 }
 
 void main() {
@@ -89,32 +89,32 @@ void main() {
     return;
   }
   const vec3 world = s.xyz;
-  const vec3 light = vsm_light_point(world);
+  const vec3 light = virtual_light_point(world);
   const vec2 xy = light.xy;
   int level;
 #if VIRTUAL_MARK_PASS == 1
   {
-    const float search = vsm_search_ws(vsm_depth_ws(light.z));
-    level = mark_square(vsm_search_level(world, search, xy), xy, search);
+    const float search = virtual_search_ws(virtual_depth_ws(light.z));
+    level = mark_square(virtual_search_level(world, search, xy), xy, search);
   }
 #elif VIRTUAL_MARK_PASS == 2
   {
     float radius;
     int blockers;
     const vec2 gradient = u_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
-    const bool searched = vsm_pcss_radius(world, gradient, radius, blockers);
+    const bool searched = virtual_pcss_radius(world, gradient, radius, blockers);
     if (u_write_radii) imageStore(u_radii, p, vec4(searched ? radius : -1.0));
     if (!searched || blockers == 0) {
       // No search (the pool held none of its levels) or nothing in front: no filter pages.
       if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
       return;
     }
-    level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, radius)), xy, radius);
+    level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, radius)), xy, radius);
   }
 #else
-  level = mark_square(vsm_level_for_texel(vsm_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
+  level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
 #endif
-  if (level < u_vsm_levels) {
+  if (level < u_virtual_levels) {
     atomicAdd(u_pixels_per_level[level], 1u);
   } else {
     atomicAdd(u_unmarked, 1u);

@@ -15,7 +15,7 @@
 //   VIRTUAL_MARK_IMAGE_SURFACE  rgba32f, read: each pixel's surface point, world xyz; w > 0 where a
 //                               surface is (w <= 0: sky, not marked, not counted)
 //   VIRTUAL_MARK_IMAGE_LEVELS   r32f, written where u_write_levels: the level each pixel samples (-1:
-//                               no surface; u_vsm_levels: beyond the coarsest level's window)
+//                               no surface; u_virtual_levels: beyond the coarsest level's window)
 //   VIRTUAL_MARK_IMAGE_RADII    r32f, written in pass 2 where u_write_radii: each pixel's penumbra,
 //                               world radius (0: nothing in front; -1: no surface or no search)
 //
@@ -28,13 +28,13 @@
 //                                                pages_per_side² window is bit
 //                                                b = virtual_mark_page_bit(level, x, y, pages_per_side),
 //                                                bit (b % 32) of page-bit word b / 32
-// Page (x, y) of level k covers light-space [u_vsm_origin[k] + (x, y) · page_ws, + page_ws) with
-// page_ws = u_vsm_page_texels · u_vsm_texel0_ws · 2^k.
+// Page (x, y) of level k covers light-space [u_virtual_origin[k] + (x, y) · page_ws, + page_ws) with
+// page_ws = u_virtual_page_texels · u_virtual_texel0_ws · 2^k.
 //
-// The level a pixel asks for (virtual_pages.glsl: vsm_requested_texel_ws, vsm_level_for_texel; on
+// The level a pixel asks for (virtual_pages.glsl: virtual_requested_texel_ws, virtual_level_for_texel; on
 // the CPU adaptive::requested_texel_ws and adaptive::level_for_texel):
 //   texel_ws = max(r / c, s · min_texel_px)      (the rule; u_mark_footprint_only: s · min_texel_px)
-//   level    = clamp(floor(log2(texel_ws / u_vsm_texel0_ws)), 0, u_vsm_levels - 1)
+//   level    = clamp(floor(log2(texel_ws / u_virtual_texel0_ws)), 0, u_virtual_levels - 1)
 // r the filter's world radius (u_radius_ws), c u_mark_c_texels, s the pixel's world footprint (its
 // view depth · u_mark_footprint_per_depth), min_texel_px u_mark_min_texel_px. The pixel marks the
 // pages of that level under the square of half-side r around its light-space point; a level whose
@@ -44,7 +44,7 @@
 // (virtual_pages.glsl; passes 0 and 1 read no texture): VIRTUAL_UNIT_POOL (the depth pool, r32f or
 // a depth format, gathered and fetched without a comparison), VIRTUAL_UNIT_TABLE (the page tables,
 // r32i: the pool slot of each page, -1 where not resident), VIRTUAL_UNIT_BOUNDS (each pool tile's
-// depth bounds, read only where u_vsm_bounds).
+// depth bounds, read only where u_virtual_bounds).
 #ifndef PENUMBRA_VIRTUAL_MARK_CONTRACT_H
 #define PENUMBRA_VIRTUAL_MARK_CONTRACT_H
 
@@ -61,7 +61,7 @@ using uint = std::uint32_t;
 #define PENUMBRA_VIRTUAL_FUNCTION
 #endif
 
-PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_MAX_LEVELS, 16)  // levels the buffer counts (the renderer's VSM_MAX_LEVELS)
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_MAX_LEVELS, 16)  // levels the buffer counts (the renderer's VIRTUAL_MAX_LEVELS)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_GROUP_SIZE, 8)   // a work group: 8 × 8 pixels
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_BUFFER, 0)       // shader storage binding of the marks buffer
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_SURFACE, 0)
@@ -71,7 +71,7 @@ PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_RADII, 2)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL, 0)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_UNMARKED, 16)   // VIRTUAL_MARK_MAX_LEVELS
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PAGE_BITS, 17)  // VIRTUAL_MARK_MAX_LEVELS + 1
-// Texture units (the renderer's UNIT_VSM_* of shaders/shadow_contract.h).
+// Texture units (the renderer's UNIT_VIRTUAL_* of shaders/shadow_contract.h).
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_POOL, 9)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_TABLE, 10)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_BOUNDS, 14)

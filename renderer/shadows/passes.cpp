@@ -300,7 +300,7 @@ class VirtualPagesPass final : public Pass {
       v->pool_pages = s.map.virtual_pool_pages;
       v->map = std::make_unique<VirtualShadowMap>(layout, s.map.virtual_pool_pages, content);
       v->marker = std::make_unique<PageMarker>(layout);
-      v->shading_counts = gl::Buffer(sizeof(contract::VsmShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
+      v->shading_counts = gl::Buffer(sizeof(contract::VirtualShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
     }
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
     v->map->set_bounds(s.map.virtual_bounds);
@@ -315,7 +315,7 @@ class VirtualPagesPass final : public Pass {
     }
     // The camera's surfaces: world xyz, w = 1 (0 where nothing is).
     const gl::Program& prog = r.programs.get(r.shaders, "virtual_positions",
-                                             {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "vsm_positions.frag"}});
+                                             {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "virtual_positions.frag"}});
     v->fbo.bind();
     glViewport(0, 0, w, h);
     const float nothing[4] = {0, 0, 0, 0}, far_depth = 1;
@@ -568,7 +568,7 @@ class PostPass final : public Pass {
   }
 };
 
-// The shading's pixels by where they found their virtual-map pages (vsm_status.comp), read at
+// The shading's pixels by where they found their virtual-map pages (virtual_status.comp), read at
 // once (a wait for the pass): the counts belong to this frame's report. With
 // map.virtual_marks_late the previous frame's counts are read first and reported instead, and
 // this frame's are left for the next.
@@ -578,7 +578,7 @@ void count_virtual_status(FrameContext& f) {
   const gl::Buffer& counts = v.shading_counts;
   const bool late = f.settings.map.virtual_marks_late;
   const auto report = [&] {
-    contract::VsmShadingResult c{};
+    contract::VirtualShadingResult c{};
     glGetNamedBufferSubData(counts.id(), 0, sizeof c, &c);
     f.info.virtual_map->at_level = c.at_level;
     f.info.virtual_map->coarser = c.coarser;
@@ -590,12 +590,12 @@ void count_virtual_status(FrameContext& f) {
   }
   const std::uint32_t zero = 0;
   glClearNamedBufferData(counts.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-  const gl::Program& prog = r.programs.get(r.shaders, "vsm_status", {{GL_COMPUTE_SHADER, "vsm_status.comp"}});
+  const gl::Program& prog = r.programs.get(r.shaders, "virtual_status", {{GL_COMPUTE_SHADER, "virtual_status.comp"}});
   prog.use();
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   glBindImageTexture(prog.binding("u_status"), r.targets->virtual_status_tex.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_R8UI);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_VSM_SHADING, counts.id());
-  constexpr int group = contract::VSM_STATUS_GROUP_PIXELS;
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_VIRTUAL_SHADING, counts.id());
+  constexpr int group = contract::VIRTUAL_STATUS_GROUP_PIXELS;
   glDispatchCompute(static_cast<GLuint>((f.plan.width_px + group - 1) / group), static_cast<GLuint>((f.plan.height_px + group - 1) / group), 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   v.shading_counts_pending = late;
@@ -653,8 +653,8 @@ class ShadingPass final : public Pass {
       v.map->bind(prog);
       set_virtual_mark_uniforms(prog, f.scene.camera, f.plan.height_px, v.options);
       if (v.pcss) {
-        v.pcss_radii.bind(contract::UNIT_VSM_PCSS_RADII);
-        glBindSampler(contract::UNIT_VSM_PCSS_RADII, 0);
+        v.pcss_radii.bind(contract::UNIT_VIRTUAL_PCSS_RADII);
+        glBindSampler(contract::UNIT_VIRTUAL_PCSS_RADII, 0);
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);  // the marker's image stores
       }
     }

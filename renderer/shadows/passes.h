@@ -90,7 +90,7 @@ struct FrameResources {
     gl::Texture positions;
     gl::Texture pcss_radii;  // PCSS: each pixel's penumbra as the marking's search found it (R32F)
     gl::Framebuffer fbo;
-    gl::Buffer shading_counts;  // contract::VsmShadingResult
+    gl::Buffer shading_counts;  // contract::VirtualShadingResult
     bool shading_counts_pending = false;  // map.virtual_marks_late: the counts hold the previous frame's, not yet read
     // map.virtual_marks_late: the marks of the previous frame (PCSS: its searches' and its
     // penumbrae'), read by this one; where its camera stood in light space, and how it marked.

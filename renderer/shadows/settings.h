@@ -57,7 +57,7 @@ struct ShadowMapParams {
   VirtualPages virtual_pages = VirtualPages::off;
   int virtual_pool_pages = 32;  // page slots per side of the pool (32² slots of 128² texels: 64 MiB)
   bool virtual_cache = true;    // keep drawn pages across frames (off: every marked page drawn every frame)
-  // Depth bounds per tile of each drawn page (two planes around its depths, vsm_bounds.comp), with
+  // Depth bounds per tile of each drawn page (two planes around its depths, virtual_bounds.comp), with
   // which the filters skip a square surely lit or in umbra and PCSS's search one without blockers.
   // The image is the same either way, up to float rounding; off measures what they save.
   bool virtual_bounds = true;

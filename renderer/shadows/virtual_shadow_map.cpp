@@ -71,9 +71,9 @@ VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, 
 namespace {
 
 const adaptive::VirtualMapLayout& checked_layout(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side) {
-  if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
+  if (layout.levels < 1 || layout.levels > contract::VIRTUAL_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
       !(layout.texel0_ws > 0) || pool_pages_per_side < 1)
-    throw std::invalid_argument("virtual shadow map: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
+    throw std::invalid_argument("virtual shadow map: levels must be 1.." + std::to_string(contract::VIRTUAL_MAX_LEVELS) +
                                 ", page_texels, pages_per_side, texel0_ws and the pool's pages per side positive");
   return layout;
 }
@@ -105,14 +105,14 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
   }
   fbo_ = gl::Framebuffer(attachments, "virtual shadow map page pool");
   program_ = gl::ShaderLibrary().program(
-      {{GL_VERTEX_SHADER, "vsm_page.vert"},
-       {GL_FRAGMENT_SHADER, content == Content::depth_and_moments ? "vsm_page_moments.frag" : "shadow_depth.frag"}});
-  if (content == Content::depth && layout.page_texels % contract::VSM_BOUNDS_TILE == 0) {
-    const int tiles = side / contract::VSM_BOUNDS_TILE;
+      {{GL_VERTEX_SHADER, "virtual_page.vert"},
+       {GL_FRAGMENT_SHADER, content == Content::depth_and_moments ? "virtual_page_moments.frag" : "shadow_depth.frag"}});
+  if (content == Content::depth && layout.page_texels % contract::VIRTUAL_BOUNDS_TILE == 0) {
+    const int tiles = side / contract::VIRTUAL_BOUNDS_TILE;
     bounds_pool_ = gl::Texture({GL_RGBA32F, tiles, tiles, 1}, "virtual shadow map tile bounds");
     glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    bounds_program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "vsm_bounds.comp"}});
+    bounds_program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "virtual_bounds.comp"}});
     bounds_slots_ = gl::Buffer(static_cast<std::size_t>(pool_slots()) * sizeof(std::int32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
     bounds_ = true;
   }
@@ -134,7 +134,7 @@ void VirtualShadowMap::set_bounds(bool on) {
 
 std::uint64_t VirtualShadowMap::page_bytes() const {
   const auto texels = static_cast<std::uint64_t>(layout_.page_texels) * static_cast<std::uint64_t>(layout_.page_texels);
-  const std::uint64_t tiles = texels / (contract::VSM_BOUNDS_TILE * contract::VSM_BOUNDS_TILE);
+  const std::uint64_t tiles = texels / (contract::VIRTUAL_BOUNDS_TILE * contract::VIRTUAL_BOUNDS_TILE);
   return texels * (content_ == Content::depth_and_moments ? 4 + 8 : 4) + (bounds_ ? tiles * 16 : 0);
 }
 
@@ -142,13 +142,13 @@ void VirtualShadowMap::write_bounds(const std::vector<int>& slots) {
   if (slots.empty()) return;
   glNamedBufferSubData(bounds_slots_.id(), 0, static_cast<GLsizeiptr>(slots.size() * sizeof(int)), slots.data());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bounds_slots_.id());
-  pool_.bind(contract::UNIT_VSM_POOL);
-  glBindSampler(contract::UNIT_VSM_POOL, 0);
+  pool_.bind(contract::UNIT_VIRTUAL_POOL);
+  glBindSampler(contract::UNIT_VIRTUAL_POOL, 0);
   glBindImageTexture(0, bounds_pool_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   bounds_program_.use();
-  bounds_program_.set("u_vsm_pool_pages", pool_side_);
-  bounds_program_.set("u_vsm_page_texels", layout_.page_texels);
-  const int groups = (layout_.page_texels / contract::VSM_BOUNDS_TILE + 7) / 8;  // 8 × 8 tiles a workgroup
+  bounds_program_.set("u_virtual_pool_pages", pool_side_);
+  bounds_program_.set("u_virtual_page_texels", layout_.page_texels);
+  const int groups = (layout_.page_texels / contract::VIRTUAL_BOUNDS_TILE + 7) / 8;  // 8 × 8 tiles a workgroup
   glDispatchCompute(static_cast<GLuint>(groups), static_cast<GLuint>(groups), static_cast<GLuint>(slots.size()));
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
 }
@@ -277,19 +277,19 @@ std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_p
 }
 
 void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view) {
-  program.set("u_vsm_light_view", view.light_view);
+  program.set("u_virtual_light_view", view.light_view);
   std::vector<glm::vec2> origins;
   for (int k = 0; k < layout.levels; ++k) {
     const adaptive::LightXY o = adaptive::level_origin(k, view.camera_xy, layout);
     origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
   }
-  program.set("u_vsm_origin", std::span<const glm::vec2>(origins));
-  program.set("u_vsm_texel0_ws", static_cast<float>(layout.texel0_ws));
-  program.set("u_vsm_page_texels", layout.page_texels);
-  program.set("u_vsm_pages_per_side", layout.pages_per_side);
-  program.set("u_vsm_levels", layout.levels);
-  program.set("u_vsm_near_ws", view.near_ws);
-  program.set("u_vsm_far_ws", view.far_ws);
+  program.set("u_virtual_origin", std::span<const glm::vec2>(origins));
+  program.set("u_virtual_texel0_ws", static_cast<float>(layout.texel0_ws));
+  program.set("u_virtual_page_texels", layout.page_texels);
+  program.set("u_virtual_pages_per_side", layout.pages_per_side);
+  program.set("u_virtual_levels", layout.levels);
+  program.set("u_virtual_near_ws", view.near_ws);
+  program.set("u_virtual_far_ws", view.far_ws);
 }
 
 adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
@@ -313,10 +313,10 @@ void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& 
 }
 
 void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss) {
-  program.set("u_vsm_tan_half_angle", pcss.tan_half_angle);
-  program.set("u_vsm_search_scale", pcss.search_scale);
-  program.set("u_vsm_min_penumbra_ws", pcss.min_penumbra_ws);
-  program.set("u_vsm_search_bias_texels", pcss.search_bias_texels);
+  program.set("u_virtual_tan_half_angle", pcss.tan_half_angle);
+  program.set("u_virtual_search_scale", pcss.search_scale);
+  program.set("u_virtual_min_penumbra_ws", pcss.min_penumbra_ws);
+  program.set("u_virtual_search_bias_texels", pcss.search_bias_texels);
   program.set("u_search_receiver_plane", pcss.receiver_plane);
 }
 
@@ -327,29 +327,29 @@ VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg) {
 }
 
 void VirtualShadowMap::bind(const gl::Program& program) const {
-  pool_.bind(contract::UNIT_VSM_POOL);
-  glBindSampler(contract::UNIT_VSM_POOL, 0);  // texelFetch: no sampler state needed
-  table_.bind(contract::UNIT_VSM_TABLE);
-  glBindSampler(contract::UNIT_VSM_TABLE, 0);
-  pool_.bind(contract::UNIT_VSM_POOL_CMP);
-  compare_.bind(contract::UNIT_VSM_POOL_CMP);
+  pool_.bind(contract::UNIT_VIRTUAL_POOL);
+  glBindSampler(contract::UNIT_VIRTUAL_POOL, 0);  // texelFetch: no sampler state needed
+  table_.bind(contract::UNIT_VIRTUAL_TABLE);
+  glBindSampler(contract::UNIT_VIRTUAL_TABLE, 0);
+  pool_.bind(contract::UNIT_VIRTUAL_POOL_CMP);
+  compare_.bind(contract::UNIT_VIRTUAL_POOL_CMP);
   if (content_ == Content::depth_and_moments) {
-    moments_.bind(contract::UNIT_VSM_MOMENTS);
-    glBindSampler(contract::UNIT_VSM_MOMENTS, 0);
+    moments_.bind(contract::UNIT_VIRTUAL_MOMENTS);
+    glBindSampler(contract::UNIT_VIRTUAL_MOMENTS, 0);
   }
   if (bounds_) {
-    bounds_pool_.bind(contract::UNIT_VSM_BOUNDS);
-    glBindSampler(contract::UNIT_VSM_BOUNDS, 0);
+    bounds_pool_.bind(contract::UNIT_VIRTUAL_BOUNDS);
+    glBindSampler(contract::UNIT_VIRTUAL_BOUNDS, 0);
   }
-  program.set("u_vsm_bounds", bounds_);
+  program.set("u_virtual_bounds", bounds_);
   set_virtual_page_uniforms(program, layout_, view_);
-  program.set("u_vsm_pool_pages", pool_side_);
+  program.set("u_virtual_pool_pages", pool_side_);
 }
 
 PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layout) {
-  if (layout.levels < 1 || layout.levels > contract::VSM_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
+  if (layout.levels < 1 || layout.levels > contract::VIRTUAL_MAX_LEVELS || layout.page_texels < 1 || layout.pages_per_side < 1 ||
       !(layout.texel0_ws > 0))
-    throw std::invalid_argument("page marker: levels must be 1.." + std::to_string(contract::VSM_MAX_LEVELS) +
+    throw std::invalid_argument("page marker: levels must be 1.." + std::to_string(contract::VIRTUAL_MAX_LEVELS) +
                                 ", page_texels, pages_per_side and texel0_ws positive");
   const gl::ShaderLibrary shaders;
   for (int pass = 0; pass < 3; ++pass)
@@ -381,7 +381,7 @@ adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, co
 }
 
 gl::Buffer PageMarker::make_marks() const {
-  return gl::Buffer((contract::VSM_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  return gl::Buffer((contract::VIRTUAL_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
 }
 
 void PageMarker::dispatch(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
@@ -429,14 +429,14 @@ void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera&
 }
 
 adaptive::MarkResult PageMarker::read(const gl::Buffer& marks) const {
-  std::vector<std::uint32_t> m(contract::VSM_MAX_LEVELS + 1 + words_);
+  std::vector<std::uint32_t> m(contract::VIRTUAL_MAX_LEVELS + 1 + words_);
   glGetNamedBufferSubData(marks.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
   adaptive::MarkResult out;
   for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(k)]);
-  out.unmarked = m[contract::VSM_MAX_LEVELS];
+  out.unmarked = m[contract::VIRTUAL_MAX_LEVELS];
   const int n = layout_.pages_per_side;
   for (std::size_t w = 0; w < words_; ++w)
-    for (std::uint32_t word = m[contract::VSM_MAX_LEVELS + 1 + w]; word != 0; word &= word - 1) {
+    for (std::uint32_t word = m[contract::VIRTUAL_MAX_LEVELS + 1 + w]; word != 0; word &= word - 1) {
       const auto bit = static_cast<int>(w * 32 + static_cast<std::size_t>(std::countr_zero(word)));
       out.pages.insert({bit / (n * n), bit % n, (bit / n) % n});
     }

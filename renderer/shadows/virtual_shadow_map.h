@@ -7,7 +7,7 @@
 // adaptive/page_cache.h (the floor first, coarse levels and near pages first, least recently asked
 // for evicted: its comment); this class draws the pages it is told into their slots and uploads the
 // tables. Shaders read depths through the tables with shaders/virtual_pages.glsl; a pixel whose page
-// is missing reads a coarser resident level (vsm_resident_level), never none. The light view is a
+// is missing reads a coarser resident level (virtual_resident_level), never none. The light view is a
 // rotation only (pages are places in light space); its depth range is the sun's bounded region
 // (sun_virtual_view).
 #include <cstdint>
@@ -78,7 +78,7 @@ adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s);
 // an image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
 void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options);
 
-// PCSS through the pages (virtual_pages.glsl's vsm_pcss_radius): a sun of angular radius
+// PCSS through the pages (virtual_pages.glsl's virtual_pcss_radius): a sun of angular radius
 // atan(tan_half_angle), the blocker search's radius over its geometric bound, the smallest
 // penumbra (world radius), the search's constant depth bias in texels of its level, and whether
 // the search tests each texel against the receiver's plane (else against one depth).
@@ -160,7 +160,7 @@ class VirtualShadowMap {
   // shadow maps (t, t² + the texel's variance, of the depth t as the pages hold it).
   enum class Content { depth, depth_and_moments };
   // pool_pages_per_side² slots of layout.page_texels² texels. Throws std::invalid_argument for a
-  // layout with more than VSM_MAX_LEVELS levels or non-positive sizes, std::runtime_error (naming
+  // layout with more than VIRTUAL_MAX_LEVELS levels or non-positive sizes, std::runtime_error (naming
   // the pool) when GL cannot allocate it.
   VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int pool_pages_per_side, Content content = Content::depth);
 
@@ -185,8 +185,8 @@ class VirtualShadowMap {
   // map.slope_bias and map.offset_bias; none by default). A change drops every page.
   void set_raster_bias(float slope, float offset);
   // Whether update() also takes the depth bounds of each tile of the pages it draws
-  // (vsm_bounds.comp) and bind() lets the filters use them (on by default; depth pools whose page
-  // side VSM_BOUNDS_TILE divides). Turning them on drops every page, whose tiles have none.
+  // (virtual_bounds.comp) and bind() lets the filters use them (on by default; depth pools whose page
+  // side VIRTUAL_BOUNDS_TILE divides). Turning them on drops every page, whose tiles have none.
   void set_bounds(bool on);
   bool bounds() const { return bounds_; }
   // Bytes one resident page holds: its depths (and moments), and its tiles' bounds when they are on.
@@ -202,9 +202,9 @@ class VirtualShadowMap {
   // bounds walk its vertices). Call it with each frame's scene before its updates.
   scene::Aabb invalidate_moved_casters(const scene::Scene& scene);
 
-  // Binds the pool to UNIT_VSM_POOL (raw depths) and UNIT_VSM_POOL_CMP (compared), the moments
-  // pool (if any) to UNIT_VSM_MOMENTS, the tables to UNIT_VSM_TABLE, the tiles' bounds (if on) to
-  // UNIT_VSM_BOUNDS, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
+  // Binds the pool to UNIT_VIRTUAL_POOL (raw depths) and UNIT_VIRTUAL_POOL_CMP (compared), the moments
+  // pool (if any) to UNIT_VIRTUAL_MOMENTS, the tables to UNIT_VIRTUAL_TABLE, the tiles' bounds (if on) to
+  // UNIT_VIRTUAL_BOUNDS, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
   void bind(const gl::Program& program) const;
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const { return cache_.slot_of(page); }
@@ -221,7 +221,7 @@ class VirtualShadowMap {
   std::vector<SlotState> slot_states() const { return cache_.slot_states(); }
   const gl::Texture& pool() const { return pool_; }
   const gl::Texture& moments_pool() const { return moments_; }  // Content::depth_and_moments: RG32F, the pool's layout
-  // The tiles' bounds when on: RGBA32F, a texel per VSM_BOUNDS_TILE² texels of the pool (vsm_bounds.comp).
+  // The tiles' bounds when on: RGBA32F, a texel per VIRTUAL_BOUNDS_TILE² texels of the pool (virtual_bounds.comp).
   const gl::Texture& bounds_pool() const { return bounds_pool_; }
 
  private:
@@ -229,18 +229,18 @@ class VirtualShadowMap {
   std::uint64_t draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                           const std::vector<std::vector<scene::Footprint>>& footprints) const;
   void write_tables();
-  // Takes the bounds of every tile of the pages in `slots` (vsm_bounds.comp).
+  // Takes the bounds of every tile of the pages in `slots` (virtual_bounds.comp).
   void write_bounds(const std::vector<int>& slots);
 
   adaptive::VirtualMapLayout layout_;
   int pool_side_ = 0;
   Content content_ = Content::depth;
   gl::Texture pool_, moments_, table_;
-  gl::Texture bounds_pool_;    // RGBA32F, a texel per tile of the pool (vsm_bounds.comp's planes)
+  gl::Texture bounds_pool_;    // RGBA32F, a texel per tile of the pool (virtual_bounds.comp's planes)
   gl::Program bounds_program_;
-  gl::Buffer bounds_slots_;    // the slots whose tiles vsm_bounds.comp takes
+  gl::Buffer bounds_slots_;    // the slots whose tiles virtual_bounds.comp takes
   bool bounds_ = false;
-  gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (vsm_pcf_box's gathers)
+  gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (virtual_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;
   adaptive::PageCache cache_;

@@ -133,10 +133,10 @@ TEST(InstalledVirtualMark, IsSelfContainedAndCompilesAloneForEveryPass) {
 
 TEST(InstalledVirtualMark, TheDriverSeesTheContractsBindingsAndBufferLayout) {
   // The contract's numbers are the renderer's.
-  EXPECT_EQ(vm::VIRTUAL_MARK_MAX_LEVELS, contract::VSM_MAX_LEVELS);
-  EXPECT_EQ(vm::VIRTUAL_UNIT_POOL, contract::UNIT_VSM_POOL);
-  EXPECT_EQ(vm::VIRTUAL_UNIT_TABLE, contract::UNIT_VSM_TABLE);
-  EXPECT_EQ(vm::VIRTUAL_UNIT_BOUNDS, contract::UNIT_VSM_BOUNDS);
+  EXPECT_EQ(vm::VIRTUAL_MARK_MAX_LEVELS, contract::VIRTUAL_MAX_LEVELS);
+  EXPECT_EQ(vm::VIRTUAL_UNIT_POOL, contract::UNIT_VIRTUAL_POOL);
+  EXPECT_EQ(vm::VIRTUAL_UNIT_TABLE, contract::UNIT_VIRTUAL_TABLE);
+  EXPECT_EQ(vm::VIRTUAL_UNIT_BOUNDS, contract::UNIT_VIRTUAL_BOUNDS);
   // The bit of a page and back, over a window of 5² pages.
   for (int level = 0; level < 3; ++level)
     for (int y = 0; y < 5; ++y)
@@ -174,12 +174,12 @@ TEST(InstalledVirtualMark, TheDriverSeesTheContractsBindingsAndBufferLayout) {
     EXPECT_EQ(p.unit_of("u_levels"), vm::VIRTUAL_MARK_IMAGE_LEVELS);
     EXPECT_EQ(p.unit_of("u_radii"), vm::VIRTUAL_MARK_IMAGE_RADII);
     if (pass == 2) {  // the blocker search reads the pages; passes 0 and 1 read no texture
-      for (const char* name : {"u_vsm_pool", "u_vsm_table", "u_vsm_tile_bounds"}) ASSERT_NE(p.location(name), -1) << name;
-      EXPECT_EQ(p.unit_of("u_vsm_pool"), vm::VIRTUAL_UNIT_POOL);
-      EXPECT_EQ(p.unit_of("u_vsm_table"), vm::VIRTUAL_UNIT_TABLE);
-      EXPECT_EQ(p.unit_of("u_vsm_tile_bounds"), vm::VIRTUAL_UNIT_BOUNDS);
-      EXPECT_EQ(p.location("u_vsm_pool_cmp"), -1) << "the marking now reads the comparison pool: add its unit to the contract";
-      EXPECT_EQ(p.location("u_vsm_moments"), -1) << "the marking now reads the moments pool: add its unit to the contract";
+      for (const char* name : {"u_virtual_pool", "u_virtual_table", "u_virtual_tile_bounds"}) ASSERT_NE(p.location(name), -1) << name;
+      EXPECT_EQ(p.unit_of("u_virtual_pool"), vm::VIRTUAL_UNIT_POOL);
+      EXPECT_EQ(p.unit_of("u_virtual_table"), vm::VIRTUAL_UNIT_TABLE);
+      EXPECT_EQ(p.unit_of("u_virtual_tile_bounds"), vm::VIRTUAL_UNIT_BOUNDS);
+      EXPECT_EQ(p.location("u_virtual_pool_cmp"), -1) << "the marking now reads the comparison pool: add its unit to the contract";
+      EXPECT_EQ(p.location("u_virtual_moments"), -1) << "the marking now reads the moments pool: add its unit to the contract";
     }
   }
 }
@@ -239,12 +239,12 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
     const adaptive::LightXY o = adaptive::level_origin(k, camera_xy, layout);
     origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
   }
-  glProgramUniformMatrix4fv(p.id, p.location("u_vsm_light_view"), 1, GL_FALSE, glm::value_ptr(light_view));
-  glProgramUniform2fv(p.id, p.location("u_vsm_origin"), layout.levels, glm::value_ptr(origins[0]));
-  glProgramUniform1f(p.id, p.location("u_vsm_texel0_ws"), static_cast<float>(layout.texel0_ws));
-  glProgramUniform1i(p.id, p.location("u_vsm_page_texels"), layout.page_texels);
-  glProgramUniform1i(p.id, p.location("u_vsm_pages_per_side"), layout.pages_per_side);
-  glProgramUniform1i(p.id, p.location("u_vsm_levels"), layout.levels);
+  glProgramUniformMatrix4fv(p.id, p.location("u_virtual_light_view"), 1, GL_FALSE, glm::value_ptr(light_view));
+  glProgramUniform2fv(p.id, p.location("u_virtual_origin"), layout.levels, glm::value_ptr(origins[0]));
+  glProgramUniform1f(p.id, p.location("u_virtual_texel0_ws"), static_cast<float>(layout.texel0_ws));
+  glProgramUniform1i(p.id, p.location("u_virtual_page_texels"), layout.page_texels);
+  glProgramUniform1i(p.id, p.location("u_virtual_pages_per_side"), layout.pages_per_side);
+  glProgramUniform1i(p.id, p.location("u_virtual_levels"), layout.levels);
   glProgramUniform3fv(p.id, p.location("u_mark_camera_position"), 1, glm::value_ptr(ground.eye));
   const glm::vec3 forward = ground.forward();
   glProgramUniform3fv(p.id, p.location("u_mark_camera_forward"), 1, glm::value_ptr(forward));

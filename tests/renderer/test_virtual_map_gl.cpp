@@ -71,12 +71,12 @@ gl::Program compute_program(const std::string& name, const std::string& text) {
 
 // Runs a comparison shader `p` (uniforms u_level and u_radius_texels, the single map of the level
 // at texture unit `unit`, its output an n × n RGBA32F image at image unit 0) over level `level` of
-// `vsm` for squares of 2.5 texels' radius and of 20 (wider than a page of small_layout), handing
+// `virtual_map` for squares of 2.5 texels' radius and of 20 (wider than a page of small_layout), handing
 // `check` each radius and the output read back, four floats a point.
-void for_each_radius(const gl::Program& p, const VirtualShadowMap& vsm, int level, const gl::Texture& single, int unit, int n,
+void for_each_radius(const gl::Program& p, const VirtualShadowMap& virtual_map, int level, const gl::Texture& single, int unit, int n,
                      const std::function<void(float, const std::vector<float>&)>& check) {
   const gl::Texture out({GL_RGBA32F, n, n, 1}, "comparison output");
-  vsm.bind(p);
+  virtual_map.bind(p);
   p.set("u_level", level);
   single.bind(unit);
   glBindSampler(unit, 0);
@@ -93,8 +93,8 @@ void for_each_radius(const gl::Program& p, const VirtualShadowMap& vsm, int leve
 }
 
 // What virtual_pages.glsl reads, texel by texel over level `level`'s window: the depth, or -1 where
-// vsm_fetch finds nothing; with `resident`, the level vsm_resident_level falls back to instead.
-std::vector<float> read_through_tables(const VirtualShadowMap& vsm, int level, bool resident = false) {
+// virtual_fetch finds nothing; with `resident`, the level virtual_resident_level falls back to instead.
+std::vector<float> read_through_tables(const VirtualShadowMap& virtual_map, int level, bool resident = false) {
   const gl::Program p = compute_program("probe.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -105,16 +105,16 @@ void main() {
   const ivec2 t = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(t, imageSize(u_out)))) return;
   float depth;
-  float v = vsm_fetch(u_level, t, depth) ? depth : -1.0;
+  float v = virtual_fetch(u_level, t, depth) ? depth : -1.0;
   if (u_resident) {  // the texel's centre in light space, then the finest resident level there
-    const vec2 xy = u_vsm_origin[u_level] + (vec2(t) + 0.5) * vsm_texel_ws(u_level);
-    v = float(vsm_resident_level(u_level, xy));
+    const vec2 xy = u_virtual_origin[u_level] + (vec2(t) + 0.5) * virtual_texel_ws(u_level);
+    v = float(virtual_resident_level(u_level, xy));
   }
   imageStore(u_out, t, vec4(v));
 })");
-  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
+  const int side = virtual_map.layout().page_texels * virtual_map.layout().pages_per_side;
   const gl::Texture out({GL_R32F, side, side, 1}, "probe output");
-  vsm.bind(p);
+  virtual_map.bind(p);
   p.set("u_level", level);
   p.set("u_resident", resident);
   glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
@@ -127,8 +127,8 @@ void main() {
 
 // Level `level`'s whole window drawn directly into one map of its size (no pages, no culling);
 // with `moments`, also VSM's moments (RG interleaved) as the pages draw them.
-std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& vsm, int level, std::vector<float>* moments = nullptr) {
-  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
+std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& virtual_map, int level, std::vector<float>* moments = nullptr) {
+  const int side = virtual_map.layout().page_texels * virtual_map.layout().pages_per_side;
   const gl::Texture depth({GL_DEPTH_COMPONENT32F, side, side, 1}, "full level map");
   gl::Texture moments_tex;
   std::vector<gl::Framebuffer::Attachment> a = {{&depth, GL_DEPTH_ATTACHMENT}};
@@ -138,9 +138,9 @@ std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& vsm, int l
   }
   const gl::Framebuffer fbo(a, "full level map");
   const gl::Program p = gl::ShaderLibrary().program(
-      {{GL_VERTEX_SHADER, "vsm_page.vert"}, {GL_FRAGMENT_SHADER, moments ? "vsm_page_moments.frag" : "shadow_depth.frag"}});
-  const adaptive::LightXY o = vsm.origin(level);
-  const auto extent = static_cast<float>(side * vsm.layout().texel0_ws * std::ldexp(1.0, level));
+      {{GL_VERTEX_SHADER, "virtual_page.vert"}, {GL_FRAGMENT_SHADER, moments ? "virtual_page_moments.frag" : "shadow_depth.frag"}});
+  const adaptive::LightXY o = virtual_map.origin(level);
+  const auto extent = static_cast<float>(side * virtual_map.layout().texel0_ws * std::ldexp(1.0, level));
   const auto x0 = static_cast<float>(o.x), y0 = static_cast<float>(o.y);
   p.set("u_clip_from_world", glm::ortho(x0, x0 + extent, y0, y0 + extent, f.view.near_ws, f.view.far_ws) * f.view.light_view);
   fbo.bind();
@@ -171,9 +171,9 @@ std::vector<float> full_map(const Fixture& f, const VirtualShadowMap& vsm, int l
 }
 
 // full_map's depths as an R32F texture, which the comparison shaders read as the single map.
-gl::Texture single_map(const Fixture& f, const VirtualShadowMap& vsm, int level) {
-  const int side = vsm.layout().page_texels * vsm.layout().pages_per_side;
-  const std::vector<float> direct = full_map(f, vsm, level);
+gl::Texture single_map(const Fixture& f, const VirtualShadowMap& virtual_map, int level) {
+  const int side = virtual_map.layout().page_texels * virtual_map.layout().pages_per_side;
+  const std::vector<float> direct = full_map(f, virtual_map, level);
   gl::Texture single({GL_R32F, side, side, 1}, "single map of the level");
   glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RED, GL_FLOAT, direct.data());
   return single;
@@ -182,19 +182,19 @@ gl::Texture single_map(const Fixture& f, const VirtualShadowMap& vsm, int level)
 TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14);  // 196 slots for 192 pages: slots in the pool's last row and column are used
-  const auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  VirtualShadowMap virtual_map(layout, 14);  // 196 slots for 192 pages: slots in the pool's last row and column are used
+  const auto stats = virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   EXPECT_EQ(stats.requested, 192);
   EXPECT_EQ(stats.drawn, 192);
   EXPECT_EQ(stats.missing, 0);
   EXPECT_EQ(stats.resident, 192);
   std::set<int> slots;
-  for (const Page& p : every_page(layout)) slots.insert(vsm.slot_of(p));
+  for (const Page& p : every_page(layout)) slots.insert(virtual_map.slot_of(p));
   EXPECT_EQ(slots.size(), 192u);
   EXPECT_TRUE(slots.count(13) && slots.count(14 * 13)) << "the pool's last column and last row";
   for (int level = 0; level < layout.levels; ++level) {
     SCOPED_TRACE(level);
-    const std::vector<float> paged = read_through_tables(vsm, level), direct = full_map(f, vsm, level);
+    const std::vector<float> paged = read_through_tables(virtual_map, level), direct = full_map(f, virtual_map, level);
     ASSERT_EQ(paged.size(), direct.size());
     std::size_t differ = 0, covered = 0;
     for (std::size_t i = 0; i < paged.size(); ++i) {
@@ -209,19 +209,19 @@ TEST(VirtualMap, ATexelThroughTheTablesEqualsTheFullMapOfItsLevel) {
   }
 }
 
-// PCF through the tables (vsm_pcf_box) against the same box filter on a single map of the level
+// PCF through the tables (virtual_pcf_box) against the same box filter on a single map of the level
 // (the full map drawn directly): squares of 2.5 texels' radius at 128 × 128 points over level 1's
 // window, a fifth of which cross a page border, with the receiver just behind the surface there,
 // and of 20 texels (wider than a 32-texel page: up to three pages a side, the blocks read one by
-// one); and PCSS's blocker search (vsm_blocker_search) over squares twice as wide, likewise, at
+// one); and PCSS's blocker search (virtual_blocker_search) over squares twice as wide, likewise, at
 // every other point against a sloped receiver plane (each texel tested at its centre).
 TEST(VirtualMap, PcfAndBlockerSearchAcrossPageBordersEqualASingleMapOfTheLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14);
-  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  VirtualShadowMap virtual_map(layout, 14);
+  virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   const int level = 1, side = layout.page_texels * layout.pages_per_side;
-  const gl::Texture single = single_map(f, vsm, level);
+  const gl::Texture single = single_map(f, virtual_map, level);
   const gl::Program p = compute_program("pcf.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -232,12 +232,12 @@ uniform float u_radius_texels;
 void main() {
   const ivec2 q = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(q, imageSize(u_out)))) return;
-  const int side = u_vsm_page_texels * u_vsm_pages_per_side;
-  const float t = vsm_texel_ws(u_level);
+  const int side = u_virtual_page_texels * u_virtual_pages_per_side;
+  const float t = virtual_texel_ws(u_level);
   const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));  // texel coordinates, off-centre
   const float receiver = texelFetch(u_single, ivec2(p), 0).r + 0.002;     // just behind the surface there
   bool found;
-  const float paged = vsm_pcf_box(u_level, u_vsm_origin[u_level] + p * t, receiver, u_radius_texels * t, found);
+  const float paged = virtual_pcf_box(u_level, u_virtual_origin[u_level] + p * t, receiver, u_radius_texels * t, found);
   // The reference: the same square over the single map, texel by texel.
   const float r = u_radius_texels;
   const vec2 lo = p - r, hi = p + r;
@@ -255,7 +255,7 @@ void main() {
   const vec2 step = gradient * t;
   int blockers;
   bool searched;
-  const float mean = vsm_blocker_search(u_level, u_vsm_origin[u_level] + p * t, receiver, gradient, 2.0 * r * t, blockers, searched);
+  const float mean = virtual_blocker_search(u_level, u_virtual_origin[u_level] + p * t, receiver, gradient, 2.0 * r * t, blockers, searched);
   float ref_sum = 0.0;
   int ref_count = 0;
   for (int j = int(floor(p.y - 2.0 * r)); j <= int(ceil(p.y + 2.0 * r)) - 1; ++j)
@@ -270,7 +270,7 @@ void main() {
                             whole_search ? (ref_count > 0 ? ref_sum / float(ref_count) : 1.0) + float(ref_count) : -1.0));
 })");
   const int n = 128;
-  for_each_radius(p, vsm, level, single, 13, n, [&](float r, const std::vector<float>& v) {
+  for_each_radius(p, virtual_map, level, single, 13, n, [&](float r, const std::vector<float>& v) {
     int compared = 0, across = 0, partial = 0, searched = 0, with_blockers = 0;
     float worst = 0, worst_search = 0, worst_sloped = 0;
     double sloped_blockers = 0, sloped_flips = 0;
@@ -322,22 +322,22 @@ void main() {
   });
 }
 
-// The tiles' bounds (vsm_bounds.comp): every texel of every page lies between its tile's two
+// The tiles' bounds (virtual_bounds.comp): every texel of every page lies between its tile's two
 // planes, and on the demo's ground, tilted in light space, most tiles are one plane, their bounds
 // a rounding apart; tiles over an edge are wide.
 TEST(VirtualMap, TileBoundsHoldEveryTexelAndHugAPlanarGround) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14);
-  ASSERT_TRUE(vsm.bounds()) << "on by default for a depth pool";
-  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
-  const int side = 14 * layout.page_texels, tile = shadows::contract::VSM_BOUNDS_TILE, tiles = side / tile;
+  VirtualShadowMap virtual_map(layout, 14);
+  ASSERT_TRUE(virtual_map.bounds()) << "on by default for a depth pool";
+  virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
+  const int side = 14 * layout.page_texels, tile = shadows::contract::VIRTUAL_BOUNDS_TILE, tiles = side / tile;
   std::vector<float> depth(static_cast<std::size_t>(side) * side), bounds(4 * static_cast<std::size_t>(tiles) * tiles);
-  glGetTextureImage(vsm.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
-  glGetTextureImage(vsm.bounds_pool().id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(bounds.size() * sizeof(float)), bounds.data());
+  glGetTextureImage(virtual_map.pool().id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth.size() * sizeof(float)), depth.data());
+  glGetTextureImage(virtual_map.bounds_pool().id(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(bounds.size() * sizeof(float)), bounds.data());
   int checked = 0, planar = 0, wide = 0;
   for (const Page& page : every_page(layout)) {
-    const int slot = vsm.slot_of(page);
+    const int slot = virtual_map.slot_of(page);
     ASSERT_GE(slot, 0);
     for (int ty = 0; ty < layout.page_texels / tile; ++ty)
       for (int tx = 0; tx < layout.page_texels / tile; ++tx) {
@@ -359,11 +359,11 @@ TEST(VirtualMap, TileBoundsHoldEveryTexelAndHugAPlanarGround) {
   EXPECT_GT(planar, checked / 4) << "the ground's tiles";
   EXPECT_GT(wide, 0) << "tiles over a caster's edge";
 
-  vsm.set_bounds(false);
-  EXPECT_FALSE(vsm.bounds());
-  EXPECT_EQ(vsm.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 0) << "turning them off keeps the pages";
-  vsm.set_bounds(true);
-  EXPECT_EQ(vsm.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 192) << "pages drawn without bounds have none";
+  virtual_map.set_bounds(false);
+  EXPECT_FALSE(virtual_map.bounds());
+  EXPECT_EQ(virtual_map.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 0) << "turning them off keeps the pages";
+  virtual_map.set_bounds(true);
+  EXPECT_EQ(virtual_map.update(every_page(layout), f.view, f.scene, f.meshes).drawn, 192) << "pages drawn without bounds have none";
 }
 
 // The bounds decide a square only where the filter would say the same: box PCF and PCSS's search
@@ -373,10 +373,10 @@ TEST(VirtualMap, TileBoundsHoldEveryTexelAndHugAPlanarGround) {
 TEST(VirtualMap, TileBoundsDecideOnlyWhatTheFilterFinds) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14);
-  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  VirtualShadowMap virtual_map(layout, 14);
+  virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   const int level = 1;
-  const gl::Texture single = single_map(f, vsm, level);
+  const gl::Texture single = single_map(f, virtual_map, level);
   const gl::Program p = compute_program("bounds.comp", R"(
 #include "virtual_pages.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -387,8 +387,8 @@ const float R = 3.5;
 void main() {
   const ivec2 q = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(q, imageSize(u_out)))) return;
-  const int side = u_vsm_page_texels * u_vsm_pages_per_side;
-  const float t = vsm_texel_ws(u_level);
+  const int side = u_virtual_page_texels * u_virtual_pages_per_side;
+  const float t = virtual_texel_ws(u_level);
   const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));
   const ivec2 c = clamp(ivec2(p), ivec2(1), ivec2(side - 2));
   // The surface's plane at p from its neighbours (normalized depth per texel), the receiver on it.
@@ -400,29 +400,29 @@ void main() {
   const float bias = 0.5 * (abs(per_texel.x) + abs(per_texel.y)) + 1e-4;
   const float receiver = behind ? 1.01 : texelFetch(u_single, c, 0).r + dot(p - vec2(c) - 0.5, per_texel) - bias;
   const vec2 gradient = behind ? vec2(0.0) : per_texel / t;
-  const vec2 xy = u_vsm_origin[u_level] + p * t;
+  const vec2 xy = u_virtual_origin[u_level] + p * t;
   bool found;
-  const float pcf = vsm_pcf_box(u_level, xy, receiver, gradient, R * t, found);
-  // The decision vsm_pcf_box takes, taken again.
+  const float pcf = virtual_pcf_box(u_level, xy, receiver, gradient, R * t, found);
+  // The decision virtual_pcf_box takes, taken again.
   const vec2 lo = p - R, hi = p + R;
   const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
-  VsmSquare sq;
+  VirtualSquare sq;
   float decided = -1.0;
-  if (vsm_square(u_level, first, last, sq)) {
-    const vec2 gap = vsm_tile_gap(sq, first, last, p, receiver, gradient * t);
-    const float corner = 0.5 * (abs(gradient.x) + abs(gradient.y)) * t + VSM_GAP_EPSILON;
+  if (virtual_square(u_level, first, last, sq)) {
+    const vec2 gap = virtual_tile_gap(sq, first, last, p, receiver, gradient * t);
+    const float corner = 0.5 * (abs(gradient.x) + abs(gradient.y)) * t + VIRTUAL_GAP_EPSILON;
     decided = gap.x >= corner ? 1.0 : gap.y < -corner ? 0.0 : -1.0;
   }
   int blockers;
   bool searched;
-  const float mean = vsm_blocker_search(u_level, xy, receiver, gradient, R * t, blockers, searched);
+  const float mean = virtual_blocker_search(u_level, xy, receiver, gradient, R * t, blockers, searched);
   imageStore(u_out, q, vec4(found ? pcf : -1.0, decided, mean + float(blockers), searched ? 1.0 : 0.0));
 })");
   const int n = 128;
   const gl::Texture out({GL_RGBA32F, n, n, 1}, "bounds comparison");
   const auto run = [&](bool bounds) {
-    vsm.bind(p);
-    p.set("u_vsm_bounds", bounds);
+    virtual_map.bind(p);
+    p.set("u_virtual_bounds", bounds);
     p.set("u_level", level);
     single.bind(13);
     glBindSampler(13, 0);
@@ -463,17 +463,17 @@ void main() {
   EXPECT_GT(searched, n * n / 2);
 }
 
-// VSM through the tables (vsm_moments_box) against the same box over a single map of the level's
+// VSM through the tables (virtual_moments_box) against the same box over a single map of the level's
 // moments drawn directly: squares of 2.5 and 20 texels' radius (up to three pages a side) at
 // 128 × 128 points over level 1's window, both moments.
 TEST(VirtualMap, VsmMomentsAcrossPageBordersEqualASingleMapOfTheLevel) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14, VirtualShadowMap::Content::depth_and_moments);
-  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  VirtualShadowMap virtual_map(layout, 14, VirtualShadowMap::Content::depth_and_moments);
+  virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   const int level = 1, side = layout.page_texels * layout.pages_per_side;
   std::vector<float> moments;
-  full_map(f, vsm, level, &moments);
+  full_map(f, virtual_map, level, &moments);
   const gl::Texture single({GL_RG32F, side, side, 1}, "single moments map of the level");
   glTextureSubImage2D(single.id(), 0, 0, 0, side, side, GL_RG, GL_FLOAT, moments.data());
   const gl::Program p = compute_program("moments.comp", R"(
@@ -486,11 +486,11 @@ uniform float u_radius_texels;
 void main() {
   const ivec2 q = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(q, imageSize(u_out)))) return;
-  const int side = u_vsm_page_texels * u_vsm_pages_per_side;
-  const float t = vsm_texel_ws(u_level);
+  const int side = u_virtual_page_texels * u_virtual_pages_per_side;
+  const float t = virtual_texel_ws(u_level);
   const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));
   bool found;
-  const vec2 paged = vsm_moments_box(u_level, u_vsm_origin[u_level] + p * t, u_radius_texels * t, found);
+  const vec2 paged = virtual_moments_box(u_level, u_virtual_origin[u_level] + p * t, u_radius_texels * t, found);
   const float r = u_radius_texels;
   const vec2 lo = p - r, hi = p + r;
   vec2 sum = vec2(0.0);
@@ -503,7 +503,7 @@ void main() {
   imageStore(u_out, q, vec4(found ? paged : vec2(-1.0), whole ? sum / (4.0 * r * r) : vec2(-1.0)));
 })");
   const int n = 128;
-  for_each_radius(p, vsm, level, single, 14, n, [&](float r, const std::vector<float>& v) {
+  for_each_radius(p, virtual_map, level, single, 14, n, [&](float r, const std::vector<float>& v) {
     int compared = 0, differ = 0, below_far = 0;
     float worst = 0;
     for (int q = 0; q < n * n; ++q) {
@@ -531,36 +531,36 @@ void main() {
 TEST(VirtualMap, PagesStayCachedAndOnlyWhatChangedIsDrawn) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
-  VirtualShadowMap vsm(layout, 14);
-  vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  VirtualShadowMap virtual_map(layout, 14);
+  virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   // The same view again: nothing drawn.
-  auto stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  auto stats = virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   EXPECT_EQ(stats.drawn, 0);
   EXPECT_EQ(stats.cached, 192);
   EXPECT_EQ(stats.triangles, 0u);
   // The camera moves 4 m (a page of level 2): the windows scroll by 4, 2 and 1 pages, gaining
   // 32 + 16 + 8 pages; the others are where they were, in light space, and stay.
   f.view.camera_xy = {4, 0};
-  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  stats = virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   EXPECT_EQ(stats.drawn, 56);
   EXPECT_EQ(stats.cached, 136);
   EXPECT_EQ(stats.evicted, 52) << "4 free slots, then the pages the windows left";
   EXPECT_EQ(stats.missing, 0);
-  const std::vector<float> paged = read_through_tables(vsm, 1), direct = full_map(f, vsm, 1);
+  const std::vector<float> paged = read_through_tables(virtual_map, 1), direct = full_map(f, virtual_map, 1);
   std::size_t differ = 0;
   for (std::size_t i = 0; i < paged.size(); ++i) differ += !(std::abs(paged[i] - direct[i]) <= 1e-5f);
   EXPECT_LE(differ, paged.size() / 1000) << "after scrolling, the tables still point at the right depths";
   // A caster moves: only the pages over its old (or new) bounds are redrawn.
   const scene::Object& box = f.scene.objects[1];
-  vsm.invalidate(box.mesh->bounds().transformed(box.model));
-  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  virtual_map.invalidate(box.mesh->bounds().transformed(box.model));
+  stats = virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   EXPECT_GT(stats.invalidated, 0);
   EXPECT_EQ(stats.drawn, stats.invalidated);
   EXPECT_LT(stats.drawn, 192 / 4) << "a box touches a few pages per level";
   // The light moves: every page is redrawn (and the 4 the windows left, still cached, dropped).
   EXPECT_EQ(stats.resident, 196);
   f.view.light_view = shadows::sun_light_view(glm::normalize(glm::vec3(0.3f, -1.0f, -0.4f)));
-  stats = vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+  stats = virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
   EXPECT_EQ(stats.drawn, 192);
   EXPECT_EQ(stats.invalidated, 196);
   EXPECT_EQ(stats.resident, 192);
@@ -608,9 +608,9 @@ TEST(VirtualMap, APoolTooSmallKeepsACoarseFloorUnderEveryRequestedPage) {
   Fixture f;
   const VirtualMapLayout layout = small_layout();
   {
-    VirtualShadowMap vsm(layout, 3);  // 9 slots for 192 pages: level 2 alone is 64
+    VirtualShadowMap virtual_map(layout, 3);  // 9 slots for 192 pages: level 2 alone is 64
     try {
-      vsm.update(every_page(layout), f.view, f.scene, f.meshes);
+      virtual_map.update(every_page(layout), f.view, f.scene, f.meshes);
       ADD_FAILURE() << "a pool of 9 slots took every page";
     } catch (const shadows::PoolTooSmall& e) {
       EXPECT_EQ(e.pages(), 64);
@@ -753,10 +753,10 @@ TEST(VirtualMap, PcssSearchTestsAgainstTheReceiverPlaneAndFindsOnlyRealBlockers)
     pcss.min_penumbra_ws = 0.01f;
     pcss.search_bias_texels = 0.5f;
     pcss.receiver_plane = receiver_plane;
-    VirtualShadowMap vsm(layout, 32);
+    VirtualShadowMap virtual_map(layout, 32);
     const adaptive::MarkResult search = marker.mark_pcss_search(surface, camera, h, view, pcss, options);
-    vsm.update(search.pages, view, sc, meshes);
-    marker.mark_pcss_filter(surface, camera, h, vsm, pcss, options, nullptr, &radii);
+    virtual_map.update(search.pages, view, sc, meshes);
+    marker.mark_pcss_filter(surface, camera, h, virtual_map, pcss, options, nullptr, &radii);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
     std::vector<float> r(static_cast<std::size_t>(w) * h);
     glGetTextureImage(radii.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(r.size() * sizeof(float)), r.data());
@@ -915,7 +915,7 @@ TEST(VirtualMap, RendererImageIsTheSameWithOrWithoutTileBounds) {
 // VSM through the pages (moments drawn beside the depths, box-filtered at lookup on the marked
 // level) on the demo scene against VSM on one fine fitted map (4096², moments blurred by the same
 // world radius): the same shadows, penumbrae included, the pool holding moments.
-TEST(VirtualMap, RendererShadesVsmThroughThePagesLikeAFineMap) {
+TEST(VirtualMap, RendererShadesVirtualThroughThePagesLikeAFineMap) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
   const int w = 320, h = 180;
@@ -1087,13 +1087,13 @@ TEST(VirtualMap, MarksReadAFrameLateWaitForNothingAndTheFirstFrameIsCoarseNotLit
 
 TEST(VirtualMap, BadLayoutsAreRefused) {
   VirtualMapLayout l = small_layout();
-  l.levels = shadows::contract::VSM_MAX_LEVELS + 1;
+  l.levels = shadows::contract::VIRTUAL_MAX_LEVELS + 1;
   EXPECT_THROW(VirtualShadowMap(l, 4), std::invalid_argument);
   l = small_layout();
   EXPECT_THROW(VirtualShadowMap(l, 0), std::invalid_argument);
   Fixture f;
-  VirtualShadowMap vsm(small_layout(), 4);
-  EXPECT_THROW(vsm.update({{0, 8, 0}}, f.view, f.scene, f.meshes), std::invalid_argument) << "page outside the window";
+  VirtualShadowMap virtual_map(small_layout(), 4);
+  EXPECT_THROW(virtual_map.update({{0, 8, 0}}, f.view, f.scene, f.meshes), std::invalid_argument) << "page outside the window";
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // A virtual shadow map's page: positions into the page's orthographic light clip space
 // (shadows/virtual_shadow_map.cpp); the fragment shader is shadow_depth.frag's (depth only) or
-// vsm_page_moments.frag's (depth and moments).
+// virtual_page_moments.frag's (depth and moments).
 layout(location = 0) in vec3 a_position;
 
 uniform mat4 u_model;

@@ -1,10 +1,10 @@
-// Counts the shading pass's pixels by where they found their virtual-map pages (o_vsm_status: 1 on
+// Counts the shading pass's pixels by where they found their virtual-map pages (o_virtual_status: 1 on
 // the level they marked, 2 on a coarser resident level, 3 none, 0 no surface) into the contract's
-// VsmShadingResult. Each invocation sums a BLOCK × BLOCK square in registers, the workgroup in
+// VirtualShadingResult. Each invocation sums a BLOCK × BLOCK square in registers, the workgroup in
 // shared memory, and one global atomic per counter and workgroup: per-fragment atomics on three
 // counters serialised the shading pass on software GL (2.6x its time). A workgroup covers
-// VSM_STATUS_GROUP_PIXELS² pixels.
-#define PENUMBRA_VSM_SHADING_RESULT
+// VIRTUAL_STATUS_GROUP_PIXELS² pixels.
+#define PENUMBRA_VIRTUAL_SHADING_RESULT
 #include "shadow_contract.h"
 
 layout(local_size_x = 16, local_size_y = 16) in;
@@ -12,13 +12,13 @@ layout(binding = 0, r8ui) uniform readonly uimage2D u_status;
 
 shared uint s_counts[3];
 
-const int BLOCK = VSM_STATUS_GROUP_PIXELS / 16;
+const int BLOCK = VIRTUAL_STATUS_GROUP_PIXELS / 16;
 
 void main() {
   if (gl_LocalInvocationIndex < 3u) s_counts[gl_LocalInvocationIndex] = 0u;
   barrier();
   const ivec2 size = imageSize(u_status);
-  const ivec2 origin = ivec2(gl_WorkGroupID.xy) * VSM_STATUS_GROUP_PIXELS + ivec2(gl_LocalInvocationID.xy) * BLOCK;
+  const ivec2 origin = ivec2(gl_WorkGroupID.xy) * VIRTUAL_STATUS_GROUP_PIXELS + ivec2(gl_LocalInvocationID.xy) * BLOCK;
   uvec3 counts = uvec3(0u);
   for (int y = 0; y < BLOCK; ++y)
     for (int x = 0; x < BLOCK; ++x) {

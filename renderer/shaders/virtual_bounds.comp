@@ -1,6 +1,6 @@
-// Depth bounds per tile of VSM_BOUNDS_TILE² texels of the pages the virtual shadow map drew
+// Depth bounds per tile of VIRTUAL_BOUNDS_TILE² texels of the pages the virtual shadow map drew
 // (shadows/virtual_shadow_map.cpp), which the filters read to skip squares that are surely lit or
-// surely in umbra (virtual_pages.glsl, vsm_tile_gap). A tile's bounds are two parallel planes
+// surely in umbra (virtual_pages.glsl, virtual_tile_gap). A tile's bounds are two parallel planes
 // around its depths: a plane through three of them, moved down to the lowest depth and up to the
 // highest. Planes, not a minimum and a maximum: a receiver tilted in light space (the
 // ground under a low sun) crosses any constant bound within its tile, but lies on its plane.
@@ -10,31 +10,31 @@
 #include "shadow_contract.h"
 
 layout(local_size_x = 8, local_size_y = 8) in;  // one invocation per tile; one workgroup row of z per drawn page
-layout(binding = UNIT_VSM_POOL) uniform sampler2D u_vsm_pool;
+layout(binding = UNIT_VIRTUAL_POOL) uniform sampler2D u_virtual_pool;
 layout(binding = 0, rgba32f) uniform writeonly image2D u_bounds;
 layout(std430, binding = 0) readonly buffer DrawnSlots { int u_slots[]; };
-uniform int u_vsm_pool_pages;
-uniform int u_vsm_page_texels;
+uniform int u_virtual_pool_pages;
+uniform int u_virtual_page_texels;
 
-const int T = VSM_BOUNDS_TILE;
+const int T = VIRTUAL_BOUNDS_TILE;
 
 void main() {
-  const int tiles = u_vsm_page_texels / T;  // per side of a page
+  const int tiles = u_virtual_page_texels / T;  // per side of a page
   const ivec2 tile = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(tile, ivec2(tiles)))) return;
   const int slot = u_slots[gl_WorkGroupID.z];
-  const ivec2 corner = ivec2(slot % u_vsm_pool_pages, slot / u_vsm_pool_pages) * u_vsm_page_texels + tile * T;
+  const ivec2 corner = ivec2(slot % u_virtual_pool_pages, slot / u_virtual_pool_pages) * u_virtual_page_texels + tile * T;
   // The plane through three corners: exact where the tile's depths are one plane (a planar surface,
   // rasterized). Where they are not (an edge, a caster over the ground), the step between the
   // surfaces widens the bounds whatever the plane.
-  const float origin = texelFetch(u_vsm_pool, corner, 0).r;
-  const float a = (texelFetch(u_vsm_pool, corner + ivec2(T - 1, 0), 0).r - origin) / float(T - 1);
-  const float b = (texelFetch(u_vsm_pool, corner + ivec2(0, T - 1), 0).r - origin) / float(T - 1);
+  const float origin = texelFetch(u_virtual_pool, corner, 0).r;
+  const float a = (texelFetch(u_virtual_pool, corner + ivec2(T - 1, 0), 0).r - origin) / float(T - 1);
+  const float b = (texelFetch(u_virtual_pool, corner + ivec2(0, T - 1), 0).r - origin) / float(T - 1);
   const float half_side = 0.5 * float(T);
   float lower = 1e30, upper = -1e30;
   for (int j = 0; j < T; ++j)
     for (int i = 0; i < T; ++i) {
-      const float d = texelFetch(u_vsm_pool, corner + ivec2(i, j), 0).r;
+      const float d = texelFetch(u_virtual_pool, corner + ivec2(i, j), 0).r;
       const float residual = d - (a * (float(i) + 0.5 - half_side) + b * (float(j) + 0.5 - half_side));
       lower = min(lower, residual);
       upper = max(upper, residual);
