@@ -239,17 +239,47 @@ std::optional<CalibrationMethod> method_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-CalibrationChoice Calibration::choose(std::string_view technique, std::string_view kernel) const {
+CalibrationChoice Calibration::choose(std::string_view technique, std::string_view kernel, bool rotated) const {
   const std::string wanted = kernel.empty() ? std::string(technique) : std::string(technique) + " " + std::string(kernel);
+  const std::string wanted_rotated = rotated ? wanted + " rotated per pixel" : wanted;
+  // The kernel an entry was measured with: its own, PCF's assumed one when it states none.
+  const auto measured_kernel = [](const CalibrationEntry& e) -> std::string {
+    return e.technique == "pcf" && e.kernel.empty() ? std::string(kAssumedPcfKernel) : e.kernel;
+  };
+  const auto fallback = [&](const CalibrationEntry& e, std::string reason, std::string would) {
+    CalibrationChoice c = from_entry(e, true, describe(e) + ", not measured for " + wanted_rotated + ": " + reason + "; " + would + " would match");
+    c.fallback_reason = std::move(reason);
+    c.would_match = std::move(would);
+    return c;
+  };
+  const auto kernel_said = [&](const CalibrationEntry& e) {
+    return e.kernel.empty() ? "measured with the " + measured_kernel(e) + " kernel (the study's, assumed: the entry states none)"
+                            : "measured with the " + e.kernel + " kernel";
+  };
+  const std::string would = rotated ? "an entry for " + wanted + " measured rotated, or pcf.rotate false with a " + wanted + " entry"
+                                    : "a " + wanted + " entry";
+  const auto exact_kernel = [&](const CalibrationEntry& e) {
+    return e.technique == technique && (measured_kernel(e) == kernel || (e.kernel.empty() && e.technique != "pcf"));
+  };
   for (const CalibrationEntry& e : entries)
-    if (e.technique == technique && e.kernel == kernel) return from_entry(e, false, describe(e));
+    if (e.technique == technique && e.kernel == kernel && exact_kernel(e)) {
+      if (rotated) return fallback(e, "measured unrotated (the study draws one tap pattern for every pixel)", would);
+      return from_entry(e, false, describe(e));
+    }
   for (const CalibrationEntry& e : entries)
-    if (e.technique == technique && e.kernel.empty()) return from_entry(e, false, describe(e));
+    if (exact_kernel(e)) {
+      if (rotated) return fallback(e, "measured unrotated (the study draws one tap pattern for every pixel)", would);
+      return from_entry(e, false, describe(e));
+    }
   for (const CalibrationEntry& e : entries)
-    if (e.technique == technique) return from_entry(e, true, describe(e) + ", not measured for " + wanted);
+    if (e.technique == technique) return fallback(e, kernel_said(e) + (kernel.empty() ? "" : ", not with " + std::string(kernel)), would);
   for (const CalibrationEntry& e : entries)
-    if (e.technique == "pcf") return from_entry(e, true, describe(e) + ", not measured for " + wanted);
-  return {kPublishedC, kPublishedC, kPublishedC, false, std::nullopt, true, "published PCF value, not measured for " + wanted};
+    if (e.technique == "pcf") return fallback(e, "measured for pcf, not for " + std::string(technique), would);
+  CalibrationChoice c{kPublishedC, kPublishedC, kPublishedC, false, std::nullopt, true,
+                      "published PCF value, not measured for " + wanted_rotated + "; " + would + " would match"};
+  c.fallback_reason = "no entry in the file for " + wanted + " or pcf";
+  c.would_match = would;
+  return c;
 }
 
 const json_input::ObjectSpec& calibration_fields() {

@@ -25,6 +25,9 @@
 namespace penumbra::adaptive {
 
 inline constexpr int kCalibrationSchemaVersion = 2;
+// The kernel a PCF entry without one was measured with: the study's own filter, the disk
+// (default.json's reading of the thesis assumes it; version-1 files were fitted on the study's).
+inline constexpr std::string_view kAssumedPcfKernel = "disk";
 
 // How an entry's c was obtained.
 enum class CalibrationMethod {
@@ -104,11 +107,14 @@ struct CalibrationChoice {
   bool has_ci95 = false;
   // The entry used (nullopt: the published value, the file having nothing that applies).
   std::optional<CalibrationEntry> entry;
-  // True when the entry was measured for another technique or kernel than the one rendered.
+  // True when the entry was measured for another technique, kernel or rotation than the one rendered.
   bool fallback = false;
   // One phrase: "pcf grid entry (people, 5 participants)", "pcf entry (published), not measured for
   // rpcf", "published PCF value, not measured for vsm".
   std::string from;
+  // With fallback: why the entry does not match ("measured with the disk kernel (the study's, assumed:
+  // the entry states none), not with grid") and what would ("a pcf grid entry"); "" otherwise.
+  std::string fallback_reason, would_match;
   // What an operator must know before trusting c: "flags: one_participant", "NOT USABLE: not_converged"
   // ("" when the entry has neither).
   std::string warnings() const;
@@ -122,7 +128,12 @@ struct Calibration {
   // The entry for `technique` and `kernel` (kernel "" when the technique has none): the exact
   // entry, else the technique's entry for any kernel, else one for another kernel of the
   // technique, else the PCF entry, else the published value, each fallback saying so.
-  CalibrationChoice choose(std::string_view technique, std::string_view kernel) const;
+  // A PCF entry without a kernel (the published constant, version-1 files) was measured with the
+  // study's filter, the disk (kAssumedPcfKernel): for grid or poisson it is a fallback.
+  // `rotated`: the renderer rotates the kernel's taps per pixel (PCF poisson with pcf.rotate). No
+  // entry is measured so (the study draws an unrotated disk and refuses pcf.rotate), so every entry
+  // is then a fallback, said so with what would match (pcf.rotate false).
+  CalibrationChoice choose(std::string_view technique, std::string_view kernel, bool rotated = false) const;
 };
 
 // Throws CalibrationError naming the file and field on bad input (one line).

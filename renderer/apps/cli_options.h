@@ -173,9 +173,14 @@ struct CalibrationOption {
   bool ci_upper = false;             // use the entries' upper ci95 bound instead of c
   float command_line_c = 0;          // --adaptive.c's value when given
 
-  // The entry the file has for the settings' technique and kernel (or its fallback).
+  // The entry the file has for the settings' technique and kernel (or its fallback). PCF's Poisson
+  // disk rotated per pixel is another filter than the unrotated one every entry was measured with.
   adaptive::CalibrationChoice choice(const shadows::ShadowSettings& s) const {
-    return loaded.choose(shadows::to_string(s.technique), shadows::variant_choice(s));
+    const std::string kernel = shadows::variant_choice(s);
+    return loaded.choose(shadows::to_string(s.technique), kernel, rotated(s));
+  }
+  static bool rotated(const shadows::ShadowSettings& s) {
+    return s.technique == shadows::Technique::pcf && shadows::variant_choice(s) == "poisson" && s.pcf.rotate;
   }
   // Where the settings' c came from, for a line of output: --adaptive.c, or the file's entry.
   std::string source_of_c(const shadows::ShadowSettings& s) const {
@@ -320,6 +325,9 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
                       {"obtained_by", chosen.entry ? std::string(adaptive::method_name(chosen.entry->obtained_by)) : "published"},
                       {"observers", chosen.entry ? std::string(adaptive::method_description(chosen.entry->obtained_by)) : "published"},
                       {"fallback", chosen.fallback},
+                      {"fallback_reason", chosen.fallback ? nlohmann::json(chosen.fallback_reason) : nlohmann::json(nullptr)},
+                      {"would_match", chosen.fallback ? nlohmann::json(chosen.would_match) : nlohmann::json(nullptr)},
+                      {"rotate", CalibrationOption::rotated(settings)},
                       {"from", chosen.from},
                       {"source_of_c", calibration.c_from_command_line ? "--adaptive.c" : "file"},
                       {"flags", chosen.entry ? chosen.entry->flags : std::vector<std::string>{}},

@@ -189,15 +189,21 @@ TEST_F(CalibrationFile, ShippedDefaultIsThePublishedConstant) {
   EXPECT_TRUE(e.threshold->beta_assumed);
   EXPECT_NEAR(c_at_visibility(e, 0.6464646464646464).c, 3.54, 0.01);
   EXPECT_NEAR(c_at_visibility(3.47, 0.8105, 0.6464646464646464, 3.5), 3.97, 0.01);
+  // The published entry states no kernel: the study's disk is assumed (its reading), so PCF's disk
+  // takes it as measured and the grid (the main job's PCF) as a fallback, said so (issue 48).
+  EXPECT_FALSE(cal.choose("pcf", "disk").fallback);
   const CalibrationChoice grid = cal.choose("pcf", "grid");
   EXPECT_DOUBLE_EQ(grid.c, kPublishedC);
-  EXPECT_FALSE(grid.fallback);
-  EXPECT_EQ(grid.from, "pcf entry (published, 10 participants)");
+  EXPECT_TRUE(grid.fallback);
+  EXPECT_EQ(grid.from,
+            "pcf entry (published, 10 participants), not measured for pcf grid: measured with the disk kernel (the study's, assumed: the "
+            "entry states none), not with grid; a pcf grid entry would match");
+  EXPECT_EQ(grid.would_match, "a pcf grid entry");
   // Another technique gets PCF's entry, said to be a fallback.
   const CalibrationChoice vsm = cal.choose("vsm", "");
   EXPECT_DOUBLE_EQ(vsm.c, kPublishedC);
   EXPECT_TRUE(vsm.fallback);
-  EXPECT_EQ(vsm.from, "pcf entry (published, 10 participants), not measured for vsm");
+  EXPECT_EQ(vsm.from, "pcf entry (published, 10 participants), not measured for vsm: measured for pcf, not for vsm; a vsm entry would match");
 }
 
 // A version-1 file (one top-level c, as penumbra-fit wrote before entries per technique) loads as
@@ -211,11 +217,13 @@ TEST_F(CalibrationFile, VersionOneFilesLoadAsThePcfEntry) {
   EXPECT_EQ(fitted.entries[0].kernel, "");
   EXPECT_EQ(fitted.entries[0].obtained_by, CalibrationMethod::study);
   EXPECT_EQ(fitted.entries[0].condition, "step/1");
-  const CalibrationChoice c = fitted.choose("pcf", "poisson");
+  const CalibrationChoice c = fitted.choose("pcf", "disk");
   EXPECT_DOUBLE_EQ(c.c, 4.25);
   EXPECT_DOUBLE_EQ(c.ci95_lo, 3.5);
   EXPECT_DOUBLE_EQ(c.ci95_hi, 5.0);
   EXPECT_FALSE(c.fallback);
+  // Measured with the study's disk: for the Poisson kernel it stands in, said so (issue 48).
+  EXPECT_TRUE(fitted.choose("pcf", "poisson").fallback);
   EXPECT_EQ(load_calibration(write(R"({"c": 3})")).entries[0].obtained_by, CalibrationMethod::published);
 }
 
@@ -238,8 +246,12 @@ TEST_F(CalibrationFile, EachTechniqueGetsItsOwnEntryOrASaidFallback) {
   for (const Case& k : {Case{"pcf", "poisson", 3.0, false, "pcf poisson entry (people, 5 participants)"},
                         Case{"pcf", "grid", 2.0, false, "pcf grid entry (image observer)"},
                         Case{"vsm", "", 4.0, false, "vsm entry (psychometric simulation)"},
-                        Case{"rpcf", "", 0.8, true, "rpcf wide entry (people, 1 participant), not measured for rpcf"},
-                        Case{"msm", "", 3.0, true, "pcf poisson entry (people, 5 participants), not measured for msm"}}) {
+                        Case{"rpcf", "", 0.8, true,
+                             "rpcf wide entry (people, 1 participant), not measured for rpcf: measured with the wide kernel; a rpcf entry "
+                             "would match"},
+                        Case{"msm", "", 3.0, true,
+                             "pcf poisson entry (people, 5 participants), not measured for msm: measured for pcf, not for msm; a msm entry "
+                             "would match"}}) {
     SCOPED_TRACE(std::string(k.technique) + " " + k.kernel);
     const CalibrationChoice got = cal.choose(k.technique, k.kernel);
     EXPECT_DOUBLE_EQ(got.c, k.c);
@@ -254,7 +266,40 @@ TEST_F(CalibrationFile, EachTechniqueGetsItsOwnEntryOrASaidFallback) {
   EXPECT_DOUBLE_EQ(esm.c, kPublishedC);
   EXPECT_TRUE(esm.fallback);
   EXPECT_FALSE(esm.entry.has_value());
-  EXPECT_EQ(esm.from, "published PCF value, not measured for esm");
+  EXPECT_EQ(esm.from, "published PCF value, not measured for esm; a esm entry would match");
+}
+
+// Issue 48: kernel matching is loud. The renderer's Poisson disk rotated per pixel is another filter
+// than the unrotated one every entry was measured with (the study draws one tap pattern and refuses
+// pcf.rotate), and a grid is not the disk an entry without a kernel was measured with: each is a
+// fallback naming why and what would match.
+TEST_F(CalibrationFile, AnotherKernelOrRotationIsAFallbackSaidWithWhatWouldMatch) {
+  const Calibration predicted = load_calibration(PENUMBRA_SOURCE_DIR "/data/calibration/predicted.json");
+  const CalibrationChoice unrotated = predicted.choose("pcf", "poisson", false);
+  EXPECT_FALSE(unrotated.fallback) << unrotated.from;
+  const CalibrationChoice rotated = predicted.choose("pcf", "poisson", true);
+  EXPECT_TRUE(rotated.fallback);
+  ASSERT_TRUE(rotated.entry.has_value());
+  EXPECT_EQ(rotated.entry->kernel, "poisson");
+  EXPECT_DOUBLE_EQ(rotated.c, unrotated.c);
+  EXPECT_NE(rotated.from.find("not measured for pcf poisson rotated per pixel: measured unrotated"), std::string::npos) << rotated.from;
+  EXPECT_EQ(rotated.would_match, "an entry for pcf poisson measured rotated, or pcf.rotate false with a pcf poisson entry");
+  EXPECT_NE(rotated.fallback_reason.find("unrotated"), std::string::npos);
+  // Grid against the published (disk) entry, and against a disk entry stated as such.
+  const Calibration published = load_calibration(PENUMBRA_SOURCE_DIR "/data/calibration/default.json");
+  const CalibrationChoice grid = published.choose("pcf", "grid");
+  EXPECT_TRUE(grid.fallback);
+  EXPECT_NE(grid.fallback_reason.find("disk"), std::string::npos) << grid.fallback_reason;
+  const Calibration disk = load_calibration(write(R"({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "disk", "c": 3.1, "obtained_by": "study", "participants": 8}]})"));
+  EXPECT_FALSE(disk.choose("pcf", "disk").fallback);
+  const CalibrationChoice disk_for_grid = disk.choose("pcf", "grid");
+  EXPECT_TRUE(disk_for_grid.fallback);
+  EXPECT_EQ(disk_for_grid.from,
+            "pcf disk entry (people, 8 participants), not measured for pcf grid: measured with the disk kernel, not with grid; a pcf grid "
+            "entry would match");
+  // An exact match says no reason.
+  EXPECT_TRUE(disk.choose("pcf", "disk").fallback_reason.empty());
 }
 
 TEST_F(CalibrationFile, BadVersionTwoFilesNameTheField) {

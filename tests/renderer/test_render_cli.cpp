@@ -464,11 +464,19 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
     std::string from;
   };
   for (const Case& c : {Case{{"--technique", "pcf", "--pcf.kernel", "grid"}, "pcf-grid", 2.5, false, "pcf grid entry (people, 3 participants)"},
-                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson"}, "pcf-poisson", 3.25, false, "pcf poisson entry (image observer)"},
+                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson", "--pcf.rotate", "false"}, "pcf-poisson", 3.25, false,
+                             "pcf poisson entry (image observer)"},
+                        // Issue 48: rotated per pixel (the default) it is another filter than the entry's.
+                        Case{{"--technique", "pcf", "--pcf.kernel", "poisson"}, "pcf-poisson", 3.25, true,
+                             "pcf poisson entry (image observer), not measured for pcf poisson rotated per pixel: measured unrotated (the "
+                             "study draws one tap pattern for every pixel); an entry for pcf poisson measured rotated, or pcf.rotate false "
+                             "with a pcf poisson entry would match"},
                         Case{{"--technique", "vsm"}, "vsm", 6.0, false, "vsm entry (psychometric simulation)"},
-                        Case{{"--technique", "rpcf"}, "rpcf", 2.5, true, "pcf grid entry (people, 3 participants), not measured for rpcf"}}) {
+                        Case{{"--technique", "rpcf"}, "rpcf", 2.5, true,
+                             "pcf grid entry (people, 3 participants), not measured for rpcf: measured for pcf, not for rpcf; a rpcf entry "
+                             "would match"}}) {
     SCOPED_TRACE(c.dir);
-    const fs::path out = work_ / ("out-" + c.dir);
+    const fs::path out = work_ / ("out-" + c.dir + "-" + std::to_string(c.args.size()));
     std::vector<std::string> args = c.args;
     args.insert(args.end(), {"--calibration", cal_file.string(), "-o", out.string()});
     const Result r = run_render(small_args(args), scratch_);
@@ -479,8 +487,37 @@ TEST_F(RenderCli, EachTechniqueUsesItsOwnCalibrationEntry) {
     EXPECT_NEAR(render.at("settings").at("adaptive").at("c").get<double>(), c.c, 1e-6);
     EXPECT_EQ(cal.at("fallback").get<bool>(), c.fallback);
     EXPECT_EQ(cal.at("from"), c.from);
+    EXPECT_EQ(cal.at("fallback_reason").is_null(), !c.fallback);
     EXPECT_EQ(cal.at("schema_version"), 2);
     EXPECT_EQ(read_json(out / "report.json").at("calibration"), cal) << "the summary names the rendered technique's c";
+  }
+}
+
+// Issue 48: kernel matching is loud. The main job's PCF grid with the published (disk) entry, and the
+// rotated Poisson disk with predicted.json's unrotated Poisson entry, each print the fallback with
+// what would match on their "c for" line and record it in report.json.
+TEST_F(RenderCli, AnotherKernelOrRotationIsPrintedAsAFallback) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string calibration, dir, printed, reason;
+  };
+  for (const Case& c : {Case{{"--pcf.kernel", "grid"}, "default.json", "pcf-grid", "not measured for pcf grid", "disk kernel"},
+                        Case{{"--pcf.kernel", "poisson"}, "predicted.json", "pcf-poisson", "not measured for pcf poisson rotated per pixel",
+                             "unrotated"}}) {
+    SCOPED_TRACE(c.dir);
+    std::vector<std::string> args = c.args;
+    const fs::path out = work_ / ("fallback-" + c.dir);
+    // The shipped files, beside this source in the tree.
+    const fs::path shipped = fs::path(__FILE__).parent_path().parent_path().parent_path() / "data" / "calibration" / c.calibration;
+    args.insert(args.end(), {"--technique", "pcf", "--adaptive.enabled", "true", "--calibration", shipped.string(), "-o", out.string()});
+    const Result r = run_render(small_args(args), scratch_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find(c.printed), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("would match"), std::string::npos) << r.out;
+    const auto cal = read_json(out / c.dir / "report.json").at("calibration");
+    EXPECT_TRUE(cal.at("fallback").get<bool>());
+    EXPECT_NE(cal.at("fallback_reason").get<std::string>().find(c.reason), std::string::npos) << cal.dump();
+    EXPECT_FALSE(cal.at("would_match").get<std::string>().empty());
   }
 }
 
