@@ -14,18 +14,25 @@
 // with a percentile bootstrap interval over the stimuli (seeds) rendered per radius.
 //   penumbra-observer-curve --pattern stair,step --contrast 1,0.5 --artifact-px 5,10,20
 //       --technique pcf --set pcf.kernel=grid --json pcf-grid.json
+// The renders are independent: --shard I/N --part FILE renders every N-th of them (shard/shard.h)
+// on any machine, and `penumbra-observer-curve merge PARTS... -o OUT` turns the N parts into
+// exactly what the unsharded run writes to --json OUT (docs/cluster.md).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "cli/list_option.h"
 #include "cli/main.h"
+#include "shard/shard.h"
+#include "tool/tool.h"
 #include "io/atomic_file.h"
 #include "io/safe_path.h"
 #include "json/json_input.h"
@@ -124,9 +131,81 @@ std::vector<std::string> drawable_techniques() {
   return out;
 }
 
+
+// The options that say where the output goes and which shard runs, not what is computed: left out
+// of a part's settings and of the recorded command, which ends with the --json the merge writes.
+bool is_output_option(const std::string& arg) {
+  for (const char* name : {"--shard", "--part", "--json"})
+    if (arg == name || arg.rfind(std::string(name) + "=", 0) == 0) return true;
+  return false;
+}
+std::vector<std::string> settings_args(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (!is_output_option(args[i])) {
+      out.push_back(args[i]);
+    } else if (args[i].find('=') == std::string::npos) {
+      ++i;  // and its value
+    }
+  }
+  return out;
+}
+
+constexpr std::string_view kPartKind = "penumbra-observer-curve part";
+
+// The renders of a merge: every grid item's deviations from the parts (item number -> value).
+struct Merged {
+  std::vector<shard::Part> parts;
+};
+
+int run(const std::vector<std::string>& args, const Merged* merged);
+
+// penumbra-observer-curve merge PARTS... -o OUT: the parts' deviations, checked, through the same
+// curves, bootstrap and output as the unsharded run (run() with the parts' own arguments).
+int merge_main(int argc, char** argv) {
+  CLI::App app{"Merge the part files of penumbra-observer-curve --shard I/N --part FILE into the calibration.json the "
+               "unsharded run writes (docs/cluster.md)"};
+  cli::describe_tool(app, "penumbra-observer-curve merge", "cluster.md");
+  std::vector<std::string> paths;
+  std::string out;
+  app.add_option("parts", paths, "the part files, one per shard 0/N to N-1/N, any order")->required();
+  app.add_option("-o,--output", out, "the calibration.json to write (as --json of the unsharded run)")->required();
+  if (const auto status = cli::parse(app, argc - 1, argv + 1, "penumbra-observer-curve merge")) return *status;
+  Merged merged;
+  std::vector<std::string> args;
+  try {
+    io::check_output(out, io::OutputKind::file);
+    shard::Checked checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-observer-curve"));
+    const nlohmann::json& stored = checked.settings["args"];
+    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+    for (const auto& a : stored) {
+      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+      args.push_back(a.get<std::string>());
+    }
+    merged.parts = std::move(checked.parts);
+  } catch (const std::exception& e) {
+    return cli::fail("penumbra-observer-curve merge", e);
+  }
+  args.push_back("--json");
+  args.push_back(out);
+  return run(args, &merged);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string_view(argv[1]) == "merge") return merge_main(argc, argv);
+  return run(std::vector<std::string>(argv + 1, argv + argc), nullptr);
+}
+
+namespace {
+
+int run(const std::vector<std::string>& args, const Merged* merged) {
+  std::vector<std::string> argv_text{"penumbra-observer-curve"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  const int argc = static_cast<int>(argv.size());
   CLI::App app{"The image observer's 2afc psychometric curve and implied c (docs/study.md)"};
   cli::describe_tool(app, "penumbra-observer-curve", "study.md");
   std::vector<std::string> patterns{"stair"};
@@ -171,17 +250,33 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--weber", params.weber, "decision noise sd (relative deviation; --observer frame: its own, default 0.0304)")
       ->capture_default_str();
+  std::string shard_text, part_out;
+  app.add_option("--shard", shard_text,
+                 "I/N: render only shard I of N (0 <= I < N) of the grid of conditions x sizes x radii x seeds (every item "
+                 "whose number in that order is I modulo N) into --part; `penumbra-observer-curve merge` joins the N parts "
+                 "into what the unsharded run writes (docs/cluster.md)");
+  app.add_option("--part", part_out, "--shard: the part file to write (the shard's deviations, its settings and the build's version)");
   bool list_techniques = false;
   app.add_flag("--list-techniques", list_techniques,
                "print the techniques the study can draw, one a line as --technique and --set take them (TECHNIQUE or "
                "TECHNIQUE:SECTION.KEY=CHOICE, one per choice of a variant setting such as pcf's kernel), from the renderer's "
                "registry, and exit");
-  if (const auto status = cli::parse(app, argc, argv, "penumbra-observer-curve")) return *status;
+  if (const auto status = cli::parse(app, argc, argv.data(), "penumbra-observer-curve")) return *status;
   if (list_techniques) {
     for (const std::string& spec : drawable_techniques()) std::printf("%s\n", spec.c_str());
     return 0;
   }
   try {
+    std::optional<shard::Shard> sharded;
+    if (!shard_text.empty()) {
+      sharded = shard::parse(shard_text);
+      if (part_out.empty()) throw cli::UsageError("--shard: needs --part FILE, where the shard's part goes");
+      if (!json_out.empty())
+        throw cli::UsageError("--json: a shard writes a part (--part); `penumbra-observer-curve merge PARTS... -o OUT` writes the calibration.json");
+      io::check_output(part_out, io::OutputKind::file);
+    } else if (!part_out.empty()) {
+      throw cli::UsageError("--part: only with --shard I/N");
+    }
     if (!json_out.empty()) io::check_output(json_out, io::OutputKind::file);  // before the curves: every output's rule
     stimuli::StimulusSpec base;
     base.size_px = size_px;
@@ -211,18 +306,60 @@ int main(int argc, char** argv) {
       return out;
     };
 
-    gl::HeadlessContext context;
-    stimuli::StimulusRenderer renderer;
+    // The grid: condition (pattern x contrast) x artifact size x radius x seed, its items numbered
+    // in this loop order; a shard renders the items whose number is its index modulo N. The radii
+    // stop where the filter would be clamped, which depends on the size alone.
+    std::vector<std::vector<double>> ratios(artifacts.size());
+    for (std::size_t j = 0; j < artifacts.size(); ++j)
+      for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
+        if (stimuli::clamp_filter_radius(ratio * artifacts[j], size_px).clamped) break;
+        ratios[j].push_back(ratio);
+      }
+    std::size_t items = 0;
+    for (const auto& r : ratios) items += r.size() * static_cast<std::size_t>(seeds);
+    items *= parsed_patterns.size() * contrasts.size();
+    std::vector<double> jagged_at(items, NAN), straight_at(items, NAN);  // item -> deviation
+    if (merged) {  // every item from the one part that covers it, in the shard's own order
+      for (const shard::Part& part : merged->parts) {
+        const std::string file = part.path.string();
+        const nlohmann::json& points = part.payload.contains("points") ? part.payload["points"] : nlohmann::json();
+        if (part.payload.value("items", nlohmann::json()) != nlohmann::json(items) || !points.is_array())
+          throw std::runtime_error(file + ": payload: not a part of this grid of " + std::to_string(items) + " renders");
+        std::size_t item = part.shard.index;
+        for (std::size_t k = 0; k < points.size(); ++k, item += part.shard.count) {
+          const nlohmann::json& point = points[k];
+          const auto value = [&](std::size_t f) { return point[f].is_null() ? NAN : point[f].get<double>(); };
+          if (item >= items || !point.is_array() || point.size() != 3 || point[0] != nlohmann::json(item) ||
+              !(point[1].is_number() || point[1].is_null()) || !(point[2].is_number() || point[2].is_null()))
+            throw std::runtime_error(file + ": payload.points[" + std::to_string(k) + "]: not [" + std::to_string(item) +
+                                     ", jagged, straight] of shard " + part.shard.text() + " of " + std::to_string(items) + " renders");
+          jagged_at[item] = value(1);
+          straight_at[item] = value(2);
+        }
+        if (item < items)
+          throw std::runtime_error(file + ": payload.points: " + std::to_string(points.size()) + " renders, shard " + part.shard.text() +
+                                   " of " + std::to_string(items) + " has more");
+      }
+    }
+    std::optional<gl::HeadlessContext> context;  // a merge renders nothing
+    std::optional<stimuli::StimulusRenderer> renderer;
+    if (!merged) {
+      context.emplace();
+      renderer.emplace();
+    }
     observers::ImageObserver eye(params, 1);
-    std::printf("%s%s, %s observer, window %g %s, weber %g, blur %g arcmin at %g px/deg, %d seeds\n",
+    std::printf("%s%s, %s observer, window %g %s, weber %g, blur %g arcmin at %g px/deg, %d seeds%s\n",
                 ("technique " + base.technique).c_str(), kernel.empty() ? "" : (" " + kernel).c_str(), observer_kind.c_str(), params.window_r,
-                frame ? "deg" : "r", params.weber, params.blur_sigma_arcmin, params.pixels_per_degree, seeds);
+                frame ? "deg" : "r", params.weber, params.blur_sigma_arcmin, params.pixels_per_degree, seeds,
+                sharded ? (", shard " + sharded->text() + " of " + std::to_string(items) + " renders").c_str() : "");
     nlohmann::json per_condition = nlohmann::json::array();
     double largest = NAN;
     std::string largest_condition;
     std::vector<int> all_seeds(static_cast<std::size_t>(seeds));
     for (int s = 0; s < seeds; ++s) all_seeds[static_cast<std::size_t>(s)] = s;
     std::vector<std::vector<std::vector<Point>>> data;  // condition -> artifact size -> radius
+    nlohmann::json part_points = nlohmann::json::array();  // --shard: [item, jagged, straight] per render of the shard
+    std::size_t item = 0;
     for (const stimuli::Pattern pattern : parsed_patterns) {
       for (const double contrast : contrasts) {
         char contrast_text[32];
@@ -230,32 +367,38 @@ int main(int argc, char** argv) {
         const std::string condition = stimuli::to_string(pattern) + "/" + contrast_text;
         nlohmann::json per_artifact = nlohmann::json::array();
         std::vector<std::vector<Point>> condition_points;
-        for (const double a : artifacts) {
-          std::printf("%s, a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", condition.c_str(), a);
+        for (std::size_t j = 0; j < artifacts.size(); ++j) {
+          const double a = artifacts[j];
+          if (!sharded) std::printf("%s, a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", condition.c_str(), a);
           std::vector<Point> points;
-          for (double ratio = ratio_min; ratio <= ratio_max * 1.0001; ratio *= step) {
+          const std::size_t shard_before = part_points.size();
+          for (const double ratio : ratios[j]) {
             stimuli::StimulusSpec spec = base;
             spec.pattern = pattern;
             spec.artifact_px = a;
             spec.lit_linear = contrast;
-            const auto shown = stimuli::clamp_filter_radius(ratio * a, size_px);
-            if (shown.clamped) break;
-            spec.filter_radius_px = shown.filter_radius_px;
+            spec.filter_radius_px = stimuli::clamp_filter_radius(ratio * a, size_px).filter_radius_px;
             Point point;
             point.ratio = ratio;
-            for (int s = 0; s < seeds; ++s) {
-              spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));
-              const stimuli::StimulusPair pair = renderer.render(spec);
-              if (frame) {
-                point.jagged.push_back(metrics::detect_difference(displayed(pair.line, spec.transfer), metrics::Encoding::linear,
-                                                                  displayed(pair.artifact, spec.transfer), metrics::Encoding::linear, frame_params)
-                                           .deviation_max);
-                point.straight.push_back(0.0);  // the reference against itself
-              } else {
-                point.jagged.push_back(eye.local_deviation(pair.artifact, spec, pair.geometry, false));
-                point.straight.push_back(eye.local_deviation(pair.line, spec, pair.geometry, false));
+            for (int s = 0; s < seeds; ++s, ++item) {
+              if (!merged && (!sharded || sharded->covers(item))) {
+                spec.seed = sampling::derive_seed(11, static_cast<std::uint64_t>(s));  // the seed's own: the same in every shard
+                const stimuli::StimulusPair pair = renderer->render(spec);
+                if (frame) {
+                  jagged_at[item] = metrics::detect_difference(displayed(pair.line, spec.transfer), metrics::Encoding::linear,
+                                                               displayed(pair.artifact, spec.transfer), metrics::Encoding::linear, frame_params)
+                                        .deviation_max;
+                  straight_at[item] = 0.0;  // the reference against itself
+                } else {
+                  jagged_at[item] = eye.local_deviation(pair.artifact, spec, pair.geometry, false);
+                  straight_at[item] = eye.local_deviation(pair.line, spec, pair.geometry, false);
+                }
+                if (sharded) part_points.push_back({item, jagged_at[item], straight_at[item]});
               }
+              point.jagged.push_back(jagged_at[item]);
+              point.straight.push_back(straight_at[item]);
             }
+            if (sharded) continue;
             double jagged = 0, straight = 0;
             for (int s = 0; s < seeds; ++s) {
               jagged += point.jagged[static_cast<std::size_t>(s)] / seeds;
@@ -263,6 +406,11 @@ int main(int argc, char** argv) {
             }
             std::printf("  %5.2f  %.5f          %.5f    %.3f\n", ratio, jagged, straight, p_correct(point, all_seeds, params.weber));
             points.push_back(std::move(point));
+          }
+          if (sharded) {
+            std::printf("%s, a = %g px: %zu renders\n", condition.c_str(), a, part_points.size() - shard_before);
+            std::fflush(stdout);
+            continue;
           }
           const Curve curve = implied_c(points, all_seeds, params.weber, p_threshold);
           std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %s%.2f\n", curve.at_most ? "at most " : "",
@@ -273,6 +421,7 @@ int main(int argc, char** argv) {
           per_artifact.push_back(per);
           condition_points.push_back(std::move(points));
         }
+        if (sharded) continue;
         const double c = condition_c(condition_points, all_seeds, params.weber, p_threshold);
         nlohmann::json entry = {{"condition", condition}, {"c", std::isnan(c) ? nlohmann::json(nullptr) : nlohmann::json(c)},
                                 {"per_artifact", per_artifact}};
@@ -283,6 +432,13 @@ int main(int argc, char** argv) {
           largest_condition = condition;
         }
       }
+    }
+    if (sharded) {  // the settings are the arguments themselves: the merge parses them again
+      const nlohmann::json part_settings = {{"args", settings_args(args)}};
+      io::write_file_atomic(part_out, shard::part_text(kPartKind, tool::version_line("penumbra-observer-curve"), *sharded, part_settings,
+                                                       {{"items", items}, {"points", part_points}}));
+      std::printf("wrote %s: shard %s, %zu of %zu renders\n", part_out.c_str(), sharded->text().c_str(), part_points.size(), items);
+      return 0;
     }
     // The interval from the stimuli themselves: a percentile bootstrap over the seeds (each one
     // phase and orientation of the edge), the same resampled seeds for every radius, size and
@@ -318,8 +474,9 @@ int main(int argc, char** argv) {
     }
     if (!json_out.empty()) {
       if (std::isnan(largest)) throw std::runtime_error("--json: no condition crossed p_threshold within the ratio range; nothing to write");
-      std::string command = "penumbra-observer-curve";
-      for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
+      std::string command = "penumbra-observer-curve";  // the same for a merge of shards: --json last
+      for (const std::string& a : settings_args(args)) command += " " + a;
+      command += " --json " + json_out;
       const nlohmann::json entry = {{"technique", technique.empty() ? "pcf" : technique},
                                     {"kernel", kernel},
                                     {"c", largest},
@@ -347,7 +504,9 @@ int main(int argc, char** argv) {
                   kernel.empty() ? "" : (" " + kernel).c_str(), largest, largest_condition.c_str());
     }
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-observer-curve", e);
+    return cli::fail(merged ? "penumbra-observer-curve merge" : "penumbra-observer-curve", e);
   }
   return 0;
 }
+
+}  // namespace
