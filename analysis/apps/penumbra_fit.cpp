@@ -165,6 +165,7 @@ struct StudyOptions {
   std::uint64_t seed = 1;
   int threads = 0;
   bool no_progress = false;
+  double observer_percentile = 90;  // the multilevel fit's observer percentile, in per cent
   bool accept_inconsistent = false;
   bool pool = false;
   bool pool_observers = false;
@@ -209,6 +210,7 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   options.p_threshold = mo.p_threshold;
   options.bootstrap = so.bootstrap;
   options.seed = so.seed;
+  options.observer_percentile = so.observer_percentile / 100.0;
   options.threads = so.threads;
   // Read before the long work so a bad file fails at once. Several files (e.g. one per partner or
   // pattern) are searched in order; the first entry for a (pattern, contrast, size) wins.
@@ -304,6 +306,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 1000000));
   app.add_option("--seed", so.seed, "bootstrap seed")->capture_default_str()->check(cli::non_negative_integer());
+  app.add_option("--observer-percentile", so.observer_percentile,
+                 "the multilevel fit's observer: c for this percentile of the population of observers (90: nine in ten see "
+                 "the staircase at a smaller radius), with its interval, beside the population's mean c and spread")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 99.9));
   app.add_option("--threads", so.threads, "threads for the fits of every phase (0: all cores); the results do not depend on it")
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));

@@ -405,6 +405,27 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
   return w;
 }
 
+MultilevelFit population_fit(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
+                             const StudyFitOptions& options) {
+  MultilevelInput input;
+  std::map<std::string, std::size_t> index;
+  for (std::size_t k = 0; k < fit.conditions.size(); ++k) {
+    const ConditionFit& cf = fit.conditions[k];
+    input.condition_specs.push_back(cf.spec);
+    input.log_beta.push_back(cf.linear.params.log_beta);
+    input.lambda.push_back(cf.linear.params.lambda);
+    input.u_start.push_back(cf.linear.params.u[0]);
+    for (const auto& [participant, list] : groups[k]) {
+      if (!index.count(participant)) {
+        index[participant] = input.participants.size();
+        input.participants.push_back({participant, std::vector<std::vector<Group>>(fit.conditions.size())});
+      }
+      input.participants[index[participant]].conditions[k] = list;
+    }
+  }
+  return fit_multilevel(input, options.observer_percentile, options.level);
+}
+
 std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit) {
   std::vector<ThesisEstimate> out;
   for (const ConditionFit& c : fit.conditions) {
@@ -623,6 +644,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       condition_beta[cf.condition] = std::exp(cf.linear.params.log_beta);
       out.conditions.push_back(std::move(cf));
     }
+    out.population = population_fit(out, condition_groups, options);
     out.worst = worst_case(out, condition_groups, options, threads, one_done);
   }
 

@@ -22,6 +22,7 @@
 
 #include "data/dataset.h"
 #include "fit/model_fit.h"
+#include "fit/multilevel_fit.h"
 
 namespace penumbra::analysis {
 
@@ -43,6 +44,8 @@ struct StudyFitOptions {
   std::function<void(const std::string& phase, int done, int total)> progress;
   bool accept_inconsistent = false;   // the logs were loaded with LoadOptions::accept_inconsistent
   bool pool = false;                  // the logs were loaded with LoadOptions::pool
+  // The multilevel fit's observer percentile (MultilevelFit; penumbra-fit --observer-percentile 90).
+  double observer_percentile = 0.9;
 };
 
 struct TrackPoint {
@@ -189,6 +192,7 @@ struct StudyFit {
   std::vector<std::string> pooled_differences;  // setups pooled although they differ (--pool)
   std::vector<ConditionFit> conditions;
   std::vector<StaircaseFit> staircases;
+  MultilevelFit population;              // participants as random effects on log c (fit/multilevel_fit.h)
   WorstCase worst;                       // the entry's c (calibration_condition applies --condition)
   std::vector<ThesisEstimate> thesis;    // the thesis's own estimate per condition
 };
@@ -205,6 +209,9 @@ BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector
 // participant, in fit.conditions' order.
 WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
                      const StudyFitOptions& options, int threads, const std::function<void()>& one_done = {});
+// The multilevel fit of the study's conditions (fit/multilevel_fit.h): `groups` as for worst_case.
+MultilevelFit population_fit(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
+                             const StudyFitOptions& options);
 // The thesis's estimate per condition (ThesisEstimate), from fit.staircases' QUEST means.
 std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit);
 

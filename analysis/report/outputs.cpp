@@ -219,6 +219,50 @@ std::vector<std::string> unusable_because(const WorstCase& c) {
   return why;
 }
 
+Json population_json(const StudyFit& fit, const std::optional<std::string>& wanted) {
+  const MultilevelFit& m = fit.population;
+  if (!m.fitted) return nullptr;
+  const auto pair = [](const MultilevelInterval& i) { return Json{number(i.lo), number(i.hi)}; };
+  // The condition it speaks for: --condition's, else the population's worst (the largest mean), whose
+  // interval is the largest of the simultaneous ones (it covers the worst true mean whatever the
+  // differences between the conditions, with no test of them).
+  std::size_t k = static_cast<std::size_t>(m.worst);
+  bool chosen = false;
+  if (wanted)
+    for (std::size_t i = 0; i < fit.conditions.size(); ++i)
+      if (fit.conditions[i].condition == *wanted) k = i, chosen = true;
+  const MultilevelFit::Condition& c = m.conditions[k];
+  const bool worst_over_several = !chosen && m.conditions.size() > 1;
+  Json per = Json::array();
+  for (std::size_t i = 0; i < m.conditions.size(); ++i) {
+    const MultilevelFit::Condition& x = m.conditions[i];
+    per.push_back({{"condition", fit.conditions[i].condition},
+                   {"mean_c", number(x.mean_c)},
+                   {"mean_c_ci95", pair(x.mean_c_ci)},
+                   {"percentile_c", number(x.percentile_c)},
+                   {"percentile_c_ci95", pair(x.percentile_c_ci)}});
+  }
+  char pct[32];
+  std::snprintf(pct, sizeof pct, "%g", 100.0 * m.percentile);
+  return {{"method", "multilevel: log10 c = condition mean (fixed) + participant offset (random, normal, the same in every condition), "
+                     "integrated out by quadrature on 241 normal deviates; slope and lapse held at each condition's joint fit"},
+          {"interval", "profile likelihood; means and percentiles with the squared Student t quantile (participants - 1 dof) as "
+                       "cut-off, sd with chi2(1)"},
+          {"participants", m.participants},
+          {"condition", worst_over_several ? "the worst condition (" + fit.conditions[k].condition + ")" : fit.conditions[k].condition},
+          {"mean_c", number(c.mean_c)},
+          {"mean_c_ci95", pair(worst_over_several ? m.worst_mean_c_ci : c.mean_c_ci)},
+          {"sd_log10", number(m.sd_log10)},
+          {"sd_log10_ci95", {number(m.sd_ci.lo), number(m.sd_ci.hi)}},
+          {"observer_percentile", std::string(pct)},
+          {"percentile_c", number(c.percentile_c)},
+          {"percentile_c_ci95", pair(worst_over_several ? m.worst_percentile_c_ci : c.percentile_c_ci)},
+          {"worst_interval", worst_over_several ? "the largest of the conditions' simultaneous (Bonferroni) intervals" : "the condition's own"},
+          {"converged", m.converged},
+          {"flags", m.flags.list},
+          {"per_condition", per}};
+}
+
 Json calibration_json(const StudyFit& fit, const std::optional<std::string>& condition, const std::string& created_utc,
                       const std::vector<std::string>& inputs, const CalibrationProvenance& provenance) {
   const WorstCase chosen = entry_choice(fit, condition);
@@ -274,6 +318,7 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
                                 {"resamples", chosen.resamples}}},
                 {"per_condition", per},
                 {"flags", chosen.flags.list}};
+  if (Json population = population_json(fit, condition); !population.is_null()) entry["population"] = std::move(population);
   // An interval that is not finite is left out (the renderer reads a present one as numbers).
   auto finite = [](const Interval& i) { return std::isfinite(i.lo) && std::isfinite(i.hi) && i.lo > 0; };
   if (finite(chosen.ci95)) entry["ci95"] = {std::min(chosen.ci95.lo, chosen.c), std::max(chosen.ci95.hi, chosen.c)};
@@ -461,6 +506,7 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                           {"bias_log10", number(fit.worst.bias_log10)},
                           {"resamples", fit.worst.resamples},
                           {"beta", number(fit.worst.beta)}}},
+          {"population", population_json(fit, std::nullopt)},
           {"thesis_estimate", [&] {
              Json list = Json::array();
              for (const ThesisEstimate& t : fit.thesis) {
@@ -588,6 +634,14 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
     << "] (profile and participant bootstrap; profile alone [" << fmt("%.3f", chosen.profile.lo) << ", "
     << fmt("%.3f", chosen.profile.hi) << "]) from " << chosen.condition << " (" << chosen.method << "), " << provenance.observers
     << "; published c = " << fmt("%g", kPublishedC) << "\n";
+  if (const Json p = population_json(fit, wanted); !p.is_null()) {
+    const auto v = [](const Json& x) { return x.is_number() ? fmt("%.3f", x.get<double>()) : std::string("n/a"); };
+    o << "population (multilevel, participants as random effects): mean c = " << v(p["mean_c"]) << " [" << v(p["mean_c_ci95"][0])
+      << ", " << v(p["mean_c_ci95"][1]) << "], sd " << v(p["sd_log10"]) << " log10 [" << v(p["sd_log10_ci95"][0]) << ", "
+      << v(p["sd_log10_ci95"][1]) << "], " << p["observer_percentile"].get<std::string>() << "th-percentile observer c = "
+      << v(p["percentile_c"]) << " [" << v(p["percentile_c_ci95"][0]) << ", " << v(p["percentile_c_ci95"][1]) << "] ("
+      << p["condition"].get<std::string>() << ", " << fit.population.participants << " participants)\n";
+  }
   for (const ThesisEstimate& t : fit.thesis) {
     const ConditionFit* c = nullptr;
     for (const ConditionFit& k : fit.conditions)
