@@ -283,13 +283,29 @@ namespace {
 // The sun's virtual shadow map for this frame: the camera's world positions (into the camera
 // targets' depth, which the shading pass reuses), the pages they mark by the rule or the footprint,
 // and those not cached drawn into the pool with their own caster culling.
+//
+// Its steps are the frame's passes (each timed when a timer is given): virtual_positions,
+// virtual_mark (the marking dispatch, and its read-back unless the marks are read late),
+// virtual_read (the previous frame's marks, late), then VirtualShadowMap::update's virtual_admit,
+// virtual_draw, virtual_bounds and virtual_table; PCSS marks and updates twice, its first round
+// suffixed "_search".
 class VirtualPagesPass final : public Pass {
  public:
   PassId id() const override { return PassId::virtual_pages; }
+  bool reports_subpasses() const override { return true; }
   void execute(FrameContext& f) override {
     FrameResources& r = f.res;
     const ShadowSettings& s = f.settings;
     auto& v = r.virtual_map;
+    std::optional<ScopedPass> scope;
+    const auto step = [&](const char* name) {
+      scope.reset();
+      scope.emplace(f.timer, name, f.info.passes);
+    };
+    const auto steps = [&](const char* suffix) {
+      scope.reset();
+      return VirtualShadowMap::StepReport{f.timer, &f.info.passes, suffix};
+    };
     // How the technique reads pages (its registry entry): moments are drawn beside the depths, a
     // blocker search marks in two rounds.
     const PageReading reading = technique_entry(s.technique).pages;
@@ -314,6 +330,7 @@ class VirtualPagesPass final : public Pass {
       v->fbo = gl::Framebuffer(att, "virtual map: position pass");
     }
     // The camera's surfaces: world xyz, w = 1 (0 where nothing is).
+    step("virtual_positions");
     const gl::Program& prog = r.programs.get(r.shaders, "virtual_positions",
                                              {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "virtual_positions.frag"}});
     v->fbo.bind();
@@ -349,6 +366,7 @@ class VirtualPagesPass final : public Pass {
       if (late.filter.id() == 0) late.filter = v->marker->make_marks(), late.search = v->marker->make_marks();
       const adaptive::VirtualMapLayout& layout = v->map->layout();
       std::set<adaptive::Page> requested;
+      step("virtual_read");
       if (late.pending && late.light_view == view.light_view && late.pcss == pcss) {
         marked = v->marker->read(late.filter);
         requested = adaptive::rebase_pages(marked.pages, late.camera_xy, view.camera_xy, layout);
@@ -369,7 +387,9 @@ class VirtualPagesPass final : public Pass {
       out.region_floor = static_cast<int>(floor.size());
       requested.insert(floor.begin(), floor.end());
       if (!s.map.virtual_cache) v->map->invalidate_all();
-      out.pages = v->map->update(requested, view, f.scene, f.meshes);
+      const VirtualShadowMap::StepReport report = steps("");
+      out.pages = v->map->update(requested, view, f.scene, f.meshes, &report);
+      step("virtual_mark");
       if (pcss) {
         v->marker->dispatch_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options, late.search);
         v->marker->dispatch_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, &v->pcss_radii, late.filter);
@@ -384,13 +404,17 @@ class VirtualPagesPass final : public Pass {
     } else if (pcss) {
       // Two rounds: the pages of each pixel's blocker search, then those of the penumbra it finds.
       v->late.pending = false;
+      step("virtual_mark_search");
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
-      const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes);
+      const VirtualShadowMap::StepReport first_report = steps("_search");
+      const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes, &first_report);
+      step("virtual_mark");
       marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, nullptr, &v->pcss_radii);
       std::set<adaptive::Page> all = search.pages;
       all.insert(marked.pages.begin(), marked.pages.end());
-      const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes);
+      const VirtualShadowMap::StepReport second_report = steps("");
+      const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes, &second_report);
       out.pages = second;
       out.pages.drawn = first.drawn + second.drawn;
       out.pages.cached = second.cached - first.drawn;  // the search's pages drawn this frame are not cached ones
@@ -402,9 +426,11 @@ class VirtualPagesPass final : public Pass {
       out.sync_reads = 2;
     } else {
       v->late.pending = false;
+      step("virtual_mark");
       marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
-      out.pages = v->map->update(marked.pages, view, f.scene, f.meshes);
+      const VirtualShadowMap::StepReport report = steps("");
+      out.pages = v->map->update(marked.pages, view, f.scene, f.meshes, &report);
       out.sync_reads = 1;
     }
     out.pixels_per_level = marked.pixels_per_level;
@@ -413,6 +439,7 @@ class VirtualPagesPass final : public Pass {
     out.pool_bytes = static_cast<std::uint64_t>(v->map->pool_slots()) * v->map->page_bytes();
     out.table_bytes = static_cast<std::uint64_t>(v->map->layout().pages_per_side) * v->map->layout().pages_per_side *
                       static_cast<std::uint64_t>(v->map->layout().levels) * 4;
+    scope.reset();
     f.info.virtual_map = out;
     f.info.map_triangles.push_back(out.pages.triangles);
     gl::check_errors("virtual_pages pass");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,7 @@
 #include "scene/culling.h"
 #include "shadows/fitting.h"
 #include "shaders/shadow_contract.h"
+#include "shadows/scoped_pass.h"
 
 namespace penumbra::shadows {
 
@@ -212,13 +214,20 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key
 }
 
 VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
-                                         const scene::GpuMeshes& meshes) {
+                                         const scene::GpuMeshes& meshes, const StepReport* steps) {
   if (meshes.size() != scene.objects.size()) throw std::invalid_argument("virtual shadow map: the meshes are not the scene's");
   for (const adaptive::Page& page : requested)  // before anything changes (the cache checks too, after a new view)
     if (page.level < 0 || page.level >= layout_.levels || page.x < 0 || page.y < 0 || page.x >= layout_.pages_per_side ||
         page.y >= layout_.pages_per_side)
       throw std::invalid_argument("virtual shadow map: page outside the layout (level " + std::to_string(page.level) + ", " +
                                   std::to_string(page.x) + ", " + std::to_string(page.y) + ")");
+  std::optional<ScopedPass> scope;
+  const auto step = [&](const char* name) {
+    scope.reset();
+    if (steps) scope.emplace(steps->timer, (name + steps->suffix).c_str(), *steps->passes);
+  };
+
+  step("virtual_admit");
   if (has_view_ && (view.light_view != view_.light_view || view.near_ws != view_.near_ws || view.far_ws != view_.far_ws)) invalidate_all();
   view_ = view;
   has_view_ = true;
@@ -227,6 +236,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   static_cast<adaptive::PageCacheStats&>(stats) = admitted.stats;
   const std::vector<adaptive::PageCache::Admitted>& to_draw = admitted.to_draw;
 
+  step("virtual_draw");
   if (!to_draw.empty()) {
     fbo_.bind();
     program_.use();
@@ -250,12 +260,16 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     glDisable(GL_DEPTH_CLAMP);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    if (bounds_) {
+  }
+  if (bounds_) {
+    step("virtual_bounds");
+    if (!to_draw.empty()) {
       std::vector<int> drawn;
       for (const auto& [slot, key] : to_draw) drawn.push_back(slot);
       write_bounds(drawn);
     }
   }
+  step("virtual_table");
   write_tables();
   return stats;
 }

@@ -24,6 +24,10 @@
 #include <penumbra/scene/scene.h>
 #include <penumbra/shadows/settings.h>
 
+namespace penumbra::gl {
+class PassTimer;
+}
+
 namespace penumbra::shadows {
 
 // Where the clipmap stands this frame.
@@ -179,8 +183,19 @@ class VirtualShadowMap {
   // Throws PoolTooSmall when even the coarsest level's pages under the requested ones do not fit.
   // A view whose light_view or depth range differs from the last one invalidates every page.
   // Leaves the pool's framebuffer unbound and the viewport and scissor test changed.
+  //
+  // `steps`, when given, reports update()'s steps as passes of the frame, each timed by its timer
+  // (may be null): virtual_admit (the page cache: admit, evict, the view's invalidation),
+  // virtual_draw (the casters into the admitted pages), virtual_bounds (when bounds() is on) and
+  // virtual_table (the page tables written), each name followed by `suffix` (PCSS's first round:
+  // "_search"). Every step is reported whether or not it has work this frame.
+  struct StepReport {
+    gl::PassTimer* timer = nullptr;
+    std::vector<std::string>* passes = nullptr;  // required
+    std::string suffix;
+  };
   VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
-                         const scene::GpuMeshes& meshes);
+                         const scene::GpuMeshes& meshes, const StepReport* steps = nullptr);
   // The raster depth offset pages are drawn with (glPolygonOffset factor and units, as the maps'
   // map.slope_bias and map.offset_bias; none by default). A change drops every page.
   void set_raster_bias(float slope, float offset);

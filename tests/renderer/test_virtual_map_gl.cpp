@@ -796,7 +796,8 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
   const io::ImageF paged = r.read_visibility();
   ASSERT_TRUE(rule.virtual_map.has_value());
   const auto& v = *rule.virtual_map;
-  EXPECT_EQ(rule.passes, (std::vector<std::string>{"virtual_pages", "shading"}));
+  EXPECT_EQ(rule.passes, (std::vector<std::string>{"virtual_positions", "virtual_mark", "virtual_admit", "virtual_draw", "virtual_bounds",
+                                                    "virtual_table", "shading"}));
   EXPECT_GT(v.pages.requested, 0);
   EXPECT_EQ(v.pages.drawn, v.pages.requested) << "the first frame draws every page it marks";
   EXPECT_EQ(v.pages.missing, 0);
@@ -842,6 +843,54 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
 // and drawn first, then those of the penumbra it finds; every pixel finds its pages, and the image
 // agrees with PCSS's box filter on one fine fitted map (whose search is a Poisson disk: the
 // penumbrae differ a little; mean difference 0.0043 at 320 × 180).
+// The virtual map's steps are the frame's passes, each timed: PCF marks once, PCSS twice (its
+// search's round suffixed), late marks read the previous frame's before the update and mark after
+// it; every step the frame lists has one sample in the timer, and the draw step holds the time of
+// drawing the pages (nothing drawn: nearly none).
+TEST(VirtualMap, ItsStepsAreNamedPassesEachTimed) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  const int w = 160, h = 90;
+  shadows::ShadowSettings pcss;
+  pcss.technique = shadows::Technique::pcss;
+  pcss.pcss.kernel = shadows::Kernel::grid;
+  pcss.adaptive.min_texel_px = 1;
+  pcss.map.virtual_pages = shadows::VirtualPages::rule;
+  shadows::ShadowSettings late = virtual_pcf(shadows::VirtualPages::rule);
+  late.map.virtual_marks_late = true;
+  const std::vector<std::string> update = {"virtual_admit", "virtual_draw", "virtual_bounds", "virtual_table"};
+  auto with = [](std::vector<std::string> head, const std::vector<std::string>& tail) {
+    head.insert(head.end(), tail.begin(), tail.end());
+    return head;
+  };
+  std::vector<std::string> pcss_steps = {"virtual_positions", "virtual_mark_search"};
+  for (const std::string& u : update) pcss_steps.push_back(u + "_search");
+  pcss_steps.push_back("virtual_mark");
+  pcss_steps = with(pcss_steps, update);
+  pcss_steps.push_back("shading");
+  const struct {
+    shadows::ShadowSettings settings;
+    std::vector<std::string> passes;
+  } cases[] = {
+      {virtual_pcf(shadows::VirtualPages::rule), with(with({"virtual_positions", "virtual_mark"}, update), {"shading"})},
+      {pcss, pcss_steps},
+      {late, with(with({"virtual_positions", "virtual_read"}, update), {"virtual_mark", "shading"})},
+  };
+  for (const auto& c : cases) {
+    gl::PassTimer timer(false);
+    const shadows::FrameInfo info = r.render(c.settings, w, h, &timer);
+    EXPECT_EQ(info.passes, c.passes) << shadows::technique_entry(c.settings.technique).name;
+    const std::vector<gl::PassStats> stats = timer.stats();
+    for (const std::string& pass : c.passes) {
+      const auto it = std::find_if(stats.begin(), stats.end(), [&](const gl::PassStats& st) { return st.pass == pass; });
+      ASSERT_NE(it, stats.end()) << pass << " was not timed";
+      EXPECT_EQ(it->samples, 1) << pass;
+      EXPECT_GE(it->median_ms, 0.0) << pass;
+    }
+    EXPECT_EQ(stats.size(), c.passes.size()) << "nothing timed that the frame does not list";
+  }
+}
+
 TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
@@ -915,7 +964,7 @@ TEST(VirtualMap, RendererImageIsTheSameWithOrWithoutTileBounds) {
 // VSM through the pages (moments drawn beside the depths, box-filtered at lookup on the marked
 // level) on the demo scene against VSM on one fine fitted map (4096², moments blurred by the same
 // world radius): the same shadows, penumbrae included, the pool holding moments.
-TEST(VirtualMap, RendererShadesVirtualThroughThePagesLikeAFineMap) {
+TEST(VirtualMap, RendererShadesVsmThroughThePagesLikeAFineMap) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
   const int w = 320, h = 180;
@@ -928,7 +977,9 @@ TEST(VirtualMap, RendererShadesVirtualThroughThePagesLikeAFineMap) {
   const shadows::FrameInfo info = r.render(s, w, h);
   const io::ImageF paged = r.read_visibility();
   ASSERT_TRUE(info.virtual_map.has_value());
-  EXPECT_EQ(info.passes, (std::vector<std::string>{"virtual_pages", "shading"})) << "no moments atlas, no blur pass";
+  EXPECT_EQ(info.passes, (std::vector<std::string>{"virtual_positions", "virtual_mark", "virtual_admit", "virtual_draw", "virtual_table",
+                                                    "shading"}))
+      << "no moments atlas, no blur pass; moments pools have no depth bounds";
   EXPECT_EQ(info.virtual_map->coarser, 0u);
   EXPECT_EQ(info.virtual_map->none, 0u);
   EXPECT_GT(info.virtual_map->at_level, static_cast<std::uint64_t>(w * h / 2));
