@@ -18,6 +18,7 @@ packages=(
   python3-matplotlib
   xvfb xauth fonts-dejavu-core
   xdotool  # the study GUI test types keys and clicks into the participant window under Xvfb
+  parallel  # GNU parallel: scripts/predict-calibration.sh --jobs runs the shards on local slots or lab machines (docs/cluster.md)
   clang libclang-rt-14-dev  # the fuzz preset: clang's libFuzzer and sanitizer runtimes (Debian 12: clang 14)
 )
 

@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# scripts/predict-calibration.sh --jobs 2 (GNU parallel, issue 50): a sweep of a tiny grid in 4
+# shards on 2 local slots, once uninterrupted and once with one shard's penumbra-observer-curve
+# killed (SIGKILL) mid-run. The killed sweep fails and says --resume; --resume runs that one shard
+# alone (the joblog's finished ones are skipped) and the merge equals the uninterrupted sweep's,
+# byte for byte apart from created_utc. Skipped (77) without GNU parallel (scripts/setup.sh).
+#   predict_calibration_parallel_test.sh PENUMBRA-OBSERVER-CURVE
+set -euo pipefail
+curve="$1"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
+command -v parallel >/dev/null || { echo "skipped: GNU parallel is not installed (scripts/setup.sh installs it)"; exit 77; }
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+# 2 conditions x 2 sizes x 3 radii x 2 seeds = 24 renders; a shard prints a line after each of its
+# 4 blocks (condition x size), so a kill after the first line lands with three blocks to go.
+grid="--pattern stair,step --artifact-px 10,20 --ratio-min 1 --ratio-max 3 --ratio-step 1.5 --seeds 2"
+sweep() { "$repo/scripts/predict-calibration.sh" --jobs 2 --shards 4 --grid "$grid" "$@" pcf:pcf.kernel=grid; }
+
+PENUMBRA_OBSERVER_CURVE="$curve" sweep --work "$tmp/whole" "$tmp/whole.json" >"$tmp/whole.log" 2>&1 ||
+  fail "the uninterrupted sweep: $(cat "$tmp/whole.log")"
+
+# The curve as every shard of the second sweep runs it: shard 2/4's first run is killed once it
+# has rendered its first block (its first progress line is in the job's log, its stdout).
+cat >"$tmp/curve-killed-once.sh" <<WRAPPER
+#!/usr/bin/env bash
+if [[ " \$* " == *" --shard 2/4 "* && ! -e "$tmp/killed" ]]; then
+  touch "$tmp/killed"
+  log="\$(readlink /proc/\$\$/fd/1)"
+  "$curve" "\$@" &
+  pid=\$!
+  until grep -q ' renders\$' "\$log" || ! kill -0 \$pid 2>/dev/null; do sleep 0.01; done
+  kill -KILL \$pid 2>/dev/null
+  wait \$pid
+  exit \$?
+fi
+exec "$curve" "\$@"
+WRAPPER
+chmod +x "$tmp/curve-killed-once.sh"
+export PENUMBRA_OBSERVER_CURVE="$tmp/curve-killed-once.sh"
+if sweep --work "$tmp/killed-sweep" "$tmp/resumed.json" >"$tmp/killed.log" 2>&1; then
+  fail "the sweep with a killed shard succeeded: $(cat "$tmp/killed.log")"
+fi
+grep -q -- "rerun with --resume" "$tmp/killed.log" || fail "the failed sweep does not say --resume: $(cat "$tmp/killed.log")"
+parts="$tmp/killed-sweep/parts"
+[[ ! -e "$parts/pcf-pcf-kernel-grid.2-of-4.json" ]] || fail "shard 2/4 wrote its part: it was not killed mid-run"
+grep -q ' renders$' "$parts/pcf-pcf-kernel-grid.2-of-4.log" || fail "shard 2/4 was killed before it rendered"
+for i in 0 1 3; do [[ -f "$parts/pcf-pcf-kernel-grid.$i-of-4.json" ]] || fail "shard $i/4 has no part"; done
+[[ ! -e "$tmp/resumed.json" ]] || fail "the failed sweep wrote its output"
+joblog="$tmp/killed-sweep/joblog"
+[[ $(tail -n +2 "$joblog" | wc -l) -eq 4 ]] || fail "the joblog has not 4 jobs: $(cat "$joblog")"
+
+sweep --work "$tmp/killed-sweep" --resume "$tmp/resumed.json" >"$tmp/resumed.log" 2>&1 || fail "--resume: $(cat "$tmp/resumed.log")"
+# The resume ran shard 2/4 alone: one more joblog row, for it, exit 0.
+[[ $(tail -n +2 "$joblog" | wc -l) -eq 5 ]] || fail "--resume ran other than the one killed shard: $(cat "$joblog")"
+tail -n 1 "$joblog" | awk -F'\t' '$7 != 0 || $9 !~ /--shard 2\/4 / { exit 1 }' || fail "--resume's row: $(tail -n 1 "$joblog")"
+diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tmp/resumed.json") >"$tmp/diff" ||
+  fail "the resumed sweep differs from the uninterrupted one: $(head -20 "$tmp/diff")"
+grep -q '"c": [0-9]' "$tmp/resumed.json" || fail "no c in $(cat "$tmp/resumed.json")"
+echo "ok: shard 2/4 killed mid-run, --resume ran it alone, the merge equals the uninterrupted sweep"
