@@ -7,7 +7,7 @@
 # them outside CI, HARDENING=0 leaves them out in CI. Extra arguments go to the first ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+scripts/setup.sh --test
 scripts/build.sh
 args=(--preset default -j "$(nproc)")
 if [[ "${SLOW:-0}" != "1" ]]; then

@@ -27,6 +27,7 @@
 #include "io/image_io.h"
 #include "json/json_input.h"
 #include "observers/image_observer.h"
+#include "online/serve_command.h"
 #include "observers/psychometric_observer.h"
 #include "procedure/session.h"
 #include "procedure/session_record.h"
@@ -787,11 +788,13 @@ int main(int argc, char** argv) {
 
   const study_app::ReferenceCommand reference(app);
   const study_app::CalibrateDisplayCommand calibrate_display(app);
+  const study_app::ServeCommand serve(app, shipped_config());
 
   if (const auto status = cli::parse(app, argc, argv, "penumbra-study")) return *status;
   try {
     if (reference.parsed()) return reference.run();
     if (calibrate_display.parsed()) return calibrate_display.run();
+    if (serve.parsed()) return serve.run();
     if (display_check->parsed()) return run_display_check(display_config);
     if (prepare->parsed()) return run_prepare_frames(prepare_config, prepare_cache);
     if (stim->parsed()) {
