@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# scripts/slurm/submit-predict-calibration.sh on a real single-node Slurm (issue 50): munged,
+# slurmctld and slurmd (Debian's munge, slurmctld, slurmd, slurm-client) started on localhost by
+# this script with their own key, config, ports and state in a temporary folder, and stopped at
+# its end. A tiny grid in 3 shards runs as a job array throttled to 2 tasks, then the merge job
+# that waits on it (--dependency=afterok); OUTPUT equals the serial run's apart from created_utc.
+# Skipped (77) where the daemons are not installed, the user is not root, or they do not start
+# (a container without the privileges): CTest label `slurm`.
+#   predict_calibration_slurm_test.sh PENUMBRA-OBSERVER-CURVE
+set -euo pipefail
+curve="$1"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
+skip() { echo "skipped: $*"; exit 77; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+for tool in munged slurmctld slurmd sbatch squeue sinfo scontrol; do
+  command -v "$tool" >/dev/null || PATH="$PATH:/usr/sbin" command -v "$tool" >/dev/null ||
+    skip "$tool is not installed (apt install munge slurmctld slurmd slurm-client)"
+done
+export PATH="$PATH:/usr/sbin"
+[[ $(id -u) -eq 0 ]] || skip "slurmd must run as root to start the jobs"
+tmp="$(mktemp -d)"
+chmod 700 "$tmp"
+pids=()
+cleanup() {
+  local pid
+  if [[ -f "$tmp/slurm.conf" ]]; then SLURM_CONF="$tmp/slurm.conf" scancel --quiet --user root 2>/dev/null || true; fi
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null || true
+  done
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+host="$(hostname -s)"
+port=$((20000 + $$ % 20000))
+mkdir -p "$tmp/state" "$tmp/spool" "$tmp/logs"
+dd if=/dev/urandom of="$tmp/munge.key" bs=1024 count=1 status=none
+chmod 400 "$tmp/munge.key"
+munged --force --key-file="$tmp/munge.key" --socket="$tmp/munge.socket" --pid-file="$tmp/munged.pid" \
+  --log-file="$tmp/munged.log" --seed-file="$tmp/munged.seed" ||
+  skip "munged does not start here: $(tail -n 2 "$tmp/munged.log" 2>/dev/null)"
+pids+=("$(cat "$tmp/munged.pid")")
+cat >"$tmp/slurm.conf" <<CONF
+ClusterName=penumbra-test
+SlurmctldHost=$host(127.0.0.1)
+SlurmctldPort=$port
+SlurmdPort=$((port + 1))
+AuthType=auth/munge
+CredType=cred/munge
+AuthInfo=socket=$tmp/munge.socket
+SlurmUser=root
+SlurmdUser=root
+StateSaveLocation=$tmp/state
+SlurmdSpoolDir=$tmp/spool
+SlurmctldPidFile=$tmp/slurmctld.pid
+SlurmdPidFile=$tmp/slurmd.pid
+SlurmctldLogFile=$tmp/slurmctld.log
+SlurmdLogFile=$tmp/slurmd.log
+ProctrackType=proctrack/linuxproc
+TaskPlugin=task/none
+MpiDefault=none
+SchedulerType=sched/backfill
+SelectType=select/cons_tres
+SelectTypeParameters=CR_Core
+ReturnToService=2
+JobCompType=jobcomp/none
+AccountingStorageType=accounting_storage/none
+PlugStackConfig=$tmp/plugstack.conf
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=1000 State=UNKNOWN
+PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
+CONF
+: >"$tmp/plugstack.conf"
+export SLURM_CONF="$tmp/slurm.conf"
+slurmctld -D -i -f "$SLURM_CONF" >"$tmp/slurmctld.out" 2>&1 &
+pids+=($!)
+slurmd -D -N "$host" -f "$SLURM_CONF" >"$tmp/slurmd.out" 2>&1 &
+pids+=($!)
+for _ in $(seq 150); do
+  [[ "$(sinfo -h -n "$host" -o %t 2>/dev/null)" == idle ]] && break
+  kill -0 "${pids[1]}" 2>/dev/null && kill -0 "${pids[2]}" 2>/dev/null ||
+    skip "slurmctld or slurmd exited: $(tail -n 3 "$tmp/slurmctld.log" "$tmp/slurmd.log" 2>/dev/null | tr '\n' ' ')"
+  sleep 0.2
+done
+[[ "$(sinfo -h -n "$host" -o %t)" == idle ]] || skip "the node is not idle after 30 s: $(sinfo -h -n "$host" -o '%t %E')"
+
+grid="--pattern stair,step --artifact-px 10 --ratio-min 1 --ratio-max 3 --ratio-step 1.5 --seeds 2"
+spec=pcf:pcf.kernel=grid
+export PENUMBRA_OBSERVER_CURVE="$curve"
+"$repo/scripts/predict-calibration.sh" --grid "$grid" "$tmp/serial.json" "$spec" >"$tmp/serial.log" 2>&1 || fail "serial: $(cat "$tmp/serial.log")"
+"$repo/scripts/slurm/submit-predict-calibration.sh" --limit 2 --sbatch "--cpus-per-task=1 --mem=200M --output=$tmp/logs/%x-%j.out" \
+  --shards 3 --work "$tmp/work" --grid "$grid" "$tmp/slurm.json" "$spec" >"$tmp/submit.log" 2>&1 || fail "submit: $(cat "$tmp/submit.log")"
+cat "$tmp/submit.log"
+array_id="$(sed -n 's/.*array \([0-9]*\):.*/\1/p' "$tmp/submit.log")"
+merge_id="$(sed -n 's/.*merge \([0-9]*\) after.*/\1/p' "$tmp/submit.log")"
+[[ -n "$array_id" && -n "$merge_id" ]] || fail "no job ids in: $(cat "$tmp/submit.log")"
+# The merge waits on the whole array: its dependency names it, and it cannot start before.
+scontrol show job "$merge_id" | grep -q "Dependency=afterok:${array_id}" ||
+  [[ -f "$tmp/slurm.json" ]] || fail "the merge job's dependency: $(scontrol show job "$merge_id" | grep -o 'Dependency=[^ ]*')"
+scontrol show job "$array_id" 2>/dev/null | grep -q "ArrayTaskThrottle=2" || echo "note: the array finished before its throttle could be read"
+for _ in $(seq 900); do
+  [[ -z "$(squeue -h -o %i)" ]] && break
+  [[ "$(squeue -h -j "$merge_id" -o %r 2>/dev/null)" != DependencyNeverSatisfied ]] ||
+    fail "a task failed, so the merge never runs (afterok): $(tail -n 3 "$tmp"/logs/* 2>/dev/null | tr '\n' ' ')"
+  sleep 0.2
+done
+[[ -z "$(squeue -h -o %i)" ]] || fail "jobs still queued after 180 s: $(squeue)"
+[[ -f "$tmp/slurm.json" ]] || fail "the merge wrote nothing: $(cat "$tmp"/logs/* 2>/dev/null | tail -n 20)"
+for i in 0 1 2; do [[ -f "$tmp/work/parts/pcf-pcf-kernel-grid.$i-of-3.json" ]] || fail "task $i left no part"; done
+[[ $(ls "$tmp/logs" | wc -l) -eq 4 ]] || fail "not 3 tasks and a merge: $(ls "$tmp/logs")"
+diff <(grep -v '"created_utc"' "$tmp/serial.json") <(grep -v '"created_utc"' "$tmp/slurm.json") >"$tmp/diff" ||
+  fail "the Slurm run differs from the serial one: $(head -20 "$tmp/diff")"
+echo "ok: array $array_id (3 tasks, at most 2 at once) and merge $merge_id after it; equal to the serial run"
