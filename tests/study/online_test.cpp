@@ -1,0 +1,325 @@
+// penumbra-study serve over HTTP (docs/study-online.md): a whole short session by a scripted client
+// against the lab's own Session with the same seed and answers; the attacks a participant link
+// invites; kill -9 of the server mid-session; and the same session in a real browser (Debian's
+// chromium driven by puppeteer-core, tests/study/online_browser_session.mjs) when both are there.
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <signal.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "app_process.h"
+#include "json/json_input.h"
+#include "log/trial_log.h"
+#include "procedure/config.h"
+#include "procedure/session.h"
+#include "procedure/session_flow.h"
+
+namespace fs = std::filesystem;
+using penumbra::test::App;
+using nlohmann::json;
+
+namespace {
+
+const fs::path kConfig = fs::path(PENUMBRA_TESTS_DIR) / "online_short_config.json";
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("penumbra-online-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// The server on 127.0.0.1 and a free port; killed (SIGKILL) when destroyed.
+struct ServerProcess {
+  std::unique_ptr<App> app;
+  int port = 0;
+  explicit ServerProcess(const fs::path& sessions) {
+    app = std::make_unique<App>(PENUMBRA_STUDY_EXE, std::vector<std::string>{"serve", "--config", kConfig.string(), "-o", sessions.string(),
+                                                                             "--port", "0", "--bind", "127.0.0.1", "--iti-ms", "50"});
+    if (!app->wait_for("listening on http://127.0.0.1:")) throw std::runtime_error("the server did not start: " + app->output());
+    const std::string out = app->output();
+    port = std::stoi(out.substr(out.find("listening on http://127.0.0.1:") + 30));
+  }
+  void kill9() { app.reset(); }
+};
+
+// A participant's page, scripted: the screens it is shown and what it posts.
+struct Participant {
+  httplib::Client http;
+  std::string id, tab;
+  json screen;
+  int last_status = 0;
+  Participant(int port, std::string id_, std::string tab_ = "tab-scripted-1") : http("127.0.0.1", port), id(std::move(id_)), tab(std::move(tab_)) {
+    http.set_read_timeout(60, 0);
+  }
+  int get() {
+    const auto r = http.Get(("/api/screen?id=" + id + "&tab=" + tab).c_str());
+    if (!r) return last_status = -1;
+    if (r->status == 200) screen = json::parse(r->body);
+    return last_status = r->status;
+  }
+  int post(json body) {
+    body["id"] = id;
+    body["tab"] = tab;
+    if (!body.contains("step")) body["step"] = screen.value("step", "");
+    const auto r = http.Post("/api/act", body.dump(), "application/json");
+    if (!r) return last_status = -1;
+    if (r->status == 200) screen = json::parse(r->body);
+    return last_status = r->status;
+  }
+  static json answer_body(const json& screen, const std::string& answer) {
+    return {{"action", "answer"}, {"trial", screen["trial"]["number"]}, {"answer", answer}, {"rt_ms", 500.25},
+            {"frame_ms", {16.7, 16.6, 16.8, 16.7}}, {"key", answer == "first" ? "f" : "j"}, {"onset_ms", 1000.0}, {"response_ms", 1500.25}};
+  }
+};
+
+// The answer to trial n: answers[n % size], f = first (left), j = second (right).
+std::string answer_for(const std::string& answers, int trial) { return answers[static_cast<std::size_t>(trial) % answers.size()] == 'f' ? "first" : "second"; }
+
+// Plays screens until the end screen or until `stop_after` answers (-1: no limit). Returns the
+// answers given.
+int play(Participant& p, const std::string& answers, int stop_after = -1) {
+  int given = 0;
+  for (int guard = 0; guard < 500; ++guard) {
+    const std::string s = p.screen.value("screen", "");
+    int status = 0;
+    if (s == "consent") {
+      status = p.post({{"action", "agree"}});
+    } else if (p.screen.value("needs_intake", false)) {
+      status = p.post({{"action", "intake"}, {"answers", {{"age", "30"}, {"vision", "no"}}}});
+    } else if (p.screen.value("needs_display", false)) {
+      status = p.post({{"action", "display"}, {"px_per_mm", 3.78}, {"viewing_distance_mm", 600}, {"window_width_css_px", 1280},
+                       {"window_height_css_px", 800}, {"refresh_hz", 60}, {"device_pixel_ratio", 1}, {"user_agent", "scripted"}});
+    } else if (s == "welcome" || s == "round" || s == "break" || s == "feedback") {
+      status = p.post({{"action", "continue"}});
+    } else if (s == "trial") {
+      if (given == stop_after) return given;
+      status = p.post(Participant::answer_body(p.screen, answer_for(answers, p.screen["trial"]["number"].get<int>())));
+      ++given;
+    } else if (s == "end") {
+      return given;
+    } else {
+      ADD_FAILURE() << "unexpected screen: " << p.screen.dump();
+      return given;
+    }
+    if (status != 200) {
+      ADD_FAILURE() << "post on the " << s << " screen: status " << status;
+      return given;
+    }
+  }
+  ADD_FAILURE() << "the session did not end";
+  return given;
+}
+
+// The lab's session with the same config, participant (so the same seed) and answers, written by
+// procedure::Session as penumbra-study run writes it.
+fs::path lab_session(const fs::path& dir, const std::string& id, const std::string& answers) {
+  const penumbra::procedure::StudyConfig config = penumbra::procedure::load_config(kConfig);
+  json extra = {{"observer_kind", "person"},
+                {"config_file", kConfig.string()},
+                {"presentation_options", {{"kind", "browser"}, {"served_by", "penumbra-study serve"}}},
+                {"consent", penumbra::procedure::consent_record(config.text("consent"), penumbra::procedure::utc_now())}};
+  penumbra::procedure::Session lab = penumbra::procedure::Session::create(config, dir, id, extra);
+  while (const auto plan = lab.next()) lab.record(*plan, answer_for(answers, plan->trial) == "first" ? "left" : "right", 500.25);
+  return dir;
+}
+
+// trials.csv and session.json of an online session equal the lab's apart from timing and display.
+void expect_same_as_lab(const fs::path& online, const fs::path& lab) {
+  auto rows = [](const fs::path& d) {
+    std::vector<std::string> out;
+    for (penumbra::trial_log::TrialRow r : penumbra::trial_log::read(d / "trials.csv").rows) {
+      r.session_id.clear();
+      r.utc_time.clear();
+      r.rt_ms = 0;
+      r.timing.reset();
+      out.push_back(penumbra::trial_log::format_row(r));
+    }
+    return out;
+  };
+  const std::vector<std::string> a = rows(online), b = rows(lab);
+  ASSERT_FALSE(b.empty());
+  EXPECT_EQ(a, b);
+  auto session = [](const fs::path& d) {
+    json j = penumbra::json_input::read_file(d / "session.json");
+    for (const char* k : {"created_utc", "resumed_utc", "session_id", "presentation"}) j.erase(k);
+    j["consent"].erase("utc");
+    return j;
+  };
+  EXPECT_EQ(session(online).dump(1), session(lab).dump(1));
+}
+
+TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswers) {
+  const fs::path tmp = fresh_dir("whole");
+  ServerProcess server(tmp / "sessions");
+  Participant p(server.port, "P01");
+  ASSERT_EQ(p.get(), 200);
+  EXPECT_EQ(p.screen["screen"], "consent");
+  EXPECT_FALSE(fs::exists(tmp / "sessions" / "P01")) << "nothing is written before consent";
+  const std::string answers = "ffjfjjfj";
+  const int given = play(p, answers);
+  EXPECT_EQ(given, 8);  // 2 practice + 2 rounds x 3
+  EXPECT_EQ(p.screen["screen"], "end");
+  EXPECT_FALSE(p.screen.value("completion_code", "").empty());
+  expect_same_as_lab(tmp / "sessions" / "P01", lab_session(tmp / "lab", "P01", answers));
+  // The browser's part: its timing in trials.csv, its display in session.json, its data quality.
+  const auto log = penumbra::trial_log::read(tmp / "sessions" / "P01" / "trials.csv");
+  for (const auto& r : log.rows) {
+    ASSERT_TRUE(r.timing.has_value());
+    EXPECT_EQ(r.timing->frames, 4);
+    EXPECT_DOUBLE_EQ(r.rt_ms, 500.25);
+    EXPECT_EQ(r.timing->dropped_frames, 0);
+  }
+  const json j = penumbra::json_input::read_file(tmp / "sessions" / "P01" / "session.json");
+  EXPECT_EQ(j["observer_kind"], "person");
+  ASSERT_TRUE(j["presentation"].is_array());
+  EXPECT_EQ(j["presentation"].back()["kind"], "browser");
+  EXPECT_NEAR(j["presentation"].back()["pixels_per_degree"].get<double>(), 2 * 600 * std::tan(0.5 * M_PI / 180) * 3.78, 1e-9);
+  const json online = penumbra::json_input::read_file(tmp / "sessions" / "P01" / "online.json");
+  EXPECT_EQ(online["intake"]["answers"]["age"], "30");
+  fs::remove_all(tmp);
+}
+
+TEST(OnlineServer, AttacksAreRefusedWithAStatusAndNothingIsWrittenOutsideTheSession) {
+  const fs::path tmp = fresh_dir("attacks");
+  const fs::path sessions = tmp / "sessions";
+  ServerProcess server(sessions);
+  httplib::Client http("127.0.0.1", server.port);
+  auto get_status = [&](const std::string& path) {
+    const auto r = http.Get(path.c_str());
+    return r ? r->status : -1;
+  };
+  EXPECT_EQ(get_status("/api/screen?id=..%2F..%2Fescape&tab=tab-attack-1"), 400);
+  EXPECT_EQ(get_status("/api/screen?id=../escape&tab=tab-attack-1"), 400);
+  EXPECT_EQ(get_status("/api/screen?id=a%00b&tab=tab-attack-1"), 400);
+  EXPECT_EQ(get_status("/api/screen?id=%C3%A9t%C3%A9&tab=tab-attack-1"), 400);
+  EXPECT_EQ(get_status("/api/screen?id=.hidden&tab=tab-attack-1"), 400);
+  const int long_id = get_status("/api/screen?id=" + std::string(10000, 'a') + "&tab=tab-attack-1");
+  EXPECT_TRUE(long_id == 414 || long_id == 400) << long_id;
+  EXPECT_EQ(get_status("/api/screen?id=" + std::string(100, 'a') + "&tab=tab-attack-1"), 400);
+  EXPECT_EQ(get_status("/stimuli/..%2Fsessions.png"), 404);  // decoded to a path, not a name: no route
+  EXPECT_EQ(get_status("/stimuli/0123456789abcdef.png"), 404);
+  EXPECT_EQ(get_status("/../../etc/passwd"), 404);
+
+  Participant p(server.port, "P02", "tab-attack-1");
+  ASSERT_EQ(p.get(), 200);
+  // Malformed and oversized posts.
+  auto raw_post = [&](const std::string& body) {
+    const auto r = http.Post("/api/act", body, "application/json");
+    return r ? r->status : -1;
+  };
+  EXPECT_EQ(raw_post("{\"id\": \"P02\", "), 400);
+  EXPECT_EQ(raw_post("[1,2,3]"), 400);
+  EXPECT_EQ(raw_post(json({{"id", "P02"}, {"tab", "tab-attack-1"}, {"action", "agree"}, {"step", "x"}, {"pad", std::string(100000, 'x')}}).dump()), 413);
+  EXPECT_EQ(raw_post(json({{"id", std::string(10000, 'b')}, {"tab", "tab-attack-1"}, {"action", "agree"}}).dump()), 400);
+  EXPECT_EQ(raw_post(json({{"id", "P99"}, {"tab", "tab-attack-1"}, {"action", "agree"}, {"step", "x"}}).dump()), 404);
+  // An answer before any trial is on screen.
+  EXPECT_EQ(p.post(Participant::answer_body({{"trial", {{"number", 0}}}}, "first")), 409);
+  ASSERT_EQ(p.post({{"action", "agree"}}), 200);
+  // A replayed post: the same step again.
+  const json consent_step = {{"action", "agree"}, {"step", "stale-0"}};
+  EXPECT_EQ(p.post(consent_step), 409);
+  // A second tab for the same id.
+  Participant second(server.port, "P02", "tab-attack-2");
+  EXPECT_EQ(second.get(), 409);
+  play(p, "f", 0);  // up to the first trial
+  ASSERT_EQ(p.screen["screen"], "trial");
+  const int trial = p.screen["trial"]["number"];
+  json wrong = Participant::answer_body(p.screen, "first");
+  wrong["trial"] = trial + 1;
+  EXPECT_EQ(p.post(wrong), 409) << "an answer for a trial not on screen";
+  json bad = Participant::answer_body(p.screen, "first");
+  bad["rt_ms"] = -5;
+  EXPECT_EQ(p.post(bad), 400);
+  bad = Participant::answer_body(p.screen, "first");
+  bad["answer"] = "both";
+  EXPECT_EQ(p.post(bad), 400);
+  const json good = [&] {
+    json g = Participant::answer_body(p.screen, "first");
+    g["step"] = p.screen["step"];
+    return g;
+  }();
+  ASSERT_EQ(p.post(good), 200);
+  EXPECT_EQ(p.post(good), 409) << "a replayed answer";
+  EXPECT_EQ(penumbra::trial_log::read(sessions / "P02" / "trials.csv").rows.size(), 1u) << "the replay added no row";
+  // Nothing outside SESSIONS_DIR; inside it, the one session and the stimulus cache.
+  std::set<std::string> outside, inside;
+  for (const auto& e : fs::directory_iterator(tmp)) outside.insert(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(sessions)) inside.insert(e.path().filename().string());
+  EXPECT_EQ(outside, (std::set<std::string>{"sessions"}));
+  EXPECT_EQ(inside, (std::set<std::string>{".stimuli", "P02"}));
+  // Each refusal is a line on the operator's terminal.
+  const std::string out = server.app->output();
+  EXPECT_NE(out.find("refused 400 GET /api/screen: id '../escape'"), std::string::npos) << out;
+  EXPECT_NE(out.find("refused 409 GET /api/screen: id 'P02' is open in another tab"), std::string::npos) << out;
+  EXPECT_NE(out.find("refused 409 POST /api/act: step"), std::string::npos) << out;
+  fs::remove_all(tmp);
+}
+
+TEST(OnlineServer, KillNineMidSessionThenRestartContinuesWithNothingLostOrDuplicated) {
+  const fs::path tmp = fresh_dir("kill");
+  const std::string answers = "jffjfjff";
+  auto server = std::make_unique<ServerProcess>(tmp / "sessions");
+  {
+    Participant p(server->port, "P03");
+    ASSERT_EQ(p.get(), 200);
+    EXPECT_EQ(play(p, answers, 4), 4);
+    ASSERT_EQ(p.screen["screen"], "trial");
+  }
+  server->kill9();
+  EXPECT_EQ(penumbra::trial_log::read(tmp / "sessions" / "P03" / "trials.csv").rows.size(), 4u);
+  server = std::make_unique<ServerProcess>(tmp / "sessions");
+  Participant p(server->port, "P03");  // the same tab: it reloads after the connection came back
+  ASSERT_EQ(p.get(), 200);
+  EXPECT_EQ(p.screen["screen"], "welcome") << "the restarted server resumes at the welcome-back screen";
+  EXPECT_FALSE(p.screen["needs_display"].get<bool>()) << "the display measured before the crash is kept";
+  EXPECT_EQ(play(p, answers), 4);
+  EXPECT_EQ(p.screen["screen"], "end");
+  const auto rows = penumbra::trial_log::read(tmp / "sessions" / "P03" / "trials.csv").rows;
+  ASSERT_EQ(rows.size(), 8u);
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i].trial, static_cast<int>(i));
+  expect_same_as_lab(tmp / "sessions" / "P03", lab_session(tmp / "lab", "P03", answers));
+  fs::remove_all(tmp);
+}
+
+TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
+  const fs::path puppeteer = fs::path(PENUMBRA_SOURCE_DIR) / "web" / "node_modules" / "puppeteer-core";
+  const char* chromium = std::getenv("PENUMBRA_CHROMIUM") ? std::getenv("PENUMBRA_CHROMIUM") : "/usr/bin/chromium";
+  if (!fs::exists(chromium) || !fs::exists(puppeteer) || std::system("node --version >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "needs Debian's chromium (scripts/setup.sh --test), node and web/node_modules (npm ci)";
+  const fs::path tmp = fresh_dir("browser");
+  ServerProcess server(tmp / "sessions");
+  const std::string answers = "fjjffjfj";
+  const fs::path shots = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS") ? fs::path(std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) : tmp / "screens";
+  const std::string cmd = "timeout 300 node " + (fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string() + " 'http://127.0.0.1:" +
+                          std::to_string(server.port) + "/?id=B01' '" + shots.string() + "' " + answers + " > " + (tmp / "browser.txt").string() + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  const std::string said = penumbra::test::slurp(tmp / "browser.txt");
+  ASSERT_EQ(status, 0) << said << "\nserver:\n" << server.app->output();
+  EXPECT_NE(said.find("end: completion code"), std::string::npos) << said;
+  for (const char* screen : {"consent", "intake", "fullscreen", "chinrest-card", "chinrest-blindspot", "trial0", "feedback", "end"})
+    EXPECT_NE(said.find(std::string("screen: ") + screen), std::string::npos) << screen << "\n" << said;
+  expect_same_as_lab(tmp / "sessions" / "B01", lab_session(tmp / "lab", "B01", answers));
+  const json j = penumbra::json_input::read_file(tmp / "sessions" / "B01" / "session.json");
+  const json& shown = j["presentation"].back();
+  EXPECT_EQ(shown["kind"], "browser");
+  EXPECT_GT(shown["pixels_per_degree"].get<double>(), 5);
+  EXPECT_GT(shown["refresh_hz"].get<double>(), 10);
+  EXPECT_NE(shown["user_agent"].get<std::string>().find("Chrome"), std::string::npos);
+  for (const auto& r : penumbra::trial_log::read(tmp / "sessions" / "B01" / "trials.csv").rows) {
+    ASSERT_TRUE(r.timing.has_value());
+    EXPECT_GE(r.timing->frames, 1);
+    EXPECT_GT(r.rt_ms, 0);
+  }
+  const json online = penumbra::json_input::read_file(tmp / "sessions" / "B01" / "online.json");
+  EXPECT_EQ(online["quality"]["page_loads"], 1);
+  if (!std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) fs::remove_all(tmp);
+}
+
+}  // namespace
