@@ -164,7 +164,8 @@ int run(const std::vector<std::string>& args, const Merged* merged);
 // curves, bootstrap and output as the unsharded run (run() with the parts' own arguments).
 int merge_main(int argc, char** argv) {
   CLI::App app{"Merge the part files of penumbra-observer-curve --shard I/N --part FILE into the calibration.json the "
-               "unsharded run writes (docs/cluster.md)"};
+               "unsharded run writes (docs/cluster.md)",
+               "penumbra-observer-curve merge"};
   cli::describe_tool(app, "penumbra-observer-curve merge", "cluster.md");
   std::vector<std::string> paths;
   std::string out;
