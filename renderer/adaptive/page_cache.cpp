@@ -46,6 +46,23 @@ void PageCache::invalidate_all() {
   for (int i = 0; i < pool_slots(); ++i) free_slot(i);
 }
 
+void PageCache::invalidate_all_but(const std::set<Page>& kept, LightXY camera_xy) {
+  std::set<PageKey> keys;
+  for (const Page& p : kept) {
+    if (p.level < 0 || p.level >= layout_.levels || p.x < 0 || p.y < 0 || p.x >= layout_.pages_per_side || p.y >= layout_.pages_per_side)
+      throw std::invalid_argument("page cache: kept page outside the layout (level " + std::to_string(p.level) + ", " +
+                                  std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
+    const LightXY o = level_origin(p.level, camera_xy, layout_);  // page-snapped, as update() takes it
+    keys.insert({p.level, std::llround(o.x / page_ws(p.level)) + p.x, std::llround(o.y / page_ws(p.level)) + p.y});
+  }
+  for (int i = 0; i < pool_slots(); ++i) {
+    const Slot& s = slots_[static_cast<std::size_t>(i)];
+    if (!s.used || keys.count(s.key)) continue;
+    free_slot(i);
+    ++invalidated_;
+  }
+}
+
 int PageCache::invalidate(LightXY lo, LightXY hi) {
   if (!(lo.x <= hi.x && lo.y <= hi.y)) return 0;
   int dropped = 0;

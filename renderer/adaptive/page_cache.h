@@ -88,6 +88,11 @@ class PageCache {
 
   // Drops every page (the light, its depth range or the raster bias changed).
   void invalidate_all();
+  // Drops every page but those of `kept` (window-relative for a camera at `camera_xy`, as
+  // region_floor_pages gives them): a frame that draws its pages anew keeps the coarse fallback an
+  // engine keeps resident (the late marks' region floor). Counted as invalidated. Throws
+  // std::invalid_argument for a kept page outside the layout (before anything changes).
+  void invalidate_all_but(const std::set<Page>& kept, LightXY camera_xy);
   // Drops the resident pages whose light-space square meets the rectangle [lo, hi] (a caster's
   // light-space footprint, at any depth: call with a moved caster's old and new bounds). Returns how
   // many. An empty rectangle (lo > hi on an axis) drops none.

@@ -379,14 +379,16 @@ class VirtualPagesPass final : public Pass {
       }
       // At most 16 pages (1 MiB of 128² depths; 8 coarse pages on the town's street), what the first
       // frame after a cut shows. 256 pages (a quarter of the default pool) took 234 pages beside the
-      // 104 the street's marks asked for. Each floor page draws every caster over it: uncached, the
-      // floor costs about one more draw of the town a frame (docs/results/virtual-maps.md).
+      // 104 the street's marks asked for. Each floor page draws every caster over it, so the floor
+      // stays resident even without map.virtual_cache (drawn again only where a caster moved or the
+      // light did, like an engine's coarse levels): redrawn every frame it doubled the triangles of
+      // an uncached frame on the street (docs/results/virtual-maps.md).
       constexpr int kRegionFloorPages = 16;
       const std::set<adaptive::Page> floor =
           adaptive::region_floor_pages(view.region_lo, view.region_hi, view.camera_xy, layout, std::min(kRegionFloorPages, v->map->pool_slots() / 4));
       out.region_floor = static_cast<int>(floor.size());
       requested.insert(floor.begin(), floor.end());
-      if (!s.map.virtual_cache) v->map->invalidate_all();
+      if (!s.map.virtual_cache) v->map->invalidate_all_but(floor, view.camera_xy);
       const VirtualShadowMap::StepReport report = steps("");
       out.pages = v->map->update(requested, view, f.scene, f.meshes, &report);
       step("virtual_mark");

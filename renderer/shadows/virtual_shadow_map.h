@@ -208,6 +208,8 @@ class VirtualShadowMap {
   std::uint64_t page_bytes() const;
   // Drops every page (the light moved).
   void invalidate_all();
+  // Drops every page but `kept` (window-relative for a camera at `camera_xy`): adaptive::PageCache::invalidate_all_but.
+  void invalidate_all_but(const std::set<adaptive::Page>& kept, adaptive::LightXY camera_xy) { cache_.invalidate_all_but(kept, camera_xy); }
   // Drops the pages over the world box `bounds` (a caster moved: call with its old and its new
   // bounds): those whose light-space square meets the box's light-space footprint, at any depth.
   void invalidate(const scene::Aabb& bounds);

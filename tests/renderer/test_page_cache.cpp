@@ -5,6 +5,7 @@
 
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <vector>
 
 #include "adaptive/page_cache.h"
@@ -69,6 +70,31 @@ TEST(PageCache, AMovingCameraKeepsPagesByTheirPlaceInLightSpace) {
   EXPECT_EQ(cache.key_of({0, 1, 2}), (PageKey{0, 0, 0}));
   EXPECT_DOUBLE_EQ(cache.origin(0).x, -4.0);
   EXPECT_DOUBLE_EQ(cache.origin(1).x, -16.0);  // level 1's window has not moved (a page there is 8 wide)
+}
+
+// An uncached frame of late marks draws its pages anew but keeps the region floor: the kept pages
+// are found by their place in light space for the camera given (here moved by one level-0 page,
+// so that the kept level-0 page is window (1, 2) now), everything else is dropped and counted.
+TEST(PageCache, InvalidatingAllButTheFloorKeepsExactlyTheFloor) {
+  PageCache cache(tiny(), 16);
+  const std::set<Page> floor = {{2, 1, 1}, {2, 2, 1}};
+  std::set<Page> asked = floor;
+  asked.insert({{0, 2, 2}, {1, 0, 0}});
+  EXPECT_EQ(cache.update(asked, {0, 0}).stats.drawn, 4);
+  const int floor_slot = cache.slot_of({2, 1, 1});
+  const std::set<Page> kept = {{2, 1, 1}, {2, 2, 1}, {0, 1, 2}};  // level 2's window has not moved; (0, 1, 2) is the old (0, 2, 2)
+  cache.invalidate_all_but(kept, {4, 0});
+  const PageCache::Update next = cache.update(asked, {0, 0});  // the camera back: the same windows as the first frame
+  EXPECT_EQ(next.stats.invalidated, 1) << "only (1, 0, 0) was dropped";
+  EXPECT_EQ(next.stats.cached, 3);
+  EXPECT_EQ(next.stats.drawn, 1);
+  ASSERT_EQ(next.to_draw.size(), 1u);
+  EXPECT_EQ(next.to_draw[0].key, (PageKey{1, -2, -2}));
+  EXPECT_EQ(cache.slot_of({2, 1, 1}), floor_slot) << "a kept page stays in its slot";
+  cache.invalidate_all_but({}, {0, 0});
+  EXPECT_EQ(cache.resident(), 0) << "nothing kept: everything dropped";
+  EXPECT_THROW(cache.invalidate_all_but({{3, 0, 0}}, {0, 0}), std::invalid_argument);
+  EXPECT_THROW(cache.invalidate_all_but({{0, 4, 0}}, {0, 0}), std::invalid_argument);
 }
 
 TEST(PageCache, EvictsTheLeastRecentlyAskedForPageAndNeverOneTheFrameKeeps) {

@@ -1136,6 +1136,36 @@ TEST(VirtualMap, MarksReadAFrameLateWaitForNothingAndTheFirstFrameIsCoarseNotLit
   }
 }
 
+// Uncached (map.virtual_cache false), late marks keep the region floor resident: from the second
+// frame on its pages are cached, not drawn again, and a frame draws the triangles of the pages its
+// marks asked for, no more than the same-frame marking draws (before, the floor was redrawn every
+// frame and doubled the triangles on the street).
+TEST(VirtualMap, UncachedLateMarksKeepTheFloorAndDrawNoMoreThanSameFrameMarks) {
+  shadows::ShadowSettings s = virtual_pcf(shadows::VirtualPages::rule);
+  s.map.virtual_cache = false;
+  const int w = 160, h = 90;
+  shadows::Renderer same_frame;
+  same_frame.set_scene(scene::make_builtin_scene("demo"));
+  same_frame.render(s, w, h);
+  const shadows::FrameInfo now = same_frame.render(s, w, h);
+  EXPECT_EQ(now.virtual_map->pages.cached, 0) << "uncached: every page drawn every frame";
+  s.map.virtual_marks_late = true;
+  shadows::Renderer late;
+  late.set_scene(scene::make_builtin_scene("demo"));
+  const shadows::FrameInfo cut = late.render(s, w, h);
+  EXPECT_EQ(cut.virtual_map->pages.drawn, cut.virtual_map->region_floor);
+  for (int frame = 1; frame < 4; ++frame) {
+    const shadows::FrameInfo f = late.render(s, w, h);
+    const auto& v = *f.virtual_map;
+    SCOPED_TRACE(frame);
+    EXPECT_EQ(v.sync_reads, 0);
+    EXPECT_GE(v.pages.cached, v.region_floor) << "the floor stays resident";
+    EXPECT_LE(v.pages.drawn, now.virtual_map->pages.drawn) << "the marked pages alone are drawn";
+    EXPECT_LE(v.pages.triangles, now.virtual_map->pages.triangles);
+    EXPECT_GT(v.pages.triangles, 0u);
+  }
+}
+
 TEST(VirtualMap, BadLayoutsAreRefused) {
   VirtualMapLayout l = small_layout();
   l.levels = shadows::contract::VIRTUAL_MAX_LEVELS + 1;
