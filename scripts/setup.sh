@@ -25,7 +25,11 @@ packages=(
   libcpp-httplib-dev nodejs  # penumbra-study serve and its page (web/, docs/study-online.md)
 )
 command -v npm >/dev/null || packages+=(npm)  # Debian's npm, unless node came with its own
-[[ "${1:-}" == "--test" ]] && packages+=(chromium)  # the online study's real-browser test (puppeteer-core drives it)
+if [[ "${1:-}" == "--test" ]]; then
+  packages+=(chromium)  # the online study's real-browser test (puppeteer-core drives it)
+  # A single-node Slurm that study.predict_calibration_slurm_array starts and stops itself (docs/cluster.md)
+  packages+=(munge slurmctld slurmd slurm-client)
+fi
 
 # The online study's page: jsPsych from npm as web/package-lock.json pins it (the build copies it
 # into the page's static files; no CDN at run time). Installed again only when the lock file is
