@@ -186,7 +186,7 @@ async function runTrial(display) {
       running = false;
       document.removeEventListener("keydown", onKey);
       const at = Math.max(e.timeStamp, onset);
-      resolve({ answer: keys[e.key], key: e.key, onset_ms: onset, response_ms: at, rt_ms: at - onset, frame_ms: frames.slice(0, 20000) });
+      resolve({ answer: keys[e.key], key: e.key, onset_ms: onset, response_ms: at, rt_ms: at - onset, frame_ms: frames.slice(0, 6000).map((x) => Math.round(x * 100) / 100) });
     };
     document.addEventListener("keydown", onKey);
   });
