@@ -1,8 +1,9 @@
 // A whole short online session in a real browser (tests/study/online_test.cpp runs it): Debian's
 // chromium, headless, driven by puppeteer-core from web/node_modules (nothing downloads a browser).
-// Usage: node online_browser_session.mjs URL SCREENSHOT_DIR [ANSWERS]
-//   URL: the participant link (http://127.0.0.1:PORT/?id=ID); ANSWERS: the keys pressed on the
-//   trials in order, f (first) or j (second), repeated when shorter than the session (default "f").
+// Usage: node online_browser_session.mjs URL SCREENSHOT_DIR [ANSWERS] [RELOAD_AT]
+//   URL: the participant link (http://127.0.0.1:PORT/?id=ID); ANSWERS: the key pressed on trial n
+//   is ANSWERS[n % length], f (first) or j (second) (default "f"); RELOAD_AT: reload the page once
+//   when trial RELOAD_AT is on screen, instead of answering it.
 // Takes a screenshot of each new screen (NN-<screen>.png) and prints one line per step.
 import { createRequire } from "node:module";
 import { mkdirSync } from "node:fs";
@@ -13,7 +14,9 @@ const here = dirname(fileURLToPath(import.meta.url));
 const require = createRequire(join(here, "../../web/package.json"));
 const puppeteer = require("puppeteer-core");
 
-const [url, shots, answers = "f"] = process.argv.slice(2);
+const [url, shots, answers = "f", reloadAtText = "-1"] = process.argv.slice(2);
+const reloadAt = Number(reloadAtText);
+let reloaded = false;
 mkdirSync(shots, { recursive: true });
 const browser = await puppeteer.launch({
   executablePath: process.env.PENUMBRA_CHROMIUM || "/usr/bin/chromium",
@@ -50,7 +53,8 @@ try {
       return "";
     });
     if (!state) continue;
-    const name = state === "trial" ? "trial" + answered : state;
+    const trialNumber = state === "trial" ? await page.evaluate(() => screen.trial.number) : -1;
+    const name = state === "trial" ? "trial" + trialNumber : state;
     if (name !== lastName) {
       shot += 1;
       await page.screenshot({ path: join(shots, `${String(shot).padStart(2, "0")}-${name.replace(/[^A-Za-z0-9-]+/g, "_").slice(0, 40)}.png`) });
@@ -73,8 +77,13 @@ try {
         await sleep(300);
       }
     } else if (state === "chinrest-report") await page.click("#distance-report #proceed");
-    else if (state === "trial") {
-      await page.keyboard.press(answers[answered % answers.length] === "j" ? "j" : "f");
+    else if (state === "trial" && trialNumber === reloadAt && !reloaded) {
+      reloaded = true;
+      console.log(`reload on trial ${trialNumber}`);
+      await page.reload({ waitUntil: "networkidle0" });
+      lastName = "";
+    } else if (state === "trial") {
+      await page.keyboard.press(answers[trialNumber % answers.length] === "j" ? "j" : "f");
       answered += 1;
       lastName = "";
       changed = Date.now();

@@ -39,9 +39,9 @@ fs::path fresh_dir(const std::string& name) {
 struct ServerProcess {
   std::unique_ptr<App> app;
   int port = 0;
-  explicit ServerProcess(const fs::path& sessions) {
+  explicit ServerProcess(const fs::path& sessions, int port_ = 0) {
     app = std::make_unique<App>(PENUMBRA_STUDY_EXE, std::vector<std::string>{"serve", "--config", kConfig.string(), "-o", sessions.string(),
-                                                                             "--port", "0", "--bind", "127.0.0.1", "--iti-ms", "50"});
+                                                                             "--port", std::to_string(port_), "--bind", "127.0.0.1", "--iti-ms", "50"});
     if (!app->wait_for("listening on http://127.0.0.1:")) throw std::runtime_error("the server did not start: " + app->output());
     const std::string out = app->output();
     port = std::stoi(out.substr(out.find("listening on http://127.0.0.1:") + 30));
@@ -288,11 +288,17 @@ TEST(OnlineServer, KillNineMidSessionThenRestartContinuesWithNothingLostOrDuplic
   fs::remove_all(tmp);
 }
 
-TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
+// Debian's chromium, node and puppeteer-core from web/node_modules: "" when all are there.
+std::string browser_missing() {
   const fs::path puppeteer = fs::path(PENUMBRA_SOURCE_DIR) / "web" / "node_modules" / "puppeteer-core";
   const char* chromium = std::getenv("PENUMBRA_CHROMIUM") ? std::getenv("PENUMBRA_CHROMIUM") : "/usr/bin/chromium";
-  if (!fs::exists(chromium) || !fs::exists(puppeteer) || std::system("node --version >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "needs Debian's chromium (scripts/setup.sh --test), node and web/node_modules (npm ci)";
+  if (!fs::exists(chromium) || !fs::exists(puppeteer) || !fs::exists("/usr/bin/node"))
+    return "needs Debian's chromium (scripts/setup.sh --test), /usr/bin/node and web/node_modules (npm ci)";
+  return "";
+}
+
+TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
+  if (const std::string missing = browser_missing(); !missing.empty()) GTEST_SKIP() << missing;
   const fs::path tmp = fresh_dir("browser");
   ServerProcess server(tmp / "sessions");
   const std::string answers = "fjjffjfj";
@@ -320,6 +326,40 @@ TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   const json online = penumbra::json_input::read_file(tmp / "sessions" / "B01" / "online.json");
   EXPECT_EQ(online["quality"]["page_loads"], 1);
   if (!std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) fs::remove_all(tmp);
+}
+
+// A reload while trial 2 is on screen shows trial 2 again; the server killed (SIGKILL) while
+// trial 4 is up and started again on the same port: the page reconnects and the session ends with
+// every trial once.
+TEST(OnlineServer, RealBrowserReloadMidTrialAndServerKillMidSessionLoseNothing) {
+  if (const std::string missing = browser_missing(); !missing.empty()) GTEST_SKIP() << missing;
+  const fs::path tmp = fresh_dir("browser-kill");
+  auto server = std::make_unique<ServerProcess>(tmp / "sessions");
+  const int port = server->port;
+  const std::string answers = "jjffjfjf";
+  App browser("/usr/bin/node", {(fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string(),
+                                "http://127.0.0.1:" + std::to_string(port) + "/?id=B02", (tmp / "screens").string(), answers, "2"});
+  bool up = false;
+  for (int tries = 0; tries < 10 && !up; ++tries) up = browser.wait_for("screen: trial4");
+  ASSERT_TRUE(up) << browser.output() << "\nserver:\n" << server->app->output();
+  server->kill9();
+  server = std::make_unique<ServerProcess>(tmp / "sessions", port);
+  ASSERT_EQ(browser.wait_exit(std::chrono::seconds(240)), 0) << browser.output() << "\nserver:\n" << server->app->output();
+  const std::string said = browser.output();
+  EXPECT_NE(said.find("reload on trial 2"), std::string::npos) << said;
+  const std::size_t first = said.find("screen: trial2");
+  ASSERT_NE(first, std::string::npos) << said;
+  EXPECT_NE(said.find("screen: trial2", first + 1), std::string::npos) << "after the reload, trial 2 again\n" << said;
+  EXPECT_NE(said.find("end: completion code"), std::string::npos) << said;
+  EXPECT_NE(server->app->output().find("B02: trial 7: "), std::string::npos) << "the restarted server took the last answer\n"
+                                                                               << server->app->output();
+  const auto rows = penumbra::trial_log::read(tmp / "sessions" / "B02" / "trials.csv").rows;
+  ASSERT_EQ(rows.size(), 8u);
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i].trial, static_cast<int>(i));
+  expect_same_as_lab(tmp / "sessions" / "B02", lab_session(tmp / "lab", "B02", answers));
+  const json online = penumbra::json_input::read_file(tmp / "sessions" / "B02" / "online.json");
+  EXPECT_EQ(online["quality"]["page_loads"], 2) << "the first load and the reload";
+  fs::remove_all(tmp);
 }
 
 }  // namespace
