@@ -255,7 +255,7 @@ struct Server::Impl {
       : o(std::move(options)),
         stimuli(o.sessions_dir / ".stimuli"),
         per_id(o.max_requests_per_second),
-        per_address(o.max_requests_per_second * 4) {}
+        per_address(o.max_requests_per_second_per_address) {}
 
   void say(const std::string& line) const {
     if (o.say) o.say(line);

@@ -33,7 +33,8 @@ struct ServerOptions {
   std::string completion_url;          // the participant pool's return link; "{code}" is replaced by the code
   double iti_ms = 400;
   std::size_t max_body_bytes = 64 * 1024;  // an answer carries its frame intervals (6000 at most from the page)
-  int max_requests_per_second = 40;    // per participant id and per client address
+  int max_requests_per_second = 40;    // per participant id
+  int max_requests_per_second_per_address = 1000;  // behind a reverse proxy every participant has its address
   double tab_lease_s = 20;             // a tab not heard from for this long gives its id up
   std::function<void(const std::string& line)> say;  // the operator's terminal
 };
