@@ -24,6 +24,10 @@ void Renderer::set_scene(const scene::Scene& s) {
   gl::check_errors("scene upload");
 }
 
+void Renderer::camera_cut() {
+  if (res_->virtual_map) res_->virtual_map->late.pending = false;
+}
+
 void Renderer::reset_adaptive() {
   adaptive_.reset();
   res_->requirement.pending[0] = res_->requirement.pending[1] = false;

@@ -118,6 +118,10 @@ class Renderer {
   GLuint depth_minmax_texture() const;
   // Forgets the adaptive state (hysteresis, last PCSS requirement), e.g. after a scene change.
   void reset_adaptive();
+  // The next frame's camera is not where the last frame's was heading (a cut): with
+  // map.virtual_marks_late it draws no page of the last frame's marks (those pages lie where the
+  // camera was), only the coarse floor, and marks for the frame after.
+  void camera_cut();
   // Tints the image by cascade (debug overlay).
   void set_show_cascades(bool on) { show_cascades_ = on; }
   // Counts each pass's work with pipeline statistics queries (FrameInfo::work), read at the end of

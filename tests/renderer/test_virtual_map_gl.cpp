@@ -1164,6 +1164,14 @@ TEST(VirtualMap, UncachedLateMarksKeepTheFloorAndDrawNoMoreThanSameFrameMarks) {
     EXPECT_LE(v.pages.triangles, now.virtual_map->pages.triangles);
     EXPECT_GT(v.pages.triangles, 0u);
   }
+  // A cut: the last frame's marks lie where the camera was; the next frame draws the floor alone.
+  late.camera_cut();
+  const shadows::FrameInfo after_cut = late.render(s, w, h);
+  EXPECT_EQ(after_cut.virtual_map->pages.requested, after_cut.virtual_map->region_floor);
+  EXPECT_EQ(after_cut.virtual_map->pages.drawn, 0) << "the floor was resident";
+  const int requested = late.render(s, w, h).virtual_map->pages.requested;  // the cut frame's marks and the floor
+  EXPECT_GE(requested, now.virtual_map->pages.requested) << "the frame after it reads the cut frame's marks";
+  EXPECT_LE(requested, now.virtual_map->pages.requested + after_cut.virtual_map->region_floor);
 }
 
 TEST(VirtualMap, BadLayoutsAreRefused) {

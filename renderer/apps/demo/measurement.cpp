@@ -385,11 +385,14 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     const glm::mat4 view_projection = metrics::camera_view_projection(camera, width, height);
     for (Series& s : series) {
       s.renderer->scene().camera = camera;
-      if (!pf.continues && s.config.settings.adaptive.enabled) {
+      if (!pf.continues) s.renderer->camera_cut();  // late virtual-map marks of the last station lie elsewhere
+      if (!pf.continues && (s.config.settings.adaptive.enabled || s.config.settings.map.virtual_marks_late)) {
         // A new station: the controller starts from this view, not from the last station's maps
         // (which a 30-frame shrink delay would keep), and one untimed frame measures the view's
-        // PCSS requirement. Consecutive frames (a full path) keep the hysteresis.
-        s.renderer->reset_adaptive();
+        // PCSS requirement, or marks the virtual map's pages that late marks read a frame later
+        // (the cut frame itself is shaded from the coarse floor). Consecutive frames (a full
+        // path) keep the hysteresis and the marks.
+        if (s.config.settings.adaptive.enabled) s.renderer->reset_adaptive();
         s.renderer->render(s.config.settings, width, height);
       }
       std::vector<double> repeats;
