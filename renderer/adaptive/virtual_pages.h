@@ -28,6 +28,8 @@
 #include <tuple>
 #include <vector>
 
+#include <penumbra/published.h>
+
 namespace penumbra::adaptive {
 
 // A point in light space (orthographic: across the light), world units. No GLM here: adaptive/ stays
@@ -55,7 +57,7 @@ struct PixelRequest {
 
 struct MarkOptions {
   Marking marking = Marking::rule;
-  double c_texels = 3.47;    // the rule's constant
+  double c_texels = kPublishedC;  // the rule's constant (the published value until a calibration says otherwise)
   double min_texel_px = 1;   // the pixel floor (texels no finer than this many footprints)
 };
 

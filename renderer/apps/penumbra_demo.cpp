@@ -366,9 +366,9 @@ int run_pages(const Options& opt, shadows::ShadowSettings base) {
   const scene::GpuMeshes meshes(scene.objects);
   shadows::VirtualMapView view;  // per frame: the maps' bounded region for its camera (shadows::sun_virtual_view)
   bool has_view = false;
-  constexpr int kPoolSide = 32;
+  const int kPoolSide = shadows::ShadowMapParams{}.virtual_pool_pages;  // the renderer's default pool
   adaptive::VirtualMapLayout layout;
-  constexpr double kPageBytes = 128.0 * 128.0 * 4;  // a page of 32-bit depth
+  const double kPageBytes = static_cast<double>(layout.page_texels) * layout.page_texels * 4;  // a page of 32-bit depth
   std::vector<io::Image8> level_views;  // levels.png
   std::vector<std::string> level_labels;
   nlohmann::json report;
