@@ -25,7 +25,7 @@ double student_t_quantile(double p, double dof) {
 
 namespace {
 
-constexpr int kNodes = 241;          // normal deviates in [-6, 6]
+constexpr int kNodes = 121;          // normal deviates in [-6, 6]
 constexpr double kZMax = 6.0;
 constexpr double kTableStep = 0.004;  // log10 units of the threshold tables
 constexpr double kTableHalfWidth = 1.5;
@@ -46,6 +46,22 @@ struct Table {
     const double p0 = ll[static_cast<std::size_t>(i - 1)], p1 = ll[static_cast<std::size_t>(i)],
                  p2 = ll[static_cast<std::size_t>(i + 1)], p3 = ll[static_cast<std::size_t>(i + 2)];
     return p1 + 0.5 * t * (p2 - p0 + t * (2 * p0 - 5 * p1 + 4 * p2 - p3 + t * (3 * (p1 - p2) + p3 - p0)));
+  }
+  // The value and its derivative in u (0 beyond the table, where the value holds).
+  double at(double u, double* slope) const {
+    const double f = (u - u0) / step;
+    const int n = static_cast<int>(ll.size());
+    if (f <= 1 || f >= n - 2) {
+      *slope = 0;
+      return at(u);
+    }
+    const int i = static_cast<int>(std::floor(f));
+    const double t = f - i;
+    const double p0 = ll[static_cast<std::size_t>(i - 1)], p1 = ll[static_cast<std::size_t>(i)],
+                 p2 = ll[static_cast<std::size_t>(i + 1)], p3 = ll[static_cast<std::size_t>(i + 2)];
+    const double a = p2 - p0, b = 2 * p0 - 5 * p1 + 4 * p2 - p3, c = 3 * (p1 - p2) + p3 - p0;
+    *slope = 0.5 * (a + 2 * t * b + 3 * t * t * c) / step;
+    return p1 + 0.5 * t * (a + t * (b + t * c));
   }
 };
 
@@ -79,39 +95,85 @@ void unpack(const double* theta, int conditions, const Hold& h, std::vector<doub
   if (h.kind == Hold::percentile) u[static_cast<std::size_t>(h.condition)] = -(h.value - h.z * sd);
 }
 
-// -log of participant j's marginal likelihood.
-double participant_nll(const Data& d, std::size_t j, const std::vector<double>& u, double sd) {
+// -log of participant j's marginal likelihood, and (when grad_u is given) its gradient in u (K)
+// and in sd.
+double participant_nll(const Data& d, std::size_t j, const std::vector<double>& u, double sd, double* grad_u = nullptr,
+                       double* grad_sd = nullptr) {
   sd = std::max(0.0, sd);
+  const std::size_t nodes = d.nodes.size(), K = static_cast<std::size_t>(d.conditions);
   double best = -INFINITY;
-  static thread_local std::vector<double> ll;
-  ll.assign(d.nodes.size(), 0.0);
-  for (std::size_t q = 0; q < d.nodes.size(); ++q) {
+  static thread_local std::vector<double> ll, dll;  // per node: the sum over conditions; its slopes per condition
+  ll.assign(nodes, 0.0);
+  dll.assign(nodes * K, 0.0);
+  for (std::size_t q = 0; q < nodes; ++q) {
     const double b = sd * d.nodes[q];  // log10 c offset: u - b
     double sum = 0;
-    for (int k = 0; k < d.conditions; ++k) {
-      const Table& t = d.tables[j][static_cast<std::size_t>(k)];
-      if (!t.ll.empty()) sum += t.at(u[static_cast<std::size_t>(k)] - b);
+    for (std::size_t k = 0; k < K; ++k) {
+      const Table& t = d.tables[j][k];
+      if (t.ll.empty()) continue;
+      if (grad_u) sum += t.at(u[k] - b, &dll[q * K + k]);
+      else sum += t.at(u[k] - b);
     }
     ll[q] = sum;
     best = std::max(best, sum);
   }
   double total = 0;
-  for (std::size_t q = 0; q < d.nodes.size(); ++q) total += d.weights[q] * std::exp(ll[q] - best);
+  for (std::size_t q = 0; q < nodes; ++q) {
+    ll[q] = d.weights[q] * std::exp(ll[q] - best);  // now each node's share before normalising
+    total += ll[q];
+  }
+  if (grad_u) {
+    // d(-log L)/d u_k = -sum_q share_q ll'_k;  d/d sd = sum_q share_q z_q sum_k ll'_k.
+    for (std::size_t k = 0; k < K; ++k) grad_u[k] = 0;
+    *grad_sd = 0;
+    for (std::size_t q = 0; q < nodes; ++q) {
+      const double share = ll[q] / total;
+      double slopes = 0;
+      for (std::size_t k = 0; k < K; ++k) {
+        grad_u[k] -= share * dll[q * K + k];
+        slopes += dll[q * K + k];
+      }
+      *grad_sd += share * d.nodes[q] * slopes;
+    }
+  }
   return -(best + std::log(total));
 }
 
-struct ParticipantCost {
-  const Data* data;
-  std::size_t j;
-  Hold hold;
-  bool operator()(double const* const* theta, double* residual) const {
+// sqrt(2 NLL_j) with its analytic derivative in the free parameters (the map from them to u and sd
+// is linear: Hold).
+class ParticipantCost : public ceres::CostFunction {
+ public:
+  ParticipantCost(const Data* data, std::size_t j, Hold hold) : data_(data), j_(j), hold_(hold) {
+    set_num_residuals(1);
+    mutable_parameter_block_sizes()->push_back(free_count(data->conditions, hold));
+  }
+  bool Evaluate(double const* const* theta, double* residual, double** jacobians) const override {
     std::vector<double> u;
     double sd = 0;
-    unpack(theta[0], data->conditions, hold, u, sd);
-    const double nll = participant_nll(*data, j, u, sd);
-    residual[0] = std::sqrt(2.0 * std::max(nll, 1e-12));
+    const int K = data_->conditions;
+    unpack(theta[0], K, hold_, u, sd);
+    std::vector<double> gu(static_cast<std::size_t>(K));
+    double gsd = 0;
+    const double nll = participant_nll(*data_, j_, u, sd, gu.data(), &gsd);
+    const double r = std::sqrt(2.0 * std::max(nll, 1e-12));
+    residual[0] = r;
+    if (jacobians && jacobians[0]) {
+      // The held percentile's threshold moves with sd: u_k = -(q - z sd).
+      if (hold_.kind == Hold::percentile) gsd += hold_.z * gu[static_cast<std::size_t>(hold_.condition)];
+      int i = 0;
+      for (int k = 0; k < K; ++k) {
+        if ((hold_.kind == Hold::mean || hold_.kind == Hold::percentile) && k == hold_.condition) continue;
+        jacobians[0][i++] = gu[static_cast<std::size_t>(k)] / r;
+      }
+      if (hold_.kind != Hold::sd) jacobians[0][i] = gsd / r;
+    }
     return true;
   }
+
+ private:
+  const Data* data_;
+  std::size_t j_;
+  Hold hold_;
 };
 
 double total_nll(const Data& d, const std::vector<double>& u, double sd) {
@@ -134,16 +196,13 @@ Solution solve(const Data& d, const Hold& hold, const std::vector<double>& u_sta
   if (hold.kind != Hold::sd) theta.push_back(std::max(sd_start, 0.01));
   ceres::Problem problem;
   for (std::size_t j = 0; j < d.tables.size(); ++j) {
-    auto* cost = new ceres::DynamicNumericDiffCostFunction<ParticipantCost, ceres::CENTRAL>(new ParticipantCost{&d, j, hold});
-    cost->AddParameterBlock(n);
-    cost->SetNumResiduals(1);
-    problem.AddResidualBlock(cost, nullptr, theta.data());
+    problem.AddResidualBlock(new ParticipantCost(&d, j, hold), nullptr, theta.data());
   }
   if (hold.kind != Hold::sd) {
     problem.SetParameterLowerBound(theta.data(), n - 1, 0.0);
     problem.SetParameterUpperBound(theta.data(), n - 1, 1.0);
   }
-  const ceres::Solver::Options options = solver::small_problem_options(1e-10);
+  const ceres::Solver::Options options = solver::small_problem_options(1e-9);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   Solution s;
@@ -181,9 +240,22 @@ End profile_end(const std::function<Solution(double)>& at, double estimate, doub
     step *= 2;
   }
   if (!std::isfinite(outside)) return {inside, true};
-  for (int i = 0; i < 40 && std::abs(outside - inside) > 1e-5; ++i) {
-    const double mid = 0.5 * (inside + outside);
-    (excess(mid) > 0 ? outside : inside) = mid;
+  // Illinois (regula falsi) between a point inside and one outside the cut-off.
+  double f_in = excess(inside), f_out = excess(outside);
+  int side = 0;
+  for (int i = 0; i < 30 && std::abs(outside - inside) > 2e-4; ++i) {
+    const double v = (f_out * inside - f_in * outside) / (f_out - f_in);
+    const double fv = excess(v);
+    if (std::abs(fv) < 1e-6) return {v, false};
+    if (fv > 0) {
+      outside = v, f_out = fv;
+      if (side == -1) f_in *= 0.5;
+      side = -1;
+    } else {
+      inside = v, f_in = fv;
+      if (side == 1) f_out *= 0.5;
+      side = 1;
+    }
   }
   return {0.5 * (inside + outside), false};
 }

@@ -12,10 +12,10 @@
 // The likelihood integrates b_j numerically: each participant's likelihood in condition k as a
 // function of its threshold u = -log10 c is tabulated once (slope and lapse held at the condition's
 // joint fit, ConditionFit::linear; a cubic through the table), and the product over conditions is
-// integrated against the normal density on a fixed grid of 241 normal deviates in [-6, 6]
-// (trapezoid rule: spacing sd / 20, fine beside the width of a participant's likelihood at every
-// sd the data allow). Ceres minimizes the marginal negative log-likelihood as a sum of squares,
-// one residual sqrt(2 NLL_j) per participant (central numeric derivatives: the table is cheap).
+// integrated against the normal density on a fixed grid of 121 normal deviates in [-6, 6]
+// (trapezoid rule: spacing sd / 10, fine beside the width of a participant's likelihood at the
+// spreads people show). Ceres minimizes the marginal negative log-likelihood as a sum of squares,
+// one residual sqrt(2 NLL_j) per participant, with its analytic gradient through the tables.
 //
 // Intervals are profile likelihood: the quantity held, the rest refitted. For the population mean
 // and a percentile the cut-off is the squared Student t quantile with participants - 1 degrees of

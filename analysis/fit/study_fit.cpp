@@ -292,6 +292,24 @@ ModelSpec joint_spec(const StudyFit& fit, const std::vector<std::map<std::string
 
 }  // namespace
 
+namespace {
+
+// The population's worst-case interval into the entry's ci95; an interval the profile never closed
+// (too few participants or trials to bound the spread) is kept beside it and flagged, not hulled:
+// it would say nothing but "unbounded".
+void add_population(WorstCase& w, const MultilevelFit& m) {
+  if (!m.fitted) return;
+  const MultilevelInterval& i = m.worst_mean_c_ci;
+  w.population = {i.lo, i.hi, i.lo_open, i.hi_open};
+  if (i.lo_open || i.hi_open || !(i.lo > 0.01 && i.hi < 1000)) {
+    w.flags.add("population_interval_open");
+    return;
+  }
+  w.ci95 = hull(w.ci95, w.population);
+}
+
+}  // namespace
+
 WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string, std::vector<Group>>>& groups,
                      const StudyFitOptions& options, int threads, const std::function<void()>& one_done) {
   WorstCase w;
@@ -310,6 +328,7 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
     w.beta_wald = only.beta_wald;
     w.lapse = only.linear.params.lambda;
     w.flags = only.flags;
+    add_population(w, fit.population);
     return w;
   }
   // Do the conditions differ? One threshold for all against one per condition.
@@ -323,7 +342,37 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
   for (const ConditionFit& c : fit.conditions)
     if (c.c > largest->c) largest = &c;
   w.max_c = largest->c;
-  const bool pooled = w.lr_p >= 0.05;
+  // The worst case without a significance gate (issue 48): each condition's log10 c shrunk toward
+  // their precision-weighted mean by the between-condition variance the data show
+  // (DerSimonian-Laird: tau^2 = max(0, (Q - (K - 1)) / (sum w - sum w^2 / sum w)), weights 1 / se^2
+  // of each condition's joint fit), theta_k* = mean + tau^2 / (tau^2 + se_k^2) (theta_k - mean),
+  // and the largest of them. Equal conditions give tau^2 = 0 most of the time: the conditions' one
+  // c (the pooled fit), which no maximum biased; clearly different ones are barely shrunk: the
+  // largest. In between the estimate moves smoothly, with no test deciding. Its interval (below)
+  // holds the population's worst-case interval, which covers whatever the differences.
+  std::vector<double> theta, se2;
+  for (const ConditionFit& c : fit.conditions) {
+    theta.push_back(std::log10(c.c));
+    double se = c.linear.se(0);
+    if (!std::isfinite(se) && std::isfinite(c.c_profile.lo) && std::isfinite(c.c_profile.hi))
+      se = std::log10(c.c_profile.hi / c.c_profile.lo) / (2 * z_of(options.level));
+    se2.push_back(std::isfinite(se) && se > 0 ? se * se : 1.0);
+  }
+  double sw = 0, sw2 = 0, weighted_mean = 0;
+  for (std::size_t k = 0; k < theta.size(); ++k) sw += 1 / se2[k], sw2 += 1 / (se2[k] * se2[k]), weighted_mean += theta[k] / se2[k];
+  weighted_mean /= sw;
+  double q = 0;
+  for (std::size_t k = 0; k < theta.size(); ++k) q += (theta[k] - weighted_mean) * (theta[k] - weighted_mean) / se2[k];
+  const double tau2 = std::max(0.0, (q - static_cast<double>(theta.size() - 1)) / (sw - sw2 / sw));
+  w.tau_log10 = std::sqrt(tau2);
+  const bool pooled = tau2 <= 0;
+  std::size_t chosen = 0;
+  double largest_log10 = -INFINITY;
+  for (std::size_t k = 0; k < theta.size(); ++k) {
+    const double shrunk = weighted_mean + tau2 / (tau2 + se2[k]) * (theta[k] - weighted_mean);
+    if (shrunk > largest_log10) largest_log10 = shrunk, chosen = k;
+  }
+  const ConditionFit* largest_shrunk = &fit.conditions[chosen];
   // The participants, and each one's groups per condition (empty where a participant lacks one).
   std::vector<std::string> people;
   for (const auto& per_condition : groups)
@@ -347,13 +396,14 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
       w.beta_wald = {std::exp(f_one.params.log_beta - z * se), std::exp(f_one.params.log_beta + z * se), false, false};
     }
   } else {
-    w.method = "bias-corrected maximum";
-    w.condition = largest->condition;
-    w.profile = largest->c_profile;
-    w.beta = largest->beta;
-    w.beta_wald = largest->beta_wald;
-    w.lapse = largest->linear.params.lambda;
-    w.flags = largest->flags;
+    w.method = "shrunken maximum";
+    w.condition = largest_shrunk->condition;
+    w.c = std::pow(10.0, largest_log10);
+    w.profile = largest_shrunk->c_profile;
+    w.beta = largest_shrunk->beta;
+    w.beta_wald = largest_shrunk->beta_wald;
+    w.lapse = largest_shrunk->linear.params.lambda;
+    w.flags = largest_shrunk->flags;
   }
   if (options.bootstrap > 0 && people.size() >= 2) {
     // Participants resampled with replacement, the same draw for every condition (paired).
@@ -368,10 +418,7 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
           if (const auto it = groups[k].find(draw[j]); it != groups[k].end())
             resampled[k][draw[j] + "#" + std::to_string(j)] = it->second;  // a participant drawn twice counts twice
       double value = NAN;
-      if (pooled) {
-        const FitResult f = analysis::fit(joint_spec(fit, resampled, true), f_one.params, false);
-        value = -f.params.u[0];
-      } else {
+      {
         double best = -INFINITY;
         for (std::size_t k = 0; k < groups.size(); ++k) {
           if (resampled[k].empty()) continue;
@@ -389,7 +436,7 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
     if (!values.empty()) {
       w.resamples = static_cast<int>(values.size());
       double shift = 0;
-      if (!pooled) {
+      {
         double mean = 0;
         for (double v : values) mean += v;
         mean /= static_cast<double>(values.size());
@@ -400,8 +447,10 @@ WorstCase worst_case(const StudyFit& fit, const std::vector<std::map<std::string
                      false};
     }
   }
-  if (!pooled) w.c = std::isfinite(w.bias_log10) ? std::pow(10.0, std::log10(w.max_c) - w.bias_log10) : w.max_c;
   w.ci95 = hull(w.profile, w.bootstrap);
+  // The population's worst case (fit/multilevel_fit.h): participants as random effects, the largest
+  // of the conditions' simultaneous intervals.
+  add_population(w, fit.population);
   return w;
 }
 

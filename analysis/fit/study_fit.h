@@ -128,26 +128,30 @@ struct ConditionFit {
 
 // The c calibration.json takes: the worst case over conditions, without the selection bias of a
 // plain maximum (with conditions of equal c, the largest of their estimates is biased upward by
-// 3-4 % and its interval covers about 90 %). First a likelihood-ratio test of whether the
-// conditions differ at all (one threshold against one per condition, slope and lapse shared):
-//  - they do not (p >= 0.05): c is the one threshold of all conditions pooled, which no selection
-//    touched ("pooled");
-//  - they do: c is the largest condition's, less the maximum's bias estimated by a bootstrap over
-//    participants (each resample refits every condition and takes the maximum: bias =
-//    mean log10 max* - log10 max), "bias-corrected maximum".
-// The interval the renderer reads (ci95) holds both the trial-level profile interval and the
-// participant bootstrap's (so differences between participants widen it); the profile interval
-// alone is kept beside it. With --condition, that condition's c with the same two intervals.
+// 3-4 % and its interval covers about 90 %) and without a significance gate (issue 48: pooling
+// when an LR test said p >= 0.05 covered the worst condition's c in 25 of 40 studies with one
+// condition 5 % above the rest).
+//  - c: each condition's log10 c shrunk toward their precision-weighted mean by the
+//    between-condition variance the data show (DerSimonian-Laird tau^2), and the largest of them
+//    ("shrunken maximum"); where tau^2 is 0 the conditions' one c, the pooled fit ("pooled").
+//  - ci95: the hull of the chosen condition's profile interval, the participant bootstrap of the
+//    maximum (percentile, less the maximum's bias) and the population's worst-case interval of the
+//    multilevel fit (the largest of the conditions' simultaneous intervals: it covers the largest
+//    true c whenever each condition's interval covers its own, whatever the differences).
+// The likelihood-ratio test of whether the conditions differ is reported, and decides nothing.
+// With --condition, that condition's c with its profile and bootstrap intervals.
 struct WorstCase {
-  std::string method;     // single condition | pooled | bias-corrected maximum | chosen (--condition)
+  std::string method;     // single condition | pooled | shrunken maximum | chosen (--condition)
   std::string condition;  // the condition c is taken from, or "all conditions" (pooled)
   double c = NAN;
   Interval profile;       // trial-level: profile likelihood of the chosen estimate
   Interval bootstrap;     // participants resampled (percentile; bias-corrected for the maximum)
-  Interval ci95;          // what calibration.json's ci95 holds: the hull of the two above
+  Interval population;    // the multilevel fit's worst-case interval of the population mean c
+  Interval ci95;          // what calibration.json's ci95 holds: the hull of the three above
+  double tau_log10 = NAN; // between-condition sd of log10 c the shrinkage used (0: the pooled c)
   double lr_stat = NAN, lr_p = NAN;  // conditions differ? (dof = conditions - 1)
   int lr_dof = 0;
-  double max_c = NAN, bias_log10 = NAN;  // the plain maximum and its estimated bias (bias-corrected case)
+  double max_c = NAN, bias_log10 = NAN;  // the plain maximum and its bias estimated by the bootstrap
   int resamples = 0;
   // The psychometric function c is a threshold on: the fit c came from (the pooled model, or the
   // largest condition's).

@@ -245,7 +245,7 @@ Json population_json(const StudyFit& fit, const std::optional<std::string>& want
   char pct[32];
   std::snprintf(pct, sizeof pct, "%g", 100.0 * m.percentile);
   return {{"method", "multilevel: log10 c = condition mean (fixed) + participant offset (random, normal, the same in every condition), "
-                     "integrated out by quadrature on 241 normal deviates; slope and lapse held at each condition's joint fit"},
+                     "integrated out by quadrature on 121 normal deviates; slope and lapse held at each condition's joint fit"},
           {"interval", "profile likelihood; means and percentiles with the squared Student t quantile (participants - 1 dof) as "
                        "cut-off, sd with chi2(1)"},
           {"participants", m.participants},
@@ -285,11 +285,12 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
          << "; c is the radius at detection probability F = " << fmt("%.4g", fit.criterion_f) << ", QUEST's criterion for "
          << fit.p_threshold << " correct, lapse free) to " << fit.trials << " trials from " << fit.sessions << " sessions; "
          << (condition ? "condition chosen by --condition"
-                       : chosen.method == "pooled" ? "the conditions do not differ (LR test): one c for all, no maximum"
-                                                   : chosen.method == "bias-corrected maximum"
-                                                         ? "the worst condition, its maximum's selection bias removed by a bootstrap over participants"
+                       : chosen.method == "pooled" ? "the conditions' c shrunk toward their mean show no difference (tau 0): one c for all, no maximum"
+                                                   : chosen.method == "shrunken maximum"
+                                                         ? "the worst condition: the largest of the conditions' c shrunk toward their mean (no significance gate)"
                                                          : "one condition")
-         << "; ci95 holds the profile-likelihood and the participant-bootstrap intervals; inputs: " << join(inputs, " ");
+         << "; ci95 holds the profile-likelihood, the participant-bootstrap and the multilevel population intervals; inputs: "
+         << join(inputs, " ");
   Json threshold = {{"task", fit.task},
                     {"guess", fit.guess},
                     {"criterion_f", fit.criterion_f},
@@ -315,6 +316,7 @@ Json calibration_json(const StudyFit& fit, const std::optional<std::string>& con
                                 {"conditions_differ_p", number(chosen.lr_p)},
                                 {"largest_c", number(chosen.max_c)},
                                 {"bias_log10", number(chosen.bias_log10)},
+                                {"tau_log10", number(chosen.tau_log10)},
                                 {"resamples", chosen.resamples}}},
                 {"per_condition", per},
                 {"flags", chosen.flags.list}};
@@ -502,8 +504,10 @@ Json report_json(const StudyFit& fit, const ReferenceTable* reference, const std
                           {"conditions_differ_lr", number(fit.worst.lr_stat)},
                           {"conditions_differ_dof", fit.worst.lr_dof},
                           {"conditions_differ_p", number(fit.worst.lr_p)},
+                          {"ci95_population", interval(fit.worst.population)},
                           {"largest_c", number(fit.worst.max_c)},
                           {"bias_log10", number(fit.worst.bias_log10)},
+                          {"tau_log10", number(fit.worst.tau_log10)},
                           {"resamples", fit.worst.resamples},
                           {"beta", number(fit.worst.beta)}}},
           {"population", population_json(fit, std::nullopt)},
@@ -627,11 +631,12 @@ std::string summary_text(const StudyFit& fit, const ReferenceTable* reference,
       << fmt("%.2f", c.beta_wald.hi) << "], lapse " << fmt("%.3f", c.linear.params.lambda) << "\n";
   if (fit.conditions.size() > 1)
     o << "conditions differ? LR " << fmt("%.2f", chosen.lr_stat) << " on " << chosen.lr_dof << " dof, p " << fmt("%.3g", chosen.lr_p)
-      << (wanted ? "" : chosen.method == "pooled" ? ": no, one c for all (no maximum, no selection bias)"
-                                                  : ": yes, the largest (" + fmt("%.3f", chosen.max_c) + ") less its bias")
+      << (wanted ? "" : " (decides nothing); the conditions' c shrunk toward their mean (tau " + fmt("%.3f", chosen.tau_log10) + " log10): " +
+                            (chosen.method == "pooled" ? std::string("no difference left, one c for all (no maximum, no selection bias)")
+                                                       : "the largest, " + chosen.condition + " (plain maximum " + fmt("%.3f", chosen.max_c) + ")"))
       << "\n";
   o << "\ncalibration: c = " << fmt("%.3f", chosen.c) << " [" << fmt("%.3f", chosen.ci95.lo) << ", " << fmt("%.3f", chosen.ci95.hi)
-    << "] (profile and participant bootstrap; profile alone [" << fmt("%.3f", chosen.profile.lo) << ", "
+    << "] (profile, participant bootstrap and population; profile alone [" << fmt("%.3f", chosen.profile.lo) << ", "
     << fmt("%.3f", chosen.profile.hi) << "]) from " << chosen.condition << " (" << chosen.method << "), " << provenance.observers
     << "; published c = " << fmt("%g", kPublishedC) << "\n";
   if (const Json p = population_json(fit, wanted); !p.is_null()) {

@@ -2,9 +2,13 @@
 // 95 % profile-likelihood interval of c contains the planted c 90-98 % of the time.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
+#include <thread>
+#include <vector>
 
 #include "data/simulate.h"
 #include "fit/study_fit.h"
@@ -37,51 +41,68 @@ TEST(Coverage, ProfileIntervalCoversThePlantedC) {
   EXPECT_LE(rate, 0.98);
 }
 
-// Issue 29 (label slow, several minutes): four conditions of equal planted c, 6-10 participants,
-// 160 simulated studies. The entry's c (StudyFit::worst: pooled when the conditions do not differ,
-// else the bias-corrected maximum) is unbiased within 1.5 %, and its ci95 (the profile and the
-// participant bootstrap together) covers the planted c 93-97 % of the time; the plain maximum's
-// bias and its own interval's coverage are printed beside it.
-TEST(Coverage, TheEntrysIntervalCoversAndItsCIsUnbiased) {
-  const int studies = std::getenv("PENUMBRA_COVERAGE_STUDIES") ? std::atoi(std::getenv("PENUMBRA_COVERAGE_STUDIES")) : 160;
-  double sum_log = 0, sum_log_max = 0;
-  int covered = 0, covered_max = 0, pooled = 0;
-  for (int i = 0; i < studies; ++i) {
-    SimulatedStudy s;
-    s.participants = 6 + i % 5;
-    s.conditions.clear();
-    for (const auto& [pattern, contrast] : {std::pair{"stair", 1.0}, {"step", 1.0}, {"stair", 0.5}, {"step", 0.5}}) {
-      SimulatedCondition c;
-      c.pattern = pattern;
-      c.contrast = contrast;
-      c.planted.c_true = 3.0;
-      c.planted.lapse = 0.02;
-      s.conditions.push_back(c);
-    }
-    s.seed = 123000 + static_cast<std::uint64_t>(i);
-    StudyFitOptions o;
-    o.bootstrap = 100;
-    o.threads = 2;
-    o.seed = static_cast<std::uint64_t>(i) + 1;
-    const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), o);
-    const WorstCase& w = f.worst;
-    sum_log += std::log10(w.c / 3.0);
-    sum_log_max += std::log10(w.max_c / 3.0);
-    covered += w.ci95.lo <= 3.0 && 3.0 <= w.ci95.hi ? 1 : 0;
-    const ConditionFit* largest = &f.conditions.front();
-    for (const ConditionFit& c : f.conditions)
-      if (c.c > largest->c) largest = &c;
-    covered_max += largest->c_profile.lo <= 3.0 && 3.0 <= largest->c_profile.hi ? 1 : 0;
-    pooled += w.method == "pooled" ? 1 : 0;
+// Issue 48 (label slow, about 15 min of CPU on 2 threads): the entry's c with no significance gate.
+// Three conditions, one of them 0, 5 or 10 % above the other two (planted c 3.0), and participants
+// identical or differing by sd 0.08 log10 of c (the same offset in every condition); 6-10
+// participants x 3 sizes x 40 trials. The entry's ci95 must hold the worst condition's planted c
+// (the population's median observer's) in at least 90 % of the studies in every case. Run with the
+// bootstrap off: the ci95 then holds the profile and the population intervals only, and the
+// bootstrap's can only widen it, so the coverage measured is a lower bound of penumbra-fit's.
+// PENUMBRA_COVERAGE_STUDIES sets the studies per case (default 30).
+TEST(Coverage, TheEntrysIntervalCoversTheWorstConditionWhateverTheDifferences) {
+  const int studies = std::getenv("PENUMBRA_COVERAGE_STUDIES") ? std::atoi(std::getenv("PENUMBRA_COVERAGE_STUDIES")) : 30;
+  struct Case {
+    double above, sd_log10;
+  };
+  const Case cases[] = {{0.0, 0.0}, {0.05, 0.0}, {0.10, 0.0}, {0.0, 0.08}, {0.05, 0.08}};
+  std::printf("%-10s %-8s %8s %10s %10s %12s %10s %10s\n", "above", "sd", "studies", "ci95", "profile", "population", "bias %",
+              "pooled");
+  for (const Case& k : cases) {
+    std::vector<int> covered(static_cast<std::size_t>(studies)), covered_profile(covered), covered_population(covered), pooled(covered);
+    std::vector<double> log_ratio(static_cast<std::size_t>(studies));
+    std::atomic<int> next{0};
+    auto worker = [&] {
+      for (int i = next++; i < studies; i = next++) {
+        SimulatedStudy s;
+        s.participants = 6 + i % 5;
+        s.conditions.clear();
+        for (const auto& [pattern, contrast] : {std::pair{"stair", 1.0}, {"step", 1.0}, {"stair", 0.5}}) {
+          SimulatedCondition c;
+          c.pattern = pattern;
+          c.contrast = contrast;
+          c.planted.c_true = 3.0;
+          c.planted.lapse = 0.02;
+          s.conditions.push_back(c);
+        }
+        s.conditions[1].planted.c_true = 3.0 * (1 + k.above);
+        s.participant_sd_log10 = k.sd_log10;
+        s.seed = 480000 + static_cast<std::uint64_t>(i) + static_cast<std::uint64_t>(1000 * (k.above * 100 + k.sd_log10 * 1000));
+        const double worst = 3.0 * (1 + k.above);
+        StudyFitOptions o;
+        o.bootstrap = 0;
+        o.threads = 1;
+        const StudyFit f = fit_study(as_dataset(s, simulate_study(s)), o);
+        const WorstCase& w = f.worst;
+        const auto holds = [&](const Interval& v) { return v.lo <= worst && worst <= v.hi ? 1 : 0; };
+        const auto idx = static_cast<std::size_t>(i);
+        covered[idx] = holds(w.ci95);
+        covered_profile[idx] = holds(w.profile);
+        covered_population[idx] = holds(w.population);
+        pooled[idx] = w.method == "pooled" ? 1 : 0;
+        log_ratio[idx] = std::log10(w.c / worst);
+      }
+    };
+    std::thread other(worker);
+    worker();
+    other.join();
+    const auto sum = [](const std::vector<int>& v) { return std::accumulate(v.begin(), v.end(), 0); };
+    const double bias = std::pow(10.0, std::accumulate(log_ratio.begin(), log_ratio.end(), 0.0) / studies) - 1;
+    std::printf("%-10.0f %-8.2f %8d %5d %4.0f%% %5d %3.0f%% %6d %4.0f%% %+10.2f %10d\n", 100 * k.above, k.sd_log10, studies, sum(covered),
+                100.0 * sum(covered) / studies, sum(covered_profile), 100.0 * sum(covered_profile) / studies, sum(covered_population),
+                100.0 * sum(covered_population) / studies, 100 * bias, sum(pooled));
+    std::fflush(stdout);
+    EXPECT_GE(sum(covered), static_cast<int>(std::ceil(0.9 * studies))) << "above " << k.above << ", sd " << k.sd_log10;
   }
-  const double bias = std::pow(10.0, sum_log / studies) - 1, bias_max = std::pow(10.0, sum_log_max / studies) - 1;
-  const double rate = double(covered) / studies;
-  std::printf("entry c: bias %+.2f %%, ci95 covers %d/%d = %.3f (%d pooled); the plain maximum: bias %+.2f %%, its profile "
-              "interval covers %d/%d = %.3f\n",
-              100 * bias, covered, studies, rate, pooled, 100 * bias_max, covered_max, studies, double(covered_max) / studies);
-  EXPECT_LT(std::abs(bias), 0.015);
-  EXPECT_GE(rate, 0.93);
-  EXPECT_LE(rate, 0.97);
 }
 
 }  // namespace
