@@ -602,6 +602,106 @@ struct Server::Impl {
     say(p.id + ": display measured: " + json_input::dump(ppd) + " px per degree, refresh " + json_input::dump(refresh_hz) + " Hz");
   }
 
+  // ---- The admin's view: the sessions this server run holds, as the lab's admin view shows one
+  // (screen, trials, each staircase's trials, estimate and sd, r/a), with the data quality.
+  nlohmann::json status() {
+    std::vector<std::shared_ptr<Participant>> all;
+    {
+      std::lock_guard lock(participants_m);
+      for (const auto& [id, p] : participants) all.push_back(p);
+    }
+    nlohmann::json out = nlohmann::json::array();
+    const double now = steady_s();
+    for (const auto& shared : all) {
+      Participant& p = *shared;
+      std::lock_guard lock(p.m);
+      nlohmann::json j = {{"id", p.id}, {"tab_silent_s", std::round(now - p.tab_seen_s)}};
+      if (p.declined || !p.flow) {
+        j["screen"] = p.declined ? "declined consent" : "not started";
+        out.push_back(j);
+        continue;
+      }
+      const SessionFlow& flow = *p.flow;
+      const procedure::FlowStatus st = flow.status();
+      j["screen"] = st.screen;
+      j["last_answer"] = st.last_answer;
+      if (flow.has_session()) {
+        const Session& s = flow.session();
+        j["trials"] = s.trials_done();
+        j["pixels_per_degree"] = pixels_per_degree(p);
+        const nlohmann::json& q = p.online.contains("quality") ? p.online["quality"] : nlohmann::json::object();
+        j["fullscreen_exits"] = q.value("fullscreen_exits", 0);
+        j["tab_switches"] = q.value("tab_switches", 0);
+        j["page_loads"] = q.value("page_loads", 0);
+        nlohmann::json staircases = nlohmann::json::array();
+        const std::vector<int>& order = s.randomization().round_order;
+        for (std::size_t position = 0; position < order.size(); ++position) {
+          const int r = order[position];
+          for (const auto& sc : s.rounds()[static_cast<std::size_t>(r)])
+            staircases.push_back({{"round", position + 1},
+                                  {"condition", s.condition(r)},
+                                  {"staircase", sc.name},
+                                  {"trials", sc.quest.trial_count()},
+                                  {"max_trials", s.config().max_trials},
+                                  {"mean", sc.quest.mean()},
+                                  {"sd", sc.quest.sd()},
+                                  {"r_over_a", std::pow(10.0, -sc.quest.mean())},
+                                  {"state", sc.done ? "done" : sc.quest.trial_count() == 0 ? "not started" : "running"}});
+        }
+        j["staircases"] = staircases;
+      }
+      out.push_back(j);
+    }
+    return out;
+  }
+
+  static std::string html_escape(const std::string& s) {
+    std::string out;
+    for (const char c : s) {
+      if (c == '<') out += "&lt;";
+      else if (c == '>') out += "&gt;";
+      else if (c == '&') out += "&amp;";
+      else if (c == '"') out += "&quot;";
+      else out += c;
+    }
+    return out;
+  }
+
+  std::string status_html() {
+    const nlohmann::json all = status();
+    std::string h = "<!doctype html><meta charset=utf-8><meta http-equiv=refresh content=5><title>" + html_escape(o.config.name) +
+                    ": sessions</title><style>body{font-family:sans-serif}td,th{padding:2px 8px;text-align:left}"
+                    "table{border-collapse:collapse}tr:nth-child(even){background:#eee}</style><h1>" + html_escape(o.config.name) + ": " +
+                    std::to_string(all.size()) + " session(s) in this server run</h1>";
+    for (const auto& p : all) {
+      char line[400];
+      std::snprintf(line, sizeof line, "<h2>%s</h2><p>%s; %d trials; %.1f px/deg; fullscreen exits %d, tab switches %d, page loads %d; "
+                    "last heard %g s ago; %s</p>", html_escape(p["id"]).c_str(), html_escape(p["screen"]).c_str(), p.value("trials", 0),
+                    p.value("pixels_per_degree", 0.0), p.value("fullscreen_exits", 0), p.value("tab_switches", 0), p.value("page_loads", 0),
+                    p["tab_silent_s"].get<double>(), html_escape(p.value("last_answer", std::string())).c_str());
+      h += line;
+      if (!p.contains("staircases")) continue;
+      h += "<table><tr><th>round<th>condition<th>staircase<th>trials<th>estimate log10(a/r) &plusmn; sd<th>r/a<th></tr>";
+      for (const auto& sc : p["staircases"]) {
+        std::snprintf(line, sizeof line, "<tr><td>%d<td>%s<td>%s<td>%d / %d<td>%+.3f &plusmn; %.3f<td>%.2f<td>%s</tr>", sc["round"].get<int>(),
+                      html_escape(sc["condition"]).c_str(), html_escape(sc["staircase"]).c_str(), sc["trials"].get<int>(),
+                      sc["max_trials"].get<int>(), sc["mean"].get<double>(), sc["sd"].get<double>(), sc["r_over_a"].get<double>(),
+                      html_escape(sc["state"]).c_str());
+        h += line;
+      }
+      h += "</table>";
+    }
+    return h;
+  }
+
+  void check_admin(const httplib::Request& req) const {
+    const std::string given = req.get_param_value("token");
+    unsigned diff = given.size() != o.admin_token.size() ? 1u : 0u;
+    for (std::size_t i = 0; i < std::min(given.size(), o.admin_token.size()); ++i)
+      diff |= static_cast<unsigned>(given[i] ^ o.admin_token[i]);
+    if (o.admin_token.empty() || diff != 0) throw Refusal{404, "no admin page here (--admin-token and ?token=)"};
+  }
+
   void event(Participant& p, const nlohmann::json& body) {
     const std::string load = short_string(body, "load", 64);
     const long n = static_cast<long>(finite_number(body, "n", 0, 1e9));
@@ -696,6 +796,15 @@ Server::Server(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(o
               s.act(*p, body);
               reply(res, 200, s.screen(*p));
             }));
+  http.Get("/admin", guarded("GET", [&s](const httplib::Request& req, httplib::Response& res) {
+             s.check_admin(req);
+             res.set_header("Cache-Control", "no-store");
+             res.set_content(s.status_html(), "text/html; charset=utf-8");
+           }));
+  http.Get("/admin.json", guarded("GET", [&s](const httplib::Request& req, httplib::Response& res) {
+             s.check_admin(req);
+             reply(res, 200, {{"config", s.o.config.name}, {"sessions", s.status()}});
+           }));
   http.Get(R"(/stimuli/([^/]*))", guarded("GET", [&s](const httplib::Request& req, httplib::Response& res) {
              const std::string name = req.matches[1];
              if (!stimulus_name(name)) throw Refusal{400, "not a stimulus name"};

@@ -36,6 +36,7 @@ struct ServerOptions {
   int max_requests_per_second = 40;    // per participant id
   int max_requests_per_second_per_address = 1000;  // behind a reverse proxy every participant has its address
   double tab_lease_s = 20;             // a tab not heard from for this long gives its id up
+  std::string admin_token;             // "": no admin page; else /admin?token=... (and /admin.json)
   std::function<void(const std::string& line)> say;  // the operator's terminal
 };
 

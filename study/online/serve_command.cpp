@@ -36,6 +36,9 @@ ServeCommand::ServeCommand(CLI::App& app, const CLI::Validator& config_check) {
                        "the code the end screen shows (a participant pool's study code); default: one per session, from its id");
   command_->add_option("--completion-url", completion_url_,
                        "the participant pool's return link on the end screen; {code} is replaced by the completion code");
+  command_->add_option("--admin-token", admin_token_,
+                       "the admin's status page at /admin?token=TOKEN (sessions, trials, staircases, data quality; /admin.json "
+                       "the same as JSON); without it there is none");
   command_->add_option("--iti-ms", iti_ms_, "blank between trials (ms)")->capture_default_str()->check(CLI::Range(0.0, 10000.0));
 }
 
@@ -52,6 +55,9 @@ int ServeCommand::run() const {
   o.completion_code = completion_code_;
   o.completion_url = completion_url_;
   o.iti_ms = iti_ms_;
+  o.admin_token = admin_token_;
+  if (!admin_token_.empty() && admin_token_.size() < 16)
+    throw CLI::ValidationError("--admin-token", "at least 16 characters (it is all that guards the page)");
   if (completion_code_.size() > 64) throw CLI::ValidationError("--completion-code", "at most 64 characters");
   static std::mutex say_m;
   o.say = [](const std::string& line) {

@@ -44,9 +44,11 @@ fs::path fresh_dir(const std::string& name) {
 struct ServerProcess {
   std::unique_ptr<App> app;
   int port = 0;
-  explicit ServerProcess(const fs::path& sessions, int port_ = 0) {
-    app = std::make_unique<App>(PENUMBRA_STUDY_EXE, std::vector<std::string>{"serve", "--config", kConfig.string(), "-o", sessions.string(),
-                                                                             "--port", std::to_string(port_), "--bind", "127.0.0.1", "--iti-ms", "50"});
+  explicit ServerProcess(const fs::path& sessions, int port_ = 0, const std::vector<std::string>& more = {}) {
+    std::vector<std::string> args{"serve", "--config", kConfig.string(), "-o", sessions.string(),
+                                  "--port", std::to_string(port_), "--bind", "127.0.0.1", "--iti-ms", "50"};
+    args.insert(args.end(), more.begin(), more.end());
+    app = std::make_unique<App>(PENUMBRA_STUDY_EXE, args);
     if (!app->wait_for("listening on http://127.0.0.1:")) throw std::runtime_error("the server did not start: " + app->output());
     const std::string out = app->output();
     port = std::stoi(out.substr(out.find("listening on http://127.0.0.1:") + 30));
@@ -189,7 +191,8 @@ void expect_same_as_lab(const fs::path& online, const fs::path& lab) {
 
 TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswers) {
   const fs::path tmp = fresh_dir("whole");
-  ServerProcess server(tmp / "sessions");
+  const std::string token = "admin-token-0123456789";
+  ServerProcess server(tmp / "sessions", 0, {"--admin-token", token});
   Participant p(server.port, "P01");
   ASSERT_EQ(p.get(), 200);
   EXPECT_EQ(p.screen["screen"], "consent");
@@ -215,6 +218,25 @@ TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswer
   EXPECT_NEAR(j["presentation"].back()["pixels_per_degree"].get<double>(), 2 * 600 * std::tan(0.5 * M_PI / 180) * 3.78, 1e-9);
   const json online = penumbra::json_input::read_file(tmp / "sessions" / "P01" / "online.json");
   EXPECT_EQ(online["intake"]["answers"]["age"], "30");
+  // The admin's page: the session, its trials and each staircase as the lab's admin view shows them.
+  httplib::Client admin("127.0.0.1", server.port);
+  EXPECT_EQ(admin.Get("/admin")->status, 404);
+  EXPECT_EQ(admin.Get("/admin.json?token=admin-token-012345678X")->status, 404);
+  const auto status = admin.Get(("/admin.json?token=" + token).c_str());
+  ASSERT_EQ(status->status, 200);
+  const json sessions = json::parse(status->body)["sessions"];
+  ASSERT_EQ(sessions.size(), 1u);
+  EXPECT_EQ(sessions[0]["id"], "P01");
+  EXPECT_EQ(sessions[0]["trials"], 8);
+  EXPECT_EQ(sessions[0]["screen"], "end screen");
+  ASSERT_EQ(sessions[0]["staircases"].size(), 2u);
+  for (const auto& sc : sessions[0]["staircases"]) {
+    EXPECT_EQ(sc["trials"], 3);
+    EXPECT_EQ(sc["state"], "done");
+  }
+  const auto page = admin.Get(("/admin?token=" + token).c_str());
+  ASSERT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("<h2>P01</h2>"), std::string::npos);
   fs::remove_all(tmp);
 }
 
