@@ -266,6 +266,37 @@ TEST(FitCli, LinkedLogsAreRefused) {
   fs::remove_all(dir);
 }
 
+// Issue 48: --observer-percentile chooses the observer of the multilevel fit; calibration.json's
+// entry carries the population's mean c, spread and that observer's c with their intervals, and
+// summary.txt prints them. A higher percentile's c is larger (by z_p sd in log10).
+TEST(FitCli, ObserverPercentileChoosesThePopulationsObserver) {
+  const fs::path dir = fresh("percentile");
+  const auto sessions = simulated_sessions(dir / "sessions", 4);
+  std::string args;
+  for (const auto& s : sessions) args += s.string() + " ";
+  std::map<std::string, nlohmann::json> population;
+  for (const char* p : {"50", "97.5"}) {
+    std::string out;
+    ASSERT_EQ(run(args + "-o " + (dir / p).string() + " --bootstrap 0 --observer-percentile " + p, &out), 0) << out;
+    EXPECT_NE(out.find("population (multilevel, participants as random effects): mean c = "), std::string::npos) << out;
+    population[p] = nlohmann::json::parse(read(dir / p / "calibration.json"))["entries"][0]["population"];
+    EXPECT_EQ(population[p]["observer_percentile"], p);
+    EXPECT_EQ(population[p]["participants"], 4);
+    for (const char* key : {"mean_c_ci95", "sd_log10_ci95", "percentile_c_ci95"}) {
+      SCOPED_TRACE(key);
+      ASSERT_TRUE(population[p][key][0].is_number());
+      EXPECT_LE(population[p][key][0].get<double>(), population[p][key][1].get<double>());
+    }
+  }
+  // The median observer is the population mean; the 97.5th lies z sd above it.
+  EXPECT_NEAR(population["50"]["percentile_c"].get<double>(), population["50"]["mean_c"].get<double>(), 1e-9);
+  const double sd = population["97.5"]["sd_log10"], mean = population["97.5"]["mean_c"];
+  EXPECT_NEAR(std::log10(population["97.5"]["percentile_c"].get<double>() / mean), 1.959964 * sd, 1e-5);
+  std::string out;
+  EXPECT_EQ(run(args + "-o " + (dir / "bad").string() + " --observer-percentile 100", &out), 2) << out;
+  EXPECT_NE(out.find("--observer-percentile"), std::string::npos) << out;
+}
+
 // Issue 26: one short session gave c = 0.647 (not converged, slope at its bound, one participant)
 // and went into calibration.json with exit 0. An unusable fit is written only with
 // --allow-unusable, marked so in the file.
