@@ -186,18 +186,6 @@ FrameTimes time_frames(shadows::Renderer& r, const shadows::ShadowSettings& s, i
   return t;
 }
 
-// The floor: the frame without a meaningful shadow — hard shadows from a 1×1 unfitted map, so
-// the shading pass does one lookup and the depth pass rasterizes into one texel. Everything a
-// shadowed frame adds to the lit image lies above it.
-shadows::ShadowSettings unshadowed(const shadows::ShadowSettings& base) {
-  shadows::ShadowSettings s = base;
-  s.technique = shadows::Technique::hard;
-  s.adaptive.enabled = false;
-  s.map.resolution_texels = 1;
-  s.map.fit = false;
-  return s;
-}
-
 // Marks, within each (scene, variant) group, the rows no other row beats in both frame time and
 // error (mean absolute visibility error): lower or equal in both and lower in one. `pareto` compares
 // median frame times; `pareto_spread` reads frame times whose [min, max] ranges overlap as a tie
@@ -428,7 +416,7 @@ int main(int argc, char** argv) {
     for (const auto& scene : scenes) {
       renderer.set_scene(scene);
       shadows::FrameInfo info;
-      const FrameTimes floor = time_frames(renderer, unshadowed(opt.base), opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
+      const FrameTimes floor = time_frames(renderer, shadows::unshadowed_floor(opt.base), opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
       std::fprintf(stderr, "[%6.1f s] %s: unshadowed floor %.2f ms\n", elapsed_s(), scene.name.c_str(), floor.median());
       nlohmann::json scene_report = {{"scene", scene.name},
                                      {"floor_ms", {{"median", floor.median()}, {"min", floor.min()}, {"max", floor.max()}}},

@@ -192,6 +192,17 @@ std::string describe(const ShadowSettings& s) {
   return out;
 }
 
+ShadowSettings unshadowed_floor(const ShadowSettings& base) {
+  ShadowSettings s = base;
+  s.technique = Technique::hard;
+  s.adaptive.enabled = false;
+  s.map.resolution_texels = 1;
+  s.map.fit = false;
+  s.map.cascades = 1;
+  s.map.virtual_pages = VirtualPages::off;
+  return s;
+}
+
 std::string variant_choice(const ShadowSettings& s) {
   const std::string_view key = technique_entry(s.technique).variant_setting;
   std::string out;

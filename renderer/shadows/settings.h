@@ -161,6 +161,12 @@ void visit_technique_section(S& s, F&& f) {
 // The parameters relevant to `s.technique`, as "section.key=value" pairs (for names and reports).
 std::string describe(const ShadowSettings& s);
 
+// The frame without a meaningful shadow, the physical floor a shadow's cost sits on: `base` with
+// hard shadows from one 1×1 unfitted map (no cascades, no pages, no rule), so that the depth pass
+// rasterizes into one texel and the shading pass does one lookup; everything else (camera,
+// shading) as `base` has it. penumbra-bench and the main job time it beside each frame.
+ShadowSettings unshadowed_floor(const ShadowSettings& base);
+
 // The value of the technique's variant setting (PCF's kernel: "grid", "poisson"), or "" for a
 // technique without one: with the technique's name, what calibration.json entries are keyed by.
 std::string variant_choice(const ShadowSettings& s);

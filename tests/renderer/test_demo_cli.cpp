@@ -229,6 +229,10 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
         EXPECT_GT(v.at("equal_error").at("error").get<double>(), 0);
         EXPECT_GT(v.at("equal_error").at("time").at("ratio").at("median").get<double>(), 0);
         EXPECT_GT(v.at("equal_error").at("memory").at("ratio").at("median").get<double>(), 0);
+        // The shadow's own cost: the frame above the unshadowed floor, read against the front too.
+        EXPECT_GT(v.at("equal_error").at("shadow_cost").at("ratio").at("median").get<double>(), 0);
+        EXPECT_LT(v.at("shadow_ms").at("median").get<double>(), v.at("frame_ms").at("median").get<double>());
+        EXPECT_GT(t.at("floor").at("frame_ms").at("median").get<double>(), 0);
         EXPECT_GT(v.at("last_frame").at("pages").at("requested").get<int>(), 0);
         EXPECT_EQ(v.at("last_frame").at("shaded_pixels").at("none").get<int>(), 0);
         std::string label = t.at("technique").get<std::string>();

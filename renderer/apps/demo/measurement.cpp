@@ -350,10 +350,17 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
   ref_options.ray_traced = traced_ != nullptr;  // ref_options.traced: at each reference frame (traced_at)
   shadows::Renderer ref_renderer;
   if (options_.reference) ref_renderer.set_scene(scene_);
+  // The floor each frame's shadow cost is taken above: the same camera and shading, no shadow.
+  Series floor;
+  floor.config.settings = shadows::unshadowed_floor(series[run.fixed].config.settings);
+  floor.renderer = std::make_unique<shadows::Renderer>();
+  floor.renderer->set_scene(scene_);
+  floor.timer = std::make_unique<gl::PassTimer>(method_ == gl::TimingMethod::gpu_timer);
   // The moving objects (scene::ObjectPath) where they are at `frame`, in every scene drawn.
   const auto pose = [&](int frame) {
     if (scene_.object_paths.empty()) return;
     for (Series& s : series) scene::pose_objects(scene_, frame, s.renderer->scene());
+    scene::pose_objects(scene_, frame, floor.renderer->scene());
     if (options_.reference) scene::pose_objects(scene_, frame, ref_renderer.scene());
     probe_.set_models(scene::posed_at(scene_, frame));
   };
@@ -364,6 +371,8 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     s.renderer->scene().camera = camera_at(scene_, plan_, plan_.frames.front().frame);
     s.renderer->render(s.config.settings, width, height);
   }
+  floor.renderer->scene().camera = camera_at(scene_, plan_, plan_.frames.front().frame);
+  floor.renderer->render(floor.config.settings, width, height);
   io::ImageF surface_previous;
   glm::mat4 view_projection_previous(1);
   const int crop_w = std::max(8, width / 4), crop_h = std::max(8, height / 4);
@@ -383,6 +392,10 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     pose(pf.frame);
     io::ImageF surface = probe_.render(camera, width, height);
     const glm::mat4 view_projection = metrics::camera_view_projection(camera, width, height);
+    floor.renderer->scene().camera = camera;
+    std::vector<double> floor_repeats;
+    for (int r = 0; r < std::max(options_.repeats, 1); ++r) floor_repeats.push_back(timed_render(floor, width, height));
+    run.floor_ms.push_back(stats::median(floor_repeats));
     for (Series& s : series) {
       s.renderer->scene().camera = camera;
       if (!pf.continues) s.renderer->camera_cut();  // late virtual-map marks of the last station lie elsewhere
@@ -503,7 +516,11 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     surface_previous = std::move(surface);
     view_projection_previous = view_projection;
   }
-  for (Series& s : series) s.timer->poll(true);
+  for (Series& s : series) {
+    s.timer->poll(true);
+    // What the shadow costs above the floor, frame by frame (a noisy frame may come out below it).
+    for (std::size_t i = 0; i < s.ms.size(); ++i) s.shadow_ms.push_back(s.ms[i] - run.floor_ms[i]);
+  }
   return run;
 }
 

@@ -43,6 +43,7 @@ struct Series {
   io::ImageF visibility, previous;
   // per path frame
   std::vector<double> ms;         // median over --repeats renders of the frame
+  std::vector<double> shadow_ms;  // ms minus the run's unshadowed floor at the same frame (TechniqueRun::floor_ms)
   std::vector<double> texels;     // drawn into its maps
   std::vector<double> allocated;  // the atlas allocated for them
   std::vector<double> map_triangles;  // drawn into all its maps after culling
@@ -104,6 +105,9 @@ struct TechniqueRun {
   std::vector<std::string> flip_labels;
   int flip_montage_frame = -1;
   std::string csv;   // frames.csv rows
+  // The physical floor: per path frame, the frame without a meaningful shadow
+  // (shadows::unshadowed_floor of the fixed map's settings), timed as the configurations are.
+  std::vector<double> floor_ms;
 };
 
 struct WalkOptions {

@@ -226,6 +226,8 @@ EqualError equal_error(const TechniqueRun& run, ErrorMeasure measure) {
   }
   eq.time = compare_on(run, measure, eq.family, run.adaptive, eq.adaptive_error, &Series::ms, true);
   eq.memory = compare_on(run, measure, eq.family, run.adaptive, eq.adaptive_error, &Series::allocated, false);
+  const bool floor = !run.floor_ms.empty();
+  if (floor) eq.shadow = compare_on(run, measure, eq.family, run.adaptive, eq.adaptive_error, &Series::shadow_ms, true);
   eq.available = !eq.time.front.empty() && !eq.memory.front.empty();
   if (!eq.available) eq.why_not = "no engine configuration was measured against the reference";
   for (std::size_t k = 0; k < run.series.size() && eq.available; ++k) {
@@ -236,6 +238,7 @@ EqualError equal_error(const TechniqueRun& run, ErrorMeasure measure) {
     v.error = error_of(run.series[k], measure);
     v.time = compare_on(run, measure, eq.family, k, v.error, &Series::ms, true);
     v.memory = compare_on(run, measure, eq.family, k, v.error, &Series::allocated, false);
+    if (floor) v.shadow = compare_on(run, measure, eq.family, k, v.error, &Series::shadow_ms, true);
     eq.virtual_maps.push_back(v);
   }
   return eq;
@@ -245,18 +248,19 @@ namespace {
 // One configuration read against the front: "pcf    [LABEL ]at RMSE ...: speedup ..., memory ratio ...";
 // PCSS's FLIP against the ray-traced sun says so.
 std::string reading_line(const TechniqueRun& run, ErrorMeasure measure, const std::string& label, double error,
-                         const FrontComparison& time, const FrontComparison& memory) {
-  char line[640];
-  std::snprintf(line, sizeof line, "%-6s %sat %s %.4f%s: speedup %s, memory ratio %s (time: %s; memory: %s)", run.technique.c_str(),
+                         const FrontComparison& time, const FrontComparison& memory, const FrontComparison& shadow) {
+  char line[768];
+  const std::string shadow_text = shadow.front.empty() ? "" : ", shadow cost " + ratio_text(shadow);
+  std::snprintf(line, sizeof line, "%-6s %sat %s %.4f%s: speedup %s, memory ratio %s%s (time: %s; memory: %s)", run.technique.c_str(),
                 label.empty() ? "" : (label + " ").c_str(), measure_label(measure), error,
                 measure == ErrorMeasure::flip_ray_traced ? " against the ray-traced sun" : "", ratio_text(time).c_str(),
-                ratio_text(memory).c_str(), where_text(run, time).c_str(), where_text(run, memory).c_str());
+                ratio_text(memory).c_str(), shadow_text.c_str(), where_text(run, time).c_str(), where_text(run, memory).c_str());
   return line;
 }
 }  // namespace
 
 std::string virtual_headline(const TechniqueRun& run, const VirtualReading& v) {
-  return reading_line(run, v.measure, run.series[v.series].config.name, v.error, v.time, v.memory);
+  return reading_line(run, v.measure, run.series[v.series].config.name, v.error, v.time, v.memory, v.shadow);
 }
 
 std::string headline(const TechniqueRun& run, const EqualError& eq) {
@@ -265,7 +269,7 @@ std::string headline(const TechniqueRun& run, const EqualError& eq) {
     std::snprintf(line, sizeof line, "%-6s %s", run.technique.c_str(), eq.why_not.c_str());
     return line;
   }
-  return reading_line(run, eq.measure, "", eq.adaptive_error, eq.time, eq.memory);
+  return reading_line(run, eq.measure, "", eq.adaptive_error, eq.time, eq.memory, eq.shadow);
 }
 
 namespace {
@@ -276,6 +280,7 @@ nlohmann::json equal_json(const TechniqueRun& run, const EqualError& eq, const s
           {"adaptive_error", eq.adaptive_error},
           {"time", comparison_json(run, eq.time, "ms")},
           {"memory", comparison_json(run, eq.memory, "texels")},
+          {"shadow_cost", eq.shadow.front.empty() ? nlohmann::json(nullptr) : comparison_json(run, eq.shadow, "ms")},
           {"headline", headline(run, eq)}};
 }
 nlohmann::json virtual_json(const TechniqueRun& run, const EqualError& eq, std::size_t k) {
@@ -285,6 +290,7 @@ nlohmann::json virtual_json(const TechniqueRun& run, const EqualError& eq, std::
   return {{"error", v.error},
           {"time", comparison_json(run, v.time, "ms")},
           {"memory", comparison_json(run, v.memory, "texels")},
+          {"shadow_cost", v.shadow.front.empty() ? nlohmann::json(nullptr) : comparison_json(run, v.shadow, "ms")},
           {"headline", virtual_headline(run, v)}};
 }
 }  // namespace
@@ -299,6 +305,10 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
   nlohmann::json t;
   t["technique"] = run.technique;
   t["fixed"] = {{"resolution_texels", cf.config.settings.map.resolution_texels}, {"frame_ms", sf}, {"passes", io::to_json(cf.timer->stats())}};
+  if (!run.floor_ms.empty())
+    t["floor"] = {{"frame_ms", spread(run.floor_ms)},
+                  {"what", "the frame without a meaningful shadow (shadows::unshadowed_floor: hard shadows from one 1x1 unfitted map), "
+                           "same camera and shading, timed as the configurations; shadow cost = frame ms - floor ms, per frame"}};
   t["adaptive"] = {{"resolution_texels", sr},
                    {"cascades_most_frames", usual_resolution(ca)},
                    {"storage", ca.info.storage},
@@ -350,6 +360,7 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
     j["texels_rendered"] = spread(s.texels);
     j["texels_allocated"] = mean_of(s.allocated);
     j["map_triangles"] = spread(s.map_triangles);
+    if (!s.shadow_ms.empty()) j["shadow_ms"] = spread(s.shadow_ms);  // frame ms minus the floor, per frame
     j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
     j["reference_error"] = reference_error_json(s.vs_reference);
     if (run.perceptual) j["flip"] = flip_json(s.flip), j["observer"] = observer_json(s.seen);

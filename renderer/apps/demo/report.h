@@ -40,6 +40,7 @@ struct VirtualReading {
   std::size_t series = 0;
   double error = 0;
   FrontComparison time, memory;
+  FrontComparison shadow;  // on the shadow's cost: frame ms minus the unshadowed floor, per frame
 };
 struct EqualError {
   ErrorMeasure measure = ErrorMeasure::rmse;
@@ -48,6 +49,7 @@ struct EqualError {
   double adaptive_error = 0;
   std::vector<std::size_t> family;  // series indices of the engine family (the fixed map included)
   FrontComparison time, memory;
+  FrontComparison shadow;  // on the shadow's cost (Series::shadow_ms); empty without a floor
   std::vector<VirtualReading> virtual_maps;  // each virtual configuration (Role::virtual_pages)
 };
 EqualError equal_error(const TechniqueRun& run, ErrorMeasure measure = ErrorMeasure::rmse);
