@@ -17,6 +17,7 @@
 #include "data/reference_table.h"
 #include "fit/frame_fit.h"
 #include "fit/model_fit.h"
+#include "fit/plan.h"
 #include "fit/study_fit.h"
 #include "report/outputs.h"
 #include "cli/progress_bar.h"
@@ -340,9 +341,42 @@ int main(int argc, char** argv) {
   psychometric->add_option("--format", format, "counts or trials")->capture_default_str();
   add_model_options(*psychometric, single_model);
 
+  auto* plan = app.add_subcommand("plan", "simulate studies of a design and print the precision of c, the power to detect a "
+                                          "planted difference and the coverage of the entry's interval");
+  PlanOptions plan_options;
+  plan->add_option("--participants", plan_options.participants, "participants per study")->capture_default_str()->check(CLI::Range(2, 1000));
+  plan->add_option("--trials", plan_options.trials_per_staircase, "trials per staircase")->capture_default_str()->check(CLI::Range(5, 10000));
+  plan->add_option("--conditions", plan_options.conditions, "conditions (pattern x contrast)")->capture_default_str()->check(CLI::Range(2, 12));
+  plan->add_option("--c", plan_options.c, "planted c of the other conditions")->capture_default_str()->check(CLI::Range(0.5, 20.0));
+  plan->add_option("--difference", plan_options.difference, "the worst condition lies this fraction above the others (0.1 = 10 %)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 2.0));
+  plan->add_option("--sd", plan_options.sd_log10, "between-participant sd of log10 c")->capture_default_str()->check(CLI::Range(0.0, 0.5));
+  plan->add_option("--alpha", plan_options.alpha, "level of the test whose power is printed")->capture_default_str()->check(CLI::Range(0.001, 0.5));
+  plan->add_option("--studies", plan_options.studies, "simulated studies")->capture_default_str()->check(CLI::Range(1, 100000));
+  plan->add_option("--seed", plan_options.seed, "seed")->capture_default_str();
+  plan->add_option("--threads", plan_options.threads, "studies fitted side by side (0: all cores); the results do not depend on it")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
+
   if (const auto status = cli::parse(app, argc, argv, "penumbra-fit")) return *status;
   try {
     if (psychometric->parsed()) return run_psychometric(input, format, single_model);
+    if (plan->parsed()) {
+      const PlanResult r = plan_study(plan_options);
+      const PlanOptions& o = r.options;
+      std::printf("plan: %d participants x %d conditions x %zu sizes x %d trials per staircase; worst condition %.0f %% above c = %g, "
+                  "participant sd %.3f log10; %d simulated studies\n",
+                  o.participants, o.conditions, o.artifact_px.size(), o.trials_per_staircase, 100 * o.difference, o.c, o.sd_log10,
+                  o.studies);
+      std::printf("precision of the entry's c: median ci95 half-width +-%.1f %%; bias %+.2f %%\n", r.median_half_width_percent,
+                  r.bias_percent);
+      std::printf("power to detect the difference (conditions differ, LR test at %g): %.2f +- %.2f (Monte Carlo se)\n", o.alpha, r.power,
+                  r.power_se);
+      std::printf("coverage of the worst condition's c %.3f: entry ci95 %.2f, population interval %.2f\n", r.worst_c, r.coverage,
+                  r.coverage_population);
+      return 0;
+    }
     return run_study(so, study_model);
   } catch (const std::exception& e) {
     return cli::fail("penumbra-fit", e);
