@@ -1,6 +1,7 @@
 #include "online/online_server.h"
 
 #include <fcntl.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <httplib.h>
@@ -22,6 +23,7 @@
 #include "io/image_io.h"
 #include "io/safe_path.h"
 #include "json/json_input.h"
+#include "log/directory_lock.h"
 #include "procedure/session.h"
 #include "procedure/session_flow.h"
 #include "procedure/session_record.h"
@@ -243,6 +245,7 @@ double finite_number(const nlohmann::json& body, const char* key, double lo, dou
 }  // namespace
 
 struct Server::Impl {
+  trial_log::DirectoryLock lock;  // of SESSIONS_DIR, for the server's life
   ServerOptions o;
   httplib::Server http;
   StimulusStore stimuli;
@@ -746,9 +749,21 @@ Server::Server(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(o
   if (!fs::is_regular_file(s.o.web_dir / "index.html", ec))
     throw std::runtime_error("--web " + s.o.web_dir.string() + ": no index.html (install the page: scripts/setup.sh runs npm ci in web/, then build penumbra-study)");
   io::refuse_link(s.o.sessions_dir, "the folder of sessions is named itself, not through a link");
-  fs::create_directories(s.o.sessions_dir / ".stimuli");
+  if (fs::exists(s.o.sessions_dir, ec) && !fs::is_directory(s.o.sessions_dir, ec))
+    throw std::runtime_error("-o " + s.o.sessions_dir.string() + ": not a folder");
+  fs::create_directories(s.o.sessions_dir / ".stimuli", ec);
+  if (ec) throw std::runtime_error("-o " + s.o.sessions_dir.string() + ": cannot create " + (s.o.sessions_dir / ".stimuli").string() + ": " + ec.message());
+  // One server per folder of sessions: a second one is refused before it listens.
+  s.lock = trial_log::DirectoryLock(s.o.sessions_dir);
   httplib::Server& http = s.http;
   http.new_task_queue = [] { return new httplib::ThreadPool(64); };
+  // SO_REUSEADDR (a restart binds while the killed server's connections wait out TIME_WAIT), but
+  // not httplib's default SO_REUSEPORT: a second server on the same port is refused, not handed
+  // half of the participants' connections.
+  http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   http.set_payload_max_length(s.o.max_body_bytes);
   http.set_read_timeout(10, 0);
   http.set_write_timeout(10, 0);

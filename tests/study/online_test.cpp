@@ -307,12 +307,16 @@ TEST(OnlineServer, AttacksAreRefusedWithAStatusAndNothingIsWrittenOutsideTheSess
   for (const auto& e : fs::directory_iterator(tmp)) outside.insert(e.path().filename().string());
   for (const auto& e : fs::directory_iterator(sessions)) inside.insert(e.path().filename().string());
   EXPECT_EQ(outside, (std::set<std::string>{"sessions"}));
+  inside.erase("session.lock");  // the server's lock on the folder
   EXPECT_EQ(inside, (std::set<std::string>{".stimuli", "P02"}));
   // Each refusal is a line on the operator's terminal.
   const std::string out = server.app->output();
   EXPECT_NE(out.find("refused 400 GET /api/screen: id '../escape'"), std::string::npos) << out;
   EXPECT_NE(out.find("refused 409 GET /api/screen: id 'P02' is open in another tab"), std::string::npos) << out;
   EXPECT_NE(out.find("refused 409 POST /api/act: step"), std::string::npos) << out;
+  // A second server on the same folder of sessions, or on the same port, is refused at start.
+  EXPECT_THROW(ServerProcess again(sessions), std::runtime_error);
+  EXPECT_THROW(ServerProcess same_port(tmp / "other", server.port), std::runtime_error);
   fs::remove_all(tmp);
 }
 
