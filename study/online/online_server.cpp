@@ -448,9 +448,16 @@ struct Server::Impl {
       }
     }
     if (s == Screen::finished && session) {
-      const std::string code = o.completion_code.empty()
-                                   ? text::fnv1a64_hex("completion\n" + flow.session().session_id()).substr(0, 10)
-                                   : o.completion_code;
+      // A code of its own per session: 10 random hex digits, drawn once and kept in online.json (a
+      // reload shows the same). Not derived from the id, which a participant could recompute.
+      if (o.completion_code.empty() && !p.online.contains("completion_code")) {
+        std::random_device device;
+        std::string drawn;
+        for (int i = 0; i < 10; ++i) drawn += "0123456789abcdef"[device() % 16];
+        p.online["completion_code"] = drawn;
+        write_online(p);
+      }
+      const std::string code = o.completion_code.empty() ? p.online["completion_code"].get<std::string>() : o.completion_code;
       j["completion_code"] = code;
       if (!o.completion_url.empty()) {
         std::string url = o.completion_url;

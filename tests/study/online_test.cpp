@@ -24,6 +24,7 @@
 #include "procedure/config.h"
 #include "procedure/session.h"
 #include "procedure/session_flow.h"
+#include "text/fingerprint.h"
 
 namespace fs = std::filesystem;
 using penumbra::test::App;
@@ -218,6 +219,13 @@ TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswer
   EXPECT_NEAR(j["presentation"].back()["pixels_per_degree"].get<double>(), 2 * 600 * std::tan(0.5 * M_PI / 180) * 3.78, 1e-9);
   const json online = penumbra::json_input::read_file(tmp / "sessions" / "P01" / "online.json");
   EXPECT_EQ(online["intake"]["answers"]["age"], "30");
+  // The completion code is drawn at random, kept, and shown again on a reload: not the id's hash.
+  const std::string code = p.screen.value("completion_code", "");
+  EXPECT_EQ(code.size(), 10u);
+  EXPECT_EQ(online.value("completion_code", ""), code);
+  EXPECT_NE(code, penumbra::text::fnv1a64_hex("completion\nP01").substr(0, 10));
+  ASSERT_EQ(p.get(), 200);
+  EXPECT_EQ(p.screen.value("completion_code", ""), code);
   // The admin's page: the session, its trials and each staircase as the lab's admin view shows them.
   httplib::Client admin("127.0.0.1", server.port);
   EXPECT_EQ(admin.Get("/admin")->status, 404);
