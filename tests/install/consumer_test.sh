@@ -150,7 +150,11 @@ sed -e 's/"usable": false, "unusable_because": \[[^]]*\]/"usable": true/' -e 's/
 "$example" "$work/flagged.json" >"$work/flagged.out" || fail "engine_integration with a usable, flagged entry"
 head -1 "$work/flagged.out" | grep -q "^c = 3.10 texels (.*); flags: one_participant$" ||
   fail "engine_integration does not print the entry's flags: $(head -1 "$work/flagged.out")"
-head -1 "$work/example.txt" | grep -q "^c = 3.47 texels ([^;]*)$" || fail "the published entry printed warnings: $(head -1 "$work/example.txt")"
+# The published entry states no kernel (the study's disk) and the example filters with the grid: a
+# fallback, said with what would match, and nothing else (no flags, not NOT USABLE).
+head -1 "$work/example.txt" |
+  grep -q "^c = 3.47 texels (pcf entry (published, 10 participants), not measured for pcf grid: [^;]*; a pcf grid entry would match)$" ||
+  fail "the published entry's line is not the kernel fallback alone: $(head -1 "$work/example.txt")"
 status=0
 "$example" --allow-unusabel "$work/flagged.json" >/dev/null 2>&1 || status=$?
 ((status == 2)) || fail "engine_integration with an unknown option exited $status, not 2"
