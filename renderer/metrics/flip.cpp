@@ -10,6 +10,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "metrics/image_checks.h"
+
 namespace penumbra::metrics {
 namespace {
 
@@ -297,9 +299,7 @@ FlipReference::FlipReference(const image::ImageF& reference, Encoding encoding, 
 
 FlipResult FlipReference::compare(const image::ImageF& test, Encoding test_encoding) const {
   check_image(test, "test");
-  if (width_ != test.width || height_ != test.height)
-    throw std::invalid_argument("LDR-FLIP: image sizes differ (reference " + std::to_string(width_) + "×" + std::to_string(height_) +
-                                ", test " + std::to_string(test.width) + "×" + std::to_string(test.height) + ")");
+  check_same_size("LDR-FLIP", width_, height_, test.width, test.height);
   const Prepared t = prepare(test, test_encoding, options_.pixels_per_degree);
   const double c_max = cmax(), pc_cmax = C::pc * c_max;
   FlipResult result;
@@ -326,10 +326,7 @@ FlipResult ldr_flip(const image::ImageF& reference, Encoding reference_encoding,
                     const FlipOptions& options) {
   check_image(reference, "reference");
   check_image(test, "test");
-  if (reference.width != test.width || reference.height != test.height)
-    throw std::invalid_argument("LDR-FLIP: image sizes differ (reference " + std::to_string(reference.width) + "×" +
-                                std::to_string(reference.height) + ", test " + std::to_string(test.width) + "×" +
-                                std::to_string(test.height) + ")");
+  check_same_size("LDR-FLIP", reference.width, reference.height, test.width, test.height);
   return FlipReference(reference, reference_encoding, options).compare(test, test_encoding);
 }
 

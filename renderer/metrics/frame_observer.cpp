@@ -8,6 +8,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "metrics/image_checks.h"
+
 namespace penumbra::metrics {
 namespace {
 
@@ -182,9 +184,7 @@ ObserverReference& ObserverReference::operator=(ObserverReference&&) noexcept = 
 
 FrameDetection ObserverReference::judge(const image::ImageF& test, Encoding test_encoding) const {
   check_image(test, "test");
-  if (width_ != test.width || height_ != test.height)
-    throw std::invalid_argument("frame observer: image sizes differ (reference " + std::to_string(width_) + "×" + std::to_string(height_) +
-                                ", test " + std::to_string(test.width) + "×" + std::to_string(test.height) + ")");
+  check_same_size("frame observer", width_, height_, test.width, test.height);
   const FrameObserverParams& p = params_;
   const Planes& r = *planes_;
   const cv::Mat tst = seen_luminance(test, test_encoding, p);
@@ -226,10 +226,7 @@ FrameDetection detect_difference(const image::ImageF& reference, Encoding refere
                                  Encoding test_encoding, const FrameObserverParams& params) {
   check_image(reference, "reference");
   check_image(test, "test");
-  if (reference.width != test.width || reference.height != test.height)
-    throw std::invalid_argument("frame observer: image sizes differ (reference " + std::to_string(reference.width) + "×" +
-                                std::to_string(reference.height) + ", test " + std::to_string(test.width) + "×" +
-                                std::to_string(test.height) + ")");
+  check_same_size("frame observer", reference.width, reference.height, test.width, test.height);
   return ObserverReference(reference, reference_encoding, params).judge(test, test_encoding);
 }
 

@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/quality/qualityssim.hpp>
 
+#include "metrics/image_checks.h"
+
 namespace penumbra::metrics {
 namespace {
 
@@ -27,10 +29,7 @@ template <class T>
 void check_pair(const io::Image<T>& reference, const io::Image<T>& test, const CompareOptions& options) {
   check_shape(reference, "reference");
   check_shape(test, "test");
-  if (reference.width != test.width || reference.height != test.height)
-    throw std::invalid_argument("compare: image sizes differ (reference " + std::to_string(reference.width) + "×" +
-                                std::to_string(reference.height) + ", test " + std::to_string(test.width) + "×" +
-                                std::to_string(test.height) + ")");
+  check_same_size("compare", reference.width, reference.height, test.width, test.height);
   if (reference.channels != test.channels)
     throw std::invalid_argument("compare: channel counts differ (reference " + std::to_string(reference.channels) + ", test " +
                                 std::to_string(test.channels) + ")");
