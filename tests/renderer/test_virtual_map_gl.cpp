@@ -788,6 +788,16 @@ shadows::ShadowSettings virtual_pcf(shadows::VirtualPages marking) {
   return s;
 }
 
+// PCSS (grid kernel) through the virtual map by the rule, the pixel floor at 1.
+shadows::ShadowSettings virtual_pcss() {
+  shadows::ShadowSettings s;
+  s.technique = shadows::Technique::pcss;
+  s.pcss.kernel = shadows::Kernel::grid;
+  s.adaptive.min_texel_px = 1;
+  s.map.virtual_pages = shadows::VirtualPages::rule;
+  return s;
+}
+
 TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
@@ -845,17 +855,12 @@ TEST(VirtualMap, RendererShadesPcfThroughThePagesLikeAFineMap) {
 // penumbrae differ a little; mean difference 0.0043 at 320 × 180).
 // The virtual map's steps are the frame's passes, each timed: PCF marks once, PCSS twice (its
 // search's round suffixed), late marks read the previous frame's before the update and mark after
-// it; every step the frame lists has one sample in the timer, and the draw step holds the time of
-// drawing the pages (nothing drawn: nearly none).
+// it; every step the frame lists has one sample in the timer, and nothing else is timed.
 TEST(VirtualMap, ItsStepsAreNamedPassesEachTimed) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
   const int w = 160, h = 90;
-  shadows::ShadowSettings pcss;
-  pcss.technique = shadows::Technique::pcss;
-  pcss.pcss.kernel = shadows::Kernel::grid;
-  pcss.adaptive.min_texel_px = 1;
-  pcss.map.virtual_pages = shadows::VirtualPages::rule;
+  const shadows::ShadowSettings pcss = virtual_pcss();
   shadows::ShadowSettings late = virtual_pcf(shadows::VirtualPages::rule);
   late.map.virtual_marks_late = true;
   const std::vector<std::string> update = {"virtual_admit", "virtual_draw", "virtual_bounds", "virtual_table"};
@@ -895,11 +900,7 @@ TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
   const int w = 320, h = 180;
-  shadows::ShadowSettings s;
-  s.technique = shadows::Technique::pcss;
-  s.pcss.kernel = shadows::Kernel::grid;
-  s.adaptive.min_texel_px = 1;
-  s.map.virtual_pages = shadows::VirtualPages::rule;
+  shadows::ShadowSettings s = virtual_pcss();
   const shadows::FrameInfo info = r.render(s, w, h);
   const io::ImageF paged = r.read_visibility();
   ASSERT_TRUE(info.virtual_map.has_value());
@@ -933,11 +934,7 @@ TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
 TEST(VirtualMap, RendererImageIsTheSameWithOrWithoutTileBounds) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));
-  shadows::ShadowSettings pcss;
-  pcss.technique = shadows::Technique::pcss;
-  pcss.pcss.kernel = shadows::Kernel::grid;
-  pcss.adaptive.min_texel_px = 1;
-  pcss.map.virtual_pages = shadows::VirtualPages::rule;
+  const shadows::ShadowSettings pcss = virtual_pcss();
   for (shadows::ShadowSettings s : {virtual_pcf(shadows::VirtualPages::rule), pcss}) {
     SCOPED_TRACE(s.technique == shadows::Technique::pcf ? "pcf" : "pcss");
     s.map.virtual_bounds = true;
@@ -1078,11 +1075,7 @@ TEST(VirtualMap, RendererCachesPagesRedrawsAMovedCasterAndCountsWhatAFullPoolCan
 TEST(VirtualMap, MarksReadAFrameLateWaitForNothingAndTheFirstFrameIsCoarseNotLit) {
   for (const bool pcss : {false, true}) {
     SCOPED_TRACE(pcss ? "pcss" : "pcf");
-    shadows::ShadowSettings s = virtual_pcf(shadows::VirtualPages::rule);
-    if (pcss) {
-      s.technique = shadows::Technique::pcss;
-      s.pcss.kernel = shadows::Kernel::grid;
-    }
+    shadows::ShadowSettings s = pcss ? virtual_pcss() : virtual_pcf(shadows::VirtualPages::rule);
     const int w = 160, h = 90;
     shadows::Renderer same_frame;
     same_frame.set_scene(scene::make_builtin_scene("demo"));
