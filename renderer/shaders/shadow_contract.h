@@ -63,6 +63,7 @@ PENUMBRA_CONSTANT(VIRTUAL_BOUNDS_TILE, 16)         // virtual shadow map: texels
 
 // Uniform-block binding points.
 PENUMBRA_CONSTANT(BLOCK_SHADOW_FRAME, 0)
+PENUMBRA_CONSTANT(BLOCK_VIRTUAL_FRAME, 1)  // the virtual shadow map's VirtualFrame (virtual_mark_contract.h's VIRTUAL_FRAME_BLOCK)
 
 // What every shadow lookup of a frame needs: cameras, the light frame, the cascades, biases and the
 // fixed filter radius. Members keep their uniform names, so GLSL reads them as before.
@@ -129,6 +130,13 @@ PENUMBRA_STORAGE_BUFFER(VirtualShadingResult, BUFFER_VIRTUAL_SHADING) {
   uint none;
 };
 #endif
+
+// virtual_bounds.comp: the tiles' bounds of the pages a virtual shadow map drew, written to image
+// unit IMAGE_VIRTUAL_BOUNDS from the pool slots listed in storage buffer BUFFER_VIRTUAL_BOUNDS_SLOTS
+// (ints); a work group covers VIRTUAL_BOUNDS_GROUP² tiles of one page.
+PENUMBRA_CONSTANT(BUFFER_VIRTUAL_BOUNDS_SLOTS, 2)
+PENUMBRA_CONSTANT(IMAGE_VIRTUAL_BOUNDS, 0)
+PENUMBRA_CONSTANT(VIRTUAL_BOUNDS_GROUP, 8)
 
 #ifdef __cplusplus
 static_assert(sizeof(PcssRequirementResult) == 4 * MAX_CASCADES * sizeof(std::uint32_t), "std430: four uint arrays, no padding");

@@ -7,14 +7,15 @@
 // Texel (i, j) of the tile (centre at i + 0.5, j + 0.5) lies between
 //   lower + a (i + 0.5 - T/2) + b (j + 0.5 - T/2)  and  upper + a (...) + b (...),  T the tile's side,
 // stored as (lower, upper, a, b) at the tile's place in the pool, divided by T.
+// The pool's layout (u_virtual_pool_pages, u_virtual_page_texels) is the VirtualFrame block's.
 #include "shadow_contract.h"
+#include "virtual_mark_contract.h"
 
-layout(local_size_x = 8, local_size_y = 8) in;  // one invocation per tile; one workgroup row of z per drawn page
+// One invocation per tile; one work group layer of z per drawn page.
+layout(local_size_x = VIRTUAL_BOUNDS_GROUP, local_size_y = VIRTUAL_BOUNDS_GROUP) in;
 layout(binding = UNIT_VIRTUAL_POOL) uniform sampler2D u_virtual_pool;
-layout(binding = 0, rgba32f) uniform writeonly image2D u_bounds;
-layout(std430, binding = 0) readonly buffer DrawnSlots { int u_slots[]; };
-uniform int u_virtual_pool_pages;
-uniform int u_virtual_page_texels;
+layout(binding = IMAGE_VIRTUAL_BOUNDS, rgba32f) uniform writeonly image2D u_bounds;
+layout(std430, binding = BUFFER_VIRTUAL_BOUNDS_SLOTS) readonly buffer DrawnSlots { int u_slots[]; };
 
 const int T = VIRTUAL_BOUNDS_TILE;
 

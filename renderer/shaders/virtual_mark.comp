@@ -26,8 +26,9 @@ layout(std430, binding = VIRTUAL_MARK_BUFFER) buffer Marks {
   uint u_page_bits[];  // bit virtual_mark_page_bit(level, x, y, pages_per_side)
 };
 
+// The frame's layout, camera and constants are the VirtualFrame block (virtual_mark_contract.h); these
+// differ between the dispatches of a frame.
 uniform float u_radius_ws;  // the filter's world radius (0: none)
-uniform bool u_search_receiver_plane;  // PCSS: the blocker search tests against the receiver's plane
 // VIRTUAL_MARK_PASS (a define: one program per pass, PageMarker) 0: the pages of a filter of
 // u_radius_ws; PCSS: 1 the pages of each pixel's blocker search, 2 (the search's pages resident) the
 // pages of the penumbra that search finds. Not a uniform: llvmpipe runs both sides of a branch on a
@@ -43,7 +44,7 @@ int mark_square(int level, vec2 xy, float r) {
   for (; level < u_virtual_levels; ++level) {
     if (!virtual_in_window(level, xy)) continue;
     const float page_ws = float(u_virtual_page_texels) * virtual_texel_ws(level);
-    const vec2 local = (xy - u_virtual_origin[level]) / page_ws;
+    const vec2 local = (xy - virtual_origin(level)) / page_ws;
     const float reach = r / page_ws;  // the square [xy - r, xy + r], in pages
     const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
     const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
@@ -101,7 +102,7 @@ void main() {
   {
     float radius;
     int blockers;
-    const vec2 gradient = u_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
+    const vec2 gradient = u_virtual_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
     const bool searched = virtual_pcss_radius(world, gradient, radius, blockers);
     if (u_write_radii) imageStore(u_radii, p, vec4(searched ? radius : -1.0));
     if (!searched || blockers == 0) {

@@ -2,14 +2,21 @@
 // by GLSL: what an engine binds before it dispatches the marking and how it reads the marks back.
 // Installed for engines as <penumbra/shaders/virtual_mark_contract.h> (C++17; no GL, no GLM), beside
 // share/penumbra/shaders/virtual_mark.comp, the marking shader with its includes inlined (this file
-// among them); docs/virtual-pages-in-your-engine.md walks through it. The renderer's PageMarker
-// (shadows/virtual_shadow_map.h) dispatches the same shader; tests/install/test_virtual_mark_gl.cpp
-// checks every number here against the driver's view of the installed shader and against
-// shaders/shadow_contract.h.
+// among them); docs/virtual-pages-in-your-engine.md walks through it. The renderer's PageMarker and
+// its shading through the pages (shadows/virtual_shadow_map.h, shaders/virtual_pages.glsl) read the
+// same block; tests/install/test_virtual_mark_gl.cpp checks every number here against the driver's
+// view of the installed shader and against shaders/shadow_contract.h, test_shader_contract_gl the
+// block's std140 offsets against the C++ struct's.
 //
 // Dispatch: ceil(width / VIRTUAL_MARK_GROUP_SIZE) × ceil(height / VIRTUAL_MARK_GROUP_SIZE) work
 // groups over the surface image, one invocation per pixel. Compile with `#version 450 core` and
 // `#define VIRTUAL_MARK_PASS 0` (1, 2: PCSS's two passes) before the shader's text.
+//
+// The frame: a std140 uniform block VirtualFrame at uniform-buffer binding VIRTUAL_FRAME_BLOCK
+// (below), one buffer of sizeof(VirtualFrame) bytes written once a frame: the map's layout and
+// light view, the camera the marking measures footprints with, the rule's constants, PCSS's
+// search constants. What differs between dispatches of a frame stays a plain uniform of the
+// marking shader: u_radius_ws (pass 0: the filter's world radius), u_write_levels, u_write_radii.
 //
 // Images (glBindImageTexture unit = the constant):
 //   VIRTUAL_MARK_IMAGE_SURFACE  rgba32f, read: each pixel's surface point, world xyz; w > 0 where a
@@ -28,8 +35,8 @@
 //                                                pages_per_side² window is bit
 //                                                b = virtual_mark_page_bit(level, x, y, pages_per_side),
 //                                                bit (b % 32) of page-bit word b / 32
-// Page (x, y) of level k covers light-space [u_virtual_origin[k] + (x, y) · page_ws, + page_ws) with
-// page_ws = u_virtual_page_texels · u_virtual_texel0_ws · 2^k.
+// Page (x, y) of level k covers light-space [u_virtual_origin[k].xy + (x, y) · page_ws, + page_ws)
+// with page_ws = u_virtual_page_texels · u_virtual_texel0_ws · 2^k.
 //
 // The level a pixel asks for (virtual_pages.glsl: virtual_requested_texel_ws, virtual_level_for_texel; on
 // the CPU adaptive::requested_texel_ws and adaptive::level_for_texel):
@@ -54,11 +61,28 @@
 
 namespace penumbra::shadows::virtual_mark {
 using uint = std::uint32_t;
+// The block's GLSL types as plain floats (no GLM): a vec3 member is followed by a scalar, which
+// std140 packs into its fourth component; mat4 is column-major, columns[c][r] (as GLSL and glm).
+struct vec3 {
+  float x = 0, y = 0, z = 0;
+};
+struct vec4 {
+  float x = 0, y = 0, z = 0, w = 0;
+};
+struct mat4 {
+  float columns[4][4] = {};
+};
+using bool32 = std::uint32_t;  // a GLSL bool in a block: 4 bytes, 0 or 1
 #define PENUMBRA_VIRTUAL_CONSTANT(name, value) inline constexpr int name = value;
 #define PENUMBRA_VIRTUAL_FUNCTION inline constexpr
+#define PENUMBRA_VIRTUAL_ALIGN16 alignas(16)
+#define PENUMBRA_VIRTUAL_UNIFORM_BLOCK(name, binding_point) struct alignas(16) name
 #else
 #define PENUMBRA_VIRTUAL_CONSTANT(name, value) const int name = value;
 #define PENUMBRA_VIRTUAL_FUNCTION
+#define PENUMBRA_VIRTUAL_ALIGN16
+#define PENUMBRA_VIRTUAL_UNIFORM_BLOCK(name, binding_point) layout(std140, binding = binding_point) uniform name
+#define bool32 bool
 #endif
 
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_MAX_LEVELS, 16)  // levels the buffer counts (the renderer's VIRTUAL_MAX_LEVELS)
@@ -75,6 +99,39 @@ PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PAGE_BITS, 17)  // VIRTUAL_MARK_MAX_
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_POOL, 9)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_TABLE, 10)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_BOUNDS, 14)
+// Uniform-buffer binding of the VirtualFrame block (the renderer's BLOCK_VIRTUAL_FRAME; its
+// ShadowFrame block takes binding 0).
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_FRAME_BLOCK, 1)
+
+// One frame of the virtual shadow map, as every shader that reads its pages or marks them sees it.
+// Layout rules: mat4 and vec4 (and arrays of them) start on 16 bytes, a vec3 is followed by a
+// scalar, booleans are 4 bytes; the C++ offsets are checked against the driver's std140 offsets.
+PENUMBRA_VIRTUAL_UNIFORM_BLOCK(VirtualFrame, VIRTUAL_FRAME_BLOCK) {
+  PENUMBRA_VIRTUAL_ALIGN16 mat4 u_virtual_light_view;  // world → light space: rigid, the light along -z
+  // xy: level k's window's lower corner in light space; zw: 0. A vec4 per level: std140 strides an
+  // array of vec2 by 16 bytes anyway.
+  PENUMBRA_VIRTUAL_ALIGN16 vec4 u_virtual_origin[VIRTUAL_MARK_MAX_LEVELS];
+  PENUMBRA_VIRTUAL_ALIGN16 vec3 u_mark_camera_position;  // the camera the marking measures footprints from
+  float u_mark_footprint_per_depth;  // perspective: a pixel's world size per unit of view depth; orthographic: its size
+  PENUMBRA_VIRTUAL_ALIGN16 vec3 u_mark_camera_forward;   // unit view direction
+  float u_mark_c_texels;             // c: texels under the filter's radius
+  float u_mark_min_texel_px;         // the pixel floor: no texel finer than this many footprints
+  float u_virtual_texel0_ws;         // level 0's texel; level k's is u_virtual_texel0_ws · 2^k
+  int u_virtual_page_texels;         // texels per page side
+  int u_virtual_pages_per_side;      // pages per level window side
+  int u_virtual_levels;              // clipmap levels, at most VIRTUAL_MARK_MAX_LEVELS
+  int u_virtual_pool_pages;          // pool slots per side (slot s at (s % n, s / n)); pass 2 and the shading
+  float u_virtual_near_ws;           // the light-space depth range the pages hold: depth = (-z - near) / (far - near)
+  float u_virtual_far_ws;
+  float u_virtual_tan_half_angle;    // PCSS: the sun's angular radius, as a tangent
+  float u_virtual_search_scale;      // PCSS: the blocker search's radius over its geometric bound
+  float u_virtual_min_penumbra_ws;   // PCSS: the smallest penumbra (world radius)
+  float u_virtual_search_bias_texels;  // PCSS: the search's depth bias, texels of its level
+  bool32 u_virtual_bounds;           // the tiles' depth bounds at VIRTUAL_UNIT_BOUNDS may be read
+  bool32 u_virtual_search_receiver_plane;  // PCSS: the search tests each texel against the receiver's plane
+  bool32 u_mark_perspective;         // perspective (else orthographic) camera
+  bool32 u_mark_footprint_only;      // mark by the footprint alone (what engines' virtual maps do)
+};
 
 // The bit of page (x, y) of `level` among the page bits, for windows of pages_per_side² pages.
 PENUMBRA_VIRTUAL_FUNCTION uint virtual_mark_page_bit(int level, int x, int y, int pages_per_side) {
@@ -97,9 +154,18 @@ inline constexpr Page virtual_mark_page_of_bit(uint bit, int pages_per_side) {
 }
 static_assert(VIRTUAL_MARK_WORD_UNMARKED == VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL + VIRTUAL_MARK_MAX_LEVELS, "std430: a uint array, no padding");
 static_assert(VIRTUAL_MARK_WORD_PAGE_BITS == VIRTUAL_MARK_WORD_UNMARKED + 1, "std430: a uint, then the page bits");
+static_assert(sizeof(vec3) == 12 && sizeof(vec4) == 16 && sizeof(mat4) == 64, "the block's GLSL types");
+static_assert(offsetof(VirtualFrame, u_virtual_origin) == 64 && offsetof(VirtualFrame, u_mark_camera_position) == 64 + 16 * VIRTUAL_MARK_MAX_LEVELS &&
+                  offsetof(VirtualFrame, u_mark_footprint_per_depth) == offsetof(VirtualFrame, u_mark_camera_position) + 12,
+              "std140: a vec4 array after the mat4, a vec3 followed by a scalar in its fourth component");
+static_assert(sizeof(VirtualFrame) == 64 + 16 * VIRTUAL_MARK_MAX_LEVELS + 2 * 16 + 16 * 4, "std140: no padding");
 }  // namespace penumbra::shadows::virtual_mark
+#else
+#undef bool32
 #endif
 #undef PENUMBRA_VIRTUAL_CONSTANT
 #undef PENUMBRA_VIRTUAL_FUNCTION
+#undef PENUMBRA_VIRTUAL_ALIGN16
+#undef PENUMBRA_VIRTUAL_UNIFORM_BLOCK
 
 #endif  // PENUMBRA_VIRTUAL_MARK_CONTRACT_H

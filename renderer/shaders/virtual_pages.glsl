@@ -1,20 +1,14 @@
 // A virtual shadow map's depths through its page tables (shadows/virtual_shadow_map.h): level k
 // is a window of u_virtual_pages_per_side² pages of u_virtual_page_texels² texels, texel size
-// u_virtual_texel0_ws·2^k, its lower corner at u_virtual_origin[k] in light space; the table of level k
+// u_virtual_texel0_ws·2^k, its lower corner at virtual_origin(k) in light space; the table of level k
 // holds, per page of the window, its slot in the pool (-1: not resident). Depths are the light-
 // space distance mapped linearly from [u_virtual_near_ws, u_virtual_far_ws] to [0, 1], as every page was
-// drawn, so that depths of different levels compare.
+// drawn, so that depths of different levels compare. The frame's layout, light view, marking and
+// PCSS constants are the VirtualFrame block (virtual_mark_contract.h), one uniform buffer a frame;
+// only the samplers are plain uniforms here (GLSL keeps opaque types out of blocks).
 #include "shadow_contract.h"
+#include "virtual_mark_contract.h"
 
-uniform mat4 u_virtual_light_view;
-uniform vec2 u_virtual_origin[VIRTUAL_MAX_LEVELS];
-uniform float u_virtual_texel0_ws;
-uniform int u_virtual_page_texels;
-uniform int u_virtual_pages_per_side;
-uniform int u_virtual_levels;
-uniform int u_virtual_pool_pages;  // slots per side of the pool
-uniform float u_virtual_near_ws;
-uniform float u_virtual_far_ws;
 layout(binding = UNIT_VIRTUAL_POOL) uniform sampler2D u_virtual_pool;
 layout(binding = UNIT_VIRTUAL_TABLE) uniform isampler2D u_virtual_table;
 layout(binding = UNIT_VIRTUAL_POOL_CMP) uniform sampler2DShadow u_virtual_pool_cmp;  // the pool, LEQUAL comparison (lit)
@@ -22,20 +16,13 @@ layout(binding = UNIT_VIRTUAL_MOMENTS) uniform sampler2D u_virtual_moments;  // 
 // Per tile of VIRTUAL_BOUNDS_TILE² pool texels: (lower, upper, a, b), planes around its depths
 // (virtual_bounds.comp); read only when u_virtual_bounds.
 layout(binding = UNIT_VIRTUAL_BOUNDS) uniform sampler2D u_virtual_tile_bounds;
-uniform bool u_virtual_bounds;
 
-// Which level a surface point asks for (set_virtual_mark_uniforms): the page marking
-// (virtual_mark.comp) and the shading pass ask it the same way, so a pixel samples the level its pages
-// were marked on.
-uniform vec3 u_mark_camera_position;
-uniform vec3 u_mark_camera_forward;
-uniform bool u_mark_perspective;
-uniform float u_mark_footprint_per_depth;  // perspective: a pixel's world size per unit of depth; orthographic: its size
-uniform float u_mark_c_texels;
-uniform float u_mark_min_texel_px;
-uniform bool u_mark_footprint_only;
+// Level `level`'s window's lower corner in light space.
+vec2 virtual_origin(int level) { return u_virtual_origin[level].xy; }
 
-// The finest texel `world` needs, with a filter of world radius `radius_ws` (0: none):
+// The finest texel `world` needs, with a filter of world radius `radius_ws` (0: none), by the
+// block's u_mark_* (set_virtual_marking): the page marking (virtual_mark.comp) and the shading pass
+// ask it the same way, so a pixel samples the level its pages were marked on.
 //   rule       max(r / c, s · min_texel_px)   (s the pixel's world footprint)
 //   footprint  s · min_texel_px
 float virtual_requested_texel_ws(vec3 world, float radius_ws) {
@@ -58,11 +45,11 @@ vec3 virtual_light_point(vec3 world) {
 float virtual_texel_ws(int level) { return u_virtual_texel0_ws * exp2(float(level)); }
 
 // The texel of `level`'s window that holds light-space `xy` (it may lie outside the window).
-ivec2 virtual_texel(int level, vec2 xy) { return ivec2(floor((xy - u_virtual_origin[level]) / virtual_texel_ws(level))); }
+ivec2 virtual_texel(int level, vec2 xy) { return ivec2(floor((xy - virtual_origin(level)) / virtual_texel_ws(level))); }
 
 // Whether level `level`'s window holds light-space `xy`.
 bool virtual_in_window(int level, vec2 xy) {
-  const vec2 local = (xy - u_virtual_origin[level]) / (float(u_virtual_page_texels) * virtual_texel_ws(level));
+  const vec2 local = (xy - virtual_origin(level)) / (float(u_virtual_page_texels) * virtual_texel_ws(level));
   return all(greaterThanEqual(local, vec2(0.0))) && all(lessThan(local, vec2(u_virtual_pages_per_side)));
 }
 
@@ -244,7 +231,7 @@ float virtual_pcf_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, vec2 lo, 
 // outside the level's window.
 float virtual_pcf_box(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out bool found) {
   const float t = virtual_texel_ws(level);
-  const vec2 p = (xy - u_virtual_origin[level]) / t;  // texel coordinates in the level's window
+  const vec2 p = (xy - virtual_origin(level)) / t;  // texel coordinates in the level's window
   const float r = max(radius_ws / t, 1e-4);
   const vec2 lo = p - r, hi = p + r;
   const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;  // blocks from an even texel
@@ -301,7 +288,7 @@ vec2 virtual_moments_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, vec2 l
 // texel under the square is not resident or lies outside the level's window.
 vec2 virtual_moments_box(int level, vec2 xy, float radius_ws, out bool found) {
   const float t = virtual_texel_ws(level);
-  const vec2 p = (xy - u_virtual_origin[level]) / t;
+  const vec2 p = (xy - virtual_origin(level)) / t;
   const float r = max(radius_ws / t, 1e-4);
   const vec2 lo = p - r, hi = p + r;
   const ivec2 first = ivec2(floor(lo)) & ~1, last = ivec2(ceil(hi)) - 1;
@@ -349,7 +336,7 @@ void virtual_blocker_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, ivec2 
 float virtual_blocker_search(int level, vec2 xy, float depth, vec2 gradient, float radius_ws, out int blockers, out bool found) {
   blockers = 0;
   const float t = virtual_texel_ws(level);
-  const vec2 p = (xy - u_virtual_origin[level]) / t;
+  const vec2 p = (xy - virtual_origin(level)) / t;
   const float r = max(radius_ws / t, 1e-4);
   const ivec2 inside = ivec2(floor(p - r)), last = ivec2(ceil(p + r)) - 1;
   const ivec2 first = inside & ~1;  // blocks from an even texel; texels before `inside` are not the square's
@@ -381,14 +368,10 @@ vec2 virtual_plane_gradient(vec3 dx, vec3 dy) {
 }
 
 // PCSS through the pages, for a sun of angular radius atan(u_virtual_tan_half_angle)
-// (set_virtual_pcss_uniforms). The marking (virtual_mark.comp) runs the blocker search once a frame
+// (the block's PCSS constants, set_virtual_pcss). The marking (virtual_mark.comp) runs the blocker search once a frame
 // and writes the penumbra it finds, which the shading filters with. The search reads the surface
 // point itself (no normal offset), each texel against the receiver's plane there (the marker's
 // gradient) less a constant bias of u_virtual_search_bias_texels of its level.
-uniform float u_virtual_tan_half_angle;
-uniform float u_virtual_search_scale;
-uniform float u_virtual_min_penumbra_ws;
-uniform float u_virtual_search_bias_texels;
 // The blocker search's square spans this many texels of its level per radius: a mean blocker depth
 // needs no finer texels than that (its level is far coarser than a contact shadow's filter).
 const float VIRTUAL_SEARCH_TEXELS = 4.0;

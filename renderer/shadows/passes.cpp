@@ -26,6 +26,7 @@ const gl::Program& ProgramCache::get(const gl::ShaderLibrary& shaders, const std
   if (it == programs_.end()) {
     gl::Program program = shaders.program(stages, defines);
     check_shadow_frame_block(program, key);
+    check_virtual_frame_block(program, key);
     it = programs_.emplace(key, std::move(program)).first;
   }
   return it->second;
@@ -679,8 +680,8 @@ class ShadingPass final : public Pass {
     f.set_technique_uniforms(prog);
     if (virtual_pages) {
       const FrameResources::Virtual& v = *r.virtual_map;
-      v.map->bind(prog);
-      set_virtual_mark_uniforms(prog, f.scene.camera, f.plan.height_px, v.options);
+      v.map->set_marking(f.scene.camera, f.plan.height_px, v.options);
+      v.map->bind();
       if (v.pcss) {
         v.pcss_radii.bind(contract::UNIT_VIRTUAL_PCSS_RADII);
         glBindSampler(contract::UNIT_VIRTUAL_PCSS_RADII, 0);

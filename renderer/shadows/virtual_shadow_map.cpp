@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <optional>
-#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -13,11 +13,16 @@
 
 #include "gl/shader_library.h"
 #include "scene/culling.h"
+#include "shadows/contract.h"
 #include "shadows/fitting.h"
 #include "shaders/shadow_contract.h"
 #include "shadows/scoped_pass.h"
 
 namespace penumbra::shadows {
+
+static_assert(contract::BLOCK_VIRTUAL_FRAME == virtual_mark::VIRTUAL_FRAME_BLOCK && contract::BLOCK_VIRTUAL_FRAME != contract::BLOCK_SHADOW_FRAME,
+              "the VirtualFrame block's binding: shadow_contract.h and virtual_mark_contract.h");
+static_assert(contract::VIRTUAL_MAX_LEVELS == virtual_mark::VIRTUAL_MARK_MAX_LEVELS, "the block's origins: one per level");
 
 glm::mat4 sun_light_view(const glm::vec3& direction) {
   const glm::vec3 d = glm::normalize(direction);
@@ -87,6 +92,8 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
       pool_side_(pool_pages_per_side),
       content_(content),
       cache_(layout, pool_pages_per_side * pool_pages_per_side) {
+  set_virtual_view(frame_, layout, view_);
+  frame_.u_virtual_pool_pages = pool_side_;
   const int side = pool_side_ * layout.page_texels;
   pool_ = gl::Texture({GL_DEPTH_COMPONENT32F, side, side, 1}, "virtual shadow map page pool");
   glTextureParameteri(pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // complete with one level: textureGather reads it
@@ -115,9 +122,11 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
     glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(bounds_pool_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     bounds_program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "virtual_bounds.comp"}});
+    check_virtual_frame_block(bounds_program_, "virtual_bounds.comp");
     bounds_slots_ = gl::Buffer(static_cast<std::size_t>(pool_slots()) * sizeof(std::int32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
     bounds_ = true;
   }
+  frame_.u_virtual_bounds = bounds_;
   write_tables();
 }
 
@@ -131,6 +140,7 @@ void VirtualShadowMap::set_bounds(bool on) {
   const bool now = on && bounds_pool_.id() != 0;
   if (now == bounds_) return;
   bounds_ = now;
+  frame_.u_virtual_bounds = bounds_;
   if (now) invalidate_all();  // the pages drawn without bounds have none
 }
 
@@ -143,14 +153,13 @@ std::uint64_t VirtualShadowMap::page_bytes() const {
 void VirtualShadowMap::write_bounds(const std::vector<int>& slots) {
   if (slots.empty()) return;
   glNamedBufferSubData(bounds_slots_.id(), 0, static_cast<GLsizeiptr>(slots.size() * sizeof(int)), slots.data());
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bounds_slots_.id());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_VIRTUAL_BOUNDS_SLOTS, bounds_slots_.id());
   pool_.bind(contract::UNIT_VIRTUAL_POOL);
   glBindSampler(contract::UNIT_VIRTUAL_POOL, 0);
-  glBindImageTexture(0, bounds_pool_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  glBindImageTexture(contract::IMAGE_VIRTUAL_BOUNDS, bounds_pool_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  frame_buffer_.bind(frame_);  // the pool's layout
   bounds_program_.use();
-  bounds_program_.set("u_virtual_pool_pages", pool_side_);
-  bounds_program_.set("u_virtual_page_texels", layout_.page_texels);
-  const int groups = (layout_.page_texels / contract::VIRTUAL_BOUNDS_TILE + 7) / 8;  // 8 × 8 tiles a workgroup
+  const int groups = (layout_.page_texels / contract::VIRTUAL_BOUNDS_TILE + contract::VIRTUAL_BOUNDS_GROUP - 1) / contract::VIRTUAL_BOUNDS_GROUP;
   glDispatchCompute(static_cast<GLuint>(groups), static_cast<GLuint>(groups), static_cast<GLuint>(slots.size()));
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
 }
@@ -231,6 +240,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   if (has_view_ && (view.light_view != view_.light_view || view.near_ws != view_.near_ws || view.far_ws != view_.far_ws)) invalidate_all();
   view_ = view;
   has_view_ = true;
+  set_virtual_view(frame_, layout_, view_);
   const adaptive::PageCache::Update admitted = cache_.update(requested, view.camera_xy);
   VirtualMapStats stats;
   static_cast<adaptive::PageCacheStats&>(stats) = admitted.stats;
@@ -290,20 +300,37 @@ std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_p
          " holds them all";
 }
 
-void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view) {
-  program.set("u_virtual_light_view", view.light_view);
-  std::vector<glm::vec2> origins;
-  for (int k = 0; k < layout.levels; ++k) {
-    const adaptive::LightXY o = adaptive::level_origin(k, view.camera_xy, layout);
-    origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
+namespace {
+
+virtual_mark::vec3 block_vec3(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+void set_virtual_view(VirtualFrame& frame, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) frame.u_virtual_light_view.columns[c][r] = view.light_view[c][r];  // column-major, as glm
+  for (int k = 0; k < virtual_mark::VIRTUAL_MARK_MAX_LEVELS; ++k) {
+    const adaptive::LightXY o = k < layout.levels ? adaptive::level_origin(k, view.camera_xy, layout) : adaptive::LightXY{};
+    frame.u_virtual_origin[k] = {static_cast<float>(o.x), static_cast<float>(o.y), 0, 0};
   }
-  program.set("u_virtual_origin", std::span<const glm::vec2>(origins));
-  program.set("u_virtual_texel0_ws", static_cast<float>(layout.texel0_ws));
-  program.set("u_virtual_page_texels", layout.page_texels);
-  program.set("u_virtual_pages_per_side", layout.pages_per_side);
-  program.set("u_virtual_levels", layout.levels);
-  program.set("u_virtual_near_ws", view.near_ws);
-  program.set("u_virtual_far_ws", view.far_ws);
+  frame.u_virtual_texel0_ws = static_cast<float>(layout.texel0_ws);
+  frame.u_virtual_page_texels = layout.page_texels;
+  frame.u_virtual_pages_per_side = layout.pages_per_side;
+  frame.u_virtual_levels = layout.levels;
+  frame.u_virtual_near_ws = view.near_ws;
+  frame.u_virtual_far_ws = view.far_ws;
+}
+
+VirtualFrameBuffer::VirtualFrameBuffer() : buffer_(sizeof(VirtualFrame), nullptr, GL_DYNAMIC_STORAGE_BIT) {}
+
+void VirtualFrameBuffer::bind(const VirtualFrame& frame) const {
+  if (!holds_ || std::memcmp(&held_, &frame, sizeof frame) != 0) {  // std140 as laid out: no padding to differ in
+    glNamedBufferSubData(buffer_.id(), 0, sizeof frame, &frame);
+    held_ = frame;
+    holds_ = true;
+    ++writes_;
+  }
+  glBindBufferBase(GL_UNIFORM_BUFFER, contract::BLOCK_VIRTUAL_FRAME, buffer_.id());
 }
 
 adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
@@ -314,24 +341,24 @@ adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
   return o;
 }
 
-void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options) {
+void set_virtual_marking(VirtualFrame& frame, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options) {
   const bool perspective = camera.projection == scene::Camera::Projection::perspective;
-  program.set("u_mark_camera_position", camera.position);
-  program.set("u_mark_camera_forward", glm::normalize(camera.target - camera.position));
-  program.set("u_mark_perspective", perspective);
-  program.set("u_mark_footprint_per_depth", perspective ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / static_cast<float>(height_px)
-                                                        : camera.ortho_height_ws / static_cast<float>(height_px));
-  program.set("u_mark_c_texels", static_cast<float>(options.c_texels));
-  program.set("u_mark_min_texel_px", static_cast<float>(options.min_texel_px));
-  program.set("u_mark_footprint_only", options.marking == adaptive::Marking::footprint);
+  frame.u_mark_camera_position = block_vec3(camera.position);
+  frame.u_mark_camera_forward = block_vec3(glm::normalize(camera.target - camera.position));
+  frame.u_mark_perspective = perspective;
+  frame.u_mark_footprint_per_depth = perspective ? 2 * std::tan(glm::radians(camera.fov_y_deg) / 2) / static_cast<float>(height_px)
+                                                 : camera.ortho_height_ws / static_cast<float>(height_px);
+  frame.u_mark_c_texels = static_cast<float>(options.c_texels);
+  frame.u_mark_min_texel_px = static_cast<float>(options.min_texel_px);
+  frame.u_mark_footprint_only = options.marking == adaptive::Marking::footprint;
 }
 
-void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss) {
-  program.set("u_virtual_tan_half_angle", pcss.tan_half_angle);
-  program.set("u_virtual_search_scale", pcss.search_scale);
-  program.set("u_virtual_min_penumbra_ws", pcss.min_penumbra_ws);
-  program.set("u_virtual_search_bias_texels", pcss.search_bias_texels);
-  program.set("u_search_receiver_plane", pcss.receiver_plane);
+void set_virtual_pcss(VirtualFrame& frame, const VirtualPcss& pcss) {
+  frame.u_virtual_tan_half_angle = pcss.tan_half_angle;
+  frame.u_virtual_search_scale = pcss.search_scale;
+  frame.u_virtual_min_penumbra_ws = pcss.min_penumbra_ws;
+  frame.u_virtual_search_bias_texels = pcss.search_bias_texels;
+  frame.u_virtual_search_receiver_plane = pcss.receiver_plane;
 }
 
 VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg) {
@@ -340,7 +367,7 @@ VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg) {
           plane ? s.map.depth_bias_texels : 2.0f, plane};
 }
 
-void VirtualShadowMap::bind(const gl::Program& program) const {
+void VirtualShadowMap::bind() const {
   pool_.bind(contract::UNIT_VIRTUAL_POOL);
   glBindSampler(contract::UNIT_VIRTUAL_POOL, 0);  // texelFetch: no sampler state needed
   table_.bind(contract::UNIT_VIRTUAL_TABLE);
@@ -355,9 +382,7 @@ void VirtualShadowMap::bind(const gl::Program& program) const {
     bounds_pool_.bind(contract::UNIT_VIRTUAL_BOUNDS);
     glBindSampler(contract::UNIT_VIRTUAL_BOUNDS, 0);
   }
-  program.set("u_virtual_bounds", bounds_);
-  set_virtual_page_uniforms(program, layout_, view_);
-  program.set("u_virtual_pool_pages", pool_side_);
+  frame_buffer_.bind(frame_);
 }
 
 PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layout) {
@@ -366,16 +391,17 @@ PageMarker::PageMarker(const adaptive::VirtualMapLayout& layout) : layout_(layou
     throw std::invalid_argument("page marker: levels must be 1.." + std::to_string(contract::VIRTUAL_MAX_LEVELS) +
                                 ", page_texels, pages_per_side and texel0_ws positive");
   const gl::ShaderLibrary shaders;
-  for (int pass = 0; pass < 3; ++pass)
+  for (int pass = 0; pass < 3; ++pass) {
     programs_[pass] = shaders.program({{GL_COMPUTE_SHADER, "virtual_mark.comp"}}, {{"VIRTUAL_MARK_PASS", std::to_string(pass)}});
-  const std::size_t bits = static_cast<std::size_t>(layout.levels) * layout.pages_per_side * layout.pages_per_side;
-  words_ = (bits + 31) / 32;
+    check_virtual_frame_block(programs_[pass], "virtual_mark.comp");
+  }
+  words_ = virtual_mark::virtual_mark_buffer_words(layout.levels, layout.pages_per_side);
   marks_ = make_marks();
 }
 
 adaptive::MarkResult PageMarker::mark(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                       double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels) const {
-  run(Pass::filter, surface, camera, height_px, view, radius_ws, options, levels, nullptr, marks_);
+  dispatch(surface, camera, height_px, view, radius_ws, options, marks_, levels);
   return read(marks_);
 }
 
@@ -388,36 +414,39 @@ adaptive::MarkResult PageMarker::mark_pcss_search(const gl::Texture& surface, co
 adaptive::MarkResult PageMarker::mark_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px,
                                                   const VirtualShadowMap& map, const VirtualPcss& pcss, const adaptive::MarkOptions& options,
                                                   const gl::Texture* levels, const gl::Texture* radii) const {
-  set_virtual_pcss_uniforms(program(Pass::pcss_penumbra), pcss);
-  map.bind(program(Pass::pcss_penumbra));  // the search reads the pages the first pass marked
-  run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, levels, radii, marks_);
+  dispatch_pcss_filter(surface, camera, height_px, map, pcss, options, radii, marks_, levels);
   return read(marks_);
 }
 
 gl::Buffer PageMarker::make_marks() const {
-  return gl::Buffer((contract::VIRTUAL_MAX_LEVELS + 1 + words_) * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  return gl::Buffer(words_ * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT);
 }
 
 void PageMarker::dispatch(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-                          double radius_ws, const adaptive::MarkOptions& options, const gl::Buffer& marks) const {
-  run(Pass::filter, surface, camera, height_px, view, radius_ws, options, nullptr, nullptr, marks);
+                          double radius_ws, const adaptive::MarkOptions& options, const gl::Buffer& marks, const gl::Texture* levels) const {
+  VirtualFrame frame{};
+  set_virtual_view(frame, layout_, view);
+  run(Pass::filter, surface, camera, height_px, frame, radius_ws, options, levels, nullptr, marks);
 }
 
 void PageMarker::dispatch_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                                       const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Buffer& marks) const {
-  set_virtual_pcss_uniforms(program(Pass::pcss_search), pcss);
-  run(Pass::pcss_search, surface, camera, height_px, view, 0, options, nullptr, nullptr, marks);
+  VirtualFrame frame{};
+  set_virtual_view(frame, layout_, view);
+  set_virtual_pcss(frame, pcss);
+  run(Pass::pcss_search, surface, camera, height_px, frame, 0, options, nullptr, nullptr, marks);
 }
 
 void PageMarker::dispatch_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
                                       const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Texture* radii,
-                                      const gl::Buffer& marks) const {
-  set_virtual_pcss_uniforms(program(Pass::pcss_penumbra), pcss);
-  map.bind(program(Pass::pcss_penumbra));  // the search reads the pages resident now
-  run(Pass::pcss_penumbra, surface, camera, height_px, map.view(), 0, options, nullptr, radii, marks);
+                                      const gl::Buffer& marks, const gl::Texture* levels) const {
+  map.bind();  // the search reads the pages resident now
+  VirtualFrame frame = map.frame();  // its pool, bounds and view
+  set_virtual_pcss(frame, pcss);
+  run(Pass::pcss_penumbra, surface, camera, height_px, frame, 0, options, levels, radii, marks);
 }
 
-void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
+void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, VirtualFrame frame,
                      double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii,
                      const gl::Buffer& marks) const {
   const gl::Program& prog = program(pass);
@@ -428,31 +457,32 @@ void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera&
   if (!same_size_r32f(levels)) throw std::invalid_argument("page marker: the levels image must be R32F of the surface's size");
   if (!same_size_r32f(radii)) throw std::invalid_argument("page marker: the radii image must be R32F of the surface's size");
   prog.set("u_write_levels", levels != nullptr);
-  if (levels) glBindImageTexture(1, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  if (levels) glBindImageTexture(virtual_mark::VIRTUAL_MARK_IMAGE_LEVELS, levels->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
   prog.set("u_write_radii", radii != nullptr);
-  if (radii) glBindImageTexture(2, radii->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-  set_virtual_page_uniforms(prog, layout_, view);
-  set_virtual_mark_uniforms(prog, camera, height_px, options);
+  if (radii) glBindImageTexture(virtual_mark::VIRTUAL_MARK_IMAGE_RADII, radii->id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+  set_virtual_marking(frame, camera, height_px, options);
+  frame_buffer_.bind(frame);
   prog.set("u_radius_ws", static_cast<float>(radius_ws));
   const std::uint32_t zero = 0;
   glClearNamedBufferData(marks.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, marks.id());
-  glBindImageTexture(0, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, virtual_mark::VIRTUAL_MARK_BUFFER, marks.id());
+  glBindImageTexture(virtual_mark::VIRTUAL_MARK_IMAGE_SURFACE, surface.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
   prog.dispatch_covering(surface.desc().width, surface.desc().height);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
 }
 
 adaptive::MarkResult PageMarker::read(const gl::Buffer& marks) const {
-  std::vector<std::uint32_t> m(contract::VIRTUAL_MAX_LEVELS + 1 + words_);
+  namespace vm = virtual_mark;
+  std::vector<std::uint32_t> m(words_);
   glGetNamedBufferSubData(marks.id(), 0, static_cast<GLsizeiptr>(m.size() * sizeof(std::uint32_t)), m.data());
   adaptive::MarkResult out;
-  for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(k)]);
-  out.unmarked = m[contract::VIRTUAL_MAX_LEVELS];
-  const int n = layout_.pages_per_side;
-  for (std::size_t w = 0; w < words_; ++w)
-    for (std::uint32_t word = m[contract::VIRTUAL_MAX_LEVELS + 1 + w]; word != 0; word &= word - 1) {
-      const auto bit = static_cast<int>(w * 32 + static_cast<std::size_t>(std::countr_zero(word)));
-      out.pages.insert({bit / (n * n), bit % n, (bit / n) % n});
+  for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(vm::VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL + k)]);
+  out.unmarked = m[vm::VIRTUAL_MARK_WORD_UNMARKED];
+  for (std::size_t w = vm::VIRTUAL_MARK_WORD_PAGE_BITS; w < words_; ++w)
+    for (std::uint32_t word = m[w]; word != 0; word &= word - 1) {
+      const auto bit = static_cast<vm::uint>((w - vm::VIRTUAL_MARK_WORD_PAGE_BITS) * 32 + static_cast<std::size_t>(std::countr_zero(word)));
+      const vm::Page page = vm::virtual_mark_page_of_bit(bit, layout_.pages_per_side);
+      out.pages.insert({page.level, page.x, page.y});
     }
   return out;
 }

@@ -22,6 +22,7 @@
 #include <penumbra/gl/objects.h>
 #include <penumbra/scene/gpu_mesh.h>
 #include <penumbra/scene/scene.h>
+#include <penumbra/shaders/virtual_mark_contract.h>
 #include <penumbra/shadows/settings.h>
 
 namespace penumbra::gl {
@@ -71,16 +72,20 @@ struct VirtualMapStats : adaptive::PageCacheStats {
 // them all. The apps print it; the main job and the bench refuse to time such a frame.
 std::string missing_pages_warning(const VirtualMapStats& stats, int pool_pages_per_side);
 
-// virtual_pages.glsl's uniforms for `layout` seen from `view` (the level windows around its camera).
-void set_virtual_page_uniforms(const gl::Program& program, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
+// The frame a virtual shadow map's shaders read: the std140 VirtualFrame block of
+// shaders/virtual_mark_contract.h (one uniform buffer, VirtualFrameBuffer), filled in parts below.
+using VirtualFrame = virtual_mark::VirtualFrame;
+// Writes the layout's and the view's part of `frame`: the light view, each level's window around
+// the view's camera, the texel, page and window sizes, the level count and the depth range.
+void set_virtual_view(VirtualFrame& frame, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
 
 // How `s` marks pages: by the rule (or map.virtual_pages = footprint: the footprint), with
 // adaptive.c and the pixel floor adaptive.min_texel_px (0: one pixel; the footprint needs a floor).
 adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s);
 
-// virtual_pages.glsl's marking uniforms: which level a surface point asks for, seen by `camera` in
-// an image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
-void set_virtual_mark_uniforms(const gl::Program& program, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options);
+// Writes the marking's part of `frame`: which level a surface point asks for, seen by `camera` in an
+// image `height_px` rows high, by `options`' rule (or footprint), c and pixel floor.
+void set_virtual_marking(VirtualFrame& frame, const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options);
 
 // PCSS through the pages (virtual_pages.glsl's virtual_pcss_radius): a sun of angular radius
 // atan(tan_half_angle), the blocker search's radius over its geometric bound, the smallest
@@ -93,13 +98,31 @@ struct VirtualPcss {
   float search_bias_texels = 1;
   bool receiver_plane = true;
 };
-void set_virtual_pcss_uniforms(const gl::Program& program, const VirtualPcss& pcss);
+// Writes PCSS's part of `frame`.
+void set_virtual_pcss(VirtualFrame& frame, const VirtualPcss& pcss);
 // PCSS's parameters through the pages for settings `s` and a sun of angular diameter
 // `light_size_deg` (scene::Light::size): the search reads the surface point itself, without the
 // normal offset; with map.receiver_plane_bias each texel is tested against the receiver's plane
 // less map.depth_bias_texels of the search's level (as the maps' search), else against the
 // receiver's depth less 2 texels (a coarse level's texel spans a sloped receiver's depths).
 VirtualPcss virtual_pcss(const ShadowSettings& s, float light_size_deg);
+
+// A uniform buffer holding one VirtualFrame, bound at the contract's VIRTUAL_FRAME_BLOCK: where the
+// shaders of virtual_pages.glsl find the frame (no uniform of the block is set by name).
+class VirtualFrameBuffer {
+ public:
+  VirtualFrameBuffer();
+  // Writes `frame` into the buffer, unless it holds that frame already, and binds the buffer.
+  void bind(const VirtualFrame& frame) const;
+  // How many times bind() wrote the buffer.
+  int writes() const { return writes_; }
+
+ private:
+  gl::Buffer buffer_;
+  mutable VirtualFrame held_{};
+  mutable bool holds_ = false;
+  mutable int writes_ = 0;
+};
 
 class VirtualShadowMap;
 
@@ -136,26 +159,27 @@ class PageMarker {
   // later frame, when the GPU has long finished it.
   gl::Buffer make_marks() const;
   void dispatch(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view, double radius_ws,
-                const adaptive::MarkOptions& options, const gl::Buffer& marks) const;
+                const adaptive::MarkOptions& options, const gl::Buffer& marks, const gl::Texture* levels = nullptr) const;
   void dispatch_pcss_search(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
                             const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Buffer& marks) const;
   void dispatch_pcss_filter(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
                             const VirtualPcss& pcss, const adaptive::MarkOptions& options, const gl::Texture* radii,
-                            const gl::Buffer& marks) const;
+                            const gl::Buffer& marks, const gl::Texture* levels = nullptr) const;
   adaptive::MarkResult read(const gl::Buffer& marks) const;
 
  private:
   // The marking's three passes (virtual_mark.comp's VIRTUAL_MARK_PASS): a filter's pages, PCSS's searches',
   // PCSS's penumbrae'.
   enum class Pass { filter = 0, pcss_search = 1, pcss_penumbra = 2 };
-  void run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualMapView& view,
-           double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii,
-           const gl::Buffer& marks) const;
+  // `frame`: the layout's and view's part (and PCSS's); run() adds the marking's.
+  void run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, VirtualFrame frame, double radius_ws,
+           const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii, const gl::Buffer& marks) const;
   const gl::Program& program(Pass pass) const { return programs_[static_cast<int>(pass)]; }
   adaptive::VirtualMapLayout layout_;
   gl::Program programs_[3];  // one per Pass: a pass chosen by a uniform costs the others' code on llvmpipe
+  VirtualFrameBuffer frame_buffer_;
   gl::Buffer marks_;
-  std::size_t words_ = 0;  // page bits, in 32-bit words
+  std::size_t words_ = 0;  // the marks buffer, in 32-bit words (virtual_mark_buffer_words)
 };
 
 class VirtualShadowMap {
@@ -221,8 +245,15 @@ class VirtualShadowMap {
 
   // Binds the pool to UNIT_VIRTUAL_POOL (raw depths) and UNIT_VIRTUAL_POOL_CMP (compared), the moments
   // pool (if any) to UNIT_VIRTUAL_MOMENTS, the tables to UNIT_VIRTUAL_TABLE, the tiles' bounds (if on) to
-  // UNIT_VIRTUAL_BOUNDS, and sets virtual_pages.glsl's uniforms of `program` for the last update's view.
-  void bind(const gl::Program& program) const;
+  // UNIT_VIRTUAL_BOUNDS, and frame() (the last update's view) to BLOCK_VIRTUAL_FRAME.
+  void bind() const;
+  // The VirtualFrame the map's readers see: its layout, pool and bounds, the last update's view,
+  // and the marking and PCSS parts last set (a pixel samples the level it marked).
+  const VirtualFrame& frame() const { return frame_; }
+  void set_marking(const scene::Camera& camera, int height_px, const adaptive::MarkOptions& options) {
+    set_virtual_marking(frame_, camera, height_px, options);
+  }
+  void set_pcss(const VirtualPcss& pcss) { set_virtual_pcss(frame_, pcss); }
   // The slot of window-relative `page` of the last update's view, or -1 when it is not resident.
   int slot_of(const adaptive::Page& page) const { return cache_.slot_of(page); }
   // The last update's view (has_view: there was one).
@@ -260,6 +291,8 @@ class VirtualShadowMap {
   gl::Sampler compare_;  // the pool's nearest LEQUAL comparison (virtual_pcf_box's gathers)
   gl::Framebuffer fbo_;
   gl::Program program_;
+  VirtualFrame frame_{};
+  VirtualFrameBuffer frame_buffer_;
   adaptive::PageCache cache_;
   VirtualMapView view_;
   bool has_view_ = false;

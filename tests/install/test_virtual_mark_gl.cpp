@@ -3,12 +3,13 @@
 // engine would use it, through raw GL calls and nothing of Penumbra's shader loading:
 //   - it compiles alone on the driver for each VIRTUAL_MARK_PASS with `#version 450 core` and the
 //     define before it (no #include left to expand);
-//   - the driver's work-group size, image units, storage binding, marks-buffer offsets and texture
-//     units equal <penumbra/shaders/virtual_mark_contract.h>, whose numbers equal the renderer's
-//     shaders/shadow_contract.h;
-//   - dispatched with the uniforms docs/virtual-pages-in-your-engine.md lists, on a ground plane
-//     seen in perspective, it marks the pages adaptive::mark_pages marks on the CPU (decoded with
-//     the contract's virtual_mark_page_of_bit), by the rule and by the footprint.
+//   - the driver's work-group size, image units, storage binding, marks-buffer offsets, texture
+//     units and VirtualFrame block (binding, size) equal <penumbra/shaders/virtual_mark_contract.h>,
+//     whose numbers equal the renderer's shaders/shadow_contract.h, and the frame's values are in
+//     the block, not in loose uniforms;
+//   - dispatched with the block filled as docs/virtual-pages-in-your-engine.md says, on a ground
+//     plane seen in perspective, it marks the pages adaptive::mark_pages marks on the CPU (decoded
+//     with the contract's virtual_mark_page_of_bit), by the rule and by the footprint.
 #include <gtest/gtest.h>
 
 #include <epoxy/gl.h>
@@ -24,7 +25,6 @@
 #include <vector>
 
 #include <glm/glm.hpp>
-#include <glm/gtc/type_ptr.hpp>
 
 #include <penumbra/shaders/virtual_mark_contract.h>
 
@@ -137,6 +137,7 @@ TEST(InstalledVirtualMark, TheDriverSeesTheContractsBindingsAndBufferLayout) {
   EXPECT_EQ(vm::VIRTUAL_UNIT_POOL, contract::UNIT_VIRTUAL_POOL);
   EXPECT_EQ(vm::VIRTUAL_UNIT_TABLE, contract::UNIT_VIRTUAL_TABLE);
   EXPECT_EQ(vm::VIRTUAL_UNIT_BOUNDS, contract::UNIT_VIRTUAL_BOUNDS);
+  EXPECT_EQ(vm::VIRTUAL_FRAME_BLOCK, contract::BLOCK_VIRTUAL_FRAME);
   // The bit of a page and back, over a window of 5² pages.
   for (int level = 0; level < 3; ++level)
     for (int y = 0; y < 5; ++y)
@@ -169,6 +170,29 @@ TEST(InstalledVirtualMark, TheDriverSeesTheContractsBindingsAndBufferLayout) {
     EXPECT_EQ(p.buffer_variable("u_unmarked", GL_OFFSET), vm::VIRTUAL_MARK_WORD_UNMARKED * word);
     EXPECT_EQ(p.buffer_variable("u_page_bits[0]", GL_OFFSET), vm::VIRTUAL_MARK_WORD_PAGE_BITS * word);
     EXPECT_EQ(p.buffer_variable("u_page_bits[0]", GL_ARRAY_STRIDE), word);
+
+    const GLuint frame = glGetUniformBlockIndex(p.id, "VirtualFrame");
+    ASSERT_NE(frame, GL_INVALID_INDEX);
+    GLint frame_size = 0, frame_binding = -1;
+    glGetActiveUniformBlockiv(p.id, frame, GL_UNIFORM_BLOCK_DATA_SIZE, &frame_size);
+    glGetActiveUniformBlockiv(p.id, frame, GL_UNIFORM_BLOCK_BINDING, &frame_binding);
+    EXPECT_EQ(frame_size, static_cast<GLint>(sizeof(vm::VirtualFrame)));
+    EXPECT_EQ(frame_binding, vm::VIRTUAL_FRAME_BLOCK);
+    // Outside the block the shader has only what differs between dispatches, and its samplers and images.
+    GLint count = 0;
+    glGetProgramiv(p.id, GL_ACTIVE_UNIFORMS, &count);
+    std::set<std::string> loose;
+    for (GLuint u = 0; u < static_cast<GLuint>(count); ++u) {
+      char name[128] = {};
+      GLint in_block = -1, type = 0;
+      glGetActiveUniformName(p.id, u, sizeof name, nullptr, name);
+      glGetActiveUniformsiv(p.id, 1, &u, GL_UNIFORM_BLOCK_INDEX, &in_block);
+      glGetActiveUniformsiv(p.id, 1, &u, GL_UNIFORM_TYPE, &type);
+      const bool opaque = type == GL_SAMPLER_2D || type == GL_INT_SAMPLER_2D || type == GL_IMAGE_2D;
+      if (in_block == -1 && !opaque) loose.insert(name);
+    }
+    for (const std::string& name : loose)
+      EXPECT_TRUE(name == "u_radius_ws" || name == "u_write_levels" || name == "u_write_radii") << name << " is a loose uniform";
 
     EXPECT_EQ(p.unit_of("u_surface"), vm::VIRTUAL_MARK_IMAGE_SURFACE);
     EXPECT_EQ(p.unit_of("u_levels"), vm::VIRTUAL_MARK_IMAGE_LEVELS);
@@ -233,24 +257,29 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
   glCreateBuffers(1, &marks);
   glNamedBufferStorage(marks, static_cast<GLsizeiptr>(words * sizeof(std::uint32_t)), nullptr, GL_DYNAMIC_STORAGE_BIT);
 
-  // The uniforms of docs/virtual-pages-in-your-engine.md, by name.
-  std::vector<glm::vec2> origins;
+  // The VirtualFrame block as docs/virtual-pages-in-your-engine.md fills it, in a uniform buffer of
+  // the engine's own; then the dispatch's uniforms by name.
+  vm::VirtualFrame frame{};
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) frame.u_virtual_light_view.columns[c][r] = light_view[c][r];  // column-major, as glm and GL
   for (int k = 0; k < layout.levels; ++k) {
     const adaptive::LightXY o = adaptive::level_origin(k, camera_xy, layout);
-    origins.emplace_back(static_cast<float>(o.x), static_cast<float>(o.y));
+    frame.u_virtual_origin[k] = {static_cast<float>(o.x), static_cast<float>(o.y), 0, 0};
   }
-  glProgramUniformMatrix4fv(p.id, p.location("u_virtual_light_view"), 1, GL_FALSE, glm::value_ptr(light_view));
-  glProgramUniform2fv(p.id, p.location("u_virtual_origin"), layout.levels, glm::value_ptr(origins[0]));
-  glProgramUniform1f(p.id, p.location("u_virtual_texel0_ws"), static_cast<float>(layout.texel0_ws));
-  glProgramUniform1i(p.id, p.location("u_virtual_page_texels"), layout.page_texels);
-  glProgramUniform1i(p.id, p.location("u_virtual_pages_per_side"), layout.pages_per_side);
-  glProgramUniform1i(p.id, p.location("u_virtual_levels"), layout.levels);
-  glProgramUniform3fv(p.id, p.location("u_mark_camera_position"), 1, glm::value_ptr(ground.eye));
+  frame.u_virtual_texel0_ws = static_cast<float>(layout.texel0_ws);
+  frame.u_virtual_page_texels = layout.page_texels;
+  frame.u_virtual_pages_per_side = layout.pages_per_side;
+  frame.u_virtual_levels = layout.levels;
+  frame.u_mark_camera_position = {ground.eye.x, ground.eye.y, ground.eye.z};
   const glm::vec3 forward = ground.forward();
-  glProgramUniform3fv(p.id, p.location("u_mark_camera_forward"), 1, glm::value_ptr(forward));
-  glProgramUniform1i(p.id, p.location("u_mark_perspective"), 1);
-  glProgramUniform1f(p.id, p.location("u_mark_footprint_per_depth"), ground.footprint_per_depth());
-  glProgramUniform1f(p.id, p.location("u_mark_min_texel_px"), 1.0f);
+  frame.u_mark_camera_forward = {forward.x, forward.y, forward.z};
+  frame.u_mark_perspective = 1;
+  frame.u_mark_footprint_per_depth = ground.footprint_per_depth();
+  frame.u_mark_min_texel_px = 1.0f;
+  GLuint frame_buffer = 0;
+  glCreateBuffers(1, &frame_buffer);
+  glNamedBufferStorage(frame_buffer, sizeof frame, nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glBindBufferBase(GL_UNIFORM_BUFFER, vm::VIRTUAL_FRAME_BLOCK, frame_buffer);
   glProgramUniform1f(p.id, p.location("u_radius_ws"), radius_ws);
   glProgramUniform1i(p.id, p.location("u_write_levels"), 0);
   glProgramUniform1i(p.id, p.location("u_write_radii"), 0);
@@ -272,8 +301,9 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
     adaptive::MarkOptions options;
     options.marking = m;
     options.c_texels = 3.47;
-    glProgramUniform1f(p.id, p.location("u_mark_c_texels"), static_cast<float>(options.c_texels));
-    glProgramUniform1i(p.id, p.location("u_mark_footprint_only"), m == adaptive::Marking::footprint);
+    frame.u_mark_c_texels = static_cast<float>(options.c_texels);
+    frame.u_mark_footprint_only = m == adaptive::Marking::footprint;
+    glNamedBufferSubData(frame_buffer, 0, sizeof frame, &frame);
     const std::uint32_t zero = 0;
     glClearNamedBufferData(marks, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, vm::VIRTUAL_MARK_BUFFER, marks);
@@ -316,6 +346,7 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
     if (m == adaptive::Marking::rule) by_rule = gpu;
     else EXPECT_NE(gpu, by_rule) << "the rule and the footprint marked the same pages: the test does not tell them apart";
   }
+  glDeleteBuffers(1, &frame_buffer);
   glDeleteBuffers(1, &marks);
   glDeleteTextures(1, &surface);
 }

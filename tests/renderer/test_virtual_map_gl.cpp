@@ -76,7 +76,7 @@ gl::Program compute_program(const std::string& name, const std::string& text) {
 void for_each_radius(const gl::Program& p, const VirtualShadowMap& virtual_map, int level, const gl::Texture& single, int unit, int n,
                      const std::function<void(float, const std::vector<float>&)>& check) {
   const gl::Texture out({GL_RGBA32F, n, n, 1}, "comparison output");
-  virtual_map.bind(p);
+  virtual_map.bind();
   p.set("u_level", level);
   single.bind(unit);
   glBindSampler(unit, 0);
@@ -107,14 +107,14 @@ void main() {
   float depth;
   float v = virtual_fetch(u_level, t, depth) ? depth : -1.0;
   if (u_resident) {  // the texel's centre in light space, then the finest resident level there
-    const vec2 xy = u_virtual_origin[u_level] + (vec2(t) + 0.5) * virtual_texel_ws(u_level);
+    const vec2 xy = virtual_origin(u_level) + (vec2(t) + 0.5) * virtual_texel_ws(u_level);
     v = float(virtual_resident_level(u_level, xy));
   }
   imageStore(u_out, t, vec4(v));
 })");
   const int side = virtual_map.layout().page_texels * virtual_map.layout().pages_per_side;
   const gl::Texture out({GL_R32F, side, side, 1}, "probe output");
-  virtual_map.bind(p);
+  virtual_map.bind();
   p.set("u_level", level);
   p.set("u_resident", resident);
   glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
@@ -237,7 +237,7 @@ void main() {
   const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));  // texel coordinates, off-centre
   const float receiver = texelFetch(u_single, ivec2(p), 0).r + 0.002;     // just behind the surface there
   bool found;
-  const float paged = virtual_pcf_box(u_level, u_virtual_origin[u_level] + p * t, receiver, u_radius_texels * t, found);
+  const float paged = virtual_pcf_box(u_level, virtual_origin(u_level) + p * t, receiver, u_radius_texels * t, found);
   // The reference: the same square over the single map, texel by texel.
   const float r = u_radius_texels;
   const vec2 lo = p - r, hi = p + r;
@@ -255,7 +255,7 @@ void main() {
   const vec2 step = gradient * t;
   int blockers;
   bool searched;
-  const float mean = virtual_blocker_search(u_level, u_virtual_origin[u_level] + p * t, receiver, gradient, 2.0 * r * t, blockers, searched);
+  const float mean = virtual_blocker_search(u_level, virtual_origin(u_level) + p * t, receiver, gradient, 2.0 * r * t, blockers, searched);
   float ref_sum = 0.0;
   int ref_count = 0;
   for (int j = int(floor(p.y - 2.0 * r)); j <= int(ceil(p.y + 2.0 * r)) - 1; ++j)
@@ -400,7 +400,7 @@ void main() {
   const float bias = 0.5 * (abs(per_texel.x) + abs(per_texel.y)) + 1e-4;
   const float receiver = behind ? 1.01 : texelFetch(u_single, c, 0).r + dot(p - vec2(c) - 0.5, per_texel) - bias;
   const vec2 gradient = behind ? vec2(0.0) : per_texel / t;
-  const vec2 xy = u_virtual_origin[u_level] + p * t;
+  const vec2 xy = virtual_origin(u_level) + p * t;
   bool found;
   const float pcf = virtual_pcf_box(u_level, xy, receiver, gradient, R * t, found);
   // The decision virtual_pcf_box takes, taken again.
@@ -420,9 +420,12 @@ void main() {
 })");
   const int n = 128;
   const gl::Texture out({GL_RGBA32F, n, n, 1}, "bounds comparison");
+  const shadows::VirtualFrameBuffer frame_buffer;  // the map's frame with its bounds on or off
   const auto run = [&](bool bounds) {
-    virtual_map.bind(p);
-    p.set("u_virtual_bounds", bounds);
+    virtual_map.bind();
+    shadows::VirtualFrame frame = virtual_map.frame();
+    frame.u_virtual_bounds = bounds;
+    frame_buffer.bind(frame);
     p.set("u_level", level);
     single.bind(13);
     glBindSampler(13, 0);
@@ -490,7 +493,7 @@ void main() {
   const float t = virtual_texel_ws(u_level);
   const vec2 p = (vec2(q) + 0.37) * float(side) / vec2(imageSize(u_out));
   bool found;
-  const vec2 paged = virtual_moments_box(u_level, u_virtual_origin[u_level] + p * t, u_radius_texels * t, found);
+  const vec2 paged = virtual_moments_box(u_level, virtual_origin(u_level) + p * t, u_radius_texels * t, found);
   const float r = u_radius_texels;
   const vec2 lo = p - r, hi = p + r;
   vec2 sum = vec2(0.0);
