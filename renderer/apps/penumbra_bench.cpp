@@ -9,6 +9,11 @@
 // Writes DIR/bench.csv (one row per configuration, `pareto` marks the error/time front among
 // the rows measured against the same reference), DIR/report.json, and one plot per scene
 // (DIR/pareto-<scene>.png/.svg, drawn by scripts/plot_bench.py). Progress goes to stderr.
+// The rows are independent: --shard I/N --part FILE measures every N-th of them (shard/shard.h),
+// on any machine, and `penumbra-bench merge PARTS... -o DIR` writes the DIR the unsharded run
+// writes. Frame times are measurements, so what a merge reproduces byte for byte is every other
+// column; the Pareto marks, which read the times, are drawn again over the merged rows
+// (docs/cluster.md).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -18,7 +23,9 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -33,6 +40,7 @@
 #include "gl/timer.h"
 #include "io/image_io.h"
 #include "io/report.h"
+#include "io/safe_path.h"
 #include "io/staged_dir.h"
 #include "metrics/ground_truth.h"
 #include "metrics/image_error.h"
@@ -44,6 +52,8 @@
 #include "shadows/settings.h"
 #include "shadows/technique.h"
 #include "shadows/virtual_shadow_map.h"
+#include "shard/shard.h"
+#include "tool/tool.h"
 
 namespace fs = std::filesystem;
 using namespace penumbra;
@@ -85,6 +95,7 @@ struct FrameTimes {
 };
 
 struct Row {
+  std::size_t item = 0;  // the row's number in the grid's loop order (scene, variant, row of the variant): its shard
   std::string scene, technique, variant;
   double radius_ws = NAN;
   int resolution_texels = 0;  // 0 for a virtual map's row: it has pages, not one resolution
@@ -94,7 +105,8 @@ struct Row {
   double memory_texels = 0;   // shadow memory in 4-byte texels: the atlas, or the resident pages and the page tables
   FrameTimes times;
   double floor_ms = 0;
-  const metrics::Reference* reference = nullptr;
+  std::string reference_kind;  // the reference's kind, size and samples (a merge has the numbers, not the images)
+  int reference_resolution_texels = 0, reference_samples = 0;
   metrics::ImageError error;
   bool pareto = false;
   bool pareto_spread = false;
@@ -106,7 +118,7 @@ struct Row {
   std::string settings;
   float c = 0;         // adaptive.c of the row's settings
   std::string c_from;  // where it came from (calibration.json entry, fallback or --adaptive.c)
-  std::vector<shadows::PassWork> work;  // the last timed frame's, per pass (what a GPU pays for)
+  nlohmann::json work;  // the last timed frame's, per pass (what a GPU pays for): shadows::work_json
 };
 
 // Sets a fixed-radius filter's radius in world units, so that the filter is the same footprint
@@ -224,8 +236,8 @@ std::string csv_row(const Row& r, const Options& opt) {
   o << r.scene << ',' << r.technique << ',' << r.variant << ',' << csv_number(r.radius_ws) << ',' << r.resolution_texels << ','
     << (r.adaptive ? 1 : 0) << ',' << opt.width << ',' << opt.height << ',' << r.times.ms.size() << ','
     << gl::to_string(r.times.method) << ',' << csv_number(r.times.median()) << ',' << csv_number(r.times.min()) << ','
-    << csv_number(r.times.max()) << ',' << csv_number(r.floor_ms) << ',' << metrics::to_string(r.reference->kind) << ','
-    << r.reference->resolution_texels << ',' << r.reference->samples << ',' << csv_number(r.error.mean_abs) << ','
+    << csv_number(r.times.max()) << ',' << csv_number(r.floor_ms) << ',' << r.reference_kind << ','
+    << r.reference_resolution_texels << ',' << r.reference_samples << ',' << csv_number(r.error.mean_abs) << ','
     << csv_number(r.error.rmse) << ',' << csv_number(r.error.max_abs) << ',' << csv_number(r.error.ssim) << ','
     << csv_number(r.error.psnr_db) << ',' << csv_number(r.error.share_above_threshold) << ',' << (r.pareto ? 1 : 0) << ','
     << (r.pareto_spread ? 1 : 0) << ','
@@ -246,7 +258,7 @@ nlohmann::json row_json(const Row& r) {
                       {"frame_ms", r.times.ms},
                       {"frame_ms_median", r.times.median()},
                       {"floor_ms", r.floor_ms},
-                      {"reference_kind", metrics::to_string(r.reference->kind)},
+                      {"reference_kind", r.reference_kind},
                       {"error", metrics::to_json(r.error)},
                       {"pareto", r.pareto},
                       {"pareto_spread", r.pareto_spread},
@@ -260,9 +272,119 @@ nlohmann::json row_json(const Row& r) {
                       {"c", r.c},
                       {"c_from", r.c_from},
                       {"settings", r.settings}};
-  j["work"] = shadows::work_json(r.work);
+  j["work"] = r.work;
   return j;
 }
+
+// A part's numbers: JSON has no NaN or infinity (an unset radius, the PSNR of an exact match).
+nlohmann::json part_number(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  return v;
+}
+double number_of_part(const nlohmann::json& j) {
+  if (j.is_number()) return j.get<double>();
+  const std::string text = j.get<std::string>();  // throws for anything else: the caller names the part
+  if (text == "nan") return NAN;
+  if (text == "inf" || text == "-inf") return text == "inf" ? INFINITY : -INFINITY;
+  throw std::runtime_error("'" + json_input::printable(text, 20) + "' is not a number");
+}
+
+// Everything a row of bench.csv and report.json reads, for a part file. JSON numbers round-trip
+// doubles exactly, and the floats are doubles on the way, so a merged row prints as the measured one.
+nlohmann::json row_part(const Row& r) {
+  const metrics::ImageError& e = r.error;
+  return {{"item", r.item}, {"scene", r.scene}, {"technique", r.technique}, {"variant", r.variant},
+          {"radius_ws", part_number(r.radius_ws)}, {"resolution_texels", r.resolution_texels}, {"adaptive", r.adaptive},
+          {"virtual_pages", r.virtual_pages}, {"pages_resident", r.pages_resident}, {"memory_texels", part_number(r.memory_texels)},
+          {"frame_ms", r.times.ms}, {"timing_method", gl::to_string(r.times.method)}, {"floor_ms", part_number(r.floor_ms)},
+          {"reference_kind", r.reference_kind}, {"reference_resolution_texels", r.reference_resolution_texels},
+          {"reference_samples", r.reference_samples},
+          {"error", {{"pixels", e.pixels}, {"channels", e.channels}, {"max_abs", part_number(e.max_abs)}, {"mean_abs", part_number(e.mean_abs)},
+                     {"rmse", part_number(e.rmse)}, {"psnr_db", part_number(e.psnr_db)}, {"ssim", part_number(e.ssim)},
+                     {"threshold", part_number(e.threshold)}, {"share_above_threshold", part_number(e.share_above_threshold)}}},
+          {"s_xy", r.s_xy}, {"filter_radius_texels", r.filter_radius_texels}, {"resolution_source", r.resolution_source},
+          {"required_texels", part_number(r.required_texels)}, {"cascades", r.cascades}, {"settings", r.settings}, {"c", r.c},
+          {"c_from", r.c_from}, {"work", r.work}};
+}
+
+// The row a part recorded; throws naming the part's file and the row for a field that is missing
+// or of the wrong type.
+Row row_of_part(const nlohmann::json& j, const std::string& file) {
+  try {
+    Row r;
+    r.item = j.at("item").get<std::size_t>();
+    r.scene = j.at("scene").get<std::string>();
+    r.technique = j.at("technique").get<std::string>();
+    r.variant = j.at("variant").get<std::string>();
+    r.radius_ws = number_of_part(j.at("radius_ws"));
+    r.resolution_texels = j.at("resolution_texels").get<int>();
+    r.adaptive = j.at("adaptive").get<bool>();
+    r.virtual_pages = j.at("virtual_pages").get<std::string>();
+    r.pages_resident = j.at("pages_resident").get<int>();
+    r.memory_texels = number_of_part(j.at("memory_texels"));
+    r.times.ms = j.at("frame_ms").get<std::vector<double>>();
+    if (r.times.ms.empty()) throw std::runtime_error("frame_ms: no frames");
+    const std::string method = j.at("timing_method").get<std::string>();
+    if (method == gl::to_string(gl::TimingMethod::gpu_timer)) r.times.method = gl::TimingMethod::gpu_timer;
+    else if (method == gl::to_string(gl::TimingMethod::wall_finish)) r.times.method = gl::TimingMethod::wall_finish;
+    else throw std::runtime_error("timing_method: '" + json_input::printable(method, 40) + "'");
+    r.floor_ms = number_of_part(j.at("floor_ms"));
+    r.reference_kind = j.at("reference_kind").get<std::string>();
+    r.reference_resolution_texels = j.at("reference_resolution_texels").get<int>();
+    r.reference_samples = j.at("reference_samples").get<int>();
+    const nlohmann::json& e = j.at("error");
+    r.error.pixels = e.at("pixels").get<std::int64_t>();
+    r.error.channels = e.at("channels").get<int>();
+    r.error.max_abs = number_of_part(e.at("max_abs"));
+    r.error.mean_abs = number_of_part(e.at("mean_abs"));
+    r.error.rmse = number_of_part(e.at("rmse"));
+    r.error.psnr_db = number_of_part(e.at("psnr_db"));
+    r.error.ssim = number_of_part(e.at("ssim"));
+    r.error.threshold = number_of_part(e.at("threshold"));
+    r.error.share_above_threshold = number_of_part(e.at("share_above_threshold"));
+    r.s_xy = j.at("s_xy").get<float>();
+    r.filter_radius_texels = j.at("filter_radius_texels").get<float>();
+    r.resolution_source = j.at("resolution_source").get<std::string>();
+    r.required_texels = number_of_part(j.at("required_texels"));
+    r.cascades = j.at("cascades").get<int>();
+    r.settings = j.at("settings").get<std::string>();
+    r.c = j.at("c").get<float>();
+    r.c_from = j.at("c_from").get<std::string>();
+    r.work = j.at("work");
+    return r;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file + ": payload.rows: row " + (j.is_object() && j.contains("item") ? j["item"].dump() : std::string("?")) +
+                             ": " + json_input::printable(e.what(), 160));
+  }
+}
+
+// The options that say where the output goes and which shard runs, not what is measured: left out
+// of a part's settings and of the recorded command, which ends with the -o DIR the merge writes.
+bool is_output_option(const std::string& arg) {
+  for (const char* name : {"--shard", "--part", "--output", "-o"})
+    if (arg == name || arg.rfind(std::string(name) + "=", 0) == 0) return true;
+  return arg.size() > 2 && arg.rfind("-o", 0) == 0 && arg[2] != '-';  // -oDIR
+}
+std::vector<std::string> settings_args(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (!is_output_option(args[i])) {
+      out.push_back(args[i]);
+    } else if (args[i] == "--shard" || args[i] == "--part" || args[i] == "--output" || args[i] == "-o") {
+      ++i;  // and its value
+    }
+  }
+  return out;
+}
+
+constexpr std::string_view kPartKind = "penumbra-bench part";
+
+// A merge's parts, checked by shard::read_parts: the rows, the references and the device come
+// from them instead of from rendering.
+struct Merged {
+  std::vector<shard::Part> parts;
+};
 
 std::string join(const std::vector<std::string>& v) {
   std::string s;
@@ -270,9 +392,64 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
+int run(const std::vector<std::string>& args, const Merged* merged);
+
+// penumbra-bench merge PARTS... -o DIR: the parts' rows, checked, through the same Pareto marks,
+// CSV, report and plots as the unsharded run (run() with the parts' own arguments).
+int merge_main(int argc, char** argv) {
+  CLI::App app{"Merge the part files of penumbra-bench --shard I/N --part FILE into the directory the unsharded run writes "
+               "(bench.csv, report.json, plots). Every column but the frame times, and the Pareto marks drawn from them, "
+               "equals the unsharded run's: times are measurements and differ run to run (docs/cluster.md)",
+               "penumbra-bench merge"};
+  cli::describe_tool(app, "penumbra-bench merge", "cluster.md");
+  std::vector<std::string> paths;
+  std::string out;
+  app.add_option("parts", paths, "the part files, one per shard 0/N to N-1/N, any order")->required();
+  app.add_option("-o,--output", out, "the output directory (as -o of the unsharded run)")->required()->check(cli::path_given());
+  if (const auto status = cli::parse(app, argc - 1, argv + 1, "penumbra-bench merge")) return *status;
+  Merged merged;
+  std::vector<std::string> args;
+  try {
+    shard::Checked checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-bench"));
+    const nlohmann::json& stored = checked.settings["args"];
+    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+    for (const auto& a : stored) {
+      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+      args.push_back(a.get<std::string>());
+    }
+    // Frame times from two devices are not one measurement: the Pareto marks would compare them.
+    const std::string first = json_input::printable(checked.parts.front().path.string(), 200);
+    const nlohmann::json device = checked.parts.front().payload.value("device", nlohmann::json());
+    for (const shard::Part& part : checked.parts)
+      if (part.payload.value("device", nlohmann::json()) != device)
+        throw std::runtime_error(json_input::printable(part.path.string(), 200) + ": measured on another device than " + first + " (" +
+                                 json_input::printable(part.payload.value("device", nlohmann::json()).dump(), 120) +
+                                 "); frame times of two devices do not merge");
+    merged.parts = std::move(checked.parts);
+  } catch (const std::exception& e) {
+    return cli::fail("penumbra-bench merge", e);
+  }
+  args.push_back("-o");
+  args.push_back(out);
+  return run(args, &merged);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string_view(argv[1]) == "merge") return merge_main(argc, argv);
+  return run(std::vector<std::string>(argv + 1, argv + argc), nullptr);
+}
+
+namespace {
+
+int run(const std::vector<std::string>& args, const Merged* merged) {
+  std::vector<std::string> argv_text{"penumbra-bench"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  const int argc = static_cast<int>(argv.size());
+  const char* const tool_name = merged ? "penumbra-bench merge" : "penumbra-bench";
   CLI::App app{"Shadow error against frame time: every technique x resolution (x filter radius) against a ground truth; "
                "writes bench.csv, report.json and a Pareto plot per scene."};
   cli::describe_tool(app, "penumbra-bench", "bench.md");
@@ -320,14 +497,18 @@ int main(int argc, char** argv) {
   app.add_flag("--no-plot", no_plot, "skip the plots (no Python needed)");
   app.add_option("--python", opt.python, "Python with matplotlib that draws the plots");
   app.add_option("--plot-script", opt.plot_script, "the plotting script");
-  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")
-      ->required()
-      ->check(cli::path_given());
+  app.add_option("-o,--output", opt.output, "output directory (replaced as a whole when the run succeeds)")->check(cli::path_given());
+  std::string shard_text, part_out;
+  app.add_option("--shard", shard_text,
+                 "I/N: measure only shard I of N (0 <= I < N) of the rows, every row whose number in the loop order (scene, "
+                 "variant, row of the variant) is I modulo N, into --part instead of -o; `penumbra-bench merge PARTS... -o DIR` "
+                 "writes what the unsharded run writes, frame times apart (measurements differ run to run; docs/cluster.md)");
+  app.add_option("--part", part_out, "--shard: the part file to write (the shard's rows, its settings, the device and the build's version)");
   apps::add_calibration_option(app, opt.calibration);
   apps::add_settings_options(app, opt.base);
 
   try {
-    app.parse(argc, argv);
+    app.parse(argc, argv.data());
     if (quick) {
       auto preset = [&](const char* option, auto& target, auto value) {
         if (app.count(option) == 0) target = value;
@@ -362,7 +543,23 @@ int main(int argc, char** argv) {
     }
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    return cli::fail("penumbra-bench", e.what(), cli::kExitUsage);
+    return cli::fail(tool_name, e.what(), cli::kExitUsage);
+  }
+  std::optional<shard::Shard> sharded;
+  try {
+    if (!shard_text.empty()) {
+      sharded = shard::parse(shard_text);
+      if (part_out.empty()) throw cli::UsageError("--shard: needs --part FILE, where the shard's rows go");
+      if (!opt.output.empty())
+        throw cli::UsageError("--output: a shard writes a part (--part); `penumbra-bench merge PARTS... -o DIR` writes the directory");
+      io::check_output(part_out, io::OutputKind::file);
+    } else if (!part_out.empty()) {
+      throw cli::UsageError("--part: only with --shard I/N");
+    } else if (opt.output.empty()) {
+      throw cli::UsageError("--output is required (or --shard I/N --part FILE)");
+    }
+  } catch (const std::exception& e) {
+    return cli::fail(tool_name, e);
   }
 
   try {
@@ -372,16 +569,31 @@ int main(int argc, char** argv) {
     apps::apply_calibration(app, opt.calibration, opt.base);
     std::vector<scene::Scene> scenes;
     for (const auto& name : opt.scenes) scenes.push_back(scene::load_scene(name));
-    if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the plots");
+    const bool plots = opt.plot && !sharded;  // a shard writes its part alone; the merge plots
+    if (plots) apps::check_python(opt.python, opt.plot_script, "the plots");
 
-    gl::HeadlessContext context;
-    const gl::ContextInfo& ctx = context.info();
-    for (int r : opt.resolutions)
-      if (r > ctx.max_texture_size)
-        throw std::runtime_error("--resolutions " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
-                                 std::to_string(ctx.max_texture_size));
-    io::StagedDirectory out(opt.output, "report.json");
-    const bool gpu = !ctx.software && timing == "auto";
+    // The device: this one, or for a merge the one the parts were measured on (merge_main
+    // checked that they share it).
+    std::optional<gl::HeadlessContext> context;
+    nlohmann::json device;
+    bool gpu = false;
+    std::string renderer_name;
+    if (!merged) {
+      context.emplace();
+      const gl::ContextInfo& ctx = context->info();
+      for (int r : opt.resolutions)
+        if (r > ctx.max_texture_size)
+          throw std::runtime_error("--resolutions " + std::to_string(r) + " exceeds this device's GL_MAX_TEXTURE_SIZE " +
+                                   std::to_string(ctx.max_texture_size));
+      device = ctx;
+      gpu = !ctx.software && timing == "auto";
+      renderer_name = ctx.renderer;
+    } else {
+      const nlohmann::json& payload = merged->parts.front().payload;
+      device = payload.value("device", nlohmann::json());
+      gpu = payload.value("timing_method", "") == std::string("gpu_timer");
+      renderer_name = device.is_object() ? device.value("renderer", "") : "";
+    }
 
     const std::vector<Variant> variants = make_variants(opt);
     {
@@ -401,38 +613,118 @@ int main(int argc, char** argv) {
     const int total_rows =
         static_cast<int>(scenes.size() * (variants.size() * opt.resolutions.size() + static_cast<std::size_t>(adaptive_variants))) +
         virtual_rows;
+    const auto row_count = static_cast<std::size_t>(total_rows);
+    // The rows each shard's part owes, by number; the merge takes each from the one part that covers it.
+    auto rows_of_shard = [&](const shard::Shard& sh) { return row_count / sh.count + (sh.index < row_count % sh.count ? 1 : 0); };
+    std::vector<const nlohmann::json*> merged_rows(merged ? row_count : 0, nullptr);
+    std::vector<std::string> merged_row_file(merged_rows.size());
+    if (merged) {
+      for (const shard::Part& part : merged->parts) {
+        const std::string file = json_input::printable(part.path.string(), 200);
+        static const nlohmann::json none;  // (both branches lvalues: the rows are pointed into, not copied)
+        const nlohmann::json& part_rows = part.payload.contains("rows") ? part.payload["rows"] : none;
+        if (part.payload.value("items", nlohmann::json()) != nlohmann::json(row_count) || !part_rows.is_array() ||
+            !part.payload.contains("scenes") || !part.payload["scenes"].is_array() || part.payload["scenes"].size() != scenes.size())
+          throw std::runtime_error(file + ": payload: not a part of this grid of " + std::to_string(row_count) + " rows");
+        if (part_rows.size() != rows_of_shard(part.shard))
+          throw std::runtime_error(file + ": payload.rows: " + std::to_string(part_rows.size()) + " rows, shard " + part.shard.text() +
+                                   " of " + std::to_string(row_count) + " rows has " + std::to_string(rows_of_shard(part.shard)));
+        for (const nlohmann::json& row : part_rows) {
+          const nlohmann::json item = row.is_object() ? row.value("item", nlohmann::json()) : nlohmann::json();
+          if (!item.is_number_unsigned() || item.get<std::size_t>() >= row_count || !part.shard.covers(item.get<std::size_t>()) ||
+              merged_rows[item.get<std::size_t>()])
+            throw std::runtime_error(file + ": payload.rows: row " + item.dump() + " is not one of shard " + part.shard.text() + "'s");
+          merged_rows[item.get<std::size_t>()] = &row;
+          merged_row_file[item.get<std::size_t>()] = file;
+        }
+      }
+    }
+    std::optional<io::StagedDirectory> out;
+    if (!sharded) out.emplace(opt.output, "report.json");
     std::fprintf(stderr,
-                 "penumbra-bench: %zu scenes x (%zu variants x %zu resolutions + %d adaptive) + %d virtual = %d rows at %dx%d, "
-                 "%d frames each, on %s (%s)\n",
-                 scenes.size(), variants.size(), opt.resolutions.size(), adaptive_variants, virtual_rows, total_rows, opt.width,
-                 opt.height, opt.frames, ctx.renderer.c_str(), gpu ? "gpu_timer" : "wall_finish");
+                 "%s: %zu scenes x (%zu variants x %zu resolutions + %d adaptive) + %d virtual = %d rows at %dx%d, "
+                 "%d frames each, on %s (%s)%s\n",
+                 tool_name, scenes.size(), variants.size(), opt.resolutions.size(), adaptive_variants, virtual_rows, total_rows, opt.width,
+                 opt.height, opt.frames, renderer_name.c_str(), gpu ? "gpu_timer" : "wall_finish",
+                 sharded ? (", shard " + sharded->text() + ": " + std::to_string(rows_of_shard(*sharded)) + " of them").c_str()
+                         : merged ? (", merged from " + std::to_string(merged->parts.size()) + " parts").c_str() : "");
 
     std::vector<Row> rows;
-    std::vector<std::unique_ptr<metrics::Reference>> references;  // rows point into these
+    std::vector<std::unique_ptr<metrics::Reference>> references;
     nlohmann::json scene_reports = nlohmann::json::array();
-    shadows::Renderer renderer;
-    renderer.set_count_work(true);  // each row's work per pass (report.json)
+    std::optional<shadows::Renderer> renderer;  // a merge renders nothing
+    if (!merged) {
+      renderer.emplace();
+      renderer->set_count_work(true);  // each row's work per pass (report.json)
+    }
     int done = 0;
-    for (const auto& scene : scenes) {
-      renderer.set_scene(scene);
+    std::size_t item = 0;  // the next row's number in the loop order: its shard
+    for (std::size_t scene_index = 0; scene_index < scenes.size(); ++scene_index) {
+      const scene::Scene& scene = scenes[scene_index];
       shadows::FrameInfo info;
-      const FrameTimes floor = time_frames(renderer, shadows::unshadowed_floor(opt.base), opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
-      std::fprintf(stderr, "[%6.1f s] %s: unshadowed floor %.2f ms\n", elapsed_s(), scene.name.c_str(), floor.median());
-      nlohmann::json scene_report = {{"scene", scene.name},
-                                     {"floor_ms", {{"median", floor.median()}, {"min", floor.min()}, {"max", floor.max()}}},
-                                     {"floor_method", "hard shadows from a 1x1 unfitted map (one lookup per pixel)"},
-                                     {"references", nlohmann::json::array()}};
+      FrameTimes floor;
+      nlohmann::json scene_report;
+      if (merged) {  // the floor as shard 0 measured it (every shard measures every scene's); the references below
+        scene_report = merged->parts.front().payload["scenes"][scene_index];
+        if (!scene_report.is_object() || scene_report.value("scene", "") != scene.name)
+          throw std::runtime_error(json_input::printable(merged->parts.front().path.string(), 200) + ": payload.scenes: not " + scene.name);
+        scene_report["references"] = nlohmann::json::array();
+      } else {
+        renderer->set_scene(scene);
+        floor = time_frames(*renderer, shadows::unshadowed_floor(opt.base), opt.width, opt.height, opt.warmup, opt.frames, gpu, info);
+        std::fprintf(stderr, "[%6.1f s] %s: unshadowed floor %.2f ms\n", elapsed_s(), scene.name.c_str(), floor.median());
+        scene_report = {{"scene", scene.name},
+                        {"floor_ms", {{"median", floor.median()}, {"min", floor.min()}, {"max", floor.max()}}},
+                        {"floor_method", "hard shadows from a 1x1 unfitted map (one lookup per pixel)"},
+                        {"references", nlohmann::json::array()}};
+      }
       std::map<std::string, const metrics::Reference*> area_reference;  // one per scene: it does not depend on the technique
-      for (const auto& v : variants) {
-        const metrics::Reference* ref = nullptr;
+      std::set<std::string> merged_references;                          // the reference keys a merge has listed
+      for (std::size_t variant_index = 0; variant_index < variants.size(); ++variant_index) {
+        const Variant& v = variants[variant_index];
         const bool area = metrics::reference_kind(v.technique) == metrics::ReferenceKind::area_light;
+        // The reference's key in a part: the variant that made it, or "area" for the scene's one
+        // area-light reference (made by whichever area-light variant a shard measures first).
+        const std::string reference_key = area ? "area" : std::to_string(variant_index);
+        const std::size_t variant_rows = opt.resolutions.size() + (opt.adaptive && has_rule_radius(v) ? 1 : 0) +
+                                         (opt.virtual_map && reads_pages(v, scene) ? 2 : 0);
+        if (sharded) {  // a variant none of whose rows is this shard's costs no reference
+          bool any = false;
+          for (std::size_t k = item; k < item + variant_rows; ++k) any = any || sharded->covers(k);
+          if (!any) {
+            item += variant_rows;
+            continue;
+          }
+        }
+        if (merged) {
+          if (merged_references.insert(reference_key).second) {
+            nlohmann::json entry;
+            for (const shard::Part& part : merged->parts)  // the lowest shard that made it
+              for (const nlohmann::json& e : part.payload["scenes"][scene_index].value("references", nlohmann::json::array()))
+                if (entry.is_null() && e.is_object() && e.value("key", "") == reference_key) entry = e;
+            if (entry.is_null())
+              throw std::runtime_error("no part has " + scene.name + "'s reference for " + v.label + " (" +
+                                       json_input::printable(merged->parts.front().path.string(), 200) + ", ...)");
+            entry.erase("key");
+            scene_report["references"].push_back(entry);
+          }
+          for (std::size_t k = 0; k < variant_rows; ++k, ++item) {
+            Row row = row_of_part(*merged_rows[item], merged_row_file[item]);
+            if (row.scene != scene.name || row.variant != v.label)
+              throw std::runtime_error(merged_row_file[item] + ": payload.rows: row " + std::to_string(item) + " is " + row.scene + ", " +
+                                       row.variant + ", not " + scene.name + ", " + v.label);
+            rows.push_back(std::move(row));
+          }
+          continue;
+        }
+        const metrics::Reference* ref = nullptr;
         if (area && area_reference.count(scene.name)) {
           ref = area_reference[scene.name];
         } else {
           std::fprintf(stderr, "[%6.1f s] %s: reference for %s (%s)...\n", elapsed_s(), scene.name.c_str(), v.label.c_str(),
                        area ? "area-light average" : "same filter, high resolution");
           references.push_back(std::make_unique<metrics::Reference>(
-              metrics::make_reference(renderer, v.settings, opt.width, opt.height, opt.reference)));
+              metrics::make_reference(*renderer, v.settings, opt.width, opt.height, opt.reference)));
           ref = references.back().get();
           if (area) area_reference[scene.name] = ref;
           if (!ref->note.empty()) std::fprintf(stderr, "  note: %s\n", ref->note.c_str());
@@ -443,13 +735,19 @@ int main(int argc, char** argv) {
                                                 {"description", ref->description},
                                                 {"note", ref->note},
                                                 {"render_ms", ref->render_ms}});
+          if (sharded) scene_report["references"].back()["key"] = reference_key;
         }
+        // The next row of the variant, measured when it is this shard's (always, unsharded).
         auto measure = [&](const shadows::ShadowSettings& s, int warmup) {
-          Row row{scene.name, v.technique, v.label, v.radius_ws, s.map.resolution_texels};
-          row.times = time_frames(renderer, s, opt.width, opt.height, warmup, opt.frames, gpu, info);
+          const std::size_t number = item++;
+          if (sharded && !sharded->covers(number)) return;
+          Row row{number, scene.name, v.technique, v.label, v.radius_ws, s.map.resolution_texels};
+          row.times = time_frames(*renderer, s, opt.width, opt.height, warmup, opt.frames, gpu, info);
           row.floor_ms = floor.median();
-          row.reference = ref;
-          row.error = metrics::compare(ref->visibility, renderer.read_visibility());
+          row.reference_kind = metrics::to_string(ref->kind);
+          row.reference_resolution_texels = ref->resolution_texels;
+          row.reference_samples = ref->samples;
+          row.error = metrics::compare(ref->visibility, renderer->read_visibility());
           row.s_xy = info.light.s_xy;
           row.filter_radius_texels = info.filter_radius_texels;
           row.resolution_texels = info.resolution_texels;
@@ -458,7 +756,7 @@ int main(int argc, char** argv) {
           row.cascades = static_cast<int>(info.cascades.size());
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.memory_texels = shadows::shadow_memory_texels(info);
-          row.work = info.work;
+          row.work = shadows::work_json(info.work);
           if (info.virtual_map) {
             // A pool that missed pages shades their pixels from a coarser level: that speed is not
             // the configuration's, and the row is refused rather than reported.
@@ -474,17 +772,18 @@ int main(int argc, char** argv) {
           row.c = s.adaptive.c;
           row.c_from = opt.calibration.source_of_c(s);
           ++done;
+          const int of = sharded ? static_cast<int>(rows_of_shard(*sharded)) : total_rows;
           const std::string size = row.virtual_pages.empty() ? (row.adaptive ? "adaptive " : "") + std::to_string(row.resolution_texels) + "^2"
                                                              : "virtual " + row.virtual_pages + " " + std::to_string(row.pages_resident) + "p";
           std::fprintf(stderr, "[%6.1f s] %d/%d %s %s %s: %.2f ms, mean abs %.5f, max %.3f, SSIM %.4f\n", elapsed_s(), done,
-                       total_rows, scene.name.c_str(), v.label.c_str(), size.c_str(), row.times.median(), row.error.mean_abs,
+                       of, scene.name.c_str(), v.label.c_str(), size.c_str(), row.times.median(), row.error.mean_abs,
                        row.error.max_abs, row.error.ssim);
-          return row;
+          rows.push_back(std::move(row));
         };
         for (int res : opt.resolutions) {
           shadows::ShadowSettings s = v.settings;
           s.map.resolution_texels = res;
-          rows.push_back(measure(s, opt.warmup));
+          measure(s, opt.warmup);
         }
         if (opt.adaptive && has_rule_radius(v)) {
           // The rule's resolution for this filter, in steady state: a fresh controller grows at
@@ -492,8 +791,8 @@ int main(int argc, char** argv) {
           // after adaptive.shrink_delay_frames frames; the warmup covers both.
           shadows::ShadowSettings s = v.settings;
           s.adaptive.enabled = true;
-          renderer.reset_adaptive();
-          rows.push_back(measure(s, std::max(opt.warmup, s.adaptive.shrink_delay_frames + 2)));
+          renderer->reset_adaptive();
+          measure(s, std::max(opt.warmup, s.adaptive.shrink_delay_frames + 2));
         }
         if (opt.virtual_map && reads_pages(v, scene))
           for (const shadows::VirtualPages marking : {shadows::VirtualPages::rule, shadows::VirtualPages::footprint}) {
@@ -502,10 +801,20 @@ int main(int argc, char** argv) {
             shadows::ShadowSettings s = v.settings;
             s.map.virtual_pages = marking;
             s.map.virtual_cache = false;
-            rows.push_back(measure(s, opt.warmup));
+            measure(s, opt.warmup);
           }
       }
       scene_reports.push_back(scene_report);
+    }
+    if (sharded) {  // the settings are the arguments themselves: the merge parses them again
+      nlohmann::json part_rows = nlohmann::json::array();
+      for (const Row& r : rows) part_rows.push_back(row_part(r));
+      const nlohmann::json payload = {{"items", row_count},        {"device", device}, {"timing_method", gpu ? "gpu_timer" : "wall_finish"},
+                                      {"scenes", scene_reports}, {"rows", part_rows}, {"elapsed_s", elapsed_s()}};
+      io::write_file_atomic(part_out, shard::part_text(kPartKind, tool::version_line("penumbra-bench"), *sharded,
+                                                       {{"args", settings_args(args)}}, payload));
+      std::printf("wrote %s: shard %s, %zu of %d rows\n", part_out.c_str(), sharded->text().c_str(), rows.size(), total_rows);
+      return 0;
     }
     mark_pareto(rows);
     int adaptive_rows = 0, on_front = 0, on_spread_front = 0;
@@ -515,7 +824,7 @@ int main(int argc, char** argv) {
     for (const auto& r : rows)
       if (!r.virtual_pages.empty()) virtual_on_front += r.pareto, virtual_on_spread_front += r.pareto_spread;
 
-    const fs::path& dir = out.path();
+    const fs::path& dir = out->path();
     std::string csv = std::string(kCsvHeader) + "\n";
     for (const auto& r : rows) csv += csv_row(r, opt) + "\n";
     io::write_file_atomic(dir / "bench.csv", csv);
@@ -523,12 +832,15 @@ int main(int argc, char** argv) {
     // The c each technique's adaptive rows used and where it came from, keyed by technique.
     nlohmann::json calibration_per_technique = nlohmann::json::object();
     for (const Variant& v : variants) calibration_per_technique[v.technique] = apps::calibration_json(opt.calibration, v.settings);
+    // The command without where its output went, then -o: the same for a merge of shards.
     std::ostringstream command;
-    for (int i = 0; i < argc; ++i) command << (i ? " " : "") << argv[i];
+    command << "penumbra-bench";
+    for (const std::string& a : settings_args(args)) command << ' ' << a;
+    command << " -o " << opt.output;
     nlohmann::json report = {
         {"tool", "penumbra-bench"},
         {"command", command.str()},
-        {"device", ctx},
+        {"device", device},
         {"timing_method", gpu ? "gpu_timer" : "wall_finish"},
         {"image_px", {opt.width, opt.height}},
         {"frames", opt.frames},
@@ -546,13 +858,17 @@ int main(int argc, char** argv) {
         {"scenes", scene_reports},
         {"rows", nlohmann::json::array()}};
     for (const auto& r : rows) report["rows"].push_back(row_json(r));
-    if (opt.plot) {
+    if (plots) {
       std::fprintf(stderr, "[%6.1f s] plotting...\n", elapsed_s());
       apps::run_python_script(opt.python, opt.plot_script, {(dir / "bench.csv").string(), dir.string()}, "the plots");
     }
-    report["elapsed_s"] = elapsed_s();
+    // A merge's elapsed_s is the parts' summed: the work the rows took, not the merge's second.
+    double parts_s = 0;
+    if (merged)
+      for (const shard::Part& part : merged->parts) parts_s += part.payload.value("elapsed_s", 0.0);
+    report["elapsed_s"] = merged ? parts_s : elapsed_s();
     io::write_file_atomic(dir / "report.json", json_input::dump(report, 2) + "\n");
-    out.commit();
+    out->commit();
     std::fprintf(stderr, "[%6.1f s] done\n", elapsed_s());
     if (adaptive_rows > 0)
       std::cout << "adaptive rows on their variant's Pareto front: " << on_front << " of " << adaptive_rows << " (medians), "
@@ -560,9 +876,11 @@ int main(int argc, char** argv) {
     if (virtual_rows > 0)
       std::cout << "virtual map rows on their variant's Pareto front: " << virtual_on_front << " of " << virtual_rows << " (medians), "
                 << virtual_on_spread_front << " of " << virtual_rows << " (spreads as ties)\n";
-    std::cout << "wrote " << out.target().string() << "/ (" << rows.size() << " rows)\n";
+    std::cout << "wrote " << out->target().string() << "/ (" << rows.size() << " rows)\n";
     return 0;
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-bench", e);
+    return cli::fail(tool_name, e);
   }
 }
+
+}  // namespace

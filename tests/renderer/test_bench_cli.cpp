@@ -1,6 +1,7 @@
 // penumbra-bench end to end at tiny sizes: the CSV and report.json have their documented shape,
 // every technique of the settings table gets rows, a configuration equal to its own reference
-// measures zero error, and bad input is refused in one line with nothing written.
+// measures zero error, and bad input is refused in one line with nothing written; three shards
+// merged equal the unsharded run but for the frame times, and a bad merge writes nothing.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -431,6 +432,159 @@ TEST_F(BenchCli, ForeignDirectoryIsLeftUntouched) {
   EXPECT_EQ(line_count(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr(out.string()));
   EXPECT_EQ(test::read_file(out / "notes.txt"), "mine\n");
+}
+
+
+// --shard I/N --part FILE and `penumbra-bench merge` (docs/cluster.md): four techniques, two of
+// which share the area-light reference, so that a shard may make it for either.
+class BenchShards : public BenchCli {
+ protected:
+  test::Result bench_grid(std::vector<std::string> args) {
+    args.insert(args.begin(), grid_.begin(), grid_.end());
+    return bench(args);
+  }
+  test::Result merge(std::vector<std::string> args) {
+    args.insert(args.begin(), "merge");
+    return test::run_exe(PENUMBRA_BENCH_EXE, args, tmp_ / "scratch");
+  }
+  // Shard i of n of the grid into work()/part-i-of-n.json.
+  fs::path part(int i, int n, std::vector<std::string> extra = {}) {
+    const fs::path p = work() / ("part-" + std::to_string(i) + "-of-" + std::to_string(n) + ".json");
+    extra.insert(extra.end(), {"--shard", std::to_string(i) + "/" + std::to_string(n), "--part", p.string()});
+    const test::Result r = bench_grid(extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.out, HasSubstr("wrote " + p.string() + ": shard " + std::to_string(i) + "/" + std::to_string(n)));
+    return p;
+  }
+  // A refused merge: exit 1, one line naming `needle`, and no output directory.
+  void expect_refused(const std::vector<fs::path>& parts, const std::string& needle) {
+    std::vector<std::string> args;
+    for (const auto& p : parts) args.push_back(p.string());
+    const fs::path out = work() / "merged";
+    args.insert(args.end(), {"-o", out.string()});
+    const test::Result r = merge(args);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    EXPECT_THAT(r.err, HasSubstr(needle));
+    EXPECT_FALSE(fs::exists(out)) << "a refused merge wrote " << out;
+    for (const auto& e : fs::directory_iterator(work()))
+      EXPECT_THAT(e.path().filename().string(), Not(HasSubstr("merged"))) << "staging left behind";
+  }
+  // The grid unsharded, in 3 shards and merged (parts out of order): every non-timing field equal.
+  void expect_three_shards_merge_to_the_unsharded_run(std::size_t rows);
+  std::vector<std::string> grid_ = {"--techniques", "hard,pcf,pcss,erosion", "--no-plot"};
+};
+
+// Frame times (and the Pareto marks drawn from them, the floor, the references' render time and
+// the run's elapsed seconds) are measurements; everything else is the same text.
+const std::set<std::string> kTimingColumns = {"frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "pareto", "pareto_spread"};
+
+nlohmann::json without_timing(nlohmann::json report) {
+  for (const char* key : {"elapsed_s", "adaptive_on_front", "virtual_on_front"}) report.erase(key);
+  for (auto& scene : report.at("scenes")) {
+    scene.erase("floor_ms");
+    for (auto& reference : scene.at("references")) reference.erase("render_ms");
+  }
+  for (auto& row : report.at("rows"))
+    for (const char* key : {"frame_ms", "frame_ms_median", "floor_ms", "pareto", "pareto_spread"}) row.erase(key);
+  return report;
+}
+
+void BenchShards::expect_three_shards_merge_to_the_unsharded_run(std::size_t n_rows) {
+  const fs::path full = work() / "full", merged = work() / "merged";
+  const test::Result whole = bench_grid({"-o", full.string()});
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  std::vector<fs::path> parts;
+  for (int i = 0; i < 3; ++i) parts.push_back(part(i, 3));
+  EXPECT_FALSE(fs::exists(work() / "out")) << "a shard writes its part alone";
+  // The rule: row k is shard k mod 3's, whatever the rows' techniques.
+  const auto part0 = nlohmann::json::parse(test::read_file(parts[0]));
+  std::vector<std::size_t> items, every_third;
+  for (const auto& row : part0.at("payload").at("rows")) items.push_back(row.at("item").get<std::size_t>());
+  for (std::size_t k = 0; k < n_rows; k += 3) every_third.push_back(k);
+  EXPECT_EQ(items, every_third);
+
+  const test::Result m = merge({parts[2].string(), parts[0].string(), parts[1].string(), "-o", merged.string()});
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  EXPECT_THAT(m.out, HasSubstr("wrote " + merged.string() + "/ (" + std::to_string(n_rows) + " rows)"));
+
+  std::vector<std::string> header_full, header_merged;
+  const auto rows_full = read_csv(full / "bench.csv", header_full), rows_merged = read_csv(merged / "bench.csv", header_merged);
+  EXPECT_EQ(header_merged, header_full);
+  ASSERT_EQ(rows_merged.size(), n_rows);
+  ASSERT_EQ(rows_merged.size(), rows_full.size());
+  for (std::size_t k = 0; k < rows_full.size(); ++k)
+    for (const auto& [column, value] : rows_full[k])
+      if (!kTimingColumns.count(column)) EXPECT_EQ(rows_merged[k].at(column), value) << "row " << k << ", " << column;
+  // The merged times are the parts' own, and the front is drawn over them: some row is on it.
+  int front = 0;
+  for (const auto& row : rows_merged) front += row.at("pareto") == "1";
+  EXPECT_GT(front, 0);
+
+  nlohmann::json report_full = nlohmann::json::parse(test::read_file(full / "report.json"));
+  nlohmann::json report_merged = nlohmann::json::parse(test::read_file(merged / "report.json"));
+  // The command as the unsharded run records it, with the merge's -o.
+  EXPECT_THAT(report_full.at("command").get<std::string>(), HasSubstr(" -o " + full.string()));
+  std::string command = report_full.at("command").get<std::string>();
+  command.replace(command.find(" -o " + full.string()), 4 + full.string().size(), " -o " + merged.string());
+  EXPECT_EQ(report_merged.at("command"), command);
+  report_full.erase("command");
+  report_merged.erase("command");
+  EXPECT_EQ(without_timing(report_merged).dump(1), without_timing(report_full).dump(1));
+  EXPECT_EQ(report_merged.at("scenes").at(0).at("references").size(), report_full.at("scenes").at(0).at("references").size());
+}
+
+TEST_F(BenchShards, ThreeShardsMergedEqualTheUnshardedRunApartFromTimes) { expect_three_shards_merge_to_the_unsharded_run(10); }
+
+// The virtual map's rows (pages resident, the page tables' memory) under the demo scene's sun.
+TEST_F(BenchShards, VirtualMapRowsMergeToo) {
+  grid_ = {"--scenes", "demo,two-planes", "--techniques", "pcf,pcss", "--pcf.kernel", "grid", "--pcss.kernel", "grid",
+           "--resolutions", "64", "--no-adaptive", "--no-plot"};
+  expect_three_shards_merge_to_the_unsharded_run(8);
+}
+
+TEST_F(BenchShards, AMergeOfMissingTwiceOrForeignPartsIsRefusedWithNothingWritten) {
+  // Other settings (one more frame per row), made first: the part's name is the shard's.
+  const fs::path other = work() / "other.json";
+  fs::rename(part(1, 3, {"--frames", "3"}), other);
+  const fs::path p0 = part(0, 3), p1 = part(1, 3), p2 = part(2, 3);
+  expect_refused({p0, p2}, "shard 1/3 missing");
+  expect_refused({p0, p1, p2, p1}, p1.string() + ": shard 1/3 again");
+  const fs::path copy = work() / "copy-of-1.json";
+  fs::copy_file(p1, copy);
+  expect_refused({p0, p1, copy, p2}, copy.string() + ": shard 1/3 again");
+  expect_refused({p0, other, p2}, other.string() + ": made with other settings");
+  // Another shard count.
+  const fs::path half = part(1, 2);
+  expect_refused({p0, half, p2}, half.string() + ": shard 1/2, but");
+  // Another tool's part, and a part edited after it was written.
+  const fs::path edited = work() / "edited.json";
+  std::string text = test::read_file(p1);
+  text.replace(text.find("\"--frames\""), 10, "\"--warmup\"");
+  { std::ofstream(edited) << text; }
+  expect_refused({p0, edited, p2}, edited.string() + ": its settings do not match its fingerprint");
+}
+
+TEST_F(BenchShards, BadShardOptionsAreRefusedNamingTheOption) {
+  const std::string part_file = (work() / "p.json").string();
+  for (const std::string shard : {"0/0", "3/2", "junk", "1/", "-1/2"}) {
+    const test::Result r = bench_grid({"--shard", shard, "--part", part_file});
+    EXPECT_EQ(r.exit_code, 2) << shard << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--shard"));
+  }
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--shard", "0/2"}, "--shard: needs --part"},
+      {{"--part", part_file, "-o", (work() / "out").string()}, "--part: only with --shard"},
+      {{"--shard", "0/2", "--part", part_file, "-o", (work() / "out").string()}, "--output: a shard writes a part"},
+      {{}, "--output is required"}};
+  for (const auto& [args, needle] : cases) {
+    const test::Result r = bench_grid(args);
+    EXPECT_EQ(r.exit_code, 2) << needle << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1) << r.err;
+    EXPECT_THAT(r.err, HasSubstr(needle));
+  }
+  EXPECT_TRUE(fs::is_empty(work())) << "a refused shard wrote something";
 }
 
 }  // namespace

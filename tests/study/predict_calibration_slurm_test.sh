@@ -5,10 +5,13 @@
 # its end. A tiny grid in 3 shards runs as a job array throttled to 2 tasks, then the merge job
 # that waits on it (--dependency=afterok); OUTPUT equals the serial run's apart from created_utc.
 # Skipped (77) where the daemons are not installed, the user is not root, or they do not start
-# (a container without the privileges): CTest label `slurm`.
-#   predict_calibration_slurm_test.sh PENUMBRA-OBSERVER-CURVE
+# (a container without the privileges): CTest label `slurm`. With PENUMBRA-BENCH, the same daemons
+# then run scripts/slurm/submit-bench.sh: a tiny bench in 3 shards and its merge, equal to the
+# unsharded run in every column but the frame times.
+#   predict_calibration_slurm_test.sh PENUMBRA-OBSERVER-CURVE [PENUMBRA-BENCH]
 set -euo pipefail
 curve="$1"
+bench="${2:-}"
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 skip() { echo "skipped: $*"; exit 77; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -111,3 +114,35 @@ for i in 0 1 2; do [[ -f "$tmp/work/parts/pcf-pcf-kernel-grid.$i-of-3.json" ]] |
 diff <(grep -v '"created_utc"' "$tmp/serial.json") <(grep -v '"created_utc"' "$tmp/slurm.json") >"$tmp/diff" ||
   fail "the Slurm run differs from the serial one: $(head -20 "$tmp/diff")"
 echo "ok: array $array_id (3 tasks, at most 2 at once) and merge $merge_id after it; equal to the serial run"
+
+[[ -n "$bench" ]] || exit 0
+# The bench's array and merge. Frame times, the floor and the Pareto marks drawn from them are
+# measurements: every other column is compared.
+bench_grid=(--scenes two-planes --techniques hard,pcss --resolutions 64,256 --reference-resolution 256 --area-samples 4
+            --area-resolution 256 --width 64 --height 36 --frames 2 --warmup 1 --no-plot)
+"$bench" "${bench_grid[@]}" -o "$tmp/bench-serial" >"$tmp/bench-serial.log" 2>&1 || fail "bench serial: $(tail -n 3 "$tmp/bench-serial.log")"
+PENUMBRA_BENCH="$bench" "$repo/scripts/slurm/submit-bench.sh" --shards 3 --limit 2 \
+  --sbatch "--cpus-per-task=1 --mem=500M --output=$tmp/logs/%x-%j.out" --work "$tmp/bench-work" -o "$tmp/bench-slurm" \
+  -- "${bench_grid[@]}" >"$tmp/bench-submit.log" 2>&1 || fail "submit-bench: $(cat "$tmp/bench-submit.log")"
+cat "$tmp/bench-submit.log"
+bench_merge="$(sed -n 's/.*merge \([0-9]*\) after.*/\1/p' "$tmp/bench-submit.log")"
+[[ -n "$bench_merge" ]] || fail "no merge job id in: $(cat "$tmp/bench-submit.log")"
+for _ in $(seq 900); do
+  [[ -z "$(squeue -h -o %i)" ]] && break
+  [[ "$(squeue -h -j "$bench_merge" -o %r 2>/dev/null)" != DependencyNeverSatisfied ]] ||
+    fail "a bench task failed, so the merge never runs (afterok): $(tail -n 3 "$tmp"/logs/penumbra-bench-* 2>/dev/null | tr '\n' ' ')"
+  sleep 0.2
+done
+[[ -z "$(squeue -h -o %i)" ]] || fail "bench jobs still queued after 180 s: $(squeue)"
+[[ -f "$tmp/bench-slurm/bench.csv" ]] || fail "the bench merge wrote nothing: $(cat "$tmp"/logs/penumbra-bench-* 2>/dev/null | tail -n 20)"
+/usr/bin/python3 - "$tmp/bench-serial/bench.csv" "$tmp/bench-slurm/bench.csv" <<'PY' || fail "the Slurm bench differs from the serial one"
+import csv, sys
+timing = {"frame_ms_median", "frame_ms_min", "frame_ms_max", "floor_ms", "pareto", "pareto_spread"}
+a, b = (list(csv.DictReader(open(p))) for p in sys.argv[1:])
+assert len(a) == len(b) > 0, (len(a), len(b))
+for k, (x, y) in enumerate(zip(a, b)):
+    for column in x:
+        if column not in timing and x[column] != y[column]:
+            sys.exit("row %d, %s: %s, not %s" % (k, column, y[column], x[column]))
+PY
+echo "ok: the bench's 3 tasks and merge $bench_merge equal the unsharded run apart from the frame times"
