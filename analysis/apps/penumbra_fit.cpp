@@ -14,6 +14,7 @@
 
 #include "data/dataset.h"
 #include "data/level_data.h"
+#include "data/online_quality.h"
 #include "data/reference_table.h"
 #include "fit/frame_fit.h"
 #include "fit/model_fit.h"
@@ -171,11 +172,39 @@ struct StudyOptions {
   bool pool = false;
   bool pool_observers = false;
   bool allow_unusable = false;
+  std::optional<std::string> exclude_quality;  // --exclude-quality: data-quality criteria (data/online_quality.h)
 };
+
+// The sessions' data quality and what the criteria exclude: the inputs left to fit, and the table
+// and report.json block when there is anything to report (a browser session, or criteria given).
+struct QualityCheck {
+  std::vector<fs::path> fitted;
+  int excluded = 0;
+  std::string table;
+  nlohmann::json report;
+};
+
+QualityCheck check_quality(const StudyOptions& so, const std::vector<QualityCriterion>& criteria) {
+  std::vector<SessionQuality> sessions = read_quality(so.inputs);
+  QualityCheck out;
+  out.excluded = apply_quality_criteria(sessions, criteria);
+  for (std::size_t i = 0; i < sessions.size(); ++i)
+    if (sessions[i].excluded_because.empty()) out.fitted.push_back(so.inputs[i]);
+  if (quality_reported(sessions, criteria)) {
+    out.table = quality_table(sessions, criteria);
+    out.report = quality_json(sessions, criteria);
+  }
+  if (out.excluded > 0 && out.fitted.empty()) {
+    std::cout << out.table;
+    throw std::runtime_error("every session is excluded by --exclude-quality " + *so.exclude_quality + " (the table above says why); nothing to fit");
+  }
+  return out;
+}
 
 // A frame study's sessions: k* per patch, per technique and pooled (fit/frame_fit.h) into
 // report.json and summary.txt; no calibration.json (k* is a verdict on c, not a new c).
-int run_frame_study(const StudyOptions& so, const StudyFitOptions& options, const Dataset& data, PhaseProgress& progress) {
+int run_frame_study(const StudyOptions& so, const StudyFitOptions& options, const Dataset& data, PhaseProgress& progress,
+                    const QualityCheck& quality) {
   if (!so.references.empty()) throw std::invalid_argument("--reference: a frame study has no reference filter sizes");
   if (so.condition) throw std::invalid_argument("--condition: a frame study writes no calibration entry to choose one for");
   std::set<std::string> kinds;
@@ -192,7 +221,8 @@ int run_frame_study(const StudyOptions& so, const StudyFitOptions& options, cons
   for (const fs::path& p : so.inputs) inputs.push_back(p.string());
   nlohmann::json report = frame_report_json(fit, inputs, utc_now());
   report["fit_seconds"] = seconds;
-  const std::string summary = frame_summary_text(fit);
+  if (!quality.report.is_null()) report["data_quality"] = quality.report;
+  const std::string summary = frame_summary_text(fit) + quality.table;
   io::StagedDirectory out(so.output.string(), "report.json");
   io::write_file_atomic(out.path() / "summary.txt", summary);
   io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 1) + "\n");
@@ -227,21 +257,27 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   }
   options.accept_inconsistent = so.accept_inconsistent;
   options.pool = so.pool;
+  const std::vector<QualityCriterion> criteria =
+      so.exclude_quality ? parse_quality_criteria(*so.exclude_quality) : std::vector<QualityCriterion>{};
   PhaseProgress progress(!so.no_progress);
-  const Dataset data = [&] {
+  const auto load = [&](const std::vector<fs::path>& inputs) {
     try {
       // The last line of reading waits for the checks below: refused input stays one line.
       const auto reading = [&](int done, int total) {
         if (done < total) progress("reading logs", done, total);
       };
-      return load_dataset(so.inputs, {.accept_inconsistent = so.accept_inconsistent, .pool = so.pool, .progress = reading});
+      return load_dataset(inputs, {.accept_inconsistent = so.accept_inconsistent, .pool = so.pool, .progress = reading});
     } catch (const InconsistentLog& e) {
       throw std::runtime_error(std::string(e.what()) +
                                "; the log is inconsistent (rows duplicated, removed, reordered or edited?): not fitted "
                                "(--accept-inconsistent fits it anyway, listed in report.json and summary.txt)");
     }
-  }();
-  if (is_frame_study(data)) return run_frame_study(so, options, data, progress);
+  };
+  // Every session is read and checked, excluded or not; the fit reads those the criteria keep.
+  Dataset data = load(so.inputs);
+  const QualityCheck quality = check_quality(so, criteria);
+  if (quality.excluded > 0) data = load(quality.fitted);
+  if (is_frame_study(data)) return run_frame_study(so, options, data, progress, quality);
   // Before the fit: sessions of different kernels or observer kinds are refused at once.
   const CalibrationProvenance provenance = calibration_provenance(data, so.pool_observers);
   progress("reading logs", static_cast<int>(so.inputs.size()), static_cast<int>(so.inputs.size()));
@@ -262,7 +298,8 @@ int run_study(const StudyOptions& so, const ModelOptions& mo) {
   nlohmann::json report = report_json(fit, ref, inputs, created, provenance);
   report["fit_seconds"] = seconds;
   report["threads"] = so.threads > 0 ? so.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const std::string summary = summary_text(fit, ref, so.condition, provenance);
+  if (!quality.report.is_null()) report["data_quality"] = quality.report;
+  const std::string summary = summary_text(fit, ref, so.condition, provenance) + quality.table;
   // A fit nobody should use does not become a calibration the renderer reads without a word.
   if (const std::vector<std::string> why = unusable_because(chosen); !why.empty() && !so.allow_unusable) {
     std::cout << summary;
@@ -329,6 +366,10 @@ int main(int argc, char** argv) {
   app.add_flag("--allow-unusable", so.allow_unusable,
                "write calibration.json even when the chosen condition's fit is not usable (not converged, threshold at a bound, "
                "open or infinite interval, c outside [0.5, 20]), marked \"usable\": false; without it nothing is written");
+  app.add_option("--exclude-quality", so.exclude_quality,
+                 "leave out sessions whose data quality fails these criteria, e.g. "
+                 "fullscreen_exits>2,tab_switches>3,page_loads>3,rt_outliers>10%,chinrest_cv>0.1 (docs/fit.md#data-quality); each "
+                 "excluded session is printed with its reason and listed in report.json. Default: none excluded, the table reported");
   add_model_options(app, study_model);
 
   auto* psychometric = app.add_subcommand("psychometric", "fit one data set and print JSON");

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -102,6 +103,22 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
         throw std::runtime_error(file + ": config.yesno_scoring: expected jagged_only or balanced");
       info.yesno_scoring = config["yesno_scoring"].get<std::string>();
       info.setup["yesno_scoring"] = info.yesno_scoring;
+    }
+  }
+  // A browser session's display as the participant measured it (the server scaled each stimulus
+  // to stimulus_css_px CSS pixels, so one stimulus pixel spans stimulus_css_px / size_px of them).
+  if (j.contains("presentation") && j["presentation"].is_array()) {
+    const nlohmann::json* shown = nullptr;
+    for (const auto& entry : j["presentation"])
+      if (entry.is_object() && entry.value("kind", std::string()) == "browser" && entry.value("fits", false)) shown = &entry;
+    if (shown) {
+      const double ppd = number_field(*shown, file, "presentation[kind browser]", "pixels_per_degree");
+      const double css = number_field(*shown, file, "presentation[kind browser]", "stimulus_css_px");
+      const auto size = info.setup.find("stimulus.size_px");
+      const double size_px = size == info.setup.end() ? NAN : std::strtod(size->second.c_str(), nullptr);
+      if (!(ppd > 0 && ppd < 1e5) || !(css > 0 && css < 1e5))
+        throw std::runtime_error(file + ": presentation[kind browser]: pixels_per_degree and stimulus_css_px: expected positive numbers");
+      if (size_px > 0) info.browser_pixels_per_degree = ppd * size_px / css;
     }
   }
   if (j.contains("config") && j["config"].is_object() && j["config"].contains("stopping")) {

@@ -34,6 +34,11 @@ struct SessionInfo {
   // transfer by its calibration's fingerprint, "display.calibration") and the QUEST parameters.
   // Sessions that differ here are not pooled without LoadOptions::pool.
   std::map<std::string, std::string> setup;
+  // A session in a participant's browser (penumbra-study serve): the stimulus pixels per degree
+  // that participant saw, from session.json's last presentation of kind "browser" that fitted the
+  // window: the virtual chinrest's CSS pixels per degree times the stimulus pixels per CSS pixel
+  // (size_px / stimulus_css_px). Unset for a lab session (its display is in `setup`).
+  std::optional<double> browser_pixels_per_degree;
 };
 
 struct Trial {

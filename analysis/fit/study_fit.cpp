@@ -512,6 +512,10 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
   out.options = options;
   out.sessions = static_cast<int>(data.sessions.size());
   for (const SessionInfo& s : data.sessions) {
+    if (s.browser_pixels_per_degree) {  // measured in the participant's browser, not the config's monitor
+      out.pixels_per_degree[s.participant] = *s.browser_pixels_per_degree;
+      continue;
+    }
     const auto field = [&](const char* key) {
       const auto it = s.setup.find(std::string("display.") + key);
       return it == s.setup.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
