@@ -5,6 +5,7 @@
 // contract's units, the renderer's link-time checks refuse a block that disagrees, and no value of
 // the virtual map is a loose uniform again (set by name, a misspelt one dropped silently).
 #include <cstddef>
+#include <cstring>
 #include <map>
 #include <regex>
 #include <stdexcept>
@@ -19,6 +20,7 @@
 #include "shadows/contract.h"
 #include "shadows/settings.h"
 #include "shadows/technique.h"
+#include "shadows/virtual_shadow_map.h"
 
 namespace penumbra::shadows {
 namespace {
@@ -181,6 +183,55 @@ TEST(ShaderContractGl, EveryVirtualFrameMemberSitsWhereTheCppStructPutsIt) {
   glGetProgramResourceiv(programs.front().second.id(), GL_UNIFORM, index, 2, props, 2, nullptr, values);
   EXPECT_EQ(values[0], contract::VIRTUAL_MAX_LEVELS);
   EXPECT_EQ(values[1], 16);
+}
+
+// The bytes of the uniform buffer bound at BLOCK_VIRTUAL_FRAME.
+std::vector<unsigned char> bound_virtual_frame() {
+  GLint buffer = 0;
+  glGetIntegeri_v(GL_UNIFORM_BUFFER_BINDING, contract::BLOCK_VIRTUAL_FRAME, &buffer);
+  std::vector<unsigned char> bytes(sizeof(VirtualFrame));
+  if (buffer == 0) return {};
+  glGetNamedBufferSubData(static_cast<GLuint>(buffer), 0, static_cast<GLsizeiptr>(bytes.size()), bytes.data());
+  return bytes;
+}
+
+bool same_bytes(const std::vector<unsigned char>& bytes, const VirtualFrame& frame) {
+  return bytes.size() == sizeof frame && std::memcmp(bytes.data(), &frame, sizeof frame) == 0;
+}
+
+// The frame is written once while it stays the same (bind() again writes nothing) and again when it
+// changes; the buffer bound is the one written, and it holds the struct's bytes.
+TEST(ShaderContractGl, TheVirtualFrameBufferHoldsTheFrameAndWritesOnlyAChange) {
+  adaptive::VirtualMapLayout layout;
+  layout.levels = 5;
+  VirtualMapView view;
+  view.light_view = sun_light_view(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)));
+  view.near_ws = 2, view.far_ws = 90;
+  view.camera_xy = {12.5, -3.25};
+  VirtualFrame frame{};
+  set_virtual_view(frame, layout, view);
+  EXPECT_EQ(frame.u_virtual_levels, 5);
+  EXPECT_EQ(frame.u_virtual_light_view.columns[2][0], view.light_view[2][0]);  // column-major, as glm
+  const adaptive::LightXY o = adaptive::level_origin(3, view.camera_xy, layout);
+  EXPECT_EQ(frame.u_virtual_origin[3].x, static_cast<float>(o.x));
+  EXPECT_EQ(frame.u_virtual_origin[3].y, static_cast<float>(o.y));
+  EXPECT_EQ(frame.u_virtual_origin[5].x, 0.0f) << "no level 5";
+
+  const VirtualFrameBuffer buffer;
+  buffer.bind(frame);
+  EXPECT_EQ(buffer.writes(), 1);
+  EXPECT_TRUE(same_bytes(bound_virtual_frame(), frame));
+  buffer.bind(frame);
+  EXPECT_EQ(buffer.writes(), 1) << "an unchanged frame is not written again";
+  frame.u_mark_c_texels = 3.47f;
+  buffer.bind(frame);
+  EXPECT_EQ(buffer.writes(), 2);
+  EXPECT_TRUE(same_bytes(bound_virtual_frame(), frame));
+  const VirtualFrameBuffer other;
+  VirtualFrame zero{};
+  other.bind(zero);
+  EXPECT_TRUE(same_bytes(bound_virtual_frame(), zero)) << "the last bound buffer is the one read";
+  EXPECT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 }
 
 // The shape cannot drift back: no program that reads the virtual map has an active u_virtual_* or
