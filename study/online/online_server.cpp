@@ -6,6 +6,7 @@
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -464,6 +465,15 @@ struct Server::Impl {
         if (const auto at = url.find("{code}"); at != std::string::npos) url.replace(at, 6, code);
         j["completion_url"] = url;
       }
+      // The lab's default end text asks the participant to tell the experimenter, who is not there
+      // online: unless the config gives its own (texts.end), the end screen says what to do here.
+      const bool own_text = std::any_of(c.texts.begin(), c.texts.end(), [](const auto& given) { return given.first == "end"; });
+      if (!own_text)
+        j["body"] = o.completion_url.empty()
+                        ? "The session is complete: your answers are saved.\nCopy the completion code below into the study "
+                          "page that sent you here, then you may close this tab."
+                        : "The session is complete: your answers are saved.\nUse the link below to return to the participant "
+                          "pool; it carries your completion code (shown below in case you need to enter it).";
     }
     return j;
   }

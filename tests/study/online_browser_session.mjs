@@ -91,6 +91,10 @@ try {
     else if (state.startsWith("message:")) await page.keyboard.press("Space");
     else if (state === "end") {
       const code = await page.$eval(".pen-code", (e) => e.textContent);
+      const text = await page.$eval(".pen-screen .pen-body", (e) => e.innerText.replace(/\n+/g, " / "));
+      const link = await page.evaluate(() => { const a = document.querySelector(".pen-screen a"); return a ? a.href : ""; });
+      console.log(`end text: ${text}`);
+      if (link) console.log(`end link: ${link}`);
       console.log(`end: completion code ${code}, ${answered} trials answered`);
       break;
     }

@@ -224,6 +224,10 @@ TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswer
   EXPECT_EQ(code.size(), 10u);
   EXPECT_EQ(online.value("completion_code", ""), code);
   EXPECT_NE(code, penumbra::text::fnv1a64_hex("completion\nP01").substr(0, 10));
+  // The end text is the online one (the config gives none): no experimenter to tell, the code to copy.
+  const std::string end_text = p.screen.value("body", "");
+  EXPECT_EQ(end_text.find("experimenter"), std::string::npos) << end_text;
+  EXPECT_NE(end_text.find("Copy the completion code below"), std::string::npos) << end_text;
   ASSERT_EQ(p.get(), 200);
   EXPECT_EQ(p.screen.value("completion_code", ""), code);
   // The admin's page: the session, its trials and each staircase as the lab's admin view shows them.
@@ -422,7 +426,7 @@ std::string browser_missing() {
 TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   if (const std::string missing = browser_missing(); !missing.empty()) GTEST_SKIP() << missing;
   const fs::path tmp = fresh_dir("browser");
-  ServerProcess server(tmp / "sessions");
+  ServerProcess server(tmp / "sessions", 0, {"--completion-url", "https://pool.example.org/complete?cc={code}"});
   const std::string answers = "fjjffjfj";
   const fs::path shots = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS") ? fs::path(std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) : tmp / "screens";
   const std::string cmd = "timeout 300 node " + (fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string() + " 'http://127.0.0.1:" +
@@ -447,6 +451,39 @@ TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   }
   const json online = penumbra::json_input::read_file(tmp / "sessions" / "B01" / "online.json");
   EXPECT_EQ(online["quality"]["page_loads"], 1);
+  // The end screen online: what to do here (the pool's link with the code), not the lab's "tell the experimenter".
+  const std::string code = online.value("completion_code", "");
+  ASSERT_EQ(code.size(), 10u);
+  EXPECT_NE(said.find("end link: https://pool.example.org/complete?cc=" + code), std::string::npos) << said;
+  EXPECT_NE(said.find("end text: The session is complete: your answers are saved. / Use the link below to return to the participant pool"),
+            std::string::npos)
+      << said;
+  EXPECT_EQ(said.find("experimenter"), std::string::npos) << said;
+  // The chinrest's blind spot, measured three times (the script stops the ball three times): each
+  // reading recorded, their mean the plugin's viewing distance.
+  const json& readings = shown["chinrest"]["blindspot_distances_mm"];
+  ASSERT_EQ(readings.size(), 3u) << shown.dump(1);
+  double mean = 0;
+  for (const auto& d : readings) mean += d.get<double>() / 3;
+  EXPECT_NEAR(mean, shown["viewing_distance_mm"].get<double>(), 0.01 * shown["viewing_distance_mm"].get<double>()) << readings;
+#ifdef PENUMBRA_FIT_EXE
+  // The fitter reads the browser's session like any other: the participant's pixels per degree
+  // from the chinrest, and the session's data quality.
+  const std::string fit = std::string(PENUMBRA_FIT_EXE) + " " + (tmp / "sessions" / "B01").string() + " -o " + (tmp / "fit").string() +
+                          " --bootstrap 0 --no-progress --allow-unusable > " + (tmp / "fit.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(fit.c_str()), 0) << penumbra::test::slurp(tmp / "fit.txt");
+  const json report = penumbra::json_input::read_file(tmp / "fit" / "report.json");
+  EXPECT_NEAR(report["pixels_per_degree"]["B01"].get<double>(),
+              shown["pixels_per_degree"].get<double>() * 96 / shown["stimulus_css_px"].get<double>(), 1e-9);
+  const json& quality = report["data_quality"]["sessions"][0];
+  EXPECT_EQ(quality["kind"], "browser");
+  EXPECT_EQ(quality["browser"].get<std::string>().rfind("HeadlessChrome ", 0), 0u) << quality;
+  EXPECT_EQ(quality["device_pixel_ratio"], 1);
+  EXPECT_EQ(quality["page_loads"], 1);
+  EXPECT_EQ(quality["chinrest_distances_mm"], readings);
+  EXPECT_GT(quality["rt_median_ms"].get<double>(), 0);
+  EXPECT_NE(penumbra::test::slurp(tmp / "fit.txt").find("data quality (per session"), std::string::npos);
+#endif
   if (!std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) fs::remove_all(tmp);
 }
 

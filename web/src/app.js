@@ -323,11 +323,35 @@ const fullscreen = {
   message: "<p>The study runs in fullscreen. If you leave fullscreen, you will be asked to return.</p>",
   button_label: "Enter fullscreen",
 };
+// The chinrest's blind-spot readings one by one (the plugin keeps only their mean): the ball's and
+// the square's centres at every press of Space that stops the ball (presses alternate: start,
+// stop), read before the plugin's own listener moves anything. A redo draws a new ball and starts
+// the readings afresh, as the plugin does.
+const kBlindSpotAngleDeg = 13.5;  // the plugin's angle between fixation and the blind spot
+let blindSpot = { ball: null, presses: 0, offsets_px: [] };
+function onBlindSpotKey(e) {
+  if (e.key !== " " || e.repeat) return;
+  const ball = document.querySelector("#virtual-chinrest-circle");
+  const square = document.querySelector("#virtual-chinrest-square");
+  if (!ball || !square) return;
+  if (ball !== blindSpot.ball) blindSpot = { ball, presses: 0, offsets_px: [] };
+  blindSpot.presses += 1;
+  if (blindSpot.presses % 2 === 1) return;  // this press starts the ball
+  const centre = (el) => { const b = el.getBoundingClientRect(); return b.left + b.width / 2; };
+  blindSpot.offsets_px.push(centre(square) - centre(ball));
+}
+
 const chinrest = {
   type: jsPsychVirtualChinrest,
   blindspot_reps: 3,
   resize_units: "none",
+  on_load: () => {
+    blindSpot = { ball: null, presses: 0, offsets_px: [] };
+    window.addEventListener("keydown", onBlindSpotKey, true);
+  },
   on_finish: async (data) => {
+    window.removeEventListener("keydown", onBlindSpotKey, true);
+    const distances = blindSpot.offsets_px.map((px) => px / data.px2mm / Math.tan(kBlindSpotAngleDeg * Math.PI / 180));
     pendingDisplay = {
       px_per_mm: data.px2mm,
       viewing_distance_mm: data.view_dist_mm,
@@ -338,7 +362,8 @@ const chinrest = {
       device_pixel_ratio: window.devicePixelRatio,
       refresh_hz: refreshHz,
       user_agent: navigator.userAgent.slice(0, 400),
-      chinrest: { item_width_px: data.item_width_px, item_width_mm: data.item_width_mm, px2mm: data.px2mm, view_dist_mm: data.view_dist_mm },
+      chinrest: { item_width_px: data.item_width_px, item_width_mm: data.item_width_mm, px2mm: data.px2mm, view_dist_mm: data.view_dist_mm,
+                  blindspot_distances_mm: distances.map((d) => Math.round(d * 100) / 100) },
     };
   },
 };
