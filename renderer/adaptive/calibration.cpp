@@ -207,15 +207,56 @@ double c_at_visibility(double c, double criterion_f, double visibility, double b
   return linear ? 1.0 / x : std::pow(10.0, -x);
 }
 
+namespace {
+
+// dF/dx at F for slope 1, x in log10 units.
+double slope_at(psychometric::Model m, double f) {
+  switch (m) {
+    case psychometric::Model::weibull:
+    case psychometric::Model::log_weibull: return std::log(10.0) * (1 - f) * -std::log(1 - f);
+    case psychometric::Model::normal: {
+      const double z = std::sqrt(2.0) * psychometric::inverse_erf(2 * f - 1);
+      return std::exp(-0.5 * z * z) / std::sqrt(2 * 3.141592653589793);
+    }
+    case psychometric::Model::logistic: return f * (1 - f);
+  }
+  return NAN;
+}
+
+psychometric::Model family_model(std::string_view family) {
+  const auto model = psychometric::parse_model(family);
+  if (!model) throw std::invalid_argument("family '" + std::string(family) + "': expected log-weibull, weibull, normal or logistic");
+  return *model;
+}
+
+}  // namespace
+
+double family_slope(std::string_view from, double beta, std::string_view to, double criterion_f) {
+  return beta * slope_at(family_model(from), criterion_f) / slope_at(family_model(to), criterion_f);
+}
+
 CAtVisibility c_at_visibility(const CalibrationEntry& e, double visibility) {
   const ThresholdDefinition& t = e.definition();
-  CAtVisibility out{c_at_visibility(e.c, t.criterion_f, visibility, t.beta, t.family), INFINITY, 0};
-  for (const double c : {e.ci95_lo, e.ci95_hi})
-    for (const double beta : {t.beta_lo, t.beta_hi}) {
-      const double v = c_at_visibility(c, t.criterion_f, visibility, beta, t.family);
-      out.lo = std::min(out.lo, v);
-      out.hi = std::max(out.hi, v);
-    }
+  const double c = c_at_visibility(e.c, t.criterion_f, visibility, t.beta, t.family);
+  CAtVisibility out{c, INFINITY, 0, c, c};
+  if (visibility == t.criterion_f) {
+    out.lo = std::min(e.ci95_lo, c);
+    out.hi = std::max(e.ci95_hi, c);
+    return out;
+  }
+  for (const std::string_view family : {"log-weibull", "normal", "logistic"}) {
+    for (const double c_end : {e.ci95_lo, e.ci95_hi})
+      for (const double beta : {t.beta_lo, t.beta_hi}) {
+        const double v = c_at_visibility(c_end, t.criterion_f, visibility, family_slope(t.family, beta, family, t.criterion_f), family);
+        out.lo = std::min(out.lo, v);
+        out.hi = std::max(out.hi, v);
+      }
+    const double v = c_at_visibility(e.c, t.criterion_f, visibility, family_slope(t.family, t.beta, family, t.criterion_f), family);
+    out.family_lo = std::min(out.family_lo, v);
+    out.family_hi = std::max(out.family_hi, v);
+  }
+  out.lo = std::min(out.lo, c);
+  out.hi = std::max(out.hi, c);
   return out;
 }
 

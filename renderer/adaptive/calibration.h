@@ -93,11 +93,26 @@ struct CalibrationEntry {
 double c_at_visibility(double c, double criterion_f, double visibility, double beta, std::string_view family = "log-weibull");
 
 // An entry's c at `visibility` with its interval: the entry's ci95 mapped through the slope's
-// interval (the widest combination). visibility = the entry's criterion gives c and ci95 back.
+// interval (the widest combination), and through the psychometric family (issue 48). A study's
+// QUEST trials sit near the criterion, so the data fix the function's level and local slope there
+// and say little of its shape in the tail: refitting the same data with another family moves c at
+// F 0.1 by 14-20 % while c moves 1.5 %. So the interval is the hull over the families the fitter
+// supports (log-Weibull, its Weibull on a / r being the same function, normal, logistic), each
+// with the slope whose dF/dx at the criterion equals the entry's (family_slope).
+// visibility = the entry's criterion gives c and ci95 back.
 struct CAtVisibility {
   double c = kPublishedC, lo = kPublishedC, hi = kPublishedC;
+  // The hull of the other families' c at `visibility` from the entry's c and slope alone (no
+  // interval of either): how far the family alone moves it.
+  double family_lo = kPublishedC, family_hi = kPublishedC;
 };
 CAtVisibility c_at_visibility(const CalibrationEntry& entry, double visibility);
+
+// The slope of family `to` whose dF/dx (x in log10 units) at detection probability `criterion_f`
+// equals that of family `from` with slope `beta`: the same curve near the criterion. The Weibull's
+// slope on a / r is the log-Weibull's on log10 of it. Throws std::invalid_argument for an unknown
+// family.
+double family_slope(std::string_view from, double beta, std::string_view to, double criterion_f);
 
 // The c the rule uses for one technique, and where it came from, for output and reports.
 struct CalibrationChoice {

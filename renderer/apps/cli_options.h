@@ -296,11 +296,18 @@ inline std::string calibration_line(const CalibrationOption& calibration, const 
     // What c means: the detection probability at which the staircase is still seen.
     const adaptive::CalibrationChoice chosen = calibration.choice(settings);
     const double criterion = chosen.entry ? chosen.entry->definition().criterion_f : adaptive::ThresholdDefinition{}.criterion_f;
-    char at[160];
-    if (settings.adaptive.visibility > 0)
-      std::snprintf(at, sizeof at, " at visibility F = %.3g (the entry's c %.3g is at its criterion F = %.3g)",
-                    settings.adaptive.visibility, chosen.c, criterion);
-    else
+    char at[320];
+    if (settings.adaptive.visibility > 0) {
+      // The interval at F: c's and the slope's, and the psychometric family's spread (a study's
+      // trials sit near the criterion; the tail is the family's, adaptive::c_at_visibility).
+      adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
+      if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
+      const adaptive::CAtVisibility range = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
+      std::snprintf(at, sizeof at,
+                    " at visibility F = %.3g (the entry's c %.3g is at its criterion F = %.3g), [%.3g, %.3g] over c, the slope and the "
+                    "psychometric family (the family alone [%.3g, %.3g])",
+                    settings.adaptive.visibility, chosen.c, criterion, range.lo, range.hi, range.family_lo, range.family_hi);
+    } else
       std::snprintf(at, sizeof at, " at the entry's criterion, detection probability F = %.3g", criterion);
     line += at;
   }
@@ -339,9 +346,10 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
     adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
     if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
     const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
-    // Only an interval the entry has (of c, or of an estimated slope): none is written as null.
-    const bool interval = entry.has_ci95 || entry.definition().beta_lo < entry.definition().beta_hi;
-    j["ci95_at_visibility"] = interval ? nlohmann::json{at.lo, at.hi} : nlohmann::json(nullptr);
+    // Only an interval there is (of c, of an estimated slope, or the family's away from the
+    // criterion): none is written as null.
+    j["ci95_at_visibility"] = at.lo < at.hi ? nlohmann::json{at.lo, at.hi} : nlohmann::json(nullptr);
+    j["family_at_visibility"] = {at.family_lo, at.family_hi};
   }
   if (chosen.entry && !chosen.entry->usable) j["unusable_because"] = chosen.entry->unusable_because;
   return j;

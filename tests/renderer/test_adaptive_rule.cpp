@@ -8,9 +8,11 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "adaptive/cascades.h"
 #include "adaptive/resolution_rule.h"
+#include "psychometric/psychometric.h"
 
 namespace penumbra::adaptive {
 namespace {
@@ -189,6 +191,14 @@ TEST_F(CalibrationFile, ShippedDefaultIsThePublishedConstant) {
   EXPECT_TRUE(e.threshold->beta_assumed);
   EXPECT_NEAR(c_at_visibility(e, 0.6464646464646464).c, 3.54, 0.01);
   EXPECT_NEAR(c_at_visibility(3.47, 0.8105, 0.6464646464646464, 3.5), 3.97, 0.01);
+  // Issue 48: far from the criterion the interval carries the psychometric family: the published
+  // entry has no interval of c or of its (assumed) slope, yet at F 0.1 it is no longer one number
+  // (the log-Weibull's long lower tail asks the largest c there; the normal and logistic less).
+  const CAtVisibility far = c_at_visibility(e, 0.1);
+  EXPECT_LT(far.lo, 0.95 * far.c);
+  EXPECT_GE(far.hi, far.c);
+  EXPECT_LE(far.lo, far.family_lo);
+  EXPECT_GE(far.hi, far.family_hi);
   // The published entry states no kernel: the study's disk is assumed (its reading), so PCF's disk
   // takes it as measured and the grid (the main job's PCF) as a fallback, said so (issue 48).
   EXPECT_FALSE(cal.choose("pcf", "disk").fallback);
@@ -373,6 +383,61 @@ TEST_F(CalibrationFile, BadFilesNameTheField) {
   };
   for (const auto& c : cases) expect_refused(c.text, c.field);
   EXPECT_THROW(load_calibration("/nonexistent/calibration.json"), CalibrationError);
+}
+
+// Issue 48: the families' slopes are matched where the data are (at the criterion) and differ in
+// the tail. family_slope gives the normal and logistic the log-Weibull's dF/dx at F* (checked by a
+// finite difference of each core), so the curves agree near F* (within 1 % of c at F 0.55 and
+// 0.75) and part in the tail: at F 0.1 the hull of c is wider than the slope's own interval, and
+// holds each family's value; at the criterion nothing but the entry's ci95 is left.
+TEST(CAtVisibility, FarFromTheCriterionTheIntervalHoldsEveryFamily) {
+  const double f_star = 0.6464646464646464, beta = 3.5, c = 3.0;
+  const double threshold_x = -std::log10(c);
+  const auto slope = [&](psychometric::Model m, double b) {
+    const double alpha = threshold_x - psychometric::core_inverse(m, f_star, 0.0, b);
+    const double h = 1e-6;
+    return (psychometric::core(m, threshold_x + h, alpha, b) - psychometric::core(m, threshold_x - h, alpha, b)) / (2 * h);
+  };
+  const double lw = slope(psychometric::Model::log_weibull, beta);
+  for (const auto& [name, model] : {std::pair{"normal", psychometric::Model::normal}, std::pair{"logistic", psychometric::Model::logistic}}) {
+    const double b = family_slope("log-weibull", beta, name, f_star);
+    EXPECT_NEAR(slope(model, b) / lw, 1.0, 1e-6) << name;
+    EXPECT_NEAR(family_slope(name, b, "log-weibull", f_star), beta, 1e-9) << name;
+    for (const double near : {0.55, 0.75})
+      EXPECT_NEAR(c_at_visibility(c, f_star, near, b, name) / c_at_visibility(c, f_star, near, beta), 1.0, 0.01) << name << " " << near;
+  }
+  EXPECT_DOUBLE_EQ(family_slope("weibull", beta, "log-weibull", f_star), beta);
+  CalibrationEntry e;
+  e.c = c;
+  e.ci95_lo = 2.9;
+  e.ci95_hi = 3.1;
+  e.has_ci95 = true;
+  ThresholdDefinition t;
+  t.criterion_f = f_star;
+  t.beta = beta;
+  t.beta_lo = 3.0;
+  t.beta_hi = 4.0;
+  t.beta_assumed = false;
+  e.threshold = t;
+  const CAtVisibility far = c_at_visibility(e, 0.1);
+  double slope_lo = INFINITY, slope_hi = 0;
+  for (const double ce : {2.9, 3.1})
+    for (const double b : {3.0, 4.0}) {
+      slope_lo = std::min(slope_lo, c_at_visibility(ce, f_star, 0.1, b));
+      slope_hi = std::max(slope_hi, c_at_visibility(ce, f_star, 0.1, b));
+    }
+  EXPECT_LE(far.lo, slope_lo);
+  EXPECT_GE(far.hi, slope_hi);
+  EXPECT_GT(far.family_hi / far.family_lo, 1.05);  // the family alone moves c(0.1) by more than 5 %
+  for (const char* name : {"normal", "logistic"}) {
+    const double v = c_at_visibility(c, f_star, 0.1, family_slope("log-weibull", beta, name, f_star), name);
+    EXPECT_LE(far.lo, v) << name;
+    EXPECT_GE(far.hi, v) << name;
+  }
+  const CAtVisibility at = c_at_visibility(e, f_star);
+  EXPECT_DOUBLE_EQ(at.c, c);
+  EXPECT_DOUBLE_EQ(at.lo, 2.9);
+  EXPECT_DOUBLE_EQ(at.hi, 3.1);
 }
 
 TEST(CascadeSplits, PracticalSchemeBetweenUniformAndLogarithmic) {

@@ -594,6 +594,14 @@ TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
   EXPECT_GT(r1, r0);
   EXPECT_NEAR(r1 / r0, factor, 32.0 / r0 * factor + 1e-9) << r0 << " -> " << r1;
   EXPECT_NE(out_low.find("c for pcf poisson = 6.82 texels at visibility F = 0.1"), std::string::npos) << out_low;
+  // Issue 48: the published entry has no interval, yet at F 0.1 c carries the psychometric family's
+  // spread (the log-Weibull asks the most there), printed and recorded.
+  EXPECT_NE(out_low.find("over c, the slope and the psychometric family (the family alone ["), std::string::npos) << out_low;
+  const nlohmann::json& at = low.at("calibration").at("ci95_at_visibility");
+  ASSERT_TRUE(at.is_array()) << low.at("calibration").dump();
+  EXPECT_LT(at[0].get<double>(), 0.95 * 3.47 * factor);
+  EXPECT_GE(at[1].get<double>(), 3.47 * factor - 1e-9);
+  EXPECT_TRUE(base.at("calibration").find("ci95_at_visibility") == base.at("calibration").end()) << "none at the criterion";
   EXPECT_NE(out_default.find("at the entry's criterion, detection probability F = 0.674"), std::string::npos) << out_default;
   // A visibility no function reaches is refused by the settings table.
   const Result bad = run_render(small_args({"--adaptive.visibility", "1.5", "-o", (work_ / "bad").string()}), scratch_);
