@@ -69,7 +69,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${CMAKE_INSTALL_DO
 # --- the virtual shadow map's page marking for engines: share/penumbra/shaders/ ----------------------
 #
 # renderer/shaders/virtual_mark.comp with its includes (virtual_mark_contract.h, virtual_pages.glsl,
-# shadow_contract.h) inlined, so that an engine compiles it as it is with its own #version and
+# shadow_contract.h, read_count.glsl) inlined, so that an engine compiles it as it is with its own #version and
 # defines (GLSL has no #include; the renderer's gl::ShaderLibrary expands them, an engine's loader
 # need not). Written at build time from the sources the renderer embeds, into build/install/shaders/
 # (not build/share/penumbra: a tool in the build tree would take that for an installed tree), and
@@ -83,6 +83,7 @@ add_custom_command(
           -DVERSION=${PROJECT_VERSION} -P ${PROJECT_SOURCE_DIR}/cmake/FlattenGlsl.cmake
   DEPENDS ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_mark.comp ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_mark_contract.h
           ${PROJECT_SOURCE_DIR}/renderer/shaders/virtual_pages.glsl ${PROJECT_SOURCE_DIR}/renderer/shaders/shadow_contract.h
+          ${PROJECT_SOURCE_DIR}/renderer/shaders/read_count.glsl
           ${PROJECT_SOURCE_DIR}/cmake/FlattenGlsl.cmake
   COMMENT "Inlining the includes of virtual_mark.comp for engines"
   VERBATIM)

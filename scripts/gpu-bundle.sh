@@ -12,7 +12,7 @@
 #   gl-debs/        libglvnd's Debian packages (libEGL, libGLX, libOpenGL, ...) for a machine
 #                   without them (the device machine: gpu-check.sh unpacks them into /)
 #   data/           calibration/default.json (penumbra-demo --calibration)
-#   run, gpu-check.sh, gpu-gl-tests.sh, gpu_summary.py, VERSION
+#   run, gpu-check.sh, gpu-gl-tests.sh, gpu_summary.py, gpu_cost_model.py, VERSION
 # The folder is replaced only when the whole bundle is made; this script refuses more than
 # 48 MiB (the device tool carries 64 MiB, the working tree included).
 #   --out DIR      the bundle folder (default .gpu-bundle)
@@ -140,6 +140,7 @@ cp data/calibration/default.json "$stage/data/calibration/"
 install -m 755 scripts/gpu-run.sh "$stage/run"
 install -m 755 scripts/gpu-check.sh scripts/gpu-gl-tests.sh "$stage/"
 install -m 644 scripts/gpu_summary.py "$stage/"
+install -m 644 scripts/gpu_cost_model.py "$stage/"
 
 if [[ $gl_debs -eq 1 ]]; then
   mkdir -p "$stage/gl-debs"

@@ -146,6 +146,14 @@ if [[ $software -eq 0 || $require_gpu -eq 0 ]] && [[ $software -ne 2 ]]; then
   fi
 fi
 
+# The cost model beside the demo's measured shadow costs (gpu_cost_model.py: a model, labelled as
+# one): the note compares the GPU's measured ratios with the model's.
+if [[ -f "$work/demo/report.json" ]] && command -v python3 >/dev/null; then
+  python3 "$bundle/gpu_cost_model.py" "$work/demo/report.json" --json "$work/demo/cost-model.json" >"$work/demo/cost-model.txt" 2>>"$log" ||
+    echo "gpu_cost_model.py failed: see check.log" >"$work/demo/cost-model.txt"
+  cat "$work/demo/cost-model.txt" >>"$log"
+fi
+
 elapsed=$(($(date +%s) - started))
 if command -v python3 >/dev/null; then
   python3 "$bundle/gpu_summary.py" "$work" "$software" "$renderer" "$elapsed" "$require_gpu" >"$OUT/summary.txt" 2>>"$log" ||

@@ -125,6 +125,12 @@ def main():
         for t in demo.get("techniques", []):
             lines.append(f"    {t['technique']:<6} fixed {both(pass_totals(t['fixed'].get('passes'))):<18}"
                          f" adaptive {both(pass_totals(t['adaptive'].get('passes')))}")
+        # The cost model's prediction from the same run's counts, beside these measured shadow costs
+        # (gpu-check.sh ran scripts/gpu_cost_model.py on this report).
+        model = read(os.path.join(work, "demo", "cost-model.txt"))
+        if model:
+            lines.append("  the cost model (a model, not a measurement) on this run's counts:")
+            lines += ["    " + l for l in model.splitlines()]
 
     benches = [(name, load(os.path.join(work, name, "report.json"))) for name in ("bench", "bench-wall")]
     benches = [(n, b) for n, b in benches if b]

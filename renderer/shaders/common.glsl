@@ -5,6 +5,7 @@
 // The light frame, cascades, biases and the fixed filter radius of the frame come from the
 // ShadowFrame uniform block (shadow_contract.h, shared with the C++ side).
 #include "shadow_contract.h"
+#include "read_count.glsl"
 
 const float PI = 3.14159265358979;
 

@@ -17,6 +17,12 @@
 in vec3 v_world;
 in vec3 v_normal;
 
+#if defined(COUNT_SHADOW_READS)
+// A counting run redraws the frame's surfaces over their own depth (Renderer::count_shading_reads):
+// only the fragment each pixel kept runs, once, as on a GPU whose early depth test culls the rest.
+layout(early_fragment_tests) in;
+#endif
+
 uniform vec3 u_albedo;  // per object; the frame's light, cameras and cascades are in ShadowFrame
 
 
@@ -85,7 +91,7 @@ layout(binding = UNIT_VIRTUAL_PCSS_RADII) uniform sampler2D u_virtual_pcss_radii
 // fixed world radius, or PCSS's box filter of the penumbra its blocker search found.
 float virtual_visibility(vec3 n, float sin_angle, vec2 gradient) {
 #if defined(TECHNIQUE_PCSS)
-  const float radius_ws = texelFetch(u_virtual_pcss_radii, ivec2(gl_FragCoord.xy), 0).r;
+  const float radius_ws = COUNTED(1, 4, texelFetch(u_virtual_pcss_radii, ivec2(gl_FragCoord.xy), 0)).r;
   if (radius_ws < 0.0) {
     o_virtual_status = 3u;  // no level held the search
     return 1.0;
@@ -124,7 +130,7 @@ float cascade_visibility(int i, vec3 n, float sin_angle, float depth_ws, vec2 gr
 
   float visibility;
 #if defined(SCREEN_SPACE_VISIBILITY)
-  visibility = texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0).r;  // EDTSM, EDTSSM: the post passes' result
+  visibility = COUNTED(1, 8, texelFetch(u_screen_visibility, ivec2(gl_FragCoord.xy), 0)).r;  // EDTSM, EDTSSM: the post passes' result
 #else
   visibility = technique_visibility(sc, gradient, depth_ws, filter_uv);
 #endif
@@ -191,5 +197,12 @@ void main() {
 #endif
 #if defined(PCSS_REQUIREMENT)
   o_requirement = vec2(requirement, float(cascade) + (clamped ? 0.5 : 0.0));
+#endif
+#if defined(COUNT_SHADOW_READS)
+  const uint slot = (uint(gl_FragCoord.x) + 17u * uint(gl_FragCoord.y)) % uint(SHADOW_READ_SLOTS);
+  atomicAdd(read_pixels[slot], 1u);
+  atomicAdd(read_instructions[slot], g_read_instructions);
+  atomicAdd(read_texels[slot], g_read_texels);
+  atomicAdd(read_bytes[slot], g_read_bytes);
 #endif
 }

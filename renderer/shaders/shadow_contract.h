@@ -117,6 +117,21 @@ PENUMBRA_STORAGE_BUFFER(PcssRequirementResult, BUFFER_PCSS_REQUIREMENT) {
 };
 #endif
 
+// A counting run of the shading pass (Renderer::count_shading_reads, read_count.glsl): each pixel
+// shaded adds itself and its shadow lookup's texture instructions, texels and bytes to this std430
+// buffer, spread over SHADOW_READ_SLOTS slots by pixel so that no 32-bit slot overflows; the CPU
+// sums the slots.
+PENUMBRA_CONSTANT(BUFFER_SHADOW_READS, 3)
+PENUMBRA_CONSTANT(SHADOW_READ_SLOTS, 256)
+#if defined(__cplusplus) || defined(COUNT_SHADOW_READS)
+PENUMBRA_STORAGE_BUFFER(ShadowReadsResult, BUFFER_SHADOW_READS) {
+  uint read_pixels[SHADOW_READ_SLOTS];
+  uint read_instructions[SHADOW_READ_SLOTS];
+  uint read_texels[SHADOW_READ_SLOTS];
+  uint read_bytes[SHADOW_READ_SLOTS];
+};
+#endif
+
 // The shading pass through a virtual shadow map (VIRTUAL_SHADOW_MAP) marks each pixel by where it
 // found its pages: on the level it marked, on a coarser resident one (the pool could not hold
 // its), or nowhere (lit); virtual_status.comp counts them into this buffer, read back after the pass
@@ -141,6 +156,7 @@ PENUMBRA_CONSTANT(VIRTUAL_BOUNDS_GROUP, 8)
 #ifdef __cplusplus
 static_assert(sizeof(PcssRequirementResult) == 4 * MAX_CASCADES * sizeof(std::uint32_t), "std430: four uint arrays, no padding");
 static_assert(sizeof(VirtualShadingResult) == 3 * sizeof(std::uint32_t), "std430: three uints");
+static_assert(sizeof(ShadowReadsResult) == 4 * SHADOW_READ_SLOTS * sizeof(std::uint32_t), "std430: four uint arrays, no padding");
 static_assert(MAX_CASCADES == 4, "per-cascade scalars are one vec4 each (u_cascade_res, ...)");
 }  // namespace penumbra::shadows::contract
 #else

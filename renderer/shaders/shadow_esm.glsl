@@ -9,7 +9,7 @@ uniform float u_esm_exponent;  // c, already clamped to the float32 range (esm_e
 
 // Visibility for a receiver at normalized linear depth t.
 float shadow_esm(vec2 uv, float t) {
-  float occluders = textureLod(u_moments, atlas_uv(uv), 0.0).r;  // E[exp(c z)] over the filter
+  float occluders = COUNTED(4, u_count_moment_bytes, textureLod(u_moments, atlas_uv(uv), 0.0)).r;  // E[exp(c z)] over the filter
   return clamp(occluders * exp(-u_esm_exponent * t), 0.0, 1.0);
 }
 

@@ -23,7 +23,7 @@ vec4 evsm_moments(float t) {
 // Visibility for a receiver at normalized linear depth t. The variance floor, given in depth^2,
 // is carried into each warp by its slope dw/dt = 2c|w| at the receiver.
 float shadow_evsm(vec2 uv, float t) {
-  vec4 m = textureLod(u_moments, atlas_uv(uv), 0.0);
+  vec4 m = COUNTED(4, u_count_moment_bytes, textureLod(u_moments, atlas_uv(uv), 0.0));
   vec2 w = evsm_warp(t);
   vec2 slope = 2.0 * u_evsm_exponents * abs(w);
   vec2 floor_variance = max(u_evsm_min_variance * slope * slope, vec2(1e-30));

@@ -2,7 +2,7 @@
 #ifndef SHADOW_HARD_GLSL
 #define SHADOW_HARD_GLSL
 float shadow_hard(vec3 sc) {
-  return texture(u_shadow_cmp_nearest, vec3(atlas_uv(sc.xy), reference_depth(sc, vec2(0.0), vec2(0.0))));
+  return COUNTED(1, 4, texture(u_shadow_cmp_nearest, vec3(atlas_uv(sc.xy), reference_depth(sc, vec2(0.0), vec2(0.0)))));
 }
 
 #if defined(TECHNIQUE_HARD)

@@ -47,7 +47,7 @@ float msm_shadow_intensity(vec4 b, float z_f) {
 
 // Visibility for a receiver at normalized linear depth t in [0, 1].
 float shadow_msm(vec2 uv, float t) {
-  vec4 b = mix(textureLod(u_moments, atlas_uv(uv), 0.0), vec4(0.0, 0.63, 0.0, 0.63), u_msm_moment_bias);
+  vec4 b = mix(COUNTED(4, u_count_moment_bytes, textureLod(u_moments, atlas_uv(uv), 0.0)), vec4(0.0, 0.63, 0.0, 0.63), u_msm_moment_bias);
   float v = 1.0 - msm_shadow_intensity(b, 2.0 * t - 1.0 - u_msm_depth_bias);
   return clamp((v - u_msm_bleed_reduction) / (1.0 - u_msm_bleed_reduction), 0.0, 1.0);
 }

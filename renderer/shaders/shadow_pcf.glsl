@@ -63,15 +63,15 @@ float pcf_grid(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
         vec2 wx = vec2(overlap(float(i), float(i + 1), box.lo.x, box.hi.x), overlap(float(i + 1), float(i + 2), box.lo.x, box.hi.x));
         vec2 corner = vec2(i + 1, j + 1) / g_shadow_res;
         // Gather order: (i, j+1), (i+1, j+1), (i+1, j), (i, j).
-        vec4 t = textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient));
+        vec4 t = COUNTED(4, 4, textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient)));
         sum += dot(t, vec4(wx.x * wy.y, wx.y * wy.y, wx.y * wy.x, wx.x * wy.x));
       }
     }
     return sum * box.norm;
   }
   BOX_STRIDED_SUM(box, max_taps, sum,
-                  texture(u_shadow_cmp_nearest, vec3(atlas_uv(cell_centre / g_shadow_res),
-                                                     reference_depth(sc, cell_centre / g_shadow_res - sc.xy, gradient))))
+                  COUNTED(1, 4, texture(u_shadow_cmp_nearest, vec3(atlas_uv(cell_centre / g_shadow_res),
+                                                                   reference_depth(sc, cell_centre / g_shadow_res - sc.xy, gradient)))))
   return sum * box.norm;
 }
 
@@ -128,7 +128,7 @@ float pcf_disk(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
       }
       if (stride == 2) {
         vec2 corner = vec2(i + 1, j + 1) / g_shadow_res;
-        vec4 t = textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient));
+        vec4 t = COUNTED(4, 4, textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient)));
         sum += dot(t, w);
       } else {
         // One comparison per quarter cell (stride / 2 texels a side), at its centre.
@@ -136,7 +136,7 @@ float pcf_disk(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
         vec2 c00 = (vec2(i, j) + h) / g_shadow_res, d = 2.0 * h / g_shadow_res;
         vec2 c[4] = vec2[4](c00 + vec2(0.0, d.y), c00 + d, c00 + vec2(d.x, 0.0), c00);
         for (int k = 0; k < 4; ++k)
-          sum += w[k] * texture(u_shadow_cmp_nearest, vec3(atlas_uv(c[k]), reference_depth(sc, c[k] - sc.xy, gradient)));
+          sum += w[k] * COUNTED(1, 4, texture(u_shadow_cmp_nearest, vec3(atlas_uv(c[k]), reference_depth(sc, c[k] - sc.xy, gradient))));
       }
       weight += w.x + w.y + w.z + w.w;
     }
@@ -146,11 +146,11 @@ float pcf_disk(vec3 sc, vec2 gradient, float radius_texels, int max_taps) {
 
 // Poisson-disk PCF over a disk of radius `radius_uv`; each tap is a hardware 2x2 comparison.
 float pcf_poisson(vec3 sc, vec2 gradient, float radius_uv, int taps, mat2 rotation) {
-  if (radius_uv <= 0.0) return texture(u_shadow_cmp, vec3(atlas_uv(sc.xy), reference_depth(sc, vec2(0.0), gradient)));
+  if (radius_uv <= 0.0) return COUNTED(4, 4, texture(u_shadow_cmp, vec3(atlas_uv(sc.xy), reference_depth(sc, vec2(0.0), gradient))));
   float sum = 0.0;
   for (int i = 0; i < taps; ++i) {
     vec2 o = rotation * u_poisson[i] * radius_uv;
-    sum += texture(u_shadow_cmp, vec3(atlas_uv(sc.xy + o), reference_depth(sc, o, gradient)));
+    sum += COUNTED(4, 4, texture(u_shadow_cmp, vec3(atlas_uv(sc.xy + o), reference_depth(sc, o, gradient))));
   }
   return sum / float(taps);
 }

@@ -30,7 +30,7 @@ bool pcss_blocker_depth(vec3 sc, vec2 gradient, float z_r, int blocker_taps, mat
   int blockers = 0;
   for (int i = 0; i < blocker_taps; ++i) {
     vec2 o = rotation * u_poisson[i] * search;
-    float d = textureLod(u_shadow_depth, atlas_uv(sc.xy + o), 0.0).r;
+    float d = COUNTED(1, 4, textureLod(u_shadow_depth, atlas_uv(sc.xy + o), 0.0)).r;
     if (d < reference_depth(sc, o, gradient)) {
       blocker_sum += linear_depth_ws(d);
       ++blockers;
@@ -70,10 +70,10 @@ vec2 depth_range(vec2 uv, float radius_uv) {
   if (level >= textureQueryLevels(u_depth_minmax)) return vec2(0.0, 1.0);
   ivec2 b0 = lo >> (level + 1), b1 = hi >> (level + 1);
   if (any(greaterThanEqual(b1, textureSize(u_depth_minmax, level)))) return vec2(0.0, 1.0);
-  vec2 a = texelFetch(u_depth_minmax, b0, level).rg;
-  vec2 b = texelFetch(u_depth_minmax, ivec2(b1.x, b0.y), level).rg;
-  vec2 c = texelFetch(u_depth_minmax, ivec2(b0.x, b1.y), level).rg;
-  vec2 d = texelFetch(u_depth_minmax, b1, level).rg;
+  vec2 a = COUNTED(1, 8, texelFetch(u_depth_minmax, b0, level)).rg;
+  vec2 b = COUNTED(1, 8, texelFetch(u_depth_minmax, ivec2(b1.x, b0.y), level)).rg;
+  vec2 c = COUNTED(1, 8, texelFetch(u_depth_minmax, ivec2(b0.x, b1.y), level)).rg;
+  vec2 d = COUNTED(1, 8, texelFetch(u_depth_minmax, b1, level)).rg;
   vec2 range = vec2(min(min(a.x, b.x), min(c.x, d.x)), max(max(a.y, b.y), max(c.y, d.y)));
   return beyond ? vec2(range.x, 1.0) : range;
 }

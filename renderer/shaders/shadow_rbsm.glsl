@@ -13,7 +13,7 @@ uniform int u_rpcf_max_grid_taps;
 // Shadow test of texel t (1 lit, 0 shadowed) for the receiver plane through sc.
 float rbsm_test(vec3 sc, vec2 gradient, ivec2 t) {
   vec2 centre = (vec2(t) + 0.5) / g_shadow_res;
-  return textureLod(u_shadow_cmp_nearest, vec3(atlas_uv(centre), reference_depth(sc, centre - sc.xy, gradient)), 0.0);
+  return COUNTED(1, 4, textureLod(u_shadow_cmp_nearest, vec3(atlas_uv(centre), reference_depth(sc, centre - sc.xy, gradient)), 0.0));
 }
 
 // Walks from texel t along e over the step whose edge faces n (t and t + n differ). Returns
@@ -177,7 +177,7 @@ bool rbsm_uniform(vec3 sc, vec2 gradient, ivec2 first, ivec2 last, float value) 
   for (int j = first.y; j <= last.y; j += 2) {
     for (int i = first.x; i <= last.x; i += 2) {
       vec2 corner = vec2(i + 1, j + 1) / g_shadow_res;
-      vec4 t = textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient));
+      vec4 t = COUNTED(4, 4, textureGather(u_shadow_cmp_nearest, atlas_uv(corner), reference_depth(sc, corner - sc.xy, gradient)));
       if (any(notEqual(t, vec4(value)))) return false;
     }
   }

@@ -21,7 +21,7 @@ float vsm_visibility(vec2 moments, float t) {
 }
 
 // Visibility for a receiver at normalized linear depth t.
-float shadow_vsm(vec2 uv, float t) { return vsm_visibility(textureLod(u_moments, atlas_uv(uv), 0.0).rg, t); }
+float shadow_vsm(vec2 uv, float t) { return vsm_visibility(COUNTED(4, u_count_moment_bytes, textureLod(u_moments, atlas_uv(uv), 0.0)).rg, t); }
 
 #if defined(TECHNIQUE_VSM) && !defined(PENUMBRA_COMPUTE)
 // Moments of one depth (moments pass): t and t^2 plus the variance of t over the texel, estimated

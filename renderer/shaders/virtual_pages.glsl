@@ -8,6 +8,7 @@
 // only the samplers are plain uniforms here (GLSL keeps opaque types out of blocks).
 #include "shadow_contract.h"
 #include "virtual_mark_contract.h"
+#include "read_count.glsl"
 
 layout(binding = UNIT_VIRTUAL_POOL) uniform sampler2D u_virtual_pool;
 layout(binding = UNIT_VIRTUAL_TABLE) uniform isampler2D u_virtual_table;
@@ -55,7 +56,7 @@ bool virtual_in_window(int level, vec2 xy) {
 
 // The slot holding page `page` of `level` (-1: not resident), and the pool texel of window texel
 // (0, 0) of that page: window texel t of the page lies at virtual_slot_shift(...) + t.
-int virtual_slot(int level, ivec2 page) { return texelFetch(u_virtual_table, ivec2(page.x, page.y + level * u_virtual_pages_per_side), 0).r; }
+int virtual_slot(int level, ivec2 page) { return COUNTED(1, 4, texelFetch(u_virtual_table, ivec2(page.x, page.y + level * u_virtual_pages_per_side), 0)).r; }
 ivec2 virtual_slot_shift(int slot, ivec2 page) {
   return (ivec2(slot % u_virtual_pool_pages, slot / u_virtual_pool_pages) - page) * u_virtual_page_texels;
 }
@@ -70,7 +71,7 @@ bool virtual_fetch(int level, ivec2 texel, out float depth) {
   if (page.x >= u_virtual_pages_per_side || page.y >= u_virtual_pages_per_side) return false;
   const int slot = virtual_slot(level, page);
   if (slot < 0) return false;
-  depth = texelFetch(u_virtual_pool, virtual_slot_shift(slot, page) + texel, 0).r;
+  depth = COUNTED(1, 4, texelFetch(u_virtual_pool, virtual_slot_shift(slot, page) + texel, 0)).r;
   return true;
 }
 
@@ -149,7 +150,7 @@ vec2 virtual_tile_gap(const VirtualSquare sq, ivec2 first, ivec2 last, vec2 p, f
     if (any(greaterThan(tile, t1))) continue;
     const ivec2 corner = tile * VIRTUAL_BOUNDS_TILE;  // window texel; a tile lies in one page
     const ivec2 shift = sq.shift[int(corner.x >= sq.split.x) + 2 * int(corner.y >= sq.split.y)];
-    const vec4 b = texelFetch(u_virtual_tile_bounds, (corner + shift) / VIRTUAL_BOUNDS_TILE, 0);
+    const vec4 b = COUNTED(1, 16, texelFetch(u_virtual_tile_bounds, (corner + shift) / VIRTUAL_BOUNDS_TILE, 0));
     // plane - receiver = offset + g · (x - centre) over the centres x of the tile's part of the square
     const vec2 centre = vec2(corner) + 0.5 * float(VIRTUAL_BOUNDS_TILE);
     const vec2 lo = vec2(max(first, corner)) + 0.5, hi = vec2(min(last, corner + VIRTUAL_BOUNDS_TILE - 1)) + 0.5;
@@ -190,7 +191,7 @@ float virtual_pcf_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, vec2 lo, 
       const ivec2 shift = i >= sh.split.x ? right_shift : left_shift;
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Four comparisons in one gather, order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
-      const vec4 lit = textureGather(u_virtual_pool_cmp, vec2(ivec2(i, j) + shift + 1) * inv_pool, row_reference + (float(i + 1) - p.x) * step.x);
+      const vec4 lit = COUNTED(4, 4, textureGather(u_virtual_pool_cmp, vec2(ivec2(i, j) + shift + 1) * inv_pool, row_reference + (float(i + 1) - p.x) * step.x));
       upper += dot(lit.xy, wx);
       lower += dot(lit.wz, wx);
     }
@@ -272,7 +273,7 @@ vec2 virtual_moments_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, vec2 l
       const vec2 wx = max(vec2(0.0), min(vec2(i + 1, i + 2), vec2(hi.x)) - max(vec2(i, i + 1), vec2(lo.x)));
       // Order: x (i, j + 1), y (i + 1, j + 1), z (i + 1, j), w (i, j).
       const vec2 uv = vec2(ivec2(i, j) + shift + 1) * inv_pool;
-      const vec4 m1 = textureGather(u_virtual_moments, uv, 0), m2 = textureGather(u_virtual_moments, uv, 1);
+      const vec4 m1 = COUNTED(4, 4, textureGather(u_virtual_moments, uv, 0)), m2 = COUNTED(4, 4, textureGather(u_virtual_moments, uv, 1));
       upper += vec2(dot(m1.xy, wx), dot(m2.xy, wx));
       lower += vec2(dot(m1.wz, wx), dot(m2.wz, wx));
     }
@@ -317,7 +318,7 @@ void virtual_blocker_blocks(ivec2 from, ivec2 to, const VirtualShifts sh, ivec2 
     virtual_row_shifts(sh, j, left_shift, right_shift);
     for (int i = from.x; i <= to.x; i += 2) {
       const ivec2 shift = i >= sh.split.x ? right_shift : left_shift;
-      const vec4 d = textureGather(u_virtual_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0);
+      const vec4 d = COUNTED(4, 4, textureGather(u_virtual_pool, vec2(ivec2(i, j) + shift + 1) * inv_pool, 0));
       const float left = (float(i) + 0.5 - p.x) * step.x, right = (float(i) + 1.5 - p.x) * step.x;  // columns i, i + 1
       const vec4 tested = vec4(i >= inside.x ? row_depth.x + left : -1.0, i + 1 <= last.x ? row_depth.y + right : -1.0,
                                i + 1 <= last.x ? row_depth.z + right : -1.0, i >= inside.x ? row_depth.w + left : -1.0);

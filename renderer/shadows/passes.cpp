@@ -168,9 +168,11 @@ std::uint64_t FrameContext::draw_scene(const gl::Program& program, bool shading,
   return triangles;
 }
 
+PassReport FrameContext::report() const { return {timer, work, &info.passes}; }
+
 glm::mat4 FrameContext::camera_view_projection() const { return scene.camera.projection_matrix(plan.aspect) * scene.camera.view(); }
 
-const gl::Program& FrameContext::shading_program(bool gbuffer) const {
+const gl::Program& FrameContext::shading_program(bool gbuffer, bool count_reads) const {
   const TechniqueEntry& entry = *plan.technique;
   std::vector<gl::ShaderDefine> defines;
   if (gbuffer) {
@@ -184,6 +186,7 @@ const gl::Program& FrameContext::shading_program(bool gbuffer) const {
   }
   if (plan.pcss_requirement) defines.push_back({"PCSS_REQUIREMENT", "1"});
   if (plan.virtual_pages != VirtualPages::off && !gbuffer) defines.push_back({"VIRTUAL_SHADOW_MAP", "1"});
+  if (count_reads) defines.push_back({"COUNT_SHADOW_READS", "1"});
   std::string key = "shading:";
   for (const auto& d : defines) key += d.name + ";";
   return res.programs.get(res.shaders, key, {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shading.frag"}}, defines);
@@ -301,11 +304,11 @@ class VirtualPagesPass final : public Pass {
     std::optional<ScopedPass> scope;
     const auto step = [&](const char* name) {
       scope.reset();
-      scope.emplace(f.timer, name, f.info.passes);
+      scope.emplace(f.report(), name);
     };
     const auto steps = [&](const char* suffix) {
       scope.reset();
-      return VirtualShadowMap::StepReport{f.timer, &f.info.passes, suffix};
+      return VirtualShadowMap::StepReport{f.report(), suffix};
     };
     // How the technique reads pages (its registry entry): moments are drawn beside the depths, a
     // blocker search marks in two rounds.
@@ -591,8 +594,7 @@ class PostPass final : public Pass {
     ctx.view.perspective = cam.projection == scene::Camera::Projection::perspective;
     ctx.view.px_scale = ctx.view.perspective ? height / (2 * std::tan(glm::radians(cam.fov_y_deg) / 2)) : height / cam.ortho_height_ws;
     ctx.set_technique_uniforms = [&f](const gl::Program& p) { f.set_technique_uniforms(p); };
-    ctx.timer = f.timer;
-    ctx.passes = &f.info.passes;
+    ctx.report = f.report();
     f.bind_shadow_maps();
     f.res.screen_result = &f.plan.technique->post(*f.res.screen_space, f.settings, ctx);
   }
@@ -636,6 +638,31 @@ void count_virtual_status(FrameContext& f) {
   gl::check_errors("virtual map status count");
 }
 
+// The shading pass's draw with `prog` (the frame's shading program, or its counting variant): the
+// shadow maps and the technique's state bound, every object in view drawn. Returns the triangles
+// drawn.
+std::uint64_t draw_shading(FrameContext& f, const gl::Program& prog) {
+  FrameResources& r = f.res;
+  prog.use();
+  f.bind_shadow_maps();
+  f.set_technique_uniforms(prog);
+  if (f.plan.virtual_pages != VirtualPages::off) {
+    const FrameResources::Virtual& v = *r.virtual_map;
+    v.map->set_marking(f.scene.camera, f.plan.height_px, v.options);
+    v.map->bind();
+    if (v.pcss) {
+      v.pcss_radii.bind(contract::UNIT_VIRTUAL_PCSS_RADII);
+      glBindSampler(contract::UNIT_VIRTUAL_PCSS_RADII, 0);
+      glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);  // the marker's image stores
+    }
+  }
+  if (r.screen_result) {
+    glBindSampler(contract::UNIT_SCREEN_VISIBILITY, 0);
+    r.screen_result->bind(contract::UNIT_SCREEN_VISIBILITY);
+  }
+  return f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
+}
+
 class ShadingPass final : public Pass {
  public:
   PassId id() const override { return PassId::shading; }
@@ -668,27 +695,10 @@ class ShadingPass final : public Pass {
       // fragments it kept.
       glDepthFunc(GL_LEQUAL);
       glDepthMask(GL_FALSE);
-      if (r.screen_result) {
-        glBindSampler(contract::UNIT_SCREEN_VISIBILITY, 0);
-        r.screen_result->bind(contract::UNIT_SCREEN_VISIBILITY);
-      }
     } else {
       glClearBufferfv(GL_DEPTH, 0, &far_depth);
     }
-    prog.use();
-    f.bind_shadow_maps();
-    f.set_technique_uniforms(prog);
-    if (virtual_pages) {
-      const FrameResources::Virtual& v = *r.virtual_map;
-      v.map->set_marking(f.scene.camera, f.plan.height_px, v.options);
-      v.map->bind();
-      if (v.pcss) {
-        v.pcss_radii.bind(contract::UNIT_VIRTUAL_PCSS_RADII);
-        glBindSampler(contract::UNIT_VIRTUAL_PCSS_RADII, 0);
-        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);  // the marker's image stores
-      }
-    }
-    f.info.camera_triangles += f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
+    f.info.camera_triangles += draw_shading(f, prog);
     if (virtual_pages) count_virtual_status(f);
     glDisable(GL_FRAMEBUFFER_SRGB);
     glDepthFunc(GL_LESS);
@@ -727,6 +737,45 @@ class PcssRequirementPass final : public Pass {
 };
 
 }  // namespace
+
+ShadowReads count_shading_reads(FrameContext& f) {
+  FrameResources& r = f.res;
+  if (!r.shadow_reads.id()) r.shadow_reads = gl::Buffer(sizeof(contract::ShadowReadsResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  const std::uint32_t zero = 0;
+  glClearNamedBufferData(r.shadow_reads.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, contract::BUFFER_SHADOW_READS, r.shadow_reads.id());
+  r.targets->fbo.bind();
+  glViewport(0, 0, f.plan.width_px, f.plan.height_px);
+  // The frame's own depth, kept: each pixel's surface passes (LEQUAL), nothing behind it runs
+  // (shading.frag declares early fragment tests when counting), nothing is written.
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  const gl::Program& prog = f.shading_program(false, true);
+  const TechniqueEntry& entry = *f.plan.technique;
+  const std::optional<MomentsLayout> moments = entry.moments ? entry.moments(f.settings) : std::nullopt;
+  prog.set("u_count_moment_bytes", moments ? bytes_per_texel(moments->format) : 0);
+  FrameInfo scratch;  // the counting draw's own bookkeeping, not the frame's
+  FrameContext counting{f.settings, f.plan, f.scene, f.meshes, r, scratch, nullptr, nullptr, f.show_cascades};
+  draw_shading(counting, prog);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  contract::ShadowReadsResult raw{};
+  glGetNamedBufferSubData(r.shadow_reads.id(), 0, sizeof raw, &raw);
+  ShadowReads reads;
+  for (int i = 0; i < contract::SHADOW_READ_SLOTS; ++i) {
+    reads.pixels += raw.read_pixels[i];
+    reads.instructions += raw.read_instructions[i];
+    reads.texels += raw.read_texels[i];
+    reads.bytes += raw.read_bytes[i];
+  }
+  gl::check_errors("shadow read count");
+  return reads;
+}
 
 std::vector<std::unique_ptr<Pass>> make_passes() {
   std::vector<std::unique_ptr<Pass>> passes;

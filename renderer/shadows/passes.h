@@ -29,6 +29,7 @@
 #include <penumbra/scene/gpu_mesh.h>
 #include <penumbra/scene/scene.h>
 #include <penumbra/shadows/frame_plan.h>
+#include <penumbra/shadows/scoped_pass.h>
 #include <penumbra/shadows/screen_space.h>
 #include <penumbra/shadows/virtual_shadow_map.h>
 
@@ -121,6 +122,7 @@ struct FrameResources {
   Requirement requirement;
   std::map<int, std::vector<glm::vec2>> poisson;  // Poisson disks by tap count
   std::unique_ptr<Virtual> virtual_map;  // made on the first virtual frame
+  gl::Buffer shadow_reads;  // contract::ShadowReadsResult, made on the first counting run
 };
 
 // One frame being executed.
@@ -132,6 +134,7 @@ struct FrameContext {
   FrameResources& res;
   FrameInfo& info;
   gl::PassTimer* timer = nullptr;
+  WorkCounter* work = nullptr;  // counts each pass's work when the renderer counts work
   bool show_cascades = false;
 
   // Draws the units of every mesh that may touch `volume` of `clip_from_world` (all of them with
@@ -148,9 +151,12 @@ struct FrameContext {
   void set_technique_uniforms(const gl::Program& program) const;
   // Binds the depth atlas, its min-max pyramid and the moments to their units (contract::UNIT_*).
   void bind_shadow_maps() const;
+  // Where the frame's passes (and their steps) report: the timer, the work counter, the pass list.
+  PassReport report() const;
   // The shading program of the frame's technique; `gbuffer`: the first camera pass of a
-  // screen-space technique.
-  const gl::Program& shading_program(bool gbuffer) const;
+  // screen-space technique; `count_reads`: the variant that counts its shadow reads
+  // (read_count.glsl).
+  const gl::Program& shading_program(bool gbuffer, bool count_reads = false) const;
 };
 
 class Pass {
@@ -168,5 +174,10 @@ class Pass {
 
 // The frame's passes, in execution order (PassId order).
 std::vector<std::unique_ptr<Pass>> make_passes();
+
+// Draws the shading pass of the frame `f` planned once more with its counting variant, over the
+// depth the frame left and writing no colour, and returns what its shadow lookups read
+// (Renderer::count_shading_reads). Needs the frame's resources as its passes left them.
+ShadowReads count_shading_reads(FrameContext& f);
 
 }  // namespace penumbra::shadows

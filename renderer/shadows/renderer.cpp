@@ -94,40 +94,33 @@ FrameInfo Renderer::render(const ShadowSettings& s, int width_px, int height_px,
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
-  FrameContext frame{s, plan, scene_, meshes_, *res_, info, timer, show_cascades_};
+  FrameContext frame{s, plan, scene_, meshes_, *res_, info, timer, count_work_ ? &work_ : nullptr, show_cascades_};
   frame.upload_shadow_frame();
-  constexpr GLenum kWorkTargets[3] = {GL_PRIMITIVES_SUBMITTED_ARB, GL_FRAGMENT_SHADER_INVOCATIONS_ARB, GL_COMPUTE_SHADER_INVOCATIONS_ARB};
-  std::size_t counted = 0;  // passes whose work queries ran
   for (const auto& pass : passes_) {
     if (!pass->needed(plan)) continue;
-    if (count_work_) {
-      for (std::size_t k = 0; k < 3; ++k) {
-        if (work_queries_.size() <= 3 * counted + k) work_queries_.push_back(std::make_unique<gl::Query>(kWorkTargets[k]));
-        glBeginQuery(kWorkTargets[k], work_queries_[3 * counted + k]->id());
-      }
-      info.work.push_back({pass->name(), 0, 0, 0});
-    }
     if (pass->reports_subpasses()) {
-      pass->execute(frame);
+      pass->execute(frame);  // its steps report themselves (frame.report())
     } else {
-      ScopedPass scope(timer, pass->name(), info.passes);
+      ScopedPass scope(frame.report(), pass->name());
       pass->execute(frame);
     }
-    if (count_work_) {
-      for (GLenum target : kWorkTargets) glEndQuery(target);
-      ++counted;
-    }
   }
-  for (std::size_t i = 0; i < counted; ++i) {
-    GLuint64 v[3] = {0, 0, 0};
-    for (std::size_t k = 0; k < 3; ++k) glGetQueryObjectui64v(work_queries_[3 * i + k]->id(), GL_QUERY_RESULT, &v[k]);
-    info.work[i].primitives = v[0], info.work[i].fragments = v[1], info.work[i].compute_invocations = v[2];
-  }
+  if (count_work_) info.work = work_.collect();
+  last_settings_ = std::make_unique<ShadowSettings>(s);
+  last_plan_ = std::make_unique<FramePlan>(plan);
   ++res_->requirement.frame;
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (timer) timer->poll(false);
   last_cascades_ = info.cascades;
   return info;
+}
+
+ShadowReads Renderer::count_shading_reads() {
+  if (!last_plan_) throw std::logic_error("count_shading_reads: no frame rendered yet");
+  FrameInfo scratch;
+  FrameContext frame{*last_settings_, *last_plan_, scene_, meshes_, *res_, scratch, nullptr, nullptr, show_cascades_};
+  frame.upload_shadow_frame();  // as the frame had it (a later edit of the scene's camera aside)
+  return shadows::count_shading_reads(frame);
 }
 
 namespace {

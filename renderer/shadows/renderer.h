@@ -23,21 +23,11 @@
 #include <penumbra/scene/scene.h>
 #include <penumbra/shadows/fitting.h>
 #include <penumbra/shadows/frame_plan.h>
+#include <penumbra/shadows/pass_work.h>
 #include <penumbra/shadows/settings.h>
 #include <penumbra/shadows/virtual_shadow_map.h>
 
 namespace penumbra::shadows {
-
-// What a pass gave the GPU to do, counted by the driver (ARB_pipeline_statistics_query) when the
-// renderer counts work (Renderer::set_count_work): primitives submitted (after the CPU's culling),
-// fragment shader invocations (a depth pass's rasterized texels, the shading's pixels) and compute
-// shader invocations. Counts, not times: what a GPU pays for whatever the machine measuring them.
-struct PassWork {
-  std::string pass;
-  std::uint64_t primitives = 0;
-  std::uint64_t fragments = 0;
-  std::uint64_t compute_invocations = 0;
-};
 
 struct FrameInfo {
   LightFrame light;                // cascade 0
@@ -58,7 +48,7 @@ struct FrameInfo {
   std::vector<std::uint64_t> map_triangles;
   std::uint64_t camera_triangles = 0;
   std::uint64_t scene_triangles = 0;
-  std::vector<PassWork> work;  // per pass run, in order; empty unless the renderer counts work
+  std::vector<PassWork> work;  // per pass (or step) run, in order; empty unless the renderer counts work (pass_work.h)
   // The sun's virtual shadow map (map.virtual_pages): what the frame marked and drew, the memory it
   // holds (the pool's resident pages and every level's table; the pool is allocated whole), and
   // the shading's pixels by where they found their pages.
@@ -127,6 +117,11 @@ class Renderer {
   // Counts each pass's work with pipeline statistics queries (FrameInfo::work), read at the end of
   // the frame (a wait for the frame's GPU work: for measuring runs; off by default).
   void set_count_work(bool on) { count_work_ = on; }
+  // Draws the last frame's shading pass again with its counting variant and returns what its
+  // shadow lookups read per pixel shown (pass_work.h). Writes no image and changes no state a
+  // later frame reads (maps, pages, the adaptive controller), so a measured run can count any
+  // frame it times, untimed. Throws std::logic_error before the first frame.
+  ShadowReads count_shading_reads();
 
   io::Image8 read_color() const;       // RGBA, sRGB-encoded
   io::ImageF read_visibility() const;  // one channel
@@ -148,7 +143,10 @@ class Renderer {
   std::vector<CascadeInfo> last_cascades_;
   bool show_cascades_ = false;
   bool count_work_ = false;
-  std::vector<std::unique_ptr<gl::Query>> work_queries_;  // three per pass run (primitives, fragments, compute), reused
+  WorkCounter work_;
+  // The last frame's settings and plan (count_shading_reads draws its shading again).
+  std::unique_ptr<ShadowSettings> last_settings_;
+  std::unique_ptr<FramePlan> last_plan_;
 };
 
 }  // namespace penumbra::shadows

@@ -1,19 +1,30 @@
 #pragma once
-// Brackets one pass of a frame: records its name in the frame's pass list and times it.
+// Brackets one pass (or one step of a pass) of a frame: records its name in the frame's pass list,
+// times it and counts its work (pass_work.h), each when given.
 #include <string>
 #include <vector>
 
 #include <penumbra/gl/timer.h>
+#include <penumbra/shadows/pass_work.h>
 
 namespace penumbra::shadows {
 
+// Where a frame's passes report: its timer and work counter (either may be null) and its pass list.
+struct PassReport {
+  gl::PassTimer* timer = nullptr;
+  WorkCounter* work = nullptr;
+  std::vector<std::string>* passes = nullptr;  // required
+};
+
 class ScopedPass {
  public:
-  ScopedPass(gl::PassTimer* timer, const char* name, std::vector<std::string>& passes) : timer_(timer) {
-    passes.emplace_back(name);
+  ScopedPass(const PassReport& report, const std::string& name) : timer_(report.timer), work_(report.work) {
+    report.passes->push_back(name);
     if (timer_) timer_->begin(name);
+    if (work_) work_->begin(name);
   }
   ~ScopedPass() {
+    if (work_) work_->end();
     if (timer_) timer_->end();
   }
   ScopedPass(const ScopedPass&) = delete;
@@ -21,6 +32,7 @@ class ScopedPass {
 
  private:
   gl::PassTimer* timer_;
+  WorkCounter* work_;
 };
 
 }  // namespace penumbra::shadows

@@ -70,7 +70,7 @@ void ScreenSpace::bind_gbuffer(const gl::Program& p, const ScreenView& view, flo
 }
 
 void ScreenSpace::detect_sites(const SiteSearch& search, float depth_threshold, const PostPassContext& ctx) {
-  ScopedPass pass(ctx.timer, search.laplacian ? "edges" : "sites", *ctx.passes);
+  ScopedPass pass(ctx.report, search.laplacian ? "edges" : "sites");
   std::vector<gl::ShaderDefine> defines;
   if (search.laplacian) defines.push_back({"LAPLACIAN", "1"});
   if (search.blocker_search) defines.push_back({"BLOCKER_SEARCH", "1"});
@@ -91,10 +91,10 @@ const gl::Texture& ScreenSpace::edt_penumbra(bool propagated_width, bool edge_be
                                              const std::function<void(const gl::Program&)>& set_uniforms,
                                              const PostPassContext& ctx) {
   {
-    ScopedPass pass(ctx.timer, "edt", *ctx.passes);
+    ScopedPass pass(ctx.report, "edt");
     edt_.compute(sites_);
   }
-  ScopedPass pass(ctx.timer, "edt_penumbra", *ctx.passes);
+  ScopedPass pass(ctx.report, "edt_penumbra");
   std::vector<gl::ShaderDefine> defines;
   if (propagated_width) defines.push_back({"PROPAGATED_WIDTH", "1"});
   const gl::Program& p = program("edt_penumbra.comp", defines);
@@ -113,7 +113,7 @@ const gl::Texture& ScreenSpace::edt_penumbra(bool propagated_width, bool edge_be
 
 const gl::Texture& ScreenSpace::mean_filter(const gl::Texture& source, float filter_ws, int max_width_px,
                                             float depth_threshold, const PostPassContext& ctx) {
-  ScopedPass pass(ctx.timer, "mean_filter", *ctx.passes);
+  ScopedPass pass(ctx.report, "mean_filter");
   const gl::Program& p = program("ss_mean_filter.comp");
   p.use();
   bind_gbuffer(p, ctx.view, depth_threshold);

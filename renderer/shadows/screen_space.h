@@ -18,6 +18,7 @@
 #include <penumbra/gl/shader_library.h>
 #include <penumbra/gl/timer.h>
 #include <penumbra/shadows/edt.h>
+#include <penumbra/shadows/scoped_pass.h>
 #include <penumbra/shadows/settings.h>
 
 namespace penumbra::shadows {
@@ -34,8 +35,7 @@ struct PostPassContext {
   ScreenView view;
   // Sets the light-frame and shadow-map uniforms (common.glsl, shadow_pcss.glsl) on a program.
   std::function<void(const gl::Program&)> set_technique_uniforms;
-  gl::PassTimer* timer = nullptr;
-  std::vector<std::string>* passes = nullptr;  // the frame's pass list
+  PassReport report;  // the frame's timer, work counter and pass list (scoped_pass.h)
 };
 
 class ScreenSpace {

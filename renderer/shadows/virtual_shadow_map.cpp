@@ -233,7 +233,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   std::optional<ScopedPass> scope;
   const auto step = [&](const char* name) {
     scope.reset();
-    if (steps) scope.emplace(steps->timer, (name + steps->suffix).c_str(), *steps->passes);
+    if (steps) scope.emplace(steps->report, name + steps->suffix);
   };
 
   step("virtual_admit");

@@ -23,6 +23,7 @@
 #include <penumbra/scene/gpu_mesh.h>
 #include <penumbra/scene/scene.h>
 #include <penumbra/shaders/virtual_mark_contract.h>
+#include <penumbra/shadows/scoped_pass.h>
 #include <penumbra/shadows/settings.h>
 
 namespace penumbra::gl {
@@ -209,13 +210,12 @@ class VirtualShadowMap {
   // Leaves the pool's framebuffer unbound and the viewport and scissor test changed.
   //
   // `steps`, when given, reports update()'s steps as passes of the frame, each timed by its timer
-  // (may be null): virtual_admit (the page cache: admit, evict, the view's invalidation),
+  // and counted by its work counter (either may be null): virtual_admit (the page cache: admit, evict, the view's invalidation),
   // virtual_draw (the casters into the admitted pages), virtual_bounds (when bounds() is on) and
   // virtual_table (the page tables written), each name followed by `suffix` (PCSS's first round:
   // "_search"). Every step is reported whether or not it has work this frame.
   struct StepReport {
-    gl::PassTimer* timer = nullptr;
-    std::vector<std::string>* passes = nullptr;  // required
+    PassReport report;  // report.passes required
     std::string suffix;
   };
   VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,

@@ -496,5 +496,88 @@ TEST(WorkCounts, AFourTimesFinerMapRasterizesAboutSixteenTimesTheTexels) {
   EXPECT_EQ(cm.compute_invocations, 0u);
 }
 
+// Issue 47: what the shading's shadow lookups read, counted by the shader itself at each pixel
+// shown. Each count is known from the kernel: hard shadows one nearest comparison; the grid box of
+// radius 1.5 texels spans 3 or 4 texels a side, two 2 × 2 gathers a side wherever the pixel lies;
+// the Poisson disk one hardware 2 × 2 comparison per tap; VSM one bilinear fetch of its moments.
+// Every technique counts the same pixels, each once.
+TEST(ShadowReads, EachKernelReadsWhatItsShapeSays) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  const int w = 160, h = 90;
+  EXPECT_THROW(r.count_shading_reads(), std::logic_error) << "no frame yet";
+  struct Case {
+    const char* name;
+    shadows::ShadowSettings settings;
+    double instructions, texels, bytes;  // per pixel
+  };
+  ShadowSettings hard;
+  hard.technique = Technique::hard;
+  ShadowSettings grid;
+  grid.technique = Technique::pcf;
+  grid.pcf.kernel = Kernel::grid;
+  grid.pcf.radius = 1.5f;
+  ShadowSettings poisson = grid;
+  poisson.pcf.kernel = Kernel::poisson;
+  poisson.pcf.poisson_taps = 25;
+  ShadowSettings vsm;
+  vsm.technique = Technique::vsm;
+  const std::optional<shadows::MomentsLayout> moments = shadows::technique_entry(Technique::vsm).moments(vsm);
+  ASSERT_TRUE(moments.has_value());
+  const double moment_bytes = shadows::bytes_per_texel(moments->format);
+  const Case cases[] = {
+      {"hard", hard, 1, 1, 4},
+      {"pcf grid r 1.5", grid, 4, 16, 64},
+      {"pcf poisson 25 taps", poisson, 25, 100, 400},
+      {"vsm", vsm, 1, 4, 4 * moment_bytes},
+  };
+  std::uint64_t pixels = 0;
+  for (const Case& c : cases) {
+    r.render(c.settings, w, h);
+    const io::ImageF image = r.read_visibility();
+    const shadows::ShadowReads reads = r.count_shading_reads();
+    EXPECT_EQ(r.read_visibility().pixels, image.pixels) << c.name << ": the counting draw writes no image";
+    EXPECT_GE(reads.pixels, static_cast<std::uint64_t>(w * h / 2)) << c.name << ": the ground fills most of the view";
+    EXPECT_LE(reads.pixels, static_cast<std::uint64_t>(w * h)) << c.name << ": each pixel once";
+    if (pixels) EXPECT_EQ(reads.pixels, pixels) << c.name;
+    pixels = reads.pixels;
+    EXPECT_DOUBLE_EQ(reads.per_pixel(reads.instructions), c.instructions) << c.name;
+    EXPECT_DOUBLE_EQ(reads.per_pixel(reads.texels), c.texels) << c.name;
+    EXPECT_DOUBLE_EQ(reads.per_pixel(reads.bytes), c.bytes) << c.name;
+  }
+}
+
+// Counting a frame's reads leaves the frames after it as they were: the adaptive PCSS controller
+// (which reads the previous frame's requirement) and the virtual map's cache see the same frames.
+TEST(ShadowReads, CountingChangesNoLaterFrame) {
+  const scene::Scene demo = scene::make_builtin_scene("demo");
+  ShadowSettings pcss;
+  pcss.technique = Technique::pcss;
+  pcss.adaptive.enabled = true;
+  pcss.adaptive.pcss = shadows::PcssRequirement::per_pixel;
+  ShadowSettings paged;
+  paged.technique = Technique::pcf;
+  paged.pcf.kernel = Kernel::grid;
+  paged.pcf.radius = 0.12f;
+  paged.pcf.radius_unit = shadows::RadiusUnit::world;
+  paged.map.virtual_pages = shadows::VirtualPages::rule;
+  paged.map.virtual_cache = true;
+  for (const ShadowSettings& s : {pcss, paged}) {
+    shadows::Renderer counted, plain;
+    counted.set_scene(demo);
+    plain.set_scene(demo);
+    for (int frame = 0; frame < 3; ++frame) {
+      for (shadows::Renderer* r : {&counted, &plain}) r->scene().camera.position += glm::vec3(0.3f, 0, 0.2f);
+      const shadows::FrameInfo a = counted.render(s, 160, 90);
+      const shadows::ShadowReads reads = counted.count_shading_reads();
+      EXPECT_GT(reads.instructions, reads.pixels) << shadows::technique_entry(s.technique).name;
+      const shadows::FrameInfo b = plain.render(s, 160, 90);
+      EXPECT_EQ(a.resolution_texels, b.resolution_texels) << "frame " << frame;
+      if (a.virtual_map) EXPECT_EQ(a.virtual_map->pages.drawn, b.virtual_map->pages.drawn) << "frame " << frame;
+      EXPECT_EQ(counted.read_visibility().pixels, plain.read_visibility().pixels) << "frame " << frame;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace penumbra

@@ -899,6 +899,37 @@ TEST(VirtualMap, ItsStepsAreNamedPassesEachTimed) {
   }
 }
 
+// Issue 47: the virtual map's work counted per step, not per pass, so the pages' raster is not
+// mixed with the camera's: virtual_draw submits exactly the triangles the map says it drew into
+// pages, virtual_positions rasterizes the camera's pixels, the marking is compute alone. The
+// shading through the pages reads each pixel's page table before its depths.
+TEST(VirtualMap, ItsWorkIsCountedPerStepAndItsReadsPerPixel) {
+  shadows::Renderer r;
+  r.set_scene(scene::make_builtin_scene("demo"));
+  r.set_count_work(true);
+  const int w = 160, h = 90;
+  for (const shadows::ShadowSettings& s : {virtual_pcf(shadows::VirtualPages::rule), virtual_pcss()}) {
+    const std::string name(shadows::technique_entry(s.technique).name);
+    const shadows::FrameInfo info = r.render(s, w, h);
+    ASSERT_EQ(info.work.size(), info.passes.size()) << name;
+    std::uint64_t draw_primitives = 0;
+    for (std::size_t i = 0; i < info.work.size(); ++i) {
+      const shadows::PassWork& p = info.work[i];
+      EXPECT_EQ(p.pass, info.passes[i]);
+      if (p.pass.starts_with("virtual_draw")) draw_primitives += p.primitives;
+      if (p.pass.starts_with("virtual_mark")) {
+        EXPECT_GT(p.compute_invocations, 0u) << p.pass;
+        EXPECT_EQ(p.primitives, 0u) << p.pass;
+      }
+      if (p.pass == "virtual_positions") EXPECT_GE(p.fragments, static_cast<std::uint64_t>(w * h / 2)) << name;
+    }
+    EXPECT_EQ(draw_primitives, info.virtual_map->pages.triangles) << name << ": what the map counted as drawn into its pages";
+    const shadows::ShadowReads reads = r.count_shading_reads();
+    EXPECT_GE(reads.pixels, static_cast<std::uint64_t>(w * h / 2)) << name;
+    EXPECT_GT(reads.per_pixel(reads.instructions), 1.0) << name << ": a table read, then the depths";
+  }
+}
+
 TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
   shadows::Renderer r;
   r.set_scene(scene::make_builtin_scene("demo"));

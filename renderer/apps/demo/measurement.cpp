@@ -38,6 +38,22 @@ double timed_render(Series& s, int width, int height) {
   return now_ms() - t0;
 }
 
+}  // namespace
+
+ShadowWork shadow_work(const shadows::FrameInfo& info) {
+  ShadowWork w;
+  for (const shadows::PassWork& p : info.work) {
+    if (p.pass == "shading") continue;
+    w.primitives += static_cast<double>(p.primitives);
+    w.fragments += static_cast<double>(p.fragments);
+    w.compute_invocations += static_cast<double>(p.compute_invocations);
+    if (p.pass == "shadow_map" || p.pass.starts_with("virtual_draw")) w.depth_texels += static_cast<double>(p.fragments);
+  }
+  return w;
+}
+
+namespace {
+
 double texels_of(const shadows::FrameInfo& info) {
   if (info.virtual_map) {  // the pages drawn
     const double page = info.virtual_map->page_texels;
@@ -334,6 +350,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     s.config = std::move(config);
     s.renderer = std::make_unique<shadows::Renderer>();
     s.renderer->set_scene(scene_);
+    s.renderer->set_count_work(true);  // what each frame gave the GPU to do (Series::work)
     s.timer = std::make_unique<gl::PassTimer>(method_ == gl::TimingMethod::gpu_timer);
     run.series.push_back(std::move(s));
   }
@@ -423,6 +440,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
         s.pages_invalidated.push_back(s.info.virtual_map->pages.invalidated);
       }
       s.texels.push_back(texels_of(s.info));
+      s.work.push_back(shadow_work(s.info));
       double triangles = 0;
       for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
       s.map_triangles.push_back(triangles);
@@ -432,6 +450,13 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
       s.resolution.push_back(res);
       if (s.config.timed()) s.color = s.renderer->read_color();  // the lit image: compared in the tables only
       s.visibility = s.renderer->read_visibility();
+      if (pf.reference && options_.reference && s.config.timed()) {
+        // What the shading's lookups read, per pixel shown: a counting draw of this frame's
+        // shading, untimed, changing nothing the next frame reads.
+        const shadows::ShadowReads r = s.renderer->count_shading_reads();
+        s.reads.pixels += r.pixels, s.reads.instructions += r.instructions, s.reads.texels += r.texels, s.reads.bytes += r.bytes;
+        ++s.read_frames;
+      }
       // Flicker (metrics/temporal.h): visibility of this frame against the previous one at the
       // pixels whose surface point stayed in view.
       if (pf.continues) {

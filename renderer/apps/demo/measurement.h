@@ -32,6 +32,17 @@
 
 namespace penumbra::demo {
 
+// What one frame's shadow gave the GPU to do, counted by the driver (shadows::PassWork), summed
+// over every pass but the shading: the maps, the virtual map's steps (its camera positions, the
+// marking, the pages), the moments blur, the screen-space passes.
+struct ShadowWork {
+  double primitives = 0;           // submitted, after the CPU's culling
+  double fragments = 0;            // fragment shader invocations
+  double compute_invocations = 0;
+  double depth_texels = 0;         // of those fragments, the maps' rasters' (shadow_map, virtual_draw)
+};
+ShadowWork shadow_work(const shadows::FrameInfo& info);
+
 // One configuration along the path, with everything measured about it.
 struct Series {
   Configuration config;
@@ -52,6 +63,9 @@ struct Series {
   std::vector<double> flicker_mean_abs, flicker_share;  // per pair of consecutive frames
   std::vector<double> pcss_clamped;  // PCSS with the per-pixel requirement: share held at the minimum penumbra
   std::vector<double> pages_drawn, pages_invalidated;  // virtual map, per frame: pages drawn; dropped as the van moved
+  std::vector<ShadowWork> work;                        // per frame
+  shadows::ShadowReads reads;                          // the shading's shadow reads, summed over the reference frames
+  int read_frames = 0;
   int resolution_changes = 0;
   // at the reference frames
   std::vector<metrics::ImageError> vs_reference;

@@ -40,6 +40,30 @@ nlohmann::json reference_error_json(const std::vector<metrics::ImageError>& erro
           {"ssim_mean", mean_of(ssim)}, {"ssim_min", min_of(ssim)}};
 }
 
+// What a configuration's shadow gave the GPU to do (ShadowWork per frame, spread over the path's
+// frames) and what its shading's lookups read per pixel shown (over the reference frames): the
+// counts a cost model turns into a GPU's time (scripts/gpu_cost_model.py).
+nlohmann::json work_json(const Series& s) {
+  std::vector<double> primitives, fragments, compute, depth;
+  for (const ShadowWork& w : s.work)
+    primitives.push_back(w.primitives), fragments.push_back(w.fragments), compute.push_back(w.compute_invocations),
+        depth.push_back(w.depth_texels);
+  nlohmann::json j = {{"frames", s.work.size()},
+                      {"primitives", spread(primitives)},
+                      {"fragments", spread(fragments)},
+                      {"depth_texels", spread(depth)},
+                      {"compute_invocations", spread(compute)}};
+  if (s.read_frames > 0) {
+    const shadows::ShadowReads& r = s.reads;
+    j["reads"] = {{"frames", s.read_frames},
+                  {"pixels_per_frame", static_cast<double>(r.pixels) / s.read_frames},
+                  {"instructions_per_pixel", r.per_pixel(r.instructions)},
+                  {"texels_per_pixel", r.per_pixel(r.texels)},
+                  {"bytes_per_pixel", r.per_pixel(r.bytes)}};
+  }
+  return j;
+}
+
 // Every cascade of the adaptive maps, as most frames along the path had them ("2624+3904").
 std::string usual_resolution(const Series& s) {
   std::map<std::string, int> seen;
@@ -361,6 +385,7 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
     j["texels_allocated"] = mean_of(s.allocated);
     j["map_triangles"] = spread(s.map_triangles);
     if (!s.shadow_ms.empty()) j["shadow_ms"] = spread(s.shadow_ms);  // frame ms minus the floor, per frame
+    j["work"] = work_json(s);
     j["ssim_vs_engine_min"] = min_of(s.ssim_vs_engine);
     j["reference_error"] = reference_error_json(s.vs_reference);
     if (run.perceptual) j["flip"] = flip_json(s.flip), j["observer"] = observer_json(s.seen);

@@ -31,7 +31,7 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
 
   gl::Texture& edges = ss.edges_mip();
   {
-    ScopedPass pass(ctx.timer, "erosion_minmax", *ctx.passes);
+    ScopedPass pass(ctx.report, "erosion_minmax");
     const gl::Program& prog = ss.program("erosion_minmax.comp");
     prog.use();
     ss.bind_gbuffer(prog, ctx.view, p.depth_threshold);
@@ -50,7 +50,7 @@ const gl::Texture& run_erosion(ScreenSpace& ss, const ErosionParams& p, const Po
     gl::check_errors("erosion_minmax pass");
   }
   {
-    ScopedPass pass(ctx.timer, "erosion", *ctx.passes);
+    ScopedPass pass(ctx.report, "erosion");
     const gl::Program& prog = ss.program("erosion_search.comp");
     prog.use();
     ctx.set_technique_uniforms(prog);
