@@ -76,8 +76,10 @@ async function sendEvent(kind) {
   await call("POST", "/api/act", { id: participantId, tab: tabToken, action: "event", kind, load: pageLoad, n: eventNumber });
 }
 document.addEventListener("visibilitychange", () => sendEvent(document.hidden ? "tab_hidden" : "tab_visible"));
+// Not after the end: the end screen leaves fullscreen itself, which is no exit of the participant's
+// (it was counted as one, so every finished session had one).
 document.addEventListener("fullscreenchange", () => {
-  if (!document.fullscreenElement) sendEvent("fullscreen_exit");
+  if (!document.fullscreenElement && !finished) sendEvent("fullscreen_exit");
 });
 
 // The refresh rate: the median interval of 60 animation frames.
