@@ -451,8 +451,10 @@ TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   }
   const json online = penumbra::json_input::read_file(tmp / "sessions" / "B01" / "online.json");
   EXPECT_EQ(online["quality"]["page_loads"], 1);
-  // The script never leaves fullscreen; the end screen's own exit is not the participant's.
+  // The script never leaves fullscreen or the tab; the end screen's own exit and the browser
+  // closed after the end are not the participant's.
   EXPECT_EQ(online["quality"]["fullscreen_exits"], 0) << online["quality"];
+  EXPECT_EQ(online["quality"]["tab_switches"], 0) << "closing the tab after the end is no switch\n" << online["quality"];
   // The end screen online: what to do here (the pool's link with the code), not the lab's "tell the experimenter".
   const std::string code = online.value("completion_code", "");
   ASSERT_EQ(code.size(), 10u);

@@ -75,9 +75,11 @@ async function sendEvent(kind) {
   eventNumber += 1;
   await call("POST", "/api/act", { id: participantId, tab: tabToken, action: "event", kind, load: pageLoad, n: eventNumber });
 }
-document.addEventListener("visibilitychange", () => sendEvent(document.hidden ? "tab_hidden" : "tab_visible"));
-// Not after the end: the end screen leaves fullscreen itself, which is no exit of the participant's
-// (it was counted as one, so every finished session had one).
+// Neither is counted after the end: the end screen leaves fullscreen itself, and the participant
+// then closes the tab (each was counted, so a finished session could show an exit and a switch).
+document.addEventListener("visibilitychange", () => {
+  if (!finished) sendEvent(document.hidden ? "tab_hidden" : "tab_visible");
+});
 document.addEventListener("fullscreenchange", () => {
   if (!document.fullscreenElement && !finished) sendEvent("fullscreen_exit");
 });
