@@ -86,6 +86,17 @@ TEST_F(DemoCli, HeadlessComparisonWritesTheReport) {
       EXPECT_LE(seen.at("p_detect_max").get<double>(), 1);
       EXPECT_EQ(seen.at("visible").get<bool>(), seen.at("p_detect_max").get<double>() > 0.6737);
       EXPECT_GE(seen.at("patches_per_frame")[0].get<int>(), 1);
+      // Issue 47: what the shadow gave the GPU to do per frame, and what its lookups read per
+      // pixel (scripts/gpu_cost_model.py reads these).
+      const auto& work = row->at("work");
+      EXPECT_EQ(work.at("frames").get<int>(), 3);
+      EXPECT_GT(work.at("primitives").at("median").get<double>(), 0);
+      EXPECT_GT(work.at("depth_texels").at("median").get<double>(), 0);
+      EXPECT_LE(work.at("depth_texels").at("median").get<double>(), work.at("fragments").at("median").get<double>());
+      EXPECT_GE(work.at("reads").at("frames").get<int>(), 1);
+      EXPECT_GT(work.at("reads").at("pixels_per_frame").get<double>(), 192 * 108 / 4);
+      EXPECT_GE(work.at("reads").at("instructions_per_pixel").get<double>(), 1);
+      EXPECT_GE(work.at("reads").at("bytes_per_pixel").get<double>(), 4 * work.at("reads").at("instructions_per_pixel").get<double>());
     }
     // The family's verdict: the cheapest configuration (median frame time) the observer cannot
     // tell from the reference, or none.
