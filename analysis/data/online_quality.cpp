@@ -12,6 +12,7 @@
 #include "io/safe_path.h"
 #include "json/json_input.h"
 #include "log/trial_log.h"
+#include "text/fields.h"
 #include "procedure/session_record.h"
 
 namespace penumbra::analysis {
@@ -160,11 +161,7 @@ std::vector<QualityCriterion> parse_quality_criteria(const std::string& text) {
   std::vector<QualityCriterion> out;
   const std::string option = "--exclude-quality '" + json_input::printable(text) + "': ";
   const std::set<std::string> measures = {"fullscreen_exits", "tab_switches", "page_loads", "rt_outliers", "chinrest_cv"};
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
-    start = comma + 1;
+  for (const std::string& item : text::split_fields(text)) {
     const std::size_t gt = item.find('>');
     if (gt == std::string::npos)
       throw std::invalid_argument(option + "'" + json_input::printable(item) +
@@ -182,10 +179,11 @@ std::vector<QualityCriterion> parse_quality_criteria(const std::string& text) {
     if (percent) limit.pop_back();
     if (percent != (c.measure == "rt_outliers"))
       throw std::invalid_argument(option + c.measure + (percent ? ": a count or a ratio, not a per cent" : ": expected a per cent, e.g. rt_outliers>10%"));
-    char* end = nullptr;
-    const double v = limit.empty() ? NAN : std::strtod(limit.c_str(), &end);
-    if (!std::isfinite(v) || end != limit.c_str() + limit.size() || v < 0)
-      throw std::invalid_argument(option + c.measure + ": '" + json_input::printable(limit) + "' is not a non-negative number");
+    // Plain decimals only (no sign, exponent, whitespace, hexadecimal, inf or nan).
+    static const std::regex plain(R"(\d+(\.\d*)?|\.\d+)");
+    const double v = std::regex_match(limit, plain) ? std::strtod(limit.c_str(), nullptr) : NAN;
+    if (!std::isfinite(v))
+      throw std::invalid_argument(option + c.measure + ": '" + json_input::printable(limit) + "': expected a plain decimal number, e.g. 3 or 0.1");
     const bool count = c.measure == "fullscreen_exits" || c.measure == "tab_switches" || c.measure == "page_loads";
     if (count && v != std::floor(v)) throw std::invalid_argument(option + c.measure + ": expected a whole count");
     if (percent && v >= 100) throw std::invalid_argument(option + "rt_outliers: expected a per cent below 100");

@@ -241,7 +241,7 @@ TEST(FitOnline, BadQualityCriteriaAreRefusedNamingTheOption) {
   const fs::path dir = fresh("refuse");
   const Study study = online_study(dir);
   for (const std::string bad : {"tab_switches", "tab_switches>x", "tab_switches>-1", "tab_switches>1.5", "rt_outliers>10",
-                                 "rt_outliers>100%", "chinrest_cv>0.1%", "speed>1", "tab_switches>1,tab_switches>2", "tab_switches>1,",
+                                 "rt_outliers>100%", "chinrest_cv>0.1%", "speed>1", "tab_switches>1,tab_switches>2", "tab_switches>1,", "chinrest_cv> 0.1", "chinrest_cv>0x1", "chinrest_cv>inf", "chinrest_cv>1e-1",
                                  "''"}) {
     std::string out;
     EXPECT_EQ(run(study.sessions[0].string() + " -o " + (dir / "fit").string() + " --bootstrap 0 --no-progress --exclude-quality " +
