@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -307,6 +308,11 @@ inline std::string calibration_line(const CalibrationOption& calibration, const 
                     " at visibility F = %.3g (the entry's c %.3g is at its criterion F = %.3g), [%.3g, %.3g] over c, the slope and the "
                     "psychometric family (the family alone [%.3g, %.3g])",
                     settings.adaptive.visibility, chosen.c, criterion, range.lo, range.hi, range.family_lo, range.family_hi);
+      // An entry that states no slope (the published constant; predicted.json's image-observer
+      // entries made before they recorded the observer's own) is read with QUEST's 3.5: said.
+      if (entry.definition().beta_assumed)
+        std::snprintf(at + std::strlen(at), sizeof at - std::strlen(at), ", slope %.3g assumed (the entry states none)",
+                      entry.definition().beta);
     } else
       std::snprintf(at, sizeof at, " at the entry's criterion, detection probability F = %.3g", criterion);
     line += at;

@@ -104,6 +104,35 @@ double condition_c(const std::vector<std::vector<Point>>& per_artifact, const st
   return count ? std::exp(log_sum / count) : NAN;
 }
 
+// The observer's own slope (issue 48: c at another visibility needs it, and the observer's curve
+// is far shallower than QUEST's assumed 3.5): the log-Weibull's beta of a condition's curve,
+// pooled over the artifact sizes that crossed, each size's x = log10(a / r) taken from its own
+// threshold so that the sizes align where P = p_threshold. The least-squares slope of
+// log10(-ln(1 - F)) on x, F = (P - 0.5) / 0.5 (the observer has no lapse), over the points with F
+// in [0.02, 0.98]: the curve is noise-free, and beyond those the transform only amplifies the
+// rendering's rounding. NAN with fewer than three such points.
+double condition_slope(const std::vector<std::vector<Point>>& per_artifact, const std::vector<int>& pick, double weber,
+                       double p_threshold) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto& points : per_artifact) {
+    const Curve curve = implied_c(points, pick, weber, p_threshold);
+    if (std::isnan(curve.implied) || curve.at_most) continue;
+    for (const Point& point : points) {
+      const double f = (p_correct(point, pick, weber) - 0.5) / 0.5;
+      if (!(f >= 0.02 && f <= 0.98)) continue;
+      const double x = std::log10(curve.implied / point.ratio), y = std::log10(-std::log(1 - f));
+      n += 1;
+      sx += x;
+      sy += y;
+      sxx += x * x;
+      sxy += x * y;
+    }
+  }
+  const double var = sxx - sx * sx / n;
+  if (n < 3 || !(var > 0)) return NAN;
+  return (sxy - sx * sy / n) / var;
+}
+
 constexpr int kResamples = 400;  // bootstrap over the stimuli per radius
 
 // Every technique of the registry that the study can draw (its settings are accepted and it has an
@@ -446,7 +475,10 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
     // condition, so the entry's c (the largest condition's) is resampled as a whole. With one
     // seed there is nothing to resample: [c, c].
     std::vector<std::vector<double>> condition_draws(data.size());
-    std::vector<double> largest_draws;
+    std::vector<double> largest_draws, slope_draws;  // slope_draws: the entry's (largest) condition's
+    std::size_t largest_index = 0;
+    for (std::size_t k = 0; k < per_condition.size(); ++k)
+      if (per_condition[k]["condition"] == largest_condition) largest_index = k;
     if (seeds > 1) {
       sampling::Random random(sampling::derive_seed(29, static_cast<std::uint64_t>(seeds)));
       std::vector<int> pick(static_cast<std::size_t>(seeds));
@@ -460,6 +492,9 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
           if (!(c <= draw_largest)) draw_largest = c;
         }
         if (!std::isnan(draw_largest)) largest_draws.push_back(draw_largest);
+        if (!data.empty())
+          if (const double slope = condition_slope(data[largest_index], pick, params.weber, p_threshold); !std::isnan(slope))
+            slope_draws.push_back(slope);
       }
     }
     auto interval = [&](const std::vector<double>& draws, double c) {
@@ -467,6 +502,8 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
       return nlohmann::json::array({std::min(c, stats::percentile(draws, 0.025)), std::max(c, stats::percentile(draws, 0.975))});
     };
     for (std::size_t k = 0; k < data.size(); ++k) {
+      const double beta = condition_slope(data[k], all_seeds, params.weber, p_threshold);
+      per_condition[k]["beta"] = std::isnan(beta) ? nlohmann::json(nullptr) : nlohmann::json(beta);
       const nlohmann::json& c = per_condition[k]["c"];
       if (c.is_null()) continue;
       per_condition[k]["ci95"] = interval(condition_draws[k], c.get<double>());
@@ -478,7 +515,7 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
       std::string command = "penumbra-observer-curve";  // the same for a merge of shards: --json last
       for (const std::string& a : settings_args(args)) command += " " + a;
       command += " --json " + json_out;
-      const nlohmann::json entry = {{"technique", technique.empty() ? "pcf" : technique},
+      nlohmann::json entry = {{"technique", technique.empty() ? "pcf" : technique},
                                     {"kernel", kernel},
                                     {"c", largest},
                                     {"ci95", interval(largest_draws, largest)},
@@ -493,6 +530,17 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
                                                   {"p_threshold", p_threshold}, {"seeds", seeds}, {"size_px", size_px},
                                                   {"resamples", seeds > 1 ? kResamples : 0}}},
                                     {"command", command}};
+      // What c is a threshold of, with the observer's own slope (log-Weibull, per log10 unit of
+      // a / r): c(F) at another visibility follows it instead of QUEST's assumed 3.5. ci95 of the
+      // slope over the same stimulus bootstrap as c's (none with one stimulus).
+      const double beta = per_condition[largest_index]["beta"].is_null() ? NAN : per_condition[largest_index]["beta"].get<double>();
+      if (!std::isnan(beta)) {
+        nlohmann::json threshold = {{"task", "2afc"}, {"guess", 0.5}, {"criterion_f", (p_threshold - 0.5) / 0.5}, {"family", "log-weibull"},
+                                    {"beta", beta}, {"lapse", 0.0}, {"beta_from", "the observer's curve of the entry's condition"}};
+        if (!slope_draws.empty())
+          threshold["beta_ci95"] = {std::min(beta, stats::percentile(slope_draws, 0.025)), std::max(beta, stats::percentile(slope_draws, 0.975))};
+        entry["threshold"] = threshold;
+      }
       const nlohmann::json file = {
           {"schema_version", 2},
           {"source", "image-observer prediction (a model of the observer, not human data): the largest condition's c; "

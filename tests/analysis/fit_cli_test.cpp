@@ -944,12 +944,13 @@ TEST(FitCli, SimulatedStudyPerTechniqueRecoversCAndTheRendererUsesIt) {
 }
 #endif
 
-// The image observer answering sessions of the renderer's PCF grid stimuli (3 participants, stair
-// and step at full contrast, 5/10/20 px): penumbra-fit's c per condition holds the prediction
+// A consistency check of the image observer with itself, not against people (issue 48 renamed it
+// from ImageObserverSessionsAgreeWithThePrediction): the image observer answering sessions of the
+// renderer's PCF grid stimuli (3 participants, stair and step at full contrast, 5/10/20 px): penumbra-fit's c per condition holds the prediction
 // data/calibration/predicted.json made from the same observer's noise-free curves within its 95 %
 // interval. Measured (full design, 3 participants): step/1 3.76 [3.09, 4.76] for 3.83 predicted,
 // stair/1 0.97 [0.80, 1.22] for 1.11.
-TEST(FitCli, ImageObserverSessionsAgreeWithThePrediction) {
+TEST(FitCli, ImageObserverStaircasesRecoverTheSameObserversNoiseFreeCurve) {
   const nlohmann::json predicted = nlohmann::json::parse(read(PENUMBRA_DATA_DIR "/calibration/predicted.json"));
   std::map<std::string, double> expected;
   for (const auto& e : predicted["entries"])

@@ -85,6 +85,13 @@ TEST(ObserverCurveShards, ThreeShardsMergedEqualTheUnshardedRun) {
   const nlohmann::json entry = nlohmann::json::parse(bytes(sharded / "out.json"))["entries"][0];
   EXPECT_TRUE(entry["c"].is_number()) << entry;
   EXPECT_EQ(entry["per_condition"].size(), 2u);
+  // Issue 48: each condition carries the observer's own slope (null where too few points of its
+  // curve lie inside F 0.02-0.98), and the entry's threshold block the one of its condition.
+  for (const auto& c : entry["per_condition"]) EXPECT_TRUE(c.contains("beta")) << c;
+  if (entry.contains("threshold")) {
+    EXPECT_GT(entry["threshold"]["beta"].get<double>(), 0.1) << entry["threshold"];
+    EXPECT_NEAR(entry["threshold"]["criterion_f"].get<double>(), 0.64, 1e-9) << entry["threshold"];
+  }
   fs::remove_all(whole);
   fs::remove_all(sharded);
 }
