@@ -757,6 +757,13 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
           if (info.adaptive && !info.cascades.empty()) row.required_texels = info.cascades.front().required_texels;
           row.memory_texels = shadows::shadow_memory_texels(info);
           row.work = shadows::work_json(info.work);
+          // What the shading's shadow lookups read per pixel shown (a counting draw of the last
+          // timed frame, untimed; docs/gpu.md's cost model reads it).
+          const shadows::ShadowReads reads = renderer->count_shading_reads();
+          row.work["shading_reads"] = {{"pixels", reads.pixels},
+                                       {"instructions_per_pixel", reads.per_pixel(reads.instructions)},
+                                       {"texels_per_pixel", reads.per_pixel(reads.texels)},
+                                       {"bytes_per_pixel", reads.per_pixel(reads.bytes)}};
           if (info.virtual_map) {
             // A pool that missed pages shades their pixels from a coarser level: that speed is not
             // the configuration's, and the row is refused rather than reported.

@@ -248,6 +248,11 @@ TEST_F(BenchCli, TinyRunWritesTheDocumentedCsvReportAndPlot) {
     const auto& work = row.at("work");
     ASSERT_TRUE(work.contains("shading")) << row.dump();
     EXPECT_GT(work.at("shading").at("fragments").get<std::uint64_t>(), 0u);
+    // What the shading's lookups read per pixel shown: at least one texture instruction of at least 4 bytes.
+    const auto& reads = work.at("shading_reads");
+    EXPECT_GT(reads.at("pixels").get<std::uint64_t>(), 0u);
+    EXPECT_GE(reads.at("instructions_per_pixel").get<double>(), 1.0);
+    EXPECT_GE(reads.at("bytes_per_pixel").get<double>(), 4 * reads.at("instructions_per_pixel").get<double>());
     if (work.contains("shadow_map") && !row.at("adaptive").get<bool>())
       map_fragments[row.at("variant").get<std::string>()][row.at("resolution_texels").get<int>()] =
           work.at("shadow_map").at("fragments").get<std::uint64_t>();
