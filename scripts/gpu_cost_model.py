@@ -114,7 +114,7 @@ def configurations(technique):
     adaptive = technique.get("adaptive")
     if adaptive:
         readings = {k: technique[k] for k in ("equal_flip", "equal_error") if isinstance(technique.get(k), dict)}
-        out.append(("rule (" + str(adaptive.get("name", "adaptive")) + ")", adaptive, readings))
+        out.append(("rule (" + str(adaptive.get("name", "adaptive")) + ")", adaptive, readings))  # the one map the rule sizes
     for b in technique.get("baselines", []):
         out.append((b["name"], b, {}))
     for v in technique.get("virtual", []):
@@ -192,6 +192,7 @@ def main():
                 continue
             lo, hi = reading["between"]
             if lo not in by_name or hi not in by_name:
+                print(f"  at equal {key}, {r['configuration']}: the front's {lo} or {hi} is not in the report: not modelled")
                 continue
             measured_ratio = reading["ratio"]["median"]
             text = f"  at equal {'FLIP' if key == 'equal_flip' else 'RMSE'}, {r['configuration']}: measured {measured_ratio:.2f}x less shadow cost than the front ({reading['position']}, between {lo} and {hi})"

@@ -381,6 +381,7 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
   auto on = [](const FrontComparison& c, std::size_t k) { return std::find(c.front.begin(), c.front.end(), k) != c.front.end(); };
   auto measured = [&](std::size_t k, nlohmann::json& j) {
     const Series& s = run.series[k];
+    j["name"] = s.config.name;  // as the front readings' "between" name it
     j["texels_rendered"] = spread(s.texels);
     j["texels_allocated"] = mean_of(s.allocated);
     j["map_triangles"] = spread(s.map_triangles);
