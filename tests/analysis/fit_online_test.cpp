@@ -23,6 +23,7 @@
 #include "procedure/config.h"
 #include "procedure/session.h"
 #include "procedure/session_flow.h"
+#include "fit_exe.h"
 
 namespace {
 
@@ -30,24 +31,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace penumbra;
 
-fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("penumbra-fit-online-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-int run(const std::string& args, std::string* output) {
-  const std::string command = std::string(PENUMBRA_FIT_EXE) + " " + args + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) out.append(buf, n);
-  const int status = ::pclose(pipe);
-  if (output) *output = out;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+fs::path fresh(const std::string& name) { return test::fresh_dir("penumbra-fit-online-", name); }
+int run(const std::string& args, std::string* output) { return test::run_fit(args, output); }
 
 json read_json(const fs::path& p) {
   std::ifstream in(p);
