@@ -756,9 +756,7 @@ ShadowReads count_shading_reads(FrameContext& f) {
   const TechniqueEntry& entry = *f.plan.technique;
   const std::optional<MomentsLayout> moments = entry.moments ? entry.moments(f.settings) : std::nullopt;
   prog.set("u_count_moment_bytes", moments ? bytes_per_texel(moments->format) : 0);
-  FrameInfo scratch;  // the counting draw's own bookkeeping, not the frame's
-  FrameContext counting{f.settings, f.plan, f.scene, f.meshes, r, scratch, nullptr, nullptr, f.show_cascades};
-  draw_shading(counting, prog);
+  draw_shading(f, prog);  // its triangles are the frame's, counted when it was drawn
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glDepthFunc(GL_LESS);
