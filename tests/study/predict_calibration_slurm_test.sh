@@ -15,6 +15,19 @@ bench="${2:-}"
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 skip() { echo "skipped: $*"; exit 77; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Waits for the queue to empty: fails when merge job $1 can never run (a task of its array failed:
+# afterok), with the last lines of the logs matching glob $3, or after 180 s; $2 names the jobs
+# ("" or "bench ") in the message.
+wait_for_queue() {
+  local merge=$1 what=$2 logs=$3
+  for _ in $(seq 900); do
+    [[ -z "$(squeue -h -o %i)" ]] && return 0
+    [[ "$(squeue -h -j "$merge" -o %r 2>/dev/null)" != DependencyNeverSatisfied ]] ||
+      fail "a ${what}task failed, so the merge never runs (afterok): $(tail -n 3 $logs 2>/dev/null | tr '\n' ' ')"
+    sleep 0.2
+  done
+  [[ -z "$(squeue -h -o %i)" ]] || fail "${what}jobs still queued after 180 s: $(squeue)"
+}
 for tool in munged slurmctld slurmd sbatch squeue sinfo scontrol; do
   command -v "$tool" >/dev/null || PATH="$PATH:/usr/sbin" command -v "$tool" >/dev/null ||
     skip "$tool is not installed (apt install munge slurmctld slurmd slurm-client)"
@@ -101,13 +114,7 @@ merge_id="$(sed -n 's/.*merge \([0-9]*\) after.*/\1/p' "$tmp/submit.log")"
 scontrol show job "$merge_id" | grep -q "Dependency=afterok:${array_id}" ||
   [[ -f "$tmp/slurm.json" ]] || fail "the merge job's dependency: $(scontrol show job "$merge_id" | grep -o 'Dependency=[^ ]*')"
 scontrol show job "$array_id" 2>/dev/null | grep -q "ArrayTaskThrottle=2" || echo "note: the array finished before its throttle could be read"
-for _ in $(seq 900); do
-  [[ -z "$(squeue -h -o %i)" ]] && break
-  [[ "$(squeue -h -j "$merge_id" -o %r 2>/dev/null)" != DependencyNeverSatisfied ]] ||
-    fail "a task failed, so the merge never runs (afterok): $(tail -n 3 "$tmp"/logs/* 2>/dev/null | tr '\n' ' ')"
-  sleep 0.2
-done
-[[ -z "$(squeue -h -o %i)" ]] || fail "jobs still queued after 180 s: $(squeue)"
+wait_for_queue "$merge_id" "" "$tmp/logs/*"
 [[ -f "$tmp/slurm.json" ]] || fail "the merge wrote nothing: $(cat "$tmp"/logs/* 2>/dev/null | tail -n 20)"
 for i in 0 1 2; do [[ -f "$tmp/work/parts/pcf-pcf-kernel-grid.$i-of-3.json" ]] || fail "task $i left no part"; done
 [[ $(ls "$tmp/logs" | wc -l) -eq 4 ]] || fail "not 3 tasks and a merge: $(ls "$tmp/logs")"
@@ -127,13 +134,7 @@ PENUMBRA_BENCH="$bench" "$repo/scripts/slurm/submit-bench.sh" --shards 3 --limit
 cat "$tmp/bench-submit.log"
 bench_merge="$(sed -n 's/.*merge \([0-9]*\) after.*/\1/p' "$tmp/bench-submit.log")"
 [[ -n "$bench_merge" ]] || fail "no merge job id in: $(cat "$tmp/bench-submit.log")"
-for _ in $(seq 900); do
-  [[ -z "$(squeue -h -o %i)" ]] && break
-  [[ "$(squeue -h -j "$bench_merge" -o %r 2>/dev/null)" != DependencyNeverSatisfied ]] ||
-    fail "a bench task failed, so the merge never runs (afterok): $(tail -n 3 "$tmp"/logs/penumbra-bench-* 2>/dev/null | tr '\n' ' ')"
-  sleep 0.2
-done
-[[ -z "$(squeue -h -o %i)" ]] || fail "bench jobs still queued after 180 s: $(squeue)"
+wait_for_queue "$bench_merge" "bench " "$tmp/logs/penumbra-bench-*"
 [[ -f "$tmp/bench-slurm/bench.csv" ]] || fail "the bench merge wrote nothing: $(cat "$tmp"/logs/penumbra-bench-* 2>/dev/null | tail -n 20)"
 /usr/bin/python3 - "$tmp/bench-serial/bench.csv" "$tmp/bench-slurm/bench.csv" <<'PY' || fail "the Slurm bench differs from the serial one"
 import csv, sys
