@@ -314,9 +314,28 @@ double saturated_nll(const ModelSpec& spec) {
   return nll;
 }
 
-struct Blocks {
-  std::vector<double> u;
-  double s, log_beta, lambda;
+// The values Ceres moves, in one array in the parameters' index order: thresholds, s, log beta,
+// lambda. ceres::Covariance orders its columns by the blocks' addresses; with the thresholds on the
+// heap and the other three on the stack, that order depended on the thread a fit ran on (a worker's
+// stack lies above or below its heap arena), and so did the covariance's last bit.
+class Blocks {
+ public:
+  explicit Blocks(const Parameters& p) : k_(p.u.size()), values_(p.u) {
+    values_.insert(values_.end(), {p.s, p.log_beta, p.lambda});
+  }
+  std::size_t thresholds() const { return k_; }
+  double* u(std::size_t i) { return &values_[i]; }
+  double* s() { return &values_[k_]; }
+  double* log_beta() { return &values_[k_ + 1]; }
+  double* lambda() { return &values_[k_ + 2]; }
+  Parameters parameters() const {
+    return {std::vector<double>(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(k_)), values_[k_],
+            values_[k_ + 1], values_[k_ + 2]};
+  }
+
+ private:
+  std::size_t k_;
+  std::vector<double> values_;
 };
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -384,8 +403,8 @@ void add_nll_blocks(ceres::Problem& problem, const ModelSpec& spec, Blocks& bloc
       cost = copies[i] > 1 ? new RepeatedGroupCost(std::move(nll)) : static_cast<ceres::CostFunction*>(nll.release());
     }
     // The problem owns each cost once, however many blocks share it.
-    problem.AddResidualBlock(cost, nullptr, &blocks.u[static_cast<std::size_t>(group.threshold_index)], &blocks.s,
-                             &blocks.log_beta, &blocks.lambda);
+    problem.AddResidualBlock(cost, nullptr, blocks.u(static_cast<std::size_t>(group.threshold_index)), blocks.s(),
+                             blocks.log_beta(), blocks.lambda());
   }
 }
 
@@ -432,7 +451,7 @@ void compute_covariance(const ModelSpec& spec, const Bounds& b, const std::optio
   const int n = k + 3;
   out.covariance.assign(static_cast<std::size_t>(n * n), 0.0);
   out.estimated.assign(static_cast<std::size_t>(n), false);
-  Blocks blocks{out.params.u, out.params.s, out.params.log_beta, out.params.lambda};
+  Blocks blocks(out.params);
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
   for (const Group& group : spec.groups) {
@@ -446,8 +465,8 @@ void compute_covariance(const ModelSpec& spec, const Bounds& b, const std::optio
     }
     auto* cost = new ceres::AutoDiffCostFunction<GroupFisherCost, ceres::DYNAMIC, 1, 1, 1, 1>(
         new GroupFisherCost{&spec, &group, weights}, static_cast<int>(group.rows.size()));
-    problem.AddResidualBlock(cost, nullptr, &blocks.u[static_cast<std::size_t>(group.threshold_index)], &blocks.s,
-                             &blocks.log_beta, &blocks.lambda);
+    problem.AddResidualBlock(cost, nullptr, blocks.u(static_cast<std::size_t>(group.threshold_index)), blocks.s(),
+                             blocks.log_beta(), blocks.lambda());
   }
   std::vector<const double*> free_blocks;
   std::vector<int> free_index;
@@ -463,13 +482,13 @@ void compute_covariance(const ModelSpec& spec, const Bounds& b, const std::optio
   for (int i = 0; i < k; ++i) {
     const double u = out.params.u[static_cast<std::size_t>(i)];
     const bool at_bound = near(u, b.u_min, b.u_max - b.u_min) || near(u, b.u_max, b.u_max - b.u_min);
-    consider(&blocks.u[static_cast<std::size_t>(i)], i, !at_bound && fixed_threshold != i);
+    consider(blocks.u(static_cast<std::size_t>(i)), i, !at_bound && fixed_threshold != i);
   }
-  consider(&blocks.s, k, spec.power_law && !near(out.params.s, b.s_min, 1) && !near(out.params.s, b.s_max, 1));
-  consider(&blocks.log_beta, k + 1,
+  consider(blocks.s(), k, spec.power_law && !near(out.params.s, b.s_min, 1) && !near(out.params.s, b.s_max, 1));
+  consider(blocks.log_beta(), k + 1,
            !spec.slope.fixed && !near(out.params.log_beta, b.log_beta_min, 1) &&
                !near(out.params.log_beta, b.log_beta_max, 1));
-  consider(&blocks.lambda, k + 2,
+  consider(blocks.lambda(), k + 2,
            !spec.lapse.fixed && !near(out.params.lambda, 0.0, 0.01) && !near(out.params.lambda, spec.lapse.max, 0.01));
   if (free_blocks.empty()) return;
   ceres::Covariance::Options options;
@@ -524,11 +543,11 @@ FitResult solve(const ModelSpec& spec, const Bounds& b, Parameters start, const 
                                     : std::clamp(start.log_beta, b.log_beta_min, b.log_beta_max);
   start.lambda = spec.lapse.fixed ? *spec.lapse.fixed : std::clamp(start.lambda, 0.0, spec.lapse.max);
 
-  Blocks blocks{start.u, start.s, start.log_beta, start.lambda};
+  Blocks blocks(start);
   ceres::Problem problem;
   add_nll_blocks(problem, spec, blocks);
-  for (std::size_t i = 0; i < blocks.u.size(); ++i) {
-    double* block = &blocks.u[i];
+  for (std::size_t i = 0; i < blocks.thresholds(); ++i) {
+    double* block = blocks.u(i);
     if (!problem.HasParameterBlock(block)) continue;
     if (fixed_threshold && static_cast<int>(i) == *fixed_threshold) {
       problem.SetParameterBlockConstant(block);
@@ -538,28 +557,28 @@ FitResult solve(const ModelSpec& spec, const Bounds& b, Parameters start, const 
     }
   }
   if (spec.power_law) {
-    problem.SetParameterLowerBound(&blocks.s, 0, b.s_min);
-    problem.SetParameterUpperBound(&blocks.s, 0, b.s_max);
+    problem.SetParameterLowerBound(blocks.s(), 0, b.s_min);
+    problem.SetParameterUpperBound(blocks.s(), 0, b.s_max);
   } else {
-    problem.SetParameterBlockConstant(&blocks.s);
+    problem.SetParameterBlockConstant(blocks.s());
   }
   if (spec.slope.fixed) {
-    problem.SetParameterBlockConstant(&blocks.log_beta);
+    problem.SetParameterBlockConstant(blocks.log_beta());
   } else {
-    problem.SetParameterLowerBound(&blocks.log_beta, 0, b.log_beta_min);
-    problem.SetParameterUpperBound(&blocks.log_beta, 0, b.log_beta_max);
+    problem.SetParameterLowerBound(blocks.log_beta(), 0, b.log_beta_min);
+    problem.SetParameterUpperBound(blocks.log_beta(), 0, b.log_beta_max);
   }
   if (spec.lapse.fixed) {
-    problem.SetParameterBlockConstant(&blocks.lambda);
+    problem.SetParameterBlockConstant(blocks.lambda());
   } else {
-    problem.SetParameterLowerBound(&blocks.lambda, 0, 0.0);
-    problem.SetParameterUpperBound(&blocks.lambda, 0, spec.lapse.max);
+    problem.SetParameterLowerBound(blocks.lambda(), 0, 0.0);
+    problem.SetParameterUpperBound(blocks.lambda(), 0, spec.lapse.max);
   }
   const ceres::Solver::Options options = solver::small_problem_options(1e-12);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   out.iterations = static_cast<int>(summary.iterations.size());
-  out.params = {blocks.u, blocks.s, blocks.log_beta, blocks.lambda};
+  out.params = blocks.parameters();
   bool finite = std::isfinite(out.params.s) && std::isfinite(out.params.log_beta) && std::isfinite(out.params.lambda);
   for (double u : out.params.u) finite = finite && std::isfinite(u);
   out.nll = finite ? negative_log_likelihood(spec, out.params) : NAN;
