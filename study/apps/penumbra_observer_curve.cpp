@@ -39,6 +39,7 @@
 #include "metrics/frame_observer.h"
 #include "gl/context.h"
 #include "observers/image_observer.h"
+#include "observers/observer_curve.h"
 #include "psychometric/psychometric.h"
 #include "stats/summary.h"
 #include "sampling/random.h"
@@ -48,89 +49,14 @@ using namespace penumbra;
 
 namespace {
 
-struct Curve {
-  double implied = NAN;   // c: r / a beyond which P stays below p_threshold
-  bool at_most = false;   // P was below p_threshold from the first ratio on: c <= implied
-};
+using observers::CurvePoint;
+using observers::condition_c;
+using observers::condition_slope;
+using observers::implied_c;
 
-// One radius of one artifact size: the observer's deviations per stimulus (seed: phase, orientation).
-struct Point {
-  double ratio = 0;
-  std::vector<double> jagged, straight;
-};
-
-// 2afc P(correct) at one radius over the stimuli `pick` (indices into the seeds, repeats allowed).
-double p_correct(const Point& point, const std::vector<int>& pick, double weber) {
-  double jagged = 0, straight = 0;
-  for (const int s : pick) {
-    jagged += point.jagged[static_cast<std::size_t>(s)] / pick.size();
-    straight += point.straight[static_cast<std::size_t>(s)] / pick.size();
-  }
-  return 0.5 * std::erfc(-(jagged - straight) / (2 * weber));  // Phi(d / (sqrt2 w))
-}
-
-// The r / a beyond which P stays below p_threshold, interpolated in log r / a at the last crossing.
-Curve implied_c(const std::vector<Point>& points, const std::vector<int>& pick, double weber, double p_threshold) {
-  Curve curve;
-  double last_ratio = NAN, last_p = NAN;
-  for (const Point& point : points) {
-    const double p = p_correct(point, pick, weber);
-    if (p >= p_threshold) {
-      curve.implied = NAN;
-      curve.at_most = false;
-    } else if (std::isnan(curve.implied)) {  // crossed down: interpolate in log r/a
-      curve.at_most = std::isnan(last_p);
-      curve.implied = curve.at_most ? point.ratio
-                                    : last_ratio * std::pow(point.ratio / last_ratio, (last_p - p_threshold) / (last_p - p));
-    }
-    last_ratio = point.ratio;
-    last_p = p;
-  }
-  return curve;
-}
-
-// A condition's c as penumbra-fit's one c per condition would see it: the geometric mean over
-// artifact sizes (those that crossed); NAN when none did.
-double condition_c(const std::vector<std::vector<Point>>& per_artifact, const std::vector<int>& pick, double weber,
-                   double p_threshold) {
-  double log_sum = 0;
-  int count = 0;
-  for (const auto& points : per_artifact) {
-    const Curve curve = implied_c(points, pick, weber, p_threshold);
-    if (std::isnan(curve.implied)) continue;
-    log_sum += std::log(curve.implied);
-    ++count;
-  }
-  return count ? std::exp(log_sum / count) : NAN;
-}
-
-// The observer's own slope (issue 48: c at another visibility needs it, and the observer's curve
-// is far shallower than QUEST's assumed 3.5): the log-Weibull's beta of a condition's curve,
-// pooled over the artifact sizes that crossed, each size's x = log10(a / r) taken from its own
-// threshold so that the sizes align where P = p_threshold. The least-squares slope of
-// log10(-ln(1 - F)) on x, F = (P - 0.5) / 0.5 (the observer has no lapse), over the points with F
-// in [0.02, 0.98]: the curve is noise-free, and beyond those the transform only amplifies the
-// rendering's rounding. NAN with fewer than three such points.
-double condition_slope(const std::vector<std::vector<Point>>& per_artifact, const std::vector<int>& pick, double weber,
-                       double p_threshold) {
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const auto& points : per_artifact) {
-    const Curve curve = implied_c(points, pick, weber, p_threshold);
-    if (std::isnan(curve.implied) || curve.at_most) continue;
-    for (const Point& point : points) {
-      const double f = (p_correct(point, pick, weber) - 0.5) / 0.5;
-      if (!(f >= 0.02 && f <= 0.98)) continue;
-      const double x = std::log10(curve.implied / point.ratio), y = std::log10(-std::log(1 - f));
-      n += 1;
-      sx += x;
-      sy += y;
-      sxx += x * x;
-      sxy += x * y;
-    }
-  }
-  const double var = sxx - sx * sx / n;
-  if (n < 3 || !(var > 0)) return NAN;
-  return (sxy - sx * sy / n) / var;
+// 2afc P(correct) at one radius over the stimuli `pick` (observers/observer_curve.h).
+double p_correct(const CurvePoint& point, const std::vector<int>& pick, double weber) {
+  return observers::curve_p_correct(point, pick, weber);
 }
 
 constexpr int kResamples = 400;  // bootstrap over the stimuli per radius
@@ -387,7 +313,7 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
     std::string largest_condition;
     std::vector<int> all_seeds(static_cast<std::size_t>(seeds));
     for (int s = 0; s < seeds; ++s) all_seeds[static_cast<std::size_t>(s)] = s;
-    std::vector<std::vector<std::vector<Point>>> data;  // condition -> artifact size -> radius
+    std::vector<std::vector<std::vector<CurvePoint>>> data;  // condition -> artifact size -> radius
     nlohmann::json part_points = nlohmann::json::array();  // --shard: [item, jagged, straight] per render of the shard
     std::size_t item = 0;
     for (const stimuli::Pattern pattern : parsed_patterns) {
@@ -396,11 +322,11 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
         std::snprintf(contrast_text, sizeof contrast_text, "%g", contrast);  // "stair/1", "step/0.5": penumbra-fit's names
         const std::string condition = stimuli::to_string(pattern) + "/" + contrast_text;
         nlohmann::json per_artifact = nlohmann::json::array();
-        std::vector<std::vector<Point>> condition_points;
+        std::vector<std::vector<CurvePoint>> condition_points;
         for (std::size_t j = 0; j < artifacts.size(); ++j) {
           const double a = artifacts[j];
           if (!sharded) std::printf("%s, a = %g px\n  r/a    deviation jagged  straight   P(correct)\n", condition.c_str(), a);
-          std::vector<Point> points;
+          std::vector<CurvePoint> points;
           const std::size_t shard_before = part_points.size();
           for (const double ratio : ratios[j]) {
             stimuli::StimulusSpec spec = base;
@@ -408,7 +334,7 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
             spec.artifact_px = a;
             spec.lit_linear = contrast;
             spec.filter_radius_px = stimuli::clamp_filter_radius(ratio * a, size_px).filter_radius_px;
-            Point point;
+            CurvePoint point;
             point.ratio = ratio;
             for (int s = 0; s < seeds; ++s, ++item) {
               if (!merged && (!sharded || sharded->covers(item))) {
@@ -442,11 +368,11 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
             std::fflush(stdout);
             continue;
           }
-          const Curve curve = implied_c(points, all_seeds, params.weber, p_threshold);
+          const observers::ImpliedC curve = implied_c(points, all_seeds, params.weber, p_threshold);
           std::printf("  implied c (P below p_threshold for every larger r/a; interpolated): %s%.2f\n", curve.at_most ? "at most " : "",
-                      curve.implied);
+                      curve.c);
           std::fflush(stdout);
-          nlohmann::json per = {{"artifact_px", a}, {"c", std::isnan(curve.implied) ? nlohmann::json(nullptr) : nlohmann::json(curve.implied)}};
+          nlohmann::json per = {{"artifact_px", a}, {"c", std::isnan(curve.c) ? nlohmann::json(nullptr) : nlohmann::json(curve.c)}};
           if (curve.at_most) per["at_most"] = true;  // hidden at the smallest ratio tried already
           per_artifact.push_back(per);
           condition_points.push_back(std::move(points));
