@@ -28,6 +28,7 @@
 #include "procedure/session.h"
 #include "procedure/session_flow.h"
 #include "procedure/session_record.h"
+#include "stimuli/frame_patch.h"
 #include "stimuli/stimulus.h"
 #include "text/fingerprint.h"
 
@@ -62,6 +63,13 @@ struct Refusal {
   int status;
   std::string reason;
 };
+
+// Whole or not at all: written beside its name and renamed (a killed server leaves no half PNG).
+void put_png(const fs::path& dir, const std::string& name, const io::Image8& image) {
+  const fs::path tmp = dir / (name + ".partial-" + std::to_string(::getpid()));
+  io::write_png(tmp, image);
+  fs::rename(tmp, dir / name);
+}
 
 // The renderer's stimuli as PNG files in SESSIONS_DIR/.stimuli, one pair per stimulus fingerprint
 // (the spec, its geometry, the technique's settings and the display transfer), named by a hash of
@@ -137,8 +145,8 @@ class StimulusStore {
           renderer = std::make_unique<stimuli::StimulusRenderer>();
         }
         const stimuli::StimulusPair pair = renderer->render(job.spec);
-        put(job.names.artifact, pair.artifact);
-        put(job.names.line, pair.line);
+        put_png(dir_, job.names.artifact, pair.artifact);
+        put_png(dir_, job.names.line, pair.line);
         ++renders_;
         job.done->set_value();
       } catch (...) {
@@ -149,13 +157,6 @@ class StimulusStore {
     }
   }
 
-  // Whole or not at all: written beside its name and renamed (a killed server leaves no half PNG).
-  void put(const std::string& name, const io::Image8& image) {
-    const fs::path tmp = dir_ / (name + ".partial-" + std::to_string(::getpid()));
-    io::write_png(tmp, image);
-    fs::rename(tmp, dir_ / name);
-  }
-
   fs::path dir_;
   std::mutex m_;
   std::condition_variable cv_;
@@ -164,6 +165,76 @@ class StimulusStore {
   std::thread worker_;
   bool stopping_ = false;
   std::atomic<int> renders_{0};
+};
+
+// A frame study's patches as PNG files in SESSIONS_DIR/.stimuli: every patch of every frame a
+// session can show (stimuli::session_frames), cut at start from the frames in the frame cache,
+// which the server never renders (a frame costs seconds to minutes on software GL; the lab's
+// windows read prepared frames the same way). A patch is named by a hash of its frame's PNG file
+// and its place, so a frame rendered again after a change of the renderer gives new names, and
+// a name does not say which image is the reference. The patch is the lab's (stimuli::crop of the
+// frame, RGB, 8 bits), written once; a restart finds it and reads no frame.
+class FramePatches {
+ public:
+  FramePatches() = default;
+  FramePatches(const procedure::StudyConfig& config, const fs::path& cache_dir, const fs::path& dir) {
+    const int size = config.stimulus_size_px;
+    for (const stimuli::FrameRequest& request : stimuli::session_frames(config)) {
+      const stimuli::FrameCache cache(cache_dir, false);
+      if (!cache.cached(request))
+        throw std::runtime_error("--frame-cache " + cache_dir.string() + ": frame " + stimuli::fingerprint(request) +
+                                 " is not there; render the study's frames first: penumbra-study prepare-frames");
+      const fs::path png = cache_dir / (stimuli::fingerprint(request) + ".png");
+      const std::string frame_hash = text::fnv1a64_hex(io::read_file(png, std::size_t{1} << 30));
+      std::vector<std::pair<std::size_t, std::string>> wanted;  // patches of this frame's path frame, not cut yet
+      for (std::size_t i = 0; i < config.frames.patches.size(); ++i) {
+        const procedure::FramePatch& patch = config.frames.patches[i];
+        if (patch.path_frame != request.path_frame) continue;
+        const std::string name = text::fnv1a64_hex(frame_hash + "\npatch " + std::to_string(patch.x_px) + " " + std::to_string(patch.y_px) +
+                                                    " " + std::to_string(size)) + ".png";
+        names_[key(request, i)] = name;
+        std::error_code ec;
+        if (!fs::is_regular_file(dir / name, ec)) wanted.emplace_back(i, name);
+      }
+      if (wanted.empty()) continue;
+      stimuli::FrameCache reader(cache_dir, false);
+      const io::Image8& frame = reader.frame(request);  // checks the frame's size against its request
+      for (const auto& [i, name] : wanted) {
+        const procedure::FramePatch& patch = config.frames.patches[i];
+        put_png(dir, name, stimuli::crop(frame, patch.x_px, patch.y_px, size));
+        ++cut_;
+      }
+      ++frames_read_;
+    }
+  }
+  bool empty() const { return names_.empty(); }
+  std::size_t patches() const { return names_.size(); }
+  int cut() const { return cut_; }
+  int frames_read() const { return frames_read_; }
+
+  // The trial's two patches: the reference's and the test frame's at plan.k.
+  struct Names {
+    std::string reference, test;
+  };
+  Names of(const procedure::StudyConfig& config, const procedure::TrialPlan& plan) const {
+    const auto patch = static_cast<std::size_t>(plan.staircase);
+    return {find(stimuli::reference_frame(config, plan.round, plan.staircase), patch),
+            find(stimuli::test_frame(config, plan.round, plan.staircase, plan.k), patch)};
+  }
+
+ private:
+  static std::string key(const stimuli::FrameRequest& request, std::size_t patch) {
+    return stimuli::fingerprint(request) + "/" + std::to_string(patch);
+  }
+  std::string find(const stimuli::FrameRequest& request, std::size_t patch) const {
+    const auto it = names_.find(key(request, patch));
+    if (it == names_.end())
+      throw std::runtime_error("frame " + stimuli::fingerprint(request) + " (" + request.technique + ", path frame " +
+                               std::to_string(request.path_frame) + ") is not among the frames of --config: the session's config differs from it");
+    return it->second;
+  }
+  std::map<std::string, std::string> names_;  // frame fingerprint/patch index -> file name
+  int cut_ = 0, frames_read_ = 0;
 };
 
 // Requests per second from one key (a participant id, a client address).
@@ -250,6 +321,7 @@ struct Server::Impl {
   ServerOptions o;
   httplib::Server http;
   StimulusStore stimuli;
+  FramePatches frame_patches;  // a frame study's (empty otherwise)
   RateLimit per_id, per_address;
   std::mutex participants_m;
   std::map<std::string, std::shared_ptr<Participant>> participants;
@@ -432,13 +504,23 @@ struct Server::Impl {
       j["examples"] = {{"jagged", "/stimuli/" + n.artifact}, {"straight", "/stimuli/" + n.line},
                        {"jagged_label", t.jagged_label}, {"straight_label", t.straight_label}};
     }
-    if ((s == Screen::trial || s == Screen::feedback) && flow.plan()) {
+    if ((s == Screen::trial || s == Screen::feedback) && flow.plan() && c.frames.enabled()) {
+      // Match to sample, as the lab's window shows it: the reference above, below it the
+      // reference on the target's side and the test frame's patch on the other.
+      const procedure::TrialPlan& plan = *flow.plan();
+      const FramePatches::Names n = frame_patches.of(c, plan);
+      const std::string ref = "/stimuli/" + n.reference, test = "/stimuli/" + n.test;
+      j["trial"] = {{"number", plan.trial}, {"practice", plan.practice}, {"images", plan.target == "left" ? nlohmann::json::array({ref, test}) : nlohmann::json::array({test, ref})},
+                    {"sample", ref}, {"iti_ms", o.iti_ms}};
+    } else if ((s == Screen::trial || s == Screen::feedback) && flow.plan()) {
       const procedure::TrialPlan& plan = *flow.plan();
       const StimulusStore::Names n = stimuli.ensure(plan.stimulus);
       const std::string a = "/stimuli/" + n.artifact, l = "/stimuli/" + n.line;
       nlohmann::json images = c.task == "2afc" ? nlohmann::json::array({plan.target == "left" ? a : l, plan.target == "left" ? l : a})
                                                : nlohmann::json::array({plan.target == "jagged" ? a : l});
       j["trial"] = {{"number", plan.trial}, {"practice", plan.practice}, {"images", images}, {"iti_ms", o.iti_ms}};
+    }
+    if ((s == Screen::trial || s == Screen::feedback) && flow.plan()) {
       j["question"] = t.question;
       j["first"] = t.first;
       j["second"] = t.second;
@@ -593,7 +675,8 @@ struct Server::Impl {
     const double height_css = finite_number(body, "window_height_css_px", 100, 20000);
     const double ppd = 2.0 * distance_mm * std::tan(0.5 * M_PI / 180.0) * px_per_mm;
     const double css = c.stimulus_size_px * ppd / c.display.pixels_per_degree();
-    const double need_w = css * (c.task == "2afc" ? 2.5 : 1.0) + 40, need_h = css + 220;
+    // A frame study shows the sample above the two (the lab's layout): two rows half a patch apart.
+    const double need_w = css * (c.task == "2afc" ? 2.5 : 1.0) + 40, need_h = css * (c.frames.enabled() ? 2.5 : 1.0) + 220;
     nlohmann::json d = {{"kind", "browser"},
                         {"px_per_mm", px_per_mm},
                         {"viewing_distance_mm", distance_mm},
@@ -604,7 +687,15 @@ struct Server::Impl {
       if (body.contains(k)) d[k] = finite_number(body, k, 0, 100000);
     for (const char* k : {"user_agent", "chinrest"})
       if (body.contains(k)) d[k] = k == std::string("chinrest") ? nlohmann::json(body[k].is_object() && body[k].dump().size() < 2000 ? body[k] : nlohmann::json()) : nlohmann::json(short_string(body, k, 400));
-    const bool fits = width_css >= need_w && height_css >= need_h;
+    // Device pixels per stimulus pixel. A frame study's patch shrunk below one would lose pixels
+    // of the very aliasing it asks about (the lab shows patches 1:1): refused, with the distance
+    // that gives one; an edge study's shrink is recorded and reported (docs/study-online.md).
+    const double device_px = css / c.stimulus_size_px * (d.contains("device_pixel_ratio") && d["device_pixel_ratio"].get<double>() > 0
+                                                              ? d["device_pixel_ratio"].get<double>() : 1.0);
+    d["device_px_per_stimulus_px"] = device_px;
+    const bool large_enough = width_css >= need_w && height_css >= need_h;
+    const bool sharp_enough = !c.frames.enabled() || device_px >= 1.0;
+    const bool fits = large_enough && sharp_enough;
     d["fits"] = fits;
     // record_presentation is the Session's, and the flow owns it: the session is reopened (as a
     // restart reopens it) with the display's refresh rate, on the welcome screen it stood at.
@@ -613,11 +704,19 @@ struct Server::Impl {
     Session session = reopen(p);
     session.record_presentation(d);
     install(p, std::move(session), fits ? refresh_hz : 0.0);
-    if (!fits) {
+    if (!sharp_enough) {
+      p.display = nullptr;
+      char line[400];
+      std::snprintf(line, sizeof line, "at your viewing distance your screen would show each pixel of the pictures on %.2f of its own pixels, "
+                    "fewer than one: sit farther away (at least %.0f cm, the distance was measured at %.0f cm) or use a screen with smaller pixels",
+                    device_px, std::ceil(distance_mm / device_px / 10.0), distance_mm / 10.0);
+      throw Refusal{422, line};
+    }
+    if (!large_enough) {
       p.display = nullptr;
       throw Refusal{422, "the window is too small for the stimuli at your viewing distance: it needs " + std::to_string(static_cast<int>(need_w)) +
                              " x " + std::to_string(static_cast<int>(need_h)) + " px, it has " + std::to_string(static_cast<int>(width_css)) + " x " +
-                             std::to_string(static_cast<int>(height_css))};
+                             std::to_string(static_cast<int>(height_css)) + "; enlarge the window (or sit a little closer)"};
     }
     say(p.id + ": display measured: " + json_input::dump(ppd) + " px per degree, refresh " + json_input::dump(refresh_hz) + " Hz");
   }
@@ -770,6 +869,12 @@ Server::Server(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(o
     throw std::runtime_error("-o " + s.o.sessions_dir.string() + ": not a folder");
   fs::create_directories(s.o.sessions_dir / ".stimuli", ec);
   if (ec) throw std::runtime_error("-o " + s.o.sessions_dir.string() + ": cannot create " + (s.o.sessions_dir / ".stimuli").string() + ": " + ec.message());
+  if (s.o.config.frames.enabled()) {
+    s.frame_patches = FramePatches(s.o.config, s.o.frame_cache, s.stimuli.dir());
+    s.say("frames: " + std::to_string(s.frame_patches.patches()) + " patches of " + s.o.config.name + " in " + s.stimuli.dir().string() + ", " +
+          std::to_string(s.frame_patches.cut()) + " cut now from " + std::to_string(s.frame_patches.frames_read()) + " frame(s) of the frame cache " +
+          s.o.frame_cache.string());
+  }
   // One server per folder of sessions: a second one is refused before it listens.
   s.lock = trial_log::DirectoryLock(s.o.sessions_dir);
   httplib::Server& http = s.http;

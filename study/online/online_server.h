@@ -5,7 +5,9 @@
 // C++ and the logs are the lab's (trials.csv, session.json, observer kind "person"). The page asks
 // for the current screen (JSON), shows it and posts what the participant did; the stimuli are the
 // renderer's PNGs, rendered once per stimulus fingerprint into SESSIONS_DIR/.stimuli and served by
-// that fingerprint.
+// that fingerprint. A frame study's patches are cut at start from the frames prepared in the frame
+// cache (penumbra-study prepare-frames, as the lab's windows read them), named by a hash of the
+// frame file and the patch, so the server never renders a frame while participants wait.
 //
 // What a participant can do is bounded here: an id is a short name of [A-Za-z0-9_-] (never a path),
 // one tab holds an id at a time (another is refused while the first is alive; a reload of the same
@@ -27,6 +29,7 @@ struct ServerOptions {
   std::filesystem::path config_file;   // recorded in session.json (config_file)
   std::filesystem::path sessions_dir;  // SESSIONS_DIR: one directory per participant id, and .stimuli/
   std::filesystem::path web_dir;       // the page's static files (index.html, ...)
+  std::filesystem::path frame_cache;   // a frame study's prepared frames (stimuli::FrameCache); every one must be there
   std::string bind = "127.0.0.1";
   int port = 8080;                     // 0: any free port (the line "listening on http://HOST:PORT/" says which)
   std::string completion_code;         // "" : one per session, derived from its session id

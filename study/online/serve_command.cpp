@@ -9,8 +9,10 @@
 #include <thread>
 
 #include "cli/checks.h"
+#include "cli/main.h"
 #include "online/online_server.h"
 #include "procedure/config.h"
+#include "stimuli/frame_patch.h"
 
 namespace fs = std::filesystem;
 
@@ -39,14 +41,29 @@ ServeCommand::ServeCommand(CLI::App& app, const CLI::Validator& config_check) {
   command_->add_option("--admin-token", admin_token_,
                        "the admin's status page at /admin?token=TOKEN (sessions, trials, staircases, data quality; /admin.json "
                        "the same as JSON); without it there is none");
+  command_->add_option("--frame-cache", frame_cache_,
+                       "a frame study's prepared frames (penumbra-study prepare-frames; default: $PENUMBRA_FRAME_CACHE, else "
+                       "$XDG_CACHE_HOME/penumbra/frames or ~/.cache/penumbra/frames); serve renders none")
+      ->check(cli::path_given());
   command_->add_option("--iti-ms", iti_ms_, "blank between trials (ms)")->capture_default_str()->check(CLI::Range(0.0, 10000.0));
 }
 
 int ServeCommand::run() const {
   online::ServerOptions o;
   o.config = procedure::load_config(config_);
-  if (o.config.frames.enabled())
-    throw std::invalid_argument("--config " + config_.string() + ": a frame study (frames block) is not served online yet; run it in the lab");
+  if (o.config.frames.enabled()) {
+    // As the lab's windows: the frames are prepared ahead (seconds to minutes each on software GL),
+    // never rendered while a participant waits; the server cuts its patches from them at start.
+    o.frame_cache = frame_cache_.empty() ? stimuli::default_frame_cache() : frame_cache_;
+    const stimuli::FrameCache cache(o.frame_cache, false);
+    const std::vector<stimuli::FrameRequest> frames = stimuli::session_frames(o.config);
+    std::size_t missing = 0;
+    for (const stimuli::FrameRequest& f : frames) missing += cache.cached(f) ? 0 : 1;
+    if (missing > 0)
+      throw cli::UsageError("serve: " + std::to_string(missing) + " of the " + std::to_string(frames.size()) + " frames of " + o.config.name +
+                            " are not in the frame cache " + o.frame_cache.string() + "; render them first: penumbra-study prepare-frames --config " +
+                            config_.string() + " --frame-cache " + o.frame_cache.string());
+  }
   o.config_file = config_;
   o.sessions_dir = sessions_;
   o.web_dir = web_.empty() ? fs::path(PENUMBRA_WEB_DIR) : web_;

@@ -17,7 +17,7 @@ class ServeCommand {
 
  private:
   CLI::App* command_;
-  std::filesystem::path config_, sessions_, web_;
+  std::filesystem::path config_, sessions_, web_, frame_cache_;
   std::string bind_ = "127.0.0.1", completion_code_, completion_url_, admin_token_;
   int port_ = 8080;
   double iti_ms_ = 400;

@@ -4,7 +4,8 @@
 //   URL: the participant link (http://127.0.0.1:PORT/?id=ID); ANSWERS: the key pressed on trial n
 //   is ANSWERS[n % length], f (first) or j (second) (default "f"); RELOAD_AT: reload the page once
 //   when trial RELOAD_AT is on screen, instead of answering it.
-// Takes a screenshot of each new screen (NN-<screen>.png) and prints one line per step.
+// Takes a screenshot of each new screen (NN-<screen>.png) and prints one line per step (on a
+// trial, also how many images it shows: a frame study's sample above and the two below).
 import { createRequire } from "node:module";
 import { mkdirSync } from "node:fs";
 import { dirname, join } from "node:path";
@@ -59,6 +60,9 @@ try {
       shot += 1;
       await page.screenshot({ path: join(shots, `${String(shot).padStart(2, "0")}-${name.replace(/[^A-Za-z0-9-]+/g, "_").slice(0, 40)}.png`) });
       console.log("screen: " + name);
+      if (state === "trial")  // what the trial shows: a frame study's sample above the two
+        console.log(name + " images: " + await page.evaluate(() => `sample ${document.querySelectorAll(".pen-sample img").length}, ` +
+                                                             `below ${document.querySelectorAll(".pen-stimuli:not(.pen-sample) img").length}`));
       lastName = name;
       changed = Date.now();
     }

@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <signal.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <functional>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <memory>
@@ -24,6 +27,8 @@
 #include "procedure/config.h"
 #include "procedure/session.h"
 #include "procedure/session_flow.h"
+#include "io/image_io.h"
+#include "stimuli/frame_patch.h"
 #include "text/fingerprint.h"
 
 namespace fs = std::filesystem;
@@ -33,6 +38,8 @@ using nlohmann::json;
 namespace {
 
 const fs::path kConfig = fs::path(PENUMBRA_TESTS_DIR) / "online_short_config.json";
+// A frame study: one patch of small frames, six trials (tests/study/online_frames_config.json).
+const fs::path kFramesConfig = fs::path(PENUMBRA_TESTS_DIR) / "online_frames_config.json";
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("penumbra-online-" + name + "-" + std::to_string(::getpid()));
@@ -45,8 +52,8 @@ fs::path fresh_dir(const std::string& name) {
 struct ServerProcess {
   std::unique_ptr<App> app;
   int port = 0;
-  explicit ServerProcess(const fs::path& sessions, int port_ = 0, const std::vector<std::string>& more = {}) {
-    std::vector<std::string> args{"serve", "--config", kConfig.string(), "-o", sessions.string(),
+  explicit ServerProcess(const fs::path& sessions, int port_ = 0, const std::vector<std::string>& more = {}, const fs::path& config = kConfig) {
+    std::vector<std::string> args{"serve", "--config", config.string(), "-o", sessions.string(),
                                   "--port", std::to_string(port_), "--bind", "127.0.0.1", "--iti-ms", "50"};
     args.insert(args.end(), more.begin(), more.end());
     app = std::make_unique<App>(PENUMBRA_STUDY_EXE, args);
@@ -117,7 +124,7 @@ std::string answer_for(const std::string& answers, int trial) { return answers[s
 
 // Plays screens until the end screen or until `stop_after` answers (-1: no limit). Returns the
 // answers given.
-int play(Participant& p, const std::string& answers, int stop_after = -1) {
+int play(Participant& p, const std::string& answers, int stop_after = -1, const std::function<void(const json&)>& on_trial = {}) {
   int given = 0;
   for (int guard = 0; guard < 500; ++guard) {
     const std::string s = p.screen.value("screen", "");
@@ -134,6 +141,7 @@ int play(Participant& p, const std::string& answers, int stop_after = -1) {
       status = p.post({{"action", "continue"}});
     } else if (s == "trial") {
       if (given == stop_after) return given;
+      if (on_trial) on_trial(p.screen);
       status = p.post(Participant::answer_body(p.screen, answer_for(answers, p.screen["trial"]["number"].get<int>())));
       ++given;
     } else if (s == "end") {
@@ -154,10 +162,10 @@ int play(Participant& p, const std::string& answers, int stop_after = -1) {
 
 // The lab's session with the same config, participant (so the same seed) and answers, written by
 // procedure::Session as penumbra-study run writes it.
-fs::path lab_session(const fs::path& dir, const std::string& id, const std::string& answers) {
-  const penumbra::procedure::StudyConfig config = penumbra::procedure::load_config(kConfig);
+fs::path lab_session(const fs::path& dir, const std::string& id, const std::string& answers, const fs::path& config_file = kConfig) {
+  const penumbra::procedure::StudyConfig config = penumbra::procedure::load_config(config_file);
   json extra = {{"observer_kind", "person"},
-                {"config_file", kConfig.string()},
+                {"config_file", config_file.string()},
                 {"presentation_options", {{"kind", "browser"}, {"served_by", "penumbra-study serve"}}},
                 {"consent", penumbra::procedure::consent_record(config.text("consent"), penumbra::procedure::utc_now())}};
   penumbra::procedure::Session lab = penumbra::procedure::Session::create(config, dir, id, extra);
@@ -169,12 +177,14 @@ fs::path lab_session(const fs::path& dir, const std::string& id, const std::stri
 void expect_same_as_lab(const fs::path& online, const fs::path& lab) {
   auto rows = [](const fs::path& d) {
     std::vector<std::string> out;
-    for (penumbra::trial_log::TrialRow r : penumbra::trial_log::read(d / "trials.csv").rows) {
+    const penumbra::trial_log::ReadResult log = penumbra::trial_log::read(d / "trials.csv");
+    for (penumbra::trial_log::TrialRow r : log.rows) {
       r.session_id.clear();
       r.utc_time.clear();
       r.rt_ms = 0;
       r.timing.reset();
-      out.push_back(penumbra::trial_log::format_row(r));
+      out.push_back(penumbra::trial_log::format_row(r, log.layout == penumbra::trial_log::Layout::frames ? log.layout
+                                                                                                          : penumbra::trial_log::Layout::current));
     }
     return out;
   };
@@ -249,6 +259,98 @@ TEST(OnlineServer, WholeSessionByHttpEqualsTheLabSessionWithTheSameSeedAndAnswer
   const auto page = admin.Get(("/admin?token=" + token).c_str());
   ASSERT_EQ(page->status, 200);
   EXPECT_NE(page->body.find("<h2>P01</h2>"), std::string::npos);
+  fs::remove_all(tmp);
+}
+
+// penumbra-study with `args` to its end: its exit status, and its stdout and stderr in `out`.
+int run_study(const std::vector<std::string>& args, std::string& out, const fs::path& capture) {
+  std::string cmd = PENUMBRA_STUDY_EXE;
+  for (const std::string& a : args) cmd += " '" + a + "'";
+  const int status = std::system((cmd + " > '" + capture.string() + "' 2>&1").c_str());
+  out = penumbra::test::slurp(capture);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A frame study served (docs/study-online.md#frame-studies): refused in one line while its frames
+// are not prepared; then a whole session by HTTP whose log equals the lab's with the same seed and
+// answers, each trial's three images the patches the lab's window shows (the reference's above
+// and on the target's side, the test frame's at the trial's k on the other), and a screen that
+// would shrink the patches below one device pixel per patch pixel refused with the distance that
+// does not.
+TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
+  const fs::path tmp = fresh_dir("frames");
+  const fs::path cache = tmp / "frame-cache";
+  std::string out;
+  EXPECT_EQ(run_study({"serve", "--config", kFramesConfig.string(), "-o", (tmp / "sessions").string(), "--port", "0", "--frame-cache",
+                       cache.string()}, out, tmp / "out.txt"), 2);
+  EXPECT_EQ(out, "penumbra-study: serve: 4 of the 4 frames of online-frames are not in the frame cache " + cache.string() +
+                     "; render them first: penumbra-study prepare-frames --config " + kFramesConfig.string() + " --frame-cache " +
+                     cache.string() + "\n");
+  EXPECT_FALSE(fs::exists(tmp / "sessions")) << "refused before anything is written";
+  ASSERT_EQ(run_study({"prepare-frames", "--config", kFramesConfig.string(), "--frame-cache", cache.string()}, out, tmp / "out.txt"), 0) << out;
+
+  auto server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
+  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in " + (tmp / "sessions" / ".stimuli").string() +
+                                       ", 4 cut now from 4 frame(s)"), std::string::npos) << server->app->output();
+  const std::string answers = "fjjfjf";
+  std::map<int, json> trials;  // each trial's screen, by trial number
+  {
+    Participant p(server->port, "F01");
+    ASSERT_EQ(p.get(), 200);
+    EXPECT_EQ(p.screen["screen"], "consent");
+    EXPECT_EQ(play(p, answers, -1, [&](const json& screen) { trials[screen["trial"]["number"].get<int>()] = screen; }), 6);
+    EXPECT_EQ(p.screen["screen"], "end");
+  }
+  expect_same_as_lab(tmp / "sessions" / "F01", lab_session(tmp / "lab", "F01", answers, kFramesConfig));
+
+  // Each trial shows the lab's patches: cut from the frame cache here as the window cuts them.
+  const penumbra::procedure::StudyConfig config = penumbra::procedure::load_config(kFramesConfig);
+  penumbra::stimuli::FrameCache frames(cache, false);
+  const auto log = penumbra::trial_log::read(tmp / "sessions" / "F01" / "trials.csv");
+  ASSERT_EQ(log.layout, penumbra::trial_log::Layout::frames);
+  ASSERT_EQ(log.rows.size(), 6u);
+  ASSERT_EQ(trials.size(), 6u);
+  std::set<std::string> tests_shown;
+  for (const auto& row : log.rows) {
+    const json& trial = trials.at(row.trial)["trial"];
+    ASSERT_EQ(trial["images"].size(), 2u);
+    const int reference_side = row.target == "left" ? 0 : 1;
+    EXPECT_EQ(trial["sample"], trial["images"][reference_side]) << "the reference above and on the target's side";
+    auto served = [&](const json& url) { return penumbra::io::read_image8(tmp / "sessions" / ".stimuli" / fs::path(url.get<std::string>()).filename()); };
+    penumbra::procedure::TrialPlan plan;
+    plan.round = 0;
+    plan.staircase = 0;
+    plan.k = row.k;
+    const penumbra::stimuli::PatchPair lab = penumbra::stimuli::patch_pair(frames, config, plan);
+    EXPECT_EQ(served(trial["sample"]).pixels, lab.reference.pixels) << "trial " << row.trial;
+    const penumbra::io::Image8 test = served(trial["images"][1 - reference_side]);
+    EXPECT_EQ(test.width, 64);
+    EXPECT_EQ(test.pixels, lab.test.pixels) << "trial " << row.trial << ", k " << row.k;
+    tests_shown.insert(trial["images"][1 - reference_side].get<std::string>());
+  }
+  EXPECT_GE(tests_shown.size(), 2u) << "the staircase moved k, and the test patch with it";
+
+  // A screen whose pixels per degree would shrink the patches: refused, and what to do said.
+  Participant small(server->port, "F02");
+  ASSERT_EQ(small.get(), 200);
+  ASSERT_EQ(small.post({{"action", "agree"}}), 200);
+  ASSERT_EQ(small.post({{"action", "intake"}, {"answers", {{"age", "30"}}}}), 200);
+  EXPECT_EQ(small.post({{"action", "display"}, {"px_per_mm", 1.5}, {"viewing_distance_mm", 300}, {"window_width_css_px", 1280},
+                        {"window_height_css_px", 800}, {"device_pixel_ratio", 1}}), 422);
+  EXPECT_NE(server->app->output().find("refused 422 POST /api/act: at your viewing distance your screen would show each pixel of the pictures on "
+                                       "0.41 of its own pixels, fewer than one: sit farther away (at least 73 cm"), std::string::npos)
+      << server->app->output();
+  ASSERT_EQ(small.get(), 200);
+  EXPECT_TRUE(small.screen["needs_display"].get<bool>()) << "measured again";
+  EXPECT_EQ(small.post({{"action", "display"}, {"px_per_mm", 1.5}, {"viewing_distance_mm", 750}, {"window_width_css_px", 1280},
+                        {"window_height_css_px", 800}, {"device_pixel_ratio", 1}}), 200);
+  EXPECT_FALSE(small.screen["needs_display"].get<bool>());
+
+  // A restart cuts nothing again: the patches are in .stimuli.
+  server->kill9();
+  server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
+  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in " + (tmp / "sessions" / ".stimuli").string() +
+                                       ", 0 cut now from 0 frame(s)"), std::string::npos) << server->app->output();
   fs::remove_all(tmp);
 }
 
@@ -488,6 +590,43 @@ TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   EXPECT_GT(quality["rt_median_ms"].get<double>(), 0);
   EXPECT_NE(penumbra::test::slurp(tmp / "fit.txt").find("data quality (per session"), std::string::npos);
 #endif
+  if (!std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) fs::remove_all(tmp);
+}
+
+// A frame study in a real browser: the page shows the reference above the two, each patch
+// scaled to the participant's pixels per degree (never below one device pixel per patch pixel),
+// and the log equals the lab's with the same seed and answers.
+TEST(OnlineServer, RealBrowserTakesAFrameStudySession) {
+  if (const std::string missing = browser_missing(); !missing.empty()) GTEST_SKIP() << missing;
+  const fs::path tmp = fresh_dir("browser-frames");
+  const fs::path cache = tmp / "frame-cache";
+  std::string out;
+  ASSERT_EQ(run_study({"prepare-frames", "--config", kFramesConfig.string(), "--frame-cache", cache.string()}, out, tmp / "out.txt"), 0) << out;
+  ServerProcess server(tmp / "sessions", 0, {"--frame-cache", cache.string()}, kFramesConfig);
+  const std::string answers = "jffjjf";
+  const fs::path shots = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS") ? fs::path(std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) : tmp / "screens";
+  const std::string cmd = "timeout 300 node " + (fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string() + " 'http://127.0.0.1:" +
+                          std::to_string(server.port) + "/?id=G01' '" + shots.string() + "' " + answers + " > " + (tmp / "browser.txt").string() + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  const std::string said = penumbra::test::slurp(tmp / "browser.txt");
+  ASSERT_EQ(status, 0) << said << "\nserver:\n" << server.app->output();
+  for (const char* screen : {"consent", "chinrest-blindspot", "trial0", "feedback", "trial5", "end"})
+    EXPECT_NE(said.find(std::string("screen: ") + screen), std::string::npos) << screen << "\n" << said;
+  // The page's own count of what it showed on a trial: three images, the sample above the two.
+  EXPECT_NE(said.find("trial0 images: sample 1, below 2"), std::string::npos) << said;
+  expect_same_as_lab(tmp / "sessions" / "G01", lab_session(tmp / "lab", "G01", answers, kFramesConfig));
+  const json j = penumbra::json_input::read_file(tmp / "sessions" / "G01" / "session.json");
+  const json& shown = j["presentation"].back();
+  EXPECT_EQ(shown["kind"], "browser");
+  EXPECT_TRUE(shown["fits"].get<bool>());
+  EXPECT_GE(shown["device_px_per_stimulus_px"].get<double>(), 1.0) << shown.dump(1);
+  const double config_ppd = penumbra::procedure::load_config(kFramesConfig).display.pixels_per_degree();
+  EXPECT_NEAR(shown["stimulus_css_px"].get<double>(), 64 * shown["pixels_per_degree"].get<double>() / config_ppd, 1e-9)
+      << "the patch spans the visual angle the config's display gives it";
+  for (const auto& r : penumbra::trial_log::read(tmp / "sessions" / "G01" / "trials.csv").rows) {
+    ASSERT_TRUE(r.timing.has_value());
+    EXPECT_GE(r.timing->frames, 1);
+  }
   if (!std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) fs::remove_all(tmp);
 }
 

@@ -153,11 +153,21 @@ async function runTrial(display) {
   const images = await Promise.all(trial.images.map(loadImage));
   const s = element("div", "pen-screen");
   const question = element("div", "pen-question", "");
+  const gap = (screen.stimulus_css_px || screen.stimulus_px) / 2 + "px";
   const row = element("div", "pen-stimuli");
-  row.style.gap = (screen.stimulus_css_px || screen.stimulus_px) / 2 + "px";
+  row.style.gap = gap;
   row.style.visibility = "hidden";
   images.forEach((img) => row.append(sizedImage(img)));
-  s.append(question, row);
+  // A frame study (match to sample): the reference above the two, half a patch apart, as in the lab.
+  const sample = trial.sample ? element("div", "pen-stimuli pen-sample") : null;
+  if (sample) {
+    sample.style.marginBottom = gap;
+    sample.style.visibility = "hidden";
+    sample.append(sizedImage(await loadImage(trial.sample)));
+    s.append(question, sample, row);
+  } else {
+    s.append(question, row);
+  }
   display.innerHTML = "";
   display.append(s, element("div", "pen-progress", screen.progress || ""));
   const keys = {};
@@ -174,6 +184,7 @@ async function runTrial(display) {
       if (!running) return;
       if (onset < 0 && t >= blankEnd) {
         row.style.visibility = "visible";  // drawn in this frame: its timestamp is the onset
+        if (sample) sample.style.visibility = "visible";
         question.textContent = screen.question;
         onset = t;
         frames.push(last < 0 ? 0 : t - last);
@@ -196,6 +207,7 @@ async function runTrial(display) {
   });
   document.removeEventListener("visibilitychange", onHidden);
   row.style.visibility = "hidden";
+  if (sample) sample.style.visibility = "hidden";
   await act("answer", { trial: trial.number, hidden, fullscreen: !!document.fullscreenElement, ...result });
 }
 
@@ -289,7 +301,8 @@ class PenumbraScreenPlugin {
     }
     const name = screen.screen;
     if (displayProblem && screen.needs_display) {
-      showMessage("Your screen is too small", displayProblem + "\n\nEnlarge the window (or sit a little closer), then press Space to measure again.");
+      // The server's reason says what to change (a larger window, or sitting farther away).
+      showMessage("Your screen cannot show the pictures as they are", displayProblem + ".\n\nThen press Space to measure again.");
       displayProblem = "";
       await waitKeyOrClick({ " ": true }, []);
     } else if (screen.needs_display || (screen.needs_intake && name !== "end")) {
