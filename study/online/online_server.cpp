@@ -16,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "display/display_calibration.h"
@@ -209,6 +210,12 @@ class FramePatches {
   }
   bool empty() const { return names_.empty(); }
   std::size_t patches() const { return names_.size(); }
+  // Frames with the same pixels (the rule's at k beyond its largest maps, say) give the same names.
+  std::size_t files() const {
+    std::set<std::string> distinct;
+    for (const auto& [key, name] : names_) distinct.insert(name);
+    return distinct.size();
+  }
   int cut() const { return cut_; }
   int frames_read() const { return frames_read_; }
 
@@ -871,9 +878,9 @@ Server::Server(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(o
   if (ec) throw std::runtime_error("-o " + s.o.sessions_dir.string() + ": cannot create " + (s.o.sessions_dir / ".stimuli").string() + ": " + ec.message());
   if (s.o.config.frames.enabled()) {
     s.frame_patches = FramePatches(s.o.config, s.o.frame_cache, s.stimuli.dir());
-    s.say("frames: " + std::to_string(s.frame_patches.patches()) + " patches of " + s.o.config.name + " in " + s.stimuli.dir().string() + ", " +
-          std::to_string(s.frame_patches.cut()) + " cut now from " + std::to_string(s.frame_patches.frames_read()) + " frame(s) of the frame cache " +
-          s.o.frame_cache.string());
+    s.say("frames: " + std::to_string(s.frame_patches.patches()) + " patches of " + s.o.config.name + " in " + std::to_string(s.frame_patches.files()) +
+          " files of " + s.stimuli.dir().string() + " (identical frames share them), " + std::to_string(s.frame_patches.cut()) + " cut now from " +
+          std::to_string(s.frame_patches.frames_read()) + " frame(s) of the frame cache " + s.o.frame_cache.string());
   }
   // One server per folder of sessions: a second one is refused before it listens.
   s.lock = trial_log::DirectoryLock(s.o.sessions_dir);

@@ -290,8 +290,8 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
   ASSERT_EQ(run_study({"prepare-frames", "--config", kFramesConfig.string(), "--frame-cache", cache.string()}, out, tmp / "out.txt"), 0) << out;
 
   auto server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
-  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in " + (tmp / "sessions" / ".stimuli").string() +
-                                       ", 4 cut now from 4 frame(s)"), std::string::npos) << server->app->output();
+  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in 4 files of " + (tmp / "sessions" / ".stimuli").string() +
+                                       " (identical frames share them), 4 cut now from 4 frame(s)"), std::string::npos) << server->app->output();
   const std::string answers = "fjjfjf";
   std::map<int, json> trials;  // each trial's screen, by trial number
   {
@@ -349,8 +349,8 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
   // A restart cuts nothing again: the patches are in .stimuli.
   server->kill9();
   server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
-  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in " + (tmp / "sessions" / ".stimuli").string() +
-                                       ", 0 cut now from 0 frame(s)"), std::string::npos) << server->app->output();
+  EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in 4 files of " + (tmp / "sessions" / ".stimuli").string() +
+                                       " (identical frames share them), 0 cut now from 0 frame(s)"), std::string::npos) << server->app->output();
   fs::remove_all(tmp);
 }
 
