@@ -28,14 +28,19 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "adaptive/calibration.h"
@@ -56,10 +61,12 @@
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "io/report.h"
+#include "io/safe_path.h"
 #include "io/staged_dir.h"
 #include "json/json_input.h"
 #include "metrics/frame_observer.h"
 #include "scene/scene.h"
+#include "shard/shard.h"
 #include "apps/display_geometry.h"
 #include "shadows/frame_report.h"
 #include "shadows/renderer.h"
@@ -175,117 +182,169 @@ struct Options {
   int screenshot_frames = 10;
 };
 
-void write_crops(const fs::path& file, const demo::Crops& crops) {
-  if (crops.tiles.empty()) return;
-  io::write_png(file, io::montage(crops.tiles, crops.labels, static_cast<int>(crops.tiles.size()), std::min(2 * crops.tiles.front().width, 480)));
+// The unit a shard of the headless run takes is a technique (docs/cluster.md). A technique's
+// configurations walk the path in lockstep, and what the run says about them pairs them frame by
+// frame: SSIM against the engine baseline, the fixed map against the adaptive one, the crops where
+// they differ, the FLIP montage, the front at equal error read across their frame times. Split
+// finer, a part would carry every series for the merge to redo that, over times measured in
+// different processes. Techniques share nothing that depends on one of them (the walk keeps the
+// scene, the surface probe and the thin casters' masks, which read no technique), so shard I of N
+// walks the techniques of --techniques whose position is I modulo N, and its part carries what
+// the run prints and writes for them.
+constexpr std::string_view kPartKind = "penumbra-demo part";
+
+struct Sharding {
+  std::optional<shard::Shard> shard;
+  std::string part;               // --part FILE
+  std::vector<std::string> args;  // the settings: the command line less --shard and --part
+};
+
+// One technique's share of what the headless run prints and writes: what a shard's part carries
+// and a merge puts back in the technique's place.
+struct TechniqueOutput {
+  std::size_t index = 0;  // in --techniques
+  std::string name;
+  nlohmann::json entry;  // report.json's techniques[] entry
+  std::string csv;       // its frames.csv rows
+  bool flip_available = false;  // its headline reads FLIP (the run's first line says "perceived difference" if any does)
+  std::array<std::vector<std::string>, 3> headlines;  // per demo::ErrorMeasure: the adaptive rule's line, then the virtual maps'
+  std::string unseen, calibration, single_map_row, tables;
+  std::vector<std::pair<std::string, std::string>> images;  // file in -o DIR, PNG bytes (a shard's and a merge's; the run writes its own)
+};
+
+constexpr std::array<std::string_view, 3> kMeasureKeys = {"flip", "flip_ray_traced", "rmse"};  // demo::ErrorMeasure's order
+
+// What the run prints and writes beside the techniques, the same in every shard of one command.
+struct RunHead {
+  nlohmann::json report;       // report.json less "techniques"
+  std::string scene_line;      // "\ndemo at 64x36 on llvmpipe ...; engine family sweep; calibration ...\n"
+  std::string settings_lines;  // adaptive:, frame time:, the single-map table's header
+};
+
+// A part carries PNG files as text.
+constexpr std::string_view kBase64Digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+std::string base64(std::string_view bytes) {
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);  // bytes in this group
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 3; ++k) v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 4; ++k) out += k <= n ? kBase64Digits[(v >> (18 - 6 * k)) & 63] : '=';
+  }
+  return out;
+}
+// Throws std::runtime_error for text that is not base64.
+std::string unbase64(std::string_view text) {
+  if (text.size() % 4 != 0) throw std::runtime_error("not base64 (" + std::to_string(text.size()) + " characters, not a multiple of 4)");
+  std::string out;
+  out.reserve(text.size() / 4 * 3);
+  for (std::size_t i = 0; i < text.size(); i += 4) {
+    std::uint32_t v = 0;
+    int pad = 0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const char c = text[i + k];
+      const std::size_t d = kBase64Digits.find(c);
+      if (c == '=' && i + 4 == text.size() && k >= 2 && (k == 3 || text[i + 3] == '=')) {
+        ++pad;
+      } else if (d == std::string_view::npos || pad > 0) {
+        throw std::runtime_error("not base64 (character " + std::to_string(i + k) + ")");
+      }
+      v = (v << 6) | static_cast<std::uint32_t>(d == std::string_view::npos ? 0 : d);
+    }
+    out += static_cast<char>((v >> 16) & 255);
+    if (pad < 2) out += static_cast<char>((v >> 8) & 255);
+    if (pad < 1) out += static_cast<char>(v & 255);
+  }
+  return out;
 }
 
-// The main job: for each technique, its configurations walk the path (apps/demo/measurement.h);
-// then the adoption question first (the adaptive rule against the engine's Pareto front at equal
-// error), the single-map comparison and the tables below it (apps/demo/report.h).
-int run_headless(const Options& opt, shadows::ShadowSettings base) {
-  // Everything that can refuse the command comes before any output: the plotter, the output
-  // directory, the scene and its path; then the first line of progress.
-  if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the chart");
-  const bool flip = opt.flip && opt.reference;
-  const double pixels_per_degree = flip ? apps::display_pixels_per_degree(opt.display, "penumbra-demo") : 0.0;  // --display's viewing geometry
-  io::StagedDirectory out(opt.output, "report.json");
-  gl::HeadlessContext ctx;
-  const double t_scene = now_ms();
-  scene::Scene scene = scene::load_scene(opt.scene);
-  apps::override_light_size(opt.light_size, scene.light);
-  const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
-  std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
-  const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
-  const bool directional = scene.light.type == scene::Light::Type::directional;
-
-  nlohmann::json report;
-  report["scene"] = scene.name;
-  report["device"] = ctx.info();
-  report["image_px"] = {opt.width, opt.height};
-  report["light"] = {{"type", directional ? "directional" : "spot"}, {"size", scene.light.size}, {"size_unit", directional ? "deg" : "world"}};
-  report["path"] = plan.kind;
-  report["path_length"] = plan.length;
-  report["path_frames"] = plan.frames.size();
-  for (const demo::PathFrame& f : plan.frames) report["path_frame_index"].push_back(f.frame);
-  report["frame_time_method"] = "wall_finish";
-  report["frame_time_repeats"] = opt.repeats;
-  report["pass_time_method"] = gl::to_string(method);
-  report["engine_family"] = !opt.baselines ? "none" : opt.sweep ? "sweep" : "default";
-  report["calibration"] = apps::calibration_json(opt.calibration, base);
-  report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
-  if (flip)
-    report["perceptual"] = {{"measure", "LDR-FLIP (metrics/flip.h) of the lit frames at the reference frames"},
-                            {"display", opt.display},
-                            {"pixels_per_degree", pixels_per_degree},
-                            {"pixels_per_degree_formula", "2 d tan(0.5 deg) width_px / width_mm (metrics::pixels_per_degree), the frame shown "
-                                                          "pixel for pixel"}};
-  std::string csv = "technique,configuration,path_frame,frame_ms,texels,cascades,ssim_vs_engine,flicker_mean_abs\n";
-
-  demo::ConfigurationOptions config_options;
-  config_options.family = !opt.baselines ? demo::Family::none : opt.sweep ? demo::Family::sweep : demo::Family::default_;
-  config_options.auto_cascades = opt.auto_cascades;
-  config_options.virtual_pages = opt.virtual_pages && directional;
-  std::vector<std::vector<demo::Configuration>> per_technique;
-  for (const std::string& name : opt.techniques) {
-    shadows::ShadowSettings fixed = base;
-    fixed.technique = shadows::technique_from_string(name);
-    apps::apply_calibration_for(opt.calibration, fixed);  // the technique's own c
-    fixed.adaptive.enabled = false;
-    per_technique.push_back(demo::configurations(fixed, config_options));
+// A PNG's bytes as io::write_png writes them (a merge writes these bytes: its images are the
+// unsharded run's), by way of a scratch folder of this process's own.
+class PngBytes {
+ public:
+  PngBytes() {
+    std::string dir = (fs::temp_directory_path() / "penumbra-demo-part-XXXXXX").string();
+    if (!::mkdtemp(dir.data())) throw std::runtime_error(dir + ": cannot create the images' scratch folder");
+    dir_ = dir;
   }
-  const int total = static_cast<int>(opt.techniques.size() * plan.frames.size());
-  int done = 0;
-  std::fprintf(stderr, "penumbra-demo: %zu techniques x %zu configurations x %zu frames\n", opt.techniques.size(),
-               per_technique.front().size(), plan.frames.size());
-  ProgressBar progress("penumbra-demo", true, " frames");
-  demo::WalkOptions walk_options;
-  walk_options.width = opt.width, walk_options.height = opt.height;
-  walk_options.repeats = opt.repeats;
-  walk_options.reference = opt.reference;
-  walk_options.reference_samples = opt.reference_samples;
-  walk_options.perceptual = flip;
-  walk_options.pixels_per_degree = flip ? pixels_per_degree : walk_options.pixels_per_degree;
-  demo::Walk walk(scene, plan, walk_options, method);
-  std::vector<demo::TechniqueRun> runs;
-  std::vector<demo::EqualErrors> equal;
-  for (std::size_t i = 0; i < opt.techniques.size(); ++i) {
-    const std::string& name = opt.techniques[i];
-    // The frame observer's "visible": the technique's calibration entry's criterion F (the
-    // published design's without an entry).
-    const adaptive::CalibrationChoice choice = opt.calibration.choice(per_technique[i].front().settings);
-    walk.set_criterion_f(choice.entry ? choice.entry->definition().criterion_f : metrics::kStudyCriterionF);
-    runs.push_back(walk.run(name, per_technique[i], progress, done, total));
-    const demo::TechniqueRun& run = runs.back();
-    equal.push_back(demo::equal_errors(run));
-    nlohmann::json t = demo::technique_json(run, equal.back());
-    const shadows::ShadowSettings& adapt = run.series[run.adaptive].config.settings;
-    t["settings_fixed"] = shadows::to_json(run.series[run.fixed].config.settings);
-    t["settings_adaptive"] = shadows::to_json(adapt);
-    t["calibration"] = apps::calibration_json(opt.calibration, adapt);
-    t["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
-    report["techniques"].push_back(t);
-    csv += run.csv;
-    io::write_png(out.path() / (name + "-fixed-vs-adaptive.png"),
-                  side_by_side(run.shown_fixed, run.shown_adaptive, side_by_side_labels(run, walk.plan())));
-    write_crops(out.path() / (name + "-crops.png"), run.thin_crops);
-    write_crops(out.path() / (name + "-crops-gain.png"), run.gain_crops);
-    if (!run.flip_tiles.empty())
-      io::write_png(out.path() / (name + "-flip-montage.png"),
-                    io::montage(run.flip_tiles, run.flip_labels, demo::kFlipMontageColumns, demo::flip_montage_tile_width(opt.width)));
-    runs.back().flip_tiles.clear();
-    // The tables need the numbers, not the renderers: their maps (up to 4 × 4096² each in a sweep)
-    // and images go before the next technique's.
-    for (demo::Series& s : runs.back().series) {
-      s.renderer.reset();
-      s.color = {}, s.visibility = {}, s.previous = {};
+  ~PngBytes() {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  PngBytes(const PngBytes&) = delete;
+  PngBytes& operator=(const PngBytes&) = delete;
+  std::string operator()(const io::Image8& image) const {
+    const fs::path file = dir_ / "image.png";
+    io::write_png(file, image);
+    return io::read_file(file, std::size_t{1} << 30);
+  }
+
+ private:
+  fs::path dir_;
+};
+
+nlohmann::json output_json(const TechniqueOutput& o) {
+  nlohmann::json j = {{"index", o.index},       {"technique", o.name},        {"entry", o.entry},   {"csv", o.csv},
+                      {"flip_available", o.flip_available}, {"unseen", o.unseen}, {"calibration", o.calibration},
+                      {"single_map_row", o.single_map_row}, {"tables", o.tables}};
+  for (std::size_t m = 0; m < kMeasureKeys.size(); ++m) j["headlines"][kMeasureKeys[m]] = o.headlines[m];
+  j["images"] = nlohmann::json::array();
+  for (const auto& [file, bytes] : o.images) j["images"].push_back({{"file", file}, {"png_base64", base64(bytes)}});
+  return j;
+}
+
+// Throws std::runtime_error naming the field at fault.
+TechniqueOutput output_of_json(const nlohmann::json& j) {
+  TechniqueOutput o;
+  const auto text = [&](const char* key) {
+    if (!j.contains(key) || !j[key].is_string()) throw std::runtime_error(std::string(key) + ": missing or not text");
+    return j[key].get<std::string>();
+  };
+  if (!j.contains("index") || !j["index"].is_number_unsigned()) throw std::runtime_error("index: missing or not a whole number");
+  o.index = j["index"].get<std::size_t>();
+  o.name = text("technique"), o.csv = text("csv"), o.unseen = text("unseen"), o.calibration = text("calibration");
+  o.single_map_row = text("single_map_row"), o.tables = text("tables");
+  if (!j.contains("entry") || !j["entry"].is_object()) throw std::runtime_error("entry: missing or not an object");
+  o.entry = j["entry"];
+  if (!j.contains("flip_available") || !j["flip_available"].is_boolean()) throw std::runtime_error("flip_available: missing or not true/false");
+  o.flip_available = j["flip_available"].get<bool>();
+  for (std::size_t m = 0; m < kMeasureKeys.size(); ++m) {
+    const std::string key(kMeasureKeys[m]);
+    if (!j.contains("headlines") || !j["headlines"].is_object() || !j["headlines"].contains(key) || !j["headlines"][key].is_array())
+      throw std::runtime_error("headlines." + key + ": missing or not a list");
+    for (const auto& line : j["headlines"][key]) {
+      if (!line.is_string()) throw std::runtime_error("headlines." + key + ": not a list of lines");
+      o.headlines[m].push_back(line.get<std::string>());
     }
   }
-  progress.clear();  // the tables follow on stdout
+  if (!j.contains("images") || !j["images"].is_array()) throw std::runtime_error("images: missing or not a list");
+  for (const auto& image : j["images"]) {
+    if (!image.is_object() || !image.contains("file") || !image["file"].is_string() || !image.contains("png_base64") ||
+        !image["png_base64"].is_string())
+      throw std::runtime_error("images: an entry without file and png_base64");
+    const std::string file = image["file"].get<std::string>();
+    // The name goes into -o DIR: a plain file name of this technique's, nothing else.
+    if (file.empty() || file.find('/') != std::string::npos || file.rfind(o.name + "-", 0) != 0 || !file.ends_with(".png"))
+      throw std::runtime_error("images: '" + json_input::printable(file, 80) + "' is not one of " + o.name + "'s images");
+    try {
+      o.images.emplace_back(file, unbase64(image["png_base64"].get<std::string>()));
+    } catch (const std::exception& e) {
+      throw std::runtime_error("images: " + file + ": " + e.what());
+    }
+  }
+  return o;
+}
 
-  // The adoption question first.
-  // At equal perceived difference (FLIP) first, where it was measured; then at equal RMSE.
-  const bool perceived = std::any_of(equal.begin(), equal.end(), [](const demo::EqualErrors& e) { return e.flip.available; });
+nlohmann::json head_json(const RunHead& h) {
+  return {{"report", h.report}, {"scene_line", h.scene_line}, {"settings_lines", h.settings_lines}};
+}
+
+// The adoption question first (the adaptive rule against the engine's Pareto front at equal
+// perceived difference, where it was measured, then at equal RMSE), the single-map comparison and
+// the tables below it.
+void print_results(const RunHead& head, const std::vector<TechniqueOutput>& techniques) {
+  const bool perceived = std::any_of(techniques.begin(), techniques.end(), [](const TechniqueOutput& t) { return t.flip_available; });
   std::printf("penumbra-demo: adaptive against the engine's Pareto front at equal %s to the reference (engine at equal error / "
               "adaptive, per frame along the path: median [95 %% bootstrap interval]; > 1 favours adaptive)\n",
               perceived ? "perceived difference (LDR-FLIP mean of the lit frames)" : "error");
@@ -293,37 +352,36 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     if (m == demo::ErrorMeasure::rmse && perceived) {
       std::printf("the frame observer (metrics/frame_observer.h) on the lit frames against the reference (PCSS: converged PCSS) at the "
                   "technique's criterion F, every reference frame:\n");
-      for (const demo::TechniqueRun& run : runs) std::printf("%s\n", demo::unseen_line(run, demo::cheapest_unseen(run)).c_str());
+      for (const TechniqueOutput& t : techniques) std::printf("%s\n", t.unseen.c_str());
       std::printf("at equal error (visibility RMSE against the reference):\n");
     }
-    for (std::size_t i = 0; i < runs.size(); ++i)
-      for (const demo::EqualError* eq : equal[i].shown()) {
-        if (eq->measure != m) continue;
-        std::printf("%s\n", demo::headline(runs[i], *eq).c_str());
-        for (const demo::VirtualReading& v : eq->virtual_maps) std::printf("%s\n", demo::virtual_headline(runs[i], v).c_str());
-      }
+    for (const TechniqueOutput& t : techniques)
+      for (const std::string& line : t.headlines[static_cast<std::size_t>(m)]) std::printf("%s\n", line.c_str());
   }
-  std::printf("\n%s at %dx%d on %s; %zu frames of a %d-frame %s path; engine family %s; calibration %s\n", scene.name.c_str(), opt.width,
-              opt.height, ctx.info().renderer.c_str(), plan.frames.size(), plan.length, plan.kind.c_str(),
-              report["engine_family"].get<std::string>().c_str(), opt.calibration.loaded.source.c_str());
-  for (const demo::TechniqueRun& run : runs) std::printf("%s\n", apps::calibration_line(opt.calibration, run.series[run.adaptive].config.settings).c_str());
-  const auto& ap = base.adaptive;
-  std::printf("adaptive: res = c L / r per cascade, as many cascades as the rule needs; texels no finer than %s at a cascade's near end "
-              "(--adaptive.min_texel_px), no wider than %s (--adaptive.max_texel_ws)\n",
-              ap.min_texel_px > 0 ? (std::to_string(ap.min_texel_px).substr(0, 4) + " px").c_str() : "the rule's (off)",
-              ap.max_texel_ws > 0 ? (std::to_string(ap.max_texel_ws).substr(0, 5) + " ws").c_str() : "the rule's (off)");
-  std::printf("frame time: wall clock around glFinish, ms over the path (median [p10, p90])%s\n",
-              opt.repeats > 1 ? (", each frame the median of " + std::to_string(opt.repeats) + " renders").c_str() : "");
-  std::printf("\nsingle map: one fitted map of %d² against adaptive, each labelled by its error (RMSE against the reference)\n",
-              base.map.resolution_texels);
-  std::printf("%-6s %10s %24s %10s %24s %8s %20s %8s %9s %9s\n", "tech", "RMSE fixed", "fixed", "RMSE adapt", "adaptive", "speedup",
-              "adaptive cascades", "min SSIM", "max diff", ">1/255");
-  for (const demo::TechniqueRun& run : runs) demo::print_single_map_row(run);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
+  std::fputs(head.scene_line.c_str(), stdout);
+  for (const TechniqueOutput& t : techniques) std::printf("%s\n", t.calibration.c_str());
+  std::fputs(head.settings_lines.c_str(), stdout);
+  for (const TechniqueOutput& t : techniques) std::fputs(t.single_map_row.c_str(), stdout);
+  for (const TechniqueOutput& t : techniques) {
     std::printf("\n");
-    demo::print_tables(runs[i], equal[i]);
+    std::fputs(t.tables.c_str(), stdout);
   }
   std::fflush(stdout);
+}
+
+constexpr const char* kFramesCsvHeader = "technique,configuration,path_frame,frame_ms,texels,cascades,ssim_vs_engine,flicker_mean_abs\n";
+
+// What the unsharded run and the merge print and write into -o DIR (staged in `out`): the results,
+// the images a part carried, frames.csv, report.json and the plots.
+int write_results(const Options& opt, const RunHead& head, const std::vector<TechniqueOutput>& techniques, io::StagedDirectory& out) {
+  print_results(head, techniques);
+  nlohmann::json report = head.report;
+  std::string csv = kFramesCsvHeader;
+  for (const TechniqueOutput& t : techniques) {
+    report["techniques"].push_back(t.entry);
+    csv += t.csv;
+    for (const auto& [file, bytes] : t.images) io::write_file_atomic(out.path() / file, bytes);
+  }
   io::write_file_atomic(out.path() / "frames.csv", csv);
   io::write_file_atomic(out.path() / "report.json", json_input::dump(report, 2) + "\n");
   // A plot that fails does not cost the measurements (minutes of them with --sweep): they are
@@ -345,6 +403,228 @@ int run_headless(const Options& opt, shadows::ShadowSettings base) {
     return 1;
   }
   return 0;
+}
+
+void add_crops(std::vector<std::pair<std::string, io::Image8>>& images, const std::string& file, const demo::Crops& crops) {
+  if (crops.tiles.empty()) return;
+  images.emplace_back(file, io::montage(crops.tiles, crops.labels, static_cast<int>(crops.tiles.size()),
+                                        std::min(2 * crops.tiles.front().width, 480)));
+}
+
+// The main job: for each technique, its configurations walk the path (apps/demo/measurement.h);
+// then the adoption question first (the adaptive rule against the engine's Pareto front at equal
+// error), the single-map comparison and the tables below it (apps/demo/report.h). A shard walks
+// its techniques only and writes them into its part instead.
+int run_headless(const Options& opt, shadows::ShadowSettings base, const Sharding& sharding) {
+  // Everything that can refuse the command comes before any output: the plotter, the output
+  // directory, the scene and its path; then the first line of progress.
+  const bool sharded = sharding.shard.has_value();
+  if (opt.plot && !sharded) apps::check_python(opt.python, opt.plot_script, "the chart");  // a shard writes its part alone; the merge plots
+  const bool flip = opt.flip && opt.reference;
+  const double pixels_per_degree = flip ? apps::display_pixels_per_degree(opt.display, "penumbra-demo") : 0.0;  // --display's viewing geometry
+  std::optional<io::StagedDirectory> out;
+  if (sharded) io::check_output(sharding.part, io::OutputKind::file);
+  else out.emplace(opt.output, "report.json");
+  gl::HeadlessContext ctx;
+  const double t_scene = now_ms();
+  scene::Scene scene = scene::load_scene(opt.scene);
+  apps::override_light_size(opt.light_size, scene.light);
+  const demo::PathPlan plan = demo::plan_path(scene, opt.path, opt.frames);
+  std::fprintf(stderr, "scene %s built in %.1f s\n", scene.name.c_str(), (now_ms() - t_scene) / 1000);
+  const gl::TimingMethod method = ctx.info().software ? gl::TimingMethod::wall_finish : gl::TimingMethod::gpu_timer;
+  const bool directional = scene.light.type == scene::Light::Type::directional;
+
+  RunHead head;
+  nlohmann::json& report = head.report;
+  report["scene"] = scene.name;
+  report["device"] = ctx.info();
+  report["image_px"] = {opt.width, opt.height};
+  report["light"] = {{"type", directional ? "directional" : "spot"}, {"size", scene.light.size}, {"size_unit", directional ? "deg" : "world"}};
+  report["path"] = plan.kind;
+  report["path_length"] = plan.length;
+  report["path_frames"] = plan.frames.size();
+  for (const demo::PathFrame& f : plan.frames) report["path_frame_index"].push_back(f.frame);
+  report["frame_time_method"] = "wall_finish";
+  report["frame_time_repeats"] = opt.repeats;
+  report["pass_time_method"] = gl::to_string(method);
+  report["engine_family"] = !opt.baselines ? "none" : opt.sweep ? "sweep" : "default";
+  report["calibration"] = apps::calibration_json(opt.calibration, base);
+  report["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
+  if (flip)
+    report["perceptual"] = {{"measure", "LDR-FLIP (metrics/flip.h) of the lit frames at the reference frames"},
+                            {"display", opt.display},
+                            {"pixels_per_degree", pixels_per_degree},
+                            {"pixels_per_degree_formula", "2 d tan(0.5 deg) width_px / width_mm (metrics::pixels_per_degree), the frame shown "
+                                                          "pixel for pixel"}};
+  {
+    char line[1024];
+    std::snprintf(line, sizeof line, "\n%s at %dx%d on %s; %zu frames of a %d-frame %s path; engine family %s; calibration %s\n",
+                  scene.name.c_str(), opt.width, opt.height, ctx.info().renderer.c_str(), plan.frames.size(), plan.length, plan.kind.c_str(),
+                  report["engine_family"].get<std::string>().c_str(), opt.calibration.loaded.source.c_str());
+    head.scene_line = line;
+    const auto& ap = base.adaptive;
+    std::snprintf(line, sizeof line,
+                  "adaptive: res = c L / r per cascade, as many cascades as the rule needs; texels no finer than %s at a cascade's near "
+                  "end (--adaptive.min_texel_px), no wider than %s (--adaptive.max_texel_ws)\n",
+                  ap.min_texel_px > 0 ? (std::to_string(ap.min_texel_px).substr(0, 4) + " px").c_str() : "the rule's (off)",
+                  ap.max_texel_ws > 0 ? (std::to_string(ap.max_texel_ws).substr(0, 5) + " ws").c_str() : "the rule's (off)");
+    head.settings_lines = line;
+    std::snprintf(line, sizeof line, "frame time: wall clock around glFinish, ms over the path (median [p10, p90])%s\n",
+                  opt.repeats > 1 ? (", each frame the median of " + std::to_string(opt.repeats) + " renders").c_str() : "");
+    head.settings_lines += line;
+    std::snprintf(line, sizeof line, "\nsingle map: one fitted map of %d² against adaptive, each labelled by its error (RMSE against the reference)\n",
+                  base.map.resolution_texels);
+    head.settings_lines += line;
+    std::snprintf(line, sizeof line, "%-6s %10s %24s %10s %24s %8s %20s %8s %9s %9s\n", "tech", "RMSE fixed", "fixed", "RMSE adapt", "adaptive",
+                  "speedup", "adaptive cascades", "min SSIM", "max diff", ">1/255");
+    head.settings_lines += line;
+  }
+
+  // The techniques this process walks: all of them, or its shard's.
+  std::vector<std::size_t> walked;
+  for (std::size_t i = 0; i < opt.techniques.size(); ++i)
+    if (!sharded || sharding.shard->covers(i)) walked.push_back(i);
+  demo::ConfigurationOptions config_options;
+  config_options.family = !opt.baselines ? demo::Family::none : opt.sweep ? demo::Family::sweep : demo::Family::default_;
+  config_options.auto_cascades = opt.auto_cascades;
+  config_options.virtual_pages = opt.virtual_pages && directional;
+  std::vector<std::vector<demo::Configuration>> per_technique;
+  for (const std::size_t i : walked) {
+    shadows::ShadowSettings fixed = base;
+    fixed.technique = shadows::technique_from_string(opt.techniques[i]);
+    apps::apply_calibration_for(opt.calibration, fixed);  // the technique's own c
+    fixed.adaptive.enabled = false;
+    per_technique.push_back(demo::configurations(fixed, config_options));
+  }
+  const int total = static_cast<int>(walked.size() * plan.frames.size());
+  int done = 0;
+  std::fprintf(stderr, "penumbra-demo: %zu techniques x %zu configurations x %zu frames%s\n", walked.size(), per_technique.front().size(),
+               plan.frames.size(),
+               sharded ? (" (shard " + sharding.shard->text() + " of " + std::to_string(opt.techniques.size()) + " techniques)").c_str() : "");
+  ProgressBar progress("penumbra-demo", true, " frames");
+  demo::WalkOptions walk_options;
+  walk_options.width = opt.width, walk_options.height = opt.height;
+  walk_options.repeats = opt.repeats;
+  walk_options.reference = opt.reference;
+  walk_options.reference_samples = opt.reference_samples;
+  walk_options.perceptual = flip;
+  walk_options.pixels_per_degree = flip ? pixels_per_degree : walk_options.pixels_per_degree;
+  demo::Walk walk(scene, plan, walk_options, method);
+  std::optional<PngBytes> png_bytes;  // a shard's images go into its part
+  if (sharded) png_bytes.emplace();
+  std::vector<TechniqueOutput> outputs;
+  for (std::size_t w = 0; w < walked.size(); ++w) {
+    const std::string& name = opt.techniques[walked[w]];
+    // The frame observer's "visible": the technique's calibration entry's criterion F (the
+    // published design's without an entry).
+    const adaptive::CalibrationChoice choice = opt.calibration.choice(per_technique[w].front().settings);
+    walk.set_criterion_f(choice.entry ? choice.entry->definition().criterion_f : metrics::kStudyCriterionF);
+    demo::TechniqueRun run = walk.run(name, per_technique[w], progress, done, total);
+    const demo::EqualErrors equal = demo::equal_errors(run);
+    TechniqueOutput o;
+    o.index = walked[w];
+    o.name = name;
+    o.entry = demo::technique_json(run, equal);
+    const shadows::ShadowSettings& adapt = run.series[run.adaptive].config.settings;
+    o.entry["settings_fixed"] = shadows::to_json(run.series[run.fixed].config.settings);
+    o.entry["settings_adaptive"] = shadows::to_json(adapt);
+    o.entry["calibration"] = apps::calibration_json(opt.calibration, adapt);
+    o.entry["calibration"]["bound"] = opt.ci_upper ? "ci95_hi" : "c";
+    o.csv = run.csv;
+    o.flip_available = equal.flip.available;
+    for (const demo::EqualError* eq : equal.shown()) {
+      std::vector<std::string>& lines = o.headlines[static_cast<std::size_t>(eq->measure)];
+      lines.push_back(demo::headline(run, *eq));
+      for (const demo::VirtualReading& v : eq->virtual_maps) lines.push_back(demo::virtual_headline(run, v));
+    }
+    o.unseen = demo::unseen_line(run, demo::cheapest_unseen(run));
+    o.calibration = apps::calibration_line(opt.calibration, adapt);
+    o.single_map_row = demo::single_map_row(run);
+    o.tables = demo::tables(run, equal);
+    std::vector<std::pair<std::string, io::Image8>> images;
+    images.emplace_back(name + "-fixed-vs-adaptive.png", side_by_side(run.shown_fixed, run.shown_adaptive, side_by_side_labels(run, walk.plan())));
+    add_crops(images, name + "-crops.png", run.thin_crops);
+    add_crops(images, name + "-crops-gain.png", run.gain_crops);
+    if (!run.flip_tiles.empty())
+      images.emplace_back(name + "-flip-montage.png",
+                          io::montage(run.flip_tiles, run.flip_labels, demo::kFlipMontageColumns, demo::flip_montage_tile_width(opt.width)));
+    for (const auto& [file, image] : images) {
+      if (sharded) o.images.emplace_back(file, (*png_bytes)(image));
+      else io::write_png(out->path() / file, image);
+    }
+    outputs.push_back(std::move(o));
+    // The next technique's maps (up to 4 × 4096² each in a sweep) and images come after this one's
+    // are gone: what is kept is the numbers and the text.
+  }
+  progress.clear();  // the tables follow on stdout
+  if (!sharded) return write_results(opt, head, outputs, *out);
+
+  // A shard: its results as the run prints them, then its part, whole or not at all.
+  print_results(head, outputs);
+  nlohmann::json payload = {{"device", report["device"]}, {"head", head_json(head)}, {"techniques", nlohmann::json::array()}};
+  std::string names;
+  for (const TechniqueOutput& o : outputs) {
+    payload["techniques"].push_back(output_json(o));
+    names += (names.empty() ? "" : ",") + o.name;
+  }
+  io::write_file_atomic(sharding.part, shard::part_text(kPartKind, tool::version_line("penumbra-demo"), *sharding.shard,
+                                                        {{"args", sharding.args}}, payload));
+  std::printf("wrote %s: shard %s, techniques %s of %zu\n", sharding.part.c_str(), sharding.shard->text().c_str(), names.c_str(),
+              opt.techniques.size());
+  return 0;
+}
+
+// penumbra-demo merge: the parts' techniques, checked (merge_main: the parts themselves; here what
+// they carry), printed and written as the unsharded run prints and writes them.
+int merge_headless(const Options& opt, const std::vector<shard::Part>& parts) {
+  if (opt.plot) apps::check_python(opt.python, opt.plot_script, "the chart");
+  const shard::Part& first = parts.front();
+  const std::string first_file = json_input::printable(first.path.string(), 200);
+  const auto head_of = [](const shard::Part& part) -> RunHead {
+    const std::string file = json_input::printable(part.path.string(), 200);
+    const nlohmann::json& h = part.payload.contains("head") ? part.payload["head"] : nlohmann::json();
+    if (!h.is_object() || !h.contains("report") || !h["report"].is_object() || !h.contains("scene_line") || !h["scene_line"].is_string() ||
+        !h.contains("settings_lines") || !h["settings_lines"].is_string())
+      throw std::runtime_error(file + ": payload.head: missing or not the run's head (report, scene_line, settings_lines)");
+    return {h["report"], h["scene_line"].get<std::string>(), h["settings_lines"].get<std::string>()};
+  };
+  const RunHead head = head_of(first);
+  std::vector<std::optional<TechniqueOutput>> outputs(opt.techniques.size());
+  for (const shard::Part& part : parts) {
+    const std::string file = json_input::printable(part.path.string(), 200);
+    // Frame times of two devices are no one measurement: the front at equal error reads them side by side.
+    const nlohmann::json device = part.payload.value("device", nlohmann::json());
+    if (device != first.payload.value("device", nlohmann::json()))
+      throw std::runtime_error(file + ": measured on another device than " + first_file + " (" + json_input::printable(device.dump(), 120) +
+                               "); frame times of two devices do not merge");
+    // The same command on another machine can still see another scene file or calibration file.
+    const RunHead h = head_of(part);
+    if (h.report != head.report || h.scene_line != head.scene_line || h.settings_lines != head.settings_lines)
+      throw std::runtime_error(file + ": its run's scene, path, calibration or display differ from " + first_file +
+                               "'s (payload.head); the parts are not one run");
+    const nlohmann::json& list = part.payload.contains("techniques") ? part.payload["techniques"] : nlohmann::json();
+    if (!list.is_array()) throw std::runtime_error(file + ": payload.techniques: missing or not a list");
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      TechniqueOutput o;
+      try {
+        o = output_of_json(list[k]);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(file + ": payload.techniques[" + std::to_string(k) + "]." + e.what());
+      }
+      if (o.index >= opt.techniques.size() || !part.shard.covers(o.index) || opt.techniques[o.index] != o.name || outputs[o.index])
+        throw std::runtime_error(file + ": payload.techniques[" + std::to_string(k) + "]: " + json_input::printable(o.name, 40) +
+                                 " at position " + std::to_string(o.index) + " is not one of shard " + part.shard.text() +
+                                 "'s techniques of --techniques");
+      outputs[o.index] = std::move(o);
+    }
+    for (std::size_t i = part.shard.index; i < opt.techniques.size(); i += part.shard.count)
+      if (!outputs[i])
+        throw std::runtime_error(file + ": payload.techniques: " + opt.techniques[i] + " (shard " + part.shard.text() + "'s) missing");
+  }
+  std::vector<TechniqueOutput> techniques;
+  for (auto& o : outputs) techniques.push_back(std::move(*o));
+  io::StagedDirectory out(opt.output, "report.json");
+  return write_results(opt, head, techniques, out);
 }
 
 // --pages: the pages of a virtual shadow map for the sun along the path. Each pixel's surface asks
@@ -570,9 +850,26 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
 }
 #endif
 
-}  // namespace
+// The command line less --shard and --part: a part's settings (fingerprinted; the merge parses
+// them again, with its own -o DIR).
+std::vector<std::string> settings_args(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--shard" || args[i] == "--part") ++i;  // and its value
+    else if (!args[i].starts_with("--shard=") && !args[i].starts_with("--part=")) out.push_back(args[i]);
+  }
+  return out;
+}
 
-int main(int argc, char** argv) {
+// The command line `args` (argv less the tool's name); for a merge, the parts' own arguments and
+// -o DIR, with `merged` the parts (checked by merge_main).
+int run(const std::vector<std::string>& args, const std::vector<shard::Part>* merged) {
+  std::vector<std::string> argv_text{"penumbra-demo"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  const int argc = static_cast<int>(argv.size());
+  const char* const tool_name = merged ? "penumbra-demo merge" : "penumbra-demo";
   CLI::App app{"Adaptive shadow-map resolution against a fixed resolution: frame time and image difference."};
   cli::describe_tool(app, "penumbra-demo", "adaptive.md");
   Options opt;
@@ -627,10 +924,35 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   app.add_option("--screenshot", opt.screenshot, "windowed: write the window (with the panel) to this PNG, then exit");
   app.add_option("--screenshot-frames", opt.screenshot_frames, "windowed: frames before --screenshot")->check(CLI::Range(1, 100000));
+  std::string shard_text, part_out;
+  app.add_option("--shard", shard_text,
+                 "I/N: --headless walks only shard I of N (0 <= I < N) of the techniques, those whose position in --techniques is I "
+                 "modulo N (a technique's configurations are compared frame by frame: it is not split), into --part instead of -o; "
+                 "`penumbra-demo merge PARTS... -o DIR` prints and writes what the unsharded run does, but for the frame times and "
+                 "what is read from them (docs/cluster.md)");
+  app.add_option("--part", part_out,
+                 "--shard: the part file to write, whole or not at all (the shard's techniques: report entries, frames.csv rows, "
+                 "printed lines and images; the arguments, the device and the build's version)");
   apps::add_settings_options(app, base);
-  if (const auto status = cli::parse(app, argc, argv, "penumbra-demo")) return *status;
+  if (const auto status = cli::parse(app, argc, argv.data(), tool_name)) return *status;
   opt.auto_cascades = app.count("--map.cascades") == 0;
   try {
+    Sharding sharding;
+    if (!shard_text.empty()) {
+      if (!headless || pages) throw cli::UsageError("--shard: only with --headless (a shard walks whole techniques of the comparison)");
+      sharding.shard = shard::parse(shard_text);
+      if (part_out.empty()) throw cli::UsageError("--shard: needs --part FILE, where the shard's techniques go");
+      if (app.count("--output") > 0)
+        throw cli::UsageError("--output: a shard writes a part (--part); `penumbra-demo merge PARTS... -o DIR` writes the directory");
+      if (sharding.shard->count > opt.techniques.size())
+        throw cli::UsageError("--shard: " + shard_text + ": N is above the " + std::to_string(opt.techniques.size()) +
+                              " techniques of --techniques, the unit a shard walks (at most " + std::to_string(opt.techniques.size()) +
+                              " shards)");
+      sharding.part = part_out;
+      sharding.args = settings_args(args);
+    } else if (!part_out.empty()) {
+      throw cli::UsageError("--part: only with --shard I/N");
+    }
     std::vector<shadows::Technique> compared;
     std::string listed;
     for (const auto& t : opt.techniques) {
@@ -639,15 +961,57 @@ int main(int argc, char** argv) {
     }
     (void)apps::setting_stands_for(app, "--map.resolution_texels", "--fixed-resolution");
     if (headless) apps::refuse_unused_technique_options(app, compared, "--techniques " + listed);
+    if (merged) return merge_headless(opt, *merged);  // the parts carry what the calibration gave
     apps::apply_calibration(app, opt.calibration, base, opt.ci_upper);
     if (pages) return run_pages(opt, base);
-    if (headless) return run_headless(opt, base);
+    if (headless) return run_headless(opt, base, sharding);
 #if PENUMBRA_DEMO_GUI
     return run_windowed(opt, base);
 #else
     return cli::fail("penumbra-demo", "built without GUI support; use --headless", cli::kExitUsage);
 #endif
   } catch (const std::exception& e) {
-    return cli::fail("penumbra-demo", e);
+    return cli::fail(tool_name, e);
   }
+}
+
+// penumbra-demo merge PARTS... -o DIR: the parts, checked (shard::read_parts: none missing or
+// twice, one command, one build), through run() with their own arguments.
+int merge_main(int argc, char** argv) {
+  CLI::App app{"Merge the part files of penumbra-demo --headless ... --shard I/N --part FILE: prints the tables and writes the "
+               "directory the unsharded run writes (report.json, frames.csv, the images, the plots). The images are its bytes; "
+               "every field and column equals the unsharded run's but the frame times and what is read from them: frame_ms, "
+               "shadow_ms, the passes' *_ms, the references' and FLIP's times, the speedups, the fronts on time and shadow cost "
+               "(front, front_ms, ratio, the * marks, on_front.time), the headlines and the observer's cheapest by time "
+               "(docs/cluster.md)",
+               "penumbra-demo merge"};
+  cli::describe_tool(app, "penumbra-demo merge", "cluster.md");
+  std::vector<std::string> paths;
+  std::string out;
+  app.add_option("parts", paths, "the part files, one per shard 0/N to N-1/N, any order")->required();
+  app.add_option("-o,--output", out, "the output directory (as -o of the unsharded run)")->required()->check(cli::path_given());
+  if (const auto status = cli::parse(app, argc - 1, argv + 1, "penumbra-demo merge")) return *status;
+  std::vector<std::string> args;
+  shard::Checked checked;
+  try {
+    checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-demo"));
+    const nlohmann::json& stored = checked.settings["args"];
+    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+    for (const auto& a : stored) {
+      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
+      args.push_back(a.get<std::string>());
+    }
+  } catch (const std::exception& e) {
+    return cli::fail("penumbra-demo merge", e);
+  }
+  args.push_back("-o");
+  args.push_back(out);
+  return run(args, &checked.parts);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 2 && std::string_view(argv[1]) == "merge") return merge_main(argc, argv);
+  return run(std::vector<std::string>(argv + 1, argv + argc), nullptr);
 }

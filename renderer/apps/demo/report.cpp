@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <map>
 
@@ -21,6 +22,22 @@ namespace {
 
 using stats::Spread;
 using stats::spread;
+
+// printf onto the end of `out` (the tables are text that a shard's part carries to the merge).
+__attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char* format, ...) {
+  std::va_list args, copy;
+  va_start(args, format);
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  if (n > 0) {
+    const std::size_t at = out.size();
+    out.resize(at + static_cast<std::size_t>(n) + 1);
+    std::vsnprintf(out.data() + at, static_cast<std::size_t>(n) + 1, format, args);
+    out.resize(at + static_cast<std::size_t>(n));
+  }
+  va_end(args);
+}
 
 double mean_of(const std::vector<double>& v) {
   double sum = 0;
@@ -464,29 +481,32 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eqs) {
   return t;
 }
 
-void print_single_map_row(const TechniqueRun& run) {
+std::string single_map_row(const TechniqueRun& run) {
+  std::string out;
   const Series& ca = run.series[run.adaptive];
   const Series& cf = run.series[run.fixed];
   const Spread sf = spread(cf.ms), sa = spread(ca.ms);
   const double speedup = sf.median / std::max(sa.median, 1e-9);
-  std::printf("%-6s %10.4f %8.1f [%6.1f, %6.1f] %10.4f %8.1f [%6.1f, %6.1f] %7.2fx %20s %8.4f %9.4f %9.4f\n", run.technique.c_str(),
+  appendf(out, "%-6s %10.4f %8.1f [%6.1f, %6.1f] %10.4f %8.1f [%6.1f, %6.1f] %7.2fx %20s %8.4f %9.4f %9.4f\n", run.technique.c_str(),
               reference_rmse(cf), sf.median, sf.p10, sf.p90, reference_rmse(ca), sa.median, sa.p10, sa.p90, speedup,
               (usual_resolution(ca) + "²").c_str(), min_of(run.ssim_fixed_adaptive), max_of(run.max_abs_fixed_adaptive),
               max_of(run.share_fixed_adaptive));
+  return out;
 }
 
-void print_tables(const TechniqueRun& run, const EqualErrors& eqs) {
+std::string tables(const TechniqueRun& run, const EqualErrors& eqs) {
+  std::string out;
   const EqualError& eq = *eqs.shown().front();  // the headline's reading marks its fronts
   const auto& series = run.series;
   const double engine_median = spread(series[run.engine].ms).median;
-  std::printf("%s: every configuration against %s (the engine baseline) and the reference; * on the time front, + on the memory front "
+  appendf(out, "%s: every configuration against %s (the engine baseline) and the reference; * on the time front, + on the memory front "
               "(at equal %s)\n",
               run.technique.c_str(), series[run.engine].config.name.c_str(), measure_label(eq.measure));
-  std::printf("  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
+  appendf(out, "  %-26s %24s %7s %10s %9s %9s %8s %9s %8s %7s %7s", "configuration", "frame ms", "vs eng.", "Mtex drawn", "allocated",
               "Mtri maps", "SSIM eng", "RMSE ref", "SSIM ref", "thin", "gaps");
-  if (run.perceptual) std::printf(" %8s %8s %7s %6s", "FLIP", "FLIP>.05", "max", "p_det");
-  if (run.converged) std::printf(" %9s %9s %6s", "RMSE conv", "FLIP sun", "p_sun");
-  std::printf("\n");
+  if (run.perceptual) appendf(out, " %8s %8s %7s %6s", "FLIP", "FLIP>.05", "max", "p_det");
+  if (run.converged) appendf(out, " %9s %9s %6s", "RMSE conv", "FLIP sun", "p_sun");
+  appendf(out, "\n");
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
     if (!s.config.timed()) continue;
@@ -494,43 +514,44 @@ void print_tables(const TechniqueRun& run, const EqualErrors& eqs) {
     std::string name = s.config.name;
     if (eq.available && std::find(eq.time.front.begin(), eq.time.front.end(), k) != eq.time.front.end()) name += " *";
     if (eq.available && std::find(eq.memory.front.begin(), eq.memory.front.end(), k) != eq.memory.front.end()) name += " +";
-    std::printf("  %-26s %8.1f [%6.1f, %6.1f] %6.2fx %10.2f %9.2f %9.3f %8.4f", name.c_str(), ms.median, ms.p10, ms.p90,
+    appendf(out, "  %-26s %8.1f [%6.1f, %6.1f] %6.2fx %10.2f %9.2f %9.3f %8.4f", name.c_str(), ms.median, ms.p10, ms.p90,
                 engine_median / std::max(ms.median, 1e-9), spread(s.texels).median / 1e6, mean_of(s.allocated) / 1e6,
                 spread(s.map_triangles).median / 1e6, min_of(s.ssim_vs_engine));
     if (const nlohmann::json err = reference_error_json(s.vs_reference); !err.is_null())
-      std::printf(" %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
-    if (run.thin_pixels > 0) std::printf(" %7.3f %7.3f", shadow_kept(run, s), gaps_kept(run, s));
+      appendf(out, " %9.5f %8.4f", err["rmse_mean"].get<double>(), err["ssim_mean"].get<double>());
+    if (run.thin_pixels > 0) appendf(out, " %7.3f %7.3f", shadow_kept(run, s), gaps_kept(run, s));
     if (const nlohmann::json f = flip_json(s.flip); run.perceptual && !f.is_null())
-      std::printf(" %8.5f %7.2f%% %7.3f %5.2f%s", f["mean"].get<double>(), 100 * f["share_above_mean"].get<double>(),
+      appendf(out, " %8.5f %7.2f%% %7.3f %5.2f%s", f["mean"].get<double>(), 100 * f["share_above_mean"].get<double>(),
                   f["max_max"].get<double>(), s.seen.p_detect_max(), s.seen.visible() ? "!" : " ");
     if (run.converged && !s.vs_converged.empty())
-      std::printf(" %9.5f %9.5f %5.2f%s", reference_error_json(s.vs_converged)["rmse_mean"].get<double>(), s.flip_ray_traced.mean(),
+      appendf(out, " %9.5f %9.5f %5.2f%s", reference_error_json(s.vs_converged)["rmse_mean"].get<double>(), s.flip_ray_traced.mean(),
                   s.seen_ray_traced.p_detect_max(), s.seen_ray_traced.visible() ? "!" : " ");
-    std::printf("\n");
+    appendf(out, "\n");
   }
   if (run.perceptual)
-    std::printf("  FLIP: LDR-FLIP of the lit frame against %s at %.2f pixels per degree, mean over the reference frames (FLIP>.05: share "
+    appendf(out, "  FLIP: LDR-FLIP of the lit frame against %s at %.2f pixels per degree, mean over the reference frames (FLIP>.05: share "
                 "of pixels above 0.05; max: the largest pixel); p_det: the frame observer's detection probability, the largest patch's over the reference frames, "
                 "! where above F = %.3f%s\n",
                 run.target_description.c_str(), run.pixels_per_degree, cheapest_unseen(run).criterion_f,
                 run.converged ? "; RMSE conv: visibility against it; FLIP sun, p_sun: against the ray-traced sun" : "");
   if (run.reference_frames > 0)
-    std::printf("  reference: %s; compared at %s (%lld pixels over %d frames)\n", run.reference_description.c_str(),
+    appendf(out, "  reference: %s; compared at %s (%lld pixels over %d frames)\n", run.reference_description.c_str(),
                 run.mask_description.c_str(), static_cast<long long>(run.mask_pixels), run.reference_frames);
   if (run.thin && run.reference_frames > 0)
-    std::printf("  thin casters (crane, wires): %lld shadow and %lld gap pixels over %d frames; thin = their shadow kept, gaps = "
+    appendf(out, "  thin casters (crane, wires): %lld shadow and %lld gap pixels over %d frames; thin = their shadow kept, gaps = "
                 "their gaps kept, relative to the reference\n",
                 static_cast<long long>(run.thin_pixels), static_cast<long long>(run.gap_pixels), run.reference_frames);
   const Series& ca = series[run.adaptive];
   if (!ca.pcss_clamped.empty())
-    std::printf("  PCSS: %.1f %% of the filtered pixels held at the minimum penumbra (clamped; mean over the path, %.1f %% in its last "
+    appendf(out, "  PCSS: %.1f %% of the filtered pixels held at the minimum penumbra (clamped; mean over the path, %.1f %% in its last "
                 "frame)\n",
                 100 * mean_of(ca.pcss_clamped), 100 * ca.pcss_clamped.back());
-  if (ca.flicker_mean_abs.empty()) return;
-  std::printf("  %-26s %16s %14s %12s\n", "flicker along the path", "mean |dV|", "share > 1/255", "res changes");
+  if (ca.flicker_mean_abs.empty()) return out;
+  appendf(out, "  %-26s %16s %14s %12s\n", "flicker along the path", "mean |dV|", "share > 1/255", "res changes");
   for (const Series& s : series)
-    std::printf("  %-26s %16.5f %14.4f %12d\n", s.config.name.c_str(), mean_of(s.flicker_mean_abs), mean_of(s.flicker_share),
+    appendf(out, "  %-26s %16.5f %14.4f %12d\n", s.config.name.c_str(), mean_of(s.flicker_mean_abs), mean_of(s.flicker_share),
                 s.resolution_changes);
+  return out;
 }
 
 }  // namespace penumbra::demo

@@ -86,10 +86,11 @@ nlohmann::json technique_json(const TechniqueRun& run, const EqualErrors& eq);
 // [1.10, 1.25], memory ratio 0.50x [...]".
 std::string headline(const TechniqueRun& run, const EqualError& eq);
 
-// The single-map comparison (fixed vs adaptive) as one row of the table under the headline.
-void print_single_map_row(const TechniqueRun& run);
+// The single-map comparison (fixed vs adaptive) as one row of the table under the headline (text
+// ending in a newline: printed by the run, carried by a shard's part to the merge).
+std::string single_map_row(const TechniqueRun& run);
 // Every configuration against the engine baseline and the reference, the thin casters, PCSS's
 // clamped pixels and flicker along the path.
-void print_tables(const TechniqueRun& run, const EqualErrors& eq);
+std::string tables(const TechniqueRun& run, const EqualErrors& eq);
 
 }  // namespace penumbra::demo
