@@ -694,14 +694,20 @@ struct Server::Impl {
       if (body.contains(k)) d[k] = finite_number(body, k, 0, 100000);
     for (const char* k : {"user_agent", "chinrest"})
       if (body.contains(k)) d[k] = k == std::string("chinrest") ? nlohmann::json(body[k].is_object() && body[k].dump().size() < 2000 ? body[k] : nlohmann::json()) : nlohmann::json(short_string(body, k, 400));
-    // Device pixels per stimulus pixel. A frame study's patch shrunk below one would lose pixels
-    // of the very aliasing it asks about (the lab shows patches 1:1): refused, with the distance
-    // that gives one; an edge study's shrink is recorded and reported (docs/study-online.md).
+    // Device pixels per stimulus pixel, and the least a stimulus keeps its structure with
+    // (docs/study-online.md#shrunk-stimuli): a frame study's patch needs one, since its aliasing is
+    // a pixel's (the lab shows patches 1:1); an edge study's stimulus is drawn from its parameters
+    // in stimulus pixels, and keeps every step of its jagged edge while the smallest artifact spans
+    // one device pixel, so a shrink down to that is shown (and recorded, and reported by
+    // penumbra-fit), one below it refused, with the distance that gives enough.
     const double device_px = css / c.stimulus_size_px * (d.contains("device_pixel_ratio") && d["device_pixel_ratio"].get<double>() > 0
                                                               ? d["device_pixel_ratio"].get<double>() : 1.0);
+    const double least_device_px =
+        c.frames.enabled() || c.artifact_px.empty() ? 1.0 : 1.0 / *std::min_element(c.artifact_px.begin(), c.artifact_px.end());
     d["device_px_per_stimulus_px"] = device_px;
+    d["least_device_px_per_stimulus_px"] = least_device_px;
     const bool large_enough = width_css >= need_w && height_css >= need_h;
-    const bool sharp_enough = !c.frames.enabled() || device_px >= 1.0;
+    const bool sharp_enough = device_px >= least_device_px;
     const bool fits = large_enough && sharp_enough;
     d["fits"] = fits;
     // record_presentation is the Session's, and the flow owns it: the session is reopened (as a
@@ -714,9 +720,9 @@ struct Server::Impl {
     if (!sharp_enough) {
       p.display = nullptr;
       char line[400];
-      std::snprintf(line, sizeof line, "at your viewing distance your screen would show each pixel of the pictures on %.2f of its own pixels, "
-                    "fewer than one: sit farther away (at least %.0f cm, the distance was measured at %.0f cm) or use a screen with smaller pixels",
-                    device_px, std::ceil(distance_mm / device_px / 10.0), distance_mm / 10.0);
+      std::snprintf(line, sizeof line, "at your viewing distance your screen would show each pixel of the pictures on %.3g of its own pixels, "
+                    "fewer than the %.3g they need: sit farther away (at least %.0f cm, the distance was measured at %.0f cm) or use a screen "
+                    "with smaller pixels", device_px, least_device_px, std::ceil(distance_mm * least_device_px / device_px / 10.0), distance_mm / 10.0);
       throw Refusal{422, line};
     }
     if (!large_enough) {

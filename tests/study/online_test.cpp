@@ -338,7 +338,7 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
   EXPECT_EQ(small.post({{"action", "display"}, {"px_per_mm", 1.5}, {"viewing_distance_mm", 300}, {"window_width_css_px", 1280},
                         {"window_height_css_px", 800}, {"device_pixel_ratio", 1}}), 422);
   EXPECT_NE(server->app->output().find("refused 422 POST /api/act: at your viewing distance your screen would show each pixel of the pictures on "
-                                       "0.41 of its own pixels, fewer than one: sit farther away (at least 73 cm"), std::string::npos)
+                                       "0.412 of its own pixels, fewer than the 1 they need: sit farther away (at least 73 cm"), std::string::npos)
       << server->app->output();
   ASSERT_EQ(small.get(), 200);
   EXPECT_TRUE(small.screen["needs_display"].get<bool>()) << "measured again";
@@ -351,6 +351,33 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
   server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
   EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in 4 files of " + (tmp / "sessions" / ".stimuli").string() +
                                        " (identical frames share them), 0 cut now from 0 frame(s)"), std::string::npos) << server->app->output();
+  fs::remove_all(tmp);
+}
+
+// An edge study's stimulus may be shown shrunk while its smallest artifact (8 px in the test's
+// config) keeps at least one device pixel per step, 1/8 device pixel per stimulus pixel: at 0.137
+// it is shown (and recorded), at 0.124 refused with the distance that gives 1/8.
+TEST(OnlineServer, EdgeStimuliShrunkAreShownWhileTheSmallestStepKeepsADevicePixel) {
+  const fs::path tmp = fresh_dir("shrunk");
+  ServerProcess server(tmp / "sessions");
+  auto measured = [&](const std::string& id, double px_per_mm) {
+    Participant p(server.port, id);
+    EXPECT_EQ(p.get(), 200);
+    EXPECT_EQ(p.post({{"action", "agree"}}), 200);
+    EXPECT_EQ(p.post({{"action", "intake"}, {"answers", {{"age", "30"}}}}), 200);
+    return p.post({{"action", "display"}, {"px_per_mm", px_per_mm}, {"viewing_distance_mm", 300}, {"window_width_css_px", 1280},
+                   {"window_height_css_px", 800}, {"device_pixel_ratio", 1}});
+  };
+  EXPECT_EQ(measured("S01", 1.0), 200);
+  const json shown = penumbra::json_input::read_file(tmp / "sessions" / "S01" / "session.json")["presentation"].back();
+  EXPECT_NEAR(shown["device_px_per_stimulus_px"].get<double>(), 0.1372, 1e-4);
+  EXPECT_EQ(shown["least_device_px_per_stimulus_px"], 0.125);
+  EXPECT_TRUE(shown["fits"].get<bool>());
+  EXPECT_EQ(measured("S02", 0.9), 422);
+  EXPECT_NE(server.app->output().find("refused 422 POST /api/act: at your viewing distance your screen would show each pixel of the pictures "
+                                      "on 0.124 of its own pixels, fewer than the 0.125 they need: sit farther away (at least 31 cm, the "
+                                      "distance was measured at 30 cm)"), std::string::npos)
+      << server.app->output();
   fs::remove_all(tmp);
 }
 
