@@ -2,6 +2,7 @@
 // (observer_curve.h).
 #include "observers/observer_curve.h"
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -100,6 +101,17 @@ double mean_c(const std::vector<ConditionCurves>& replicates, double weber, doub
 }
 
 WeberFit fit_weber(const std::vector<ConditionCurves>& replicates, double target_c, double p_threshold) {
+  // A c beyond a grid's radii is no threshold of it: the grid's largest ratio is a bound, not a c.
+  double first = 0, last = std::numeric_limits<double>::infinity();
+  for (const ConditionCurves& curves : replicates)
+    for (const auto& points : curves)
+      if (!points.empty()) {
+        first = std::max(first, points.front().ratio);
+        last = std::min(last, points.back().ratio);
+      }
+  if (!(target_c > first && target_c < last))
+    throw std::invalid_argument("fit_weber: c " + std::to_string(target_c) + " is outside the radius grid (r/a " + std::to_string(first) +
+                                " to " + std::to_string(last) + ")");
   double lo = std::log(1e-6), hi = std::log(1.0);  // c(lo) >= target >= c(hi)
   const double c_lo = mean_c(replicates, std::exp(lo), p_threshold), c_hi = mean_c(replicates, std::exp(hi), p_threshold);
   if (!(c_lo >= target_c) || !(c_hi <= target_c))

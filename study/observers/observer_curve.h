@@ -60,7 +60,8 @@ struct WeberFit {
 // weber grows: a larger decision noise needs a larger deviation, which a smaller filter leaves).
 // c is a step function where a curve is not monotone (the stair's nulls): a target inside a jump
 // gives the jump's weber, and `c` says what it reaches. Throws std::invalid_argument when the
-// target is outside what the grid can show (above mean_c at 1e-6 or below it at 1).
+// target is outside what the grid can show (outside its radii, or above mean_c at 1e-6 or below
+// it at 1).
 WeberFit fit_weber(const std::vector<ConditionCurves>& replicates, double target_c, double p_threshold);
 
 }  // namespace penumbra::observers
