@@ -55,13 +55,29 @@ std::vector<Footprint> unit_footprints(const std::vector<DrawUnit>& units, const
   return out;
 }
 
+namespace {
+bool overlaps(const Footprint& f, const Footprint& window) {
+  return f.lo.x <= f.hi.x && f.hi.x >= window.lo.x && f.lo.x <= window.hi.x && f.hi.y >= window.lo.y && f.lo.y <= window.hi.y;
+}
+}  // namespace
+
 DrawRanges cull_units(const std::vector<DrawUnit>& units, const std::vector<Footprint>& footprints, const Footprint& window) {
   DrawRanges r;
-  for (std::size_t k = 0; k < units.size() && k < footprints.size(); ++k) {
-    const Footprint& f = footprints[k];
-    if (units[k].index_count != 0 && f.lo.x <= f.hi.x && f.hi.x >= window.lo.x && f.lo.x <= window.hi.x && f.hi.y >= window.lo.y &&
-        f.lo.y <= window.hi.y)
-      keep(r, units[k]);
+  for (std::size_t k = 0; k < units.size() && k < footprints.size(); ++k)
+    if (units[k].index_count != 0 && overlaps(footprints[k], window)) keep(r, units[k]);
+  return r;
+}
+
+ClusterFootprints cluster_footprints(const ClusteredUnits& c, const glm::mat4& light_from_mesh) {
+  return {unit_footprints(c.units, light_from_mesh), unit_footprints(c.clusters, light_from_mesh)};
+}
+
+DrawRanges cull_clusters(const ClusteredUnits& c, const ClusterFootprints& footprints, const Footprint& window) {
+  DrawRanges r;
+  for (std::size_t u = 0; u < c.units.size() && u < footprints.units.size() && u + 1 < c.first_cluster.size(); ++u) {
+    if (c.units[u].index_count == 0 || !overlaps(footprints.units[u], window)) continue;
+    for (std::size_t k = c.first_cluster[u]; k < c.first_cluster[u + 1] && k < c.clusters.size() && k < footprints.clusters.size(); ++k)
+      if (c.clusters[k].index_count != 0 && overlaps(footprints.clusters[k], window)) keep(r, c.clusters[k]);
   }
   return r;
 }

@@ -44,4 +44,14 @@ struct Footprint {
 std::vector<Footprint> unit_footprints(const std::vector<DrawUnit>& units, const glm::mat4& light_from_mesh);
 DrawRanges cull_units(const std::vector<DrawUnit>& units, const std::vector<Footprint>& footprints, const Footprint& window);
 
+// The same by clusters (mesh.h's cluster_units): a window keeps the clusters whose footprints meet
+// it, among those of the units whose footprints do (a unit's box holds its clusters' boxes, so the
+// unit test drops no cluster the window would keep; it spares testing the clusters of units
+// elsewhere). Neighbouring clusters merge into one range, a unit kept whole into its own.
+struct ClusterFootprints {
+  std::vector<Footprint> units, clusters;
+};
+ClusterFootprints cluster_footprints(const ClusteredUnits& c, const glm::mat4& light_from_mesh);
+DrawRanges cull_clusters(const ClusteredUnits& c, const ClusterFootprints& footprints, const Footprint& window);
+
 }  // namespace penumbra::scene

@@ -5,11 +5,11 @@
 
 namespace penumbra::scene {
 
-GpuMesh::GpuMesh(const MeshData& mesh)
+GpuMesh::GpuMesh(const MeshData& mesh, std::uint32_t cluster_triangles)
     : vertices_(mesh.vertices.size() * sizeof(Vertex), mesh.vertices.data()),
       indices_(mesh.indices.size() * sizeof(std::uint32_t), mesh.indices.data()),
       index_count_(mesh.indices.size()),
-      units_(mesh.draw_units()) {
+      clustered_(cluster_units(mesh, cluster_triangles)) {
   const GLuint vao = vao_.id();
   glVertexArrayVertexBuffer(vao, 0, vertices_.id(), 0, sizeof(Vertex));
   glVertexArrayElementBuffer(vao, indices_.id());
@@ -39,11 +39,11 @@ void GpuMesh::draw(const DrawRanges& ranges) const {
   glMultiDrawElements(GL_TRIANGLES, counts.data(), GL_UNSIGNED_INT, offsets.data(), static_cast<GLsizei>(counts.size()));
 }
 
-GpuMeshes::GpuMeshes(const std::vector<Object>& objects) {
+GpuMeshes::GpuMeshes(const std::vector<Object>& objects, std::uint32_t cluster_triangles) {
   std::unordered_map<const MeshData*, const GpuMesh*> uploaded;
   for (const Object& o : objects) {
     const GpuMesh*& copy = uploaded[o.mesh.get()];
-    if (!copy) copy = copies_.emplace_back(std::make_unique<GpuMesh>(*o.mesh)).get();
+    if (!copy) copy = copies_.emplace_back(std::make_unique<GpuMesh>(*o.mesh, cluster_triangles)).get();
     of_object_.push_back(copy);
   }
 }

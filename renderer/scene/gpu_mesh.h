@@ -1,6 +1,7 @@
 #pragma once
 // The GPU copy of a CPU mesh (scene/mesh.h).
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -11,22 +12,28 @@
 
 namespace penumbra::scene {
 
+// The most triangles a cluster of a GpuMesh holds (cluster_units): what a virtual shadow map's page
+// culls by. Measured on the street (docs/results/virtual-maps.md, 2026-12-06 clusters entry).
+inline constexpr std::uint32_t kClusterTriangles = 16;
+
 // GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.
 class GpuMesh {
  public:
-  explicit GpuMesh(const MeshData& mesh);
+  explicit GpuMesh(const MeshData& mesh, std::uint32_t cluster_triangles = kClusterTriangles);
   void draw() const;
   // The ranges culling kept (scene/culling.h), in one glMultiDrawElements.
   void draw(const DrawRanges& ranges) const;
   std::size_t index_count() const { return index_count_; }
-  const std::vector<DrawUnit>& units() const { return units_; }
+  const std::vector<DrawUnit>& units() const { return clustered_.units; }
+  // The units and their clusters of at most cluster_triangles (cluster_units).
+  const ClusteredUnits& clustered() const { return clustered_; }
 
  private:
   gl::Buffer vertices_;
   gl::Buffer indices_;
   gl::VertexArray vao_;
   std::size_t index_count_ = 0;
-  std::vector<DrawUnit> units_;  // MeshData::draw_units()
+  ClusteredUnits clustered_;  // its units are MeshData::draw_units()
 };
 
 // A scene's meshes on the GPU: one copy per distinct MeshData, however many objects share it
@@ -35,7 +42,7 @@ class GpuMesh {
 class GpuMeshes {
  public:
   GpuMeshes() = default;
-  explicit GpuMeshes(const std::vector<Object>& objects);
+  explicit GpuMeshes(const std::vector<Object>& objects, std::uint32_t cluster_triangles = kClusterTriangles);
   std::size_t size() const { return of_object_.size(); }                     // objects
   const GpuMesh& operator[](std::size_t object) const { return *of_object_[object]; }
   std::size_t copies() const { return copies_.size(); }                      // distinct meshes uploaded

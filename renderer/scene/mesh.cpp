@@ -1,5 +1,6 @@
 #include "scene/mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -49,6 +50,22 @@ std::vector<DrawUnit> MeshData::draw_units() const {
   std::vector<DrawUnit> out = units;
   const std::uint32_t first = units_end(*this), end = static_cast<std::uint32_t>(indices.size());
   if (end > first) out.push_back(unit_of(*this, first, end));
+  return out;
+}
+
+ClusteredUnits cluster_units(const MeshData& mesh, std::uint32_t max_triangles) {
+  ClusteredUnits out;
+  out.units = mesh.draw_units();
+  out.first_cluster.push_back(0);
+  for (const DrawUnit& u : out.units) {
+    if (max_triangles == 0 || u.index_count <= 3 * max_triangles) {
+      out.clusters.push_back(u);
+    } else {
+      for (std::uint32_t first = u.first_index, end = u.first_index + u.index_count; first < end; first += 3 * max_triangles)
+        out.clusters.push_back(unit_of(mesh, first, std::min(end, first + 3 * max_triangles)));
+    }
+    out.first_cluster.push_back(static_cast<std::uint32_t>(out.clusters.size()));
+  }
   return out;
 }
 

@@ -21,7 +21,7 @@ nlohmann::json virtual_pages_json(const VirtualMapStats& p) {
   return {{"requested", p.requested}, {"cached", p.cached},   {"drawn", p.drawn},
           {"missing", p.missing},     {"evicted", p.evicted}, {"invalidated", p.invalidated},
           {"resident", p.resident},   {"floor", p.floor},     {"floor_level", p.floor_level},
-          {"triangles", p.triangles}};
+          {"triangles", p.triangles}, {"draws", p.draws}};
 }
 
 nlohmann::json virtual_map_json(const FrameInfo::Virtual& v) {

@@ -428,6 +428,7 @@ class VirtualPagesPass final : public Pass {
       out.pages.invalidated = first.invalidated + second.invalidated;
       out.pages.floor = std::max(first.floor, second.floor);
       out.pages.triangles = first.triangles + second.triangles;
+      out.pages.draws = first.draws + second.draws;
       out.search_pages = static_cast<int>(search.pages.size());
       out.sync_reads = 2;
     } else {

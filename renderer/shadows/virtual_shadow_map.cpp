@@ -192,8 +192,8 @@ scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene
   return all;
 }
 
-std::uint64_t VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
-                                         const std::vector<std::vector<scene::Footprint>>& footprints) const {
+void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+                                 const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
   glViewport(sx * n, sy * n, n, n);
@@ -211,15 +211,14 @@ std::uint64_t VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key
   // exact square just misses.
   const float texel = wf / static_cast<float>(n);
   const scene::Footprint window{{x0 - texel, y0 - texel}, {x0 + wf + texel, y0 + wf + texel}};
-  std::uint64_t triangles = 0;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
-    const scene::DrawRanges kept = scene::cull_units(meshes[i].units(), footprints[i], window);
+    const scene::DrawRanges kept = scene::cull_clusters(meshes[i].clustered(), footprints[i], window);
     if (kept.first_index.empty()) continue;
     program_.set("u_model", scene.objects[i].model);
     meshes[i].draw(kept);
-    triangles += kept.triangles;
+    stats.triangles += kept.triangles;
+    stats.draws += kept.first_index.size();
   }
-  return triangles;
 }
 
 VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
@@ -261,11 +260,12 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
       glEnable(GL_POLYGON_OFFSET_FILL);
       glPolygonOffset(slope_bias_, offset_bias_);
     }
-    // Each unit's footprint across the light once; each page then keeps the units over its square.
-    std::vector<std::vector<scene::Footprint>> footprints;
+    // Each cluster's footprint across the light once; each page then keeps the clusters over its
+    // square (a unit over a page would send all its triangles, the clusters far from it too).
+    std::vector<scene::ClusterFootprints> footprints;
     for (std::size_t i = 0; i < meshes.size(); ++i)
-      footprints.push_back(scene::unit_footprints(meshes[i].units(), view_.light_view * scene.objects[i].model));
-    for (const auto& [slot, key] : to_draw) stats.triangles += draw_page(slot, key, scene, meshes, footprints);
+      footprints.push_back(scene::cluster_footprints(meshes[i].clustered(), view_.light_view * scene.objects[i].model));
+    for (const auto& [slot, key] : to_draw) draw_page(slot, key, scene, meshes, footprints, stats);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
     glDisable(GL_SCISSOR_TEST);

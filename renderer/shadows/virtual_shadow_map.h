@@ -63,9 +63,11 @@ void light_depth_range(const glm::mat4& light_view, const scene::Aabb& bounds, f
 VirtualMapView sun_virtual_view(const scene::Scene& scene, float camera_aspect, const VirtualMapView* previous = nullptr);
 
 // The page cache's counts of a frame (adaptive::PageCacheStats: requested, cached, drawn, missing,
-// floor, floor_level, evicted, invalidated, resident), and the triangles drawn into the pages.
+// floor, floor_level, evicted, invalidated, resident), and the triangles drawn into the pages and
+// the index ranges they were drawn as (a multi-draw's draws: what a GPU's front end pays per draw).
 struct VirtualMapStats : adaptive::PageCacheStats {
   std::uint64_t triangles = 0;  // drawn into the pages
+  std::uint64_t draws = 0;
 };
 
 // The warning line for a frame whose pool did not hold every page it asked for ("" when none was
@@ -273,9 +275,10 @@ class VirtualShadowMap {
   const gl::Texture& bounds_pool() const { return bounds_pool_; }
 
  private:
-  // Draws page `key` into `slot`, each object's units kept by their footprints across the light.
-  std::uint64_t draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
-                          const std::vector<std::vector<scene::Footprint>>& footprints) const;
+  // Draws page `key` into `slot`, each object's clusters kept by their footprints across the light,
+  // adding the triangles and ranges drawn to `stats`.
+  void draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+                 const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const;
   void write_tables();
   // Takes the bounds of every tile of the pages in `slots` (virtual_bounds.comp).
   void write_bounds(const std::vector<int>& slots);

@@ -1,8 +1,11 @@
 // Draw units and culling (scene/mesh.h, scene/culling.h), GL-free: what a unit covers, which
-// units a camera or a shadow map drops, and the outdoor town as units with bounds.
+// units a camera or a shadow map drops, the outdoor town as units with bounds, and units split into
+// clusters (what a virtual shadow map's page culls by) against a brute-force test per triangle.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -209,6 +212,143 @@ TEST(OutdoorUnits, FootprintCullingOfPagesAgreesWithTheCasterVolumeUpToRounding)
   }
   EXPECT_GT(kept, 1000u) << "of " << compared;
   EXPECT_LT(kept, compared / 4);
+}
+
+// Checks that `c` splits `m`'s units into clusters of at most `max_triangles` (0: the units
+// themselves) that run through the index list in order, each inside its unit, with the exact
+// bounds of the vertices it uses.
+void expect_clusters_partition(const MeshData& m, const ClusteredUnits& c, std::uint32_t max_triangles) {
+  const std::vector<DrawUnit> units = m.draw_units();
+  ASSERT_EQ(c.units.size(), units.size());
+  ASSERT_EQ(c.first_cluster.size(), units.size() + 1);
+  EXPECT_EQ(c.first_cluster.front(), 0u);
+  EXPECT_EQ(c.first_cluster.back(), c.clusters.size());
+  std::uint32_t next = 0;  // every index once, in order
+  for (std::size_t u = 0; u < units.size(); ++u) {
+    EXPECT_EQ(c.units[u].first_index, units[u].first_index);
+    EXPECT_EQ(c.units[u].index_count, units[u].index_count);
+    ASSERT_LE(c.first_cluster[u], c.first_cluster[u + 1]);
+    if (max_triangles == 0) {
+      EXPECT_EQ(c.first_cluster[u + 1] - c.first_cluster[u], 1u) << "no split: a unit is its one cluster";
+    }
+    std::uint32_t in_unit = 0;
+    for (std::uint32_t k = c.first_cluster[u]; k < c.first_cluster[u + 1]; ++k) {
+      const DrawUnit& cl = c.clusters[k];
+      EXPECT_EQ(cl.first_index, next) << "cluster " << k << " is not where the previous one ended";
+      EXPECT_GT(cl.index_count, 0u);
+      EXPECT_EQ(cl.index_count % 3, 0u) << "whole triangles";
+      if (max_triangles > 0) {
+        EXPECT_LE(cl.index_count, 3 * max_triangles);
+      }
+      Aabb exact;
+      for (std::uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) exact.extend(m.vertices[m.indices[i]].position);
+      EXPECT_EQ(cl.bounds.lo, exact.lo) << "cluster " << k;
+      EXPECT_EQ(cl.bounds.hi, exact.hi) << "cluster " << k;
+      next += cl.index_count;
+      in_unit += cl.index_count;
+    }
+    EXPECT_EQ(in_unit, units[u].index_count) << "unit " << u << "'s clusters hold all its triangles and no other's";
+  }
+  EXPECT_EQ(next, m.indices.size());
+}
+
+// A mesh of units large and small: a sphere of 2304 triangles, a box of 12, a fence of 312 and a
+// tube of 8 × 40 left open after the last close.
+MeshData mixed_mesh() {
+  MeshData m;
+  m.append(make_sphere(1.5f), glm::translate(glm::mat4(1), {-3, 2, 0}));
+  m.close_unit();
+  m.append(make_box({1, 1, 1}), glm::translate(glm::mat4(1), {4, 0.5f, 2}));
+  m.close_unit();
+  m.append(make_lattice(5, 3, 9, 5, 0.05f), glm::translate(glm::mat4(1), {2, 1.5f, -3}));
+  m.close_unit();
+  std::vector<glm::vec3> points;
+  std::vector<float> radii;
+  for (int i = 0; i <= 40; ++i) {
+    points.emplace_back(-6 + 0.3f * static_cast<float>(i), 3 + std::sin(0.3f * static_cast<float>(i)), 1);
+    radii.push_back(0.1f);
+  }
+  m.append(make_tube(points, radii, 8), glm::mat4(1));
+  return m;
+}
+
+TEST(Clusters, CoverEveryTriangleOnceContiguousInsideTheirUnitsWithTheirBounds) {
+  const MeshData m = mixed_mesh();
+  for (std::uint32_t n : {0u, 1u, 5u, 16u, 64u, 5000u}) {
+    SCOPED_TRACE(n);
+    const ClusteredUnits c = cluster_units(m, n);
+    expect_clusters_partition(m, c, n);
+    if (n == 16) {
+      EXPECT_EQ(c.first_cluster[1] - c.first_cluster[0], 2304u / 16) << "the sphere in full clusters";
+    }
+  }
+  EXPECT_TRUE(cluster_units(MeshData{}, 16).clusters.empty()) << "an empty mesh has none";
+  // Every mesh of the town, at the renderer's size.
+  const Scene town = make_outdoor_scene({});
+  std::size_t units = 0, clusters = 0;
+  for (const Object& o : town.objects) {
+    SCOPED_TRACE(o.name);
+    const ClusteredUnits c = cluster_units(*o.mesh, 16);
+    expect_clusters_partition(*o.mesh, c, 16);
+    units += c.units.size();
+    clusters += c.clusters.size();
+  }
+  EXPECT_GT(clusters, 10 * units) << "the town's units are split";
+}
+
+TEST(Clusters, CullingByClustersKeepsEveryTriangleOverTheWindowAndFewerThanByUnits) {
+  // Brute force: a triangle whose vertices' light-space x, y bounds meet the window must lie in a
+  // kept range; and no range keeps anything culling by units would not.
+  const MeshData m = mixed_mesh();
+  const ClusteredUnits c = cluster_units(m, 16);
+  const glm::mat4 light = glm::lookAt(glm::vec3(0), glm::normalize(glm::vec3(-0.4f, -1.0f, -0.3f)), glm::vec3(0, 1, 0));
+  const ClusterFootprints f = cluster_footprints(c, light);
+  ASSERT_EQ(f.units.size(), c.units.size());
+  ASSERT_EQ(f.clusters.size(), c.clusters.size());
+  const std::vector<Footprint> unit_f = unit_footprints(c.units, light);
+  std::uint64_t by_clusters = 0, by_units = 0, over = 0;
+  for (float side : {0.25f, 1.0f, 4.0f})
+    for (float x = -8; x < 8; x += 0.7f)
+      for (float y = -8; y < 8; y += 0.9f) {
+        const Footprint window{{x, y}, {x + side, y + side}};
+        const DrawRanges kept = cull_clusters(c, f, window), whole = cull_units(c.units, unit_f, window);
+        std::vector<bool> in(m.indices.size() / 3, false), in_whole(m.indices.size() / 3, false);
+        std::uint64_t counted = 0;
+        for (std::size_t r = 0; r < kept.first_index.size(); ++r) {
+          if (r > 0) {
+            EXPECT_LT(kept.first_index[r - 1] + kept.index_count[r - 1], kept.first_index[r]) << "neighbours merge";
+          }
+          for (std::uint32_t i = kept.first_index[r]; i < kept.first_index[r] + kept.index_count[r]; i += 3) in[i / 3] = true, ++counted;
+        }
+        EXPECT_EQ(counted, kept.triangles);
+        for (std::size_t r = 0; r < whole.first_index.size(); ++r)
+          for (std::uint32_t i = whole.first_index[r]; i < whole.first_index[r] + whole.index_count[r]; i += 3) in_whole[i / 3] = true;
+        for (std::size_t t = 0; t < in.size(); ++t) {
+          glm::vec2 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+          for (int k = 0; k < 3; ++k) {
+            const glm::vec4 p = light * glm::vec4(m.vertices[m.indices[3 * t + k]].position, 1.0f);
+            lo = glm::min(lo, glm::vec2(p)), hi = glm::max(hi, glm::vec2(p));
+          }
+          const bool overlaps = hi.x >= window.lo.x && lo.x <= window.hi.x && hi.y >= window.lo.y && lo.y <= window.hi.y;
+          over += overlaps;
+          if (overlaps) {
+            EXPECT_TRUE(in[t]) << "triangle " << t << " over window (" << x << ", " << y << ") side " << side << " dropped";
+          }
+          if (in[t]) {
+            EXPECT_TRUE(in_whole[t]) << "triangle " << t << " kept by its cluster but not by its unit";
+          }
+        }
+        by_clusters += kept.triangles;
+        by_units += whole.triangles;
+      }
+  EXPECT_GT(over, 1000u) << "windows over the mesh";
+  EXPECT_LT(by_clusters, by_units / 2) << "clusters keep fewer triangles than units: " << by_clusters << " against " << by_units;
+  EXPECT_GE(by_clusters, over) << "at least the triangles over the windows";
+  // Without a split, culling by clusters is culling by units.
+  const ClusteredUnits whole_units = cluster_units(m, 0);
+  const Footprint window{{-2, -2}, {1, 1}};
+  EXPECT_EQ(cull_clusters(whole_units, cluster_footprints(whole_units, light), window).triangles,
+            cull_units(whole_units.units, unit_f, window).triangles);
 }
 
 }  // namespace

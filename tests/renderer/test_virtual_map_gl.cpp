@@ -603,6 +603,35 @@ TEST(VirtualMap, AMovedObjectRedrawsItsPagesAndNoStaleDepthRemains) {
   }
 }
 
+// Pages cull casters by clusters of at most scene::kClusterTriangles triangles, not by whole units:
+// every page holds exactly the depths it held when culled by units (a cluster dropped covers none
+// of its texels), and fewer triangles are drawn (the demo's sphere, 2304 triangles in one unit,
+// no longer goes whole into each of the pages it touches).
+TEST(VirtualMap, ClustersDrawTheSameDepthsWithFewerTrianglesThanUnits) {
+  Fixture f;  // its meshes: clusters of kClusterTriangles
+  const scene::GpuMeshes whole_units(f.scene.objects, 0);
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap by_units(layout, 14), by_clusters(layout, 14);
+  const auto units = by_units.update(every_page(layout), f.view, f.scene, whole_units);
+  const auto clusters = by_clusters.update(every_page(layout), f.view, f.scene, f.meshes);
+  EXPECT_EQ(units.drawn, 192);
+  EXPECT_EQ(clusters.drawn, 192);
+  for (int level = 0; level < layout.levels; ++level) {
+    SCOPED_TRACE(level);
+    const std::vector<float> a = read_through_tables(by_units, level), b = read_through_tables(by_clusters, level);
+    ASSERT_EQ(a.size(), b.size());
+    std::size_t differ = 0, covered = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i], covered += a[i] < 1.0f;
+    EXPECT_EQ(differ, 0u) << "of " << a.size() << " texels";
+    EXPECT_GT(covered, a.size() / 4) << "the scene is in the window";
+  }
+  EXPECT_LT(clusters.triangles, units.triangles / 2) << clusters.triangles << " against " << units.triangles;
+  EXPECT_GT(clusters.draws, units.draws) << "more, shorter ranges";
+  // Drawn by units, the sphere alone goes whole into each page it touches: at least its 2304
+  // triangles per page of level 0 under it.
+  EXPECT_GT(units.triangles, 4u * 2304u);
+}
+
 // A pool too small for what the frame asks keeps a coarse floor: the pages of the finest level
 // whose pages under every requested one fit (with the requested pages coarser than it), so that
 // each texel of a requested page finds a level, never nothing; what is missing is counted. A pool
