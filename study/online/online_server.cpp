@@ -777,7 +777,8 @@ struct Server::Impl {
                                   {"max_trials", s.config().max_trials},
                                   {"mean", sc.quest.mean()},
                                   {"sd", sc.quest.sd()},
-                                  {"r_over_a", std::pow(10.0, -sc.quest.mean())},
+                                  // A frame study's intensity is log10(1 / k): its estimate is a k, not an r/a.
+                                  {s.config().frames.enabled() ? "k" : "r_over_a", std::pow(10.0, -sc.quest.mean())},
                                   {"state", sc.done ? "done" : sc.quest.trial_count() == 0 ? "not started" : "running"}});
         }
         j["staircases"] = staircases;
@@ -813,11 +814,13 @@ struct Server::Impl {
                     p["tab_silent_s"].get<double>(), html_escape(p.value("last_answer", std::string())).c_str());
       h += line;
       if (!p.contains("staircases")) continue;
-      h += "<table><tr><th>round<th>condition<th>staircase<th>trials<th>estimate log10(a/r) &plusmn; sd<th>r/a<th></tr>";
+      const bool frames = o.config.frames.enabled();
+      h += frames ? "<table><tr><th>round<th>technique<th>patch<th>trials<th>estimate log10(1/k) &plusmn; sd<th>k<th></tr>"
+                  : "<table><tr><th>round<th>condition<th>staircase<th>trials<th>estimate log10(a/r) &plusmn; sd<th>r/a<th></tr>";
       for (const auto& sc : p["staircases"]) {
         std::snprintf(line, sizeof line, "<tr><td>%d<td>%s<td>%s<td>%d / %d<td>%+.3f &plusmn; %.3f<td>%.2f<td>%s</tr>", sc["round"].get<int>(),
                       html_escape(sc["condition"]).c_str(), html_escape(sc["staircase"]).c_str(), sc["trials"].get<int>(),
-                      sc["max_trials"].get<int>(), sc["mean"].get<double>(), sc["sd"].get<double>(), sc["r_over_a"].get<double>(),
+                      sc["max_trials"].get<int>(), sc["mean"].get<double>(), sc["sd"].get<double>(), sc[frames ? "k" : "r_over_a"].get<double>(),
                       html_escape(sc["state"]).c_str());
         h += line;
       }

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <filesystem>
@@ -289,7 +290,9 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
   EXPECT_FALSE(fs::exists(tmp / "sessions")) << "refused before anything is written";
   ASSERT_EQ(run_study({"prepare-frames", "--config", kFramesConfig.string(), "--frame-cache", cache.string()}, out, tmp / "out.txt"), 0) << out;
 
-  auto server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string()}, kFramesConfig);
+  const std::string token = "admin-token-0123456789";
+  auto server = std::make_unique<ServerProcess>(tmp / "sessions", 0, std::vector<std::string>{"--frame-cache", cache.string(), "--admin-token", token},
+                                                kFramesConfig);
   EXPECT_NE(server->app->output().find("frames: 4 patches of online-frames in 4 files of " + (tmp / "sessions" / ".stimuli").string() +
                                        " (identical frames share them), 4 cut now from 4 frame(s)"), std::string::npos) << server->app->output();
   const std::string answers = "fjjfjf";
@@ -302,6 +305,17 @@ TEST(OnlineServer, FrameStudyByHttpShowsTheLabsPatchesAndLogsAsTheLab) {
     EXPECT_EQ(p.screen["screen"], "end");
   }
   expect_same_as_lab(tmp / "sessions" / "F01", lab_session(tmp / "lab", "F01", answers, kFramesConfig));
+  // The admin's page names the staircase's estimate a k (the intensity is log10(1 / k)), not an r/a.
+  httplib::Client admin("127.0.0.1", server->port);
+  const auto status = admin.Get(("/admin.json?token=" + token).c_str());
+  ASSERT_TRUE(status && status->status == 200);
+  const json staircase = json::parse(status->body)["sessions"][0]["staircases"][0];
+  EXPECT_EQ(staircase["staircase"], "box");
+  EXPECT_NEAR(staircase["k"].get<double>(), std::pow(10.0, -staircase["mean"].get<double>()), 1e-12) << staircase;
+  EXPECT_FALSE(staircase.contains("r_over_a")) << staircase;
+  const auto page = admin.Get(("/admin?token=" + token).c_str());
+  ASSERT_TRUE(page && page->status == 200);
+  EXPECT_NE(page->body.find("<th>patch<th>trials<th>estimate log10(1/k) &plusmn; sd<th>k<th>"), std::string::npos) << page->body;
 
   // Each trial shows the lab's patches: cut from the frame cache here as the window cuts them.
   const penumbra::procedure::StudyConfig config = penumbra::procedure::load_config(kFramesConfig);
