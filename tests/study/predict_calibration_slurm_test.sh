@@ -7,11 +7,14 @@
 # Skipped (77) where the daemons are not installed, the user is not root, or they do not start
 # (a container without the privileges): CTest label `slurm`. With PENUMBRA-BENCH, the same daemons
 # then run scripts/slurm/submit-bench.sh: a tiny bench in 3 shards and its merge, equal to the
-# unsharded run in every column but the frame times.
-#   predict_calibration_slurm_test.sh PENUMBRA-OBSERVER-CURVE [PENUMBRA-BENCH]
+# unsharded run in every column but the frame times; with PENUMBRA-DEMO after it,
+# scripts/slurm/submit-demo-sweep.sh: a tiny sweep of two techniques in 2 tasks and its merge,
+# equal to the unsharded run but for the timing fields.
+#   predict_calibration_slurm_test.sh PENUMBRA-OBSERVER-CURVE [PENUMBRA-BENCH [PENUMBRA-DEMO]]
 set -euo pipefail
 curve="$1"
 bench="${2:-}"
+demo="${3:-}"
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 skip() { echo "skipped: $*"; exit 77; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -147,3 +150,42 @@ for k, (x, y) in enumerate(zip(a, b)):
             sys.exit("row %d, %s: %s, not %s" % (k, column, y[column], x[column]))
 PY
 echo "ok: the bench's 3 tasks and merge $bench_merge equal the unsharded run apart from the frame times"
+[[ -n "$demo" ]] || exit 0
+# The demo's sweep (scripts/slurm/submit-demo-sweep.sh): two techniques, one per task, and the
+# merge. The images are compared byte for byte; report.json and frames.csv in every field but the
+# frame times and what is read from them (docs/cluster.md).
+demo_run=(--headless --scene demo --frames 1 --width 32 --height 18 --techniques pcf,hard --sweep --no-plot)
+"$demo" "${demo_run[@]}" -o "$tmp/demo-serial" >"$tmp/demo-serial.log" 2>&1 || fail "demo serial: $(tail -n 3 "$tmp/demo-serial.log")"
+PENUMBRA_DEMO="$demo" "$repo/scripts/slurm/submit-demo-sweep.sh" --shards 2 --limit 2 \
+  --sbatch "--cpus-per-task=1 --mem=900M --output=$tmp/logs/%x-%j.out" --work "$tmp/demo-work" -o "$tmp/demo-slurm" \
+  -- "${demo_run[@]}" >"$tmp/demo-submit.log" 2>&1 || fail "submit-demo-sweep: $(cat "$tmp/demo-submit.log")"
+cat "$tmp/demo-submit.log"
+demo_merge="$(sed -n 's/.*merge \([0-9]*\) after.*/\1/p' "$tmp/demo-submit.log")"
+[[ -n "$demo_merge" ]] || fail "no merge job id in: $(cat "$tmp/demo-submit.log")"
+wait_for_queue "$demo_merge" "demo " "$tmp/logs/penumbra-demo-*"
+[[ -f "$tmp/demo-slurm/report.json" ]] || fail "the demo merge wrote nothing: $(cat "$tmp"/logs/penumbra-demo-* 2>/dev/null | tail -n 20)"
+/usr/bin/python3 - "$tmp/demo-serial" "$tmp/demo-slurm" <<'PY' || fail "the Slurm sweep differs from the serial one"
+import json, os, re, sys
+a, b = sys.argv[1:]
+files = sorted(os.listdir(a))
+assert files == sorted(os.listdir(b)), (files, sorted(os.listdir(b)))
+assert sum(f.endswith(".png") for f in files) >= 4, files
+for f in files:
+    if f.endswith(".png") and open(os.path.join(a, f), "rb").read() != open(os.path.join(b, f), "rb").read():
+        sys.exit(f + " differs")
+def timeless(j):
+    if isinstance(j, list):
+        return [timeless(x) for x in j]
+    if not isinstance(j, dict):
+        return j
+    return {k: timeless(v) for k, v in j.items()
+            if not (k.endswith("_ms") or k.endswith("_ms_mean") or k.startswith("speedup")
+                    or k in ("time", "shadow_cost", "headline", "line", "cheapest_by_time"))}
+x, y = (timeless(json.load(open(os.path.join(d, "report.json")))) for d in (a, b))
+if x != y:
+    sys.exit("report.json differs beyond the timing fields")
+csv = lambda d: re.sub(r",[0-9]+\.[0-9]{4},", ",T,", open(os.path.join(d, "frames.csv")).read())
+if csv(a) != csv(b):
+    sys.exit("frames.csv differs beyond frame_ms")
+PY
+echo "ok: the demo sweep's 2 tasks and merge $demo_merge equal the unsharded run apart from the frame times"
