@@ -302,7 +302,8 @@ class PenumbraScreenPlugin {
     const name = screen.screen;
     if (displayProblem && screen.needs_display) {
       // The server's reason says what to change (a larger window, or sitting farther away).
-      showMessage("Your screen cannot show the pictures as they are", displayProblem + ".\n\nThen press Space to measure again.");
+      showMessage("Your screen cannot show the pictures as they are",
+                  displayProblem.charAt(0).toUpperCase() + displayProblem.slice(1) + ".\n\nThen press Space to measure again.");
       displayProblem = "";
       await waitKeyOrClick({ " ": true }, []);
     } else if (screen.needs_display || (screen.needs_intake && name !== "end")) {
