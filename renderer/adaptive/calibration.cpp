@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #include "adaptive/detail/calibration_fields.h"
 #include "json/json_fields.h"
@@ -59,6 +61,32 @@ const std::shared_ptr<const ObjectSpec>& threshold_fields() {
   return spec;
 }
 
+// penumbra-fit's "population" block: the fields the renderer reads; the rest (method, interval,
+// per_condition, ...) is documentation.
+const std::shared_ptr<const ObjectSpec>& population_fields() {
+  // No upper bounds: a wide population interval (few participants) is a reading, not a bad file,
+  // and must not make the renderer refuse the entry's c. Null: what the fit could not close.
+  const auto pair = [](std::string name) {
+    return Field{.name = std::move(name), .type = Type::array, .nullable = true, .min_items = 2, .max_items = 2,
+                 .items = json_input::item({.type = Type::number, .nullable = true, .min = 0})};
+  };
+  const auto value = [](std::string name) {
+    return Field{.name = std::move(name), .type = Type::number, .required = true, .nullable = true, .min = 0};
+  };
+  static const auto spec = json_input::spec({{
+      count_field("participants"),
+      text_field("condition"),
+      value("mean_c"),
+      pair("mean_c_ci95"),
+      value("sd_log10"),
+      pair("sd_log10_ci95"),
+      {.name = "observer_percentile", .type = Type::string, .min_length = 1, .max_length = 32},
+      {.name = "percentile_c", .type = Type::number, .nullable = true, .min = 0},
+      pair("percentile_c_ci95"),
+  }, false});
+  return spec;
+}
+
 const std::shared_ptr<const ObjectSpec>& entry_fields() {
   static const auto spec = json_input::spec({{
       {.name = "technique", .type = Type::string, .required = true, .min_length = 1, .max_length = kMaxText},
@@ -77,6 +105,7 @@ const std::shared_ptr<const ObjectSpec>& entry_fields() {
       {.name = "per_condition", .type = Type::array},
       names_field("flags"),
       {.name = "threshold", .type = Type::object, .object = threshold_fields()},
+      {.name = "population", .type = Type::object, .nullable = true, .object = population_fields()},
   }, false});
   return spec;
 }
@@ -130,6 +159,33 @@ ThresholdDefinition read_threshold(const json_input::Reader& r, const nlohmann::
   return t;
 }
 
+Population read_population(const json_input::Reader& r, const nlohmann::json& j, const std::string& at) {
+  const ObjectSpec& spec = *population_fields();
+  Population p;
+  p.participants = static_cast<int>(r.integer(j, at, spec, "participants"));
+  p.condition = r.string(j, at, spec, "condition");
+  const auto bounds = [&](const char* key, double& lo, double& hi) {
+    if (const auto* v = r.get(j, at, spec, key)) {
+      lo = (*v)[0].is_null() ? NAN : (*v)[0].get<double>();
+      hi = (*v)[1].is_null() ? NAN : (*v)[1].get<double>();
+    }
+  };
+  p.mean_c = r.number(j, at, spec, "mean_c", NAN);
+  bounds("mean_c_ci95", p.mean_c_lo, p.mean_c_hi);
+  p.sd_log10 = r.number(j, at, spec, "sd_log10", NAN);
+  bounds("sd_log10_ci95", p.sd_log10_lo, p.sd_log10_hi);
+  const std::string percentile = r.string(j, at, spec, "observer_percentile");
+  if (!percentile.empty()) {
+    char* end = nullptr;
+    p.percentile = std::strtod(percentile.c_str(), &end);
+    if (end != percentile.c_str() + percentile.size() || !(p.percentile > 0 && p.percentile < 100))
+      r.fail(json_input::child(at, "observer_percentile"), "expected a percentile in (0, 100) such as \"90\", got \"" + percentile + "\"");
+  }
+  p.percentile_c = r.number(j, at, spec, "percentile_c", NAN);
+  bounds("percentile_c_ci95", p.percentile_c_lo, p.percentile_c_hi);
+  return p;
+}
+
 CalibrationEntry read_entry(const json_input::Reader& r, const nlohmann::json& j, std::size_t index) {
   const std::string at = json_input::element("entries", index);
   const ObjectSpec& spec = *entry_fields();
@@ -154,6 +210,7 @@ CalibrationEntry read_entry(const json_input::Reader& r, const nlohmann::json& j
   e.unusable_because = names("unusable_because");
   if (!e.usable && e.unusable_because.empty()) e.unusable_because.push_back("marked usable: false");
   if (r.get(j, at, spec, "threshold")) e.threshold = read_threshold(r, j["threshold"], json_input::child(at, "threshold"));
+  if (r.get(j, at, spec, "population")) e.population = read_population(r, j["population"], json_input::child(at, "population"));
   return e;
 }
 
@@ -233,6 +290,33 @@ psychometric::Model family_model(std::string_view family) {
 
 double family_slope(std::string_view from, double beta, std::string_view to, double criterion_f) {
   return beta * slope_at(family_model(from), criterion_f) / slope_at(family_model(to), criterion_f);
+}
+
+CAtPercentile c_at_observer_percentile(const CalibrationEntry& e, double percentile) {
+  if (!(percentile > 0 && percentile < 100))
+    throw std::invalid_argument("observer percentile: expected a number in (0, 100), got " + std::to_string(percentile));
+  if (!e.population)
+    throw std::invalid_argument(e.label() + " entry (" + std::string(method_description(e.obtained_by)) +
+                                ") has no population block: only penumbra-fit's multilevel fit of several participants gives a "
+                                "percentile observer's c");
+  const Population& p = *e.population;
+  if (!(p.mean_c > 0) || !(p.sd_log10 >= 0))
+    throw std::invalid_argument(e.label() + " entry's population block has no mean c or spread (the multilevel fit did not give them)");
+  CAtPercentile out;
+  if (std::abs(percentile - p.percentile) < 1e-9 && std::isfinite(p.percentile_c)) {
+    out.c = p.percentile_c;
+    out.lo = p.percentile_c_lo;
+    out.hi = p.percentile_c_hi;
+    out.fitted = true;
+    return out;
+  }
+  const double z = std::sqrt(2.0) * psychometric::inverse_erf(2 * percentile / 100 - 1);
+  out.c = p.mean_c * std::pow(10.0, z * p.sd_log10);
+  // A positive z grows with the spread, a negative one shrinks: the box's low and high corners.
+  const double sd_for_lo = z >= 0 ? p.sd_log10_lo : p.sd_log10_hi, sd_for_hi = z >= 0 ? p.sd_log10_hi : p.sd_log10_lo;
+  out.lo = p.mean_c_lo * std::pow(10.0, z * sd_for_lo);
+  out.hi = p.mean_c_hi * std::pow(10.0, z * sd_for_hi);
+  return out;
 }
 
 CAtVisibility c_at_visibility(const CalibrationEntry& e, double visibility) {

@@ -13,6 +13,7 @@
 // any kernel: the only filter such files were measured with. Another schema_version is refused.
 //
 // No GL, study or Ceres: another engine can link `penumbra_adaptive` alone.
+#include <cmath>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -58,6 +59,18 @@ struct ThresholdDefinition {
   bool beta_assumed = true;           // the slope was assumed (QUEST's), not fitted
 };
 
+// An entry's "population" block (penumbra-fit's multilevel fit, participants as random effects on
+// log10 c; docs/fit.md): the population's mean c, the between-participant spread, and the c of one
+// percentile of observers, each with its 95 % profile interval. NAN where the fit left a bound open.
+struct Population {
+  int participants = 0;
+  std::string condition;  // the condition it speaks for ("the worst condition (stair/1)")
+  double mean_c = NAN, mean_c_lo = NAN, mean_c_hi = NAN;
+  double sd_log10 = NAN, sd_log10_lo = NAN, sd_log10_hi = NAN;
+  double percentile = NAN;  // the observer percentile the fit was asked for, in (0, 100)
+  double percentile_c = NAN, percentile_c_lo = NAN, percentile_c_hi = NAN;
+};
+
 struct CalibrationEntry {
   std::string technique;  // a registry name: pcf, vsm, rpcf, ...
   std::string kernel;     // the technique's kernel (pcf: grid, poisson) or "" for any
@@ -80,6 +93,9 @@ struct CalibrationEntry {
   // published design's is assumed then (2afc-equivalent criterion 0.6465, log-Weibull, slope 3.5).
   std::optional<ThresholdDefinition> threshold;
   const ThresholdDefinition& definition() const;
+  // The multilevel fit's population; absent for a published constant, an image-observer prediction
+  // and files written before penumbra-fit had it.
+  std::optional<Population> population;
 
   // "pcf grid", or "pcf" for any kernel.
   std::string label() const { return kernel.empty() ? technique : technique + " " + kernel; }
@@ -107,6 +123,19 @@ struct CAtVisibility {
   double family_lo = kPublishedC, family_hi = kPublishedC;
 };
 CAtVisibility c_at_visibility(const CalibrationEntry& entry, double visibility);
+
+// The c of the `percentile`-th observer (in (0, 100): 90 = a c that hides the artifact at the
+// entry's criterion for 90 % of the population) from the entry's population block: the fitted
+// percentile's own c and profile interval when `percentile` is the one the fit was asked for;
+// otherwise mean_c · 10^(z sd_log10), z the normal quantile, with the interval the corners of the
+// mean's and the spread's intervals (conservative: their joint region lies inside that box).
+// `fitted` says which. Throws std::invalid_argument, naming the entry, for an entry without a
+// population block or a percentile outside (0, 100).
+struct CAtPercentile {
+  double c = NAN, lo = NAN, hi = NAN;  // NAN bounds: the fit left that side open
+  bool fitted = false;
+};
+CAtPercentile c_at_observer_percentile(const CalibrationEntry& entry, double percentile);
 
 // The slope of family `to` whose dF/dx (x in log10 units) at detection probability `criterion_f`
 // equals that of family `from` with slope `beta`: the same curve near the criterion. The Weibull's

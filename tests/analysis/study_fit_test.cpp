@@ -213,6 +213,20 @@ TEST(StudyFit, CalibrationRoundTripsThroughTheRenderersReader) {
   EXPECT_GE(cal.ci95_hi, f.worst.population.hi);
   ASSERT_TRUE(j["entries"][0].contains("population"));
   EXPECT_EQ(j["entries"][0]["population"]["observer_percentile"], "90");
+  // The renderer reads the population block as written and asks it for a percentile observer:
+  // the fitted 90th percentile's own c and interval, and the median observer at the mean c.
+  const nlohmann::json& population = j["entries"][0]["population"];
+  ASSERT_TRUE(cal.population.has_value());
+  EXPECT_EQ(cal.population->percentile, 90.0);
+  EXPECT_DOUBLE_EQ(cal.population->mean_c, population["mean_c"].get<double>());
+  EXPECT_DOUBLE_EQ(cal.population->sd_log10, population["sd_log10"].get<double>());
+  const adaptive::CAtPercentile p90 = adaptive::c_at_observer_percentile(cal, 90);
+  EXPECT_TRUE(p90.fitted);
+  EXPECT_DOUBLE_EQ(p90.c, population["percentile_c"].get<double>());
+  EXPECT_DOUBLE_EQ(p90.lo, population["percentile_c_ci95"][0].get<double>());
+  EXPECT_DOUBLE_EQ(p90.hi, population["percentile_c_ci95"][1].get<double>());
+  EXPECT_GE(p90.c, cal.population->mean_c);
+  EXPECT_NEAR(adaptive::c_at_observer_percentile(cal, 50).c, cal.population->mean_c, 1e-12);
   EXPECT_EQ(j["entries"][0]["per_condition"].size(), 2u);
   const nlohmann::json stair = calibration_json(f, std::string("stair/1"), "2024-01-01T00:00:00Z", {"sim"}, provenance);
   io::write_file_atomic(dir / "stair.json", stair.dump(2));

@@ -385,6 +385,64 @@ TEST_F(CalibrationFile, BadFilesNameTheField) {
   EXPECT_THROW(load_calibration("/nonexistent/calibration.json"), CalibrationError);
 }
 
+// Issue 48: an entry's population block (penumbra-fit's multilevel fit, as it writes it) is read,
+// and c_at_observer_percentile gives the fitted percentile's own c and interval, any other
+// percentile from the mean and the spread with the corners of their intervals; an entry without
+// the block (the published constant, a predicted entry) is refused naming the entry.
+TEST_F(CalibrationFile, APercentileObserversCComesFromThePopulationBlock) {
+  const Calibration cal = load_calibration(write(R"json({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "grid", "c": 3.13, "ci95": [2.73, 3.73], "obtained_by": "simulated", "participants": 6,
+       "population": {"method": "multilevel: ...", "participants": 6, "condition": "the worst condition (stair/1)",
+                      "mean_c": 3.184, "mean_c_ci95": [2.732, 3.734], "sd_log10": 0.05, "sd_log10_ci95": [0.02, 0.09],
+                      "observer_percentile": "90", "percentile_c": 3.273, "percentile_c_ci95": [2.824, 4.583],
+                      "worst_interval": "the largest of the conditions' simultaneous (Bonferroni) intervals"}},
+      {"technique": "vsm", "c": 3.06, "obtained_by": "image-observer", "population": null}]})json"));
+  const CalibrationEntry& grid = cal.entries[0];
+  ASSERT_TRUE(grid.population.has_value());
+  EXPECT_EQ(grid.population->participants, 6);
+  EXPECT_EQ(grid.population->percentile, 90.0);
+  const CAtPercentile fitted = c_at_observer_percentile(grid, 90);
+  EXPECT_TRUE(fitted.fitted);
+  EXPECT_EQ(fitted.c, 3.273);
+  EXPECT_EQ(fitted.lo, 2.824);
+  EXPECT_EQ(fitted.hi, 4.583);
+  // The median observer is the population's mean (z = 0): its interval is the mean's.
+  const CAtPercentile median = c_at_observer_percentile(grid, 50);
+  EXPECT_FALSE(median.fitted);
+  EXPECT_NEAR(median.c, 3.184, 1e-12);
+  EXPECT_NEAR(median.lo, 2.732, 1e-12);
+  EXPECT_NEAR(median.hi, 3.734, 1e-12);
+  // 97.5 %: z = 1.95996; the spread's upper bound raises the upper corner, its lower the lower.
+  const double z = 1.959963984540054;
+  const CAtPercentile p975 = c_at_observer_percentile(grid, 97.5);
+  EXPECT_NEAR(p975.c, 3.184 * std::pow(10.0, z * 0.05), 1e-9);
+  EXPECT_NEAR(p975.lo, 2.732 * std::pow(10.0, z * 0.02), 1e-9);
+  EXPECT_NEAR(p975.hi, 3.734 * std::pow(10.0, z * 0.09), 1e-9);
+  // Below the median the spread lowers c: the larger spread gives the lower corner.
+  const CAtPercentile p10 = c_at_observer_percentile(grid, 10);
+  EXPECT_LT(p10.c, median.c);
+  EXPECT_NEAR(p10.lo, 2.732 * std::pow(10.0, -1.2815515655446004 * 0.09), 1e-9);
+  EXPECT_NEAR(p10.hi, 3.734 * std::pow(10.0, -1.2815515655446004 * 0.02), 1e-9);
+  // Refusals: no population block (null or absent), a percentile outside (0, 100).
+  EXPECT_FALSE(cal.entries[1].population.has_value());
+  try {
+    c_at_observer_percentile(cal.entries[1], 90);
+    ADD_FAILURE() << "an entry without a population gave a percentile";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("vsm entry (image observer) has no population block"), std::string::npos) << e.what();
+  }
+  const Calibration published = load_calibration(PENUMBRA_SOURCE_DIR "/data/calibration/default.json");
+  EXPECT_THROW(c_at_observer_percentile(published.entries[0], 90), std::invalid_argument);
+  for (const double bad : {0.0, 100.0, -5.0, std::nan("")}) EXPECT_THROW(c_at_observer_percentile(grid, bad), std::invalid_argument) << bad;
+  // A malformed block is refused naming the field.
+  expect_refused(R"json({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "study",
+      "population": {"mean_c": 3, "sd_log10": 0.05, "observer_percentile": "ninety"}}]})json",
+                 ": entries[0].population.observer_percentile: expected a percentile in (0, 100)");
+  expect_refused(R"json({"schema_version": 2, "entries": [{"technique": "pcf", "c": 3, "obtained_by": "study",
+      "population": {"sd_log10": 0.05}}]})json",
+                 ": entries[0].population.mean_c");
+}
+
 // Issue 48: the families' slopes are matched where the data are (at the criterion) and differ in
 // the tail. family_slope gives the normal and logistic the log-Weibull's dF/dx at F* (checked by a
 // finite difference of each core), so the curves agree near F* (within 1 % of c at F 0.55 and
