@@ -164,6 +164,10 @@ TEST_F(DemoShards, TwoShardsOfThreeTechniquesMergeToTheUnshardedRunApartFromTime
 
   EXPECT_EQ(csv_without_times(test::read_file(merged / "frames.csv")), csv_without_times(test::read_file(full / "frames.csv")));
   EXPECT_NE(csv_without_times(test::read_file(full / "frames.csv")), test::read_file(full / "frames.csv")) << "the times are masked";
+  // Eight fields a row: the names that hold a comma are quoted.
+  EXPECT_THAT(test::read_file(full / "frames.csv"), HasSubstr(",\"adaptive, no hysteresis\","));
+  for (const std::string& row : lines_of(test::read_file(merged / "frames.csv")))
+    EXPECT_EQ(std::count(row.begin(), row.end(), ','), 7 + (row.find('"') != std::string::npos ? 1 : 0)) << row;
 
   // The printed results: as many lines, and those without a time the same, in the same places.
   const std::vector<std::string> out_full = lines_of(whole.out), out_merged = lines_of(m.out);

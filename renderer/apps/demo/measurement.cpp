@@ -102,6 +102,15 @@ io::Image8 banded(const io::Image8& map, int band) {
   return out;
 }
 
+// A frames.csv field: quoted (RFC 4180) where it holds a comma or a quote, as the names
+// "adaptive, no hysteresis" and "virtual rule, cached" do.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
 // Runs job(i) for i in [0, n) on up to `threads` threads; the first exception is rethrown.
 template <class F>
 void parallel_for(std::size_t n, int threads, F job) {
@@ -528,7 +537,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
     for (std::size_t k = 0; k < series.size(); ++k) {
       const Series& s = series[k];
       char row[320];
-      std::snprintf(row, sizeof row, "%s,%s,%d,%.4f,%.0f,%s,%.6f,%.6f\n", name.c_str(), s.config.name.c_str(), pf.frame, s.ms.back(),
+      std::snprintf(row, sizeof row, "%s,%s,%d,%.4f,%.0f,%s,%.6f,%.6f\n", name.c_str(), csv_field(s.config.name).c_str(), pf.frame, s.ms.back(),
                     s.texels.back(), s.resolution.back().c_str(), s.config.timed() ? s.ssim_vs_engine.back() : std::nan(""),
                     pf.continues ? s.flicker_mean_abs.back() : std::nan(""));
       run.csv += row;
