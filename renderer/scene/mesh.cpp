@@ -57,12 +57,14 @@ ClusteredUnits cluster_units(const MeshData& mesh, std::uint32_t max_triangles) 
   ClusteredUnits out;
   out.units = mesh.draw_units();
   out.first_cluster.push_back(0);
+  const std::uint64_t run = 3 * static_cast<std::uint64_t>(max_triangles);  // indices; no overflow for any size
   for (const DrawUnit& u : out.units) {
-    if (max_triangles == 0 || u.index_count <= 3 * max_triangles) {
+    if (max_triangles == 0 || u.index_count <= run) {
       out.clusters.push_back(u);
     } else {
-      for (std::uint32_t first = u.first_index, end = u.first_index + u.index_count; first < end; first += 3 * max_triangles)
-        out.clusters.push_back(unit_of(mesh, first, std::min(end, first + 3 * max_triangles)));
+      const auto step = static_cast<std::uint32_t>(run);  // less than the unit's index count
+      for (std::uint32_t first = u.first_index, end = u.first_index + u.index_count; first < end; first += std::min(step, end - first))
+        out.clusters.push_back(unit_of(mesh, first, first + std::min(step, end - first)));
     }
     out.first_cluster.push_back(static_cast<std::uint32_t>(out.clusters.size()));
   }

@@ -238,7 +238,7 @@ void expect_clusters_partition(const MeshData& m, const ClusteredUnits& c, std::
       EXPECT_GT(cl.index_count, 0u);
       EXPECT_EQ(cl.index_count % 3, 0u) << "whole triangles";
       if (max_triangles > 0) {
-        EXPECT_LE(cl.index_count, 3 * max_triangles);
+        EXPECT_LE(cl.index_count, 3ull * max_triangles);
       }
       Aabb exact;
       for (std::uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) exact.extend(m.vertices[m.indices[i]].position);
@@ -274,7 +274,7 @@ MeshData mixed_mesh() {
 
 TEST(Clusters, CoverEveryTriangleOnceContiguousInsideTheirUnitsWithTheirBounds) {
   const MeshData m = mixed_mesh();
-  for (std::uint32_t n : {0u, 1u, 5u, 16u, 64u, 5000u}) {
+  for (std::uint32_t n : {0u, 1u, 5u, 16u, 64u, 5000u, 0xffffffffu}) {
     SCOPED_TRACE(n);
     const ClusteredUnits c = cluster_units(m, n);
     expect_clusters_partition(m, c, n);
