@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -173,6 +174,9 @@ struct CalibrationOption {
   bool c_from_command_line = false;  // --adaptive.c was given and wins over the file
   bool ci_upper = false;             // use the entries' upper ci95 bound instead of c
   float command_line_c = 0;          // --adaptive.c's value when given
+  // --adaptive.observer-percentile P: c for the P-th percentile observer of the entry's population
+  // (penumbra-fit's multilevel block) instead of the sample's c; 0: the entry's c.
+  double observer_percentile = 0;
 
   // The entry the file has for the settings' technique and kernel (or its fallback). PCF's Poisson
   // disk rotated per pixel is another filter than the unrotated one every entry was measured with.
@@ -194,6 +198,34 @@ inline void add_calibration_option(CLI::App& app, CalibrationOption& calibration
                  "calibration.json with the constant c of the adaptive rule per technique (an explicit --adaptive.c wins over the file)")
       ->capture_default_str()
       ->check(cli::path_given());
+  app.add_option("--adaptive.observer-percentile", calibration.observer_percentile,
+                 "c for the P-th percentile observer of the entry's population (P in (0, 100): 90 hides the artifact at the "
+                 "entry's criterion for 90 % of observers), from the entry's population block (penumbra-fit's multilevel fit); "
+                 "an entry without one is refused")
+      ->check(CLI::Range(0.0, 100.0));
+}
+
+// The entry whose c the rule reads: the chosen entry (or the published value), with c and ci95
+// replaced by the percentile observer's when --adaptive.observer-percentile asks for one. An
+// entry without a population block is refused naming the option.
+inline adaptive::CalibrationEntry entry_for_c(const CalibrationOption& calibration, const adaptive::CalibrationChoice& chosen) {
+  adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
+  if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
+  if (calibration.observer_percentile <= 0) return entry;
+  if (!(calibration.observer_percentile < 100))
+    throw CLI::ValidationError("--adaptive.observer-percentile", "expected a percentile in (0, 100), got 100");
+  adaptive::CAtPercentile at;
+  try {
+    if (!chosen.entry) throw std::invalid_argument(chosen.from + " has no population block");
+    at = adaptive::c_at_observer_percentile(entry, calibration.observer_percentile);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--adaptive.observer-percentile", std::string(e.what()) + " (" + calibration.loaded.source + ")");
+  }
+  entry.c = at.c;
+  entry.has_ci95 = std::isfinite(at.lo) && std::isfinite(at.hi);
+  entry.ci95_lo = entry.has_ci95 ? std::min(at.lo, at.c) : at.c;
+  entry.ci95_hi = entry.has_ci95 ? std::max(at.hi, at.c) : at.c;
+  return entry;
 }
 
 // Sets settings.adaptive.c to the c of the settings' technique (its ci95 upper bound with
@@ -204,12 +236,11 @@ inline void apply_calibration_for(const CalibrationOption& calibration, shadows:
     return;
   }
   const adaptive::CalibrationChoice chosen = calibration.choice(settings);
+  const adaptive::CalibrationEntry entry = entry_for_c(calibration, chosen);
   if (settings.adaptive.visibility > 0) {
     // c at the chosen detection probability on the entry's psychometric function, within the
     // range adaptive.c takes: far from the entry's criterion, or with a shallow slope, it leaves
     // every usable c (F 1e-15: 69 215 texels; criterion 1e-6 with slope 0.01 at 0.999: 0).
-    adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
-    if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
     const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
     const double c = calibration.ci_upper ? at.hi : at.c;
     double lo = 0, hi = 0;
@@ -221,14 +252,14 @@ inline void apply_calibration_for(const CalibrationOption& calibration, shadows:
       std::snprintf(line, sizeof line,
                     "at F = %.6g the %s of %s (c %.6g at its criterion F = %.6g, %s slope %.6g) gives c = %.6g texels, outside "
                     "[%g, %g]; choose a visibility nearer its criterion",
-                    settings.adaptive.visibility, chosen.from.c_str(), calibration.loaded.source.c_str(), chosen.c, t.criterion_f,
+                    settings.adaptive.visibility, chosen.from.c_str(), calibration.loaded.source.c_str(), entry.c, t.criterion_f,
                     t.family.c_str(), t.beta, c, lo, hi);
       throw CLI::ValidationError("--adaptive.visibility", line);
     }
     settings.adaptive.c = static_cast<float>(c);
     return;
   }
-  settings.adaptive.c = static_cast<float>(calibration.ci_upper ? chosen.ci95_hi : chosen.c);
+  settings.adaptive.c = static_cast<float>(calibration.ci_upper ? entry.ci95_hi : entry.c);
 }
 
 // For a window whose panel can switch the technique: re-applies the calibration when the technique
@@ -278,6 +309,10 @@ inline void apply_calibration(const CLI::App& app, CalibrationOption& calibratio
       calibration.c_from_command_line && visibility && visibility->count() > 0)
     throw CLI::ValidationError("--adaptive.visibility", "not read: --adaptive.c gives c itself (the visibility sets c from the calibration "
                                                         "entry); give one of them");
+  if (const CLI::Option* percentile = app.get_option_no_throw("--adaptive.observer-percentile");
+      calibration.c_from_command_line && percentile && percentile->count() > 0)
+    throw CLI::ValidationError("--adaptive.observer-percentile", "not read: --adaptive.c gives c itself (the percentile sets c from the "
+                                                                 "calibration entry's population); give one of them");
   calibration.command_line_c = settings.adaptive.c;
   calibration.ci_upper = ci_upper;
   apply_calibration_for(calibration, settings);
@@ -297,17 +332,36 @@ inline std::string calibration_line(const CalibrationOption& calibration, const 
     // What c means: the detection probability at which the staircase is still seen.
     const adaptive::CalibrationChoice chosen = calibration.choice(settings);
     const double criterion = chosen.entry ? chosen.entry->definition().criterion_f : adaptive::ThresholdDefinition{}.criterion_f;
+    const adaptive::CalibrationEntry entry = entry_for_c(calibration, chosen);
+    if (calibration.observer_percentile > 0) {
+      // Asked like a visibility: whose c, from which population, with its interval.
+      const adaptive::Population& p = *chosen.entry->population;
+      char interval[80] = "interval open", who[400];
+      if (entry.has_ci95) std::snprintf(interval, sizeof interval, "%.3g, %.3g", entry.ci95_lo, entry.ci95_hi);
+      const double q = calibration.observer_percentile;  // 90th, 1st, 2nd, 3rd, 11th, 97.5th
+      const long whole = std::lround(q);
+      const char* suffix = q != static_cast<double>(whole) || (whole % 100 >= 11 && whole % 100 <= 13) ? "th"
+                           : whole % 10 == 1                                                           ? "st"
+                           : whole % 10 == 2                                                           ? "nd"
+                           : whole % 10 == 3                                                           ? "rd"
+                                                                                                       : "th";
+      std::snprintf(who, sizeof who,
+                    " for the %g%s-percentile observer (c %.3g [%s] at the entry's criterion; population of %d participants: mean c "
+                    "%.3g, sd %.3g log10%s)",
+                    q, suffix, entry.c, interval, p.participants, p.mean_c, p.sd_log10,
+                    std::abs(calibration.observer_percentile - p.percentile) < 1e-9 ? ", the fitted percentile"
+                                                                                    : ", from the mean and the spread");
+      line += who;
+    }
     char at[320];
     if (settings.adaptive.visibility > 0) {
       // The interval at F: c's and the slope's, and the psychometric family's spread (a study's
       // trials sit near the criterion; the tail is the family's, adaptive::c_at_visibility).
-      adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
-      if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
       const adaptive::CAtVisibility range = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
       std::snprintf(at, sizeof at,
                     " at visibility F = %.3g (the entry's c %.3g is at its criterion F = %.3g), [%.3g, %.3g] over c, the slope and the "
                     "psychometric family (the family alone [%.3g, %.3g])",
-                    settings.adaptive.visibility, chosen.c, criterion, range.lo, range.hi, range.family_lo, range.family_hi);
+                    settings.adaptive.visibility, entry.c, criterion, range.lo, range.hi, range.family_lo, range.family_hi);
       // An entry that states no slope (the published constant; predicted.json's image-observer
       // entries made before they recorded the observer's own) is read with QUEST's 3.5: said.
       if (entry.definition().beta_assumed)
@@ -347,10 +401,16 @@ inline nlohmann::json calibration_json(const CalibrationOption& calibration, con
                       {"usable", !chosen.entry || chosen.entry->usable},
                       {"visibility", settings.adaptive.visibility > 0 ? nlohmann::json(settings.adaptive.visibility) : nlohmann::json("criterion")},
                       {"criterion_f", chosen.entry ? chosen.entry->definition().criterion_f : adaptive::ThresholdDefinition{}.criterion_f},
-                      {"c_at_criterion", chosen.c}};
+                      {"c_at_criterion", chosen.c},
+                      {"observer_percentile", calibration.observer_percentile > 0 ? nlohmann::json(calibration.observer_percentile)
+                                                                                  : nlohmann::json(nullptr)}};
+  const adaptive::CalibrationEntry entry = calibration.c_from_command_line ? adaptive::CalibrationEntry{} : entry_for_c(calibration, chosen);
+  if (calibration.observer_percentile > 0 && !calibration.c_from_command_line) {
+    // The percentile observer's c at the entry's criterion and its interval (null: open).
+    j["c_for_percentile"] = entry.c;
+    j["ci95_for_percentile"] = entry.has_ci95 ? nlohmann::json{entry.ci95_lo, entry.ci95_hi} : nlohmann::json(nullptr);
+  }
   if (settings.adaptive.visibility > 0 && !calibration.c_from_command_line) {
-    adaptive::CalibrationEntry entry = chosen.entry.value_or(adaptive::CalibrationEntry{});
-    if (!chosen.entry) entry.ci95_lo = entry.ci95_hi = entry.c = chosen.c;
     const adaptive::CAtVisibility at = adaptive::c_at_visibility(entry, settings.adaptive.visibility);
     // Only an interval there is (of c, of an estimated slope, or the family's away from the
     // criterion): none is written as null.

@@ -608,6 +608,47 @@ TEST_F(RenderCli, AChosenVisibilityEnlargesTheMapByTheRatioOfItsC) {
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 
+// Issue 48: --adaptive.observer-percentile asks the entry's population (penumbra-fit's multilevel
+// block) for the P-th percentile observer's c, as --adaptive.visibility asks for a detection
+// probability: the fitted percentile's own c and interval, the median observer at the population's
+// mean c, printed and recorded; an entry without a population and an explicit --adaptive.c are
+// refused naming the option.
+TEST_F(RenderCli, AnObserverPercentileIsReadFromTheEntrysPopulation) {
+  const fs::path file = work_ / "population.json";
+  std::ofstream(file) << R"json({"schema_version": 2, "entries": [
+      {"technique": "pcf", "kernel": "disk", "c": 3.13, "ci95": [2.73, 3.73], "obtained_by": "simulated", "participants": 6,
+       "population": {"participants": 6, "condition": "the worst condition (stair/1)", "mean_c": 3.184, "mean_c_ci95": [2.732, 3.734],
+                      "sd_log10": 0.05, "sd_log10_ci95": [0.02, 0.09], "observer_percentile": "90", "percentile_c": 3.273,
+                      "percentile_c_ci95": [2.824, 4.583]}},
+      {"technique": "vsm", "c": 3.06, "obtained_by": "image-observer"}]})json";
+  auto render = [&](const std::vector<std::string>& extra, const std::string& name) {
+    std::vector<std::string> args = {"--calibration", file.string(), "--adaptive.enabled", "true"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    args.insert(args.end(), {"-o", (work_ / name).string()});
+    return run_render(small_args(args), scratch_);
+  };
+  const Result p90 = render({"--technique", "pcf", "--adaptive.observer-percentile", "90"}, "p90");
+  ASSERT_EQ(p90.exit_code, 0) << p90.err;
+  const nlohmann::json cal = read_json(work_ / "p90" / "pcf-disk" / "report.json").at("calibration");
+  EXPECT_NEAR(cal.at("c").get<double>(), 3.273, 1e-6);
+  EXPECT_EQ(cal.at("observer_percentile").get<double>(), 90.0);
+  EXPECT_EQ(cal.at("ci95_for_percentile"), nlohmann::json({2.824, 4.583}));
+  EXPECT_EQ(cal.at("c_at_criterion").get<double>(), 3.13) << "the sample's c, recorded beside";
+  EXPECT_THAT(p90.out, HasSubstr("c for pcf disk = 3.27 texels for the 90th-percentile observer (c 3.27 [2.82, 4.58] at the entry's "
+                                 "criterion; population of 6 participants: mean c 3.18, sd 0.05 log10, the fitted percentile)"));
+  const Result median = render({"--technique", "pcf", "--adaptive.observer-percentile", "50"}, "p50");
+  ASSERT_EQ(median.exit_code, 0) << median.err;
+  EXPECT_NEAR(read_json(work_ / "p50" / "pcf-disk" / "report.json").at("calibration").at("c").get<double>(), 3.184, 1e-6);
+  EXPECT_THAT(median.out, HasSubstr("from the mean and the spread"));
+  const Result none = render({"--technique", "vsm", "--adaptive.observer-percentile", "90"}, "vsm");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_THAT(none.err, HasSubstr("--adaptive.observer-percentile: vsm entry (image observer) has no population block"));
+  EXPECT_EQ(line_count(none.err), 1) << none.err;
+  const Result both = render({"--technique", "pcf", "--adaptive.c", "3", "--adaptive.observer-percentile", "90"}, "both");
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_THAT(both.err, HasSubstr("--adaptive.observer-percentile: not read: --adaptive.c gives c itself"));
+}
+
 // Issue 45: adaptive.visibility is a double in 0 (the entry's criterion) or [0.001, 0.999]. As a
 // float, 1e-45 .. 5e-324 became 0 and quietly meant the criterion; 1e-15 gave c = 69 215 texels;
 // 1e-17 failed blaming adaptive.c, exit 1. Each is refused in one line naming the option, exit 2.
