@@ -104,6 +104,15 @@ void main() {
     int blockers;
     const vec2 gradient = u_virtual_search_receiver_plane ? receiver_gradient(p, light) : vec2(0.0);
     const bool searched = virtual_pcss_radius(world, gradient, radius, blockers);
+#if defined(COUNT_SHADOW_READS)
+    {  // Renderer::count_shading_reads: the search's reads join the shading's (read_count.glsl), whose
+       // pass counts the pixel itself; this pass runs again for the count alone (PageMarker).
+      const uint slot = (uint(p.x) + 17u * uint(p.y)) % uint(SHADOW_READ_SLOTS);
+      atomicAdd(read_instructions[slot], g_read_instructions);
+      atomicAdd(read_texels[slot], g_read_texels);
+      atomicAdd(read_bytes[slot], g_read_bytes);
+    }
+#endif
     if (u_write_radii) imageStore(u_radii, p, vec4(searched ? radius : -1.0));
     if (!searched || blockers == 0) {
       // No search (the pool held none of its levels) or nothing in front: no filter pages.

@@ -758,6 +758,11 @@ ShadowReads count_shading_reads(FrameContext& f) {
   const std::optional<MomentsLayout> moments = entry.moments ? entry.moments(f.settings) : std::nullopt;
   prog.set("u_count_moment_bytes", moments ? bytes_per_texel(moments->format) : 0);
   draw_shading(f, prog);  // its triangles are the frame's, counted when it was drawn
+  // PCSS through the virtual map searches for blockers in its marking, not in the shading: that
+  // pass again, counting (PageMarker::count_pcss_search_reads).
+  if (f.plan.virtual_pages != VirtualPages::off && r.virtual_map && r.virtual_map->pcss)
+    r.virtual_map->marker->count_pcss_search_reads(r.virtual_map->positions, f.scene.camera, f.plan.height_px, *r.virtual_map->map,
+                                                   *r.virtual_map->pcss, r.virtual_map->options);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glDepthFunc(GL_LESS);

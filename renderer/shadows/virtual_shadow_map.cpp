@@ -446,10 +446,25 @@ void PageMarker::dispatch_pcss_filter(const gl::Texture& surface, const scene::C
   run(Pass::pcss_penumbra, surface, camera, height_px, frame, 0, options, levels, radii, marks);
 }
 
+void PageMarker::count_pcss_search_reads(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
+                                         const VirtualPcss& pcss, const adaptive::MarkOptions& options) const {
+  if (!count_program_.id()) {
+    count_program_ = gl::ShaderLibrary().program({{GL_COMPUTE_SHADER, "virtual_mark.comp"}},
+                                                 {{"VIRTUAL_MARK_PASS", std::to_string(static_cast<int>(Pass::pcss_penumbra))},
+                                                  {"COUNT_SHADOW_READS", "1"}});
+    check_virtual_frame_block(count_program_, "virtual_mark.comp (counting)");
+  }
+  map.bind();
+  VirtualFrame frame = map.frame();
+  set_virtual_pcss(frame, pcss);
+  run(Pass::pcss_penumbra, surface, camera, height_px, frame, 0, options, nullptr, nullptr, marks_, &count_program_);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+}
+
 void PageMarker::run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, VirtualFrame frame,
                      double radius_ws, const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii,
-                     const gl::Buffer& marks) const {
-  const gl::Program& prog = program(pass);
+                     const gl::Buffer& marks, const gl::Program* counting) const {
+  const gl::Program& prog = counting ? *counting : program(pass);
   if (height_px < 1) throw std::invalid_argument("page marker: the image needs at least one row");
   const auto same_size_r32f = [&](const gl::Texture* t) {
     return !t || (t->desc().width == surface.desc().width && t->desc().height == surface.desc().height && t->desc().format == GL_R32F);

@@ -170,16 +170,27 @@ class PageMarker {
                             const gl::Buffer& marks, const gl::Texture* levels = nullptr) const;
   adaptive::MarkResult read(const gl::Buffer& marks) const;
 
+  // Renderer::count_shading_reads: PCSS's blocker search runs here, not in the shading, so its
+  // reads are counted by dispatching mark_pcss_filter's pass again, compiled with
+  // COUNT_SHADOW_READS: each pixel's texture reads (tables, depths, tile bounds) are added to the
+  // ShadowReadsResult buffer bound at BUFFER_SHADOW_READS (its pixels are the shading's). It marks
+  // into a scratch buffer and writes no image: nothing a later frame reads changes.
+  void count_pcss_search_reads(const gl::Texture& surface, const scene::Camera& camera, int height_px, const VirtualShadowMap& map,
+                               const VirtualPcss& pcss, const adaptive::MarkOptions& options) const;
+
  private:
   // The marking's three passes (virtual_mark.comp's VIRTUAL_MARK_PASS): a filter's pages, PCSS's searches',
   // PCSS's penumbrae'.
   enum class Pass { filter = 0, pcss_search = 1, pcss_penumbra = 2 };
   // `frame`: the layout's and view's part (and PCSS's); run() adds the marking's.
+  // `counting`: a program to run instead of the pass's own (count_pcss_search_reads).
   void run(Pass pass, const gl::Texture& surface, const scene::Camera& camera, int height_px, VirtualFrame frame, double radius_ws,
-           const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii, const gl::Buffer& marks) const;
+           const adaptive::MarkOptions& options, const gl::Texture* levels, const gl::Texture* radii, const gl::Buffer& marks,
+           const gl::Program* counting = nullptr) const;
   const gl::Program& program(Pass pass) const { return programs_[static_cast<int>(pass)]; }
   adaptive::VirtualMapLayout layout_;
   gl::Program programs_[3];  // one per Pass: a pass chosen by a uniform costs the others' code on llvmpipe
+  mutable gl::Program count_program_;  // Pass::pcss_penumbra with COUNT_SHADOW_READS, made on first use
   VirtualFrameBuffer frame_buffer_;
   gl::Buffer marks_;
   std::size_t words_ = 0;  // the marks buffer, in 32-bit words (virtual_mark_buffer_words)

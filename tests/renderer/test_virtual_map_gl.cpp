@@ -735,6 +735,56 @@ TEST(VirtualMap, MarkingOnTheGpuEqualsTheCpuReference) {
   }
 }
 
+// PCSS's blocker search through the pages runs in the marking (virtual_mark.comp's penumbra pass),
+// whose reads the shading's count used to miss: counting it again (what Renderer::count_shading_reads
+// now does) tallies at least a table read and a depth gather for every pixel whose search ran, and
+// changes nothing a later marking reads.
+TEST(VirtualMap, ThePcssSearchsReadsInTheMarkingAreCounted) {
+  Fixture f;
+  const VirtualMapLayout layout = small_layout();
+  VirtualShadowMap map(layout, 14);
+  map.update(every_page(layout), f.view, f.scene, f.meshes);
+  const int w = 160, h = 90;
+  metrics::SurfaceProbe probe(f.scene);
+  const io::ImageF surface = probe.render(f.scene.camera, w, h);
+  gl::Texture texture({GL_RGBA32F, w, h, 1}, "surface");
+  glTextureSubImage2D(texture.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, surface.pixels.data());
+  shadows::VirtualPcss pcss;
+  pcss.tan_half_angle = std::tan(glm::radians(f.scene.light.size) / 2);
+  pcss.min_penumbra_ws = 0.01f;
+  const adaptive::MarkOptions options;
+  const shadows::PageMarker marker(layout);
+  const gl::Texture radii({GL_R32F, w, h, 1}, "radii");
+  const adaptive::MarkResult before = marker.mark_pcss_filter(texture, f.scene.camera, h, map, pcss, options, nullptr, &radii);
+  std::vector<float> radius(static_cast<std::size_t>(w) * h);
+  glGetTextureImage(radii.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(radius.size() * sizeof(float)), radius.data());
+  const auto searched = static_cast<std::uint64_t>(std::count_if(radius.begin(), radius.end(), [](float r) { return r >= 0; }));
+  ASSERT_GT(searched, static_cast<std::uint64_t>(w * h / 2)) << "most pixels' searches find their level resident";
+
+  const gl::Buffer reads(sizeof(shadows::contract::ShadowReadsResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  const std::uint32_t zero = 0;
+  glClearNamedBufferData(reads.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, shadows::contract::BUFFER_SHADOW_READS, reads.id());
+  marker.count_pcss_search_reads(texture, f.scene.camera, h, map, pcss, options);
+  shadows::contract::ShadowReadsResult raw{};
+  glGetNamedBufferSubData(reads.id(), 0, sizeof raw, &raw);
+  std::uint64_t pixels = 0, instructions = 0, texels = 0, bytes = 0;
+  for (int i = 0; i < shadows::contract::SHADOW_READ_SLOTS; ++i)
+    pixels += raw.read_pixels[i], instructions += raw.read_instructions[i], texels += raw.read_texels[i], bytes += raw.read_bytes[i];
+  EXPECT_EQ(pixels, 0u) << "the shading counts the pixels";
+  EXPECT_GE(instructions, 2 * searched) << "a table read and a gather at least per search";
+  EXPECT_GE(texels, 5 * searched) << "a table texel and a gather's four";
+  EXPECT_GE(bytes, 4 * texels) << "4-byte table entries and depths, 16-byte tile bounds";
+  ::testing::Test::RecordProperty("search_instructions_per_searched_pixel", static_cast<int>(instructions / searched));
+
+  // Nothing a later frame reads changed: the same marking again gives the same pages and radii.
+  const adaptive::MarkResult after = marker.mark_pcss_filter(texture, f.scene.camera, h, map, pcss, options, nullptr, &radii);
+  EXPECT_EQ(after.pages, before.pages);
+  std::vector<float> radius_after(radius.size());
+  glGetTextureImage(radii.id(), 0, GL_RED, GL_FLOAT, static_cast<GLsizei>(radius_after.size() * sizeof(float)), radius_after.data());
+  EXPECT_EQ(radius_after, radius);
+}
+
 // PCSS's blocker search through the pages tests each texel against the receiver's plane (the
 // marker takes it from neighbouring pixels): a receiver tilted 70° from the light, with nothing
 // in front of it, finds no blocker on its own surface; tested against one depth less the same
