@@ -51,7 +51,8 @@ endif()
 # --- the tools, their data and the documentation ----------------------------------------------
 
 set(penumbra_tools penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-view
-                   penumbra-quest penumbra-observer-curve penumbra-study penumbra-fit penumbra-compare)
+                   penumbra-quest penumbra-observer-curve penumbra-observer-fit penumbra-study penumbra-fit
+                   penumbra-compare)
 foreach(tool IN LISTS penumbra_tools)
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT Runtime)

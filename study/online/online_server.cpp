@@ -324,7 +324,7 @@ double finite_number(const nlohmann::json& body, const char* key, double lo, dou
 }  // namespace
 
 struct Server::Impl {
-  trial_log::DirectoryLock lock;  // of SESSIONS_DIR, for the server's life
+  trial_log::DirectoryLock sessions_lock;  // of SESSIONS_DIR, for the server's life
   ServerOptions o;
   httplib::Server http;
   StimulusStore stimuli;
@@ -892,7 +892,7 @@ Server::Server(ServerOptions options) : impl_(std::make_unique<Impl>(std::move(o
           std::to_string(s.frame_patches.frames_read()) + " frame(s) of the frame cache " + s.o.frame_cache.string());
   }
   // One server per folder of sessions: a second one is refused before it listens.
-  s.lock = trial_log::DirectoryLock(s.o.sessions_dir);
+  s.sessions_lock = trial_log::DirectoryLock(s.o.sessions_dir);
   httplib::Server& http = s.http;
   http.new_task_queue = [] { return new httplib::ThreadPool(64); };
   // SO_REUSEADDR (a restart binds while the killed server's connections wait out TIME_WAIT), but

@@ -31,7 +31,8 @@ using namespace penumbra;
 
 const std::string kStudy = PENUMBRA_STUDY_EXE, kFit = PENUMBRA_FIT_EXE, kQuest = PENUMBRA_QUEST_EXE,
                   kRender = PENUMBRA_RENDER_EXE, kScene = PENUMBRA_SCENE_EXE, kBench = PENUMBRA_BENCH_EXE,
-                  kCurve = PENUMBRA_OBSERVER_CURVE_EXE, kDemo = PENUMBRA_DEMO_EXE;
+                  kCurve = PENUMBRA_OBSERVER_CURVE_EXE, kObserverFit = PENUMBRA_OBSERVER_FIT_EXE,
+                  kDemo = PENUMBRA_DEMO_EXE;
 const std::string kConfig = PENUMBRA_DATA_DIR "/studies/default.json";
 
 // A scratch directory per test, removed at the end.
@@ -137,6 +138,8 @@ TEST(ErrorLines, CommandLinesThatCannotBeParsedAreOneLineAndExit2) {
       {kScene, {"--bogus"}},
       {kBench, {"--bogus", "-o", (s / "b").string()}},
       {kCurve, {"--bogus"}},
+      {kObserverFit, {"--bogus"}},
+      {kObserverFit, {"--human", "step/1=3.47"}},
   };
   for (const auto& [exe, args] : cases) {
     const std::string tool = fs::path(exe).filename().string();

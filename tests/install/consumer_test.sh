@@ -176,8 +176,8 @@ done
 "$work/pc_engine_integration" "$prefix/share/penumbra/calibration/default.json" | cmp - "$work/example.txt" || fail "the example built with pkg-config printed something else"
 
 step "installed tools: --version, --help, the installed data"
-tools=(penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-quest penumbra-observer-curve penumbra-study penumbra-fit
-       penumbra-compare)
+tools=(penumbra-render penumbra-scene penumbra-bench penumbra-demo penumbra-quest penumbra-observer-curve penumbra-observer-fit
+       penumbra-study penumbra-fit penumbra-compare)
 [[ -x $prefix/bin/penumbra-view || ! -e $build/renderer/penumbra-view ]] || fail "penumbra-view built but not installed"
 [[ -x $prefix/bin/penumbra-view ]] && tools+=(penumbra-view)
 for tool in "${tools[@]}"; do
