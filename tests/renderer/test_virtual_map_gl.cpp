@@ -1000,7 +1000,9 @@ TEST(VirtualMap, ItsWorkIsCountedPerStepAndItsReadsPerPixel) {
         EXPECT_GT(p.compute_invocations, 0u) << p.pass;
         EXPECT_EQ(p.primitives, 0u) << p.pass;
       }
-      if (p.pass == "virtual_positions") EXPECT_GE(p.fragments, static_cast<std::uint64_t>(w * h / 2)) << name;
+      if (p.pass == "virtual_positions") {
+        EXPECT_GE(p.fragments, static_cast<std::uint64_t>(w * h / 2)) << name;
+      }
     }
     EXPECT_EQ(draw_primitives, info.virtual_map->pages.triangles) << name << ": what the map counted as drawn into its pages";
     const shadows::ShadowReads reads = r.count_shading_reads();
