@@ -121,6 +121,9 @@ nlohmann::json read_session_json(const fs::path& path, SessionInfo& info) {
       if (size_px > 0) info.browser_pixels_per_degree = ppd * size_px / css;
     }
   }
+  if (j.contains("config") && j["config"].is_object() && j["config"].contains("quest") && j["config"]["quest"].is_object() &&
+      j["config"]["quest"].contains("tail_p_threshold"))
+    info.tail_p_threshold = number_field(j["config"]["quest"], file, "config.quest", "tail_p_threshold");
   if (j.contains("config") && j["config"].is_object() && j["config"].contains("stopping")) {
     const auto& s = j["config"]["stopping"];
     if (s.is_object() && s.contains("sd_below")) info.sd_below = number_field(s, file, "config.stopping", "sd_below");

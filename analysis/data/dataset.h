@@ -21,6 +21,9 @@ struct SessionInfo {
   std::string log_file;                    // the trials.csv read
   std::optional<quest::QuestParams> quest;  // from session.json, with the table size it used
   int quest_dim = 0;
+  // The config's quest.tail_p_threshold: the P(correct) its tail staircases' QUEST aimed at
+  // (procedure::is_tail_staircase names them); 0: none.
+  double tail_p_threshold = 0;
   double sd_below = 0.1;                   // the study's convergence criterion (session.json), else 0.1
   bool torn_tail = false;                  // the last line was cut (a trial unanswered when the app died)
   // Who answered (procedure::ObserverKind as session.json holds it): "person",

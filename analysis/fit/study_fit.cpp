@@ -14,6 +14,7 @@
 
 #include "fit/statistics.h"
 #include "procedure/config.h"
+#include "procedure/procedure.h"
 #include "sampling/random.h"
 
 namespace penumbra::analysis {
@@ -219,7 +220,9 @@ void recompute_quest(StaircaseFit& sf, const SessionInfo& session, const std::ve
   sf.logged_quest_mean = seen.back()->row.quest_mean;
   sf.logged_quest_sd = seen.back()->row.quest_sd;
   if (!session.quest) return;
-  quest::Quest q(*session.quest, session.quest_dim);
+  quest::QuestParams params = *session.quest;
+  if (procedure::is_tail_staircase(sf.staircase, session.tail_p_threshold)) params.p_threshold = session.tail_p_threshold;
+  quest::Quest q(params, session.quest_dim);
   for (const Trial* t : seen) q.update(t->row.intensity, t->row.correct);
   sf.quest_recomputed = true;
   sf.quest_mean = q.mean();
@@ -475,6 +478,37 @@ MultilevelFit population_fit(const StudyFit& fit, const std::vector<std::map<std
   return fit_multilevel(input, options.observer_percentile, options.level);
 }
 
+CAtVisibilityFit condition_c_at_visibility(const StudyFit& fit, std::size_t condition, double visibility) {
+  if (!(visibility > 0 && visibility < 1)) throw std::invalid_argument("visibility: expected a detection probability in (0, 1)");
+  if (condition >= fit.conditions.size()) throw std::invalid_argument("condition " + std::to_string(condition) + ": no such condition");
+  const FitResult& f = fit.conditions[condition].linear;
+  const psy::Model family = fit.options.family;
+  // log10 c(F) from u (c = 10^-u) and log beta; the Weibull's x is the ratio a / r, the others' its log10.
+  const auto log10_c_at = [&](double u, double log_beta) {
+    const bool linear = family == psy::Model::weibull;
+    const double x = psy::threshold_at(family, linear ? std::pow(10.0, u) : u, fit.criterion_f, visibility, std::exp(log_beta));
+    return linear ? -std::log10(x) : -x;
+  };
+  const double u = f.params.u[0], log_beta = f.params.log_beta;
+  CAtVisibilityFit out;
+  out.c = std::pow(10.0, log10_c_at(u, log_beta));
+  if (!f.covariance_ok) return out;
+  const int iu = 0, ib = f.index_log_beta();
+  constexpr double h = 1e-6;
+  const double du = (log10_c_at(u + h, log_beta) - log10_c_at(u - h, log_beta)) / (2 * h);
+  double db = 0, var_b = 0, cov_ub = 0;
+  if (std::isfinite(f.se(ib))) {  // a slope held fixed has no variance
+    db = (log10_c_at(u, log_beta + h) - log10_c_at(u, log_beta - h)) / (2 * h);
+    var_b = f.cov(ib, ib);
+    cov_ub = f.cov(iu, ib);
+  }
+  const double var = du * du * f.cov(iu, iu) + db * db * var_b + 2 * du * db * cov_ub;
+  if (!(var >= 0) || !std::isfinite(var)) return out;
+  const double half = z_of(fit.options.level) * std::sqrt(var), log_c = std::log10(out.c);
+  out.ci = {std::pow(10.0, log_c - half), std::pow(10.0, log_c + half), false, false};
+  return out;
+}
+
 std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit) {
   std::vector<ThesisEstimate> out;
   for (const ConditionFit& c : fit.conditions) {
@@ -483,7 +517,8 @@ std::vector<ThesisEstimate> thesis_estimates(const StudyFit& fit) {
     // Per participant and size one staircase: its radius r = a 10^-(QUEST's final mean).
     std::map<double, std::vector<double>> radii;
     for (const StaircaseFit& s : fit.staircases) {
-      if (s.condition != c.condition) continue;
+      // The thesis ran one target; a tail staircase's QUEST mean is another point of the function.
+      if (s.condition != c.condition || s.tail) continue;
       const double mean = s.quest_recomputed ? s.quest_mean : s.logged_quest_mean;
       if (!std::isfinite(mean)) continue;
       radii[s.artifact_px].push_back(s.artifact_px * std::pow(10.0, -mean));
@@ -740,6 +775,7 @@ StudyFit fit_study(const Dataset& data, const StudyFitOptions& options) {
       sf.staircase = first.staircase;
       sf.artifact_px = first.artifact_px;
       sf.round = first.condition_index;
+      sf.tail = procedure::is_tail_staircase(sf.staircase, session.tail_p_threshold);
       ModelSpec spec = base_spec(options, out.p_threshold, out.guess, out.quest_delta);
       // A staircase's 20-40 trials sit near its threshold and cannot tell a slope: free, it ran to
       // its bound on half of clean simulated staircases (a step function, flagged). The slope and

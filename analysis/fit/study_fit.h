@@ -59,6 +59,7 @@ struct StaircaseFit {
   std::string participant, session_id, condition, staircase;
   double artifact_px = 0;
   int round = 0;
+  bool tail = false;  // its QUEST aimed at the config's quest.tail_p_threshold, not the criterion
   FitResult fit;  // u = fit.params.u[0]
   double c = NAN, c_lo = NAN, c_hi = NAN;  // 10^-u and its Wald interval
   // QUEST posterior after the last trial, recomputed from the log (when session.json has QUEST's
@@ -203,6 +204,20 @@ struct StudyFit {
 
 // Throws std::invalid_argument for bad options.
 StudyFit fit_study(const Dataset& data, const StudyFitOptions& options);
+
+// A condition's c at detection probability `visibility` (docs/fit.md's c(F)) on its fitted
+// function (the linear model's threshold and slope, in the fit's family), with the Wald interval of
+// log10 c(F) from their joint covariance (delta method, `level`). The threshold and the slope are
+// correlated wherever the trials do not sit at F*, so this is narrower than the corners of their two
+// intervals (adaptive::c_at_visibility's, which a calibration entry allows, lacking the covariance)
+// and narrows when a tail design (quest.tail_p_threshold) puts trials near `visibility`. Within the
+// family: a refit with another family moves it (docs/fit.md). An empty interval when the fit has no
+// covariance. Throws std::invalid_argument for a visibility outside (0, 1) or a bad condition index.
+struct CAtVisibilityFit {
+  double c = NAN;
+  Interval ci;
+};
+CAtVisibilityFit condition_c_at_visibility(const StudyFit& fit, std::size_t condition, double visibility);
 
 // Bootstrap over participants of the linear model: `participants[i]` holds participant i's groups.
 BootstrapSummary bootstrap_participants(const ModelSpec& base, const std::vector<std::vector<Group>>& participants,

@@ -352,7 +352,7 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
   const bool yesno = c.task == "yesno" && c.yesno_scoring == "jagged_only";
   const double default_gamma = yesno ? 0.05 : 0.5, default_p = yesno ? 0.658 : 0.82;
   if (const auto* q = r.find(j, "quest")) {
-    r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range"});
+    r.only(*q, "quest.", {"t_guess", "t_guess_sd", "p_threshold", "beta", "delta", "gamma", "grain", "range", "tail_p_threshold"});
     c.quest.t_guess = r.number(*q, "quest.", "t_guess", frames ? 0.0 : -0.5, -5, 5);
     c.quest.t_guess_sd = r.number(*q, "quest.", "t_guess_sd", 1.0, 0.01, 100);
     c.quest.p_threshold = r.number(*q, "quest.", "p_threshold", default_p, 0.01, 0.999);
@@ -362,6 +362,15 @@ StudyConfig parse_config(const nlohmann::json& j, const std::string& file) {
     if (c.quest.p_threshold <= c.quest.gamma) r.fail("quest.p_threshold", "expected above quest.gamma");
     c.quest.grain = r.number(*q, "quest.", "grain", 0.01, 1e-4, 1);
     if (r.find(*q, "range")) c.quest.range = r.number(*q, "quest.", "range", 5, 0.1, 100);
+    if (r.find(*q, "tail_p_threshold")) {
+      if (frames) r.fail("quest.tail_p_threshold", "not with frames (a tail target is for the edge study's staircases)");
+      c.tail_p_threshold = r.number(*q, "quest.", "tail_p_threshold", 0, 0.01, 0.999);
+      // Between the guess rate (a target there is no detection at all) and the criterion (the
+      // first staircase's; above it is no tail).
+      if (!(c.tail_p_threshold > c.quest.gamma && c.tail_p_threshold < c.quest.p_threshold))
+        r.fail("quest.tail_p_threshold", "expected between quest.gamma (" + Reader::fmt(c.quest.gamma) + ") and quest.p_threshold (" +
+                                             Reader::fmt(c.quest.p_threshold) + "), both excluded, got " + Reader::fmt(c.tail_p_threshold));
+    }
   } else {
     c.quest.t_guess = frames ? 0.0 : -0.5;  // frames: k = 1, the rule as it is
     c.quest.t_guess_sd = 1.0;
@@ -553,6 +562,7 @@ nlohmann::json to_json(const StudyConfig& c) {
                           {"p_threshold", c.quest.p_threshold}, {"beta", c.quest.beta}, {"delta", c.quest.delta},
                           {"gamma", c.quest.gamma}, {"grain", c.quest.grain}};
   if (c.quest.range) quest["range"] = *c.quest.range;
+  if (c.tail_p_threshold > 0) quest["tail_p_threshold"] = c.tail_p_threshold;  // only when set: earlier sessions read back equal
   nlohmann::json stimulus = {{"size_px", c.stimulus_size_px}};
   if (c.technique.empty() && !c.frames.enabled()) {  // a frame study's stimulus block holds its size alone
     stimulus["kernel"] = stimuli::to_string(c.kernel);

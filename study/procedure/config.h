@@ -122,6 +122,11 @@ struct StudyConfig {
   std::vector<RoundConfig> rounds;
   quest::QuestParams quest;                  // t_guess, t_guess_sd in intensity units
   double intensity_min = -2.0, intensity_max = 1.0;  // QUEST's suggestion is clamped to these
+  // quest.tail_p_threshold: a second QUEST per condition and artifact size aimed at this lower
+  // P(correct) (a low detection probability F), interleaved with the first under the same stopping
+  // rule, so that the psychometric function's tail is measured rather than extrapolated from the
+  // criterion (docs/study-config.md). 0: none, the staircases of configs before issue 48.
+  double tail_p_threshold = 0;
   int min_trials = 10, max_trials = 40;
   double sd_below = 0.1;                     // converged when the posterior sd drops below this
   Practice practice;

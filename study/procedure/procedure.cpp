@@ -82,6 +82,13 @@ void check_round_order(const StudyConfig& config, const std::vector<int>& order)
                                 std::to_string(config.rounds.size() - 1) + ") once");
 }
 
+std::string tail_staircase_name(const std::string& name, double tail_p_threshold) { return name + "@" + fmt(tail_p_threshold); }
+
+bool is_tail_staircase(const std::string& staircase, double tail_p_threshold) {
+  const std::size_t at = staircase.rfind('@');
+  return tail_p_threshold > 0 && at != std::string::npos && staircase.substr(at + 1) == fmt(tail_p_threshold);
+}
+
 int Procedure::round_position(int round) const {
   const auto& order = randomization_.round_order;
   const auto it = std::find(order.begin(), order.end(), round);
@@ -93,6 +100,15 @@ Procedure::Procedure(const StudyConfig& config, Randomization randomization) : c
   for (std::size_t r = 0; r < config_.rounds.size(); ++r) {
     std::vector<Staircase> round;
     for (double a : config_.artifact_px) round.push_back({"a" + fmt(a), a, quest::Quest(config_.quest), false, {}, {}});
+    // After the criterion's staircases, so that practice (which walks the first ones) and the
+    // staircases of configs without a tail are as before. The same prior: its sd (1 log10 unit by
+    // default) spans the tail's offset (-0.19 for P 0.6 at slope 3.5).
+    if (config_.tail_p_threshold > 0) {
+      quest::QuestParams tail = config_.quest;
+      tail.p_threshold = config_.tail_p_threshold;
+      for (double a : config_.artifact_px)
+        round.push_back({tail_staircase_name("a" + fmt(a), tail.p_threshold), a, quest::Quest(tail), false, {}, {}, true});
+    }
     for (const FramePatch& patch : config_.frames.patches) round.push_back({patch.name, 0, quest::Quest(config_.quest), false, {}, {}});
     rounds_.push_back(std::move(round));
   }

@@ -40,7 +40,17 @@ struct Staircase {
   bool done = false;
   std::vector<double> filter_radius_px;  // per trial, as shown (for the admin plot)
   std::vector<int> correct;
+  // A tail staircase (config.tail_p_threshold): its QUEST aims at the tail's P(correct), not the
+  // criterion; named by tail_staircase_name.
+  bool tail = false;
 };
+
+// The name of the tail staircase beside `name` ("a10"): "a10@0.6" for a tail P(correct) 0.6, so
+// that the log's staircase column says which target each trial's QUEST had.
+std::string tail_staircase_name(const std::string& name, double tail_p_threshold);
+// Whether `staircase` (the log's column) is a tail staircase of a session whose config has
+// `tail_p_threshold` (0: none, so none is).
+bool is_tail_staircase(const std::string& staircase, double tail_p_threshold);
 
 // What differs between the sessions of one config: the seed of every random draw (target side,
 // staircase, edge phase and orientation) and the order of the rounds. Recorded in session.json
