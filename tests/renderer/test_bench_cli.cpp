@@ -520,7 +520,9 @@ void BenchShards::expect_three_shards_merge_to_the_unsharded_run(std::size_t n_r
   ASSERT_EQ(rows_merged.size(), rows_full.size());
   for (std::size_t k = 0; k < rows_full.size(); ++k)
     for (const auto& [column, value] : rows_full[k])
-      if (!kTimingColumns.count(column)) EXPECT_EQ(rows_merged[k].at(column), value) << "row " << k << ", " << column;
+      if (!kTimingColumns.count(column)) {
+        EXPECT_EQ(rows_merged[k].at(column), value) << "row " << k << ", " << column;
+      }
   // The merged times are the parts' own, and the front is drawn over them: some row is on it.
   int front = 0;
   for (const auto& row : rows_merged) front += row.at("pareto") == "1";

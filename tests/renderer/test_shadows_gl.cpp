@@ -539,7 +539,9 @@ TEST(ShadowReads, EachKernelReadsWhatItsShapeSays) {
     EXPECT_EQ(r.read_visibility().pixels, image.pixels) << c.name << ": the counting draw writes no image";
     EXPECT_GE(reads.pixels, static_cast<std::uint64_t>(w * h / 2)) << c.name << ": the ground fills most of the view";
     EXPECT_LE(reads.pixels, static_cast<std::uint64_t>(w * h)) << c.name << ": each pixel once";
-    if (pixels) EXPECT_EQ(reads.pixels, pixels) << c.name;
+    if (pixels) {
+      EXPECT_EQ(reads.pixels, pixels) << c.name;
+    }
     pixels = reads.pixels;
     EXPECT_DOUBLE_EQ(reads.per_pixel(reads.instructions), c.instructions) << c.name;
     EXPECT_DOUBLE_EQ(reads.per_pixel(reads.texels), c.texels) << c.name;
@@ -573,7 +575,9 @@ TEST(ShadowReads, CountingChangesNoLaterFrame) {
       EXPECT_GT(reads.instructions, reads.pixels) << shadows::technique_entry(s.technique).name;
       const shadows::FrameInfo b = plain.render(s, 160, 90);
       EXPECT_EQ(a.resolution_texels, b.resolution_texels) << "frame " << frame;
-      if (a.virtual_map) EXPECT_EQ(a.virtual_map->pages.drawn, b.virtual_map->pages.drawn) << "frame " << frame;
+      if (a.virtual_map) {
+        EXPECT_EQ(a.virtual_map->pages.drawn, b.virtual_map->pages.drawn) << "frame " << frame;
+      }
       EXPECT_EQ(counted.read_visibility().pixels, plain.read_visibility().pixels) << "frame " << frame;
     }
   }
