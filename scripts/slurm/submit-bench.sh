@@ -15,45 +15,8 @@
 # BENCH-ARGS are penumbra-bench's options without -o (--quick, --scenes, --techniques, ...).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-die() { echo "submit-bench: $*" >&2; exit 2; }
-limit=16 resume=0 extra=() work="out/bench-shards" shards="" out=""
-while [[ $# -gt 0 && "$1" != -- ]]; do
-  case "$1" in
-    --shards) [[ "${2:-}" =~ ^[1-9][0-9]*$ ]] || die "--shards: expected a whole number of tasks, got '${2:-}'"; shards="$2"; shift 2 ;;
-    --limit) [[ "${2:-}" =~ ^[1-9][0-9]*$ ]] || die "--limit: expected a whole number of tasks, got '${2:-}'"; limit="$2"; shift 2 ;;
-    --work) [[ -n "${2:-}" ]] || die "--work: expected a directory"; work="$2"; shift 2 ;;
-    --resume) resume=1; shift ;;
-    --sbatch) read -ra extra <<<"${2:-}"; shift 2 ;;
-    -o) [[ -n "${2:-}" ]] || die "-o: expected the output directory"; out="$2"; shift 2 ;;
-    *) die "$1: unknown option (see the comment at the top of $0; penumbra-bench's own options go after --)" ;;
-  esac
-done
-[[ "${1:-}" == -- ]] && shift
-[[ -n "$shards" ]] || die "--shards: required (the array's tasks)"
-[[ -n "$out" ]] || die "-o: required (the merged directory)"
-command -v sbatch >/dev/null || die "sbatch: not found (run this on the cluster's login node)"
-mkdir -p "$work/parts"
-args_file="$work/args.txt"
-printf '%s\n' "--shards $shards" "$@" >"$args_file.new"
-if [[ $resume -eq 1 ]]; then
-  [[ -f "$args_file" ]] || die "--resume: $args_file does not exist (submit without --resume first)"
-  cmp -s "$args_file" "$args_file.new" || { rm -f "$args_file.new"; die "--resume: other --shards or bench options than the submission in $work"; }
-  rm -f "$args_file.new"
-  tasks=()
-  for ((k = 0; k < shards; ++k)); do [[ -f "$work/parts/bench.$k-of-$shards.json" ]] || tasks+=("$k"); done
-  [[ ${#tasks[@]} -gt 0 ]] || echo "submit-bench: every part is there; queuing the merge alone"
-  array="$(IFS=,; echo "${tasks[*]}")"
-else
-  [[ ! -f "$args_file" ]] || { rm -f "$args_file.new"; die "$work: a bench was submitted there; --resume to continue it, or another --work"; }
-  mv "$args_file.new" "$args_file"
-  array="0-$((shards - 1))"
-fi
-dependency=()
-if [[ -n "$array" ]]; then
-  array_id="$(sbatch --parsable "${extra[@]}" --array="$array%$limit" scripts/slurm/bench.sbatch "$work" "$shards" "$@")"
-  array_id="${array_id%%;*}"
-  echo "submit-bench: array $array_id: tasks $array of $shards, at most $limit at once"
-  dependency=(--dependency="afterok:$array_id")
-fi
-merge_id="$(sbatch --parsable "${extra[@]}" "${dependency[@]}" scripts/slurm/bench-merge.sbatch "$work" "$shards" "$out")"
-echo "submit-bench: merge ${merge_id%%;*} after the array: writes $out"
+name=submit-bench
+source scripts/slurm/submit-common.sh
+work="out/bench-shards"
+parse_sharded_options penumbra-bench "$@"
+submit_sharded_run bench bench "a bench"

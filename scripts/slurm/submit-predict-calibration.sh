@@ -14,7 +14,8 @@
 # The rest are predict-calibration.sh's (--shards is required: the shards per technique).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-die() { echo "submit-predict-calibration: $*" >&2; exit 2; }
+name=submit-predict-calibration
+source scripts/slurm/submit-common.sh
 limit=16 resume=0 extra=() pass=() work="out/predict-calibration" shards=""
 while [[ $# -gt 0 && "$1" == --* ]]; do
   case "$1" in
@@ -29,7 +30,7 @@ while [[ $# -gt 0 && "$1" == --* ]]; do
   esac
 done
 [[ -n "$shards" ]] || die "--shards: required (the shards per technique: the array has that many tasks per technique)"
-command -v sbatch >/dev/null || die "sbatch: not found (run this on the cluster's login node)"
+require_sbatch
 if [[ $resume -eq 1 ]]; then
   [[ -f "$work/jobs.txt" ]] || die "--resume: $work/jobs.txt does not exist (submit without --resume first)"
   cp "$work/jobs.txt" "$work/jobs.txt.submitted"
@@ -47,17 +48,10 @@ if [[ $resume -eq 1 ]]; then  # the tasks whose part is missing
     part="$(sed -n "$((k + 1))p" "$work/jobs.txt" | grep -o -- '--part [^ ]*' | cut -d' ' -f2)"
     [[ -f "$part" ]] || tasks+=("$k")
   done
-  [[ ${#tasks[@]} -gt 0 ]] || echo "submit-predict-calibration: every part is there; queuing the merge alone"
   array="$(IFS=,; echo "${tasks[*]}")"
 else
   array="0-$((total - 1))"
 fi
-dependency=()
-if [[ -n "$array" ]]; then
-  array_id="$(sbatch --parsable "${extra[@]}" --array="$array%$limit" scripts/slurm/predict-calibration.sbatch "$work")"
-  array_id="${array_id%%;*}"
-  echo "submit-predict-calibration: array $array_id: tasks $array of $total, at most $limit at once"
-  dependency=(--dependency="afterok:$array_id")
-fi
-merge_id="$(sbatch --parsable "${extra[@]}" "${dependency[@]}" scripts/slurm/predict-calibration-merge.sbatch --merge "${pass[@]}" "$@")"
-echo "submit-predict-calibration: merge ${merge_id%%;*} after the array: writes ${1:-data/calibration/predicted.json}"
+array_job=(scripts/slurm/predict-calibration.sbatch "$work")
+merge_job=(scripts/slurm/predict-calibration-merge.sbatch --merge "${pass[@]}" "$@")
+submit_array_then_merge "$array" "$total" "${1:-data/calibration/predicted.json}"
