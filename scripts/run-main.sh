@@ -10,9 +10,8 @@
 # (speedup and memory ratio with intervals), then frame time,
 # texels, error against the reference (PCF: the same filter on 8188² cascades; PCSS: ray-traced),
 # thin casters, flicker; into out/demo/ (report.json, frames.csv, crops, side-by-side images,
-# plots, FLIP montages). 6.5 min on 2 quiet cores without a GPU (commit db34da8; 5.9 min before
-# the perceived difference, which `--no-flip` leaves out: docs/results/adaptive.md; 3.5 min with
-# `--no-virtual`); `--sweep` measures the
+# plots, FLIP montages). 5.5 min on 2 quiet cores without a GPU (commit 5f5167b, docs/results/adaptive.md;
+# `--no-flip` leaves out the perceived difference, `--no-virtual` the virtual maps); `--sweep` measures the
 # whole engine family, `--path full` walks all 360 frames.
 set -euo pipefail
 cd "$(dirname "$0")/.."
