@@ -37,6 +37,38 @@ Shard parse(std::string_view text, std::string_view option) {
   return shard;
 }
 
+std::vector<std::string> without_options(const std::vector<std::string>& args, std::initializer_list<std::string_view> names) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view arg = args[i];
+    bool alone = false, joined = false;
+    for (const std::string_view name : names) {
+      alone = alone || arg == name;
+      joined = joined || (arg.starts_with(name) && arg.size() > name.size() && arg[name.size()] == '=');
+      const bool one_letter = name.size() == 2 && name[0] == '-' && name[1] != '-';
+      joined = joined || (one_letter && arg.size() > 2 && arg.starts_with(name) && arg[2] != '-');
+    }
+    if (alone) ++i;  // and its value
+    else if (!joined) out.push_back(args[i]);
+  }
+  return out;
+}
+
+std::vector<std::string> stored_args(const nlohmann::json& settings, const std::string& file) {
+  if (!settings.contains("args") || !settings["args"].is_array()) throw std::runtime_error(file + ": settings.args: not a list of arguments");
+  std::vector<std::string> args;
+  for (const auto& a : settings["args"]) {
+    if (!a.is_string()) throw std::runtime_error(file + ": settings.args: not a list of arguments");
+    args.push_back(a.get<std::string>());
+  }
+  return args;
+}
+
+Argv::Argv(std::string_view tool, const std::vector<std::string>& args) : text_{std::string(tool)} {
+  text_.insert(text_.end(), args.begin(), args.end());
+  for (std::string& a : text_) pointers_.push_back(a.data());
+}
+
 std::string fingerprint(std::string_view settings) {
   std::uint64_t hash = 0xcbf29ce484222325ull;
   for (const char c : settings) {

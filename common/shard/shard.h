@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -28,6 +29,31 @@ struct Shard {
 // "I/N" with 0 <= I < N: the shard of `option` ("--shard"). Anything else throws
 // std::invalid_argument "<option>: ...", one line naming the option.
 Shard parse(std::string_view text, std::string_view option = "--shard");
+
+// The command line `args` less the options `names` and their values: a part's settings leave out
+// --shard, --part and where the output goes, so that the merge parses the rest again with its own
+// output. A name given alone takes the next argument with it; NAME=VALUE, and -oVALUE for a
+// one-letter name such as -o, is one argument.
+std::vector<std::string> without_options(const std::vector<std::string>& args, std::initializer_list<std::string_view> names);
+
+// The command line a part's settings carry as "args" (a list of strings): what the merge runs the
+// tool with. Throws std::runtime_error "<file>: settings.args: ..." for anything else.
+std::vector<std::string> stored_args(const nlohmann::json& settings, const std::string& file);
+
+// A command line given as strings (without the tool's name, as the user's or a merge's stored
+// one) as the argc and argv CLI11 parses, with `tool` in argv[0]. argv points into this object.
+class Argv {
+ public:
+  Argv(std::string_view tool, const std::vector<std::string>& args);
+  Argv(const Argv&) = delete;
+  Argv& operator=(const Argv&) = delete;
+  int argc() const { return static_cast<int>(pointers_.size()); }
+  char** argv() { return pointers_.data(); }
+
+ private:
+  std::vector<std::string> text_;
+  std::vector<char*> pointers_;
+};
 
 // A stable 16-hex-digit fingerprint (FNV-1a, 64 bits) of a settings text.
 std::string fingerprint(std::string_view settings);

@@ -361,21 +361,8 @@ Row row_of_part(const nlohmann::json& j, const std::string& file) {
 
 // The options that say where the output goes and which shard runs, not what is measured: left out
 // of a part's settings and of the recorded command, which ends with the -o DIR the merge writes.
-bool is_output_option(const std::string& arg) {
-  for (const char* name : {"--shard", "--part", "--output", "-o"})
-    if (arg == name || arg.rfind(std::string(name) + "=", 0) == 0) return true;
-  return arg.size() > 2 && arg.rfind("-o", 0) == 0 && arg[2] != '-';  // -oDIR
-}
 std::vector<std::string> settings_args(const std::vector<std::string>& args) {
-  std::vector<std::string> out;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (!is_output_option(args[i])) {
-      out.push_back(args[i]);
-    } else if (args[i] == "--shard" || args[i] == "--part" || args[i] == "--output" || args[i] == "-o") {
-      ++i;  // and its value
-    }
-  }
-  return out;
+  return shard::without_options(args, {"--shard", "--part", "--output", "-o"});
 }
 
 constexpr std::string_view kPartKind = "penumbra-bench part";
@@ -411,12 +398,7 @@ int merge_main(int argc, char** argv) {
   std::vector<std::string> args;
   try {
     shard::Checked checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-bench"));
-    const nlohmann::json& stored = checked.settings["args"];
-    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-    for (const auto& a : stored) {
-      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-      args.push_back(a.get<std::string>());
-    }
+    args = shard::stored_args(checked.settings, paths.front());
     // Frame times from two devices are not one measurement: the Pareto marks would compare them.
     const std::string first = json_input::printable(checked.parts.front().path.string(), 200);
     const nlohmann::json device = checked.parts.front().payload.value("device", nlohmann::json());
@@ -444,11 +426,7 @@ int main(int argc, char** argv) {
 namespace {
 
 int run(const std::vector<std::string>& args, const Merged* merged) {
-  std::vector<std::string> argv_text{"penumbra-bench"};
-  argv_text.insert(argv_text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
-  const int argc = static_cast<int>(argv.size());
+  shard::Argv argv("penumbra-bench", args);
   const char* const tool_name = merged ? "penumbra-bench merge" : "penumbra-bench";
   CLI::App app{"Shadow error against frame time: every technique x resolution (x filter radius) against a ground truth; "
                "writes bench.csv, report.json and a Pareto plot per scene."};
@@ -508,7 +486,7 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
   apps::add_settings_options(app, opt.base);
 
   try {
-    app.parse(argc, argv.data());
+    app.parse(argv.argc(), argv.argv());
     if (quick) {
       auto preset = [&](const char* option, auto& target, auto value) {
         if (app.count(option) == 0) target = value;

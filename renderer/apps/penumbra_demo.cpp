@@ -853,22 +853,13 @@ int run_windowed(const Options& opt, shadows::ShadowSettings settings) {
 // The command line less --shard and --part: a part's settings (fingerprinted; the merge parses
 // them again, with its own -o DIR).
 std::vector<std::string> settings_args(const std::vector<std::string>& args) {
-  std::vector<std::string> out;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--shard" || args[i] == "--part") ++i;  // and its value
-    else if (!args[i].starts_with("--shard=") && !args[i].starts_with("--part=")) out.push_back(args[i]);
-  }
-  return out;
+  return shard::without_options(args, {"--shard", "--part"});
 }
 
 // The command line `args` (argv less the tool's name); for a merge, the parts' own arguments and
 // -o DIR, with `merged` the parts (checked by merge_main).
 int run(const std::vector<std::string>& args, const std::vector<shard::Part>* merged) {
-  std::vector<std::string> argv_text{"penumbra-demo"};
-  argv_text.insert(argv_text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
-  const int argc = static_cast<int>(argv.size());
+  shard::Argv argv("penumbra-demo", args);
   const char* const tool_name = merged ? "penumbra-demo merge" : "penumbra-demo";
   CLI::App app{"Adaptive shadow-map resolution against a fixed resolution: frame time and image difference."};
   cli::describe_tool(app, "penumbra-demo", "adaptive.md");
@@ -934,7 +925,7 @@ int run(const std::vector<std::string>& args, const std::vector<shard::Part>* me
                  "--shard: the part file to write, whole or not at all (the shard's techniques: report entries, frames.csv rows, "
                  "printed lines and images; the arguments, the device and the build's version)");
   apps::add_settings_options(app, base);
-  if (const auto status = cli::parse(app, argc, argv.data(), tool_name)) return *status;
+  if (const auto status = cli::parse(app, argv.argc(), argv.argv(), tool_name)) return *status;
   opt.auto_cascades = app.count("--map.cascades") == 0;
   try {
     Sharding sharding;
@@ -995,12 +986,7 @@ int merge_main(int argc, char** argv) {
   shard::Checked checked;
   try {
     checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-demo"));
-    const nlohmann::json& stored = checked.settings["args"];
-    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-    for (const auto& a : stored) {
-      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-      args.push_back(a.get<std::string>());
-    }
+    args = shard::stored_args(checked.settings, paths.front());
   } catch (const std::exception& e) {
     return cli::fail("penumbra-demo merge", e);
   }

@@ -89,21 +89,8 @@ std::vector<std::string> drawable_techniques() {
 
 // The options that say where the output goes and which shard runs, not what is computed: left out
 // of a part's settings and of the recorded command, which ends with the --json the merge writes.
-bool is_output_option(const std::string& arg) {
-  for (const char* name : {"--shard", "--part", "--json"})
-    if (arg == name || arg.rfind(std::string(name) + "=", 0) == 0) return true;
-  return false;
-}
 std::vector<std::string> settings_args(const std::vector<std::string>& args) {
-  std::vector<std::string> out;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (!is_output_option(args[i])) {
-      out.push_back(args[i]);
-    } else if (args[i].find('=') == std::string::npos) {
-      ++i;  // and its value
-    }
-  }
-  return out;
+  return shard::without_options(args, {"--shard", "--part", "--json"});
 }
 
 constexpr std::string_view kPartKind = "penumbra-observer-curve part";
@@ -132,12 +119,7 @@ int merge_main(int argc, char** argv) {
   try {
     io::check_output(out, io::OutputKind::file);
     shard::Checked checked = shard::read_parts({paths.begin(), paths.end()}, kPartKind, tool::version_line("penumbra-observer-curve"));
-    const nlohmann::json& stored = checked.settings["args"];
-    if (!stored.is_array()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-    for (const auto& a : stored) {
-      if (!a.is_string()) throw std::runtime_error(paths.front() + ": settings.args: not a list of arguments");
-      args.push_back(a.get<std::string>());
-    }
+    args = shard::stored_args(checked.settings, paths.front());
     merged.parts = std::move(checked.parts);
   } catch (const std::exception& e) {
     return cli::fail("penumbra-observer-curve merge", e);
@@ -157,11 +139,7 @@ int main(int argc, char** argv) {
 namespace {
 
 int run(const std::vector<std::string>& args, const Merged* merged) {
-  std::vector<std::string> argv_text{"penumbra-observer-curve"};
-  argv_text.insert(argv_text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
-  const int argc = static_cast<int>(argv.size());
+  shard::Argv argv("penumbra-observer-curve", args);
   CLI::App app{"The image observer's 2afc psychometric curve and implied c (docs/study.md)"};
   cli::describe_tool(app, "penumbra-observer-curve", "study.md");
   std::vector<std::string> patterns{"stair"};
@@ -217,7 +195,7 @@ int run(const std::vector<std::string>& args, const Merged* merged) {
                "print the techniques the study can draw, one a line as --technique and --set take them (TECHNIQUE or "
                "TECHNIQUE:SECTION.KEY=CHOICE, one per choice of a variant setting such as pcf's kernel), from the renderer's "
                "registry, and exit");
-  if (const auto status = cli::parse(app, argc, argv.data(), "penumbra-observer-curve")) return *status;
+  if (const auto status = cli::parse(app, argv.argc(), argv.argv(), "penumbra-observer-curve")) return *status;
   if (list_techniques) {
     for (const std::string& spec : drawable_techniques()) std::printf("%s\n", spec.c_str());
     return 0;
