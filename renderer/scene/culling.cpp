@@ -82,4 +82,14 @@ DrawRanges cull_clusters(const ClusteredUnits& c, const ClusterFootprints& footp
   return r;
 }
 
+DrawRanges cull_clusters(const ClusteredUnits& c, const glm::mat4& clip_from_mesh, CullVolume volume) {
+  DrawRanges r;
+  for (std::size_t u = 0; u < c.units.size() && u + 1 < c.first_cluster.size(); ++u) {
+    if (c.units[u].index_count == 0 || !may_touch(clip_from_mesh, c.units[u].bounds, volume)) continue;
+    for (std::size_t k = c.first_cluster[u]; k < c.first_cluster[u + 1] && k < c.clusters.size(); ++k)
+      if (c.clusters[k].index_count != 0 && may_touch(clip_from_mesh, c.clusters[k].bounds, volume)) keep(r, c.clusters[k]);
+  }
+  return r;
+}
+
 }  // namespace penumbra::scene

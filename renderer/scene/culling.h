@@ -54,4 +54,11 @@ struct ClusterFootprints {
 ClusterFootprints cluster_footprints(const ClusteredUnits& c, const glm::mat4& light_from_mesh);
 DrawRanges cull_clusters(const ClusteredUnits& c, const ClusterFootprints& footprints, const Footprint& window);
 
+// By clusters against one volume (a shadow map's or a cascade's, whose matrix may be a spot's
+// perspective or a fitted crop): the clusters may_touch keeps, among the units it keeps. The same
+// plane test as cull_units, so a unit it drops is dropped here too, and a cluster, whose box lies in
+// its unit's, is kept only where its own corners say so. Footprints would need an orthographic light
+// frame shared by the windows (the virtual map's); here each map has its own matrix, tested once.
+DrawRanges cull_clusters(const ClusteredUnits& c, const glm::mat4& clip_from_mesh, CullVolume volume);
+
 }  // namespace penumbra::scene

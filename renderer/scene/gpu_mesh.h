@@ -12,8 +12,9 @@
 
 namespace penumbra::scene {
 
-// The most triangles a cluster of a GpuMesh holds (cluster_units): what a virtual shadow map's page
-// culls by. Measured on the street (docs/results/virtual-maps.md, 2026-12-06 clusters entry).
+// The most triangles a cluster of a GpuMesh holds (cluster_units): what a virtual shadow map's page,
+// a shadow map and a cascade cull casters by. Measured on the street (docs/results/virtual-maps.md,
+// 2026-12-06 clusters entry).
 inline constexpr std::uint32_t kClusterTriangles = 16;
 
 // GPU copy: interleaved position/normal vertex buffer, 32-bit index buffer, one VAO.

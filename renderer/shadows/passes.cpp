@@ -149,7 +149,9 @@ std::uint64_t FrameContext::draw_scene(const gl::Program& program, bool shading,
     const auto& o = scene.objects[i];
     std::optional<scene::DrawRanges> kept;
     if (settings.map.culling) {
-      kept = scene::cull_units(meshes[i].units(), clip_from_world * o.model, volume);
+      const glm::mat4 clip_from_mesh = clip_from_world * o.model;
+      kept = volume == scene::CullVolume::caster ? scene::cull_clusters(meshes[i].clustered(), clip_from_mesh, volume)
+                                                 : scene::cull_units(meshes[i].units(), clip_from_mesh, volume);
       if (kept->first_index.empty()) continue;
     }
     program.set("u_model", o.model);

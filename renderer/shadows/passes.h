@@ -137,9 +137,10 @@ struct FrameContext {
   WorkCounter* work = nullptr;  // counts each pass's work when the renderer counts work
   bool show_cascades = false;
 
-  // Draws the units of every mesh that may touch `volume` of `clip_from_world` (all of them with
-  // map.culling off) with `program`; `shading` also sets normal matrix and albedo. Returns the
-  // triangles drawn.
+  // Draws what of every mesh may touch `volume` of `clip_from_world` (all of it with map.culling
+  // off) with `program`; `shading` also sets normal matrix and albedo. Returns the triangles drawn.
+  // A caster volume (a map or a cascade) culls by clusters (scene::cull_clusters), as the virtual
+  // map's pages do, so that the two draw into their maps like for like; the view culls by units.
   std::uint64_t draw_scene(const gl::Program& program, bool shading, const glm::mat4& clip_from_world, scene::CullVolume volume) const;
   // The camera's clip-from-world matrix (as ShadowFrame's u_view_projection).
   glm::mat4 camera_view_projection() const;

@@ -17,9 +17,9 @@ Renderer::Renderer() : res_(std::make_unique<FrameResources>(shaders_)), passes_
 
 Renderer::~Renderer() = default;
 
-void Renderer::set_scene(const scene::Scene& s) {
+void Renderer::set_scene(const scene::Scene& s, std::uint32_t cluster_triangles) {
   scene_ = s;
-  meshes_ = scene::GpuMeshes(scene_.objects);
+  meshes_ = scene::GpuMeshes(scene_.objects, cluster_triangles);
   reset_adaptive();
   gl::check_errors("scene upload");
 }

@@ -90,8 +90,10 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // Uploads the scene's meshes, once per distinct mesh (instances share it); the scene is copied
-  // (camera and light may be edited later through `scene()` without re-uploading).
-  void set_scene(const scene::Scene& s);
+  // (camera and light may be edited later through `scene()` without re-uploading). The maps, the
+  // cascades and the virtual map's pages cull casters by clusters of at most `cluster_triangles`
+  // (scene::cluster_units; 0: by whole units).
+  void set_scene(const scene::Scene& s, std::uint32_t cluster_triangles = scene::kClusterTriangles);
   scene::Scene& scene() { return scene_; }
   std::size_t uploaded_meshes() const { return meshes_.copies(); }
 

@@ -35,7 +35,7 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_REAL(ShadowMapParams, cascade_lambda, "", 0, 1, "cascade splits: 0 uniform, 1 logarithmic, between: practical"),
     PENUMBRA_REAL(ShadowMapParams, cascade_blend, "", 0, 0.5, "blend band at each cascade's far end (fraction of its depth range)"),
     PENUMBRA_BOOL(ShadowMapParams, cascade_stabilize, "cascade windows in quarter-octave sizes snapped to whole texels (no crawling)"),
-    PENUMBRA_BOOL(ShadowMapParams, culling, "draw only the units whose bounds touch a map (casters) or the camera's view; the image is the same"),
+    PENUMBRA_BOOL(ShadowMapParams, culling, "draw only the clusters of triangles whose bounds touch a map (casters) and the units whose bounds touch the camera's view; the image is the same"),
     PENUMBRA_CHOICE(ShadowMapParams, virtual_pages, VirtualPages, kVirtualPages,
                     "sun: a virtual shadow map whose pages each pixel marks by its filter (rule: r / c) or its footprint; off: maps"),
     PENUMBRA_INT(ShadowMapParams, virtual_pool_pages, "pages", 1, 128, "virtual shadow map: page slots per side of the pool (128² texels each)"),

@@ -47,8 +47,9 @@ struct ShadowMapParams {
   float cascade_lambda = 0.75f;       // split scheme: 0 uniform, 1 logarithmic, between: practical
   float cascade_blend = 0.1f;         // blend band at a cascade's far end, fraction of its depth range
   bool cascade_stabilize = true;      // window size in quarter-octave steps, corner snapped to texels
-  // Skip draw units whose bounds miss a map's sides (casters, per map or cascade) or the camera's
-  // view (scene/culling.h). The image is the same either way; off draws every unit everywhere.
+  // Skip the clusters of draw units whose bounds miss a map's sides (casters, per map or cascade)
+  // and the draw units whose bounds miss the camera's view (scene/culling.h). The image is the same
+  // either way; off draws every unit everywhere.
   bool culling = true;
   // A virtual shadow map of the sun (shadows/virtual_shadow_map.h) instead of maps or cascades:
   // each pixel marks the pages of the coarsest clipmap level whose texel is at most

@@ -351,5 +351,71 @@ TEST(Clusters, CullingByClustersKeepsEveryTriangleOverTheWindowAndFewerThanByUni
             cull_units(whole_units.units, unit_f, window).triangles);
 }
 
+// The triangles of `r` as flags, one per triangle of the index list.
+std::vector<bool> triangles_in(const DrawRanges& r, std::size_t triangles) {
+  std::vector<bool> in(triangles, false);
+  for (std::size_t k = 0; k < r.first_index.size(); ++k)
+    for (std::uint32_t i = r.first_index[k]; i < r.first_index[k] + r.index_count[k]; i += 3) in[i / 3] = true;
+  return in;
+}
+
+TEST(Clusters, AMapsCullingByClustersKeepsEveryTriangleInItsFrustumAndFewerThanByUnits) {
+  // Brute force: a triangle whose three vertices do not all lie outside one of a map's four sides
+  // (in clip space, x = ±w, y = ±w) must lie in a kept range, wherever it lies in depth (a caster in
+  // front of the near plane still casts); and no range keeps what culling by units would not. The
+  // maps: cascades' orthographic windows of one light view over a depth range thinner than the
+  // mesh, and a spot's perspective aimed around it (corners behind the eye included).
+  const MeshData m = mixed_mesh();
+  const ClusteredUnits c = cluster_units(m, 16);
+  const std::size_t triangles = m.indices.size() / 3;
+  const glm::vec3 to_light = glm::normalize(glm::vec3(0.4f, 1.0f, 0.3f));
+  const glm::mat4 light = glm::lookAt(20.0f * to_light, glm::vec3(0), glm::vec3(0, 0, -1));
+  std::vector<glm::mat4> maps;
+  for (float side : {1.0f, 3.0f, 8.0f})
+    for (float x = -9; x < 8; x += 1.3f)
+      for (float y = -7; y < 6; y += 1.7f) maps.push_back(glm::ortho(x, x + side, y, y + side, 19.0f, 21.0f) * light);
+  for (const glm::vec3 target : {glm::vec3(-3, 2, 0), glm::vec3(4, 0.5f, 2), glm::vec3(2, 1.5f, -3), glm::vec3(-4, 3, 1), glm::vec3(6, -2, 9)})
+    maps.push_back(glm::perspective(glm::radians(30.0f), 1.0f, 0.5f, 40.0f) * glm::lookAt(glm::vec3(1, 3, 2), target, glm::vec3(0, 1, 0)));
+  std::uint64_t by_clusters = 0, by_units = 0, over = 0, in_front = 0;
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    const glm::mat4& clip = maps[k];
+    const DrawRanges kept = cull_clusters(c, clip, CullVolume::caster), whole = cull_units(c.units, clip, CullVolume::caster);
+    for (std::size_t r = 1; r < kept.first_index.size(); ++r) {
+      EXPECT_LT(kept.first_index[r - 1] + kept.index_count[r - 1], kept.first_index[r]) << "neighbours merge";
+    }
+    const std::vector<bool> in = triangles_in(kept, triangles), in_whole = triangles_in(whole, triangles);
+    EXPECT_EQ(static_cast<std::uint64_t>(std::count(in.begin(), in.end(), true)), kept.triangles);
+    for (std::size_t t = 0; t < triangles; ++t) {
+      unsigned outside_all = 0x3fu;  // -x, +x, -y, +y, and for the count: -z, +z
+      for (int v = 0; v < 3; ++v) {
+        const glm::vec4 p = clip * glm::vec4(m.vertices[m.indices[3 * t + v]].position, 1.0f);
+        outside_all &= (p.x < -p.w ? 1u : 0u) | (p.x > p.w ? 2u : 0u) | (p.y < -p.w ? 4u : 0u) | (p.y > p.w ? 8u : 0u) |
+                       (p.z < -p.w ? 16u : 0u) | (p.z > p.w ? 32u : 0u);
+      }
+      if ((outside_all & 0x0fu) == 0) {
+        ++over;
+        in_front += (outside_all & 16u) != 0;
+        EXPECT_TRUE(in[t]) << "triangle " << t << " in map " << k << "'s frustum dropped";
+      }
+      if (in[t]) {
+        EXPECT_TRUE(in_whole[t]) << "triangle " << t << " kept by its cluster but not by its unit, map " << k;
+      }
+    }
+    by_clusters += kept.triangles;
+    by_units += whole.triangles;
+  }
+  EXPECT_GT(over, 10000u) << "maps over the mesh";
+  EXPECT_GT(in_front, 1000u) << "triangles in front of the near plane, kept";
+  EXPECT_LT(by_clusters, by_units / 2) << "clusters keep fewer triangles than units: " << by_clusters << " against " << by_units;
+  EXPECT_GE(by_clusters, over) << "at least the triangles in the frustums";
+  // Without a split, culling by clusters is culling by units.
+  const ClusteredUnits whole_units = cluster_units(m, 0);
+  for (const glm::mat4& clip : {maps[maps.size() / 2], maps.back()}) {
+    const DrawRanges a = cull_clusters(whole_units, clip, CullVolume::caster), b = cull_units(whole_units.units, clip, CullVolume::caster);
+    EXPECT_EQ(a.first_index, b.first_index);
+    EXPECT_EQ(a.index_count, b.index_count);
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::scene

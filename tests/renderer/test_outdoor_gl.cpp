@@ -106,6 +106,42 @@ TEST(OutdoorGl, CullingChangesNoPixelAndDrawsLess) {
   EXPECT_LT(f.info.camera_triangles, f.info.scene_triangles / 2) << "the street sees a part of the town";
 }
 
+// The maps and cascades cull casters by clusters (scene::cull_clusters against each cascade's four
+// sides), as the virtual map's pages do: on the street every cascade holds the same depths, texel
+// for texel, as when culled by whole units (a cluster dropped covers none of its texels), from
+// fewer triangles, and the image is the same.
+TEST(OutdoorGl, CascadesCullByClustersIntoTheSameDepthsAsByUnits) {
+  scene::Scene s = scene::make_builtin_scene("outdoor");
+  s.camera = s.camera_path.at(s.camera, 120);
+  shadows::Renderer by_units, by_clusters;
+  by_units.set_scene(s, 0);
+  by_clusters.set_scene(s);
+  for (Technique t : {Technique::pcf, Technique::vsm}) {
+    SCOPED_TRACE(std::string(shadows::to_string(t)));
+    ShadowSettings st = test::settings(t, 1024, true);
+    st.map.cascades = 4;
+    const Frame units = render_frame(by_units, st, true, 192, 108), clusters = render_frame(by_clusters, st, true, 192, 108);
+    ASSERT_EQ(units.info.map_triangles.size(), 4u);
+    ASSERT_EQ(clusters.info.map_triangles.size(), 4u);
+    std::uint64_t by_unit = 0, by_cluster = 0;
+    for (int k = 0; k < 4; ++k) {
+      SCOPED_TRACE("cascade " + std::to_string(k));
+      const io::ImageF a = by_units.read_shadow_depth(k), b = by_clusters.read_shadow_depth(k);
+      ASSERT_EQ(a.pixels.size(), b.pixels.size());
+      std::size_t differ = 0, covered = 0;
+      for (std::size_t i = 0; i < a.pixels.size(); ++i) differ += a.pixels[i] != b.pixels[i], covered += a.pixels[i] < 1.0f;
+      EXPECT_EQ(differ, 0u) << "of " << a.pixels.size() << " texels";
+      EXPECT_GT(covered, a.pixels.size() / 2) << "the town is in the cascade";
+      EXPECT_LT(clusters.info.map_triangles[k], units.info.map_triangles[k]);
+      by_unit += units.info.map_triangles[k];
+      by_cluster += clusters.info.map_triangles[k];
+    }
+    EXPECT_EQ(clusters.color.pixels, units.color.pixels);
+    EXPECT_EQ(clusters.visibility.pixels, units.visibility.pixels);
+    EXPECT_LT(by_cluster, by_unit * 19 / 20) << by_cluster << " against " << by_unit;
+  }
+}
+
 TEST(OutdoorGl, CullingChangesNoPixelOnTheDemoSceneAndUnderTheFloodlight) {
   const scene::Scene demo = scene::make_builtin_scene("demo");
   expect_culling_changes_no_pixel(demo, test::settings(Technique::pcss, 1024, true), 128, 96);
