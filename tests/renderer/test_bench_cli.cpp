@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shadows/settings.h"
+#include "sharded_tool.h"
 #include "subprocess.h"
 
 namespace fs = std::filesystem;
@@ -448,32 +449,13 @@ class BenchShards : public BenchCli {
     args.insert(args.begin(), grid_.begin(), grid_.end());
     return bench(args);
   }
-  test::Result merge(std::vector<std::string> args) {
-    args.insert(args.begin(), "merge");
-    return test::run_exe(PENUMBRA_BENCH_EXE, args, tmp_ / "scratch");
-  }
+  test::Result merge(std::vector<std::string> args) { return test::run_merge(PENUMBRA_BENCH_EXE, std::move(args), tmp_ / "scratch"); }
   // Shard i of n of the grid into work()/part-i-of-n.json.
   fs::path part(int i, int n, std::vector<std::string> extra = {}) {
-    const fs::path p = work() / ("part-" + std::to_string(i) + "-of-" + std::to_string(n) + ".json");
-    extra.insert(extra.end(), {"--shard", std::to_string(i) + "/" + std::to_string(n), "--part", p.string()});
-    const test::Result r = bench_grid(extra);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_THAT(r.out, HasSubstr("wrote " + p.string() + ": shard " + std::to_string(i) + "/" + std::to_string(n)));
-    return p;
+    return test::make_part([this](std::vector<std::string> args) { return bench_grid(std::move(args)); }, work(), i, n, std::move(extra));
   }
-  // A refused merge: exit 1, one line naming `needle`, and no output directory.
   void expect_refused(const std::vector<fs::path>& parts, const std::string& needle) {
-    std::vector<std::string> args;
-    for (const auto& p : parts) args.push_back(p.string());
-    const fs::path out = work() / "merged";
-    args.insert(args.end(), {"-o", out.string()});
-    const test::Result r = merge(args);
-    EXPECT_EQ(r.exit_code, 1) << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr(needle));
-    EXPECT_FALSE(fs::exists(out)) << "a refused merge wrote " << out;
-    for (const auto& e : fs::directory_iterator(work()))
-      EXPECT_THAT(e.path().filename().string(), Not(HasSubstr("merged"))) << "staging left behind";
+    test::expect_merge_refused(PENUMBRA_BENCH_EXE, tmp_ / "scratch", work(), parts, needle);
   }
   // The grid unsharded, in 3 shards and merged (parts out of order): every non-timing field equal.
   void expect_three_shards_merge_to_the_unsharded_run(std::size_t rows);
@@ -574,23 +556,15 @@ TEST_F(BenchShards, AMergeOfMissingTwiceOrForeignPartsIsRefusedWithNothingWritte
 
 TEST_F(BenchShards, BadShardOptionsAreRefusedNamingTheOption) {
   const std::string part_file = (work() / "p.json").string();
-  for (const std::string shard : {"0/0", "3/2", "junk", "1/", "-1/2"}) {
-    const test::Result r = bench_grid({"--shard", shard, "--part", part_file});
-    EXPECT_EQ(r.exit_code, 2) << shard << ": " << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr("--shard"));
-  }
+  const test::ToolRun run = [this](std::vector<std::string> args) { return bench_grid(std::move(args)); };
+  for (const std::string shard : {"0/0", "3/2", "junk", "1/", "-1/2"})
+    test::expect_usage_refused(run, {"--shard", shard, "--part", part_file}, "--shard");
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"--shard", "0/2"}, "--shard: needs --part"},
       {{"--part", part_file, "-o", (work() / "out").string()}, "--part: only with --shard"},
       {{"--shard", "0/2", "--part", part_file, "-o", (work() / "out").string()}, "--output: a shard writes a part"},
       {{}, "--output is required"}};
-  for (const auto& [args, needle] : cases) {
-    const test::Result r = bench_grid(args);
-    EXPECT_EQ(r.exit_code, 2) << needle << ": " << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr(needle));
-  }
+  for (const auto& [args, needle] : cases) test::expect_usage_refused(run, args, needle);
   EXPECT_TRUE(fs::is_empty(work())) << "a refused shard wrote something";
 }
 

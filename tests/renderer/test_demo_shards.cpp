@@ -18,16 +18,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "sharded_tool.h"
 #include "subprocess.h"
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-using ::testing::Not;
 
 namespace penumbra {
 namespace {
-
-int line_count(const std::string& text) { return static_cast<int>(std::count(text.begin(), text.end(), '\n')); }
 
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
@@ -51,32 +49,13 @@ class DemoShards : public ::testing::Test {
     args.insert(args.begin(), run_.begin(), run_.end());
     return test::run_exe(PENUMBRA_DEMO_EXE, args, dir_ / "scratch");
   }
-  test::Result merge(std::vector<std::string> args) {
-    args.insert(args.begin(), "merge");
-    return test::run_exe(PENUMBRA_DEMO_EXE, args, dir_ / "scratch");
-  }
+  test::Result merge(std::vector<std::string> args) { return test::run_merge(PENUMBRA_DEMO_EXE, std::move(args), dir_ / "scratch"); }
   // Shard i of n of the run into work()/part-i-of-n.json.
   fs::path part(int i, int n, std::vector<std::string> extra = {}) {
-    const fs::path p = work() / ("part-" + std::to_string(i) + "-of-" + std::to_string(n) + ".json");
-    extra.insert(extra.end(), {"--shard", std::to_string(i) + "/" + std::to_string(n), "--part", p.string()});
-    const test::Result r = demo(extra);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_THAT(r.out, HasSubstr("wrote " + p.string() + ": shard " + std::to_string(i) + "/" + std::to_string(n)));
-    return p;
+    return test::make_part([this](std::vector<std::string> args) { return demo(std::move(args)); }, work(), i, n, std::move(extra));
   }
-  // A refused merge: exit 1, one line naming `needle`, and no output directory.
   void expect_refused(const std::vector<fs::path>& parts, const std::string& needle) {
-    std::vector<std::string> args;
-    for (const auto& p : parts) args.push_back(p.string());
-    const fs::path out = work() / "merged";
-    args.insert(args.end(), {"-o", out.string()});
-    const test::Result r = merge(args);
-    EXPECT_EQ(r.exit_code, 1) << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr(needle));
-    EXPECT_FALSE(fs::exists(out)) << "a refused merge wrote " << out;
-    for (const auto& e : fs::directory_iterator(work()))
-      EXPECT_THAT(e.path().filename().string(), Not(HasSubstr("merged"))) << "staging left behind";
+    test::expect_merge_refused(PENUMBRA_DEMO_EXE, dir_ / "scratch", work(), parts, needle);
   }
   fs::path dir_;
   // The smallest sweep the demo runs: the demo scene's one-frame orbit at 64x36, every engine
@@ -228,24 +207,15 @@ TEST_F(DemoShards, AMergeOfMissingTwiceOrForeignPartsIsRefusedWithNothingWritten
 
 TEST_F(DemoShards, BadShardOptionsAreRefusedNamingTheOption) {
   const std::string part_file = (work() / "p.json").string();
-  for (const std::string shard : {"0/0", "3/2", "junk", "1/", "-1/2", "0/4"}) {
-    const test::Result r = demo({"--shard", shard, "--part", part_file});
-    EXPECT_EQ(r.exit_code, 2) << shard << ": " << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr("--shard"));
-  }
-  const test::Result over = demo({"--shard", "0/4", "--part", part_file});
-  EXPECT_THAT(over.err, HasSubstr("above the 3 techniques"));
+  const test::ToolRun run = [this](std::vector<std::string> args) { return demo(std::move(args)); };
+  for (const std::string shard : {"0/0", "3/2", "junk", "1/", "-1/2", "0/4"})
+    test::expect_usage_refused(run, {"--shard", shard, "--part", part_file}, "--shard");
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--shard", "0/4", "--part", part_file}, "above the 3 techniques"},
       {{"--shard", "0/2"}, "--shard: needs --part"},
       {{"--part", part_file, "-o", (work() / "out").string()}, "--part: only with --shard"},
       {{"--shard", "0/2", "--part", part_file, "-o", (work() / "out").string()}, "--output: a shard writes a part"}};
-  for (const auto& [args, needle] : cases) {
-    const test::Result r = demo(args);
-    EXPECT_EQ(r.exit_code, 2) << needle << ": " << r.err;
-    EXPECT_EQ(line_count(r.err), 1) << r.err;
-    EXPECT_THAT(r.err, HasSubstr(needle));
-  }
+  for (const auto& [args, needle] : cases) test::expect_usage_refused(run, args, needle);
   // Not the headless comparison: --pages.
   const test::Result pages = test::run_exe(PENUMBRA_DEMO_EXE, {"--pages", "--shard", "0/2", "--part", part_file}, dir_ / "scratch");
   EXPECT_EQ(pages.exit_code, 2) << pages.err;

@@ -4,54 +4,32 @@
 // with one line naming the file, and writes nothing; a --shard that is not I/N with I < N is
 // refused with one line naming the option.
 #include <gtest/gtest.h>
-#include <unistd.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
-#include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "tool_run.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using penumbra::test::bytes;
+using penumbra::test::Ran;
 
 const std::string kCurve = PENUMBRA_OBSERVER_CURVE_EXE;
 // Two conditions, two sizes with different numbers of radii, two seeds: 24 renders, which three
 // shards split 8/8/8 across every block boundary.
 const std::string kGrid = "--pattern stair,step --artifact-px 5,10 --ratio-min 1 --ratio-max 3 --ratio-step 1.5 --seeds 2";
 
-fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("penumbra-shard-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path fresh(const std::string& name) { return penumbra::test::fresh_dir("penumbra-shard-", name); }
 
-std::string bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-// `args` run in `dir` (relative paths: the recorded command names the same --json in both runs);
-// its exit status, stdout and stderr.
-struct Ran {
-  int status = -1;
-  std::string out, err;
-};
-Ran run(const fs::path& dir, const std::string& args) {
-  const std::string command = "cd '" + dir.string() + "' && '" + kCurve + "' " + args + " > stdout.txt 2> stderr.txt";
-  const int raw = std::system(command.c_str());
-  Ran ran;
-  ran.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  ran.out = bytes(dir / "stdout.txt");
-  ran.err = bytes(dir / "stderr.txt");
-  return ran;
-}
+// penumbra-observer-curve `args` run in `dir` (relative paths: the recorded command names the same
+// --json in both runs).
+Ran run(const fs::path& dir, const std::string& args) { return penumbra::test::run_in(dir, kCurve, args); }
 
 // The three parts of kGrid in `dir`: part-0.json, part-1.json, part-2.json.
 void make_parts(const fs::path& dir) {

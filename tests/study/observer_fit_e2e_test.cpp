@@ -5,20 +5,24 @@
 // a command line it cannot use is refused in one line naming the option. Label slow: about 220
 // renders (100 s on the shared 2-core machine).
 #include <gtest/gtest.h>
-#include <unistd.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "tool_run.h"
+
 namespace {
 
 namespace fs = std::filesystem;
+using penumbra::test::bytes;
+using penumbra::test::fresh_dir;
+using penumbra::test::Ran;
+using penumbra::test::run_in;
 
 const std::string kFit = PENUMBRA_OBSERVER_FIT_EXE;
 const std::string kCurve = PENUMBRA_OBSERVER_CURVE_EXE;
@@ -29,32 +33,6 @@ const std::string kGrid = "--artifact-px 10 --ratio-min 1 --ratio-max 8 --ratio-
 // the stair's 2.5, the step's.
 constexpr double kDocumentedStairFromStep = 2.08, kDocumentedStepFromStair = 3.80;
 
-fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("penumbra-observer-fit-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-struct Ran {
-  int status = -1;
-  std::string out, err;
-};
-Ran run(const fs::path& dir, const std::string& exe, const std::string& args) {
-  const std::string command = "cd '" + dir.string() + "' && '" + exe + "' " + args + " > stdout.txt 2> stderr.txt";
-  const int raw = std::system(command.c_str());
-  Ran ran;
-  ran.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  ran.out = bytes(dir / "stdout.txt");
-  ran.err = bytes(dir / "stderr.txt");
-  return ran;
-}
-
 const nlohmann::json& prediction(const nlohmann::json& fit, const std::string& condition) {
   for (const auto& p : fit["predictions"])
     if (p["condition"] == condition) return p;
@@ -62,8 +40,8 @@ const nlohmann::json& prediction(const nlohmann::json& fit, const std::string& c
 }
 
 TEST(ObserverFit, TheFittedWeberReproducesItsTargetAndTheHeldOutPredictionIsTheDocumentedOne) {
-  const fs::path dir = fresh("fit");
-  const Ran ran = run(dir, kFit, kGrid + " --human step/1=3.47 --human stair/1=2.5 --contrast 1 --grids 4 --seeds 1 --json fit.json");
+  const fs::path dir = fresh_dir("penumbra-observer-fit-", "fit");
+  const Ran ran = run_in(dir, kFit, kGrid + " --human step/1=3.47 --human stair/1=2.5 --contrast 1 --grids 4 --seeds 1 --json fit.json");
   ASSERT_EQ(ran.status, 0) << ran.err;
   const nlohmann::json out = nlohmann::json::parse(bytes(dir / "fit.json"));
   ASSERT_EQ(out["fits"].size(), 2u);
@@ -83,7 +61,7 @@ TEST(ObserverFit, TheFittedWeberReproducesItsTargetAndTheHeldOutPredictionIsTheD
   // weber it must print grid 0's c.
   char weber_text[64];
   std::snprintf(weber_text, sizeof weber_text, "%.17g", weber);
-  const Ran curve = run(dir, kCurve, kGrid + " --pattern step --seeds 1 --weber " + weber_text + " --json curve.json");
+  const Ran curve = run_in(dir, kCurve, kGrid + " --pattern step --seeds 1 --weber " + weber_text + " --json curve.json");
   ASSERT_EQ(curve.status, 0) << curve.err;
   const nlohmann::json curve_json = nlohmann::json::parse(bytes(dir / "curve.json"));
   EXPECT_NEAR(curve_json["entries"][0]["per_condition"][0]["c"].get<double>(), from_step["c_per_grid"][0].get<double>(), 1e-9);
@@ -110,11 +88,11 @@ TEST(ObserverFit, TheFittedWeberReproducesItsTargetAndTheHeldOutPredictionIsTheD
 }
 
 TEST(ObserverFit, ACommandLineItCannotUseIsRefusedInOneLineNamingTheOption) {
-  const fs::path dir = fresh("refusals");
+  const fs::path dir = fresh_dir("penumbra-observer-fit-", "refusals");
   for (const std::string& args : {std::string("--human step/1=3.47"), std::string("--human step/1=3.47,stair/0.7=2.5"),
                                   std::string("--human step/1=3.47,step/1=3.5"), std::string("--human stair/1=x,step/1=3"),
                                   std::string("--human wave/1=2,step/1=3")}) {
-    const Ran ran = run(dir, kFit, args + " --json never.json");
+    const Ran ran = run_in(dir, kFit, args + " --json never.json");
     EXPECT_EQ(ran.status, 2) << args << ": " << ran.err;
     EXPECT_EQ(ran.err.find("penumbra-observer-fit: --human"), 0u) << args << ": " << ran.err;
     EXPECT_EQ(std::count(ran.err.begin(), ran.err.end(), '\n'), 1) << args << ": " << ran.err;
