@@ -566,16 +566,32 @@ std::string browser_missing() {
   return "";
 }
 
+const fs::path kBrowserSession = fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs";
+
+// What tests/study/online_browser_session.mjs printed (a line per screen and step) and its exit
+// status: participant `id`'s whole session with `server` in the browser, answering `answers`;
+// its screenshots in $PENUMBRA_ONLINE_SCREENSHOTS, else in tmp/screens.
+struct BrowserSession {
+  int status = -1;
+  std::string said;
+};
+BrowserSession take_in_browser(const ServerProcess& server, const fs::path& tmp, const std::string& id, const std::string& answers) {
+  const char* keep = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS");
+  const fs::path shots = keep ? fs::path(keep) : tmp / "screens";
+  const std::string cmd = "timeout 300 node " + kBrowserSession.string() + " 'http://127.0.0.1:" + std::to_string(server.port) + "/?id=" + id +
+                          "' '" + shots.string() + "' " + answers + " > " + (tmp / "browser.txt").string() + " 2>&1";
+  BrowserSession session;
+  session.status = std::system(cmd.c_str());
+  session.said = penumbra::test::slurp(tmp / "browser.txt");
+  return session;
+}
+
 TEST(OnlineServer, RealBrowserTakesAWholeSessionWithKeyPresses) {
   if (const std::string missing = browser_missing(); !missing.empty()) GTEST_SKIP() << missing;
   const fs::path tmp = fresh_dir("browser");
   ServerProcess server(tmp / "sessions", 0, {"--completion-url", "https://pool.example.org/complete?cc={code}"});
   const std::string answers = "fjjffjfj";
-  const fs::path shots = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS") ? fs::path(std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) : tmp / "screens";
-  const std::string cmd = "timeout 300 node " + (fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string() + " 'http://127.0.0.1:" +
-                          std::to_string(server.port) + "/?id=B01' '" + shots.string() + "' " + answers + " > " + (tmp / "browser.txt").string() + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  const std::string said = penumbra::test::slurp(tmp / "browser.txt");
+  const auto [status, said] = take_in_browser(server, tmp, "B01", answers);
   ASSERT_EQ(status, 0) << said << "\nserver:\n" << server.app->output();
   EXPECT_NE(said.find("end: completion code"), std::string::npos) << said;
   for (const char* screen : {"consent", "intake", "fullscreen", "chinrest-card", "chinrest-blindspot", "trial0", "feedback", "end"})
@@ -645,11 +661,7 @@ TEST(OnlineServer, RealBrowserTakesAFrameStudySession) {
   ASSERT_EQ(run_study({"prepare-frames", "--config", kFramesConfig.string(), "--frame-cache", cache.string()}, out, tmp / "out.txt"), 0) << out;
   ServerProcess server(tmp / "sessions", 0, {"--frame-cache", cache.string()}, kFramesConfig);
   const std::string answers = "jffjjf";
-  const fs::path shots = std::getenv("PENUMBRA_ONLINE_SCREENSHOTS") ? fs::path(std::getenv("PENUMBRA_ONLINE_SCREENSHOTS")) : tmp / "screens";
-  const std::string cmd = "timeout 300 node " + (fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string() + " 'http://127.0.0.1:" +
-                          std::to_string(server.port) + "/?id=G01' '" + shots.string() + "' " + answers + " > " + (tmp / "browser.txt").string() + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  const std::string said = penumbra::test::slurp(tmp / "browser.txt");
+  const auto [status, said] = take_in_browser(server, tmp, "G01", answers);
   ASSERT_EQ(status, 0) << said << "\nserver:\n" << server.app->output();
   for (const char* screen : {"consent", "chinrest-blindspot", "trial0", "feedback", "trial5", "end"})
     EXPECT_NE(said.find(std::string("screen: ") + screen), std::string::npos) << screen << "\n" << said;
@@ -680,7 +692,7 @@ TEST(OnlineServer, RealBrowserReloadMidTrialAndServerKillMidSessionLoseNothing) 
   auto server = std::make_unique<ServerProcess>(tmp / "sessions");
   const int port = server->port;
   const std::string answers = "jjffjfjf";
-  App browser("/usr/bin/node", {(fs::path(PENUMBRA_TESTS_DIR) / "online_browser_session.mjs").string(),
+  App browser("/usr/bin/node", {kBrowserSession.string(),
                                 "http://127.0.0.1:" + std::to_string(port) + "/?id=B02", (tmp / "screens").string(), answers, "2"});
   bool up = false;
   for (int tries = 0; tries < 10 && !up; ++tries) up = browser.wait_for("screen: trial4");
