@@ -1,23 +1,16 @@
 #pragma once
-// What the penumbra-fit command-line tests share: a fresh scratch folder per test and a run of
-// the tool as a user types it (PENUMBRA_FIT_EXE, defined by the test's target), stdout and stderr
-// together.
+// What the penumbra-fit command-line tests share: a fresh scratch folder per test (tool_run.h's
+// fresh_dir) and a run of the tool as a user types it (PENUMBRA_FIT_EXE, defined by the test's
+// target), stdout and stderr together.
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
-#include <filesystem>
 #include <string>
 
-namespace penumbra::test {
+#include "../study/tool_run.h"  // fresh_dir
 
-// An empty folder in the temporary directory, `prefix` + `name` + this process's id.
-inline std::filesystem::path fresh_dir(const std::string& prefix, const std::string& name) {
-  const std::filesystem::path d = std::filesystem::temp_directory_path() / (prefix + name + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
-}
+namespace penumbra::test {
 
 // `penumbra-fit ARGS 2>&1` through the shell; its exit status (-1: no normal exit) and, when
 // `output` is given, what it printed.

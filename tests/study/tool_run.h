@@ -1,5 +1,5 @@
 #pragma once
-// What the command-line tests of the study's tools share: a fresh scratch folder per test, a
+// What the command-line tests of the study's tools (and penumbra-fit's, tests/analysis/fit_exe.h) share: a fresh scratch folder per test, a
 // file's bytes, and a run of a tool as a user types it in a folder, stdout and stderr apart.
 #include <sys/wait.h>
 #include <unistd.h>
