@@ -4,9 +4,11 @@
 # preset (ASAN_OPTIONS, UBSAN_OPTIONS and LSAN_OPTIONS with tests/lsan.supp). The apps the e2e
 # tests start are sanitized too and inherit the options.
 #   scripts/sanitize-tests.sh [CTEST ARGS...]
-# Without arguments the `slow` and `docs` labels are left out (as in CI; the docs tests compare the
-# docs with what the programs print, which the plain suite checks, and under ASan their fits and
-# renders would only add minutes); give ctest arguments to choose
+# Without arguments the `slow`, `docs` and `slurm` labels are left out (as in CI; the docs tests
+# compare the docs with what the programs print, which the plain suite checks, and under ASan their
+# fits and renders would only add minutes; the Slurm test runs under a scheduler the observer-curve
+# shards that study.ObserverCurveShards.* and study.predict_calibration_parallel_resume run here
+# without one); give ctest arguments to choose
 # (e.g. `-L unit`, `-R fuzz.replay`). SANITIZE_BUILD_JOBS sets the build's parallelism (default:
 # all cores).
 set -euo pipefail
@@ -23,6 +25,6 @@ if [[ -f "$driver" ]]; then
 fi
 args=("$@")
 if [[ ${#args[@]} -eq 0 ]]; then
-  args=(-LE "slow|docs")
+  args=(-LE "slow|docs|slurm")
 fi
 ctest --preset sanitize -j "$(nproc)" "${args[@]}"

@@ -62,7 +62,9 @@ TEST(PoissonDisk, EveryFrozenSetIsAWellSpreadDiskSet) {
       for (std::size_t j = 0; j < i; ++j) closest = std::min(closest, glm::distance(taps[i], taps[j]));
     }
     EXPECT_FLOAT_EQ(r_max, 1.0f);
-    if (n > 1) EXPECT_GT(closest * std::sqrt(static_cast<float>(n)), 1.3f);
+    if (n > 1) {
+      EXPECT_GT(closest * std::sqrt(static_cast<float>(n)), 1.3f);
+    }
   }
 }
 
