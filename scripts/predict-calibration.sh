@@ -155,7 +155,13 @@ elif [[ "$mode" == run ]]; then
   # --resume-failed: the joblog's finished shards are skipped; killed and failed ones run again.
   parallel --will-cite --jobs "$jobs" "${remote[@]}" --joblog "$work/joblog" --resume-failed <"$work/jobs.txt" || status=$?
   if [[ $status -ne 0 ]]; then
-    echo "predict-calibration: $status of $total shards failed (logs in $work/parts); rerun with --resume to run only those" >&2
+    # parallel's exit status: 1-100 the number of failed jobs, 101 more than 100, 255 an error of
+    # its own (it was killed, or refused its arguments): then no count of shards is known.
+    if ((status <= 100)); then what="$status of $total shards failed"
+    elif ((status == 101)); then what="more than 100 of $total shards failed"
+    else what="GNU parallel stopped with status $status (killed, or its own error above) before every shard ran"
+    fi
+    echo "predict-calibration: $what (logs in $work/parts); rerun with --resume to run only the shards not done" >&2
     exit 1
   fi
   echo "predict-calibration: $total shards on $jobs slots in $((SECONDS - start)) s"

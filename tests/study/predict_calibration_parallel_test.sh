@@ -3,7 +3,8 @@
 # shards on 2 local slots, once uninterrupted and once with one shard's penumbra-observer-curve
 # killed (SIGKILL) mid-run. The killed sweep fails and says --resume; --resume runs that one shard
 # alone (the joblog's finished ones are skipped) and the merge equals the uninterrupted sweep's,
-# byte for byte apart from created_utc. Skipped (77) without GNU parallel (scripts/setup.sh).
+# byte for byte apart from created_utc. A sweep whose GNU parallel stops with its own status 255
+# says so, not "255 of 4 shards failed". Skipped (77) without GNU parallel (scripts/setup.sh).
 #   predict_calibration_parallel_test.sh PENUMBRA-OBSERVER-CURVE
 set -euo pipefail
 curve="$1"
@@ -41,7 +42,7 @@ export PENUMBRA_OBSERVER_CURVE="$tmp/curve-killed-once.sh"
 if sweep --work "$tmp/killed-sweep" "$tmp/resumed.json" >"$tmp/killed.log" 2>&1; then
   fail "the sweep with a killed shard succeeded: $(cat "$tmp/killed.log")"
 fi
-grep -q -- "rerun with --resume" "$tmp/killed.log" || fail "the failed sweep does not say --resume: $(cat "$tmp/killed.log")"
+grep -q -- "1 of 4 shards failed .*rerun with --resume" "$tmp/killed.log" || fail "the failed sweep does not say 1 of 4 and --resume: $(cat "$tmp/killed.log")"
 parts="$tmp/killed-sweep/parts"
 [[ ! -e "$parts/pcf-pcf-kernel-grid.2-of-4.json" ]] || fail "shard 2/4 wrote its part: it was not killed mid-run"
 grep -q ' renders$' "$parts/pcf-pcf-kernel-grid.2-of-4.log" || fail "shard 2/4 was killed before it rendered"
@@ -57,4 +58,16 @@ tail -n 1 "$joblog" | awk -F'\t' '$7 != 0 || $9 !~ /--shard 2\/4 / { exit 1 }' |
 diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tmp/resumed.json") >"$tmp/diff" ||
   fail "the resumed sweep differs from the uninterrupted one: $(head -20 "$tmp/diff")"
 grep -q '"c": [0-9]' "$tmp/resumed.json" || fail "no c in $(cat "$tmp/resumed.json")"
-echo "ok: shard 2/4 killed mid-run, --resume ran it alone, the merge equals the uninterrupted sweep"
+
+# GNU parallel itself stopped (status 255: killed, or an error of its own) counts no shards: the
+# sweep says so instead of "255 of 4 shards failed" (what a killed sweep printed before).
+mkdir "$tmp/bin"
+printf '#!/bin/sh\nexit 255\n' >"$tmp/bin/parallel"
+chmod +x "$tmp/bin/parallel"
+if PATH="$tmp/bin:$PATH" sweep --work "$tmp/stopped" "$tmp/stopped.json" >"$tmp/stopped.log" 2>&1; then
+  fail "a sweep whose parallel exited 255 succeeded: $(cat "$tmp/stopped.log")"
+fi
+grep -q "GNU parallel stopped with status 255 .*rerun with --resume" "$tmp/stopped.log" || fail "parallel's 255: $(cat "$tmp/stopped.log")"
+! grep -q "255 of" "$tmp/stopped.log" || fail "parallel's 255 read as a count of shards: $(cat "$tmp/stopped.log")"
+[[ ! -e "$tmp/stopped.json" ]] || fail "the stopped sweep wrote its output"
+echo "ok: shard 2/4 killed mid-run, --resume ran it alone, the merge equals the uninterrupted sweep; parallel's own 255 is said as such"
