@@ -3,7 +3,8 @@
 # shards on 2 local slots, once uninterrupted and once with one shard's penumbra-observer-curve
 # killed (SIGKILL) mid-run. The killed sweep fails and says --resume; --resume runs that one shard
 # alone (the joblog's finished ones are skipped) and the merge equals the uninterrupted sweep's,
-# byte for byte apart from created_utc. A sweep whose GNU parallel stops with its own status 255
+# byte for byte apart from created_utc; so does a sweep sent through --sshloginfile (ssh a stand-in
+# that runs the remote side here). A sweep whose GNU parallel stops with its own status 255
 # says so, not "255 of 4 shards failed". Skipped (77) without GNU parallel (scripts/setup.sh).
 #   predict_calibration_parallel_test.sh PENUMBRA-OBSERVER-CURVE
 set -euo pipefail
@@ -59,6 +60,29 @@ diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tm
   fail "the resumed sweep differs from the uninterrupted one: $(head -20 "$tmp/diff")"
 grep -q '"c": [0-9]' "$tmp/resumed.json" || fail "no c in $(cat "$tmp/resumed.json")"
 
+# --sshloginfile: the shards go through parallel's remote path (its perl wrapper, --workdir's cd,
+# the commands' quoting and redirections) to a machine named in the file. ssh is a stand-in
+# (PARALLEL_SSH) that runs the remote side here as a login would: in the home directory, with
+# none of this shell's variables; the tool is named by a path relative to the source tree, so the
+# jobs find it only through --workdir. Not covered: the network and a second file system.
+cat >"$tmp/ssh" <<'FAKE'
+#!/bin/bash
+while [[ $# -gt 0 && "$1" == -* && "$1" != -- ]]; do case "$1" in -l | -p | -o | -i) shift 2 ;; *) shift ;; esac; done
+echo "$1" >>"${0%/*}/ssh-hosts"
+shift
+[[ "${1:-}" == -- ]] && shift
+cd /tmp
+exec env -i PATH=/usr/bin:/bin HOME=/tmp SHELL=/bin/bash bash -c "$*"
+FAKE
+chmod +x "$tmp/ssh"
+printf '2/lab-pc-1\n' >"$tmp/logins"
+PARALLEL_SSH="$tmp/ssh" PENUMBRA_OBSERVER_CURVE="$(realpath --relative-to="$repo" "$curve")" sweep --sshloginfile "$tmp/logins" --work "$tmp/remote" "$tmp/remote.json" \
+  >"$tmp/remote.log" 2>&1 || fail "--sshloginfile: $(cat "$tmp/remote.log")"
+[[ $(grep -c '^lab-pc-1$' "$tmp/ssh-hosts") -eq 4 ]] || fail "not every shard went to lab-pc-1: $(cat "$tmp/ssh-hosts" 2>/dev/null)"
+tail -n +2 "$tmp/remote/joblog" | awk -F'\t' '$2 != "lab-pc-1" || $7 != 0 { exit 1 }' || fail "--sshloginfile's joblog: $(cat "$tmp/remote/joblog")"
+diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tmp/remote.json") >"$tmp/diff" ||
+  fail "the sweep through --sshloginfile differs from the local one: $(head -20 "$tmp/diff")"
+
 # GNU parallel itself stopped (status 255: killed, or an error of its own) counts no shards: the
 # sweep says so instead of "255 of 4 shards failed" (what a killed sweep printed before).
 mkdir "$tmp/bin"
@@ -70,4 +94,4 @@ fi
 grep -q "GNU parallel stopped with status 255 .*rerun with --resume" "$tmp/stopped.log" || fail "parallel's 255: $(cat "$tmp/stopped.log")"
 ! grep -q "255 of" "$tmp/stopped.log" || fail "parallel's 255 read as a count of shards: $(cat "$tmp/stopped.log")"
 [[ ! -e "$tmp/stopped.json" ]] || fail "the stopped sweep wrote its output"
-echo "ok: shard 2/4 killed mid-run, --resume ran it alone, the merge equals the uninterrupted sweep; parallel's own 255 is said as such"
+echo "ok: shard 2/4 killed mid-run, --resume ran it alone, the merge equals the uninterrupted sweep; the same through --sshloginfile; parallel's own 255 is said as such"
