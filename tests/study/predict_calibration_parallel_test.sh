@@ -71,8 +71,12 @@ while [[ $# -gt 0 && "$1" == -* && "$1" != -- ]]; do case "$1" in -l | -p | -o |
 echo "$1" >>"${0%/*}/ssh-hosts"
 shift
 [[ "${1:-}" == -- ]] && shift
+# The sanitizers' settings, as a machine running a sanitized build would have them (the sanitize
+# test preset's, and LD_PRELOAD of scripts/sanitize-tests.sh); nothing else of the caller's.
+keep=()
+for v in ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS LD_PRELOAD; do [[ -n "${!v:-}" ]] && keep+=("$v=${!v}"); done
 cd /tmp
-exec env -i PATH=/usr/bin:/bin HOME=/tmp SHELL=/bin/bash bash -c "$*"
+exec env -i PATH=/usr/bin:/bin HOME=/tmp SHELL=/bin/bash "${keep[@]}" bash -c "$*"
 FAKE
 chmod +x "$tmp/ssh"
 printf '2/lab-pc-1\n' >"$tmp/logins"
