@@ -14,6 +14,8 @@ command -v parallel >/dev/null || { echo "skipped: GNU parallel is not installed
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Whether calibration.json FILE equals the uninterrupted sweep's but created_utc (the diff in $tmp/diff).
+equals_whole() { diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$1") >"$tmp/diff"; }
 # 2 conditions x 2 sizes x 3 radii x 2 seeds = 24 renders; a shard prints a line after each of its
 # 4 blocks (condition x size), so a kill after the first line lands with three blocks to go.
 grid="--pattern stair,step --artifact-px 10,20 --ratio-min 1 --ratio-max 3 --ratio-step 1.5 --seeds 2"
@@ -56,7 +58,7 @@ sweep --work "$tmp/killed-sweep" --resume "$tmp/resumed.json" >"$tmp/resumed.log
 # The resume ran shard 2/4 alone: one more joblog row, for it, exit 0.
 [[ $(tail -n +2 "$joblog" | wc -l) -eq 5 ]] || fail "--resume ran other than the one killed shard: $(cat "$joblog")"
 tail -n 1 "$joblog" | awk -F'\t' '$7 != 0 || $9 !~ /--shard 2\/4 / { exit 1 }' || fail "--resume's row: $(tail -n 1 "$joblog")"
-diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tmp/resumed.json") >"$tmp/diff" ||
+equals_whole "$tmp/resumed.json" ||
   fail "the resumed sweep differs from the uninterrupted one: $(head -20 "$tmp/diff")"
 grep -q '"c": [0-9]' "$tmp/resumed.json" || fail "no c in $(cat "$tmp/resumed.json")"
 
@@ -84,7 +86,7 @@ PARALLEL_SSH="$tmp/ssh" PENUMBRA_OBSERVER_CURVE="$(realpath --relative-to="$repo
   >"$tmp/remote.log" 2>&1 || fail "--sshloginfile: $(cat "$tmp/remote.log")"
 [[ $(grep -c '^lab-pc-1$' "$tmp/ssh-hosts") -eq 4 ]] || fail "not every shard went to lab-pc-1: $(cat "$tmp/ssh-hosts" 2>/dev/null)"
 tail -n +2 "$tmp/remote/joblog" | awk -F'\t' '$2 != "lab-pc-1" || $7 != 0 { exit 1 }' || fail "--sshloginfile's joblog: $(cat "$tmp/remote/joblog")"
-diff <(grep -v '"created_utc"' "$tmp/whole.json") <(grep -v '"created_utc"' "$tmp/remote.json") >"$tmp/diff" ||
+equals_whole "$tmp/remote.json" ||
   fail "the sweep through --sshloginfile differs from the local one: $(head -20 "$tmp/diff")"
 
 # GNU parallel itself stopped (status 255: killed, or an error of its own) counts no shards: the
