@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
 
 #include "scene/culling.h"
 #include "scene/outdoor.h"
@@ -107,8 +109,11 @@ TEST(Culling, FootprintsKeepWhatAPagesCasterVolumeKeeps) {
   const glm::mat4 light = glm::lookAt(glm::vec3(0, 10, 0), glm::vec3(0), glm::vec3(0, 0, -1));
   const std::vector<Footprint> f = unit_footprints(units, light);
   ASSERT_EQ(f.size(), units.size());
-  EXPECT_FLOAT_EQ(f[1].lo.x, 1.5f);
-  EXPECT_FLOAT_EQ(f[1].hi.y, 0.5f);
+  // Box 1's corners at x 1.5 and y 0.5, the footprint widened by rounding's margin only (affine_bounds).
+  EXPECT_LE(f[1].lo.x, 1.5f);
+  EXPECT_GT(f[1].lo.x, 1.5f - 1e-5f);
+  EXPECT_GE(f[1].hi.y, 0.5f);
+  EXPECT_LT(f[1].hi.y, 0.5f + 1e-5f);
   const DrawRanges r = cull_units(units, f, Footprint{{-1, -1}, {3, 1}});
   const std::uint32_t box = static_cast<std::uint32_t>(make_box({1, 1, 1}).indices.size());
   ASSERT_EQ(r.first_index.size(), 1u) << "boxes 0 and 1 merge; 2 and 3 lie beside the window, 4 is empty";
@@ -130,6 +135,87 @@ TEST(Culling, FootprintsKeepWhatAPagesCasterVolumeKeeps) {
   const std::vector<Footprint> ff = unit_footprints(far_units, light);
   EXPECT_EQ(cull_units(far_units, ff, Footprint{{9999.0f, -1}, {10002.3f, 1}}).index_count.size(), 1u);
   EXPECT_EQ(cull_units(far_units, ff, Footprint{{9999.0f, -1}, {10002.3f, 1}}).first_index.front(), 0u) << "the first box only";
+}
+
+// The eight corners' images in double precision: what unit_footprints and may_touch bound.
+void corner_bounds(const glm::mat4& m, const Aabb& box, glm::dvec3& lo, glm::dvec3& hi) {
+  lo = glm::dvec3(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec4 p = glm::dmat4(m) * glm::dvec4(glm::dvec3(box.corner(i)), 1.0);
+    lo = glm::min(lo, glm::dvec3(p) / p.w);
+    hi = glm::max(hi, glm::dvec3(p) / p.w);
+  }
+}
+
+TEST(Culling, AffineMatricesBoundBoxesByCentreAndExtentHoldingEveryCornerWithinRounding) {
+  // unit_footprints and may_touch bound an affine matrix's image of a box by its centre and half
+  // extent instead of eight corners. Against the corners in double precision: every corner lies in
+  // the bounds, which exceed the corners by no more than rounding's margin (16 float epsilons of the
+  // terms' magnitude), for boxes from a point to 10 km out and matrices with mirrors, shears and a
+  // zero scale; a perspective keeps the corners' own bounds.
+  std::mt19937 rng(47);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> pick(0, 5);
+  int compared = 0, kept_by_corners = 0, kept_only_by_bounds = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const float reach = std::pow(10.0f, static_cast<float>(pick(rng)) - 1.0f);  // 0.1 m to 10 km
+    glm::mat4 m = glm::rotate(glm::mat4(1), 3.2f * unit(rng), glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)) + glm::vec3(0, 0, 1e-3f)));
+    m = glm::scale(m, {1.0f + unit(rng), trial % 7 == 0 ? 0.0f : 1.0f + 0.5f * unit(rng), trial % 5 == 0 ? -2.0f : 1.0f});  // zero scale, mirror
+    m[1][0] += 0.3f * unit(rng);  // shear
+    m[3] = glm::vec4(reach * unit(rng), reach * unit(rng), reach * unit(rng), 1.0f);
+    const glm::vec3 centre(reach * unit(rng), reach * unit(rng), reach * unit(rng));
+    const glm::vec3 half = trial % 11 == 0 ? glm::vec3(0.0f) : glm::abs(glm::vec3(unit(rng), unit(rng), unit(rng))) * (0.01f * reach);  // a point
+    const Aabb box{centre - half, centre + half};
+    glm::dvec3 lo, hi;
+    corner_bounds(m, box, lo, hi);
+    const Footprint f = unit_footprints({DrawUnit{0, 3, box}}, m).front();
+    double margin = 0;  // 16 epsilons of the terms' magnitude, as affine_bounds widens, and as much again for its rounding
+    for (int axis = 0; axis < 2; ++axis) {
+      double scale = std::abs(m[3][axis]);
+      for (int col = 0; col < 3; ++col) scale += std::abs(m[col][axis]) * std::max(std::abs(box.lo[col]), std::abs(box.hi[col]));
+      margin = 32.0 * std::numeric_limits<float>::epsilon() * scale;
+      ASSERT_LE(f.lo[axis], lo[axis]) << "trial " << trial << " axis " << axis;
+      ASSERT_GE(f.hi[axis], hi[axis]) << "trial " << trial << " axis " << axis;
+      ASSERT_GE(f.lo[axis], lo[axis] - margin) << "trial " << trial << " axis " << axis;
+      ASSERT_LE(f.hi[axis], hi[axis] + margin) << "trial " << trial << " axis " << axis;
+    }
+    // may_touch through an orthographic volume around a point near the box: a box the corners put
+    // inside is kept, and one dropped while the corners keep it never happens; kept only by the
+    // bounds means a corner within the margin of a side.
+    const glm::vec3 at = glm::vec3(m * glm::vec4(centre, 1.0f)) + glm::vec3(unit(rng), unit(rng), unit(rng)) * (0.02f * reach);
+    const float side = 0.01f * reach;
+    const glm::mat4 clip = glm::ortho(-side, side, -side, side, -reach, reach) * glm::translate(glm::mat4(1), -at) * m;
+    for (CullVolume volume : {CullVolume::caster, CullVolume::view}) {
+      glm::dvec3 clo, chi;
+      corner_bounds(clip, box, clo, chi);
+      const int axes = volume == CullVolume::view ? 3 : 2;
+      bool by_corners = true;
+      for (int a = 0; a < axes; ++a) by_corners = by_corners && chi[a] >= -1.0 && clo[a] <= 1.0;
+      const bool kept = may_touch(clip, box, volume);
+      ++compared;
+      if (by_corners) {
+        ++kept_by_corners;
+        ASSERT_TRUE(kept) << "trial " << trial << ": a box inside the volume dropped";
+      } else if (kept) {
+        ++kept_only_by_bounds;
+        double gap = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < axes; ++a) gap = std::min({gap, chi[a] < -1.0 ? -1.0 - chi[a] : gap, clo[a] > 1.0 ? clo[a] - 1.0 : gap});
+        EXPECT_LT(gap, 1e-3) << "trial " << trial << ": kept a box " << gap << " of the volume's side away";
+      }
+    }
+  }
+  EXPECT_GT(kept_by_corners, compared / 10) << "the volumes must keep some boxes for the comparison to mean anything";
+  EXPECT_LT(kept_by_corners, compared * 9 / 10);
+  EXPECT_LT(kept_only_by_bounds, compared / 100);
+  // A perspective is not affine: its bounds are the corners' own, divided by w.
+  const glm::mat4 proj = glm::perspective(1.0f, 1.5f, 0.1f, 100.0f);
+  const Aabb box{{-1, -1, -9}, {2, 1, -3}};
+  glm::dvec3 lo, hi;
+  corner_bounds(proj, box, lo, hi);
+  const Footprint f = unit_footprints({DrawUnit{0, 3, box}}, proj).front();
+  EXPECT_NEAR(f.lo.x, lo.x, 1e-6);
+  EXPECT_NEAR(f.hi.y, hi.y, 1e-6);
 }
 
 // The draw units of each run of objects with one name (an object and its instances), bounds in
