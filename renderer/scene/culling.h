@@ -20,7 +20,10 @@ enum class CullVolume {
 
 // False only when all eight corners of `box` (in the space `clip_from_box` maps to clip space)
 // lie outside one plane of `volume` (x = ±w, y = ±w; for view also z = ±w): such a box cannot
-// produce a fragment, so dropping it changes no pixel. Conservative otherwise.
+// produce a fragment, so dropping it changes no pixel. Conservative otherwise. For an affine
+// `clip_from_box` (last row 0 0 0 1: the sun's maps, w = 1) the corners' bounds are taken as the
+// centre's image ± |M| · half extent, widened by rounding's margin (16 float epsilons of the terms'
+// magnitude): a quarter of the work, and never a box dropped that the corners keep.
 bool may_touch(const glm::mat4& clip_from_box, const Aabb& box, CullVolume volume);
 
 // The index ranges of `units` that may touch `volume`, neighbouring units merged into one range,
@@ -34,7 +37,8 @@ DrawRanges cull_units(const std::vector<DrawUnit>& units, const glm::mat4& clip_
 
 // Culling against many orthographic windows of one light view (a virtual shadow map's pages):
 // each unit's footprint across the light, the x, y bounds of its box's corners in light space,
-// taken once; then a window is a rectangle test. A unit whose footprint misses the window
+// taken once (centre and extent for an affine light_from_mesh, as may_touch; the corners divided by
+// w otherwise); then a window is a rectangle test. A unit whose footprint misses the window
 // [lo, hi] is one that may_touch(ortho(lo.x, hi.x, lo.y, hi.y, near, far) · light_from_mesh,
 // bounds, CullVolume::caster) drops (that volume's four sides are the window's edges; the two differ
 // only by rounding at an edge), without transforming eight corners per unit and window.
