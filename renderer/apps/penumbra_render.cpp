@@ -190,7 +190,8 @@ int main(int argc, char** argv) {
           c_lines.push_back(line);
           std::cout << line << "\n";
         }
-    // screen: the G-buffer and post passes of the screen-space techniques.
+    // screen: the G-buffer and post passes of the screen-space techniques; shading: the camera's
+    // depth prepass (map.depth_prepass) and its shading.
     std::printf("%-12s %6s %10s %10s %10s %10s %10s\n", "technique", "res", "shadow_map", "vsm_blur", "screen", "shading", "total");
     const bool progress = ::isatty(STDERR_FILENO) != 0;  // a progress line only where it can be redrawn
     const int total_runs = static_cast<int>(variants.size() * resolutions.size());
@@ -237,7 +238,7 @@ int main(int argc, char** argv) {
           if (st.pass == "shadow_map") shadow_map = st.median_ms;
           else if (st.pass.rfind("virtual_", 0) == 0) shadow_map += st.median_ms;  // the virtual map's steps (passes.cpp)
           else if (st.pass == "vsm_blur") vsm_blur = st.median_ms;
-          else if (st.pass == "shading") shading = st.median_ms;
+          else if (st.pass == "shading" || st.pass == "depth_prepass") shading += st.median_ms;
           else screen += st.median_ms;
         }
         const bool screen_space = shadows::technique_entry(v.settings.technique).screen_space();

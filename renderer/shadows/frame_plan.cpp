@@ -102,15 +102,17 @@ PassIo pass_io(PassId pass, const FramePlan& plan) {
   const bool screen = plan.technique && plan.technique->screen_space();
   const bool virtual_pages = plan.virtual_pages != VirtualPages::off;
   switch (pass) {
-    case PassId::virtual_pages: return {kSceneMeshes, kVirtualPages};
+    case PassId::virtual_pages: return {kSceneMeshes, kVirtualPages | kCameraDepth};
     case PassId::shadow_map: return {kSceneMeshes, kDepthAtlas | (moments ? kMoments : 0u)};
     case PassId::moments_blur: return {kMoments, kMoments};
     case PassId::depth_minmax: return {kDepthAtlas, kDepthMinmax};
-    case PassId::gbuffer: return {kSceneMeshes | kDepthAtlas, kGbuffer};
+    case PassId::gbuffer: return {kSceneMeshes | kDepthAtlas, kGbuffer | kCameraDepth};
     case PassId::post: return {kGbuffer | kDepthAtlas, kScreenVisibility};
+    case PassId::depth_prepass: return {kSceneMeshes, kCameraDepth};
     case PassId::shading:
       return {kSceneMeshes | (virtual_pages ? kVirtualPages : kDepthAtlas) | (moments ? kMoments : 0u) | (screen ? kScreenVisibility : 0u) |
-                  (plan.runs(PassId::depth_minmax) ? kDepthMinmax : 0u),
+                  (plan.runs(PassId::depth_minmax) ? kDepthMinmax : 0u) |
+                  (virtual_pages || screen || plan.depth_prepass ? kCameraDepth : 0u),
               kColor | kVisibility | (plan.pcss_requirement ? kRequirementImage : 0u)};
     case PassId::pcss_requirement: return {kRequirementImage, kRequirementBuffer};
   }
@@ -125,6 +127,7 @@ std::string_view pass_name(PassId pass) {
     case PassId::depth_minmax: return "depth_minmax";
     case PassId::gbuffer: return "gbuffer";
     case PassId::post: return "post";
+    case PassId::depth_prepass: return "depth_prepass";
     case PassId::shading: return "shading";
     case PassId::pcss_requirement: return "pcss_requirement";
   }
@@ -136,7 +139,7 @@ std::string resource_names(unsigned resources) {
       {kSceneMeshes, "scene meshes"}, {kDepthAtlas, "depth atlas"},   {kMoments, "moments"},
       {kGbuffer, "G-buffer"},         {kScreenVisibility, "screen visibility"}, {kColor, "colour"},
       {kVisibility, "visibility"},    {kRequirementImage, "requirement image"}, {kRequirementBuffer, "requirement buffer"},
-      {kDepthMinmax, "depth min-max pyramid"}, {kVirtualPages, "virtual pages"}};
+      {kDepthMinmax, "depth min-max pyramid"}, {kVirtualPages, "virtual pages"}, {kCameraDepth, "camera depth"}};
   std::string out;
   for (const auto& [bit, name] : kNames)
     if (resources & bit) out += (out.empty() ? "" : ", ") + std::string(name);
@@ -342,6 +345,9 @@ FramePlan plan_frame(const ShadowSettings& s, const scene::Scene& scene, int wid
   if (entry.screen_space()) {
     plan.passes.push_back(PassId::gbuffer);
     plan.passes.push_back(PassId::post);
+  } else if (s.map.depth_prepass) {
+    plan.depth_prepass = true;
+    plan.passes.push_back(PassId::depth_prepass);
   }
   plan.passes.push_back(PassId::shading);
   if (plan.pcss_requirement) plan.passes.push_back(PassId::pcss_requirement);

@@ -41,7 +41,7 @@ struct PcssRequirementInfo {
 };
 
 // The passes a frame can run, in execution order.
-enum class PassId { virtual_pages, shadow_map, moments_blur, depth_minmax, gbuffer, post, shading, pcss_requirement };
+enum class PassId { virtual_pages, shadow_map, moments_blur, depth_minmax, gbuffer, post, depth_prepass, shading, pcss_requirement };
 
 // Region corners per cascade: one row of up to two cells, then a second row. `guard` texels of
 // far depth surround every region.
@@ -79,6 +79,7 @@ struct FramePlan {
   bool subrect = false;                       // adaptive sub-rectangle storage (else a map per size)
   AtlasLayout atlas;
   bool pcss_requirement = false;              // the frame measures its per-pixel PCSS requirement
+  bool depth_prepass = false;                 // the shading tests the camera depth a depth-only pass left (map.depth_prepass)
   PcssRequirementInfo used_requirement;       // the measurement this frame's resolution used
   float filter_radius_texels = 0;             // fixed filter, in texels of cascade 0 at mid depth
   // The sun's virtual shadow map (map.virtual_pages): the frame marks and draws pages instead of
@@ -105,6 +106,7 @@ enum Resource : unsigned {
   kRequirementBuffer = 1u << 8,
   kDepthMinmax = 1u << 9,
   kVirtualPages = 1u << 10,  // the virtual shadow map's page pool and tables
+  kCameraDepth = 1u << 11,   // the camera's depth before shading (map.depth_prepass, the virtual map's position pass, the G-buffer)
 };
 
 // The resources a pass reads and writes in the frame `plan` describes (the shading pass reads the

@@ -666,6 +666,32 @@ std::uint64_t draw_shading(FrameContext& f, const gl::Program& prog) {
   return f.draw_scene(prog, true, f.camera_view_projection(), scene::CullVolume::view);
 }
 
+// The camera's depth alone (map.depth_prepass), into the camera targets' depth, which the shading
+// pass then tests with LEQUAL: each pixel's visible surface is shaded once, its shadow looked up
+// once, however many surfaces were drawn over it before. Its triangles are the camera's.
+class DepthPrepassPass final : public Pass {
+ public:
+  PassId id() const override { return PassId::depth_prepass; }
+  void execute(FrameContext& f) override {
+    FrameResources& r = f.res;
+    // shading.vert's invariant position: the shading pass's depths equal these exactly.
+    const gl::Program& prog =
+        r.programs.get(r.shaders, "depth_prepass", {{GL_VERTEX_SHADER, "shading.vert"}, {GL_FRAGMENT_SHADER, "shadow_depth.frag"}});
+    r.targets->fbo.bind();
+    glViewport(0, 0, f.plan.width_px, f.plan.height_px);
+    const float far_depth = 1;
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    prog.use();
+    f.info.camera_triangles += f.draw_scene(prog, false, f.camera_view_projection(), scene::CullVolume::view);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::check_errors("depth_prepass pass");
+  }
+};
+
 class ShadingPass final : public Pass {
  public:
   PassId id() const override { return PassId::shading; }
@@ -693,9 +719,9 @@ class ShadingPass final : public Pass {
       const GLuint none[4] = {0, 0, 0, 0};
       glClearBufferuiv(GL_COLOR, 2, none);
     }
-    if (r.screen_result || virtual_pages) {
-      // The G-buffer (or the virtual map's position) pass left the depth: shade exactly the
-      // fragments it kept.
+    if (r.screen_result || virtual_pages || f.plan.depth_prepass) {
+      // The G-buffer, the virtual map's position pass or the depth prepass left the depth: shade
+      // exactly the fragments it kept.
       glDepthFunc(GL_LEQUAL);
       glDepthMask(GL_FALSE);
     } else {
@@ -791,6 +817,7 @@ std::vector<std::unique_ptr<Pass>> make_passes() {
   passes.push_back(std::make_unique<DepthMinmaxPass>());
   passes.push_back(std::make_unique<GbufferPass>());
   passes.push_back(std::make_unique<PostPass>());
+  passes.push_back(std::make_unique<DepthPrepassPass>());
   passes.push_back(std::make_unique<ShadingPass>());
   passes.push_back(std::make_unique<PcssRequirementPass>());
   return passes;

@@ -36,6 +36,9 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_REAL(ShadowMapParams, cascade_blend, "", 0, 0.5, "blend band at each cascade's far end (fraction of its depth range)"),
     PENUMBRA_BOOL(ShadowMapParams, cascade_stabilize, "cascade windows in quarter-octave sizes snapped to whole texels (no crawling)"),
     PENUMBRA_BOOL(ShadowMapParams, culling, "draw only the clusters of triangles whose bounds touch a map (casters) and the units whose bounds touch the camera's view; the image is the same"),
+    PENUMBRA_BOOL(ShadowMapParams, depth_prepass,
+                  "the camera's depth drawn first (depth only), so that the shading pass shades each pixel's visible surface once; "
+                  "the image is the same but for surfaces tied in depth"),
     PENUMBRA_CHOICE(ShadowMapParams, virtual_pages, VirtualPages, kVirtualPages,
                     "sun: a virtual shadow map whose pages each pixel marks by its filter (rule: r / c) or its footprint; off: maps"),
     PENUMBRA_INT(ShadowMapParams, virtual_pool_pages, "pages", 1, 128, "virtual shadow map: page slots per side of the pool (128² texels each)"),

@@ -51,6 +51,12 @@ struct ShadowMapParams {
   // and the draw units whose bounds miss the camera's view (scene/culling.h). The image is the same
   // either way; off draws every unit everywhere.
   bool culling = true;
+  // The camera's depth first, in a depth-only pass, so that the shading pass shades each pixel's
+  // visible surface once (depth test LEQUAL against it, no depth written) instead of every surface
+  // drawn over it before: what engines do before forward shading. The virtual shadow map's
+  // position pass and the screen-space techniques' G-buffer pass already leave that depth. The
+  // image is the same but where two surfaces tie in depth (the last drawn shows, not the first).
+  bool depth_prepass = true;
   // A virtual shadow map of the sun (shadows/virtual_shadow_map.h) instead of maps or cascades:
   // each pixel marks the pages of the coarsest clipmap level whose texel is at most
   // max(r / c, adaptive.min_texel_px pixels) (rule, c = adaptive.c) or at most its footprint

@@ -2,6 +2,7 @@
 // and the atlas layout, including the extremes the GL tests exercise through whole frames.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -38,20 +39,31 @@ ShadowSettings adaptive_pcf(float radius_ws) {
 
 TEST(FramePlan, PassesFollowTheTechnique) {
   using P = PassId;
-  EXPECT_EQ(plan(with(Technique::hard)).passes, (std::vector<P>{P::shadow_map, P::shading}));
-  EXPECT_EQ(plan(with(Technique::pcf)).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  // The camera's depth prepass (map.depth_prepass, on by default) before the shading of every map
+  // technique; the screen-space techniques' G-buffer pass leaves that depth itself.
+  EXPECT_EQ(plan(with(Technique::hard)).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading}));
+  EXPECT_EQ(plan(with(Technique::pcf)).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading}));
   for (Technique t : {Technique::vsm, Technique::msm, Technique::evsm})
-    EXPECT_EQ(plan(with(t)).passes, (std::vector<P>{P::shadow_map, P::moments_blur, P::shading})) << to_string(t);
+    EXPECT_EQ(plan(with(t)).passes, (std::vector<P>{P::shadow_map, P::moments_blur, P::depth_prepass, P::shading})) << to_string(t);
   for (Technique t : {Technique::edtsm, Technique::edtssm, Technique::erosion})
     EXPECT_EQ(plan(with(t)).passes, (std::vector<P>{P::shadow_map, P::gbuffer, P::post, P::shading})) << to_string(t);
   ShadowSettings pcss = with(Technique::pcss);
-  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading}));
   pcss.adaptive.enabled = true;
-  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading, P::pcss_requirement}));
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading, P::pcss_requirement}));
   pcss.adaptive.pcss = PcssRequirement::min_penumbra;
-  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::shading}));
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading}));
   pcss.pcss.hierarchical = true;  // bounds from the min-max depth pyramid before the search
+  EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_minmax, P::depth_prepass, P::shading}));
+  pcss.map.depth_prepass = false;  // the shading pass tests depth itself
   EXPECT_EQ(plan(pcss).passes, (std::vector<P>{P::shadow_map, P::depth_minmax, P::shading}));
+  EXPECT_EQ(resource_names(pass_io(P::shading, plan(pcss)).reads), "scene meshes, depth atlas, depth min-max pyramid");
+  pcss.map.depth_prepass = true;
+  EXPECT_EQ(resource_names(pass_io(P::shading, plan(pcss)).reads), "scene meshes, depth atlas, depth min-max pyramid, camera depth");
+  // The floor a frame's shadow cost is taken above has the prepass of the frame it is the floor of.
+  EXPECT_EQ(plan(unshadowed_floor(pcss)).passes, (std::vector<P>{P::shadow_map, P::depth_prepass, P::shading}));
+  pcss.map.depth_prepass = false;
+  EXPECT_EQ(plan(unshadowed_floor(pcss)).passes, (std::vector<P>{P::shadow_map, P::shading}));
 }
 
 // Issue 28: the passes' reads and writes were declared and read by nothing. Every plan of every
@@ -70,7 +82,7 @@ TEST(FramePlan, EveryPlanIsAFrameWhosePassesReadWhatEarlierOnesWrote) {
       }
   }
   FramePlan vsm = plan(with(Technique::vsm));
-  EXPECT_EQ(resource_names(pass_io(PassId::shading, vsm).reads), "scene meshes, depth atlas, moments");
+  EXPECT_EQ(resource_names(pass_io(PassId::shading, vsm).reads), "scene meshes, depth atlas, moments, camera depth");
   vsm.passes.erase(vsm.passes.begin());  // no shadow_map
   EXPECT_EQ(plan_problem(vsm), "pass vsm_blur reads moments, which no earlier pass of the frame writes");
   FramePlan pcf = plan(with(Technique::pcf));
@@ -79,6 +91,10 @@ TEST(FramePlan, EveryPlanIsAFrameWhosePassesReadWhatEarlierOnesWrote) {
   pcf.passes.push_back(PassId::shading);
   pcf.passes.push_back(PassId::shadow_map);
   EXPECT_EQ(plan_problem(pcf), "pass shadow_map runs twice or out of order");
+  FramePlan unprepared = plan(with(Technique::pcf));
+  ASSERT_TRUE(unprepared.depth_prepass);
+  unprepared.passes.erase(std::find(unprepared.passes.begin(), unprepared.passes.end(), PassId::depth_prepass));
+  EXPECT_EQ(plan_problem(unprepared), "pass shading reads camera depth, which no earlier pass of the frame writes");
   ShadowSettings pcss = with(Technique::pcss);
   pcss.adaptive.enabled = true;
   FramePlan measured = plan(pcss);
@@ -100,7 +116,7 @@ TEST(FramePlan, VirtualPagesReplaceTheMapsForBoxPcfInWorldUnits) {
   const FramePlan p = plan(s);
   EXPECT_EQ(p.passes, (std::vector<PassId>{PassId::virtual_pages, PassId::shading}));
   EXPECT_EQ(plan_problem(p), "");
-  EXPECT_EQ(resource_names(pass_io(PassId::shading, p).reads), "scene meshes, virtual pages");
+  EXPECT_EQ(resource_names(pass_io(PassId::shading, p).reads), "scene meshes, virtual pages, camera depth") << "the position pass's";
   EXPECT_EQ(p.resolution_source, "virtual_rule");
   ASSERT_EQ(p.cascades.size(), 1u);
   EXPECT_EQ(p.atlas.width * p.atlas.height, 1) << "no map is drawn";

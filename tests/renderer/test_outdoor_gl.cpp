@@ -2,6 +2,8 @@
 // under the sun (with cascades where a technique has them) and under the floodlight.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -103,7 +105,8 @@ TEST(OutdoorGl, CullingChangesNoPixelAndDrawsLess) {
   st.map.cascades = 4;
   const Frame f = render_frame(r, st, true, 192, 108);
   EXPECT_LT(f.info.map_triangles.front(), f.info.scene_triangles / 4);
-  EXPECT_LT(f.info.camera_triangles, f.info.scene_triangles / 2) << "the street sees a part of the town";
+  // Two camera passes draw it: the depth prepass and the shading (map.depth_prepass).
+  EXPECT_LT(f.info.camera_triangles, 2 * (f.info.scene_triangles / 2)) << "the street sees a part of the town";
 }
 
 // The maps and cascades cull casters by clusters (scene::cull_clusters against each cascade's four
@@ -150,6 +153,44 @@ TEST(OutdoorGl, CullingChangesNoPixelOnTheDemoSceneAndUnderTheFloodlight) {
   expect_culling_changes_no_pixel(spot, test::settings(Technique::pcf, 1024, true), 128, 72);
 }
 
+// The camera's depth prepass (map.depth_prepass): the shading pass then shades each pixel's visible
+// surface once instead of every surface drawn over it first (llvmpipe's invocation count cannot
+// show it: it counts the fragments rasterized before the depth test, the same with and without),
+// and the image is the same but where two surfaces tie in depth (the last drawn shows instead of
+// the first). Its triangles are the camera's again; the floor frame has it too.
+TEST(OutdoorGl, TheDepthPrepassLeavesTheImageButDepthTiesAndTheFloorHasItToo) {
+  scene::Scene s = scene::make_builtin_scene("outdoor");
+  s.camera = s.camera_path.at(s.camera, 120);
+  const int w = 192, h = 108;
+  for (Technique t : {Technique::pcf, Technique::vsm}) {
+    SCOPED_TRACE(std::string(shadows::to_string(t)));
+    shadows::Renderer r;
+    r.set_scene(s);
+    ShadowSettings st = test::settings(t, 1024, true);
+    st.map.cascades = 4;
+    st.map.depth_prepass = false;
+    const Frame drawn = render_frame(r, st, true, w, h);
+    st.map.depth_prepass = true;
+    const Frame prepared = render_frame(r, st, true, w, h);
+    EXPECT_EQ(std::count(drawn.info.passes.begin(), drawn.info.passes.end(), "depth_prepass"), 0);
+    ASSERT_EQ(std::count(prepared.info.passes.begin(), prepared.info.passes.end(), "depth_prepass"), 1);
+    EXPECT_EQ(prepared.info.camera_triangles, 2 * drawn.info.camera_triangles) << "the prepass draws the camera's triangles again";
+    const std::uint64_t pixels = static_cast<std::uint64_t>(w) * h;
+    std::size_t differ = 0;
+    const auto channels = static_cast<std::size_t>(drawn.color.channels);
+    ASSERT_EQ(drawn.color.pixels.size(), pixels * channels);
+    for (std::size_t i = 0; i < drawn.color.pixels.size(); i += channels)
+      for (std::size_t c = 0; c < channels; ++c)
+        if (drawn.color.pixels[i + c] != prepared.color.pixels[i + c]) {
+          ++differ;
+          break;
+        }
+    EXPECT_LT(differ, pixels / 200) << "more pixels differ than depth ties explain";
+    const shadows::FrameInfo floor = r.render(shadows::unshadowed_floor(st), w, h);
+    EXPECT_EQ(std::count(floor.passes.begin(), floor.passes.end(), "depth_prepass"), 1) << "the floor shades as its frame does";
+  }
+}
+
 // Instances (the crane's and the fence's panels) share one mesh on the GPU: the town uploads 13
 // meshes for its 111 objects, and draws the same image, pixel for pixel, as a copy of the scene in
 // which every object has a mesh of its own.
@@ -189,7 +230,7 @@ TEST(OutdoorGl, ACasterOutsideTheViewStillCasts) {
   r.set_scene(s);
   const Frame f = render_frame(r, st, true, 64, 64);
   const std::uint64_t ground = s.objects[0].mesh->indices.size() / 3;
-  EXPECT_EQ(f.info.camera_triangles, ground) << "the camera draws the ground only";
+  EXPECT_EQ(f.info.camera_triangles, 2 * ground) << "the camera draws the ground only, in its depth prepass and its shading";
   EXPECT_EQ(f.info.map_triangles.front(), f.info.scene_triangles) << "the map draws the pillar";
   const auto [dark, lit] = shadow_and_lit(f.visibility);
   EXPECT_GT(dark, 0.05) << "the pillar's shadow is in view (x in [2, 6], z in [-1, 1]: 8 % of it)";

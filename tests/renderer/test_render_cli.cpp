@@ -153,7 +153,7 @@ TEST_F(RenderCli, GoodRunWritesImagesAndReport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "") << "a good run prints nothing on stderr when it is not a terminal";
   EXPECT_THAT(r.out, HasSubstr("pcf-disk")) << "PCF's default kernel: the one the study's configs draw (issue 44)";
-  expect_render_files(only_render_dir(out), {"shadow_map", "shading"});
+  expect_render_files(only_render_dir(out), {"shadow_map", "depth_prepass", "shading"});
   EXPECT_EQ(listing(work_), std::set<std::string>{"out"}) << "no staging directory left";
 }
 
@@ -230,12 +230,12 @@ TEST_F(RenderCli, AllTechniquesWriteEveryRenderMontageAndSummary) {
     const auto& entry = penumbra::shadows::technique_entry(t);
     penumbra::shadows::ShadowSettings settings;
     settings.technique = t;
-    std::vector<std::string> run = {"shadow_map", "shading"};
+    std::vector<std::string> run = {"shadow_map", "depth_prepass", "shading"};  // the camera's depth first (map.depth_prepass)
     if (entry.post) {
       ASSERT_TRUE(screen_space.contains(std::string(name))) << name << ": a screen-space technique; list its passes above";
       run = screen_space.at(std::string(name));
     } else if (entry.moments && entry.moments(settings)) {
-      run = {"shadow_map", "vsm_blur", "shading"};
+      run = {"shadow_map", "vsm_blur", "depth_prepass", "shading"};
     }
     std::vector<std::string> names;
     for (const std::string& choice : penumbra::shadows::variant_choices(t)) names.push_back(std::string(name) + "-" + choice);

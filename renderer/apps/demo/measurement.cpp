@@ -40,10 +40,10 @@ double timed_render(Series& s, int width, int height) {
 
 }  // namespace
 
-ShadowWork shadow_work(const shadows::FrameInfo& info) {
+ShadowWork shadow_work(const shadows::FrameInfo& info, bool depth_prepass) {
   ShadowWork w;
   for (const shadows::PassWork& p : info.work) {
-    if (p.pass == "shading") continue;
+    if (p.pass == "shading" || p.pass == "depth_prepass" || (depth_prepass && p.pass == "virtual_positions")) continue;
     w.primitives += static_cast<double>(p.primitives);
     w.fragments += static_cast<double>(p.fragments);
     w.compute_invocations += static_cast<double>(p.compute_invocations);
@@ -449,7 +449,7 @@ TechniqueRun Walk::run(const std::string& name, std::vector<Configuration> confi
         s.pages_invalidated.push_back(s.info.virtual_map->pages.invalidated);
       }
       s.texels.push_back(texels_of(s.info));
-      s.work.push_back(shadow_work(s.info));
+      s.work.push_back(shadow_work(s.info, s.config.settings.map.depth_prepass));
       double triangles = 0;
       for (const std::uint64_t n : s.info.map_triangles) triangles += static_cast<double>(n);
       s.map_triangles.push_back(triangles);

@@ -33,15 +33,18 @@
 namespace penumbra::demo {
 
 // What one frame's shadow gave the GPU to do, counted by the driver (shadows::PassWork), summed
-// over every pass but the shading: the maps, the virtual map's steps (its camera positions, the
-// marking, the pages), the moments blur, the screen-space passes.
+// over every pass but the camera's: the maps, the virtual map's steps (the marking, the pages),
+// the moments blur, the screen-space passes. The camera's passes are the floor's work too: the
+// shading and the depth prepass (map.depth_prepass), and with that prepass on, the virtual map's
+// position pass, which is its depth prepass with world positions written beside the depth (off:
+// the floor draws no camera depth first, and the position pass is the virtual map's own work).
 struct ShadowWork {
   double primitives = 0;           // submitted, after the CPU's culling
   double fragments = 0;            // fragment shader invocations
   double compute_invocations = 0;
   double depth_texels = 0;         // of those fragments, the maps' rasters' (shadow_map, virtual_draw)
 };
-ShadowWork shadow_work(const shadows::FrameInfo& info);
+ShadowWork shadow_work(const shadows::FrameInfo& info, bool depth_prepass);
 
 // One configuration along the path, with everything measured about it.
 struct Series {
