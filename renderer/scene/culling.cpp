@@ -22,13 +22,15 @@ void affine_bounds(const glm::mat4& m, const Aabb& box, glm::vec3& lo, glm::vec3
   const glm::vec3 centre = 0.5f * box.lo + 0.5f * box.hi;  // halves first: no overflow near the float limit
   const glm::vec3 half = 0.5f * box.hi - 0.5f * box.lo;
   const glm::vec3 c = glm::vec3(m * glm::vec4(centre, 1.0f));
-  glm::vec3 e(0.0f);
-  for (int col = 0; col < 3; ++col) e += glm::abs(glm::vec3(m[col])) * half[col];
   // The centre's product, the extent's sum and the halves each round by a few units in the last
   // place of `scale` (the sum of the terms' magnitudes), and so does each corner's own product in
   // the eight-corner bounds these stand in for: 16 of them cover both.
-  glm::vec3 scale = glm::abs(glm::vec3(m[3]));
-  for (int col = 0; col < 3; ++col) scale += glm::abs(glm::vec3(m[col])) * glm::max(glm::abs(box.lo[col]), glm::abs(box.hi[col]));
+  glm::vec3 e(0.0f), scale = glm::abs(glm::vec3(m[3]));
+  for (int col = 0; col < 3; ++col) {
+    const glm::vec3 column = glm::abs(glm::vec3(m[col]));
+    e += column * half[col];
+    scale += column * glm::max(glm::abs(box.lo[col]), glm::abs(box.hi[col]));
+  }
   e += scale * (16.0f * std::numeric_limits<float>::epsilon());
   lo = c - e;
   hi = c + e;

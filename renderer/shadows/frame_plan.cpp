@@ -97,6 +97,10 @@ std::string virtual_pages_refusal(const ShadowSettings& s, const scene::Scene& s
 
 bool FramePlan::runs(PassId p) const { return std::find(passes.begin(), passes.end(), p) != passes.end(); }
 
+bool FramePlan::camera_depth_first() const {
+  return virtual_pages != VirtualPages::off || (technique && technique->screen_space()) || depth_prepass;
+}
+
 PassIo pass_io(PassId pass, const FramePlan& plan) {
   const bool moments = plan.moments.has_value();
   const bool screen = plan.technique && plan.technique->screen_space();
@@ -112,7 +116,7 @@ PassIo pass_io(PassId pass, const FramePlan& plan) {
     case PassId::shading:
       return {kSceneMeshes | (virtual_pages ? kVirtualPages : kDepthAtlas) | (moments ? kMoments : 0u) | (screen ? kScreenVisibility : 0u) |
                   (plan.runs(PassId::depth_minmax) ? kDepthMinmax : 0u) |
-                  (virtual_pages || screen || plan.depth_prepass ? kCameraDepth : 0u),
+                  (plan.camera_depth_first() ? kCameraDepth : 0u),
               kColor | kVisibility | (plan.pcss_requirement ? kRequirementImage : 0u)};
     case PassId::pcss_requirement: return {kRequirementImage, kRequirementBuffer};
   }

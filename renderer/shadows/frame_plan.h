@@ -89,6 +89,10 @@ struct FramePlan {
   std::vector<PassId> passes;
 
   bool runs(PassId p) const;
+  // Whether a pass before the shading leaves the camera's depth (kCameraDepth: the virtual map's
+  // position pass, the screen-space G-buffer, or the depth prepass), which the shading then tests
+  // with LEQUAL instead of clearing it.
+  bool camera_depth_first() const;
   const LightFrame& light() const { return cascades.front().light; }
 };
 

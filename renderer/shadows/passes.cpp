@@ -719,7 +719,7 @@ class ShadingPass final : public Pass {
       const GLuint none[4] = {0, 0, 0, 0};
       glClearBufferuiv(GL_COLOR, 2, none);
     }
-    if (r.screen_result || virtual_pages || f.plan.depth_prepass) {
+    if (f.plan.camera_depth_first()) {
       // The G-buffer, the virtual map's position pass or the depth prepass left the depth: shade
       // exactly the fragments it kept.
       glDepthFunc(GL_LEQUAL);
