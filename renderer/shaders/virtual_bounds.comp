@@ -18,6 +18,9 @@ layout(binding = IMAGE_VIRTUAL_BOUNDS, rgba32f) uniform writeonly image2D u_boun
 layout(std430, binding = BUFFER_VIRTUAL_BOUNDS_SLOTS) readonly buffer DrawnSlots { int u_slots[]; };
 
 const int T = VIRTUAL_BOUNDS_TILE;
+#if VIRTUAL_BOUNDS_TILE % 2 != 0
+#error "virtual_bounds.comp reads a tile in 2 x 2 blocks: VIRTUAL_BOUNDS_TILE must be even"
+#endif
 
 void main() {
   const int tiles = u_virtual_page_texels / T;  // per side of a page
@@ -32,13 +35,20 @@ void main() {
   const float a = (texelFetch(u_virtual_pool, corner + ivec2(T - 1, 0), 0).r - origin) / float(T - 1);
   const float b = (texelFetch(u_virtual_pool, corner + ivec2(0, T - 1), 0).r - origin) / float(T - 1);
   const float half_side = 0.5 * float(T);
+  // The tile's texels a 2 × 2 block at a time, one gather each (a quarter of the fetches of one
+  // texel each). A gather at the shared corner of texels (i, j) to (i + 1, j + 1) returns them in
+  // the order (i, j + 1), (i + 1, j + 1), (i + 1, j), (i, j); a corner at an integer texel coordinate
+  // lies half a texel from the rounding that picks the block, so the pool's size need not divide it.
+  const vec2 pool_size = vec2(textureSize(u_virtual_pool, 0));
   float lower = 1e30, upper = -1e30;
-  for (int j = 0; j < T; ++j)
-    for (int i = 0; i < T; ++i) {
-      const float d = texelFetch(u_virtual_pool, corner + ivec2(i, j), 0).r;
-      const float residual = d - (a * (float(i) + 0.5 - half_side) + b * (float(j) + 0.5 - half_side));
-      lower = min(lower, residual);
-      upper = max(upper, residual);
+  for (int j = 0; j < T; j += 2)
+    for (int i = 0; i < T; i += 2) {
+      const vec4 d = textureGather(u_virtual_pool, vec2(corner + ivec2(i + 1, j + 1)) / pool_size, 0);
+      const vec2 x = vec2(float(i) + 0.5 - half_side, float(i) + 1.5 - half_side);
+      const vec2 y = vec2(float(j) + 0.5 - half_side, float(j) + 1.5 - half_side);
+      const vec4 residual = d - vec4(a * x.x + b * y.y, a * x.y + b * y.y, a * x.y + b * y.x, a * x.x + b * y.x);
+      lower = min(lower, min(min(residual.x, residual.y), min(residual.z, residual.w)));
+      upper = max(upper, max(max(residual.x, residual.y), max(residual.z, residual.w)));
     }
   imageStore(u_bounds, corner / T, vec4(lower, upper, a, b));
 }

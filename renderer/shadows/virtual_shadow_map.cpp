@@ -192,17 +192,26 @@ scene::Aabb VirtualShadowMap::invalidate_moved_casters(const scene::Scene& scene
   return all;
 }
 
+void VirtualShadowMap::clear_slots(const std::vector<adaptive::PageCache::Admitted>& to_draw) const {
+  // Every slot before any page is drawn, as texture clears rather than a scissored framebuffer
+  // clear between the pages' draws (on llvmpipe a scissored clear is a quad through the pipeline).
+  const int n = layout_.page_texels;
+  const float far_depth = 1.0f;
+  const float far_moments[2] = {1, 1};  // the far plane, t = 1: nothing in front
+  for (const auto& [slot, key] : to_draw) {
+    const int sx = slot % pool_side_, sy = slot / pool_side_;
+    glClearTexSubImage(pool_.id(), 0, sx * n, sy * n, 0, n, n, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &far_depth);
+    if (content_ == Content::depth_and_moments)
+      glClearTexSubImage(moments_.id(), 0, sx * n, sy * n, 0, n, n, 1, GL_RG, GL_FLOAT, far_moments);
+  }
+}
+
 void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                                  const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
   glViewport(sx * n, sy * n, n, n);
   glScissor(sx * n, sy * n, n, n);
-  glClear(GL_DEPTH_BUFFER_BIT);  // the scissor keeps the other slots
-  if (content_ == Content::depth_and_moments) {
-    const float far_moments[4] = {1, 1, 0, 0};  // the far plane, t = 1: nothing in front
-    glClearBufferfv(GL_COLOR, 0, far_moments);
-  }
   const double w = cache_.page_ws(key.level);
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
@@ -265,6 +274,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     std::vector<scene::ClusterFootprints> footprints;
     for (std::size_t i = 0; i < meshes.size(); ++i)
       footprints.push_back(scene::cluster_footprints(meshes[i].clustered(), view_.light_view * scene.objects[i].model));
+    clear_slots(to_draw);
     for (const auto& [slot, key] : to_draw) draw_page(slot, key, scene, meshes, footprints, stats);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);

@@ -286,7 +286,9 @@ class VirtualShadowMap {
   const gl::Texture& bounds_pool() const { return bounds_pool_; }
 
  private:
-  // Draws page `key` into `slot`, each object's clusters kept by their footprints across the light,
+  // Clears the slots of the pages about to be drawn to the far plane (and the moments' to t = 1).
+  void clear_slots(const std::vector<adaptive::PageCache::Admitted>& to_draw) const;
+  // Draws page `key` into `slot` (cleared by clear_slots), each object's clusters kept by their footprints across the light,
   // adding the triangles and ranges drawn to `stats`.
   void draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                  const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const;
