@@ -44,6 +44,10 @@ void PageCache::free_slot(int slot) {
 void PageCache::invalidate_all() {
   invalidated_ += static_cast<int>(resident_.size());
   for (int i = 0; i < pool_slots(); ++i) free_slot(i);
+  // The free slots in a fresh cache's order (slot 0 on top), not in the order they were freed: a
+  // frame drawn anew then puts each page where a first frame would, whatever came before it.
+  free_.clear();
+  for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);
 }
 
 void PageCache::invalidate_all_but(const std::set<Page>& kept, LightXY camera_xy) {

@@ -86,7 +86,8 @@ class PageCache {
   // std::invalid_argument for a page outside the layout (before anything changes) and PoolTooSmall.
   Update update(const std::set<Page>& requested, LightXY camera_xy);
 
-  // Drops every page (the light, its depth range or the raster bias changed).
+  // Drops every page (the light, its depth range or the raster bias changed, or the frame is drawn
+  // uncached); the next update takes the slots a fresh cache would.
   void invalidate_all();
   // Drops every page but those of `kept` (window-relative for a camera at `camera_xy`, as
   // region_floor_pages gives them): a frame that draws its pages anew keeps the coarse fallback an

@@ -57,6 +57,26 @@ TEST(PageCache, AdmitsWhatIsAskedForOnceAndKeepsItCached) {
   for (PageCache::SlotState s : cache.slot_states()) EXPECT_NE(s, PageCache::SlotState::drawn);
 }
 
+// A frame drawn anew (map.virtual_cache off: every page invalidated before the frame) puts its pages
+// in the slots a fresh cache would: where a page lands in the pool moves its raster by the slot's
+// offset, which llvmpipe rounds (about 1e-5 of visibility, a few pixels more), so an uncached frame's
+// image would otherwise depend on the frames before it.
+TEST(PageCache, InvalidatingAllGivesTheSlotsOfAFreshCache) {
+  const std::set<Page> first = {{0, 1, 1}, {0, 2, 1}, {1, 0, 3}, {2, 1, 1}};
+  const std::set<Page> second = {{0, 0, 0}, {0, 3, 2}, {1, 1, 1}};
+  for (const std::set<Page>& asked : {first, second}) {
+    PageCache fresh(tiny(), 16);
+    const PageCache::Update expected = fresh.update(asked, {0, 0});
+    PageCache used(tiny(), 16);
+    used.update(first, {0, 0});
+    used.update(second, {4, -4});  // a moved camera: pages in other slots beside the first frame's
+    used.invalidate_all();
+    const PageCache::Update got = used.update(asked, {0, 0});
+    EXPECT_EQ(slots_of(got), slots_of(expected));
+    EXPECT_EQ(used.table(), fresh.table());
+  }
+}
+
 TEST(PageCache, AMovingCameraKeepsPagesByTheirPlaceInLightSpace) {
   PageCache cache(tiny(), 16);
   cache.update({{0, 2, 2}}, {0, 0});  // key (0, 0, 0): light space [0, 4)²
