@@ -288,8 +288,8 @@ class VirtualShadowMap {
  private:
   // Clears the slots of the pages about to be drawn to the far plane (and the moments' to t = 1).
   void clear_slots(const std::vector<adaptive::PageCache::Admitted>& to_draw) const;
-  // Draws page `key` into `slot` (cleared by clear_slots), each object's clusters kept by their footprints across the light,
-  // adding the triangles and ranges drawn to `stats`.
+  // Draws page `key` into `slot` (cleared by clear_slots), each object's clusters kept by their
+  // footprints across the light, adding the triangles and ranges drawn to `stats`.
   void draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                  const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const;
   void write_tables();
