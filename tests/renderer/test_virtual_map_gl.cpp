@@ -1247,6 +1247,36 @@ TEST(VirtualMap, MarksReadAFrameLateWaitForNothingAndTheFirstFrameIsCoarseNotLit
   }
 }
 
+// Uncached (map.virtual_cache false), a frame is drawn anew: its image is the same whatever the
+// renderer drew before it (other views, whose pages took other slots of the pool), to the bit.
+TEST(VirtualMap, AnUncachedFrameIsTheSameAfterAnyOtherFrames) {
+  const scene::Scene town = scene::make_builtin_scene("outdoor");
+  const scene::Camera here = town.camera_path.at(town.camera, 120), elsewhere = town.camera_path.at(town.camera, 240);
+  const int w = 240, h = 135;
+  for (const bool pcss : {false, true}) {
+    SCOPED_TRACE(pcss ? "pcss" : "pcf");
+    shadows::ShadowSettings s = pcss ? virtual_pcss() : virtual_pcf(shadows::VirtualPages::rule);
+    s.map.virtual_cache = false;
+    shadows::Renderer first;
+    first.set_scene(town);
+    first.scene().camera = here;
+    first.render(s, w, h);
+    const io::ImageF expected = first.read_visibility();
+
+    shadows::Renderer after;
+    after.set_scene(town);
+    after.scene().camera = elsewhere;
+    after.render(s, w, h);
+    after.scene().camera = here;
+    after.render(s, w, h);
+    const io::ImageF got = after.read_visibility();
+    ASSERT_EQ(got.pixels.size(), expected.pixels.size());
+    int differ = 0;
+    for (std::size_t p = 0; p < got.pixels.size(); ++p) differ += got.pixels[p] != expected.pixels[p];
+    EXPECT_EQ(differ, 0) << "of " << got.pixels.size() << " pixels";
+  }
+}
+
 // Uncached (map.virtual_cache false), late marks keep the region floor resident: from the second
 // frame on its pages are cached, not drawn again, and a frame draws the triangles of the pages its
 // marks asked for, no more than the same-frame marking draws (before, the floor was redrawn every
