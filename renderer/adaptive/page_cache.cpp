@@ -11,7 +11,7 @@ PageCache::PageCache(const VirtualMapLayout& layout, int pool_slots) : layout_(l
   if (layout.levels < 1 || layout.page_texels < 1 || layout.pages_per_side < 1 || !(layout.texel0_ws > 0) || pool_slots < 1)
     throw std::invalid_argument("page cache: levels, page_texels, pages_per_side, texel0_ws and the pool's slots must be positive");
   slots_.resize(static_cast<std::size_t>(pool_slots));
-  for (int i = pool_slots - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
+  reset_free_slots();
   origin_pages_x_.assign(static_cast<std::size_t>(layout.levels), 0);
   origin_pages_y_.assign(static_cast<std::size_t>(layout.levels), 0);
 }
@@ -41,13 +41,18 @@ void PageCache::free_slot(int slot) {
   free_.push_back(slot);
 }
 
+void PageCache::reset_free_slots() {
+  free_.clear();
+  for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);  // slot 0 on top
+}
+
 void PageCache::invalidate_all() {
   invalidated_ += static_cast<int>(resident_.size());
-  for (int i = 0; i < pool_slots(); ++i) free_slot(i);
-  // The free slots in a fresh cache's order (slot 0 on top), not in the order they were freed: a
-  // frame drawn anew then puts each page where a first frame would, whatever came before it.
-  free_.clear();
-  for (int i = pool_slots() - 1; i >= 0; --i) free_.push_back(i);
+  resident_.clear();
+  std::fill(slots_.begin(), slots_.end(), Slot{});
+  // Every slot free in a fresh cache's order, not in the order they were freed: a frame drawn anew
+  // then puts each page where a first frame would, whatever came before it.
+  reset_free_slots();
 }
 
 void PageCache::invalidate_all_but(const std::set<Page>& kept, LightXY camera_xy) {

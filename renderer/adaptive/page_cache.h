@@ -132,6 +132,7 @@ class PageCache {
   // stats.floor_level; throws PoolTooSmall.
   std::vector<PageKey> residency_order(const std::set<Page>& requested, PageCacheStats& stats) const;
   void free_slot(int slot);
+  void reset_free_slots();  // every slot free, slot 0 on top (a fresh cache's order)
 
   VirtualMapLayout layout_;
   std::vector<Slot> slots_;
