@@ -58,7 +58,10 @@ struct PixelRequest {
 struct MarkOptions {
   Marking marking = Marking::rule;
   double c_texels = kPublishedC;  // the rule's constant (the published value until a calibration says otherwise)
-  double min_texel_px = 1;   // the pixel floor (texels no finer than this many footprints)
+  // The pixel floor (texels no finer than this many footprints): 2^-0.5, so that a level's power of
+  // two gives texels of 0.35 to 0.71 footprints where the floor sets it (shadows::ShadowMapParams::
+  // virtual_min_texel_px says why and is this default).
+  double min_texel_px = 0.7071;
 };
 
 // The finest texel the pixel needs (rule or footprint), world units.

@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   app.add_flag("--virtual-debug", virtual_debug,
                "also write the sun's virtual shadow map for this view: virtual-levels.png (the level each pixel samples, by the "
                "rule and by the footprint) and virtual-pool.png (the page pool: drawn for this view green, kept from the previous "
-               "path frame blue); pcf or vsm with a world radius, or pcss, the pixel floor --adaptive.min_texel_px (0: 1 pixel)");
+               "path frame blue); pcf or vsm with a world radius, or pcss, the pixel floor --map.virtual_min_texel_px");
   app.add_option("-o,--output", output, "output directory (replaced as a whole when the run succeeds)")
       ->required()
       ->check(cli::path_given());
@@ -149,6 +149,11 @@ int main(int argc, char** argv) {
     {
       std::vector<shadows::ShadowSettings> rendered;
       for (const auto& v : variants) rendered.push_back(v.settings);
+      if (virtual_debug) {  // the debug views mark the sun's pages whatever the frame draws: they read its floor
+        shadows::ShadowSettings pages = variants.front().settings;
+        if (pages.map.virtual_pages == shadows::VirtualPages::off) pages.map.virtual_pages = shadows::VirtualPages::rule;
+        rendered.push_back(pages);
+      }
       apps::refuse_unread_settings(app, rendered, {{"--resolution", "map.resolution_texels"}});
     }
 

@@ -41,6 +41,8 @@ const Setting<ShadowMapParams> kMapTable[] = {
                   "the image is the same but for surfaces tied in depth"),
     PENUMBRA_CHOICE(ShadowMapParams, virtual_pages, VirtualPages, kVirtualPages,
                     "sun: a virtual shadow map whose pages each pixel marks by its filter (rule: r / c) or its footprint; off: maps"),
+    PENUMBRA_REAL(ShadowMapParams, virtual_min_texel_px, "pixels", 0.125, 64,
+                  "virtual shadow map: the pixel floor, no page texel finer than this many footprints of the pixel asking (0.71: texels of 0.35 to 0.71 pixel where the floor sets the level)"),
     PENUMBRA_INT(ShadowMapParams, virtual_pool_pages, "pages", 1, 128, "virtual shadow map: page slots per side of the pool (128² texels each)"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_cache, "virtual shadow map: keep drawn pages across frames until the light or a caster moves"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_bounds,
@@ -223,12 +225,14 @@ std::string unread_setting(const ShadowSettings& s, std::string_view section, st
   if (section == "map") {
     if (virtual_map && among({"resolution_texels", "fit", "cascades", "cascade_lambda", "cascade_blend", "cascade_stabilize"}))
       return "a virtual shadow map (map.virtual_pages " + value_of_virtual_pages(s) + ") has pages, not a map's size, fit or cascades";
-    if (!virtual_map && among({"virtual_pool_pages", "virtual_cache", "virtual_bounds", "virtual_marks_late"}))
+    if (!virtual_map && among({"virtual_min_texel_px", "virtual_pool_pages", "virtual_cache", "virtual_bounds", "virtual_marks_late"}))
       return "it sets the virtual shadow map, and map.virtual_pages is off";
   }
   if (section == "adaptive") {
     if (virtual_map && among({"enabled", "min_texels", "max_texels", "quantum_texels", "shrink_delay_frames", "max_texel_ws", "storage", "pcss"}))
       return "a virtual shadow map (map.virtual_pages " + value_of_virtual_pages(s) + ") marks pages by the rule's c, not map sizes";
+    if (virtual_map && key == "min_texel_px")
+      return "a virtual shadow map's pixel floor is map.virtual_min_texel_px (adaptive.min_texel_px is the cascades')";
     const bool rule = virtual_map ? s.map.virtual_pages == VirtualPages::rule : s.adaptive.enabled;
     if (!rule && key == "visibility")
       return virtual_map ? "pages marked by the footprint have no rule to set c for" : "the adaptive rule is off (adaptive.enabled false)";

@@ -59,9 +59,19 @@ struct ShadowMapParams {
   bool depth_prepass = true;
   // A virtual shadow map of the sun (shadows/virtual_shadow_map.h) instead of maps or cascades:
   // each pixel marks the pages of the coarsest clipmap level whose texel is at most
-  // max(r / c, adaptive.min_texel_px pixels) (rule, c = adaptive.c) or at most its footprint
-  // (footprint); only marked pages are drawn and stored. PCF with a world radius.
+  // max(r / c, virtual_min_texel_px pixels) (rule, c = adaptive.c) or at most virtual_min_texel_px
+  // pixels (footprint); only marked pages are drawn and stored. PCF with a world radius.
   VirtualPages virtual_pages = VirtualPages::off;
+  // The pages' pixel floor: no page texel asked for finer than this many footprints of the pixel
+  // asking (s, its world width at its depth); the levels' powers of two then give texels of half
+  // the floor to the floor. Where the floor, not the rule, sets the level (the town seen from
+  // above), a floor of 1 (texels of 0.5 to 1 s) shifts shadow edges and drops thin lit rims by a
+  // pixel; the default 2^-0.5 (texels of 0.35 to 0.71 s) was the best of 1, 0.71 and 0.5 at equal
+  // FLIP on the main job (docs/results/virtual-maps.md). Engines bias their levels finer too
+  // (Unreal Engine 5.4: r.Shadow.Virtual.ResolutionLodBiasDirectional, -0.5). The virtual map's own,
+  // not adaptive.min_texel_px: a page's floor is paid only where a pixel asks for it, a cascade's
+  // over the whole cascade.
+  float virtual_min_texel_px = 0.7071f;
   int virtual_pool_pages = 32;  // page slots per side of the pool (32² slots of 128² texels: 64 MiB)
   bool virtual_cache = true;    // keep drawn pages across frames (off: every marked page drawn every frame)
   // Depth bounds per tile of each drawn page (two planes around its depths, virtual_bounds.comp), with

@@ -347,7 +347,7 @@ adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
   adaptive::MarkOptions o;
   o.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
   o.c_texels = s.adaptive.c;
-  o.min_texel_px = s.adaptive.min_texel_px > 0 ? s.adaptive.min_texel_px : 1.0;
+  o.min_texel_px = s.map.virtual_min_texel_px;
   return o;
 }
 

@@ -83,7 +83,7 @@ using VirtualFrame = virtual_mark::VirtualFrame;
 void set_virtual_view(VirtualFrame& frame, const adaptive::VirtualMapLayout& layout, const VirtualMapView& view);
 
 // How `s` marks pages: by the rule (or map.virtual_pages = footprint: the footprint), with
-// adaptive.c and the pixel floor adaptive.min_texel_px (0: one pixel; the footprint needs a floor).
+// adaptive.c and the pages' pixel floor map.virtual_min_texel_px.
 adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s);
 
 // Writes the marking's part of `frame`: which level a surface point asks for, seen by `camera` in an

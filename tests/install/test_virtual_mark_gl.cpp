@@ -275,7 +275,7 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
   frame.u_mark_camera_forward = {forward.x, forward.y, forward.z};
   frame.u_mark_perspective = 1;
   frame.u_mark_footprint_per_depth = ground.footprint_per_depth();
-  frame.u_mark_min_texel_px = 1.0f;
+  frame.u_mark_min_texel_px = 0.7071f;  // the CPU reference's default (adaptive::MarkOptions)
   GLuint frame_buffer = 0;
   glCreateBuffers(1, &frame_buffer);
   glNamedBufferStorage(frame_buffer, sizeof frame, nullptr, GL_DYNAMIC_STORAGE_BIT);

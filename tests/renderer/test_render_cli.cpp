@@ -725,6 +725,9 @@ TEST_F(RenderCli, SettingsNoConfigurationReadsAreRefused) {
       {"pool_without_a_virtual_map", {"--map.virtual_pool_pages", "4"}, {"--map.virtual_pool_pages: not read", "map.virtual_pages is off"}},
       {"cache_without_a_virtual_map", {"--map.virtual_cache", "false"}, {"--map.virtual_cache: not read", "map.virtual_pages is off"}},
       {"bounds_without_a_virtual_map", {"--map.virtual_bounds", "false"}, {"--map.virtual_bounds: not read"}},
+      {"page_floor_without_a_virtual_map", {"--map.virtual_min_texel_px", "0.5"}, {"--map.virtual_min_texel_px: not read"}},
+      {"cascade_floor_with_a_virtual_map", with_virtual("rule", {"--adaptive.min_texel_px", "0.5"}),
+       {"--adaptive.min_texel_px: not read", "map.virtual_min_texel_px"}},
       {"cascades_with_a_virtual_map", with_virtual("rule", {"--map.cascades", "4"}), {"--map.cascades: not read", "virtual shadow map"}},
       {"adaptive_maps_with_a_virtual_map", with_virtual("rule", {"--adaptive.enabled", "true"}), {"--adaptive.enabled: not read"}},
       {"resolutions_with_a_virtual_map", with_virtual("rule", {"--resolution", "64,4096"}),
@@ -745,7 +748,10 @@ TEST_F(RenderCli, SettingsNoConfigurationReadsAreRefused) {
   // What they are refused beside is read: the same options in the configurations that read them run.
   for (const auto& args : std::vector<std::vector<std::string>>{
            {"--adaptive.enabled", "true", "--adaptive.visibility", "0.1"},
-           with_virtual("rule", {"--adaptive.visibility", "0.1", "--map.virtual_pool_pages", "8", "--map.virtual_cache", "false"}),
+           with_virtual("rule", {"--adaptive.visibility", "0.1", "--map.virtual_pool_pages", "8", "--map.virtual_cache", "false",
+                                 "--map.virtual_min_texel_px", "2"}),
+           {"--adaptive.min_texel_px", "1", "--map.virtual_min_texel_px", "2", "--virtual-debug", "--scene", "outdoor", "--pcf.radius_unit",
+            "world", "--pcf.radius", "0.12"},
            {"--resolution", "64", "--map.cascades", "2"}}) {
     std::vector<std::string> full = {"--width", "64", "--height", "48", "--frames", "1", "--warmup", "0", "-o", (work_ / "ok").string()};
     full.insert(full.end(), args.begin(), args.end());

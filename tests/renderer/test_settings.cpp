@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "adaptive/virtual_pages.h"
 #include "shadows/settings.h"
 
 using namespace penumbra::shadows;
@@ -190,6 +191,13 @@ TEST(Settings, AdaptiveDefaultsAreTheLibrarys) {
   EXPECT_EQ(library.min_texels, 32);  // docs/adaptive.md and docs/install.md give these numbers
   EXPECT_EQ(library.max_texels, 4096);
   EXPECT_EQ(library.quantum_texels, 32);
+}
+
+// The virtual map's pixel floor is the marking library's (adaptive::MarkOptions), 2^-0.5.
+TEST(Settings, VirtualPageFloorIsTheLibrarys) {
+  const ShadowMapParams tools;
+  EXPECT_NEAR(tools.virtual_min_texel_px, penumbra::adaptive::MarkOptions{}.min_texel_px, 1e-6);
+  EXPECT_NEAR(tools.virtual_min_texel_px, std::sqrt(0.5), 1e-4);
 }
 
 TEST(Settings, SetFromStringAcceptsValuesInRange) {

@@ -865,7 +865,7 @@ shadows::ShadowSettings virtual_pcf(shadows::VirtualPages marking) {
   s.pcf.kernel = shadows::Kernel::grid;
   s.pcf.radius = 0.12f;
   s.pcf.radius_unit = shadows::RadiusUnit::world;
-  s.adaptive.min_texel_px = 1;
+  s.map.virtual_min_texel_px = 1;
   s.map.virtual_pages = marking;
   return s;
 }
@@ -875,7 +875,7 @@ shadows::ShadowSettings virtual_pcss() {
   shadows::ShadowSettings s;
   s.technique = shadows::Technique::pcss;
   s.pcss.kernel = shadows::Kernel::grid;
-  s.adaptive.min_texel_px = 1;
+  s.map.virtual_min_texel_px = 1;
   s.map.virtual_pages = shadows::VirtualPages::rule;
   return s;
 }
@@ -1087,7 +1087,7 @@ TEST(VirtualMap, RendererShadesVsmThroughThePagesLikeAFineMap) {
   s.technique = shadows::Technique::vsm;
   s.vsm.radius = 0.12f;
   s.vsm.radius_unit = shadows::RadiusUnit::world;
-  s.adaptive.min_texel_px = 1;
+  s.map.virtual_min_texel_px = 1;
   s.map.virtual_pages = shadows::VirtualPages::rule;
   const shadows::FrameInfo info = r.render(s, w, h);
   const io::ImageF paged = r.read_visibility();

@@ -23,7 +23,8 @@ VirtualMapLayout layout() {
 }
 
 TEST(VirtualPages, RequestedTexelIsTheRuleAboveThePixelFloor) {
-  MarkOptions rule;  // c = 3.47, one footprint
+  MarkOptions rule;  // c = 3.47
+  rule.min_texel_px = 1;  // one footprint
   EXPECT_NEAR(requested_texel_ws({{0, 0}, 0.001, 0.12}, rule), 0.12 / 3.47, 1e-12);
   EXPECT_NEAR(requested_texel_ws({{0, 0}, 0.1, 0.12}, rule), 0.1, 1e-12) << "the pixel floor wins far away";
   EXPECT_NEAR(requested_texel_ws({{0, 0}, 0.001, 0}, rule), 0.001, 1e-12) << "no filter: the footprint";
@@ -32,6 +33,21 @@ TEST(VirtualPages, RequestedTexelIsTheRuleAboveThePixelFloor) {
   EXPECT_NEAR(requested_texel_ws({{0, 0}, 0.001, 0.12}, footprint), 0.001, 1e-12);
   footprint.min_texel_px = 2;
   EXPECT_NEAR(requested_texel_ws({{0, 0}, 0.001, 0.12}, footprint), 0.002, 1e-12);
+}
+
+// The default floor, 2^-0.5 footprints: where it sets the level, the level's texel is 0.35 to 0.71
+// of the pixel's footprint, never a whole one (a floor of 1 gave texels up to a pixel, which shift
+// shadow edges and drop thin lit rims by a pixel: docs/results/virtual-maps.md).
+TEST(VirtualPages, TheDefaultFloorGivesTexelsOfAThirdToSevenTenthsOfAPixel) {
+  const VirtualMapLayout l = layout();  // texels 0.005 · 2^k, k = 0..5
+  const MarkOptions options;
+  EXPECT_NEAR(options.min_texel_px, std::sqrt(0.5), 1e-4);
+  for (double s = 0.0071; s < 0.1; s *= 1.07) {  // footprints whose floor lies within the levels
+    SCOPED_TRACE(s);
+    const double texel = l.texel0_ws * std::ldexp(1.0, level_for_texel(requested_texel_ws({{0, 0}, s, 0.001}, options), l));
+    EXPECT_GT(texel, 0.3535 * s);
+    EXPECT_LE(texel, 0.7071 * s);
+  }
 }
 
 TEST(VirtualPages, LevelIsTheCoarsestTexelNotAboveTheRequest) {
