@@ -152,7 +152,7 @@ std::vector<PageKey> PageCache::residency_order(const std::set<Page>& requested,
   return order;
 }
 
-PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY camera_xy) {
+PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY camera_xy, const PageTiles* tiles) {
   for (const Page& page : requested)  // before anything changes
     if (page.level < 0 || page.level >= layout_.levels || page.x < 0 || page.y < 0 || page.x >= layout_.pages_per_side ||
         page.y >= layout_.pages_per_side)
@@ -179,12 +179,25 @@ PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY cam
   const auto kept = std::min(order.size(), static_cast<std::size_t>(pool_slots()));
   for (std::size_t i = kept; i < order.size(); ++i) stats.missing += requested.count(page_of(order[i])) > 0;
   // First what is cached, so that no page this frame keeps is evicted for another.
+  const auto tiles_of = [&](const PageKey& key) {  // the floor's pages, and pages without tiles, whole
+    if (!tiles) return kEveryTile;
+    const auto it = tiles->find(page_of(key));
+    return it == tiles->end() || it->second == 0 ? kEveryTile : it->second;
+  };
   std::vector<PageKey> wanted;
   for (std::size_t i = 0; i < kept; ++i) {
     const PageKey& key = order[i];
     if (const auto it = resident_.find(key); it != resident_.end()) {
-      slots_[static_cast<std::size_t>(it->second)].last_frame = frame_;
-      stats.cached += requested.count(page_of(key)) > 0;
+      Slot& slot = slots_[static_cast<std::size_t>(it->second)];
+      slot.last_frame = frame_;
+      if (const TileMask need = tiles_of(key); (need & ~slot.tiles) != 0) {
+        slot.tiles |= need;
+        slot.drawn_frame = frame_;
+        out.to_draw.push_back({it->second, key, slot.tiles});
+        ++stats.widened;
+      } else {
+        stats.cached += requested.count(page_of(key)) > 0;
+      }
     } else {
       wanted.push_back(key);
     }
@@ -205,9 +218,9 @@ PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY cam
       free_.pop_back();
       ++stats.evicted;
     }
-    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_};
+    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_, tiles_of(key)};
     resident_[key] = chosen;
-    out.to_draw.push_back({chosen, key});
+    out.to_draw.push_back({chosen, key, tiles_of(key)});
   }
   stats.drawn = static_cast<int>(out.to_draw.size());
   stats.resident = static_cast<int>(resident_.size());

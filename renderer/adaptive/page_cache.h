@@ -56,6 +56,7 @@ struct PageCacheStats {
   int floor = 0;        // pages of floor_level made resident though not asked for: what a missing page's pixels read
   int floor_level = -1; // the coarse floor's level (-1: nothing asked for); 0 when the pool holds every page asked for
   int evicted = 0;      // resident pages dropped to make room this frame
+  int widened = 0;      // of the drawn, pages already resident drawn again for tiles they lacked
   int invalidated = 0;  // resident pages dropped since the last update (light or caster moved)
   int resident = 0;     // pages in the pool after the update (asked for or kept from earlier frames)
 };
@@ -74,6 +75,7 @@ class PageCache {
   struct Admitted {
     int slot = 0;
     PageKey key;
+    TileMask tiles = kEveryTile;  // the tiles to draw (a page drawn again: those it had and those asked for)
   };
   struct Update {
     PageCacheStats stats;
@@ -84,7 +86,10 @@ class PageCache {
   // rest, coarse levels first and nearest the camera first, as many as the pool holds. Cached pages
   // the frame keeps are kept first, so that none is evicted for another. Throws
   // std::invalid_argument for a page outside the layout (before anything changes) and PoolTooSmall.
-  Update update(const std::set<Page>& requested, LightXY camera_xy);
+  // `tiles`: the tiles each requested page's pixels read (MarkResult::tiles); a page not in it, and
+  // every page without it, is whole. A page is drawn with the tiles asked for; a resident page asked
+  // for a tile it was not drawn with is drawn again, with its tiles and the new ones (widened).
+  Update update(const std::set<Page>& requested, LightXY camera_xy, const PageTiles* tiles = nullptr);
 
   // Drops every page (the light, its depth range or the raster bias changed, or the frame is drawn
   // uncached); the next update takes the slots a fresh cache would.
@@ -127,6 +132,7 @@ class PageCache {
     PageKey key;
     std::int64_t last_frame = -1;   // the last update that asked for it
     std::int64_t drawn_frame = -1;  // the update that admitted it
+    TileMask tiles = kEveryTile;    // the tiles drawn into it
   };
   // The pages update() keeps, in the order it keeps them (the floor first); sets stats.floor and
   // stats.floor_level; throws PoolTooSmall.

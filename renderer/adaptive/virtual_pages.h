@@ -23,6 +23,7 @@
 // cache admits, and PageMarker; shaders/virtual_pages.glsl reads and filters depths through
 // the tables.
 #include <cstdint>
+#include <map>
 #include <set>
 #include <string_view>
 #include <tuple>
@@ -77,8 +78,17 @@ struct Page {
   bool operator==(const Page& o) const { return std::tie(level, x, y) == std::tie(o.level, o.x, o.y); }
 };
 
+// The tiles of a page some pixel reads: the page cut into 8 × 8 tiles, tile (tx, ty) (ty from the
+// page's lower edge) bit ty · 8 + tx. kEveryTile: the whole page.
+using TileMask = std::uint64_t;
+inline constexpr TileMask kEveryTile = ~TileMask{0};
+using PageTiles = std::map<Page, TileMask>;
+
 struct MarkResult {
   std::set<Page> pages;               // every page some pixel asked for
+  // Per page, the tiles the squares that marked it reach (the GPU marking's, PageMarker); empty
+  // where not known (the CPU reference): whole pages.
+  PageTiles tiles;
   std::vector<std::int64_t> pixels_per_level;  // pixels that sample each level
   std::int64_t unmarked = 0;          // pixels beyond the coarsest level's extent
   std::vector<std::int64_t> pages_per_level() const;

@@ -23,7 +23,7 @@ uniform bool u_write_radii;
 layout(std430, binding = VIRTUAL_MARK_BUFFER) buffer Marks {
   uint u_pixels_per_level[VIRTUAL_MARK_MAX_LEVELS];
   uint u_unmarked;
-  uint u_page_bits[];  // bit virtual_mark_page_bit(level, x, y, pages_per_side)
+  uint u_page_bits[];  // bit virtual_mark_page_bit(level, x, y, pages_per_side), then the tile words
 };
 
 // The frame's layout, camera and constants are the VirtualFrame block (virtual_mark_contract.h); these
@@ -38,7 +38,8 @@ uniform float u_radius_ws;  // the filter's world radius (0: none)
 #endif
 
 // Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
-// xy ± r; returns the level, or u_virtual_levels when none holds xy.
+// xy ± r, and their tiles under it a texel wider; returns the level, or u_virtual_levels when none
+// holds xy.
 int mark_square(int level, vec2 xy, float r) {
   const int n = u_virtual_pages_per_side;
   for (; level < u_virtual_levels; ++level) {
@@ -52,6 +53,12 @@ int mark_square(int level, vec2 xy, float r) {
       for (int x = lo.x; x <= hi.x; ++x) {
         const uint bit = virtual_mark_page_bit(level, x, y, n);
         atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
+        const float tiles = float(VIRTUAL_MARK_TILES_PER_SIDE), texel = 1.0 / float(u_virtual_page_texels);
+        const ivec2 a = ivec2(clamp(floor((local - reach - texel - vec2(x, y)) * tiles), 0.0, tiles - 1.0));
+        const ivec2 b = ivec2(clamp(floor((local + reach + texel - vec2(x, y)) * tiles), 0.0, tiles - 1.0));
+        const uint row = ((2u << uint(b.x - a.x)) - 1u) << uint(a.x);
+        for (int ty = a.y; ty <= b.y; ++ty)
+          atomicOr(u_page_bits[virtual_mark_tile_word(bit, ty, u_virtual_levels, n)], row << uint(8 * (ty % 4)));
       }
     return level;
   }

@@ -35,6 +35,12 @@
 //                                                pages_per_side² window is bit
 //                                                b = virtual_mark_page_bit(level, x, y, pages_per_side),
 //                                                bit (b % 32) of page-bit word b / 32
+//   then, from word VIRTUAL_MARK_WORD_PAGE_BITS + virtual_mark_page_bit_words(levels, pages_per_side),
+//   two words per page (page bit b: words 2b and 2b + 1 of them): the page's marked tiles, the page
+//   cut into VIRTUAL_MARK_TILES_PER_SIDE² tiles (16² texels of a 128² page), tile (tx, ty) (ty from
+//   the page's lower edge) bit (ty % 4) · 8 + tx of word 2b + ty / 4 (virtual_mark_tile_word): the
+//   tiles the squares that marked the page reach, a texel wider (the filters gather 2 × 2 blocks
+//   from even texels). A renderer may draw into a page only the casters over its marked tiles.
 // Page (x, y) of level k covers light-space [u_virtual_origin[k].xy + (x, y) · page_ws, + page_ws)
 // with page_ws = u_virtual_page_texels · u_virtual_texel0_ws · 2^k.
 //
@@ -95,6 +101,7 @@ PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_IMAGE_RADII, 2)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL, 0)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_UNMARKED, 16)   // VIRTUAL_MARK_MAX_LEVELS
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_WORD_PAGE_BITS, 17)  // VIRTUAL_MARK_MAX_LEVELS + 1
+PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_MARK_TILES_PER_SIDE, 8)   // a page's marked tiles: 8 × 8, a 64-bit mask
 // Texture units (the renderer's UNIT_VIRTUAL_* of shaders/shadow_contract.h).
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_POOL, 9)
 PENUMBRA_VIRTUAL_CONSTANT(VIRTUAL_UNIT_TABLE, 10)
@@ -138,11 +145,22 @@ PENUMBRA_VIRTUAL_FUNCTION uint virtual_mark_page_bit(int level, int x, int y, in
   return uint((level * pages_per_side + y) * pages_per_side + x);
 }
 
+// The words of the page bits for `levels` levels of pages_per_side² pages; the tile words follow them.
+PENUMBRA_VIRTUAL_FUNCTION uint virtual_mark_page_bit_words(int levels, int pages_per_side) {
+  return (uint(levels) * uint(pages_per_side) * uint(pages_per_side) + 31u) / 32u;
+}
+
+// The word (from VIRTUAL_MARK_WORD_PAGE_BITS) holding tile row `tile_row` of the page of bit `bit`.
+PENUMBRA_VIRTUAL_FUNCTION uint virtual_mark_tile_word(uint bit, int tile_row, int levels, int pages_per_side) {
+  return virtual_mark_page_bit_words(levels, pages_per_side) + 2u * bit + uint(tile_row / 4);
+}
+
 #ifdef __cplusplus
-// The words a marks buffer needs for `levels` levels of pages_per_side² pages.
+// The words a marks buffer needs for `levels` levels of pages_per_side² pages: the counts, the page
+// bits and two tile words per page.
 inline constexpr std::size_t virtual_mark_buffer_words(int levels, int pages_per_side) {
-  const std::size_t bits = static_cast<std::size_t>(levels) * static_cast<std::size_t>(pages_per_side) * static_cast<std::size_t>(pages_per_side);
-  return static_cast<std::size_t>(VIRTUAL_MARK_WORD_PAGE_BITS) + (bits + 31) / 32;
+  const std::size_t pages = static_cast<std::size_t>(levels) * static_cast<std::size_t>(pages_per_side) * static_cast<std::size_t>(pages_per_side);
+  return static_cast<std::size_t>(VIRTUAL_MARK_WORD_PAGE_BITS) + virtual_mark_page_bit_words(levels, pages_per_side) + 2 * pages;
 }
 // The page of bit `bit` among the page bits: the inverse of virtual_mark_page_bit.
 struct Page {

@@ -19,7 +19,7 @@ nlohmann::json to_json(const LightFrame& l) {
 
 nlohmann::json virtual_pages_json(const VirtualMapStats& p) {
   return {{"requested", p.requested}, {"cached", p.cached},   {"drawn", p.drawn},
-          {"missing", p.missing},     {"evicted", p.evicted}, {"invalidated", p.invalidated},
+          {"missing", p.missing},     {"evicted", p.evicted}, {"invalidated", p.invalidated}, {"widened", p.widened},
           {"resident", p.resident},   {"floor", p.floor},     {"floor_level", p.floor_level},
           {"triangles", p.triangles}, {"draws", p.draws}};
 }

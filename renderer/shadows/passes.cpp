@@ -416,16 +416,22 @@ class VirtualPagesPass final : public Pass {
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualShadowMap::StepReport first_report = steps("_search");
-      const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes, &first_report);
+      const bool tiles = s.map.virtual_page_tiles;
+      const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes, &first_report, tiles ? &search.tiles : nullptr);
       step("virtual_mark");
       marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, nullptr, &v->pcss_radii);
       std::set<adaptive::Page> all = search.pages;
       all.insert(marked.pages.begin(), marked.pages.end());
+      adaptive::PageTiles all_tiles = search.tiles;  // the second round keeps the search's tiles
+      for (const auto& [page, t] : marked.tiles) all_tiles[page] |= t;
       const VirtualShadowMap::StepReport second_report = steps("");
-      const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes, &second_report);
+      const VirtualMapStats second = v->map->update(all, view, f.scene, f.meshes, &second_report, tiles ? &all_tiles : nullptr);
       out.pages = second;
       out.pages.drawn = first.drawn + second.drawn;
-      out.pages.cached = second.cached - first.drawn;  // the search's pages drawn this frame are not cached ones
+      // The search's pages drawn this frame are not cached ones (those drawn again for the
+      // penumbrae's tiles are counted drawn, not cached, by the second round already).
+      out.pages.cached = second.cached - (first.drawn - second.widened);
+      out.pages.widened = first.widened + second.widened;
       out.pages.evicted = first.evicted + second.evicted;
       out.pages.invalidated = first.invalidated + second.invalidated;
       out.pages.floor = std::max(first.floor, second.floor);
@@ -439,7 +445,7 @@ class VirtualPagesPass final : public Pass {
       marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualShadowMap::StepReport report = steps("");
-      out.pages = v->map->update(marked.pages, view, f.scene, f.meshes, &report);
+      out.pages = v->map->update(marked.pages, view, f.scene, f.meshes, &report, s.map.virtual_page_tiles ? &marked.tiles : nullptr);
       out.sync_reads = 1;
     }
     out.pixels_per_level = marked.pixels_per_level;

@@ -47,6 +47,8 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_BOOL(ShadowMapParams, virtual_cache, "virtual shadow map: keep drawn pages across frames until the light or a caster moves"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_bounds,
                   "virtual shadow map: depth bounds per tile of each page, to skip filters surely lit or in umbra; the image is the same"),
+    PENUMBRA_BOOL(ShadowMapParams, virtual_page_tiles,
+                  "virtual shadow map: draw into each page only the casters over the tiles its pixels read; the image is the same"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_marks_late,
                   "virtual shadow map: draw the pages the previous frame marked (no read-back waited for within a frame); a pixel "
                   "whose page is not there yet reads a coarser one"),
@@ -225,7 +227,7 @@ std::string unread_setting(const ShadowSettings& s, std::string_view section, st
   if (section == "map") {
     if (virtual_map && among({"resolution_texels", "fit", "cascades", "cascade_lambda", "cascade_blend", "cascade_stabilize"}))
       return "a virtual shadow map (map.virtual_pages " + value_of_virtual_pages(s) + ") has pages, not a map's size, fit or cascades";
-    if (!virtual_map && among({"virtual_min_texel_px", "virtual_pool_pages", "virtual_cache", "virtual_bounds", "virtual_marks_late"}))
+    if (!virtual_map && among({"virtual_min_texel_px", "virtual_pool_pages", "virtual_cache", "virtual_bounds", "virtual_page_tiles", "virtual_marks_late"}))
       return "it sets the virtual shadow map, and map.virtual_pages is off";
   }
   if (section == "adaptive") {

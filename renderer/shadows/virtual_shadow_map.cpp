@@ -198,15 +198,16 @@ void VirtualShadowMap::clear_slots(const std::vector<adaptive::PageCache::Admitt
   const int n = layout_.page_texels;
   const float far_depth = 1.0f;
   const float far_moments[2] = {1, 1};  // the far plane, t = 1: nothing in front
-  for (const auto& [slot, key] : to_draw) {
-    const int sx = slot % pool_side_, sy = slot / pool_side_;
+  for (const adaptive::PageCache::Admitted& a : to_draw) {
+    const int sx = a.slot % pool_side_, sy = a.slot / pool_side_;
     glClearTexSubImage(pool_.id(), 0, sx * n, sy * n, 0, n, n, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &far_depth);
     if (content_ == Content::depth_and_moments)
       glClearTexSubImage(moments_.id(), 0, sx * n, sy * n, 0, n, n, 1, GL_RG, GL_FLOAT, far_moments);
   }
 }
 
-void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, adaptive::TileMask tiles, const scene::Scene& scene,
+                                 const scene::GpuMeshes& meshes,
                                  const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const {
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
@@ -216,10 +217,18 @@ void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const s
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
   program_.set("u_clip_from_world", glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view);
-  // The square widened by a texel: the raster's float matrix may reach a texel into a caster the
-  // exact square just misses.
-  const float texel = wf / static_cast<float>(n);
-  const scene::Footprint window{{x0 - texel, y0 - texel}, {x0 + wf + texel, y0 + wf + texel}};
+  // The rectangle of the page's tiles to draw (the whole page unless the marking said which),
+  // widened by a texel: the raster's float matrix may reach a texel into a caster the exact square
+  // just misses.
+  int tx0 = 0, ty0 = 0, tx1 = 7, ty1 = 7;
+  if (tiles != adaptive::kEveryTile && tiles != 0) {
+    tx0 = ty0 = 7, tx1 = ty1 = 0;
+    for (int b = 0; b < 64; ++b)
+      if ((tiles >> b) & 1u) tx0 = std::min(tx0, b % 8), tx1 = std::max(tx1, b % 8), ty0 = std::min(ty0, b / 8), ty1 = std::max(ty1, b / 8);
+  }
+  const float texel = wf / static_cast<float>(n), tile = wf / 8;
+  const scene::Footprint window{{x0 + static_cast<float>(tx0) * tile - texel, y0 + static_cast<float>(ty0) * tile - texel},
+                                {x0 + static_cast<float>(tx1 + 1) * tile + texel, y0 + static_cast<float>(ty1 + 1) * tile + texel}};
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const scene::DrawRanges kept = scene::cull_clusters(meshes[i].clustered(), footprints[i], window);
     if (kept.first_index.empty()) continue;
@@ -231,7 +240,7 @@ void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, const s
 }
 
 VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
-                                         const scene::GpuMeshes& meshes, const StepReport* steps) {
+                                         const scene::GpuMeshes& meshes, const StepReport* steps, const adaptive::PageTiles* tiles) {
   if (meshes.size() != scene.objects.size()) throw std::invalid_argument("virtual shadow map: the meshes are not the scene's");
   for (const adaptive::Page& page : requested)  // before anything changes (the cache checks too, after a new view)
     if (page.level < 0 || page.level >= layout_.levels || page.x < 0 || page.y < 0 || page.x >= layout_.pages_per_side ||
@@ -249,7 +258,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
   view_ = view;
   has_view_ = true;
   set_virtual_view(frame_, layout_, view_);
-  const adaptive::PageCache::Update admitted = cache_.update(requested, view.camera_xy);
+  const adaptive::PageCache::Update admitted = cache_.update(requested, view.camera_xy, tiles);
   VirtualMapStats stats;
   static_cast<adaptive::PageCacheStats&>(stats) = admitted.stats;
   const std::vector<adaptive::PageCache::Admitted>& to_draw = admitted.to_draw;
@@ -275,7 +284,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     for (std::size_t i = 0; i < meshes.size(); ++i)
       footprints.push_back(scene::cluster_footprints(meshes[i].clustered(), view_.light_view * scene.objects[i].model));
     clear_slots(to_draw);
-    for (const auto& [slot, key] : to_draw) draw_page(slot, key, scene, meshes, footprints, stats);
+    for (const adaptive::PageCache::Admitted& a : to_draw) draw_page(a.slot, a.key, a.tiles, scene, meshes, footprints, stats);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
     glDisable(GL_SCISSOR_TEST);
@@ -285,7 +294,7 @@ VirtualMapStats VirtualShadowMap::update(const std::set<adaptive::Page>& request
     step("virtual_bounds");
     if (!to_draw.empty()) {
       std::vector<int> drawn;
-      for (const auto& [slot, key] : to_draw) drawn.push_back(slot);
+      for (const adaptive::PageCache::Admitted& a : to_draw) drawn.push_back(a.slot);
       write_bounds(drawn);
     }
   }
@@ -503,12 +512,20 @@ adaptive::MarkResult PageMarker::read(const gl::Buffer& marks) const {
   adaptive::MarkResult out;
   for (int k = 0; k < layout_.levels; ++k) out.pixels_per_level.push_back(m[static_cast<std::size_t>(vm::VIRTUAL_MARK_WORD_PIXELS_PER_LEVEL + k)]);
   out.unmarked = m[vm::VIRTUAL_MARK_WORD_UNMARKED];
-  for (std::size_t w = vm::VIRTUAL_MARK_WORD_PAGE_BITS; w < words_; ++w)
+  const std::size_t page_bits_end = vm::VIRTUAL_MARK_WORD_PAGE_BITS + vm::virtual_mark_page_bit_words(layout_.levels, layout_.pages_per_side);
+  for (std::size_t w = vm::VIRTUAL_MARK_WORD_PAGE_BITS; w < page_bits_end; ++w)
     for (std::uint32_t word = m[w]; word != 0; word &= word - 1) {
       const auto bit = static_cast<vm::uint>((w - vm::VIRTUAL_MARK_WORD_PAGE_BITS) * 32 + static_cast<std::size_t>(std::countr_zero(word)));
       const vm::Page page = vm::virtual_mark_page_of_bit(bit, layout_.pages_per_side);
       out.pages.insert({page.level, page.x, page.y});
     }
+  for (const adaptive::Page& page : out.pages) {
+    const vm::uint bit = vm::virtual_mark_page_bit(page.level, page.x, page.y, layout_.pages_per_side);
+    const auto word = [&](int row) {
+      return m[vm::VIRTUAL_MARK_WORD_PAGE_BITS + vm::virtual_mark_tile_word(bit, row, layout_.levels, layout_.pages_per_side)];
+    };
+    out.tiles[page] = word(0) | static_cast<adaptive::TileMask>(word(4)) << 32;
+  }
   return out;
 }
 

@@ -227,12 +227,17 @@ class VirtualShadowMap {
   // virtual_draw (the casters into the admitted pages), virtual_bounds (when bounds() is on) and
   // virtual_table (the page tables written), each name followed by `suffix` (PCSS's first round:
   // "_search"). Every step is reported whether or not it has work this frame.
+  //
+  // `tiles` (PageMarker's MarkResult::tiles), when given: a page is drawn with the casters over the
+  // rectangle of its marked tiles only (the rest of it holds what those casters leave there, which
+  // no pixel that marked it reads); a resident page asked for tiles beyond it is drawn again
+  // (adaptive::PageCache::update). Without it every page is drawn whole.
   struct StepReport {
     PassReport report;  // report.passes required
     std::string suffix;
   };
   VirtualMapStats update(const std::set<adaptive::Page>& requested, const VirtualMapView& view, const scene::Scene& scene,
-                         const scene::GpuMeshes& meshes, const StepReport* steps = nullptr);
+                         const scene::GpuMeshes& meshes, const StepReport* steps = nullptr, const adaptive::PageTiles* tiles = nullptr);
   // The raster depth offset pages are drawn with (glPolygonOffset factor and units, as the maps'
   // map.slope_bias and map.offset_bias; none by default). A change drops every page.
   void set_raster_bias(float slope, float offset);
@@ -289,8 +294,9 @@ class VirtualShadowMap {
   // Clears the slots of the pages about to be drawn to the far plane (and the moments' to t = 1).
   void clear_slots(const std::vector<adaptive::PageCache::Admitted>& to_draw) const;
   // Draws page `key` into `slot` (cleared by clear_slots), each object's clusters kept by their
-  // footprints across the light, adding the triangles and ranges drawn to `stats`.
-  void draw_page(int slot, const adaptive::PageKey& key, const scene::Scene& scene, const scene::GpuMeshes& meshes,
+  // footprints across the light over the rectangle of `tiles`, adding the triangles and ranges drawn
+  // to `stats`.
+  void draw_page(int slot, const adaptive::PageKey& key, adaptive::TileMask tiles, const scene::Scene& scene, const scene::GpuMeshes& meshes,
                  const std::vector<scene::ClusterFootprints>& footprints, VirtualMapStats& stats) const;
   void write_tables();
   // Takes the bounds of every tile of the pages in `slots` (virtual_bounds.comp).

@@ -145,7 +145,11 @@ TEST(InstalledVirtualMark, TheDriverSeesTheContractsBindingsAndBufferLayout) {
         const vm::Page p = vm::virtual_mark_page_of_bit(vm::virtual_mark_page_bit(level, x, y, 5), 5);
         EXPECT_TRUE(p.level == level && p.x == x && p.y == y) << level << " " << x << " " << y;
       }
-  EXPECT_EQ(vm::virtual_mark_buffer_words(12, 64), static_cast<std::size_t>(vm::VIRTUAL_MARK_WORD_PAGE_BITS) + 12 * 64 * 64 / 32);
+  EXPECT_EQ(vm::virtual_mark_page_bit_words(12, 64), 12u * 64 * 64 / 32);
+  EXPECT_EQ(vm::virtual_mark_buffer_words(12, 64), static_cast<std::size_t>(vm::VIRTUAL_MARK_WORD_PAGE_BITS) + 12 * 64 * 64 / 32 + 2 * 12 * 64 * 64)
+      << "the counts, a bit per page, then two tile words per page";
+  EXPECT_EQ(vm::virtual_mark_tile_word(0, 0, 12, 64), 12u * 64 * 64 / 32);
+  EXPECT_EQ(vm::virtual_mark_tile_word(5, 4, 12, 64), 12u * 64 * 64 / 32 + 11) << "page 5's upper four tile rows";
 
   for (int pass = 0; pass < 3; ++pass) {
     SCOPED_TRACE("VIRTUAL_MARK_PASS " + std::to_string(pass));
@@ -317,7 +321,7 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
     ASSERT_EQ(glGetError(), static_cast<GLenum>(GL_NO_ERROR));
 
     std::set<adaptive::Page> gpu;
-    for (std::size_t w = vm::VIRTUAL_MARK_WORD_PAGE_BITS; w < words; ++w)
+    for (std::size_t w = vm::VIRTUAL_MARK_WORD_PAGE_BITS; w < vm::VIRTUAL_MARK_WORD_PAGE_BITS + vm::virtual_mark_page_bit_words(layout.levels, layout.pages_per_side); ++w)
       for (int b = 0; b < 32; ++b)
         if (m_words[w] >> b & 1u) {
           const auto bit = static_cast<vm::uint>((w - vm::VIRTUAL_MARK_WORD_PAGE_BITS) * 32 + static_cast<std::size_t>(b));

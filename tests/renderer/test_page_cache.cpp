@@ -61,6 +61,47 @@ TEST(PageCache, AdmitsWhatIsAskedForOnceAndKeepsItCached) {
 // in the slots a fresh cache would: where a page lands in the pool moves its raster by the slot's
 // offset, which llvmpipe rounds (about 1e-5 of visibility, a few pixels more), so an uncached frame's
 // image would otherwise depend on the frames before it.
+// Pages drawn with the tiles their pixels read (MarkResult::tiles): a page is admitted with the
+// tiles asked for; asked again for tiles within them it stays cached; asked for a tile it lacks it is
+// drawn again in its slot with both (widened, counted drawn, not cached); a page without tiles, and
+// the floor, is whole, and a whole page covers any tiles.
+TEST(PageCache, APageIsDrawnWithItsTilesAndAgainForATileItLacks) {
+  PageCache cache(tiny(), 16);
+  const Page a{0, 1, 1}, b{0, 2, 1}, c{1, 0, 3};
+  const std::set<Page> asked = {a, b, c};
+  PageTiles tiles = {{a, 0x3}, {b, TileMask{1} << 63}};  // c: not said, whole
+  const PageCache::Update first = cache.update(asked, {0, 0}, &tiles);
+  ASSERT_EQ(first.to_draw.size(), 3u);
+  std::map<PageKey, PageCache::Admitted> drawn;
+  for (const auto& d : first.to_draw) drawn[d.key] = d;
+  EXPECT_EQ(drawn.at(cache.key_of(a)).tiles, TileMask{0x3});
+  EXPECT_EQ(drawn.at(cache.key_of(b)).tiles, TileMask{1} << 63);
+  EXPECT_EQ(drawn.at(cache.key_of(c)).tiles, kEveryTile);
+  EXPECT_EQ(first.stats.widened, 0);
+
+  tiles = {{a, 0x1}, {b, TileMask{1} << 63}, {c, 0x10}};  // within what each was drawn with
+  const PageCache::Update same = cache.update(asked, {0, 0}, &tiles);
+  EXPECT_TRUE(same.to_draw.empty());
+  EXPECT_EQ(same.stats.cached, 3);
+  EXPECT_EQ(same.stats.widened, 0);
+
+  tiles = {{a, 0x4}, {b, TileMask{1} << 63}};  // a lacks tile 2
+  const int slot_a = cache.slot_of(a);
+  const PageCache::Update wider = cache.update(asked, {0, 0}, &tiles);
+  ASSERT_EQ(wider.to_draw.size(), 1u);
+  EXPECT_EQ(wider.to_draw[0].slot, slot_a) << "drawn again in its own slot";
+  EXPECT_EQ(wider.to_draw[0].tiles, TileMask{0x7}) << "the tiles it had and the new one";
+  EXPECT_EQ(wider.stats.widened, 1);
+  EXPECT_EQ(wider.stats.drawn, 1);
+  EXPECT_EQ(wider.stats.cached, 2);
+  EXPECT_EQ(cache.slot_states()[static_cast<std::size_t>(slot_a)], PageCache::SlotState::drawn);
+
+  const PageCache::Update whole = cache.update(asked, {0, 0});  // no tiles: whole pages
+  ASSERT_EQ(whole.to_draw.size(), 2u) << "a and b lack tiles; c was drawn whole";
+  for (const auto& d : whole.to_draw) EXPECT_EQ(d.tiles, kEveryTile);
+  EXPECT_TRUE(cache.update(asked, {0, 0}, &tiles).to_draw.empty()) << "whole pages hold any tiles";
+}
+
 TEST(PageCache, InvalidatingAllGivesTheSlotsOfAFreshCache) {
   const std::set<Page> first = {{0, 1, 1}, {0, 2, 1}, {1, 0, 3}, {2, 1, 1}};
   const std::set<Page> second = {{0, 0, 0}, {0, 3, 2}, {1, 1, 1}};

@@ -726,6 +726,7 @@ TEST_F(RenderCli, SettingsNoConfigurationReadsAreRefused) {
       {"cache_without_a_virtual_map", {"--map.virtual_cache", "false"}, {"--map.virtual_cache: not read", "map.virtual_pages is off"}},
       {"bounds_without_a_virtual_map", {"--map.virtual_bounds", "false"}, {"--map.virtual_bounds: not read"}},
       {"page_floor_without_a_virtual_map", {"--map.virtual_min_texel_px", "0.5"}, {"--map.virtual_min_texel_px: not read"}},
+      {"page_tiles_without_a_virtual_map", {"--map.virtual_page_tiles", "false"}, {"--map.virtual_page_tiles: not read"}},
       {"cascade_floor_with_a_virtual_map", with_virtual("rule", {"--adaptive.min_texel_px", "0.5"}),
        {"--adaptive.min_texel_px: not read", "map.virtual_min_texel_px"}},
       {"cascades_with_a_virtual_map", with_virtual("rule", {"--map.cascades", "4"}), {"--map.cascades: not read", "virtual shadow map"}},

@@ -1025,7 +1025,7 @@ TEST(VirtualMap, RendererShadesPcssThroughThePagesOfItsSearchAndItsPenumbra) {
   const auto& v = *info.virtual_map;
   EXPECT_GT(v.search_pages, 0);
   EXPECT_GT(v.pages.requested, v.search_pages) << "the penumbrae's pages beside the searches'";
-  EXPECT_EQ(v.pages.drawn, v.pages.requested);
+  EXPECT_EQ(v.pages.drawn - v.pages.widened, v.pages.requested) << "each drawn once, and the search's again for the penumbrae's tiles";
   EXPECT_EQ(v.coarser, 0u);
   EXPECT_EQ(v.none, 0u);
   EXPECT_GT(v.at_level, static_cast<std::uint64_t>(w * h / 2));
@@ -1277,6 +1277,48 @@ TEST(VirtualMap, AnUncachedFrameIsTheSameAfterAnyOtherFrames) {
   }
 }
 
+// map.virtual_page_tiles: each page drawn with the casters over the tiles its pixels marked only.
+// The image is the same to the bit as with whole pages, uncached and along cached frames (a
+// resident page asked for tiles it lacks is drawn again), while fewer triangles are drawn: over
+// three frames of the street at 240 × 135, 56 % fewer uncached for PCF and PCSS, 13 % and 20 %
+// cached (pages asked for new tiles as the camera walks are drawn again); at 960 × 540 one uncached
+// frame draws 295 292 -> 240 612 (PCF) and 934 052 -> 519 068 (PCSS).
+TEST(VirtualMap, PagesDrawnByTheirMarkedTilesGiveTheSameImageWithFewerTriangles) {
+  const scene::Scene town = scene::make_builtin_scene("outdoor");
+  const int w = 240, h = 135;
+  for (const bool pcss : {false, true}) {
+    for (const bool cached : {false, true}) {
+      SCOPED_TRACE(std::string(pcss ? "pcss" : "pcf") + (cached ? ", cached" : ", uncached"));
+      shadows::ShadowSettings s = pcss ? virtual_pcss() : virtual_pcf(shadows::VirtualPages::rule);
+      s.map.virtual_cache = cached;
+      std::int64_t triangles[2] = {0, 0};
+      std::vector<io::ImageF> images[2];
+      for (const bool tiles : {false, true}) {
+        s.map.virtual_page_tiles = tiles;
+        shadows::Renderer r;
+        r.set_scene(town);
+        for (const int frame : {120, 126, 132}) {  // a walking camera: cached pages asked for new tiles
+          r.scene().camera = town.camera_path.at(town.camera, frame);
+          const shadows::FrameInfo info = r.render(s, w, h);
+          ASSERT_TRUE(info.virtual_map.has_value());
+          EXPECT_EQ(info.virtual_map->pages.missing, 0);
+          triangles[tiles] += info.virtual_map->pages.triangles;
+          images[tiles].push_back(r.read_visibility());
+        }
+      }
+      for (std::size_t f = 0; f < images[0].size(); ++f) {
+        ASSERT_EQ(images[1][f].pixels.size(), images[0][f].pixels.size());
+        int differ = 0;
+        for (std::size_t p = 0; p < images[0][f].pixels.size(); ++p) differ += images[1][f].pixels[p] != images[0][f].pixels[p];
+        EXPECT_EQ(differ, 0) << "frame " << f << ": of " << images[0][f].pixels.size() << " pixels";
+      }
+      EXPECT_LT(triangles[1], triangles[0] * (cached ? 0.9 : 0.6)) << triangles[1] << " against " << triangles[0];
+      ::testing::Test::RecordProperty(std::string(pcss ? "pcss" : "pcf") + (cached ? "_cached" : "") + "_triangles_whole", static_cast<int>(triangles[0]));
+      ::testing::Test::RecordProperty(std::string(pcss ? "pcss" : "pcf") + (cached ? "_cached" : "") + "_triangles_tiles", static_cast<int>(triangles[1]));
+    }
+  }
+}
+
 // Uncached (map.virtual_cache false), late marks keep the region floor resident: from the second
 // frame on its pages are cached, not drawn again, and a frame draws the triangles of the pages its
 // marks asked for, no more than the same-frame marking draws (before, the floor was redrawn every
@@ -1284,6 +1326,7 @@ TEST(VirtualMap, AnUncachedFrameIsTheSameAfterAnyOtherFrames) {
 TEST(VirtualMap, UncachedLateMarksKeepTheFloorAndDrawNoMoreThanSameFrameMarks) {
   shadows::ShadowSettings s = virtual_pcf(shadows::VirtualPages::rule);
   s.map.virtual_cache = false;
+  s.map.virtual_page_tiles = false;  // whole pages, as late marks draw them
   const int w = 160, h = 90;
   shadows::Renderer same_frame;
   same_frame.set_scene(scene::make_builtin_scene("demo"));
