@@ -48,7 +48,7 @@ const Setting<ShadowMapParams> kMapTable[] = {
     PENUMBRA_BOOL(ShadowMapParams, virtual_bounds,
                   "virtual shadow map: depth bounds per tile of each page, to skip filters surely lit or in umbra; the image is the same"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_page_tiles,
-                  "virtual shadow map: draw into each page only the casters over the tiles its pixels read; the image is the same"),
+                  "virtual shadow map, uncached: draw into each page only the casters over the tiles its pixels read; the image is the same"),
     PENUMBRA_BOOL(ShadowMapParams, virtual_marks_late,
                   "virtual shadow map: draw the pages the previous frame marked (no read-back waited for within a frame); a pixel "
                   "whose page is not there yet reads a coarser one"),

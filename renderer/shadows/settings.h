@@ -78,10 +78,12 @@ struct ShadowMapParams {
   // which the filters skip a square surely lit or in umbra and PCSS's search one without blockers.
   // The image is the same either way, up to float rounding; off measures what they save.
   bool virtual_bounds = true;
-  // Each page drawn with the casters over the tiles (16² texels) its pixels' squares reach only, not
-  // over the whole page (the marking's tiles, PageMarker; a page asked for more tiles later is drawn
-  // again). The image is the same; off measures what it saves. Pages the previous frame marked
-  // (virtual_marks_late) are drawn whole: this frame's pixels may read other tiles of them.
+  // A frame drawn anew (virtual_cache false) draws each page with the casters over the tiles (16²
+  // texels) its pixels' squares reach only, not over the whole page (the marking's tiles, PageMarker;
+  // PCSS's search pages are drawn again for the penumbrae's tiles they lack). The image is the same;
+  // off measures what it saves. Cached pages are drawn whole: later frames read other tiles of them,
+  // and drawing a page again for each new tile cost the main job's walking camera ten times the
+  // triangles (docs/results/virtual-maps.md). So are the pages late marks draw (virtual_marks_late).
   bool virtual_page_tiles = true;
   // Draw the pages the previous frame marked, read a frame late, with a coarse floor over the
   // sun's region (adaptive::region_floor_pages) so that every pixel finds a page: no read-back is

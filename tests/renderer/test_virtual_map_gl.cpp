@@ -1277,12 +1277,13 @@ TEST(VirtualMap, AnUncachedFrameIsTheSameAfterAnyOtherFrames) {
   }
 }
 
-// map.virtual_page_tiles: each page drawn with the casters over the tiles its pixels marked only.
-// The image is the same to the bit as with whole pages, uncached and along cached frames (a
-// resident page asked for tiles it lacks is drawn again), while fewer triangles are drawn: over
-// three frames of the street at 240 × 135, 56 % fewer uncached for PCF and PCSS, 13 % and 20 %
-// cached (pages asked for new tiles as the camera walks are drawn again); at 960 × 540 one uncached
-// frame draws 295 292 -> 240 612 (PCF) and 934 052 -> 519 068 (PCSS).
+// map.virtual_page_tiles: an uncached frame draws each page with the casters over the tiles its
+// pixels marked only (PCSS's search pages drawn again for the penumbrae's tiles). The image is the
+// same to the bit as with whole pages, while fewer triangles are drawn: over three frames of the
+// street at 240 × 135, 56 % fewer for PCF and PCSS (at 960 × 540 one frame draws 295 292 -> 240 612
+// for PCF and 934 052 -> 519 068 for PCSS). Cached frames draw whole pages either way (drawing a
+// page again for each new tile had cost 13 % (PCF) and 20 % (PCSS) fewer triangles here, but ten
+// times more along the main job's walk).
 TEST(VirtualMap, PagesDrawnByTheirMarkedTilesGiveTheSameImageWithFewerTriangles) {
   const scene::Scene town = scene::make_builtin_scene("outdoor");
   const int w = 240, h = 135;
@@ -1312,7 +1313,11 @@ TEST(VirtualMap, PagesDrawnByTheirMarkedTilesGiveTheSameImageWithFewerTriangles)
         for (std::size_t p = 0; p < images[0][f].pixels.size(); ++p) differ += images[1][f].pixels[p] != images[0][f].pixels[p];
         EXPECT_EQ(differ, 0) << "frame " << f << ": of " << images[0][f].pixels.size() << " pixels";
       }
-      EXPECT_LT(triangles[1], triangles[0] * (cached ? 0.9 : 0.6)) << triangles[1] << " against " << triangles[0];
+      if (cached) {
+        EXPECT_EQ(triangles[1], triangles[0]) << "cached pages are drawn whole";
+      } else {
+        EXPECT_LT(triangles[1], triangles[0] * 0.6) << triangles[1] << " against " << triangles[0];
+      }
       ::testing::Test::RecordProperty(std::string(pcss ? "pcss" : "pcf") + (cached ? "_cached" : "") + "_triangles_whole", static_cast<int>(triangles[0]));
       ::testing::Test::RecordProperty(std::string(pcss ? "pcss" : "pcf") + (cached ? "_cached" : "") + "_triangles_tiles", static_cast<int>(triangles[1]));
     }
