@@ -179,8 +179,10 @@ PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY cam
   const auto kept = std::min(order.size(), static_cast<std::size_t>(pool_slots()));
   for (std::size_t i = kept; i < order.size(); ++i) stats.missing += requested.count(page_of(order[i])) > 0;
   // First what is cached, so that no page this frame keeps is evicted for another.
-  const auto tiles_of = [&](const PageKey& key) {  // the floor's pages, and pages without tiles, whole
-    if (!tiles) return kEveryTile;
+  // The floor's pages, and pages without tiles, whole; every page whole when some are missing: their
+  // pixels read the first coarser resident level, anywhere in its pages.
+  const auto tiles_of = [&](const PageKey& key) {
+    if (!tiles || stats.missing > 0) return kEveryTile;
     const auto it = tiles->find(page_of(key));
     return it == tiles->end() || it->second == 0 ? kEveryTile : it->second;
   };

@@ -88,7 +88,9 @@ class PageCache {
   // std::invalid_argument for a page outside the layout (before anything changes) and PoolTooSmall.
   // `tiles`: the tiles each requested page's pixels read (MarkResult::tiles); a page not in it, and
   // every page without it, is whole. A page is drawn with the tiles asked for; a resident page asked
-  // for a tile it was not drawn with is drawn again, with its tiles and the new ones (widened).
+  // for a tile it was not drawn with is drawn again, with its tiles and the new ones (widened). When
+  // pages are missing (a full pool) every page is drawn whole: their pixels read coarser pages
+  // outside the tiles those were asked for.
   Update update(const std::set<Page>& requested, LightXY camera_xy, const PageTiles* tiles = nullptr);
 
   // Drops every page (the light, its depth range or the raster bias changed, or the frame is drawn

@@ -96,6 +96,22 @@ TEST(PageCache, APageIsDrawnWithItsTilesAndAgainForATileItLacks) {
   EXPECT_EQ(wider.stats.cached, 2);
   EXPECT_EQ(cache.slot_states()[static_cast<std::size_t>(slot_a)], PageCache::SlotState::drawn);
 
+  // A full pool (AFullPoolKeepsACoarseFloorAndMissesTheFarFinePages' layout and pages, each asked for
+  // with one tile): six pages missing, whose pixels read the floor level anywhere; every page drawn
+  // whole, the two asked-for ones resident too.
+  VirtualMapLayout fine = tiny();
+  fine.page_texels = 64;
+  fine.texel0_ws = 1.0 / 16;
+  PageCache small(fine, 6);
+  std::set<Page> eight;
+  PageTiles one_tile;
+  for (int x = 0; x < 4; ++x)
+    for (int y = 1; y < 3; ++y) eight.insert({0, x, y}), one_tile[{0, x, y}] = 0x1;
+  const PageCache::Update full = small.update(eight, {0, 0}, &one_tile);
+  EXPECT_EQ(full.stats.missing, 6);
+  ASSERT_EQ(full.to_draw.size(), 6u);
+  for (const auto& d : full.to_draw) EXPECT_EQ(d.tiles, kEveryTile) << "level " << d.key.level;
+
   const PageCache::Update whole = cache.update(asked, {0, 0});  // no tiles: whole pages
   ASSERT_EQ(whole.to_draw.size(), 2u) << "a and b lack tiles; c was drawn whole";
   for (const auto& d : whole.to_draw) EXPECT_EQ(d.tiles, kEveryTile);
