@@ -220,9 +220,10 @@ PageCache::Update PageCache::update(const std::set<Page>& requested, LightXY cam
       free_.pop_back();
       ++stats.evicted;
     }
-    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_, tiles_of(key)};
+    const TileMask drawn = tiles_of(key);
+    slots_[static_cast<std::size_t>(chosen)] = {true, key, frame_, frame_, drawn};
     resident_[key] = chosen;
-    out.to_draw.push_back({chosen, key, tiles_of(key)});
+    out.to_draw.push_back({chosen, key, drawn});
   }
   stats.drawn = static_cast<int>(out.to_draw.size());
   stats.resident = static_cast<int>(resident_.size());

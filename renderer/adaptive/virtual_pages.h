@@ -81,6 +81,7 @@ struct Page {
 // The tiles of a page some pixel reads: the page cut into 8 × 8 tiles, tile (tx, ty) (ty from the
 // page's lower edge) bit ty · 8 + tx. kEveryTile: the whole page.
 using TileMask = std::uint64_t;
+inline constexpr int kTilesPerSide = 8;  // the marking's VIRTUAL_MARK_TILES_PER_SIDE
 inline constexpr TileMask kEveryTile = ~TileMask{0};
 using PageTiles = std::map<Page, TileMask>;
 

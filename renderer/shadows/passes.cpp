@@ -364,6 +364,8 @@ class VirtualPagesPass final : public Pass {
       v->radius_ws = f.plan.filter_radius->radius;
       v->pcss.reset();
     }
+    // Pages drawn by their marked tiles: frames drawn anew and marked this frame (ShadowMapParams::virtual_page_tiles).
+    const bool tiles = s.map.virtual_page_tiles && !s.map.virtual_cache;
     if (s.map.virtual_marks_late) {
       // The previous frame's marks, read now that the GPU has long finished them, as pages of this
       // frame's windows; with the sun's region on a coarse level, so that a pixel whose marks are
@@ -416,7 +418,6 @@ class VirtualPagesPass final : public Pass {
       const adaptive::MarkResult search = v->marker->mark_pcss_search(v->positions, f.scene.camera, h, view, *v->pcss, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualShadowMap::StepReport first_report = steps("_search");
-      const bool tiles = s.map.virtual_page_tiles && !s.map.virtual_cache;  // ShadowMapParams::virtual_page_tiles
       const VirtualMapStats first = v->map->update(search.pages, view, f.scene, f.meshes, &first_report, tiles ? &search.tiles : nullptr);
       step("virtual_mark");
       marked = v->marker->mark_pcss_filter(v->positions, f.scene.camera, h, *v->map, *v->pcss, v->options, nullptr, &v->pcss_radii);
@@ -445,7 +446,6 @@ class VirtualPagesPass final : public Pass {
       marked = v->marker->mark(v->positions, f.scene.camera, h, view, v->radius_ws, v->options);
       if (!s.map.virtual_cache) v->map->invalidate_all();
       const VirtualShadowMap::StepReport report = steps("");
-      const bool tiles = s.map.virtual_page_tiles && !s.map.virtual_cache;  // ShadowMapParams::virtual_page_tiles
       out.pages = v->map->update(marked.pages, view, f.scene, f.meshes, &report, tiles ? &marked.tiles : nullptr);
       out.sync_reads = 1;
     }

@@ -23,6 +23,7 @@ namespace penumbra::shadows {
 static_assert(contract::BLOCK_VIRTUAL_FRAME == virtual_mark::VIRTUAL_FRAME_BLOCK && contract::BLOCK_VIRTUAL_FRAME != contract::BLOCK_SHADOW_FRAME,
               "the VirtualFrame block's binding: shadow_contract.h and virtual_mark_contract.h");
 static_assert(contract::VIRTUAL_MAX_LEVELS == virtual_mark::VIRTUAL_MARK_MAX_LEVELS, "the block's origins: one per level");
+static_assert(adaptive::kTilesPerSide == virtual_mark::VIRTUAL_MARK_TILES_PER_SIDE, "a tile mask is the marking's");
 
 glm::mat4 sun_light_view(const glm::vec3& direction) {
   const glm::vec3 d = glm::normalize(direction);
@@ -220,13 +221,14 @@ void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, adaptiv
   // The rectangle of the page's tiles to draw (the whole page unless the marking said which),
   // widened by a texel: the raster's float matrix may reach a texel into a caster the exact square
   // just misses.
-  int tx0 = 0, ty0 = 0, tx1 = 7, ty1 = 7;
+  constexpr int t = adaptive::kTilesPerSide;
+  int tx0 = 0, ty0 = 0, tx1 = t - 1, ty1 = t - 1;
   if (tiles != adaptive::kEveryTile && tiles != 0) {
-    tx0 = ty0 = 7, tx1 = ty1 = 0;
-    for (int b = 0; b < 64; ++b)
-      if ((tiles >> b) & 1u) tx0 = std::min(tx0, b % 8), tx1 = std::max(tx1, b % 8), ty0 = std::min(ty0, b / 8), ty1 = std::max(ty1, b / 8);
+    tx0 = ty0 = t - 1, tx1 = ty1 = 0;
+    for (int b = 0; b < t * t; ++b)
+      if ((tiles >> b) & 1u) tx0 = std::min(tx0, b % t), tx1 = std::max(tx1, b % t), ty0 = std::min(ty0, b / t), ty1 = std::max(ty1, b / t);
   }
-  const float texel = wf / static_cast<float>(n), tile = wf / 8;
+  const float texel = wf / static_cast<float>(n), tile = wf / t;
   const scene::Footprint window{{x0 + static_cast<float>(tx0) * tile - texel, y0 + static_cast<float>(ty0) * tile - texel},
                                 {x0 + static_cast<float>(tx1 + 1) * tile + texel, y0 + static_cast<float>(ty1 + 1) * tile + texel}};
   for (std::size_t i = 0; i < meshes.size(); ++i) {
