@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace penumbra::adaptive {
 
@@ -101,6 +102,24 @@ std::set<Page> region_floor_pages(LightXY lo, LightXY hi, LightXY camera_xy, con
     break;
   }
   return out;
+}
+
+TexelRect tiles_rect(TileMask tiles, int page_texels, int margin_texels) {
+  if (page_texels <= 0 || page_texels % kTilesPerSide != 0)
+    throw std::invalid_argument("tiles_rect: a page of " + std::to_string(page_texels) + " texels is not cut into " +
+                                std::to_string(kTilesPerSide) + " tiles a side");
+  if (margin_texels < 0) throw std::invalid_argument("tiles_rect: negative margin " + std::to_string(margin_texels));
+  const TexelRect page{0, 0, page_texels, page_texels};
+  if (tiles == kEveryTile || tiles == 0) return page;
+  int tx0 = kTilesPerSide, ty0 = kTilesPerSide, tx1 = -1, ty1 = -1;  // the marked tiles' bounds, inclusive
+  for (int b = 0; b < kTilesPerSide * kTilesPerSide; ++b)
+    if ((tiles >> b) & 1u) {
+      tx0 = std::min(tx0, b % kTilesPerSide), tx1 = std::max(tx1, b % kTilesPerSide);
+      ty0 = std::min(ty0, b / kTilesPerSide), ty1 = std::max(ty1, b / kTilesPerSide);
+    }
+  const int t = page_texels / kTilesPerSide;
+  return {std::max(tx0 * t - margin_texels, 0), std::max(ty0 * t - margin_texels, 0), std::min((tx1 + 1) * t + margin_texels, page_texels),
+          std::min((ty1 + 1) * t + margin_texels, page_texels)};
 }
 
 }  // namespace penumbra::adaptive

@@ -85,6 +85,16 @@ inline constexpr int kTilesPerSide = 8;  // the marking's VIRTUAL_MARK_TILES_PER
 inline constexpr TileMask kEveryTile = ~TileMask{0};
 using PageTiles = std::map<Page, TileMask>;
 
+// The texels of a page of `page_texels`² to draw for `tiles`: the bounding rectangle of the marked
+// tiles, `margin_texels` wider on each side (reads that reach past the tiles marked for them: the
+// shading's normal offset), clipped to the page; [x0, x1) × [y0, y1) in the page's texels, y from its
+// lower edge. The whole page for kEveryTile and for an empty mask (no tile known).
+struct TexelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool operator==(const TexelRect& o) const { return std::tie(x0, y0, x1, y1) == std::tie(o.x0, o.y0, o.x1, o.y1); }
+};
+TexelRect tiles_rect(TileMask tiles, int page_texels, int margin_texels);
+
 struct MarkResult {
   std::set<Page> pages;               // every page some pixel asked for
   // Per page, the tiles the squares that marked it reach (the GPU marking's, PageMarker); empty

@@ -93,6 +93,7 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
       pool_side_(pool_pages_per_side),
       content_(content),
       cache_(layout, pool_pages_per_side * pool_pages_per_side) {
+  set_normal_offset(ShadowMapParams{}.normal_offset_texels);
   set_virtual_view(frame_, layout, view_);
   frame_.u_virtual_pool_pages = pool_side_;
   const int side = pool_side_ * layout.page_texels;
@@ -135,6 +136,11 @@ void VirtualShadowMap::set_raster_bias(float slope, float offset) {
   if (slope == slope_bias_ && offset == offset_bias_) return;
   slope_bias_ = slope, offset_bias_ = offset;
   invalidate_all();  // pages drawn with the old offsets would disagree with new ones
+}
+
+void VirtualShadowMap::set_normal_offset(float texels) {
+  if (!(texels >= 0) || !std::isfinite(texels)) throw std::invalid_argument("virtual shadow map: normal offset " + std::to_string(texels) + " texels");
+  tile_margin_texels_ = 1 + static_cast<int>(std::ceil(texels));
 }
 
 void VirtualShadowMap::set_bounds(bool on) {
@@ -213,24 +219,18 @@ void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, adaptiv
   const int n = layout_.page_texels;
   const int sx = slot % pool_side_, sy = slot / pool_side_;
   glViewport(sx * n, sy * n, n, n);
-  glScissor(sx * n, sy * n, n, n);
   const double w = cache_.page_ws(key.level);
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
   program_.set("u_clip_from_world", glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view);
-  // The rectangle of the page's tiles to draw (the whole page unless the marking said which),
-  // widened by a texel: the raster's float matrix may reach a texel into a caster the exact square
-  // just misses.
-  constexpr int t = adaptive::kTilesPerSide;
-  int tx0 = 0, ty0 = 0, tx1 = t - 1, ty1 = t - 1;
-  if (tiles != adaptive::kEveryTile && tiles != 0) {
-    tx0 = ty0 = t - 1, tx1 = ty1 = 0;
-    for (int b = 0; b < t * t; ++b)
-      if ((tiles >> b) & 1u) tx0 = std::min(tx0, b % t), tx1 = std::max(tx1, b % t), ty0 = std::min(ty0, b / t), ty1 = std::max(ty1, b / t);
-  }
-  const float texel = wf / static_cast<float>(n), tile = wf / t;
-  const scene::Footprint window{{x0 + static_cast<float>(tx0) * tile - texel, y0 + static_cast<float>(ty0) * tile - texel},
-                                {x0 + static_cast<float>(tx1 + 1) * tile + texel, y0 + static_cast<float>(ty1 + 1) * tile + texel}};
+  // The texels of the page's tiles to draw (the whole page unless the marking said which), as wide
+  // as the shading's reads reach past them; the casters kept over them a texel wider still: the
+  // raster's float matrix may reach a texel into a caster the exact rectangle just misses.
+  const adaptive::TexelRect r = adaptive::tiles_rect(tiles, n, tile_margin_texels_);
+  glScissor(sx * n + r.x0, sy * n + r.y0, r.x1 - r.x0, r.y1 - r.y0);
+  const float texel = wf / static_cast<float>(n);
+  const scene::Footprint window{{x0 + static_cast<float>(r.x0 - 1) * texel, y0 + static_cast<float>(r.y0 - 1) * texel},
+                                {x0 + static_cast<float>(r.x1 + 1) * texel, y0 + static_cast<float>(r.y1 + 1) * texel}};
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const scene::DrawRanges kept = scene::cull_clusters(meshes[i].clustered(), footprints[i], window);
     if (kept.first_index.empty()) continue;

@@ -165,5 +165,29 @@ TEST(VirtualPages, TheRegionFloorCoversTheRegionOnTheFinestLevelThatFits) {
   EXPECT_TRUE(region_floor_pages({std::nan(""), 0}, hi, camera, l, 64).empty());
 }
 
+// A page drawn by its marked tiles draws their bounding rectangle, a margin wider, within the page.
+TEST(VirtualPages, APageIsDrawnOverItsMarkedTilesRectangleAMarginWider) {
+  const auto bit = [](int tx, int ty) { return TileMask{1} << (ty * kTilesPerSide + tx); };
+  EXPECT_EQ(tiles_rect(kEveryTile, 128, 2), (TexelRect{0, 0, 128, 128}));
+  EXPECT_EQ(tiles_rect(0, 128, 2), (TexelRect{0, 0, 128, 128})) << "no tile known: the whole page";
+  EXPECT_EQ(tiles_rect(bit(3, 5), 128, 0), (TexelRect{48, 80, 64, 96}));
+  EXPECT_EQ(tiles_rect(bit(3, 5), 128, 2), (TexelRect{46, 78, 66, 98}));
+  // Two tiles at opposite corners: the rectangle between them; the margin stops at the page's edges.
+  EXPECT_EQ(tiles_rect(bit(0, 7) | bit(6, 1), 128, 3), (TexelRect{0, 13, 115, 128}));
+  EXPECT_EQ(tiles_rect(bit(7, 0), 128, 40), (TexelRect{72, 0, 128, 56}));
+  EXPECT_EQ(tiles_rect(bit(1, 1), 16, 0), (TexelRect{2, 2, 4, 4})) << "any page side the tiles divide";
+  // A tile outside the rectangle would be a read the page misses: every marked tile lies inside.
+  const TileMask scattered = bit(2, 1) | bit(5, 3) | bit(4, 6);
+  const TexelRect r = tiles_rect(scattered, 128, 1);
+  for (int b = 0; b < kTilesPerSide * kTilesPerSide; ++b)
+    if ((scattered >> b) & 1u) {
+      const int x = (b % kTilesPerSide) * 16, y = (b / kTilesPerSide) * 16;
+      EXPECT_TRUE(x >= r.x0 && x + 16 <= r.x1 && y >= r.y0 && y + 16 <= r.y1) << "tile " << b;
+    }
+  EXPECT_THROW(tiles_rect(bit(0, 0), 100, 1), std::invalid_argument) << "100 texels are not 8 tiles";
+  EXPECT_THROW(tiles_rect(bit(0, 0), 0, 1), std::invalid_argument);
+  EXPECT_THROW(tiles_rect(bit(0, 0), 128, -1), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace penumbra::adaptive
