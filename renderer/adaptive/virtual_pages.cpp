@@ -50,8 +50,8 @@ MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy
       const LightXY& o = origins[static_cast<std::size_t>(level)];
       const LightXY local{(p.light_xy.x - o.x) / page_ws, (p.light_xy.y - o.y) / page_ws};
       if (local.x < 0 || local.y < 0 || local.x >= layout.pages_per_side || local.y >= layout.pages_per_side) continue;
-      // The pages the filter reaches: [p - r, p + r] in light space, within the level.
-      const double reach = r / page_ws;
+      // The pages the filter reaches: [p - r, p + r] in light space, the normal offset wider, within the level.
+      const double reach = (r + options.reach_texels * layout.texel0_ws * std::ldexp(1.0, level)) / page_ws;
       const int x0 = std::max(0, static_cast<int>(std::floor(local.x - reach)));
       const int x1 = std::min(layout.pages_per_side - 1, static_cast<int>(std::floor(local.x + reach)));
       const int y0 = std::max(0, static_cast<int>(std::floor(local.y - reach)));

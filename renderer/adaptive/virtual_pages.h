@@ -63,6 +63,11 @@ struct MarkOptions {
   // two gives texels of 0.35 to 0.71 footprints where the floor sets it (shadows::ShadowMapParams::
   // virtual_min_texel_px says why and is this default).
   double min_texel_px = 0.7071;
+  // How far past the filter's square the shading reads, in texels of the level it reads: the
+  // lookup moved along the surface normal (shadows::ShadowMapParams::normal_offset_texels). A pixel
+  // marks its square that much wider, so that the pages (and tiles) its moved square reads are
+  // its own, not a coarser level's it falls back to.
+  double reach_texels = 0;
 };
 
 // The finest texel the pixel needs (rule or footprint), world units.

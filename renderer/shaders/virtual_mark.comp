@@ -38,15 +38,15 @@ uniform float u_radius_ws;  // the filter's world radius (0: none)
 #endif
 
 // Marks the pages of `level` (or the first coarser level whose window holds xy) under the square
-// xy ± r, and their tiles under it a texel wider; returns the level, or u_virtual_levels when none
-// holds xy.
-int mark_square(int level, vec2 xy, float r) {
+// xy ± (r + reach_texels texels of the level), and their tiles under it a texel wider; returns the
+// level, or u_virtual_levels when none holds xy.
+int mark_square(int level, vec2 xy, float r, float reach_texels) {
   const int n = u_virtual_pages_per_side;
   for (; level < u_virtual_levels; ++level) {
     if (!virtual_in_window(level, xy)) continue;
     const float page_ws = float(u_virtual_page_texels) * virtual_texel_ws(level);
     const vec2 local = (xy - virtual_origin(level)) / page_ws;
-    const float reach = r / page_ws;  // the square [xy - r, xy + r], in pages
+    const float reach = (r + reach_texels * virtual_texel_ws(level)) / page_ws;  // the square's half-side, in pages
     const ivec2 lo = max(ivec2(0), ivec2(floor(local - reach)));
     const ivec2 hi = min(ivec2(n - 1), ivec2(floor(local + reach)));
     for (int y = lo.y; y <= hi.y; ++y)
@@ -103,7 +103,7 @@ void main() {
 #if VIRTUAL_MARK_PASS == 1
   {
     const float search = virtual_search_ws(virtual_depth_ws(light.z));
-    level = mark_square(virtual_search_level(world, search, xy), xy, search);
+    level = mark_square(virtual_search_level(world, search, xy), xy, search, 0.0);  // the search reads the point itself
   }
 #elif VIRTUAL_MARK_PASS == 2
   {
@@ -126,10 +126,10 @@ void main() {
       if (u_write_levels) imageStore(u_levels, p, vec4(-1.0));
       return;
     }
-    level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, radius)), xy, radius);
+    level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, radius)), xy, radius, u_mark_reach_texels);
   }
 #else
-  level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0));
+  level = mark_square(virtual_level_for_texel(virtual_requested_texel_ws(world, u_radius_ws)), xy, max(u_radius_ws, 0.0), u_mark_reach_texels);
 #endif
   if (level < u_virtual_levels) {
     atomicAdd(u_pixels_per_level[level], 1u);

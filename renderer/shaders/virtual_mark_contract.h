@@ -50,8 +50,11 @@
 //   level    = clamp(floor(log2(texel_ws / u_virtual_texel0_ws)), 0, u_virtual_levels - 1)
 // r the filter's world radius (u_radius_ws), c u_mark_c_texels, s the pixel's world footprint (its
 // view depth · u_mark_footprint_per_depth), min_texel_px u_mark_min_texel_px. The pixel marks the
-// pages of that level under the square of half-side r around its light-space point; a level whose
-// window does not hold the point gives way to the next coarser one.
+// pages of that level under the square of half-side r + u_mark_reach_texels texels of the level
+// around its light-space point (the shading reads the square around the point moved along the
+// surface normal: the reach is that offset, 0 where it reads none); a level whose window does not
+// hold the point gives way to the next coarser one. PCSS's search square (pass 1) is marked as it is
+// read: half-side the search radius, no reach.
 //
 // Texture units of the pages PCSS's second pass (VIRTUAL_MARK_PASS 2) searches for blockers through
 // (virtual_pages.glsl; passes 0 and 1 read no texture): VIRTUAL_UNIT_POOL (the depth pool, r32f or
@@ -123,6 +126,7 @@ PENUMBRA_VIRTUAL_UNIFORM_BLOCK(VirtualFrame, VIRTUAL_FRAME_BLOCK) {
   PENUMBRA_VIRTUAL_ALIGN16 vec3 u_mark_camera_forward;   // unit view direction
   float u_mark_c_texels;             // c: texels under the filter's radius
   float u_mark_min_texel_px;         // the pixel floor: no texel finer than this many footprints
+  float u_mark_reach_texels;         // a filter's square is marked this many texels of its level wider (the shading's normal offset)
   float u_virtual_texel0_ws;         // level 0's texel; level k's is u_virtual_texel0_ws · 2^k
   int u_virtual_page_texels;         // texels per page side
   int u_virtual_pages_per_side;      // pages per level window side
@@ -176,7 +180,9 @@ static_assert(sizeof(vec3) == 12 && sizeof(vec4) == 16 && sizeof(mat4) == 64, "t
 static_assert(offsetof(VirtualFrame, u_virtual_origin) == 64 && offsetof(VirtualFrame, u_mark_camera_position) == 64 + 16 * VIRTUAL_MARK_MAX_LEVELS &&
                   offsetof(VirtualFrame, u_mark_footprint_per_depth) == offsetof(VirtualFrame, u_mark_camera_position) + 12,
               "std140: a vec4 array after the mat4, a vec3 followed by a scalar in its fourth component");
-static_assert(sizeof(VirtualFrame) == 64 + 16 * VIRTUAL_MARK_MAX_LEVELS + 2 * 16 + 16 * 4, "std140: no padding");
+static_assert(offsetof(VirtualFrame, u_mark_footprint_only) == 64 + 16 * VIRTUAL_MARK_MAX_LEVELS + 2 * 16 + 16 * 4,
+              "std140: the scalars packed, no padding between members");
+static_assert(sizeof(VirtualFrame) == offsetof(VirtualFrame, u_mark_footprint_only) + 4 + 12, "the block's end padded to 16 bytes");
 }  // namespace penumbra::shadows::virtual_mark
 #else
 #undef bool32

@@ -325,7 +325,6 @@ class VirtualPagesPass final : public Pass {
       v->shading_counts = gl::Buffer(sizeof(contract::VirtualShadingResult), nullptr, GL_DYNAMIC_STORAGE_BIT);
     }
     v->map->set_raster_bias(s.map.slope_bias, s.map.offset_bias);
-    v->map->set_normal_offset(s.map.normal_offset_texels);
     v->map->set_bounds(s.map.virtual_bounds);
     v->map->invalidate_moved_casters(f.scene);
     const int w = f.plan.width_px, h = f.plan.height_px;

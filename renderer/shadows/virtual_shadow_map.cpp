@@ -93,7 +93,6 @@ VirtualShadowMap::VirtualShadowMap(const adaptive::VirtualMapLayout& layout, int
       pool_side_(pool_pages_per_side),
       content_(content),
       cache_(layout, pool_pages_per_side * pool_pages_per_side) {
-  set_normal_offset(ShadowMapParams{}.normal_offset_texels);
   set_virtual_view(frame_, layout, view_);
   frame_.u_virtual_pool_pages = pool_side_;
   const int side = pool_side_ * layout.page_texels;
@@ -136,11 +135,6 @@ void VirtualShadowMap::set_raster_bias(float slope, float offset) {
   if (slope == slope_bias_ && offset == offset_bias_) return;
   slope_bias_ = slope, offset_bias_ = offset;
   invalidate_all();  // pages drawn with the old offsets would disagree with new ones
-}
-
-void VirtualShadowMap::set_normal_offset(float texels) {
-  if (!(texels >= 0) || !std::isfinite(texels)) throw std::invalid_argument("virtual shadow map: normal offset " + std::to_string(texels) + " texels");
-  tile_margin_texels_ = 1 + static_cast<int>(std::ceil(texels));
 }
 
 void VirtualShadowMap::set_bounds(bool on) {
@@ -223,10 +217,11 @@ void VirtualShadowMap::draw_page(int slot, const adaptive::PageKey& key, adaptiv
   const auto x0 = static_cast<float>(static_cast<double>(key.x) * w), y0 = static_cast<float>(static_cast<double>(key.y) * w);
   const auto wf = static_cast<float>(w);
   program_.set("u_clip_from_world", glm::ortho(x0, x0 + wf, y0, y0 + wf, view_.near_ws, view_.far_ws) * view_.light_view);
-  // The texels of the page's tiles to draw (the whole page unless the marking said which), as wide
-  // as the shading's reads reach past them; the casters kept over them a texel wider still: the
-  // raster's float matrix may reach a texel into a caster the exact rectangle just misses.
-  const adaptive::TexelRect r = adaptive::tiles_rect(tiles, n, tile_margin_texels_);
+  // The texels of the page's tiles to draw (the whole page unless the marking said which; they hold
+  // the squares the shading reads, its normal offset included), a texel wider for the marking's and
+  // the shading's float arithmetic; the casters kept over them a texel wider still: the raster's
+  // float matrix may reach a texel into a caster the exact rectangle just misses.
+  const adaptive::TexelRect r = adaptive::tiles_rect(tiles, n, 1);
   glScissor(sx * n + r.x0, sy * n + r.y0, r.x1 - r.x0, r.y1 - r.y0);
   const float texel = wf / static_cast<float>(n);
   const scene::Footprint window{{x0 + static_cast<float>(r.x0 - 1) * texel, y0 + static_cast<float>(r.y0 - 1) * texel},
@@ -359,6 +354,7 @@ adaptive::MarkOptions virtual_mark_options(const ShadowSettings& s) {
   o.marking = s.map.virtual_pages == VirtualPages::footprint ? adaptive::Marking::footprint : adaptive::Marking::rule;
   o.c_texels = s.adaptive.c;
   o.min_texel_px = s.map.virtual_min_texel_px;
+  o.reach_texels = s.map.normal_offset_texels;
   return o;
 }
 
@@ -371,6 +367,7 @@ void set_virtual_marking(VirtualFrame& frame, const scene::Camera& camera, int h
                                                  : camera.ortho_height_ws / static_cast<float>(height_px);
   frame.u_mark_c_texels = static_cast<float>(options.c_texels);
   frame.u_mark_min_texel_px = static_cast<float>(options.min_texel_px);
+  frame.u_mark_reach_texels = static_cast<float>(options.reach_texels);
   frame.u_mark_footprint_only = options.marking == adaptive::Marking::footprint;
 }
 

@@ -241,10 +241,6 @@ class VirtualShadowMap {
   // The raster depth offset pages are drawn with (glPolygonOffset factor and units, as the maps'
   // map.slope_bias and map.offset_bias; none by default). A change drops every page.
   void set_raster_bias(float slope, float offset);
-  // The shading's normal offset (map.normal_offset_texels, in texels of the level it reads): how far
-  // a pixel's reads reach past the square its marks cover (a texel wider already). A page drawn by
-  // its marked tiles draws that much around them, and a texel more for rounding (adaptive::tiles_rect).
-  void set_normal_offset(float texels);
   // Whether update() also takes the depth bounds of each tile of the pages it draws
   // (virtual_bounds.comp) and bind() lets the filters use them (on by default; depth pools whose page
   // side VIRTUAL_BOUNDS_TILE divides). Turning them on drops every page, whose tiles have none.
@@ -323,7 +319,6 @@ class VirtualShadowMap {
   VirtualMapView view_;
   bool has_view_ = false;
   float slope_bias_ = 0, offset_bias_ = 0;
-  int tile_margin_texels_ = 0;  // set_normal_offset's
   // Each object's mesh and placement at the last invalidate_moved_casters.
   struct Caster {
     const scene::MeshData* mesh = nullptr;  // compared, never read: it may be gone

@@ -305,7 +305,9 @@ TEST(InstalledVirtualMark, MarksThePagesTheCpuReferenceMarks) {
     adaptive::MarkOptions options;
     options.marking = m;
     options.c_texels = 3.47;
+    options.reach_texels = 0.75;  // the renderer's normal offset (map.normal_offset_texels)
     frame.u_mark_c_texels = static_cast<float>(options.c_texels);
+    frame.u_mark_reach_texels = static_cast<float>(options.reach_texels);
     frame.u_mark_footprint_only = m == adaptive::Marking::footprint;
     glNamedBufferSubData(frame_buffer, 0, sizeof frame, &frame);
     const std::uint32_t zero = 0;

@@ -72,6 +72,7 @@ const std::map<std::string, std::size_t> kVirtualMembers = {
     MEMBER(u_mark_camera_forward, "u_mark_camera_forward"),
     MEMBER(u_mark_c_texels, "u_mark_c_texels"),
     MEMBER(u_mark_min_texel_px, "u_mark_min_texel_px"),
+    MEMBER(u_mark_reach_texels, "u_mark_reach_texels"),
     MEMBER(u_virtual_texel0_ws, "u_virtual_texel0_ws"),
     MEMBER(u_virtual_page_texels, "u_virtual_page_texels"),
     MEMBER(u_virtual_pages_per_side, "u_virtual_pages_per_side"),

@@ -1374,5 +1374,40 @@ TEST(VirtualMap, BadLayoutsAreRefused) {
   EXPECT_THROW(virtual_map.update({{0, 8, 0}}, f.view, f.scene, f.meshes), std::invalid_argument) << "page outside the window";
 }
 
+// The shading reads the filter's square around the surface point moved along its normal
+// (map.normal_offset_texels): the marking marks each square that much wider, so that the pages
+// and tiles that square reads are its own (a page only other pixels' tiles drew would hold no
+// casters where it reads; a page nobody marked would send it to a coarser level). Before the reach
+// was marked, an offset of 4 texels read tiles nobody had drawn: 3 pixels of the street differed
+// from whole pages.
+TEST(VirtualMap, EveryPixelReadsItsOwnLevelWhateverTheNormalOffset) {
+  const scene::Scene town = scene::make_builtin_scene("outdoor");
+  const int w = 240, h = 135;
+  for (const bool pcss : {false, true}) {
+    for (const float offset : {0.75f, 4.0f}) {
+      SCOPED_TRACE(std::string(pcss ? "pcss" : "pcf") + ", normal offset " + std::to_string(offset));
+      shadows::ShadowSettings s = pcss ? virtual_pcss() : virtual_pcf(shadows::VirtualPages::rule);
+      s.map.virtual_cache = false;
+      s.map.normal_offset_texels = offset;
+      std::vector<io::ImageF> images;
+      for (const bool tiles : {false, true}) {
+        s.map.virtual_page_tiles = tiles;
+        shadows::Renderer r;
+        r.set_scene(town);
+        r.scene().camera = town.camera_path.at(town.camera, 126);
+        const shadows::FrameInfo info = r.render(s, w, h);
+        ASSERT_TRUE(info.virtual_map.has_value());
+        EXPECT_EQ(info.virtual_map->pages.missing, 0);
+        EXPECT_GT(info.virtual_map->at_level, 0u);
+        EXPECT_EQ(info.virtual_map->coarser, 0u) << "pixels that read a coarser level than they asked for";
+        images.push_back(r.read_visibility());
+      }
+      int differ = 0;
+      for (std::size_t p = 0; p < images[0].pixels.size(); ++p) differ += images[1].pixels[p] != images[0].pixels[p];
+      EXPECT_EQ(differ, 0) << "tiles against whole pages, of " << images[0].pixels.size() << " pixels";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace penumbra

@@ -95,6 +95,14 @@ TEST(VirtualPages, TheFilterReachMarksNeighboursAndFarPixelsGoCoarser) {
   ASSERT_EQ(corner.pages.size(), 4u);
   EXPECT_EQ(corner.pages.begin()->x, 7);
   EXPECT_EQ(corner.pages.rbegin()->x, 8);
+  // 3 mm inside, the filter stays in its page; a shading that reads a texel (5 mm) past the
+  // filter's square (its normal offset) reaches the four again, and only them.
+  const std::vector<PixelRequest> inside = {{{-0.16 + 0.02 * 8 + 0.003, -0.16 + 0.02 * 8 + 0.003}, 0.001, 0.002}};
+  EXPECT_EQ(mark_pages(inside, {0, 0}, l, footprint).pages.size(), 1u);
+  MarkOptions reach = footprint;
+  reach.reach_texels = 1;
+  EXPECT_EQ(mark_pages(inside, {0, 0}, l, reach).pages.size(), 4u);
+  EXPECT_EQ(mark_pages(inside, {0, 0}, l, reach).pixels_per_level[0], 1) << "the reach widens the square, not the level";
   // Outside level 0's 32 cm window: level 1 (64 cm) takes it; beyond the coarsest (10.24 m): unmarked.
   const MarkResult far = mark_pages({{{0.3, 0}, 0.001, 0}, {{100, 0}, 0.001, 0}}, {0, 0}, l, footprint);
   EXPECT_EQ(far.pixels_per_level[1], 1);
