@@ -52,13 +52,17 @@ int mark_square(int level, vec2 xy, float r, float reach_texels) {
     for (int y = lo.y; y <= hi.y; ++y)
       for (int x = lo.x; x <= hi.x; ++x) {
         const uint bit = virtual_mark_page_bit(level, x, y, n);
-        atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
+        // A bit already set is not set again: a load costs less than an atomic, and most of a
+        // page's pixels find its bits set by their neighbours.
+        if ((u_page_bits[bit >> 5u] & (1u << (bit & 31u))) == 0u) atomicOr(u_page_bits[bit >> 5u], 1u << (bit & 31u));
         const float tiles = float(VIRTUAL_MARK_TILES_PER_SIDE), texel = 1.0 / float(u_virtual_page_texels);
         const ivec2 a = ivec2(clamp(floor((local - reach - texel - vec2(x, y)) * tiles), 0.0, tiles - 1.0));
         const ivec2 b = ivec2(clamp(floor((local + reach + texel - vec2(x, y)) * tiles), 0.0, tiles - 1.0));
         const uint row = ((2u << uint(b.x - a.x)) - 1u) << uint(a.x);
-        for (int ty = a.y; ty <= b.y; ++ty)
-          atomicOr(u_page_bits[virtual_mark_tile_word(bit, ty, u_virtual_levels, n)], row << uint(8 * (ty % 4)));
+        for (int ty = a.y; ty <= b.y; ++ty) {
+          const uint word = virtual_mark_tile_word(bit, ty, u_virtual_levels, n), tiles = row << uint(8 * (ty % 4));
+          if ((u_page_bits[word] & tiles) != tiles) atomicOr(u_page_bits[word], tiles);
+        }
       }
     return level;
   }
