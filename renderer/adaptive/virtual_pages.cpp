@@ -56,8 +56,23 @@ MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy
       const int x1 = std::min(layout.pages_per_side - 1, static_cast<int>(std::floor(local.x + reach)));
       const int y0 = std::max(0, static_cast<int>(std::floor(local.y - reach)));
       const int y1 = std::min(layout.pages_per_side - 1, static_cast<int>(std::floor(local.y + reach)));
+      // Each page's tiles under the square, a texel wider (the filters gather 2 × 2 blocks from even
+      // texels), as virtual_mark.comp's mark_square takes them.
+      const double texel = 1.0 / layout.page_texels;  // in pages
+      const auto tile = [](double pages) {
+        return static_cast<int>(std::clamp(std::floor(pages * kTilesPerSide), 0.0, static_cast<double>(kTilesPerSide - 1)));
+      };
       for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) out.pages.insert({level, x, y});
+        for (int x = x0; x <= x1; ++x) {
+          const Page page{level, x, y};
+          out.pages.insert(page);
+          const int tx0 = tile(local.x - reach - texel - x), tx1 = tile(local.x + reach + texel - x);
+          const int ty0 = tile(local.y - reach - texel - y), ty1 = tile(local.y + reach + texel - y);
+          TileMask mask = 0;
+          for (int ty = ty0; ty <= ty1; ++ty)
+            for (int tx = tx0; tx <= tx1; ++tx) mask |= TileMask{1} << (ty * kTilesPerSide + tx);
+          out.tiles[page] |= mask;
+        }
       ++out.pixels_per_level[static_cast<std::size_t>(level)];
       break;
     }

@@ -102,8 +102,8 @@ TexelRect tiles_rect(TileMask tiles, int page_texels, int margin_texels);
 
 struct MarkResult {
   std::set<Page> pages;               // every page some pixel asked for
-  // Per page, the tiles the squares that marked it reach (the GPU marking's, PageMarker); empty
-  // where not known (the CPU reference): whole pages.
+  // Per page, the tiles the squares that marked it reach, a texel wider (as the GPU marking's,
+  // PageMarker, records them); a page without an entry is whole.
   PageTiles tiles;
   std::vector<std::int64_t> pixels_per_level;  // pixels that sample each level
   std::int64_t unmarked = 0;          // pixels beyond the coarsest level's extent

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <iterator>
@@ -727,7 +728,19 @@ TEST(VirtualMap, MarkingOnTheGpuEqualsTheCpuReference) {
     std::int64_t moved = 0;
     for (std::size_t k = 0; k < cpu.pixels_per_level.size(); ++k) moved += std::abs(gpu.pixels_per_level[k] - cpu.pixels_per_level[k]);
     EXPECT_LE(moved, static_cast<std::int64_t>(requests.size() / 200)) << "pixels on another level";
+    // The tiles of the pages both marked: the same but for squares whose edge float rounding puts
+    // across a tile's border.
+    int tile_bits = 0, tiles_differ = 0;
+    for (const Page& p : cpu.pages) {
+      if (!gpu.pages.count(p)) continue;
+      ASSERT_TRUE(cpu.tiles.count(p) && gpu.tiles.count(p));
+      tile_bits += std::popcount(cpu.tiles.at(p));
+      tiles_differ += std::popcount(cpu.tiles.at(p) ^ gpu.tiles.at(p));
+    }
+    EXPECT_GT(tile_bits, static_cast<int>(cpu.pages.size()));
+    EXPECT_LE(tiles_differ, tile_bits / 100) << tiles_differ << " of " << tile_bits << " tiles differ";
     const std::string name(adaptive::to_string(m));
+    ::testing::Test::RecordProperty(name + "_tiles_differ", tiles_differ);
     ::testing::Test::RecordProperty(name + "_pages_cpu", static_cast<int>(cpu.pages.size()));
     ::testing::Test::RecordProperty(name + "_pages_differ", static_cast<int>(only_one.size()));
     ::testing::Test::RecordProperty(name + "_pixels_moved", static_cast<int>(moved));

@@ -173,6 +173,43 @@ TEST(VirtualPages, TheRegionFloorCoversTheRegionOnTheFinestLevelThatFits) {
   EXPECT_TRUE(region_floor_pages({std::nan(""), 0}, hi, camera, l, 64).empty());
 }
 
+// The tiles a pixel's square reaches, a texel wider, on each page it marks; the CPU reference
+// records them as the GPU marking does (VirtualMap.MarkingOnTheGpuEqualsTheCpuReference).
+TEST(VirtualPages, ASquareMarksTheTilesItReachesATexelWider) {
+  VirtualMapLayout l;
+  l.levels = 2;
+  l.texel0_ws = 0.01;  // a page of 128 texels is 1.28 m, a tile 16 cm
+  l.page_texels = 128;
+  l.pages_per_side = 4;
+  MarkOptions footprint;
+  footprint.marking = Marking::footprint;
+  const LightXY o = level_origin(0, {0, 0}, l);
+  EXPECT_DOUBLE_EQ(o.x, -2.56);
+  const auto bit = [](int tx, int ty) { return TileMask{1} << (ty * kTilesPerSide + tx); };
+  // The middle of page (1, 2) with a 5 cm filter: tiles 3 and 4 on each axis (its square and a
+  // texel reach 6 cm of the 16 cm tiles).
+  const LightXY middle{o.x + 1.28 * 1.5, o.y + 1.28 * 2.5};
+  const MarkResult m = mark_pages({{middle, 0.001, 0.05}}, {0, 0}, l, footprint);
+  ASSERT_EQ(m.pages.size(), 1u);
+  EXPECT_EQ(m.tiles.at({0, 1, 2}), bit(3, 3) | bit(4, 3) | bit(3, 4) | bit(4, 4));
+  // A square whose edge lies half a texel inside tile 3: the texel wider reaches tile 2.
+  const MarkResult edge = mark_pages({{{o.x + 1.28 * (1 + 0.375 + 0.5 / 128) + 0.05, middle.y}, 0.001, 0.05}}, {0, 0}, l, footprint);
+  ASSERT_EQ(edge.pages.size(), 1u);
+  EXPECT_EQ(edge.tiles.at({0, 1, 2}), bit(2, 3) | bit(3, 3) | bit(2, 4) | bit(3, 4));
+  // 2 cm inside the page's lower left corner: the square crosses to three neighbours, each getting
+  // the tiles along the shared edges.
+  const MarkResult corner = mark_pages({{{o.x + 1.28 + 0.02, o.y + 1.28 + 0.02}, 0.001, 0.05}}, {0, 0}, l, footprint);
+  ASSERT_EQ(corner.pages.size(), 4u);
+  EXPECT_EQ(corner.tiles.at({0, 1, 1}), bit(0, 0));
+  EXPECT_EQ(corner.tiles.at({0, 0, 0}), bit(7, 7));
+  EXPECT_EQ(corner.tiles.at({0, 1, 0}), bit(0, 7));
+  EXPECT_EQ(corner.tiles.at({0, 0, 1}), bit(7, 0));
+  // Two pixels: their tiles join.
+  const MarkResult two = mark_pages({{middle, 0.001, 0.05}, {{middle.x + 0.5, middle.y}, 0.001, 0.05}}, {0, 0}, l, footprint);
+  ASSERT_EQ(two.pages.size(), 1u);
+  EXPECT_EQ(two.tiles.at({0, 1, 2}), bit(3, 3) | bit(4, 3) | bit(3, 4) | bit(4, 4) | bit(6, 3) | bit(7, 3) | bit(6, 4) | bit(7, 4));
+}
+
 // A page drawn by its marked tiles draws their bounding rectangle, a margin wider, within the page.
 TEST(VirtualPages, APageIsDrawnOverItsMarkedTilesRectangleAMarginWider) {
   const auto bit = [](int tx, int ty) { return TileMask{1} << (ty * kTilesPerSide + tx); };
