@@ -91,8 +91,8 @@ inline constexpr TileMask kEveryTile = ~TileMask{0};
 using PageTiles = std::map<Page, TileMask>;
 
 // The texels of a page of `page_texels`² to draw for `tiles`: the bounding rectangle of the marked
-// tiles, `margin_texels` wider on each side (reads that reach past the tiles marked for them: the
-// shading's normal offset), clipped to the page; [x0, x1) × [y0, y1) in the page's texels, y from its
+// tiles, `margin_texels` wider on each side (the renderer's one texel: the marking's and the
+// shading's float arithmetic may disagree at a tile's edge), clipped to the page; [x0, x1) × [y0, y1) in the page's texels, y from its
 // lower edge. The whole page for kEveryTile and for an empty mask (no tile known).
 struct TexelRect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;

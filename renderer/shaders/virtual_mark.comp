@@ -60,8 +60,8 @@ int mark_square(int level, vec2 xy, float r, float reach_texels) {
         const ivec2 b = ivec2(clamp(floor((local + reach + texel - vec2(x, y)) * tiles), 0.0, tiles - 1.0));
         const uint row = ((2u << uint(b.x - a.x)) - 1u) << uint(a.x);
         for (int ty = a.y; ty <= b.y; ++ty) {
-          const uint word = virtual_mark_tile_word(bit, ty, u_virtual_levels, n), tiles = row << uint(8 * (ty % 4));
-          if ((u_page_bits[word] & tiles) != tiles) atomicOr(u_page_bits[word], tiles);
+          const uint word = virtual_mark_tile_word(bit, ty, u_virtual_levels, n), bits = row << uint(8 * (ty % 4));
+          if ((u_page_bits[word] & bits) != bits) atomicOr(u_page_bits[word], bits);
         }
       }
     return level;
