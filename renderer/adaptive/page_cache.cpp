@@ -16,7 +16,7 @@ PageCache::PageCache(const VirtualMapLayout& layout, int pool_slots) : layout_(l
   origin_pages_y_.assign(static_cast<std::size_t>(layout.levels), 0);
 }
 
-double PageCache::page_ws(int level) const { return layout_.page_texels * layout_.texel0_ws * std::ldexp(1.0, level); }
+double PageCache::page_ws(int level) const { return layout_.page_ws(level); }
 
 PageKey PageCache::key_of(const Page& page) const {
   const auto k = static_cast<std::size_t>(page.level);

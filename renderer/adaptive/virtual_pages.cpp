@@ -29,7 +29,7 @@ std::vector<std::int64_t> MarkResult::pages_per_level() const {
 }
 
 LightXY level_origin(int level, LightXY camera_xy, const VirtualMapLayout& layout) {
-  const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, level);
+  const double page_ws = layout.page_ws(level);
   const double half = 0.5 * layout.pages_per_side * page_ws;
   return {std::floor((camera_xy.x - half) / page_ws) * page_ws, std::floor((camera_xy.y - half) / page_ws) * page_ws};
 }
@@ -46,12 +46,12 @@ MarkResult mark_pages(const std::vector<PixelRequest>& pixels, LightXY camera_xy
     int level = level_for_texel(requested_texel_ws(p, options), layout);
     const double r = std::max(0.0, p.radius_ws);
     for (; level < layout.levels; ++level) {
-      const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, level);
+      const double page_ws = layout.page_ws(level);
       const LightXY& o = origins[static_cast<std::size_t>(level)];
       const LightXY local{(p.light_xy.x - o.x) / page_ws, (p.light_xy.y - o.y) / page_ws};
       if (local.x < 0 || local.y < 0 || local.x >= layout.pages_per_side || local.y >= layout.pages_per_side) continue;
       // The pages the filter reaches: [p - r, p + r] in light space, the normal offset wider, within the level.
-      const double reach = (r + options.reach_texels * layout.texel0_ws * std::ldexp(1.0, level)) / page_ws;
+      const double reach = (r + options.reach_texels * layout.texel_ws(level)) / page_ws;
       const int x0 = std::max(0, static_cast<int>(std::floor(local.x - reach)));
       const int x1 = std::min(layout.pages_per_side - 1, static_cast<int>(std::floor(local.x + reach)));
       const int y0 = std::max(0, static_cast<int>(std::floor(local.y - reach)));
@@ -85,7 +85,7 @@ std::set<Page> rebase_pages(const std::set<Page>& pages, LightXY from, LightXY t
   std::set<Page> out;
   for (const Page& p : pages) {
     if (p.level < 0 || p.level >= layout.levels) continue;
-    const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, p.level);
+    const double page_ws = layout.page_ws(p.level);
     const LightXY a = level_origin(p.level, from, layout), b = level_origin(p.level, to, layout);
     // Both corners are whole pages: the shift is a whole number of pages.
     const auto dx = static_cast<std::int64_t>(std::llround((a.x - b.x) / page_ws));
@@ -103,7 +103,7 @@ std::set<Page> region_floor_pages(LightXY lo, LightXY hi, LightXY camera_xy, con
     return out;
   for (int level = 0; level < layout.levels; ++level) {
     const bool coarsest = level == layout.levels - 1;
-    const double page_ws = layout.page_texels * layout.texel0_ws * std::ldexp(1.0, level);
+    const double page_ws = layout.page_ws(level);
     const LightXY o = level_origin(level, camera_xy, layout);
     // The rectangle in the window's pages (floating: beyond the window where it reaches out).
     const double x0 = std::floor((lo.x - o.x) / page_ws), x1 = std::floor((hi.x - o.x) / page_ws);

@@ -22,6 +22,7 @@
 // shadows/virtual_shadow_map.h has the page pool and the tables on the GPU, drawing the pages the
 // cache admits, and PageMarker; shaders/virtual_pages.glsl reads and filters depths through
 // the tables.
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <set>
@@ -44,6 +45,8 @@ struct VirtualMapLayout {
   double texel0_ws = 0.005;   // level 0's texel, world units
   int page_texels = 128;
   int pages_per_side = 64;    // each level: (page_texels · pages_per_side)² virtual texels
+  double texel_ws(int level) const { return texel0_ws * std::ldexp(1.0, level); }  // level k's texel: texel0_ws · 2^k
+  double page_ws(int level) const { return page_texels * texel_ws(level); }        // level k's page side
 };
 
 enum class Marking { rule, footprint };
